@@ -1,0 +1,35 @@
+use thiserror::Error;
+
+/// Invalid arguments to the field model. Each message carries the offending value.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum FieldError {
+    /// Latitude outside [-90, 90] degrees or longitude outside [-180, 180] degrees, or not finite.
+    #[error("invalid WGS84 position: lat {lat} deg, lon {lon} deg (need -90..=90, -180..=180)")]
+    InvalidLatLon {
+        /// Latitude, degrees.
+        lat: f64,
+        /// Longitude, degrees.
+        lon: f64,
+    },
+    /// A cell size that is not a positive finite number of metres.
+    #[error("invalid cell size {0} m: must be positive and finite")]
+    InvalidCellSize(f64),
+    /// A UTM zone outside 1..=60.
+    #[error("invalid UTM zone {0}: must be 1..=60")]
+    InvalidUtmZone(u8),
+    /// An empty or malformed sensor identifier.
+    #[error("invalid sensor id {0:?}: must be non-empty, at most 128 characters, no control characters")]
+    InvalidSensorId(String),
+    /// A malformed modality name.
+    #[error("invalid modality {0:?}: expected a quantity such as `vw` or `t`, optionally `@<depth>cm`, e.g. `vw@30cm`")]
+    InvalidModality(String),
+    /// Two sensors share an id.
+    #[error("duplicate sensor id {0:?}")]
+    DuplicateSensor(String),
+    /// The field has no sensors.
+    #[error("a field needs at least one sensor")]
+    NoSensors,
+    /// A derived cell size that cannot exist (e.g. altitude above the link range).
+    #[error("cannot derive a cell size: {0}")]
+    Coverage(String),
+}
