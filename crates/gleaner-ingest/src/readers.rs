@@ -1,0 +1,730 @@
+//! The file readers.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use gleaner_field::{LatLon, LocalPoint, Modality, Sensor, SensorId, TransverseMercator};
+
+use crate::readings::{Interner, Row};
+use crate::time::{parse_clock, parse_date, parse_timestamp, parse_us_date};
+use crate::{IngestError, IngestOptions, IngestReport, OnError, Problem, Readings, default_unit};
+
+/// Reads the whole file, strips a UTF-8 byte-order mark.
+fn read_file(path: &Path) -> Result<Vec<u8>, IngestError> {
+    let mut bytes = std::fs::read(path).map_err(|source| IngestError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    if bytes.starts_with(&[0xEF, 0xBB, 0xBF]) {
+        bytes.drain(..3);
+    }
+    Ok(bytes)
+}
+
+/// A CSV/TSV table: header and a record iterator with 1-based line numbers.
+struct Table<'a> {
+    path: PathBuf,
+    header: Vec<String>,
+    reader: csv::Reader<&'a [u8]>,
+    record: csv::ByteRecord,
+}
+
+impl<'a> Table<'a> {
+    fn open(path: &Path, bytes: &'a [u8], delimiter: u8) -> Result<Self, IngestError> {
+        let mut reader = csv::ReaderBuilder::new()
+            .delimiter(delimiter)
+            .has_headers(false)
+            .flexible(true)
+            .from_reader(bytes);
+        let mut record = csv::ByteRecord::new();
+        let got = reader
+            .read_byte_record(&mut record)
+            .map_err(|e| csv_error(path, e))?;
+        if !got || (record.len() == 1 && record[0].is_empty()) {
+            return Err(IngestError::Empty {
+                path: path.to_path_buf(),
+            });
+        }
+        let header = record
+            .iter()
+            .map(|f| String::from_utf8_lossy(f).trim().to_string())
+            .collect();
+        Ok(Self {
+            path: path.to_path_buf(),
+            header,
+            reader,
+            record,
+        })
+    }
+
+    /// Index of the first column whose name matches one of `names` (case-insensitive).
+    fn find(&self, names: &[&str]) -> Option<usize> {
+        names
+            .iter()
+            .find_map(|n| self.header.iter().position(|h| h.eq_ignore_ascii_case(n)))
+    }
+
+    fn require(&self, names: &[&str]) -> Result<usize, IngestError> {
+        self.find(names).ok_or_else(|| IngestError::MissingColumn {
+            path: self.path.clone(),
+            column: names.join("|"),
+            found: self.header.join(", "),
+        })
+    }
+
+    /// Advances to the next non-blank record; returns its line number.
+    fn next(&mut self) -> Result<Option<u64>, IngestError> {
+        loop {
+            let got = self
+                .reader
+                .read_byte_record(&mut self.record)
+                .map_err(|e| csv_error(&self.path, e))?;
+            if !got {
+                return Ok(None);
+            }
+            if self.record.len() == 1 && self.record[0].iter().all(u8::is_ascii_whitespace) {
+                continue;
+            }
+            return Ok(Some(self.record.position().map_or(0, |p| p.line())));
+        }
+    }
+
+    fn field(&self, k: usize) -> Result<&str, Problem> {
+        std::str::from_utf8(self.record.get(k).unwrap_or_default())
+            .map(str::trim)
+            .map_err(|_| Problem::NotUtf8)
+    }
+}
+
+fn csv_error(path: &Path, e: csv::Error) -> IngestError {
+    match e.into_kind() {
+        csv::ErrorKind::Io(source) => IngestError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+        other => IngestError::Options {
+            path: path.to_path_buf(),
+            message: format!("malformed CSV: {other:?}"),
+        },
+    }
+}
+
+/// Applies the bad-row policy: an error under `Fail`, a counted skip under `Skip`.
+struct Policy<'p> {
+    path: &'p Path,
+    on_error: OnError,
+}
+
+impl Policy<'_> {
+    fn bad(
+        &self,
+        report: &mut IngestReport,
+        line: u64,
+        column: &str,
+        value: &str,
+        problem: Problem,
+    ) -> Result<(), IngestError> {
+        let err = IngestError::Field {
+            path: self.path.to_path_buf(),
+            line,
+            column: column.to_string(),
+            value: value.to_string(),
+            problem,
+        };
+        match self.on_error {
+            OnError::Fail => Err(err),
+            OnError::Skip => {
+                report.skip(line, err.to_string());
+                Ok(())
+            }
+        }
+    }
+}
+
+fn is_missing(s: &str) -> bool {
+    s.is_empty() || s.eq_ignore_ascii_case("na")
+}
+
+fn parse_value(s: &str) -> Result<f64, Problem> {
+    let v: f64 = s.parse().map_err(|_| Problem::NotANumber)?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(Problem::NotFinite)
+    }
+}
+
+/// Sorts, removes duplicates, and turns a conflicting duplicate into an error.
+fn finish(
+    mut interner: Interner,
+    policy: &Policy<'_>,
+    report: &mut IngestReport,
+    value_column: &str,
+) -> Result<Readings, IngestError> {
+    let mut out = std::mem::take(&mut interner.out);
+    if let Err((first, second)) = out.dedup(policy.on_error, report) {
+        return Err(IngestError::Field {
+            path: policy.path.to_path_buf(),
+            line: u64::from(second.line),
+            column: value_column.to_string(),
+            value: second.value.to_string(),
+            problem: Problem::ConflictingDuplicate {
+                first_line: u64::from(first.line),
+                first_value: first.value.to_string(),
+            },
+        });
+    }
+    report.readings = out.rows.len() as u64;
+    Ok(out)
+}
+
+fn known(options: &IngestOptions, id: &str) -> bool {
+    options
+        .known_sensors
+        .as_ref()
+        .is_none_or(|k| k.contains(id))
+}
+
+/// Reads gleaner's generic long readings CSV: a header with `sensor_id`, `timestamp`,
+/// `modality`, `value` and optionally `unit` (any order, case-insensitive; `sensor` and `time`
+/// are accepted aliases). Timestamps are RFC 3339 (offsets honoured, no offset = UTC) or dates
+/// (`YYYY-MM-DD`, midnight UTC). Values `NA` or empty are missing and produce no reading; `NaN`
+/// and infinities are errors.
+pub fn read_long_csv(
+    path: &Path,
+    options: &IngestOptions,
+) -> Result<(Readings, IngestReport), IngestError> {
+    let bytes = read_file(path)?;
+    let mut table = Table::open(path, &bytes, b',')?;
+    let c_sensor = table.require(&["sensor_id", "sensor"])?;
+    let c_time = table.require(&["timestamp", "time"])?;
+    let c_mod = table.require(&["modality"])?;
+    let c_value = table.require(&["value"])?;
+    let c_unit = table.find(&["unit"]);
+    let names = table.header.clone();
+    let ncols = names.len();
+    let policy = Policy {
+        path,
+        on_error: options.on_error,
+    };
+    let mut report = IngestReport::default();
+    let mut interner = Interner::default();
+    // Rows are usually grouped by sensor and modality: cache the last lookups.
+    let mut last_sensor: Option<(String, u32)> = None;
+    let mut modality_cache: HashMap<(String, String), u32> = HashMap::new();
+    while let Some(line) = table.next()? {
+        report.rows_read += 1;
+        if table.record.len() != ncols {
+            let found = table.record.len().to_string();
+            policy.bad(&mut report, line, "*", &found, Problem::FieldCount)?;
+            continue;
+        }
+        macro_rules! field {
+            ($k:expr) => {
+                match table.field($k) {
+                    Ok(s) => s,
+                    Err(p) => {
+                        policy.bad(&mut report, line, &names[$k], "<bytes>", p)?;
+                        continue;
+                    }
+                }
+            };
+        }
+        let value_s = field!(c_value);
+        if is_missing(value_s) {
+            report.missing += 1;
+            continue;
+        }
+        let sensor_s = field!(c_sensor);
+        let sensor = match &last_sensor {
+            Some((s, k)) if s == sensor_s => *k,
+            _ => {
+                if !known(options, sensor_s) {
+                    policy.bad(
+                        &mut report,
+                        line,
+                        &names[c_sensor],
+                        sensor_s,
+                        Problem::UnknownSensor,
+                    )?;
+                    continue;
+                }
+                let Some(k) = interner.sensor(sensor_s) else {
+                    policy.bad(
+                        &mut report,
+                        line,
+                        &names[c_sensor],
+                        sensor_s,
+                        Problem::BadSensorId,
+                    )?;
+                    continue;
+                };
+                last_sensor = Some((sensor_s.to_string(), k));
+                k
+            }
+        };
+        let time_s = field!(c_time);
+        let Some(t) = parse_timestamp(time_s) else {
+            policy.bad(
+                &mut report,
+                line,
+                &names[c_time],
+                time_s,
+                Problem::BadTimestamp,
+            )?;
+            continue;
+        };
+        let mod_s = field!(c_mod);
+        let unit_s = match c_unit {
+            Some(c) => field!(c),
+            None => "",
+        };
+        let modality = match modality_cache.get(&(mod_s.to_string(), unit_s.to_string())) {
+            Some(&k) => k,
+            None => {
+                let Ok(m) = Modality::new(mod_s) else {
+                    policy.bad(
+                        &mut report,
+                        line,
+                        &names[c_mod],
+                        mod_s,
+                        Problem::BadModality,
+                    )?;
+                    continue;
+                };
+                let unit = (!unit_s.is_empty()).then_some(unit_s);
+                match interner.modality(m, unit) {
+                    Ok(k) => {
+                        modality_cache.insert((mod_s.to_string(), unit_s.to_string()), k);
+                        k
+                    }
+                    Err(expected) => {
+                        let col = c_unit.map_or("unit", |c| names[c].as_str());
+                        policy.bad(
+                            &mut report,
+                            line,
+                            col,
+                            unit_s,
+                            Problem::UnitMismatch { expected },
+                        )?;
+                        continue;
+                    }
+                }
+            }
+        };
+        let value = match parse_value(value_s) {
+            Ok(v) => v,
+            Err(p) => {
+                policy.bad(&mut report, line, &names[c_value], value_s, p)?;
+                continue;
+            }
+        };
+        interner.out.rows.push(Row {
+            sensor,
+            modality,
+            t,
+            value,
+            line: line as u32,
+        });
+    }
+    let readings = finish(interner, &policy, &mut report, &names[c_value])?;
+    Ok((readings, report))
+}
+
+/// Settings for [`read_wide_csv`].
+#[derive(Debug, Clone)]
+pub struct WideOptions {
+    /// The modality every sensor column holds, e.g. `vw@30cm`.
+    pub modality: Modality,
+    /// Its unit; defaults to [`default_unit`] of the quantity.
+    pub unit: Option<String>,
+    /// Field delimiter (default `,`).
+    pub delimiter: u8,
+    /// Offset of the file's clock from UTC, seconds (e.g. −28 800 for PST); default 0.
+    pub utc_offset_s: i64,
+}
+
+impl WideOptions {
+    /// Comma-separated, UTC, unit from the quantity.
+    pub fn new(modality: Modality) -> Self {
+        Self {
+            modality,
+            unit: None,
+            delimiter: b',',
+            utc_offset_s: 0,
+        }
+    }
+}
+
+/// Reads a wide table: time columns, then one column per sensor whose header is the sensor id.
+/// Time is either one `timestamp`/`datetime` column (RFC 3339 or date) or a `date` column
+/// (`YYYY-MM-DD` or `MM/DD/YYYY`) with an optional `time` column (`H:MM[:SS]`), read in the
+/// file's clock ([`WideOptions::utc_offset_s`]). A sensor column the project does not know is
+/// an error on line 1 (skipped as a whole under [`OnError::Skip`]).
+pub fn read_wide_csv(
+    path: &Path,
+    wide: &WideOptions,
+    options: &IngestOptions,
+) -> Result<(Readings, IngestReport), IngestError> {
+    let bytes = read_file(path)?;
+    let mut table = Table::open(path, &bytes, wide.delimiter)?;
+    let c_stamp = table.find(&["timestamp", "datetime"]);
+    let (c_date, c_clock) = match c_stamp {
+        Some(_) => (None, None),
+        None => (
+            Some(table.require(&["timestamp", "datetime", "date"])?),
+            table.find(&["time"]),
+        ),
+    };
+    let names = table.header.clone();
+    let policy = Policy {
+        path,
+        on_error: options.on_error,
+    };
+    let mut report = IngestReport::default();
+    let mut interner = Interner::default();
+    let unit = wide
+        .unit
+        .clone()
+        .or_else(|| default_unit(wide.modality.quantity()).map(str::to_string));
+    let modality = interner
+        .modality(wide.modality.clone(), unit.as_deref())
+        .map_err(|_| IngestError::Options {
+            path: path.to_path_buf(),
+            message: "inconsistent unit".into(),
+        })?;
+    let time_cols = [c_stamp, c_date, c_clock];
+    let mut columns: Vec<(usize, u32)> = Vec::new();
+    for (k, name) in names.iter().enumerate() {
+        if time_cols.contains(&Some(k)) {
+            continue;
+        }
+        if !known(options, name) {
+            policy.bad(&mut report, 1, name, name, Problem::UnknownSensor)?;
+            continue;
+        }
+        match interner.sensor(name) {
+            Some(s) => columns.push((k, s)),
+            None => policy.bad(&mut report, 1, name, name, Problem::BadSensorId)?,
+        }
+    }
+    let ncols = names.len();
+    while let Some(line) = table.next()? {
+        report.rows_read += 1;
+        if table.record.len() != ncols {
+            let found = table.record.len().to_string();
+            policy.bad(&mut report, line, "*", &found, Problem::FieldCount)?;
+            continue;
+        }
+        let t = if let Some(c) = c_stamp {
+            let s = table.field(c).unwrap_or("");
+            match parse_timestamp(s) {
+                Some(t) => t,
+                None => {
+                    policy.bad(&mut report, line, &names[c], s, Problem::BadTimestamp)?;
+                    continue;
+                }
+            }
+        } else {
+            let cd = c_date.unwrap_or(0);
+            let ds = table.field(cd).unwrap_or("");
+            let Some(day) = parse_date(ds) else {
+                policy.bad(&mut report, line, &names[cd], ds, Problem::BadTimestamp)?;
+                continue;
+            };
+            let secs = match c_clock {
+                Some(cc) => {
+                    let cs = table.field(cc).unwrap_or("");
+                    match parse_clock(cs) {
+                        Some(s) => s,
+                        None => {
+                            policy.bad(&mut report, line, &names[cc], cs, Problem::BadTimestamp)?;
+                            continue;
+                        }
+                    }
+                }
+                None => 0,
+            };
+            day + secs - wide.utc_offset_s
+        };
+        for &(c, sensor) in &columns {
+            let v = match table.field(c) {
+                Ok(v) => v,
+                Err(p) => {
+                    policy.bad(&mut report, line, &names[c], "<bytes>", p)?;
+                    continue;
+                }
+            };
+            if is_missing(v) {
+                report.missing += 1;
+                continue;
+            }
+            match parse_value(v) {
+                Ok(value) => interner.out.rows.push(Row {
+                    sensor,
+                    modality,
+                    t,
+                    value,
+                    line: line as u32,
+                }),
+                Err(p) => policy.bad(&mut report, line, &names[c], v, p)?,
+            }
+        }
+    }
+    let readings = finish(interner, &policy, &mut report, wide.modality.as_str())?;
+    Ok((readings, report))
+}
+
+/// Parses a CAF-style quantity column header `VW_30cm` / `T_150cm` to a modality.
+fn caf_modality(header: &str) -> Option<Modality> {
+    let (q, d) = header.split_once('_')?;
+    let depth: u32 = d.strip_suffix("cm")?.parse().ok()?;
+    Modality::at_depth(&q.to_ascii_lowercase(), Some(depth)).ok()
+}
+
+/// Reads a CAF daily file (`caf/Daily/CAFnnn.txt`): tab-separated, columns `Location`, `Date`
+/// (`MM/DD/YYYY`, read as midnight UTC of that date) and one column per quantity and depth
+/// (`VW_30cm` .. `T_150cm`), each its own modality (`vw@30cm` in m3/m3, `t@30cm` in degC).
+/// `NA` is missing.
+pub fn read_caf_daily(
+    path: &Path,
+    options: &IngestOptions,
+) -> Result<(Readings, IngestReport), IngestError> {
+    let bytes = read_file(path)?;
+    let mut table = Table::open(path, &bytes, b'\t')?;
+    let c_loc = table.require(&["Location"])?;
+    let c_date = table.require(&["Date"])?;
+    let names = table.header.clone();
+    let policy = Policy {
+        path,
+        on_error: options.on_error,
+    };
+    let mut report = IngestReport::default();
+    let mut interner = Interner::default();
+    let mut columns: Vec<(usize, u32)> = Vec::new();
+    for (k, name) in names.iter().enumerate() {
+        if k == c_loc || k == c_date {
+            continue;
+        }
+        let Some(m) = caf_modality(name) else {
+            return Err(IngestError::Field {
+                path: path.to_path_buf(),
+                line: 1,
+                column: name.clone(),
+                value: name.clone(),
+                problem: Problem::BadModality,
+            });
+        };
+        let unit = default_unit(m.quantity());
+        let id = interner
+            .modality(m, unit)
+            .map_err(|_| IngestError::Options {
+                path: path.to_path_buf(),
+                message: format!("column `{name}` repeated"),
+            })?;
+        columns.push((k, id));
+    }
+    let ncols = names.len();
+    let mut last_sensor: Option<(String, u32)> = None;
+    while let Some(line) = table.next()? {
+        report.rows_read += 1;
+        if table.record.len() != ncols {
+            let found = table.record.len().to_string();
+            policy.bad(&mut report, line, "*", &found, Problem::FieldCount)?;
+            continue;
+        }
+        let loc = table.field(c_loc).unwrap_or("");
+        let sensor = match &last_sensor {
+            Some((s, k)) if s == loc => *k,
+            _ => {
+                if !known(options, loc) {
+                    policy.bad(
+                        &mut report,
+                        line,
+                        &names[c_loc],
+                        loc,
+                        Problem::UnknownSensor,
+                    )?;
+                    continue;
+                }
+                let Some(k) = interner.sensor(loc) else {
+                    policy.bad(&mut report, line, &names[c_loc], loc, Problem::BadSensorId)?;
+                    continue;
+                };
+                last_sensor = Some((loc.to_string(), k));
+                k
+            }
+        };
+        let ds = table.field(c_date).unwrap_or("");
+        let Some(t) = parse_us_date(ds) else {
+            policy.bad(&mut report, line, &names[c_date], ds, Problem::BadTimestamp)?;
+            continue;
+        };
+        for &(c, modality) in &columns {
+            let v = table.field(c).unwrap_or("");
+            if is_missing(v) {
+                report.missing += 1;
+                continue;
+            }
+            match parse_value(v) {
+                Ok(value) => interner.out.rows.push(Row {
+                    sensor,
+                    modality,
+                    t,
+                    value,
+                    line: line as u32,
+                }),
+                Err(p) => policy.bad(&mut report, line, &names[c], v, p)?,
+            }
+        }
+    }
+    let readings = finish(interner, &policy, &mut report, "value")?;
+    Ok((readings, report))
+}
+
+/// Settings for [`read_sensors_csv`].
+#[derive(Debug, Clone, Default)]
+pub struct SensorsOptions {
+    /// Read positions from `easting`/`northing` (metres) in this UTM zone (zone, northern
+    /// hemisphere?) instead of `lat`/`lon`. CAF is `(11, true)` (NAD83 / UTM 11N, EPSG:26911).
+    pub utm: Option<(u8, bool)>,
+    /// Bad-row policy.
+    pub on_error: OnError,
+}
+
+/// A sensor read from a file, with the line it came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensorInput {
+    /// The sensor.
+    pub sensor: Sensor,
+    /// 1-based line.
+    pub line: u64,
+}
+
+/// Reads a sensors table: `id` (or `sensor_id`, `location`, `name`), then either `lat`/`lon`
+/// (WGS84 degrees; `lat_deg`, `latitude`, `lon_deg`, `lng`, `longitude` accepted) or, with
+/// [`SensorsOptions::utm`], `easting`/`northing` metres (`easting_m`, `northing_m`); optional
+/// `elevation_m` (`elevation`). Duplicate ids are errors.
+pub fn read_sensors_csv(
+    path: &Path,
+    options: &SensorsOptions,
+) -> Result<(Vec<SensorInput>, IngestReport), IngestError> {
+    let bytes = read_file(path)?;
+    let delimiter = if bytes
+        .split(|&b| b == b'\n')
+        .next()
+        .is_some_and(|h| h.contains(&b'\t'))
+    {
+        b'\t'
+    } else {
+        b','
+    };
+    let mut table = Table::open(path, &bytes, delimiter)?;
+    let c_id = table.require(&["id", "sensor_id", "location", "name"])?;
+    let (c_x, c_y, utm) = match options.utm {
+        Some((zone, north)) => {
+            let tm = TransverseMercator::utm(zone, north).map_err(|e| IngestError::Options {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            })?;
+            (
+                table.require(&["easting", "easting_m", "x"])?,
+                table.require(&["northing", "northing_m", "y"])?,
+                Some(tm),
+            )
+        }
+        None => (
+            table.require(&["lat", "lat_deg", "latitude"])?,
+            table.require(&["lon", "lon_deg", "lng", "longitude"])?,
+            None,
+        ),
+    };
+    let c_elev = table.find(&["elevation_m", "elevation", "elev"]);
+    let names = table.header.clone();
+    let policy = Policy {
+        path,
+        on_error: options.on_error,
+    };
+    let mut report = IngestReport::default();
+    let mut out: Vec<SensorInput> = Vec::new();
+    let mut seen: HashMap<String, u64> = HashMap::new();
+    let ncols = names.len();
+    while let Some(line) = table.next()? {
+        report.rows_read += 1;
+        if table.record.len() != ncols {
+            let found = table.record.len().to_string();
+            policy.bad(&mut report, line, "*", &found, Problem::FieldCount)?;
+            continue;
+        }
+        let id_s = table.field(c_id).unwrap_or("");
+        let Ok(id) = SensorId::new(id_s) else {
+            policy.bad(&mut report, line, &names[c_id], id_s, Problem::BadSensorId)?;
+            continue;
+        };
+        if let Some(&first_line) = seen.get(id_s) {
+            policy.bad(
+                &mut report,
+                line,
+                &names[c_id],
+                id_s,
+                Problem::DuplicateSensor { first_line },
+            )?;
+            continue;
+        }
+        let mut coord = |c: usize| -> Result<Option<f64>, IngestError> {
+            let s = table.field(c).unwrap_or("");
+            match parse_value(s) {
+                Ok(v) => Ok(Some(v)),
+                Err(p) => policy
+                    .bad(&mut report, line, &names[c], s, p)
+                    .map(|()| None),
+            }
+        };
+        let (Some(x), Some(y)) = (coord(c_x)?, coord(c_y)?) else {
+            continue;
+        };
+        let position = match &utm {
+            Some(tm) => Ok(tm.inverse(LocalPoint::new(x, y))),
+            None => LatLon::new(x, y),
+        };
+        let Ok(position) = position else {
+            let v = format!("{x}, {y}");
+            policy.bad(
+                &mut report,
+                line,
+                &format!("{}/{}", names[c_x], names[c_y]),
+                &v,
+                Problem::BadPosition,
+            )?;
+            continue;
+        };
+        let elevation_m = match c_elev {
+            Some(c) => {
+                let s = table.field(c).unwrap_or("");
+                if is_missing(s) {
+                    None
+                } else {
+                    match parse_value(s) {
+                        Ok(v) => Some(v),
+                        Err(p) => {
+                            policy.bad(&mut report, line, &names[c], s, p)?;
+                            continue;
+                        }
+                    }
+                }
+            }
+            None => None,
+        };
+        seen.insert(id_s.to_string(), line);
+        out.push(SensorInput {
+            sensor: Sensor {
+                id,
+                position,
+                elevation_m,
+            },
+            line,
+        });
+    }
+    report.readings = out.len() as u64;
+    Ok((out, report))
+}

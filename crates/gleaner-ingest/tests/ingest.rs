@@ -1,0 +1,297 @@
+//! Integration tests: the bad-input corpus under `tests/data/` and the real CAF files.
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+use gleaner_field::Modality;
+use gleaner_ingest::{
+    IngestOptions, OnError, Readings, SensorsOptions, WideOptions, read_caf_daily, read_long_csv,
+    read_sensors_csv, read_wide_csv,
+};
+
+fn corpus(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+fn shared_data() -> PathBuf {
+    std::env::var_os("GLEANER_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"))
+}
+
+fn known(ids: &[&str]) -> IngestOptions {
+    IngestOptions {
+        on_error: OnError::Fail,
+        known_sensors: Some(ids.iter().map(|s| s.to_string()).collect::<HashSet<_>>()),
+    }
+}
+
+/// Reads `file` as a long CSV with sensors s1, s2 known; under `Fail` expects either
+/// `Ok(readings)` or an error whose message contains every fragment of `expected_err`; under
+/// `Skip` expects `skipped` skipped rows.
+fn check_long(file: &str, expected: Result<usize, &[&str]>, skipped: u64) {
+    let path = corpus(file);
+    let result = read_long_csv(&path, &known(&["s1", "s2"]));
+    match (result, expected) {
+        (Ok((r, _)), Ok(n)) => assert_eq!(r.rows.len(), n, "{file}"),
+        (Err(e), Err(fragments)) => {
+            let msg = e.to_string();
+            for f in fragments {
+                assert!(msg.contains(f), "{file}: {msg:?} lacks {f:?}");
+            }
+        }
+        (got, want) => panic!("{file}: got {got:?}, want {want:?}"),
+    }
+    let mut skip = known(&["s1", "s2"]);
+    skip.on_error = OnError::Skip;
+    match read_long_csv(&path, &skip) {
+        Ok((_, report)) => assert_eq!(report.skipped, skipped, "{file} skip mode"),
+        Err(e) => assert!(skipped == u64::MAX, "{file} skip mode failed: {e}"),
+    }
+}
+
+#[test]
+fn long_csv_corpus() {
+    check_long("long_ok.csv", Ok(3), 0);
+    check_long("long_bom_crlf.csv", Ok(2), 0);
+    check_long("long_identical_dup.csv", Ok(1), 0);
+    check_long(
+        "long_unknown_sensor.csv",
+        Err(&[
+            "long_unknown_sensor.csv:3:",
+            "column `sensor_id`",
+            "unknown sensor",
+            "\"ghost\"",
+        ]),
+        1,
+    );
+    check_long(
+        "long_not_number.csv",
+        Err(&[
+            "long_not_number.csv:3:",
+            "column `value`",
+            "not a number",
+            "\"wet\"",
+        ]),
+        1,
+    );
+    check_long(
+        "long_nan.csv",
+        Err(&[":2:", "not a finite number", "\"NaN\""]),
+        1,
+    );
+    check_long(
+        "long_inf.csv",
+        Err(&[":3:", "not a finite number", "\"inf\""]),
+        1,
+    );
+    check_long(
+        "long_bad_timestamp.csv",
+        Err(&[
+            ":3:",
+            "column `timestamp`",
+            "impossible timestamp",
+            "2014-02-30",
+        ]),
+        1,
+    );
+    check_long(
+        "long_conflict.csv",
+        Err(&[":4:", "conflicts with line 2", "0.31"]),
+        1,
+    );
+    check_long(
+        "long_field_count.csv",
+        Err(&[":2:", "wrong number of fields"]),
+        1,
+    );
+    check_long(
+        "long_bad_modality.csv",
+        Err(&[":2:", "column `modality`", "VW 30"]),
+        1,
+    );
+    check_long(
+        "long_unit_mismatch.csv",
+        Err(&[":3:", "column `unit`", "m3/m3", "percent"]),
+        1,
+    );
+    // Structural problems fail in both modes.
+    check_long(
+        "long_missing_column.csv",
+        Err(&["long_missing_column.csv:1:", "missing column `modality`"]),
+        u64::MAX,
+    );
+    check_long("empty.csv", Err(&["empty.csv", "empty file"]), u64::MAX);
+    check_long(
+        "does_not_exist.csv",
+        Err(&["does_not_exist.csv", "cannot read"]),
+        u64::MAX,
+    );
+}
+
+#[test]
+fn long_csv_values_and_units() {
+    let (r, report) = read_long_csv(&corpus("long_ok.csv"), &IngestOptions::default()).unwrap();
+    assert_eq!(report.missing, 1);
+    assert_eq!(report.rows_read, 4);
+    let names: Vec<_> = r
+        .modalities
+        .iter()
+        .map(|m| (m.modality.as_str(), m.unit.as_deref()))
+        .collect();
+    assert_eq!(
+        names,
+        [("vw@30cm", Some("m3/m3")), ("t@30cm", Some("degC"))]
+    );
+    let first = r.rows[0];
+    assert_eq!((first.t, first.value), (1_388_534_400, 0.31));
+}
+
+#[test]
+fn skipped_rows_are_reported_with_their_reason() {
+    let mut opts = known(&["s1", "s2"]);
+    opts.on_error = OnError::Skip;
+    let (r, report) = read_long_csv(&corpus("long_not_number.csv"), &opts).unwrap();
+    assert_eq!(r.rows.len(), 1);
+    assert_eq!(report.skipped_rows.len(), 1);
+    assert_eq!(report.skipped_rows[0].line, 3);
+    assert!(report.skipped_rows[0].reason.contains("not a number"));
+}
+
+#[test]
+fn sensors_corpus() {
+    let (s, _) = read_sensors_csv(&corpus("sensors_ok.csv"), &SensorsOptions::default()).unwrap();
+    assert_eq!(s.len(), 2);
+    assert_eq!(s[0].sensor.elevation_m, Some(790.0));
+    assert_eq!(s[1].sensor.elevation_m, None);
+    let e =
+        read_sensors_csv(&corpus("sensors_duplicate.csv"), &SensorsOptions::default()).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains(":3: column `id`: duplicate sensor id (first on line 2)"),
+        "{e}"
+    );
+    let e =
+        read_sensors_csv(&corpus("sensors_bad_lat.csv"), &SensorsOptions::default()).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains(":3: column `lat/lon`: invalid position: \"146.779, -117.086\""),
+        "{e}"
+    );
+}
+
+#[test]
+fn wide_corpus() {
+    let wide = WideOptions::new(Modality::new("vw@30cm").unwrap());
+    let (r, report) = read_wide_csv(&corpus("wide_ok.csv"), &wide, &known(&["s1", "s2"])).unwrap();
+    assert_eq!((r.rows.len(), report.missing), (3, 1));
+    assert_eq!(r.rows.iter().map(|x| x.t).max(), Some(1_420_070_400 + 3600));
+    let e = read_wide_csv(&corpus("wide_unknown_column.csv"), &wide, &known(&["s1"])).unwrap_err();
+    assert!(
+        e.to_string().contains(":1: column `ghost`: unknown sensor"),
+        "{e}"
+    );
+    let mut skip = known(&["s1"]);
+    skip.on_error = OnError::Skip;
+    let (r, report) = read_wide_csv(&corpus("wide_unknown_column.csv"), &wide, &skip).unwrap();
+    assert_eq!((r.rows.len(), report.skipped), (1, 1));
+}
+
+#[test]
+fn caf_impossible_date() {
+    let e = read_caf_daily(&corpus("caf_bad_date.txt"), &IngestOptions::default()).unwrap_err();
+    assert!(
+        e.to_string().contains(
+            "caf_bad_date.txt:3: column `Date`: invalid or impossible timestamp: \"04/31/2007\""
+        ),
+        "{e}"
+    );
+}
+
+fn caf_sensors() -> Vec<gleaner_ingest::SensorInput> {
+    let path = shared_data().join("caf/sensors/CAF_sensor_locations.csv");
+    let (s, _) = read_sensors_csv(
+        &path,
+        &SensorsOptions {
+            utm: Some((11, true)),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    s
+}
+
+#[test]
+fn caf_locations_from_utm_match_published_lat_lon() {
+    let sensors = caf_sensors();
+    assert_eq!(sensors.len(), 42);
+    let path = shared_data().join("caf/sensors/CAF_sensor_locations.csv");
+    let (by_ll, _) = read_sensors_csv(&path, &SensorsOptions::default()).unwrap();
+    for (a, b) in sensors.iter().zip(&by_ll) {
+        assert_eq!(a.sensor.id, b.sensor.id);
+        assert!((a.sensor.position.lat() - b.sensor.position.lat()).abs() < 2e-5);
+        assert!((a.sensor.position.lon() - b.sensor.position.lon()).abs() < 2e-5);
+    }
+}
+
+#[test]
+fn all_caf_daily_files_ingest() {
+    let sensors = caf_sensors();
+    let opts = IngestOptions {
+        on_error: OnError::Fail,
+        known_sensors: Some(sensors.iter().map(|s| s.sensor.id.to_string()).collect()),
+    };
+    let mut files: Vec<_> = std::fs::read_dir(shared_data().join("caf/Daily"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 42);
+    let mut all = Readings::default();
+    let mut missing = 0;
+    for f in &files {
+        let (r, report) = read_caf_daily(f, &opts).unwrap();
+        assert_eq!(r.sensors.len(), 1, "{f:?}");
+        assert_eq!(r.modalities.len(), 10, "{f:?}");
+        assert_eq!(report.skipped, 0);
+        missing += report.missing;
+        all.append(r);
+    }
+    assert_eq!(all.sensors.len(), 42);
+    let total = all.rows.len() as u64;
+    let frac_missing = missing as f64 / (missing + total) as f64;
+    assert!(
+        (0.40..0.55).contains(&frac_missing),
+        "missing fraction {frac_missing}"
+    );
+    // Physical ranges: VW in m3/m3, T in degC.
+    for r in &all.rows {
+        let m = &all.modalities[r.modality as usize].modality;
+        match m.quantity() {
+            "vw" => assert!((-0.1..=1.0).contains(&r.value), "{m} {}", r.value),
+            "t" => assert!((-40.0..=60.0).contains(&r.value), "{m} {}", r.value),
+            q => panic!("unexpected quantity {q}"),
+        }
+    }
+}
+
+#[test]
+fn caf_hourly_wide_file_ingests() {
+    let sensors = caf_sensors();
+    let opts = IngestOptions {
+        on_error: OnError::Fail,
+        known_sensors: Some(sensors.iter().map(|s| s.sensor.id.to_string()).collect()),
+    };
+    let path = shared_data().join("caf/derived/water_content_2015_Jan_April_32_sensors.csv");
+    let wide = WideOptions::new(Modality::new("vw@30cm").unwrap());
+    let (r, report) = read_wide_csv(&path, &wide, &opts).unwrap();
+    assert_eq!(r.sensors.len(), 32);
+    assert_eq!(report.missing, 0);
+    // 2521 data lines from 2015-01-01 00:00 to 2015-04-22 09:00 (local clock read as UTC).
+    assert_eq!(report.rows_read, 2521);
+    assert_eq!(r.rows.iter().map(|x| x.t).min(), Some(1_420_070_400));
+    assert_eq!(r.rows.iter().map(|x| x.t).max(), Some(1_429_693_200));
+    assert_eq!(r.rows.len() as u64, 32 * report.rows_read);
+}
