@@ -18,10 +18,14 @@ pub enum FieldError {
     #[error("invalid UTM zone {0}: must be 1..=60")]
     InvalidUtmZone(u8),
     /// An empty or malformed sensor identifier.
-    #[error("invalid sensor id {0:?}: must be non-empty, at most 128 characters, no control characters")]
+    #[error(
+        "invalid sensor id {0:?}: must be non-empty, at most 128 characters, no control characters"
+    )]
     InvalidSensorId(String),
     /// A malformed modality name.
-    #[error("invalid modality {0:?}: expected a quantity such as `vw` or `t`, optionally `@<depth>cm`, e.g. `vw@30cm`")]
+    #[error(
+        "invalid modality {0:?}: expected a quantity such as `vw` or `t`, optionally `@<depth>cm`, e.g. `vw@30cm`"
+    )]
     InvalidModality(String),
     /// Two sensors share an id.
     #[error("duplicate sensor id {0:?}")]

@@ -132,7 +132,11 @@ pub struct Field {
 impl Field {
     /// Grids `sensors` around the base station `base`. Fails on an invalid cell size, no sensors
     /// or a duplicate sensor id.
-    pub fn build(sensors: &[Sensor], base: LatLon, config: &FieldConfig) -> Result<Self, FieldError> {
+    pub fn build(
+        sensors: &[Sensor],
+        base: LatLon,
+        config: &FieldConfig,
+    ) -> Result<Self, FieldError> {
         let size = config.cell_size_m;
         if !(size.is_finite() && size > 0.0) {
             return Err(FieldError::InvalidCellSize(size));
@@ -341,7 +345,13 @@ mod tests {
     #[test]
     fn sensors_share_cells_and_neighbours_are_8_connected() {
         let f = field_from_local(
-            &[(5.0, 5.0), (30.0, 30.0), (45.0, 5.0), (85.0, 85.0), (500.0, 500.0)],
+            &[
+                (5.0, 5.0),
+                (30.0, 30.0),
+                (45.0, 5.0),
+                (85.0, 85.0),
+                (500.0, 500.0),
+            ],
             &FieldConfig::with_cell_size(40.0),
         );
         let labels: Vec<String> = f.cells().iter().map(|c| c.index.to_string()).collect();
@@ -358,7 +368,13 @@ mod tests {
     #[test]
     fn isolated_cell_falls_back_to_k_nearest_within_radius() {
         let f = field_from_local(
-            &[(20.0, 20.0), (100.0, 20.0), (20.0, 140.0), (180.0, 20.0), (20.0, 400.0)],
+            &[
+                (20.0, 20.0),
+                (100.0, 20.0),
+                (20.0, 140.0),
+                (180.0, 20.0),
+                (20.0, 400.0),
+            ],
             &FieldConfig::with_cell_size(40.0),
         );
         // cell 0 at x0y0: non-empty cells at x2y0 (80 m), x0y3 (120 m), x4y0 (160 m).

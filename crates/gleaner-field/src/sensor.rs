@@ -130,10 +130,22 @@ mod tests {
         assert_eq!(m.quantity(), "vw");
         assert_eq!(m.depth_cm(), Some(30));
         assert_eq!(Modality::new("humidity").unwrap().depth_cm(), None);
-        for bad in ["", "@30cm", "vw@", "vw@30", "vw@xcm", "v w", "9vw", "vw@30cm@1cm"] {
+        for bad in [
+            "",
+            "@30cm",
+            "vw@",
+            "vw@30",
+            "vw@xcm",
+            "v w",
+            "9vw",
+            "vw@30cm@1cm",
+        ] {
             assert!(Modality::new(bad).is_err(), "{bad:?} accepted");
         }
-        assert_eq!(Modality::at_depth("t", Some(150)).unwrap().as_str(), "t@150cm");
+        assert_eq!(
+            Modality::at_depth("t", Some(150)).unwrap().as_str(),
+            "t@150cm"
+        );
     }
 
     #[test]
