@@ -1,0 +1,6 @@
+//! One module per subcommand. Each takes plain settings (already parsed from the command line)
+//! and returns values or text; only `main.rs` knows clap.
+
+pub mod cells;
+pub mod ingest;
+pub mod init;

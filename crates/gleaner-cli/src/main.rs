@@ -1,0 +1,223 @@
+//! `gleaner`: plans UAV data-collection missions over a farm's sensor network so that each
+//! flight brings back the data worth most to science.
+//!
+//! This binary is the only place that knows clap: arguments are parsed here, turned into plain
+//! settings, and handed to the `commands` modules.
+
+mod commands;
+mod config;
+mod progress;
+mod project;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand, ValueEnum};
+
+use commands::{cells, ingest, init};
+use project::Project;
+
+/// Utility-driven UAV data collection for farm sensor networks.
+///
+/// A project is a directory with `gleaner.toml` (settings) and `gleaner.db` (SQLite: sensors,
+/// readings, cells and the cell metadata table, missions).
+#[derive(Parser)]
+#[command(name = "gleaner", version, about, long_about = None, after_help = "Start with `gleaner demo` for a tour on a synthetic farm.")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Create a project from a sensors file: settings, database, sensors and the cell grid.
+    #[command(after_help = "Examples:\n  gleaner init --dir farm --sensors sensors.csv --cell-size 40\n  gleaner init --dir caf --sensors ../shared/data/caf/sensors/CAF_sensor_locations.csv --utm-zone 11N")]
+    Init {
+        /// Project directory (created if missing).
+        #[arg(long, default_value = ".")]
+        dir: PathBuf,
+        /// Sensors CSV: `id,lat,lon[,elevation_m]` (WGS84 degrees), or `easting,northing` metres
+        /// with --utm-zone (CAF_sensor_locations.csv works as is).
+        #[arg(long)]
+        sensors: PathBuf,
+        /// Read positions as UTM easting/northing in this zone, e.g. `11N` (EPSG:26911/32611).
+        #[arg(long)]
+        utm_zone: Option<String>,
+        /// Base station (take-off and landing) as `LAT,LON` in WGS84 degrees [default: 10 m
+        /// south of the middle of the sensors' southern edge].
+        #[arg(long, value_parser = parse_lat_lon, allow_hyphen_values = true)]
+        base: Option<(f64, f64)>,
+        /// Cell side in metres (the UAV's ground coverage) [default: 40].
+        #[arg(long)]
+        cell_size: Option<f64>,
+        /// UAV altitude, metres; with --half-angle derives the cell side (r = h·tan θ, side = r·√2).
+        #[arg(long, requires = "half_angle")]
+        altitude: Option<f64>,
+        /// Antenna half-angle, degrees (with --altitude).
+        #[arg(long, requires = "altitude")]
+        half_angle: Option<f64>,
+        /// Project name [default: the directory's name].
+        #[arg(long)]
+        name: Option<String>,
+        /// Overwrite the settings of an existing project (its database is kept).
+        #[arg(long)]
+        force: bool,
+    },
+    /// Ingest readings files into the project, all or nothing; re-ingesting changes nothing.
+    #[command(after_help = "Formats (auto-detected from the header):\n  long-csv   sensor_id,timestamp,modality,value[,unit]   (RFC 3339 or YYYY-MM-DD)\n  wide-csv   Date[,Time] or timestamp, then one column per sensor (needs --modality)\n  caf-daily  CAF daily files: Location<TAB>Date<TAB>VW_30cm ... T_150cm, NA = missing\n\nExamples:\n  gleaner ingest --project farm readings.csv\n  gleaner ingest --project caf ../shared/data/caf/Daily/*.txt\n  gleaner ingest --project caf --modality vw@30cm hourly.csv")]
+    Ingest {
+        /// Files to ingest.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Project directory.
+        #[arg(long, default_value = ".")]
+        project: PathBuf,
+        /// File format.
+        #[arg(long, value_enum, default_value_t = FormatArg::Auto)]
+        format: FormatArg,
+        /// Wide files: the modality of every sensor column, e.g. `vw@30cm`.
+        #[arg(long)]
+        modality: Option<String>,
+        /// Wide files: the unit of the values, e.g. `m3/m3`.
+        #[arg(long)]
+        unit: Option<String>,
+        /// Wide files: hours the file's clock is ahead of UTC (e.g. -8 for PST).
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        utc_offset: f64,
+        /// What to do with a bad row: stop and store nothing, or skip it and report it.
+        #[arg(long, value_enum, default_value_t = OnErrorArg::Fail)]
+        on_error: OnErrorArg,
+    },
+    /// Show the cell table with its metadata (summaries, scores, pending data).
+    #[command(after_help = "Examples:\n  gleaner cells --project farm\n  gleaner cells --project farm --sort score --json")]
+    Cells {
+        /// Project directory.
+        #[arg(long, default_value = ".")]
+        project: PathBuf,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+        /// Order of the rows.
+        #[arg(long, value_enum, default_value_t = SortArg::Label)]
+        sort: SortArg,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum FormatArg {
+    Auto,
+    LongCsv,
+    WideCsv,
+    CafDaily,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum OnErrorArg {
+    Fail,
+    Skip,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SortArg {
+    Label,
+    Sensors,
+    Score,
+    Stale,
+}
+
+fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s.split_once(',').ok_or_else(|| format!("expected LAT,LON, got {s:?}"))?;
+    let lat = a.trim().parse().map_err(|_| format!("bad latitude {a:?}"))?;
+    let lon = b.trim().parse().map_err(|_| format!("bad longitude {b:?}"))?;
+    Ok((lat, lon))
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Init {
+            dir,
+            sensors,
+            utm_zone,
+            base,
+            cell_size,
+            altitude,
+            half_angle,
+            name,
+            force,
+        } => {
+            let summary = init::run(&init::InitArgs {
+                dir,
+                sensors,
+                utm_zone,
+                base,
+                cell_size_m: cell_size,
+                coverage: altitude.zip(half_angle),
+                name,
+                force,
+            })?;
+            println!("{summary}");
+        }
+        Command::Ingest {
+            files,
+            project,
+            format,
+            modality,
+            unit,
+            utc_offset,
+            on_error,
+        } => {
+            let mut p = Project::open(&project)?;
+            let outcome = ingest::run(
+                &mut p,
+                &ingest::IngestArgs {
+                    files,
+                    format: match format {
+                        FormatArg::Auto => ingest::Format::Auto,
+                        FormatArg::LongCsv => ingest::Format::Long,
+                        FormatArg::WideCsv => ingest::Format::Wide,
+                        FormatArg::CafDaily => ingest::Format::CafDaily,
+                    },
+                    modality,
+                    unit,
+                    utc_offset_h: utc_offset,
+                    on_error: match on_error {
+                        OnErrorArg::Fail => gleaner_ingest::OnError::Fail,
+                        OnErrorArg::Skip => gleaner_ingest::OnError::Skip,
+                    },
+                    now: None,
+                },
+            )?;
+            println!("{outcome}");
+        }
+        Command::Cells { project, json, sort } => {
+            let p = Project::open(&project)?;
+            let mut rows = cells::cell_rows(&p)?;
+            cells::sort(
+                &mut rows,
+                match sort {
+                    SortArg::Label => cells::SortKey::Label,
+                    SortArg::Sensors => cells::SortKey::Sensors,
+                    SortArg::Score => cells::SortKey::Score,
+                    SortArg::Stale => cells::SortKey::Stale,
+                },
+            );
+            if json {
+                println!("{}", serde_json::to_string_pretty(&rows).context("serialising cells")?);
+            } else {
+                print!("{}", cells::table(&rows));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

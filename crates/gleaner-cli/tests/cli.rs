@@ -1,0 +1,148 @@
+//! End-to-end tests of the `gleaner` binary: each runs the real executable in a temporary
+//! project directory. Output formats are pinned with insta snapshots.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
+}
+
+fn shared_data() -> PathBuf {
+    std::env::var_os("GLEANER_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"))
+}
+
+fn gleaner(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gleaner"))
+        .args(args)
+        .output()
+        .expect("run gleaner")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = gleaner(args);
+    assert!(
+        out.status.success(),
+        "gleaner {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("utf-8 output")
+}
+
+fn fail(args: &[&str]) -> String {
+    let out = gleaner(args);
+    assert!(!out.status.success(), "gleaner {args:?} succeeded");
+    String::from_utf8(out.stderr).expect("utf-8 output")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+fn small_project() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sensors = data("sensors.csv");
+    ok(&["init", "--dir", s(dir.path()), "--sensors", s(&sensors), "--base", "46.7800,-117.0805"]);
+    dir
+}
+
+#[test]
+fn init_ingest_cells_snapshot() {
+    let dir = small_project();
+    let p = s(dir.path());
+    let readings = data("readings.csv");
+    let out = ok(&["ingest", "--project", p, s(&readings)]);
+    insta::assert_snapshot!("ingest_small", out);
+    let table = ok(&["cells", "--project", p]);
+    insta::assert_snapshot!("cells_small", table);
+    let json = ok(&["cells", "--project", p, "--json", "--sort", "sensors"]);
+    let v: serde_json::Value = serde_json::from_str(&json).expect("json");
+    insta::assert_json_snapshot!("cells_small_json", v);
+}
+
+#[test]
+fn reingest_changes_nothing() {
+    let dir = small_project();
+    let p = s(dir.path());
+    let readings = data("readings.csv");
+    ok(&["ingest", "--project", p, s(&readings)]);
+    let before = ok(&["cells", "--project", p, "--json"]);
+    let again = ok(&["ingest", "--project", p, s(&readings)]);
+    assert!(again.contains("(0 new, 160 already stored)"), "{again}");
+    assert_eq!(before, ok(&["cells", "--project", p, "--json"]));
+}
+
+#[test]
+fn failed_ingest_stores_nothing() {
+    let dir = small_project();
+    let p = s(dir.path());
+    let bad = dir.path().join("bad.csv");
+    let good = std::fs::read_to_string(data("readings.csv")).expect("read");
+    std::fs::write(&bad, format!("{good}n1,2014-02-30,vw@30cm,0.3,m3/m3\n")).expect("write");
+    let err = fail(&["ingest", "--project", p, s(&bad)]);
+    assert!(err.contains("bad.csv:162: column `timestamp`: invalid or impossible timestamp: \"2014-02-30\""), "{err}");
+    let json = ok(&["cells", "--project", p, "--json"]);
+    assert!(!json.contains("\"count\""), "something was stored: {json}");
+    // A conflict with stored data rolls back the whole second ingest.
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    let conflict = dir.path().join("conflict.csv");
+    std::fs::write(
+        &conflict,
+        "sensor_id,timestamp,modality,value\nn1,2015-01-01,vw@30cm,0.2\nn1,2014-01-01,vw@30cm,0.9\n",
+    )
+    .expect("write");
+    let err = fail(&["ingest", "--project", p, s(&conflict)]);
+    assert!(err.contains("nothing was stored"), "{err}");
+    let skipped = ok(&["ingest", "--project", p, "--on-error", "skip", s(&conflict)]);
+    assert!(skipped.contains("(1 new, 0 already stored)") && skipped.contains("1 conflicts kept as stored"), "{skipped}");
+}
+
+#[test]
+fn ingest_skip_mode_reports_rows() {
+    let dir = small_project();
+    let p = s(dir.path());
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(&bad, "sensor_id,timestamp,modality,value\nn1,2014-01-01,vw@30cm,0.3\nghost,2014-01-01,vw@30cm,0.3\nn2,2014-01-01,vw@30cm,wet\n").expect("write");
+    let out = ok(&["ingest", "--project", p, "--on-error", "skip", s(&bad)]);
+    assert!(out.contains("2 rows skipped"), "{out}");
+    assert!(out.contains("bad.csv:3: column `sensor_id`: unknown sensor"), "{out}");
+    assert!(out.contains("bad.csv:4: column `value`: not a number: \"wet\""), "{out}");
+}
+
+#[test]
+fn every_command_has_help_with_an_example() {
+    for cmd in ["init", "ingest", "cells"] {
+        let out = ok(&[cmd, "--help"]);
+        assert!(out.contains("Example"), "{cmd} --help lacks an example:\n{out}");
+    }
+}
+
+#[test]
+fn caf_project_from_real_data() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let p = s(dir.path());
+    let d = shared_data();
+    let locations = d.join("caf/sensors/CAF_sensor_locations.csv");
+    let init = ok(&["init", "--dir", p, "--sensors", s(&locations), "--utm-zone", "11N"]);
+    assert!(init.contains("sensors: 42 (42 new, 0 updated)"), "{init}");
+    let mut args: Vec<String> = vec!["ingest".into(), "--project".into(), p.into()];
+    let mut files: Vec<PathBuf> = std::fs::read_dir(d.join("caf/Daily"))
+        .expect("CAF daily dir")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    files.sort();
+    args.extend(files.iter().map(|f| s(f).to_string()));
+    let argv: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = ok(&argv);
+    assert!(out.contains("ingested 42 file(s)"), "{out}");
+    let hourly = d.join("caf/derived/water_content_2015_Jan_April_32_sensors.csv");
+    let out = ok(&["ingest", "--project", p, "--modality", "vw@30cm", s(&hourly)]);
+    assert!(out.contains("80672 readings"), "{out}");
+    let json = ok(&["cells", "--project", p, "--json"]);
+    let cells: Vec<serde_json::Value> = serde_json::from_str(&json).expect("json");
+    let sensors: usize = cells.iter().map(|c| c["sensors"].as_array().map_or(0, Vec::len)).sum();
+    assert_eq!(sensors, 42);
+    assert!(cells.iter().all(|c| !c["summaries"].as_array().expect("summaries").is_empty()));
+}
