@@ -29,10 +29,10 @@ pub enum StoreError {
         supported: i64,
     },
     /// A reading batch names a sensor that has not been stored with `upsert_sensors`.
-    #[error("unknown sensor {0:?}: upsert the sensor before inserting its readings")]
+    #[error("unknown sensor \"{0}\": upsert the sensor before inserting its readings")]
     UnknownSensor(SensorId),
     /// A reading batch names a modality that has not been stored with `upsert_modalities`.
-    #[error("unknown modality {0:?}: upsert the modality before inserting its readings")]
+    #[error("unknown modality \"{0}\": upsert the modality before inserting its readings")]
     UnknownModality(Modality),
     /// A cell lists a sensor that is not stored, or a mission visit names an unknown mission.
     #[error("unknown {what} {name:?}")]

@@ -81,6 +81,9 @@ mod sqlite;
 mod store;
 mod types;
 
+#[cfg(test)]
+mod tests;
+
 pub use error::{Result, StoreError};
 pub use sqlite::SqliteStore;
 pub use store::Store;
