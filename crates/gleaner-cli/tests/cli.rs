@@ -137,9 +137,14 @@ fn caf_project_from_real_data() {
     let argv: Vec<&str> = args.iter().map(String::as_str).collect();
     let out = ok(&argv);
     assert!(out.contains("ingested 42 file(s)"), "{out}");
+    // The hourly file's midnight readings collide with the daily means (stamped at midnight):
+    // a conflict with stored data, so nothing is stored...
     let hourly = d.join("caf/derived/water_content_2015_Jan_April_32_sensors.csv");
-    let out = ok(&["ingest", "--project", p, "--modality", "vw@30cm", s(&hourly)]);
-    assert!(out.contains("80672 readings"), "{out}");
+    let err = fail(&["ingest", "--project", p, "--modality", "vw@30cm", s(&hourly)]);
+    assert!(err.contains("conflicting reading(s), nothing written; first: CAF003 vw@30cm"), "{err}");
+    // ... while as its own modality it goes in whole.
+    let out = ok(&["ingest", "--project", p, "--modality", "vwh@30cm", s(&hourly)]);
+    assert!(out.contains("80672 readings (80672 new"), "{out}");
     let json = ok(&["cells", "--project", p, "--json"]);
     let cells: Vec<serde_json::Value> = serde_json::from_str(&json).expect("json");
     let sensors: usize = cells.iter().map(|c| c["sensors"].as_array().map_or(0, Vec::len)).sum();
