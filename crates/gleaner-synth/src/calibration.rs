@@ -282,8 +282,8 @@ mod tests {
         };
         let s = panel_stats(&panel, &options);
         assert_eq!(s.count, 9);
-        assert!((s.mean - 2.3 / 9.0).abs() < 1e-12);
-        // Changes: 0.1, 0.05 (sensor 1); 0.1, 0, 0, 0.05 (sensor 2): three above 0.07? no, two.
+        assert!((s.mean - 2.2 / 9.0).abs() < 1e-12);
+        // Changes: 0.1, 0.05 (sensor 1); 0.1, 0, 0, 0.05 (sensor 2): two above 0.07.
         assert!((s.big_jump_fraction - 2.0 / 6.0).abs() < 1e-12);
         // Common days 0, 1, 3, 4: sensor 2 is sensor 1 + 0.1 there, so correlation 1.
         assert!((s.bins[0].mean_corr - 1.0).abs() < 1e-12);

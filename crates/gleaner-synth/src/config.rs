@@ -151,16 +151,16 @@ pub struct Climate {
     pub storm_peak_doy: f64,
     /// Mean rain per storm, millimetres (exponentially distributed; default 7 mm).
     pub storm_mean_mm: f64,
-    /// Mean annual soil temperature, °C (default 10.0).
+    /// Mean annual soil temperature, °C (default 10.2).
     pub mean_soil_temp_c: f64,
-    /// Amplitude of the annual temperature wave at the surface, °C (default 11.0).
+    /// Amplitude of the annual temperature wave at the surface, °C (default 11.2).
     pub surface_annual_amplitude_c: f64,
     /// Amplitude of the daily temperature wave at the surface, °C (default 8.0); visible only
     /// with sub-daily sampling and in the top few tens of centimetres.
     pub surface_daily_amplitude_c: f64,
     /// Day of year of the warmest surface temperature, days since 1 January (default 200).
     pub warmest_doy: f64,
-    /// Annual damping depth of the temperature wave, centimetres (default 180 cm): amplitude
+    /// Annual damping depth of the temperature wave, centimetres (default 165 cm): amplitude
     /// falls as `exp(-z / D)` and the phase lags by `z / D` radians.
     pub annual_damping_depth_cm: f64,
 }
@@ -172,11 +172,11 @@ impl Default for Climate {
             storm_seasonality: 0.7,
             storm_peak_doy: 340.0,
             storm_mean_mm: 7.0,
-            mean_soil_temp_c: 10.0,
-            surface_annual_amplitude_c: 11.0,
+            mean_soil_temp_c: 10.2,
+            surface_annual_amplitude_c: 11.2,
             surface_daily_amplitude_c: 8.0,
             warmest_doy: 200.0,
-            annual_damping_depth_cm: 180.0,
+            annual_damping_depth_cm: 165.0,
         }
     }
 }

@@ -17,17 +17,17 @@ use crate::time::day_of_year;
 /// interpolate linearly and clamp at the ends.
 const TABLE_DEPTHS_CM: [f64; 5] = [30.0, 60.0, 90.0, 120.0, 150.0];
 /// Mean wilting baseline (dry end) of volumetric water, m³/m³.
-const WILT_MEAN: [f64; 5] = [0.125, 0.14, 0.15, 0.155, 0.16];
+const WILT_MEAN: [f64; 5] = [0.14, 0.153, 0.17, 0.175, 0.18];
 /// Between-sensor standard deviation of the wilting baseline, m³/m³.
 const WILT_SD: [f64; 5] = [0.04, 0.055, 0.06, 0.07, 0.07];
 /// Mean range from wilting baseline to field capacity, m³/m³.
-const RANGE_MEAN: [f64; 5] = [0.24, 0.26, 0.25, 0.24, 0.24];
+const RANGE_MEAN: [f64; 5] = [0.19, 0.21, 0.2, 0.2, 0.2];
 /// Between-sensor coefficient of variation (log-normal) of the range, dimensionless.
 const RANGE_CV: [f64; 5] = [0.12, 0.14, 0.15, 0.16, 0.16];
 /// Drying rate at the peak of the growing season, 1/day.
-const DRYING_RATE: [f64; 5] = [0.06, 0.06, 0.055, 0.05, 0.04];
+const DRYING_RATE: [f64; 5] = [0.07, 0.065, 0.06, 0.055, 0.045];
 /// Storage gained per millimetre of rain reaching the layer, 1/mm.
-const RAIN_GAIN: [f64; 5] = [0.022, 0.024, 0.024, 0.022, 0.02];
+const RAIN_GAIN: [f64; 5] = [0.03, 0.028, 0.026, 0.024, 0.022];
 /// Time constant of the rain pulse's arrival at the layer (lag and damping), days.
 const INFILTRATION_TAU_DAYS: [f64; 5] = [1.2, 2.0, 3.0, 5.0, 8.0];
 /// Amplitude of the spatially correlated moving anomaly, m³/m³.
@@ -72,7 +72,9 @@ const T_AMPLITUDE_CV: f64 = 0.04;
 /// White measurement noise of soil temperature, °C.
 const T_NOISE_SD: f64 = 0.015;
 
-const VW_RANGE: (f64, f64) = (0.01, 0.60);
+/// Physical clamp of volumetric water content, m³/m³ (inside [0, 0.6] even as f32).
+const VW_RANGE: (f64, f64) = (0.01, 0.58);
+/// Physical clamp of soil temperature, °C.
 const T_RANGE: (f64, f64) = (-30.0, 50.0);
 
 fn interp(table: &[f64; 5], depth_cm: f64) -> f64 {
@@ -715,10 +717,11 @@ fn apply_faults(
                 });
                 stuck_left[m] = len;
             }
+            let spike = uniform(rng) < f.spike_per_reading;
             if stuck_left[m] > 0 {
                 stuck_left[m] -= 1;
                 out[at] = out[at - 1];
-            } else if uniform(rng) < f.spike_per_reading && !out[at].is_nan() {
+            } else if spike && dropout_left == 0 && !out[at].is_nan() {
                 let up = uniform(rng) < 0.5;
                 let (size, (lo, hi)) = if spec.is_water {
                     (0.05 + 0.10 * uniform(rng), VW_RANGE)
