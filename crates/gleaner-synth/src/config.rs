@@ -8,6 +8,10 @@ use crate::SynthError;
 /// [`SynthConfig::scale_extent_with_sensors`] is on.
 pub const CAF_SENSOR_COUNT: usize = 42;
 
+/// Largest farm [`crate::generate`] accepts, in values (sensors x modalities x steps): 2e9
+/// single-precision values, 8 GB of memory.
+pub const MAX_VALUES: u64 = 2_000_000_000;
+
 /// 2014-01-01T00:00:00Z, the default start, seconds since the Unix epoch.
 pub const DEFAULT_START: UnixSeconds = 1_388_534_400;
 
@@ -269,6 +273,16 @@ impl SynthConfig {
                 "vw_depths_cm + t_depths_cm",
                 self.vw_depths_cm.len() + self.t_depths_cm.len(),
                 "at most 1000 modalities",
+            ));
+        }
+        let values = (self.sensor_count as u128)
+            * (self.vw_depths_cm.len() + self.t_depths_cm.len()) as u128
+            * (u128::from(self.days) * 86_400 / self.interval_s as u128);
+        if values > MAX_VALUES as u128 {
+            return Err(invalid(
+                "sensor_count x modalities x steps",
+                values,
+                "at most 2e9 values (8 GB in memory)",
             ));
         }
         let f = &self.faults;

@@ -144,7 +144,7 @@ mod time;
 mod write;
 
 pub use calibration::{DailyPanel, DistanceBin, PanelStats, StatsOptions, panel_stats};
-pub use config::{CAF_SENSOR_COUNT, Climate, DEFAULT_START, FaultRates, SynthConfig};
+pub use config::{CAF_SENSOR_COUNT, Climate, DEFAULT_START, FaultRates, MAX_VALUES, SynthConfig};
 pub use error::SynthError;
 pub use farm::{
     EventKind, FaultKind, FaultRecord, GroundTruthEvent, ModalitySpec, Reading, SynthFarm,

@@ -332,7 +332,7 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
         values
             .par_chunks_mut(stride)
             .enumerate()
-            .map(|(i, out)| simulate_sensor(&ctx, i, local[i], out, &times))
+            .map(|(i, out)| simulate_sensor(&ctx, i, local[i], out))
             .collect::<Vec<_>>()
             .into_iter()
             .flatten()
@@ -515,7 +515,6 @@ fn simulate_sensor(
     index: usize,
     p: LocalPoint,
     out: &mut [f32],
-    times: &[i64],
 ) -> Vec<FaultRecord> {
     let config = ctx.config;
     let steps = ctx.steps;
@@ -663,7 +662,7 @@ fn simulate_sensor(
         }
     }
 
-    let faults = apply_faults(config, index, ctx.modalities, out, steps, times, &mut rng);
+    let faults = apply_faults(config, index, ctx.modalities, out, steps, &mut rng);
 
     for (m, spec) in ctx.modalities.iter().enumerate() {
         for v in &mut out[m * steps..(m + 1) * steps] {
@@ -682,13 +681,11 @@ fn apply_faults(
     modalities: &[ModalitySpec],
     out: &mut [f32],
     steps: usize,
-    times: &[i64],
     rng: &mut ChaCha8Rng,
 ) -> Vec<FaultRecord> {
     let f = &config.faults;
     let mut records = Vec::new();
     let time_at = |s: usize| config.start + s as i64 * config.interval_s;
-    let _ = times;
     let mods = modalities.len();
     let mut dropout_left = 0usize;
     let mut stuck_left = vec![0usize; mods];

@@ -107,6 +107,13 @@ fn invalid_settings_are_rejected_with_their_name() {
         "climate.storm_seasonality",
     );
     check_invalid(|c| c.start = i64::MAX - 10, "start");
+    check_invalid(
+        |c| {
+            c.sensor_count = 10_000_000;
+            c.days = 1000;
+        },
+        "sensor_count x modalities x steps",
+    );
 }
 
 #[test]
