@@ -689,6 +689,8 @@ fn apply_faults(
     let mods = modalities.len();
     let mut dropout_left = 0usize;
     let mut stuck_left = vec![0usize; mods];
+    // Last value each modality reported: what a stuck sensor repeats.
+    let mut last_reported = vec![f32::NAN; mods];
     for t in 0..steps {
         if dropout_left == 0 && uniform(rng) < f.dropout_per_step {
             let len = geometric_len(rng, f.dropout_mean_steps).min(steps - t);
@@ -717,7 +719,10 @@ fn apply_faults(
             let spike = uniform(rng) < f.spike_per_reading;
             if stuck_left[m] > 0 {
                 stuck_left[m] -= 1;
-                out[at] = out[at - 1];
+                // A reading that is missing anyway (a dead sensor) stays missing.
+                if !out[at].is_nan() && !last_reported[m].is_nan() {
+                    out[at] = last_reported[m];
+                }
             } else if spike && dropout_left == 0 && !out[at].is_nan() {
                 let up = uniform(rng) < 0.5;
                 let (size, (lo, hi)) = if spec.is_water {
@@ -737,6 +742,8 @@ fn apply_faults(
             }
             if dropout_left > 0 {
                 out[at] = f32::NAN;
+            } else if !out[at].is_nan() {
+                last_reported[m] = out[at];
             }
         }
         dropout_left = dropout_left.saturating_sub(1);

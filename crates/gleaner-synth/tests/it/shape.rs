@@ -55,6 +55,25 @@ fn with_default_faults_values_stay_physical_and_missing_rows_are_absent() {
 }
 
 #[test]
+fn in_memory_readings_match_the_csv_rows() {
+    let farm = generate(&small(9, 15, 50)).unwrap();
+    let readings = &all_csv(&farm)[1];
+    let mut rows = readings.lines().skip(1);
+    let mut count = 0;
+    for r in farm.readings() {
+        let row = rows.next().expect("a row per reading");
+        let f: Vec<&str> = row.split(',').collect();
+        assert_eq!(f[0], farm.sensors()[r.sensor].id.as_str());
+        assert_eq!(f[2], farm.modalities()[r.modality].modality.as_str());
+        let v: f64 = f[3].parse().unwrap();
+        assert!((v - r.value).abs() < 1e-6, "{row} vs {}", r.value);
+        count += 1;
+    }
+    assert!(rows.next().is_none());
+    assert_eq!(count, farm.reading_count());
+}
+
+#[test]
 fn hourly_sampling_has_a_daily_temperature_cycle() {
     let config = SynthConfig {
         interval_s: 3600,
