@@ -1,0 +1,773 @@
+//! The physics-ish model behind [`generate`]. See the crate docs for the equations and the
+//! calibration of the constants below.
+
+use gleaner_field::{LatLon, LocalPoint, Modality, Sensor, SensorId, TransverseMercator};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use crate::config::SynthConfig;
+use crate::farm::{EventKind, FaultKind, FaultRecord, GroundTruthEvent, ModalitySpec, SynthFarm};
+use crate::random::{
+    Domain, SpatialField, exponential, geometric_len, normal, poisson, stream, uniform,
+};
+use crate::time::day_of_year;
+
+/// Depths (cm) at which the per-depth soil-water constants below are given; other depths
+/// interpolate linearly and clamp at the ends.
+const TABLE_DEPTHS_CM: [f64; 5] = [30.0, 60.0, 90.0, 120.0, 150.0];
+/// Mean wilting baseline (dry end) of volumetric water, m³/m³.
+const WILT_MEAN: [f64; 5] = [0.14, 0.153, 0.17, 0.175, 0.18];
+/// Between-sensor standard deviation of the wilting baseline, m³/m³.
+const WILT_SD: [f64; 5] = [0.04, 0.055, 0.06, 0.07, 0.07];
+/// Mean range from wilting baseline to field capacity, m³/m³.
+const RANGE_MEAN: [f64; 5] = [0.19, 0.21, 0.2, 0.2, 0.2];
+/// Between-sensor coefficient of variation (log-normal) of the range, dimensionless.
+const RANGE_CV: [f64; 5] = [0.12, 0.14, 0.15, 0.16, 0.16];
+/// Drying rate at the peak of the growing season, 1/day.
+const DRYING_RATE: [f64; 5] = [0.07, 0.065, 0.06, 0.055, 0.045];
+/// Storage gained per millimetre of rain reaching the layer, 1/mm.
+const RAIN_GAIN: [f64; 5] = [0.03, 0.028, 0.026, 0.024, 0.022];
+/// Time constant of the rain pulse's arrival at the layer (lag and damping), days.
+const INFILTRATION_TAU_DAYS: [f64; 5] = [1.2, 2.0, 3.0, 5.0, 8.0];
+/// Amplitude of the spatially correlated moving anomaly, m³/m³.
+const ANOMALY_SD: [f64; 5] = [0.008, 0.012, 0.016, 0.018, 0.018];
+/// Amplitude of each sensor's own slow anomaly, m³/m³.
+const LOCAL_SD: [f64; 5] = [0.02, 0.03, 0.04, 0.045, 0.045];
+/// White measurement noise, m³/m³.
+const VW_NOISE_SD: f64 = 0.0004;
+/// Log-normal spread of each sensor's response to a storm (infiltration, interception).
+const STORM_RESPONSE_SD: f64 = 0.8;
+/// Soil temperatures below this are pulled towards it (latent heat of freezing and snow
+/// cover keep the soil near 0 °C), °C.
+const T_FREEZE_KNEE_C: f64 = 1.0;
+/// Fraction of the excursion below the knee that remains.
+const T_FREEZE_DAMPING: f64 = 0.3;
+/// Storage cap: wetness `1 - exp(-S)` tops out at 0.95 (drainage above field capacity).
+const STORAGE_CAP: f64 = 3.0;
+/// Share of a sensor parameter's variance that is spatially structured (the rest is nugget).
+const SPATIAL_SHARE: f64 = 0.7;
+/// Time constant of the moving anomaly, days.
+const ANOMALY_TAU_DAYS: f64 = 60.0;
+/// Time constant of each sensor's own slow anomaly, days.
+const LOCAL_TAU_DAYS: f64 = 60.0;
+/// Number of latent processes in the moving anomaly.
+const ANOMALY_FIELDS: usize = 4;
+/// Spin-up before the first reading, days (daily steps).
+const SPIN_UP_DAYS: usize = 150;
+/// Seasonal evapotranspiration factor: `ET_FLOOR + (1 - ET_FLOOR) x (1 - cos(2 pi (doy - 15) /
+/// 365.25)) / 2`, peaking mid-July.
+const ET_FLOOR: f64 = 0.08;
+
+/// Weather anomaly of soil temperature at the surface: AR(1) standard deviation, °C.
+const T_WEATHER_SD: f64 = 2.2;
+/// Its day-to-day autocorrelation.
+const T_WEATHER_RHO: f64 = 0.8;
+/// Damping depth of the weather anomaly, cm.
+const T_WEATHER_DAMPING_CM: f64 = 70.0;
+/// Between-sensor standard deviation of the mean soil temperature, °C.
+const T_OFFSET_SD: f64 = 1.0;
+/// Between-sensor coefficient of variation of the annual amplitude.
+const T_AMPLITUDE_CV: f64 = 0.04;
+/// White measurement noise of soil temperature, °C.
+const T_NOISE_SD: f64 = 0.015;
+
+/// Physical clamp of volumetric water content, m³/m³ (inside [0, 0.6] even as f32).
+const VW_RANGE: (f64, f64) = (0.01, 0.58);
+/// Physical clamp of soil temperature, °C.
+const T_RANGE: (f64, f64) = (-30.0, 50.0);
+
+fn interp(table: &[f64; 5], depth_cm: f64) -> f64 {
+    let d = depth_cm.clamp(TABLE_DEPTHS_CM[0], TABLE_DEPTHS_CM[4]);
+    for i in 0..4 {
+        let (a, b) = (TABLE_DEPTHS_CM[i], TABLE_DEPTHS_CM[i + 1]);
+        if d <= b {
+            let w = (d - a) / (b - a);
+            return table[i] + w * (table[i + 1] - table[i]);
+        }
+    }
+    table[4]
+}
+
+/// Irwin-Hall approximation of a standard normal (sum of four uniforms): cheap noise.
+fn fast_normal(rng: &mut ChaCha8Rng) -> f64 {
+    let s: f64 = (0..4).map(|_| rng.random::<f64>()).sum();
+    (s - 2.0) * 3.0f64.sqrt()
+}
+
+fn round_to(v: f64, decimals: u32) -> f64 {
+    let k = 10f64.powi(decimals as i32);
+    (v * k).round() / k
+}
+
+/// A smooth, zero-mean, unit-variance random process: an AR(1) with time constant tau passed
+/// through a first-order low-pass with the same tau, so its day-to-day changes are small
+/// (of order dt / tau rather than sqrt(dt / tau)).
+#[derive(Debug, Clone, Copy)]
+struct SmoothProcess {
+    rho: f64,
+    kick: f64,
+    scale: f64,
+    x: f64,
+    y: f64,
+}
+
+impl SmoothProcess {
+    fn new(dt_days: f64, tau_days: f64, first_noise: f64) -> Self {
+        let rho = (-dt_days / tau_days).exp();
+        // Var(y) = (1 + rho^2) / (1 + rho)^2 for unit-variance x.
+        let scale = (1.0 + rho) / (1.0 + rho * rho).sqrt();
+        Self {
+            rho,
+            kick: (1.0 - rho * rho).sqrt(),
+            scale,
+            x: first_noise,
+            y: first_noise / scale,
+        }
+    }
+
+    fn value(&self) -> f64 {
+        self.y * self.scale
+    }
+
+    fn step(&mut self, noise: f64) -> f64 {
+        self.x = self.rho * self.x + self.kick * noise;
+        self.y = self.rho * self.y + (1.0 - self.rho) * self.x;
+        self.value()
+    }
+}
+
+/// Effects of one event on one sensor.
+#[derive(Debug, Clone, Copy)]
+struct EventEffect {
+    kind: EventKind,
+    start_step: usize,
+    end_step: usize,
+    /// Taper in (0, 1]: 1 at the centre.
+    weight: f64,
+    /// Drift of VW, m³/m³ per day, and of T, °C per day (SensorDrift only).
+    drift_vw: f64,
+    drift_t: f64,
+}
+
+/// The shared drivers and fields every sensor's simulation reads.
+struct Context<'a> {
+    config: &'a SynthConfig,
+    steps: usize,
+    dt_days: f64,
+    et: Vec<f64>,
+    rain_mm: Vec<f64>,
+    spin_up_et: Vec<f64>,
+    spin_up_rain_mm: Vec<f64>,
+    /// ANOMALY_FIELDS x steps, unit variance.
+    anomaly: Vec<f64>,
+    /// Per temperature depth: deterministic part + shared weather anomaly, °C (without the
+    /// sensor's offset and amplitude factor), split so each sensor can scale the annual wave.
+    t_annual: Vec<Vec<f64>>,
+    t_rest: Vec<Vec<f64>>,
+    wilt_field: SpatialField,
+    range_field: SpatialField,
+    drying_field: SpatialField,
+    gain_field: SpatialField,
+    t_field: SpatialField,
+    anomaly_fields: Vec<SpatialField>,
+    effects: Vec<Vec<EventEffect>>,
+    modalities: &'a [ModalitySpec],
+}
+
+fn et_factor(doy: f64) -> f64 {
+    ET_FLOOR
+        + (1.0 - ET_FLOOR) * 0.5 * (1.0 - (std::f64::consts::TAU * (doy - 15.0) / 365.25).cos())
+}
+
+fn storm_rate_per_day(config: &SynthConfig, doy: f64) -> f64 {
+    let c = &config.climate;
+    let season = (std::f64::consts::TAU * (doy - c.storm_peak_doy) / 365.25).cos();
+    (c.storms_per_year / 365.25) * (1.0 + c.storm_seasonality * season)
+}
+
+fn rain_series(config: &SynthConfig, rng: &mut ChaCha8Rng, doys: &[f64], dt_days: f64) -> Vec<f64> {
+    doys.iter()
+        .map(|&doy| {
+            let n = poisson(rng, storm_rate_per_day(config, doy) * dt_days);
+            (0..n)
+                .map(|_| exponential(rng, config.climate.storm_mean_mm))
+                .sum()
+        })
+        .collect()
+}
+
+/// Generates a synthetic farm. Deterministic: the same configuration gives the same farm,
+/// whatever the number of threads.
+///
+/// Cost is O(sensors x steps x modalities) (plus O(sensors x events) to find the sensors each
+/// event touches), parallel over sensors.
+pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
+    config.validate()?;
+    let steps = config.steps();
+    let dt_days = config.interval_s as f64 / 86_400.0;
+    let n = config.sensor_count;
+
+    let mut modalities = Vec::new();
+    for &d in &config.vw_depths_cm {
+        modalities.push(ModalitySpec {
+            modality: Modality::at_depth("vw", Some(d))?,
+            unit: "m3/m3",
+            decimals: 4,
+            depth_cm: d,
+            is_water: true,
+        });
+    }
+    for &d in &config.t_depths_cm {
+        modalities.push(ModalitySpec {
+            modality: Modality::at_depth("t", Some(d))?,
+            unit: "degC",
+            decimals: 4,
+            depth_cm: d,
+            is_water: false,
+        });
+    }
+    let times: Vec<i64> = (0..steps as i64)
+        .map(|i| config.start + i * config.interval_s)
+        .collect();
+    let doys: Vec<f64> = times.iter().map(|&t| day_of_year(t)).collect();
+
+    // Layout: a jittered grid over the extent, centred on the field centre.
+    let frame = TransverseMercator::local(config.centre);
+    let [w, h] = config.effective_extent_m();
+    let nx = ((n as f64 * w / h).sqrt().round() as usize).clamp(1, n);
+    let ny = n.div_ceil(nx);
+    let (dx, dy) = (w / nx as f64, h / ny as f64);
+    let local: Vec<LocalPoint> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut rng = stream(config.seed, Domain::Layout, i as u64);
+            let (col, row) = ((i % nx) as f64, (i / nx) as f64);
+            let je = 0.8 * (uniform(&mut rng) - 0.5);
+            let jn = 0.8 * (uniform(&mut rng) - 0.5);
+            LocalPoint::new(
+                -w / 2.0 + (col + 0.5 + je) * dx,
+                -h / 2.0 + (row + 0.5 + jn) * dy,
+            )
+        })
+        .collect();
+
+    // Static spatial fields, drawn in a fixed order.
+    let mut frng = stream(config.seed, Domain::Fields, 0);
+    let l = config.correlation_length_m;
+    let wilt_field = SpatialField::new(&mut frng, l);
+    let range_field = SpatialField::new(&mut frng, l);
+    let drying_field = SpatialField::new(&mut frng, l);
+    let gain_field = SpatialField::new(&mut frng, l);
+    let t_field = SpatialField::new(&mut frng, l);
+    let elevation_field = SpatialField::new(&mut frng, 2.0 * l);
+    let anomaly_fields: Vec<SpatialField> = (0..ANOMALY_FIELDS)
+        .map(|_| SpatialField::new(&mut frng, l))
+        .collect();
+
+    let width = n.to_string().len().max(5);
+    let sensors: Vec<Sensor> = local
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| -> Result<Sensor, crate::SynthError> {
+            let id = SensorId::new(format!("SYN{:0width$}", i + 1))?;
+            let ll = frame.inverse(*p);
+            let mut s = Sensor::new(id, LatLon::new(ll.lat(), ll.lon())?);
+            s.elevation_m = Some(round_to(785.0 + 12.0 * elevation_field.at(*p), 2));
+            Ok(s)
+        })
+        .collect::<Result<_, _>>()?;
+
+    // Shared weather.
+    let mut wrng = stream(config.seed, Domain::Weather, 0);
+    let rain_mm = rain_series(config, &mut wrng, &doys, dt_days);
+    let start_doy = day_of_year(config.start);
+    let spin_doys: Vec<f64> = (0..SPIN_UP_DAYS)
+        .map(|k| (start_doy - (SPIN_UP_DAYS - k) as f64).rem_euclid(365.25))
+        .collect();
+    let spin_up_rain_mm = rain_series(config, &mut wrng, &spin_doys, 1.0);
+    let spin_up_et = spin_doys.iter().map(|&d| et_factor(d)).collect();
+    let et = doys.iter().map(|&d| et_factor(d)).collect();
+    let mut anomaly = vec![0.0; ANOMALY_FIELDS * steps];
+    for k in 0..ANOMALY_FIELDS {
+        let mut z = SmoothProcess::new(dt_days, ANOMALY_TAU_DAYS, normal(&mut wrng));
+        for t in 0..steps {
+            anomaly[k * steps + t] = if t == 0 {
+                z.value()
+            } else {
+                z.step(normal(&mut wrng))
+            };
+        }
+    }
+    let (t_annual, t_rest) = temperature_drivers(config, &mut wrng, &times, &doys, dt_days);
+
+    let (events, effects) = place_events(config, &sensors, &local, &frame, &times);
+
+    let ctx = Context {
+        config,
+        steps,
+        dt_days,
+        et,
+        rain_mm,
+        spin_up_et,
+        spin_up_rain_mm,
+        anomaly,
+        t_annual,
+        t_rest,
+        wilt_field,
+        range_field,
+        drying_field,
+        gain_field,
+        t_field,
+        anomaly_fields,
+        effects,
+        modalities: &modalities,
+    };
+
+    let stride = modalities.len() * steps;
+    let mut values = vec![f32::NAN; n * stride];
+    let faults: Vec<FaultRecord> = if stride == 0 {
+        Vec::new()
+    } else {
+        values
+            .par_chunks_mut(stride)
+            .enumerate()
+            .map(|(i, out)| simulate_sensor(&ctx, i, local[i], out))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .flatten()
+            .collect()
+    };
+
+    Ok(SynthFarm {
+        sensors,
+        local,
+        frame,
+        base: config.base,
+        modalities,
+        times,
+        values,
+        events,
+        faults,
+    })
+}
+
+/// Shared soil-temperature drivers per temperature depth: the annual wave (to be scaled by
+/// each sensor's amplitude factor) and the rest (mean, daily wave, weather anomaly), °C.
+fn temperature_drivers(
+    config: &SynthConfig,
+    rng: &mut ChaCha8Rng,
+    times: &[i64],
+    doys: &[f64],
+    dt_days: f64,
+) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    use std::f64::consts::TAU;
+    let c = &config.climate;
+    let steps = times.len();
+    // Surface weather anomaly, AR(1) with the daily autocorrelation T_WEATHER_RHO.
+    let rho = T_WEATHER_RHO.powf(dt_days);
+    let mut weather = Vec::with_capacity(steps);
+    let mut w = T_WEATHER_SD * normal(rng);
+    for t in 0..steps {
+        if t > 0 {
+            w = rho * w + T_WEATHER_SD * (1.0 - rho * rho).sqrt() * normal(rng);
+        }
+        weather.push(w);
+    }
+    let d_year = c.annual_damping_depth_cm;
+    let d_day = d_year / 365.25f64.sqrt();
+    let lon = config.centre.lon();
+    let mut annual = Vec::new();
+    let mut rest = Vec::new();
+    for &z in &config.t_depths_cm {
+        let z = f64::from(z);
+        let amp_year = c.surface_annual_amplitude_c * (-z / d_year).exp();
+        let amp_day = c.surface_daily_amplitude_c * (-z / d_day).exp();
+        // The weather anomaly reaches depth z low-pass filtered (diffusion time ~ z^2).
+        let tau = 0.5 + (z / 25.0).powi(2);
+        let alpha = 1.0 - (-dt_days / tau).exp();
+        let damp = (-z / T_WEATHER_DAMPING_CM).exp();
+        let mut filtered = weather[0];
+        let mut a = Vec::with_capacity(steps);
+        let mut r = Vec::with_capacity(steps);
+        for t in 0..steps {
+            filtered += alpha * (weather[t] - filtered);
+            let year_phase = TAU * (doys[t] - c.warmest_doy) / 365.25 - z / d_year;
+            let solar_hour =
+                (times[t].rem_euclid(86_400) as f64 / 3600.0 + lon / 15.0).rem_euclid(24.0);
+            let day_phase = TAU * (solar_hour - 15.0) / 24.0 - z / d_day;
+            a.push(amp_year * year_phase.cos());
+            r.push(c.mean_soil_temp_c + amp_day * day_phase.cos() + damp * filtered);
+        }
+        annual.push(a);
+        rest.push(r);
+    }
+    (annual, rest)
+}
+
+/// Places the localised events and returns their ground truth and per-sensor effects.
+fn place_events(
+    config: &SynthConfig,
+    sensors: &[Sensor],
+    local: &[LocalPoint],
+    frame: &TransverseMercator,
+    times: &[i64],
+) -> (Vec<GroundTruthEvent>, Vec<Vec<EventEffect>>) {
+    let n = sensors.len();
+    let steps = times.len();
+    let mut effects = vec![Vec::new(); n];
+    let mut events = Vec::with_capacity(config.event_count);
+    let mut rng = stream(config.seed, Domain::Events, 0);
+    let [w, h] = config.effective_extent_m();
+    let spacing = (w * h / n as f64).sqrt();
+    let radius = config
+        .event_radius_m
+        .unwrap_or_else(|| (1.5 * spacing).max(30.0));
+    let step_time = |s: usize| {
+        times
+            .get(s)
+            .copied()
+            .unwrap_or(config.start + s as i64 * config.interval_s)
+    };
+    for e in 0..config.event_count {
+        let start_step = ((0.1 + 0.5 * uniform(&mut rng)) * steps as f64) as usize;
+        let length = (((0.1 + 0.2 * uniform(&mut rng)) * steps as f64) as usize).max(2);
+        let end_step = (start_step + length).min(steps);
+        let centre_sensor = rng.random_range(0..n);
+        let kind = match e % 3 {
+            0 => EventKind::Leak,
+            1 => EventKind::DryPatch,
+            _ if uniform(&mut rng) < 0.5 => EventKind::SensorDrift,
+            _ => EventKind::SensorStuck,
+        };
+        let sign = if uniform(&mut rng) < 0.5 { -1.0 } else { 1.0 };
+        let drift_vw = sign * (0.002 + 0.002 * uniform(&mut rng));
+        let drift_t = sign * (0.02 + 0.03 * uniform(&mut rng));
+        let (centre, radius_m, affected) = match kind {
+            EventKind::Leak | EventKind::DryPatch => {
+                let angle = uniform(&mut rng) * std::f64::consts::TAU;
+                let off = radius / 3.0 * uniform(&mut rng);
+                let c = LocalPoint::new(
+                    local[centre_sensor].e + off * angle.cos(),
+                    local[centre_sensor].n + off * angle.sin(),
+                );
+                let affected: Vec<(usize, f64)> = local
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, p)| {
+                        let r = p.distance(&c) / radius;
+                        (r < 1.0).then_some((i, 1.0 - 0.5 * r * r))
+                    })
+                    .collect();
+                (c, radius, affected)
+            }
+            _ => (local[centre_sensor], 0.0, vec![(centre_sensor, 1.0)]),
+        };
+        for &(i, weight) in &affected {
+            effects[i].push(EventEffect {
+                kind,
+                start_step,
+                end_step,
+                weight,
+                drift_vw,
+                drift_t,
+            });
+        }
+        let ll = frame.inverse(centre);
+        events.push(GroundTruthEvent {
+            id: format!("E{:03}", e + 1),
+            kind,
+            start: step_time(start_step),
+            end: step_time(end_step),
+            centre: LatLon::new(ll.lat(), ll.lon()).unwrap_or(config.centre),
+            radius_m,
+            affected: affected.into_iter().map(|(i, _)| i).collect(),
+        });
+    }
+    (events, effects)
+}
+
+/// Per-depth soil-water state of one sensor.
+struct WaterLayer {
+    wilt: f64,
+    range: f64,
+    drying: f64,
+    gain: f64,
+    alpha: f64,
+    spin_alpha: f64,
+    anomaly_sd: f64,
+    local_sd: f64,
+    storage: f64,
+    inflow: f64,
+    local: SmoothProcess,
+    /// Leak / dry-patch intensities in [0, 1].
+    leak: f64,
+    dry: f64,
+}
+
+fn mix(field: f64, rng: &mut ChaCha8Rng) -> f64 {
+    SPATIAL_SHARE.sqrt() * field + (1.0 - SPATIAL_SHARE).sqrt() * normal(rng)
+}
+
+/// Simulates one sensor into `out` (modalities x steps) and returns its fault records.
+fn simulate_sensor(
+    ctx: &Context<'_>,
+    index: usize,
+    p: LocalPoint,
+    out: &mut [f32],
+) -> Vec<FaultRecord> {
+    let config = ctx.config;
+    let steps = ctx.steps;
+    let dt = ctx.dt_days;
+    let mut rng = stream(config.seed, Domain::Sensor, index as u64);
+
+    // Static parameters from the spatial fields plus nugget.
+    let f_wilt = ctx.wilt_field.at(p);
+    let f_range = ctx.range_field.at(p);
+    let f_dry = ctx.drying_field.at(p);
+    let f_gain = ctx.gain_field.at(p);
+    let f_t = ctx.t_field.at(p);
+    let loadings: Vec<f64> = ctx
+        .anomaly_fields
+        .iter()
+        .map(|f| f.at(p) / (ANOMALY_FIELDS as f64).sqrt())
+        .collect();
+    let mut layers: Vec<WaterLayer> = config
+        .vw_depths_cm
+        .iter()
+        .map(|&d| {
+            let d = f64::from(d);
+            let tau = interp(&INFILTRATION_TAU_DAYS, d);
+            WaterLayer {
+                wilt: interp(&WILT_MEAN, d) + interp(&WILT_SD, d) * mix(f_wilt, &mut rng),
+                range: interp(&RANGE_MEAN, d)
+                    * (interp(&RANGE_CV, d) * mix(f_range, &mut rng)).exp(),
+                drying: interp(&DRYING_RATE, d) * (0.5 * mix(f_dry, &mut rng)).exp(),
+                gain: interp(&RAIN_GAIN, d) * (0.3 * mix(f_gain, &mut rng)).exp(),
+                alpha: 1.0 - (-dt / tau).exp(),
+                spin_alpha: 1.0 - (-1.0 / tau).exp(),
+                anomaly_sd: interp(&ANOMALY_SD, d),
+                local_sd: interp(&LOCAL_SD, d),
+                storage: 1.0,
+                inflow: 0.0,
+                local: SmoothProcess::new(dt, LOCAL_TAU_DAYS, normal(&mut rng)),
+                leak: 0.0,
+                dry: 0.0,
+            }
+        })
+        .collect();
+    let t_offset = T_OFFSET_SD * mix(f_t, &mut rng);
+    let t_amp = 1.0 + T_AMPLITUDE_CV * normal(&mut rng);
+
+    // Spin-up, daily steps, no events.
+    for k in 0..ctx.spin_up_rain_mm.len() {
+        for layer in &mut layers {
+            layer.inflow += layer.spin_alpha * (ctx.spin_up_rain_mm[k] - layer.inflow);
+            layer.storage = (layer.storage * (-layer.drying * ctx.spin_up_et[k]).exp()
+                + layer.gain * layer.inflow)
+                .min(STORAGE_CAP);
+        }
+    }
+
+    let effects = &ctx.effects[index];
+    let n_vw = layers.len();
+    for t in 0..steps {
+        // Event intensities at this step.
+        let mut leak_target = 0.0f64;
+        let mut dry_target = 0.0f64;
+        for e in effects {
+            let active = t >= e.start_step && t < e.end_step;
+            match e.kind {
+                EventKind::Leak if active => leak_target = leak_target.max(e.weight),
+                EventKind::DryPatch if active => dry_target = dry_target.max(e.weight),
+                _ => {}
+            }
+        }
+        let anomaly: f64 = loadings
+            .iter()
+            .enumerate()
+            .map(|(k, l)| l * ctx.anomaly[k * steps + t])
+            .sum();
+        // Each sensor catches its own share of a storm (log-normal, mean 1).
+        let storm_response = if ctx.rain_mm[t] > 0.0 {
+            (STORM_RESPONSE_SD * normal(&mut rng) - 0.5 * STORM_RESPONSE_SD * STORM_RESPONSE_SD)
+                .exp()
+        } else {
+            1.0
+        };
+        for (j, layer) in layers.iter_mut().enumerate() {
+            let depth_lag = layer.alpha;
+            // Leak water and drying patches arrive with the layer's own lag; they fade over
+            // about ten days after the event ends.
+            let fade = 1.0 - (-dt / 10.0).exp();
+            let rate = |target: f64, state: f64| {
+                if target > state {
+                    depth_lag.max(fade)
+                } else {
+                    fade
+                }
+            };
+            layer.leak += rate(leak_target, layer.leak) * (leak_target - layer.leak);
+            layer.dry += rate(dry_target, layer.dry) * (dry_target - layer.dry);
+            let rain = ctx.rain_mm[t] * storm_response * (1.0 - 0.8 * layer.dry);
+            layer.inflow += layer.alpha * (rain / dt - layer.inflow);
+            let drying = layer.drying * ctx.et[t] * (1.0 + 2.0 * layer.dry);
+            layer.storage = (layer.storage * (-drying * dt).exp() + layer.gain * layer.inflow * dt)
+                .min(STORAGE_CAP);
+            let local = layer.local.step(fast_normal(&mut rng));
+            let wet = 1.0 - (-layer.storage).exp();
+            let mut v = layer.wilt
+                + layer.range * wet
+                + layer.anomaly_sd * anomaly * (0.3 + wet)
+                + layer.local_sd * local
+                + VW_NOISE_SD * fast_normal(&mut rng);
+            let saturated = layer.wilt + 1.2 * layer.range;
+            v += layer.leak * (saturated - v).max(0.0);
+            v -= 0.8 * layer.dry * (v - layer.wilt).max(0.0);
+            out[j * steps + t] = v.clamp(VW_RANGE.0, VW_RANGE.1) as f32;
+        }
+        for (k, _) in config.t_depths_cm.iter().enumerate() {
+            let mut v = t_offset + t_amp * ctx.t_annual[k][t] + ctx.t_rest[k][t];
+            if v < T_FREEZE_KNEE_C {
+                v = T_FREEZE_KNEE_C + T_FREEZE_DAMPING * (v - T_FREEZE_KNEE_C);
+            }
+            v += T_NOISE_SD * fast_normal(&mut rng);
+            out[(n_vw + k) * steps + t] = v.clamp(T_RANGE.0, T_RANGE.1) as f32;
+        }
+    }
+
+    // Failing-sensor events.
+    for e in effects {
+        if !matches!(e.kind, EventKind::SensorDrift | EventKind::SensorStuck) {
+            continue;
+        }
+        for (m, spec) in ctx.modalities.iter().enumerate() {
+            let series = &mut out[m * steps..(m + 1) * steps];
+            let frozen = series.get(e.start_step).copied().unwrap_or(f32::NAN);
+            for (t, v) in series.iter_mut().enumerate().skip(e.start_step) {
+                if t >= e.end_step {
+                    *v = f32::NAN;
+                } else if e.kind == EventKind::SensorStuck {
+                    *v = frozen;
+                } else {
+                    let days = (t - e.start_step) as f64 * dt;
+                    let (drift, (lo, hi)) = if spec.is_water {
+                        (e.drift_vw, VW_RANGE)
+                    } else {
+                        (e.drift_t, T_RANGE)
+                    };
+                    *v = (f64::from(*v) + drift * days).clamp(lo, hi) as f32;
+                }
+            }
+        }
+    }
+
+    let faults = apply_faults(config, index, ctx.modalities, out, steps, &mut rng);
+
+    for (m, spec) in ctx.modalities.iter().enumerate() {
+        for v in &mut out[m * steps..(m + 1) * steps] {
+            if !v.is_nan() {
+                *v = round_to(f64::from(*v), spec.decimals) as f32;
+            }
+        }
+    }
+    faults
+}
+
+/// Applies random dropouts, stuck stretches and spikes in place; returns what was done.
+fn apply_faults(
+    config: &SynthConfig,
+    sensor: usize,
+    modalities: &[ModalitySpec],
+    out: &mut [f32],
+    steps: usize,
+    rng: &mut ChaCha8Rng,
+) -> Vec<FaultRecord> {
+    let f = &config.faults;
+    let mut records = Vec::new();
+    let time_at = |s: usize| config.start + s as i64 * config.interval_s;
+    let mods = modalities.len();
+    let mut dropout_left = 0usize;
+    let mut stuck_left = vec![0usize; mods];
+    // Last value each modality reported: what a stuck sensor repeats.
+    let mut last_reported = vec![f32::NAN; mods];
+    for t in 0..steps {
+        if dropout_left == 0 && uniform(rng) < f.dropout_per_step {
+            let len = geometric_len(rng, f.dropout_mean_steps).min(steps - t);
+            records.push(FaultRecord {
+                sensor,
+                kind: FaultKind::Dropout,
+                modality: None,
+                start: time_at(t),
+                end: time_at(t + len),
+            });
+            dropout_left = len;
+        }
+        for (m, spec) in modalities.iter().enumerate() {
+            let at = m * steps + t;
+            if stuck_left[m] == 0 && t > 0 && uniform(rng) < f.stuck_per_step {
+                let len = geometric_len(rng, f.stuck_mean_steps).min(steps - t);
+                records.push(FaultRecord {
+                    sensor,
+                    kind: FaultKind::Stuck,
+                    modality: Some(m),
+                    start: time_at(t),
+                    end: time_at(t + len),
+                });
+                stuck_left[m] = len;
+            }
+            let spike = uniform(rng) < f.spike_per_reading;
+            if stuck_left[m] > 0 {
+                stuck_left[m] -= 1;
+                // A reading that is missing anyway (a dead sensor) stays missing.
+                if !out[at].is_nan() && !last_reported[m].is_nan() {
+                    out[at] = last_reported[m];
+                }
+            } else if spike && dropout_left == 0 && !out[at].is_nan() {
+                let up = uniform(rng) < 0.5;
+                let (size, (lo, hi)) = if spec.is_water {
+                    (0.05 + 0.10 * uniform(rng), VW_RANGE)
+                } else {
+                    (3.0 + 5.0 * uniform(rng), T_RANGE)
+                };
+                let v = f64::from(out[at]) + if up { size } else { -size };
+                out[at] = v.clamp(lo, hi) as f32;
+                records.push(FaultRecord {
+                    sensor,
+                    kind: FaultKind::Spike,
+                    modality: Some(m),
+                    start: time_at(t),
+                    end: time_at(t + 1),
+                });
+            }
+            if dropout_left > 0 {
+                out[at] = f32::NAN;
+            } else if !out[at].is_nan() {
+                last_reported[m] = out[at];
+            }
+        }
+        dropout_left = dropout_left.saturating_sub(1);
+    }
+    records
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interp_clamps_and_interpolates() {
+        let table = [1.0, 2.0, 3.0, 4.0, 5.0];
+        assert_eq!(interp(&table, 10.0), 1.0);
+        assert_eq!(interp(&table, 45.0), 1.5);
+        assert_eq!(interp(&table, 150.0), 5.0);
+        assert_eq!(interp(&table, 400.0), 5.0);
+    }
+
+    #[test]
+    fn storm_rate_peaks_in_winter() {
+        let c = SynthConfig::default();
+        assert!(storm_rate_per_day(&c, 340.0) > 3.0 * storm_rate_per_day(&c, 160.0));
+        assert!(et_factor(197.0) > 0.99 && et_factor(15.0) < 0.1);
+    }
+}
