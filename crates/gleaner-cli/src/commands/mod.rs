@@ -2,5 +2,7 @@
 //! and returns values or text; only `main.rs` knows clap.
 
 pub mod cells;
+pub mod demo;
 pub mod ingest;
 pub mod init;
+pub mod synth;
