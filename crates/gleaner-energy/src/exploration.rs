@@ -1,1 +1,555 @@
-//! placeholder
+//! Exploration phase (SPEC §5 step 3): visit every cell in as few budget-feasible sorties as
+//! possible.
+//!
+//! Route-first, cluster-second: a short closed tour through all cells (nearest neighbour,
+//! then 2-opt over each cell's nearest neighbours), then the optimal split of that giant tour
+//! into consecutive sorties B -> ... -> B (Beasley 1983's split, solved by dynamic
+//! programming on the tour positions), minimising first the number of sorties, then their total
+//! energy. Every rotation of the tour in both directions is split and the best kept. Finally
+//! each sortie's own order is improved by 2-opt (which only lowers its energy).
+//!
+//! Sortie energy = fixed (climb/descent) + cruise energy of its legs + the cells' service
+//! energies, exactly as [`MissionEnergyModel::breakdown`] computes it.
+//!
+//! ```
+//! use gleaner_energy::exploration::{ExplorationOptions, plan_exploration};
+//! use gleaner_energy::{EnergyConfig, MissionEnergyModel};
+//! use gleaner_field::LocalPoint;
+//!
+//! let model = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+//! // 30 cells of 40 m in a row; each hover costs 30 s at P(0) + P_rx.
+//! let cells: Vec<LocalPoint> = (0..30).map(|i| LocalPoint::new(20.0 + 40.0 * i as f64, 20.0)).collect();
+//! let service = vec![model.service_energy_j(30.0); cells.len()];
+//! let plan = plan_exploration(&model, LocalPoint::new(0.0, 0.0), &cells, &service, &ExplorationOptions::default()).unwrap();
+//! assert!(plan.sorties.len() >= plan.lower_bound_sorties);
+//! assert!(plan.sorties.iter().all(|s| s.energy_j <= model.usable_budget_j()));
+//! ```
+
+use gleaner_field::LocalPoint;
+
+use crate::error::{EnergyError, non_negative};
+use crate::mission::MissionEnergyModel;
+
+/// Tuning of the exploration planner.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExplorationOptions {
+    /// Candidate neighbours per cell in the 2-opt of the giant tour (default 12).
+    pub neighbours: usize,
+    /// Maximum 2-opt passes over the giant tour (default 200).
+    pub max_two_opt_passes: usize,
+    /// Relative safety margin on the budget, so that float rounding never makes a planned
+    /// sortie infeasible when re-checked (default 1e-9: sorties use at most
+    /// budget·(1 − 1e-9)).
+    pub budget_margin: f64,
+}
+
+impl Default for ExplorationOptions {
+    fn default() -> Self {
+        Self {
+            neighbours: 12,
+            max_two_opt_passes: 200,
+            budget_margin: 1e-9,
+        }
+    }
+}
+
+/// One sortie of the exploration phase.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sortie {
+    /// Cells in visiting order, as indices into the input slices.
+    pub cells: Vec<usize>,
+    /// Cruise distance B -> cells -> B, metres.
+    pub distance_m: f64,
+    /// Cruise energy including the return leg, J.
+    pub travel_j: f64,
+    /// Sum of the cells' service energies, J.
+    pub service_j: f64,
+    /// Climb and descent energy ([`MissionEnergyModel::sortie_fixed_j`]), J.
+    pub fixed_j: f64,
+    /// fixed_j + travel_j + service_j, J.
+    pub energy_j: f64,
+}
+
+/// The exploration plan: sorties that together visit every cell exactly once.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExplorationPlan {
+    /// The sorties, in flying order.
+    pub sorties: Vec<Sortie>,
+    /// A lower bound on the number of sorties any plan needs: ceil(total service energy /
+    /// (budget − fixed energy per sortie)), or 0 without cells.
+    pub lower_bound_sorties: usize,
+    /// Sum of the sorties' energies, J.
+    pub total_energy_j: f64,
+    /// Length of the giant tour through all cells (cells only, closed), metres.
+    pub giant_tour_m: f64,
+}
+
+/// Plans the fewest budget-feasible sorties from `base` that together visit every cell of
+/// `cells` (centres, local metres) with service energies `service_j` (J), then the least total
+/// energy for that number of sorties (for the tour found; the split is optimal for it).
+///
+/// # Errors
+/// [`EnergyError::LengthMismatch`] if the slices differ in length;
+/// [`EnergyError::InvalidParameter`] for a non-finite position or a negative / non-finite
+/// service energy or invalid options; [`EnergyError::CellUnreachable`] if some cell cannot be
+/// served even alone.
+pub fn plan_exploration(
+    model: &MissionEnergyModel,
+    base: LocalPoint,
+    cells: &[LocalPoint],
+    service_j: &[f64],
+    options: &ExplorationOptions,
+) -> Result<ExplorationPlan, EnergyError> {
+    if cells.len() != service_j.len() {
+        return Err(EnergyError::LengthMismatch {
+            what: "cell centres vs service energies",
+            left: cells.len(),
+            right: service_j.len(),
+        });
+    }
+    for p in cells.iter().chain(std::iter::once(&base)) {
+        crate::error::finite("cell or base easting (m)", p.e)?;
+        crate::error::finite("cell or base northing (m)", p.n)?;
+    }
+    for &s in service_j {
+        non_negative("cell service energy (J)", s)?;
+    }
+    if !(options.budget_margin >= 0.0 && options.budget_margin < 1.0) {
+        return Err(EnergyError::InvalidParameter {
+            name: "budget margin",
+            value: options.budget_margin,
+            expected: "a number in [0, 1)",
+        });
+    }
+    let n = cells.len();
+    let fixed_j = model.sortie_fixed_j();
+    let budget = model.usable_budget_j() * (1.0 - options.budget_margin);
+    let epm = model.energy_per_metre_j();
+    let to_base: Vec<f64> = cells.iter().map(|c| epm * c.distance(&base)).collect();
+    for i in 0..n {
+        let alone = fixed_j + 2.0 * to_base[i] + service_j[i];
+        if alone > budget {
+            return Err(EnergyError::CellUnreachable {
+                cell: i,
+                energy_j: alone,
+                budget_j: model.usable_budget_j(),
+            });
+        }
+    }
+    let lower_bound_sorties = if n == 0 {
+        0
+    } else {
+        let total: f64 = service_j.iter().sum();
+        ((total / (budget - fixed_j)).ceil() as usize).max(1)
+    };
+    let tour = giant_tour(cells, options);
+    let giant_tour_m = cycle_length(cells, &tour);
+
+    let cost = SplitCost {
+        cells,
+        epm,
+        to_base: &to_base,
+        service_j,
+        fixed_j,
+        budget,
+    };
+    let mut best: Option<(usize, f64, Vec<Vec<usize>>)> = None;
+    let mut sequence = Vec::with_capacity(n);
+    for reversed in [false, true] {
+        for start in 0..n.max(1) {
+            sequence.clear();
+            for k in 0..n {
+                let at = if reversed {
+                    (start + n - k) % n
+                } else {
+                    (start + k) % n
+                };
+                sequence.push(tour[at]);
+            }
+            let (count, energy, groups) = cost.split(&sequence);
+            let better = match &best {
+                None => true,
+                Some((c, e, _)) => count < *c || (count == *c && energy < *e),
+            };
+            if better {
+                best = Some((count, energy, groups));
+            }
+        }
+    }
+    let groups = best.map(|b| b.2).unwrap_or_default();
+    let sorties: Vec<Sortie> = groups
+        .into_iter()
+        .filter(|g| !g.is_empty())
+        .map(|mut g| {
+            improve_sortie(cells, base, &mut g);
+            let distance_m = path_length(cells, base, &g);
+            let travel_j = epm * distance_m;
+            let service: f64 = g.iter().map(|&c| service_j[c]).sum();
+            Sortie {
+                cells: g,
+                distance_m,
+                travel_j,
+                service_j: service,
+                fixed_j,
+                energy_j: fixed_j + travel_j + service,
+            }
+        })
+        .collect();
+    let total_energy_j = sorties.iter().map(|s| s.energy_j).sum();
+    Ok(ExplorationPlan {
+        sorties,
+        lower_bound_sorties,
+        total_energy_j,
+        giant_tour_m,
+    })
+}
+
+/// Everything the split DP needs, in J.
+struct SplitCost<'a> {
+    cells: &'a [LocalPoint],
+    epm: f64,
+    to_base: &'a [f64],
+    service_j: &'a [f64],
+    fixed_j: f64,
+    budget: f64,
+}
+
+impl SplitCost<'_> {
+    /// Optimal split of `seq` into consecutive feasible sorties: (count, energy, groups).
+    fn split(&self, seq: &[usize]) -> (usize, f64, Vec<Vec<usize>>) {
+        let m = seq.len();
+        let mut count = vec![usize::MAX; m + 1];
+        let mut energy = vec![f64::INFINITY; m + 1];
+        let mut pred = vec![0usize; m + 1];
+        count[0] = 0;
+        energy[0] = 0.0;
+        for i in 0..m {
+            if count[i] == usize::MAX {
+                continue;
+            }
+            let mut path = 0.0;
+            let mut service = 0.0;
+            for j in i..m {
+                if j > i {
+                    path += self.epm * self.cells[seq[j - 1]].distance(&self.cells[seq[j]]);
+                }
+                service += self.service_j[seq[j]];
+                let sortie =
+                    self.fixed_j + self.to_base[seq[i]] + path + self.to_base[seq[j]] + service;
+                // Monotone in j (triangle inequality, service >= 0): stop at the first overflow.
+                if sortie > self.budget {
+                    break;
+                }
+                let (c, e) = (count[i] + 1, energy[i] + sortie);
+                if c < count[j + 1] || (c == count[j + 1] && e < energy[j + 1]) {
+                    count[j + 1] = c;
+                    energy[j + 1] = e;
+                    pred[j + 1] = i;
+                }
+            }
+        }
+        let mut groups = Vec::new();
+        let mut j = m;
+        while j > 0 {
+            let i = pred[j];
+            groups.push(seq[i..j].to_vec());
+            j = i;
+        }
+        groups.reverse();
+        (count[m], energy[m], groups)
+    }
+}
+
+fn cycle_length(cells: &[LocalPoint], tour: &[usize]) -> f64 {
+    let n = tour.len();
+    (0..n)
+        .map(|k| cells[tour[k]].distance(&cells[tour[(k + 1) % n]]))
+        .sum()
+}
+
+fn path_length(cells: &[LocalPoint], base: LocalPoint, order: &[usize]) -> f64 {
+    let mut previous = base;
+    let mut total = 0.0;
+    for &c in order {
+        total += previous.distance(&cells[c]);
+        previous = cells[c];
+    }
+    total + previous.distance(&base)
+}
+
+/// A closed tour through all cells: nearest neighbour from cell 0, then neighbour-list 2-opt.
+fn giant_tour(cells: &[LocalPoint], options: &ExplorationOptions) -> Vec<usize> {
+    let n = cells.len();
+    if n < 4 {
+        return (0..n).collect();
+    }
+    let d = |a: usize, b: usize| cells[a].distance(&cells[b]);
+    // Nearest neighbour construction.
+    let mut tour = Vec::with_capacity(n);
+    let mut used = vec![false; n];
+    let mut current = 0;
+    used[0] = true;
+    tour.push(0);
+    for _ in 1..n {
+        let mut next = usize::MAX;
+        let mut best = f64::INFINITY;
+        for (c, &u) in used.iter().enumerate() {
+            if !u && d(current, c) < best {
+                best = d(current, c);
+                next = c;
+            }
+        }
+        used[next] = true;
+        tour.push(next);
+        current = next;
+    }
+    // Candidate lists: the k nearest other cells of each cell.
+    let k = options.neighbours.clamp(1, n - 1);
+    let near: Vec<Vec<usize>> = (0..n)
+        .map(|a| {
+            let mut others: Vec<usize> = (0..n).filter(|&b| b != a).collect();
+            others.select_nth_unstable_by(k - 1, |&x, &y| {
+                d(a, x).total_cmp(&d(a, y)).then(x.cmp(&y))
+            });
+            others.truncate(k);
+            others.sort_by(|&x, &y| d(a, x).total_cmp(&d(a, y)).then(x.cmp(&y)));
+            others
+        })
+        .collect();
+    let mut pos = vec![0usize; n];
+    for (p, &c) in tour.iter().enumerate() {
+        pos[c] = p;
+    }
+    for _ in 0..options.max_two_opt_passes {
+        let mut improved = false;
+        for p in 0..n {
+            let a = tour[p];
+            let b = tour[(p + 1) % n];
+            let dab = d(a, b);
+            for &c in &near[a] {
+                let dac = d(a, c);
+                if dac >= dab {
+                    break;
+                }
+                let q = pos[c];
+                let dd = tour[(q + 1) % n];
+                if c == b || dd == a {
+                    continue;
+                }
+                let gain = dab + d(c, dd) - dac - d(b, dd);
+                if gain > 1e-10 * (1.0 + dab) {
+                    // Edges (a,b) at p and (c,dd) at q become (a,c) and (b,dd): reverse the
+                    // tour between them.
+                    let (lo, hi) = if p < q { (p, q) } else { (q, p) };
+                    tour[lo + 1..=hi].reverse();
+                    for (r, &city) in tour.iter().enumerate().take(hi + 1).skip(lo + 1) {
+                        pos[city] = r;
+                    }
+                    improved = true;
+                    break;
+                }
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    tour
+}
+
+/// 2-opt on one sortie's path with both ends fixed at the base, to a local optimum.
+fn improve_sortie(cells: &[LocalPoint], base: LocalPoint, order: &mut [usize]) {
+    let m = order.len();
+    if m < 2 {
+        return;
+    }
+    let at = |order: &[usize], k: usize| -> LocalPoint {
+        if k == 0 || k == m + 1 {
+            base
+        } else {
+            cells[order[k - 1]]
+        }
+    };
+    // Path positions 0..=m+1 with 0 and m+1 the base; reverse positions i+1..=j.
+    for _ in 0..100 {
+        let mut improved = false;
+        for i in 0..m {
+            for j in (i + 2)..=m {
+                let (a, b) = (at(order, i), at(order, i + 1));
+                let (c, dd) = (at(order, j), at(order, j + 1));
+                let gain = a.distance(&b) + c.distance(&dd) - a.distance(&c) - b.distance(&dd);
+                if gain > 1e-10 * (1.0 + a.distance(&b)) {
+                    order[i..j].reverse();
+                    improved = true;
+                }
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::{EnergyConfig, VerticalConfig};
+    use crate::mission::CellVisit;
+    use proptest::prelude::*;
+
+    fn grid(nx: usize, ny: usize) -> Vec<LocalPoint> {
+        (0..nx * ny)
+            .map(|i| LocalPoint::new(20.0 + 40.0 * (i % nx) as f64, 20.0 + 40.0 * (i / nx) as f64))
+            .collect()
+    }
+
+    /// Checks every cell is visited exactly once, every sortie re-checks feasible with
+    /// [`MissionEnergyModel::breakdown`] and the reported energies match it.
+    fn check_plan(
+        model: &MissionEnergyModel,
+        base: LocalPoint,
+        cells: &[LocalPoint],
+        hover_s: &[f64],
+        plan: &ExplorationPlan,
+    ) {
+        let mut seen = vec![0; cells.len()];
+        for s in &plan.sorties {
+            assert!(!s.cells.is_empty());
+            for &c in &s.cells {
+                seen[c] += 1;
+            }
+            let visits: Vec<CellVisit> = s
+                .cells
+                .iter()
+                .map(|&c| CellVisit {
+                    centre: cells[c],
+                    hover_s: hover_s[c],
+                })
+                .collect();
+            let e = model.breakdown(base, &visits).unwrap();
+            assert!(
+                e.feasible,
+                "sortie of {} J over budget {}",
+                e.total_j, e.budget_j
+            );
+            assert!(
+                (e.total_j - s.energy_j).abs() <= 1e-9 * e.total_j,
+                "{} vs {}",
+                e.total_j,
+                s.energy_j
+            );
+        }
+        assert!(seen.iter().all(|&k| k == 1), "visit counts {seen:?}");
+        assert!(plan.sorties.len() >= plan.lower_bound_sorties);
+        let total: f64 = plan.sorties.iter().map(|s| s.energy_j).sum();
+        assert!((total - plan.total_energy_j).abs() <= 1e-9 * (1.0 + total));
+    }
+
+    fn plan(
+        model: &MissionEnergyModel,
+        base: LocalPoint,
+        cells: &[LocalPoint],
+        hover_s: &[f64],
+    ) -> ExplorationPlan {
+        let service: Vec<f64> = hover_s.iter().map(|&h| model.service_energy_j(h)).collect();
+        plan_exploration(model, base, cells, &service, &ExplorationOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn empty_field_needs_no_sortie() {
+        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let p = plan(&m, LocalPoint::new(0.0, 0.0), &[], &[]);
+        assert!(p.sorties.is_empty() && p.lower_bound_sorties == 0 && p.total_energy_j == 0.0);
+    }
+
+    #[test]
+    fn small_field_fits_one_sortie() {
+        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let cells = grid(3, 3);
+        let hover = vec![30.0; 9];
+        let p = plan(&m, LocalPoint::new(0.0, 0.0), &cells, &hover);
+        assert_eq!(p.sorties.len(), 1);
+        check_plan(&m, LocalPoint::new(0.0, 0.0), &cells, &hover, &p);
+        // From the corner base: 28.28 m out, 8 legs of 40 m, and a return of at most
+        // sqrt(20² + 100²) = 101.98 m (the optimum is 428.0 m, e.g. a serpentine ending at
+        // (20, 100)).
+        assert!(
+            p.sorties[0].distance_m <= 28.2843 + 320.0 + 101.981,
+            "{}",
+            p.sorties[0].distance_m
+        );
+    }
+
+    #[test]
+    fn paper_field_meets_lower_bound_closely() {
+        // 10 x 10 cells of 40 m, 30 s hovers: each sortie serves about 12 cells.
+        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let cells = grid(10, 10);
+        let hover = vec![30.0; 100];
+        let base = LocalPoint::new(-20.0, -20.0);
+        let p = plan(&m, base, &cells, &hover);
+        check_plan(&m, base, &cells, &hover, &p);
+        assert!(
+            p.sorties.len() <= p.lower_bound_sorties + 2,
+            "{} vs bound {}",
+            p.sorties.len(),
+            p.lower_bound_sorties
+        );
+    }
+
+    #[test]
+    fn unreachable_cell_is_reported() {
+        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let cells = [LocalPoint::new(10.0, 0.0), LocalPoint::new(5_000.0, 0.0)];
+        let service = [m.service_energy_j(30.0); 2];
+        let err = plan_exploration(
+            &m,
+            LocalPoint::new(0.0, 0.0),
+            &cells,
+            &service,
+            &ExplorationOptions::default(),
+        )
+        .unwrap_err();
+        assert!(
+            matches!(err, EnergyError::CellUnreachable { cell: 1, .. }),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn bad_inputs_are_rejected() {
+        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let base = LocalPoint::new(0.0, 0.0);
+        let o = ExplorationOptions::default();
+        assert!(plan_exploration(&m, base, &[base], &[], &o).is_err());
+        assert!(plan_exploration(&m, base, &[base], &[-1.0], &o).is_err());
+        assert!(plan_exploration(&m, base, &[LocalPoint::new(f64::NAN, 0.0)], &[1.0], &o).is_err());
+    }
+
+    #[test]
+    fn deterministic() {
+        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let cells = grid(7, 5);
+        let hover = vec![45.0; 35];
+        let a = plan(&m, LocalPoint::new(0.0, 0.0), &cells, &hover);
+        let b = plan(&m, LocalPoint::new(0.0, 0.0), &cells, &hover);
+        assert_eq!(a, b);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn every_cell_once_every_sortie_feasible(
+            pts in prop::collection::vec((-600.0f64..600.0, -600.0f64..600.0, 0.0f64..120.0), 0..60),
+            vertical in any::<bool>(),
+        ) {
+            let cfg = EnergyConfig { vertical: vertical.then(VerticalConfig::default), ..EnergyConfig::paper() };
+            let m = MissionEnergyModel::new(&cfg).unwrap();
+            let cells: Vec<LocalPoint> = pts.iter().map(|&(e, n, _)| LocalPoint::new(e, n)).collect();
+            let hover: Vec<f64> = pts.iter().map(|&(_, _, h)| h).collect();
+            let base = LocalPoint::new(0.0, 0.0);
+            let p = plan(&m, base, &cells, &hover);
+            check_plan(&m, base, &cells, &hover, &p);
+        }
+    }
+}

@@ -253,9 +253,9 @@ mod tests {
         (a - b).abs() <= tol * (1.0 + b.abs())
     }
 
-    /// Hand-computed: d = sqrt(30² + 40²) = 50 m; path loss 20·log10(50) = 33.9794 dB;
-    /// SNR = 10 − 40 − 33.9794 + 110 = 46.0206 dB = 40,000 (linear, exactly: 10^4.6020600 =
-    /// 1e5/2.5 = 40,000 since 50² = 2500 and 1e-3·1e-4/2500/1e-14 W ratios).
+    /// Hand-computed in watts: P_tx = 10 dBm = 1e-2 W, g0 = -40 dB = 1e-4, N = -110 dBm =
+    /// 1e-14 W. At 40 m offset d = sqrt(30² + 40²) = 50 m, so SNR = 1e-2·1e-4/50²/1e-14 = 40,000;
+    /// directly below, d = 30 m and SNR = 1e-6/900/1e-14 = 111,111.1.
     #[test]
     fn snr_and_rate_hand_checked() {
         let link = LinkConfig::default();
@@ -265,7 +265,7 @@ mod tests {
         // 4 sensors share 1 MHz: 250 kHz · log2(40,001).
         let rate = link.rate_bps(40.0, 4);
         assert!(close(rate, 250_000.0 * 40_001f64.log2(), 1e-12));
-        // Directly below at 30 m: SNR = 1e5 / 900 · 1e3 ... = 1e11·1e-4/900·1e-3/1e-14.
+        // Directly below at 30 m.
         let below = 10f64.powf(link.snr_db(0.0) / 10.0);
         assert!(close(below, 1e-2 * 1e-4 / 900.0 / 1e-14, 1e-12), "{below}");
     }
