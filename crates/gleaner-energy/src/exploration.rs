@@ -28,7 +28,7 @@
 use gleaner_field::LocalPoint;
 
 use crate::error::{EnergyError, non_negative};
-use crate::mission::MissionEnergyModel;
+use crate::mission::{MissionEnergyModel, distance_m};
 
 /// Tuning of the exploration planner.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -125,7 +125,7 @@ pub fn plan_exploration(
     let fixed_j = model.sortie_fixed_j();
     let budget = model.usable_budget_j() * (1.0 - options.budget_margin);
     let epm = model.energy_per_metre_j();
-    let to_base: Vec<f64> = cells.iter().map(|c| epm * c.distance(&base)).collect();
+    let to_base: Vec<f64> = cells.iter().map(|c| epm * distance_m(c, &base)).collect();
     for i in 0..n {
         let alone = fixed_j + 2.0 * to_base[i] + service_j[i];
         if alone > budget {
@@ -231,7 +231,7 @@ impl SplitCost<'_> {
             let mut service = 0.0;
             for j in i..m {
                 if j > i {
-                    path += self.epm * self.cells[seq[j - 1]].distance(&self.cells[seq[j]]);
+                    path += self.epm * distance_m(&self.cells[seq[j - 1]], &self.cells[seq[j]]);
                 }
                 service += self.service_j[seq[j]];
                 let sortie =
@@ -263,7 +263,7 @@ impl SplitCost<'_> {
 fn cycle_length(cells: &[LocalPoint], tour: &[usize]) -> f64 {
     let n = tour.len();
     (0..n)
-        .map(|k| cells[tour[k]].distance(&cells[tour[(k + 1) % n]]))
+        .map(|k| distance_m(&cells[tour[k]], &cells[tour[(k + 1) % n]]))
         .sum()
 }
 
@@ -271,10 +271,10 @@ fn path_length(cells: &[LocalPoint], base: LocalPoint, order: &[usize]) -> f64 {
     let mut previous = base;
     let mut total = 0.0;
     for &c in order {
-        total += previous.distance(&cells[c]);
+        total += distance_m(&previous, &cells[c]);
         previous = cells[c];
     }
-    total + previous.distance(&base)
+    total + distance_m(&previous, &base)
 }
 
 /// A closed tour through all cells: nearest neighbour from cell 0, then neighbour-list 2-opt.
@@ -283,7 +283,7 @@ fn giant_tour(cells: &[LocalPoint], options: &ExplorationOptions) -> Vec<usize> 
     if n < 4 {
         return (0..n).collect();
     }
-    let d = |a: usize, b: usize| cells[a].distance(&cells[b]);
+    let d = |a: usize, b: usize| distance_m(&cells[a], &cells[b]);
     // Nearest neighbour construction.
     let mut tour = Vec::with_capacity(n);
     let mut used = vec![false; n];
@@ -377,8 +377,10 @@ fn improve_sortie(cells: &[LocalPoint], base: LocalPoint, order: &mut [usize]) {
             for j in (i + 2)..=m {
                 let (a, b) = (at(order, i), at(order, i + 1));
                 let (c, dd) = (at(order, j), at(order, j + 1));
-                let gain = a.distance(&b) + c.distance(&dd) - a.distance(&c) - b.distance(&dd);
-                if gain > 1e-10 * (1.0 + a.distance(&b)) {
+                let gain = distance_m(&a, &b) + distance_m(&c, &dd)
+                    - distance_m(&a, &c)
+                    - distance_m(&b, &dd);
+                if gain > 1e-10 * (1.0 + distance_m(&a, &b)) {
                     order[i..j].reverse();
                     improved = true;
                 }

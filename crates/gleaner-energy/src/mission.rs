@@ -8,6 +8,13 @@ use crate::error::{EnergyError, finite, non_negative};
 use crate::link::{DataLogging, HoverConfig, LinkConfig, SensorBacklog};
 use crate::propulsion::PowerModel;
 
+/// Euclidean distance between two local points, metres: sqrt(Δe² + Δn²). Used for every
+/// distance in this crate so that the planner costs and the breakdown agree to the last bit.
+pub(crate) fn distance_m(a: &LocalPoint, b: &LocalPoint) -> f64 {
+    let (de, dn) = (a.e - b.e, a.n - b.n);
+    (de * de + dn * dn).sqrt()
+}
+
 /// One stop of a route: where the UAV hovers and for how long.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CellVisit {
@@ -273,7 +280,7 @@ impl MissionEnergyModel {
 
     /// Travel energy between two points at cruise speed, P(V)·distance/V, J.
     pub fn travel_energy_j(&self, from: LocalPoint, to: LocalPoint) -> f64 {
-        self.energy_per_metre_j * from.distance(&to)
+        self.energy_per_metre_j * distance_m(&from, &to)
     }
 
     /// Service energy of hovering `hover_s` seconds at a cell, (P(0) + P_rx)·hover_s, J.
@@ -303,14 +310,15 @@ impl MissionEnergyModel {
     /// The symmetric matrix of travel energies between all pairs of `points`, J (for an
     /// orienteering cost matrix; put the base among the points).
     pub fn travel_cost_matrix(&self, points: &[LocalPoint]) -> TravelCostMatrix {
+        // Row by row (each pair computed twice, in the same operand order so the matrix is
+        // exactly symmetric): sequential writes are faster than mirroring.
         let n = points.len();
-        let mut costs = vec![0.0; n * n];
-        for i in 0..n {
-            for j in (i + 1)..n {
-                let c = self.travel_energy_j(points[i], points[j]);
-                costs[i * n + j] = c;
-                costs[j * n + i] = c;
-            }
+        let mut costs = Vec::with_capacity(n * n);
+        for a in points {
+            costs.extend(points.iter().map(|b| {
+                let (de, dn) = ((a.e - b.e).abs(), (a.n - b.n).abs());
+                self.energy_per_metre_j * (de * de + dn * dn).sqrt()
+            }));
         }
         TravelCostMatrix { n, costs }
     }
@@ -341,7 +349,7 @@ impl MissionEnergyModel {
             .map(|v| v.centre)
             .chain((!route.is_empty()).then_some(base));
         for to in stops {
-            let distance_m = previous.distance(&to);
+            let distance_m = distance_m(&previous, &to);
             legs.push(LegEnergy {
                 distance_m,
                 time_s: distance_m / self.cruise_speed_mps,
