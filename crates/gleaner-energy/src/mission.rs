@@ -1,7 +1,7 @@
 //! Mission energy: E_t, E_h, E_c, E_r of an ordered route from the base and back, its budget
 //! feasibility, and the additive costs an orienteering planner needs (SPEC §3).
 
-use gleaner_field::LocalPoint;
+use gleaner_field::{CellId, Field, LocalPoint};
 
 use crate::config::{CruiseSpeed, EnergyConfig};
 use crate::error::{EnergyError, finite, non_negative};
@@ -147,7 +147,7 @@ impl TravelCostMatrix {
 ///
 /// ```
 /// use gleaner_energy::{CellVisit, EnergyConfig, MissionEnergyModel};
-/// use gleaner_field::LocalPoint;
+/// use gleaner_field::{CellId, Field, LocalPoint};
 /// let model = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
 /// let route = [
 ///     CellVisit { centre: LocalPoint::new(300.0, 400.0), hover_s: 30.0 },
@@ -305,6 +305,69 @@ impl MissionEnergyModel {
             comm_j,
             energy_j: hover_j + comm_j,
         })
+    }
+
+    /// The backlog of every sensor of `cell` in `field`: horizontal offset from the cell centre
+    /// and the data pending after `elapsed_s[sensor]` seconds since its last collection
+    /// (indexed by sensor position in the field's input order; give never-collected sensors
+    /// the time since deployment or history start), with the default [`DataLogging`].
+    ///
+    /// # Errors
+    /// [`EnergyError::LengthMismatch`] if `elapsed_s` does not have one entry per sensor;
+    /// [`EnergyError::InvalidParameter`] for a negative or non-finite elapsed time or a cell id
+    /// outside the field.
+    pub fn cell_backlog(
+        &self,
+        field: &Field,
+        cell: CellId,
+        elapsed_s: &[f64],
+    ) -> Result<Vec<SensorBacklog>, EnergyError> {
+        let points = field.sensor_points();
+        if elapsed_s.len() != points.len() {
+            return Err(EnergyError::LengthMismatch {
+                what: "elapsed times vs field sensors",
+                left: elapsed_s.len(),
+                right: points.len(),
+            });
+        }
+        let Some(c) = field.cells().get(cell.index()) else {
+            return Err(EnergyError::InvalidParameter {
+                name: "cell id",
+                value: cell.index() as f64,
+                expected: "an index below the field's cell count",
+            });
+        };
+        c.sensors
+            .iter()
+            .map(|&s| {
+                SensorBacklog::from_elapsed(
+                    distance_m(&points[s], &c.centre),
+                    elapsed_s[s],
+                    &self.logging,
+                )
+            })
+            .collect()
+    }
+
+    /// [`MissionEnergyModel::cell_service`] for every cell of `field`, in cell order, from the
+    /// per-sensor times since last collection `elapsed_s` (seconds, see
+    /// [`MissionEnergyModel::cell_backlog`]). The service energies are the node costs of an
+    /// orienteering instance whose travel costs come from
+    /// [`MissionEnergyModel::travel_cost_matrix`] (the base is (0, 0) in the field's frame).
+    ///
+    /// # Errors
+    /// As [`MissionEnergyModel::cell_backlog`].
+    pub fn field_services(
+        &self,
+        field: &Field,
+        elapsed_s: &[f64],
+    ) -> Result<Vec<CellService>, EnergyError> {
+        (0..field.cells().len())
+            .map(|i| {
+                let backlog = self.cell_backlog(field, CellId(i as u32), elapsed_s)?;
+                self.cell_service(&backlog)
+            })
+            .collect()
     }
 
     /// The symmetric matrix of travel energies between all pairs of `points`, J (for an
@@ -469,6 +532,48 @@ mod tests {
             s.comm_j,
             s.energy_j
         );
+    }
+
+    #[test]
+    fn field_services_follow_sensor_backlogs() {
+        use gleaner_field::{FieldConfig, LatLon, Sensor, SensorId};
+        let base = LatLon::new(46.7785, -117.0870).unwrap();
+        let sensors = vec![
+            Sensor::new(
+                SensorId::new("a").unwrap(),
+                LatLon::new(46.7788, -117.0867).unwrap(),
+            ),
+            Sensor::new(
+                SensorId::new("b").unwrap(),
+                LatLon::new(46.7789, -117.0866).unwrap(),
+            ),
+            Sensor::new(
+                SensorId::new("c").unwrap(),
+                LatLon::new(46.7800, -117.0840).unwrap(),
+            ),
+        ];
+        let field = Field::build(&sensors, base, &FieldConfig::with_cell_size(40.0)).unwrap();
+        let m = model();
+        let day = 86_400.0;
+        let elapsed = [day, 10.0 * day, 0.0];
+        let services = m.field_services(&field, &elapsed).unwrap();
+        assert_eq!(services.len(), field.cells().len());
+        for (i, cell) in field.cells().iter().enumerate() {
+            let backlog = m.cell_backlog(&field, CellId(i as u32), &elapsed).unwrap();
+            assert_eq!(backlog.len(), cell.sensors.len());
+            for (b, &s) in backlog.iter().zip(&cell.sensors) {
+                assert!(
+                    (b.horizontal_offset_m - field.sensor_points()[s].distance(&cell.centre)).abs()
+                        < 1e-9
+                );
+                assert!(
+                    (b.pending_bytes - m.logging().pending_bytes(elapsed[s]).unwrap()).abs() < 1e-9
+                );
+            }
+            assert_eq!(services[i], m.cell_service(&backlog).unwrap());
+        }
+        assert!(m.field_services(&field, &elapsed[..2]).is_err());
+        assert!(m.cell_backlog(&field, CellId(99), &elapsed).is_err());
     }
 
     #[test]
