@@ -80,7 +80,8 @@ pub struct Sortie {
 /// The exploration plan: sorties that together visit every cell exactly once.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExplorationPlan {
-    /// The sorties, in flying order.
+    /// The sorties; each is an independent flight from the base and back, in no particular
+    /// order of priority.
     pub sorties: Vec<Sortie>,
     /// A lower bound on the number of sorties any plan needs (0 without cells): the largest,
     /// over distance thresholds tau, of ceil(service energy of the cells at least tau from the

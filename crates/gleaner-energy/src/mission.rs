@@ -85,6 +85,8 @@ pub struct MissionEnergy {
     pub budget_j: f64,
     /// total_j / budget_j, dimensionless.
     pub utilisation: f64,
+    /// budget_j − total_j (negative when infeasible), J.
+    pub remaining_j: f64,
     /// total_j <= budget_j.
     pub feasible: bool,
     /// Cruise distance including the return leg, metres.
@@ -460,6 +462,7 @@ impl MissionEnergyModel {
             total_j,
             budget_j: self.budget_j,
             utilisation: total_j / self.budget_j,
+            remaining_j: self.budget_j - total_j,
             feasible: total_j <= self.budget_j,
             distance_m,
             flight_time_s,
@@ -663,6 +666,7 @@ mod tests {
             prop_assert!((b.vertical_j + legs + cells - b.total_j).abs() <= tol);
             // Feasibility rule.
             prop_assert_eq!(b.feasible, b.total_j <= m.usable_budget_j());
+            prop_assert_eq!(b.feasible, b.remaining_j >= 0.0);
             prop_assert!((b.utilisation * b.budget_j - b.total_j).abs() <= tol);
         }
 
