@@ -465,5 +465,32 @@ mod tests {
             prop_assert!(r.speed_mps >= e.speed_mps);
             prop_assert!(rel_close(r.power_w / r.speed_mps, r.energy_per_metre_j, 1e-12));
         }
+
+        #[test]
+        fn explicit_parameters_optima_beat_a_fine_grid(
+            p0 in 1.0f64..500.0,
+            pi in 0.0f64..500.0,
+            v0 in 0.5f64..20.0,
+            u_tip in 50.0f64..250.0,
+            drag in 0.0f64..0.2,
+        ) {
+            let p = PowerParameters {
+                blade_profile_power_w: p0,
+                induced_power_w: pi,
+                mean_induced_velocity_mps: v0,
+                tip_speed_mps: u_tip,
+                parasite_drag_factor_kg_m: drag,
+                weight_n: 20.0,
+            };
+            let m = PowerModel::from_parameters(p).unwrap();
+            let e = m.max_endurance();
+            let r = m.max_range();
+            for i in 1..=2000 {
+                let v = 0.05 * i as f64;
+                prop_assert!(m.power_w(v) > 0.0);
+                prop_assert!(e.power_w <= m.power_w(v) * (1.0 + 1e-12), "P({v}) below P(V_e = {})", e.speed_mps);
+                prop_assert!(r.energy_per_metre_j <= m.energy_per_metre_j(v) * (1.0 + 1e-12), "P/V at {v} below {}", r.speed_mps);
+            }
+        }
     }
 }
