@@ -83,9 +83,10 @@ pub struct ExplorationPlan {
     /// The sorties; each is an independent flight from the base and back, in no particular
     /// order of priority.
     pub sorties: Vec<Sortie>,
-    /// A lower bound on the number of sorties any plan needs (0 without cells): the largest,
-    /// over distance thresholds tau, of ceil(service energy of the cells at least tau from the
-    /// base / (budget − fixed energy − 2·tau)); tau = 0 gives total service / budget.
+    /// A lower bound on the number of sorties any plan needs (0 without cells), with
+    /// capacity = budget − fixed energy per sortie: the larger of
+    /// ceil(sum over cells of service / (capacity − 2·one-way travel energy)) and, over distance
+    /// thresholds tau, ceil(service of the cells at least tau away / (capacity − 2·tau)).
     pub lower_bound_sorties: usize,
     /// Sum of the sorties' energies, J.
     pub total_energy_j: f64,
@@ -217,24 +218,37 @@ pub fn plan_exploration(
     })
 }
 
-/// A lower bound on the number of sorties: for every threshold tau (a cell's one-way travel
-/// energy from the base), the sorties that serve cells at least tau away fly at least 2·tau,
-/// so each has at most `capacity − 2·tau` J left for service, and together they must provide
-/// the service of all those cells: count >= ceil(service(cells with to_base >= tau) /
-/// (capacity − 2·tau)). The maximum over tau is returned (tau = 0 gives the plain
-/// total-service bound).
+/// A lower bound on the number of sorties, the larger of two valid bounds (`capacity_j` is
+/// the budget minus the fixed energy per sortie, J):
+///
+/// - per cell: a sortie S flies at least 2·to_base(c) for each of its cells c, so
+///   service(S) <= capacity − 2·to_base(c) and sum over c in S of
+///   service(c)/(capacity − 2·to_base(c)) <= 1; summing over all cells bounds the count;
+/// - per threshold tau: the sorties serving cells at least tau away have at most
+///   capacity − 2·tau each for service and must serve all those cells.
 fn sortie_lower_bound(to_base: &[f64], service_j: &[f64], capacity_j: f64) -> usize {
+    if to_base.is_empty() {
+        return 0;
+    }
+    // A tiny relative slack keeps float rounding from overstating a bound.
+    let up = |x: f64| ((x * (1.0 - 1e-12)).ceil() as usize).max(1);
+    let per_cell: f64 = to_base
+        .iter()
+        .zip(service_j)
+        .map(|(&d, &s)| {
+            let room = capacity_j - 2.0 * d;
+            if s > 0.0 && room > 0.0 { s / room } else { 0.0 }
+        })
+        .sum();
     let mut order: Vec<usize> = (0..to_base.len()).collect();
     order.sort_by(|&a, &b| to_base[b].total_cmp(&to_base[a]));
     let mut served = 0.0;
-    let mut bound = 0usize;
+    let mut bound = up(per_cell);
     for &c in &order {
         served += service_j[c];
         let room = capacity_j - 2.0 * to_base[c];
         if room > 0.0 {
-            // A tiny relative slack keeps float rounding from overstating the bound.
-            let k = (served / room * (1.0 - 1e-12)).ceil() as usize;
-            bound = bound.max(k.max(1));
+            bound = bound.max(up(served / room));
         }
     }
     bound
@@ -663,9 +677,15 @@ mod tests {
     #[test]
     fn lower_bound_hand_checked() {
         // Capacity 100 J. Cells at one-way 40, 10, 0 J with service 10, 50, 30 J.
-        // tau = 40: 10 / 20 -> 1; tau = 10: 60 / 80 -> 1; tau = 0: 90 / 100 -> 1.
+        // tau = 40: 10 / 20 -> 1; tau = 10: 60 / 80 -> 1; tau = 0: 90 / 100 -> 1;
+        // per cell: 10/20 + 50/80 + 30/100 = 1.425 -> 2.
         assert_eq!(
             sortie_lower_bound(&[40.0, 10.0, 0.0], &[10.0, 50.0, 30.0], 100.0),
+            2
+        );
+        // Per cell 5/20 + 20/80 + 30/100 = 0.8 and every threshold gives 1.
+        assert_eq!(
+            sortie_lower_bound(&[40.0, 10.0, 0.0], &[5.0, 20.0, 30.0], 100.0),
             1
         );
         // Far cells dominate: two cells 45 J away with 8 J service each need 2 sorties (room 10).
