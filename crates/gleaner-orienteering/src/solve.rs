@@ -1,0 +1,216 @@
+//! Solver entry points and options.
+
+use std::time::{Duration, Instant};
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::engine::{Ctx, State};
+use crate::error::SolveError;
+use crate::exact::{EXACT_MAX_NODES, EXACT_MAX_NODES_TEAM, exact};
+use crate::problem::Problem;
+use crate::solution::{Solution, evaluate};
+
+/// Search settings shared by the solvers.
+///
+/// The search is deterministic for a given `seed` as long as it stops on `max_iterations` or
+/// `max_stall`; `time_limit` only cuts it short (then the result depends on machine speed).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolveOptions {
+    /// Wall-clock limit for the whole solve (s). The best solution so far is returned.
+    pub time_limit: Duration,
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Maximum number of perturbation + local search iterations (`None`: until the time
+    /// limit or the stall limit).
+    pub max_iterations: Option<u64>,
+    /// Stop after this many consecutive iterations without a new best (`None`: never).
+    pub max_stall: Option<u64>,
+    /// Length of the candidate-neighbour lists (k nearest nodes) used by 2-opt, Or-opt and,
+    /// on large instances, replacement moves.
+    pub neighbours: usize,
+    /// The default solver runs [`exact`] instead when the instance has at most this many
+    /// candidate nodes (positive reward, not start/end) and the exact solver supports it.
+    /// 0 disables it.
+    pub exact_threshold: usize,
+}
+
+impl Default for SolveOptions {
+    fn default() -> SolveOptions {
+        SolveOptions {
+            time_limit: Duration::from_secs(2),
+            seed: 0,
+            max_iterations: None,
+            max_stall: Some(20_000),
+            neighbours: 24,
+            exact_threshold: 12,
+        }
+    }
+}
+
+impl SolveOptions {
+    /// Fast configuration: greedy construction then one local search to a local optimum
+    /// (no perturbation), with 12-nearest candidate lists; meant for very large instances.
+    pub fn fast() -> SolveOptions {
+        SolveOptions {
+            max_iterations: Some(0),
+            neighbours: 12,
+            ..SolveOptions::default()
+        }
+    }
+
+    /// Sets the iteration cap (deterministic runs).
+    pub fn with_iterations(mut self, iterations: u64) -> SolveOptions {
+        self.max_iterations = Some(iterations);
+        self
+    }
+
+    /// Sets the time limit.
+    pub fn with_time_limit(mut self, limit: Duration) -> SolveOptions {
+        self.time_limit = limit;
+        self
+    }
+
+    /// Sets the seed.
+    pub fn with_seed(mut self, seed: u64) -> SolveOptions {
+        self.seed = seed;
+        self
+    }
+}
+
+/// Which solver to run through [`solve`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SolverKind {
+    /// [`greedy`]: the paper's ratio-insertion heuristic.
+    Greedy,
+    /// [`solve_default`]: iterated local search seeded with greedy.
+    Default,
+    /// [`exact`]: subset dynamic programming (small instances only).
+    Exact,
+}
+
+/// Runs the chosen solver.
+pub fn solve(
+    problem: &Problem,
+    kind: SolverKind,
+    options: &SolveOptions,
+) -> Result<Solution, SolveError> {
+    match kind {
+        SolverKind::Greedy => Ok(greedy(problem)),
+        SolverKind::Default => Ok(solve_default(problem, options)),
+        SolverKind::Exact => exact(problem),
+    }
+}
+
+/// The paper's heuristic: starting from empty routes, repeatedly inserts the feasible node
+/// with the largest reward / extra cost (extra travel + its service cost, at its cheapest
+/// insertion position) until no node fits. Zero extra cost counts as an infinite ratio;
+/// ties go to the larger reward, then the lower node index, then the lower route index.
+/// Nodes with zero reward are never inserted. Deterministic, no options.
+pub fn greedy(problem: &Problem) -> Solution {
+    let ctx = Ctx::new(problem, 1);
+    let mut state = State::empty(problem);
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    state.fill(&ctx, &[], 0.0, &mut rng);
+    finish(problem, &state)
+}
+
+fn finish(problem: &Problem, state: &State) -> Solution {
+    evaluate(problem, &state.routes).unwrap_or_else(|_| Solution::empty(problem))
+}
+
+/// Lexicographic objective: more reward, then less total cost.
+fn better(a: &State, b: &State, eps: f64) -> bool {
+    if a.reward > b.reward + 1e-9 * b.reward.abs().max(1.0) {
+        return true;
+    }
+    if a.reward < b.reward - 1e-9 * b.reward.abs().max(1.0) {
+        return false;
+    }
+    a.cost.iter().sum::<f64>() < b.cost.iter().sum::<f64>() - eps
+}
+
+/// The default solver: iterated local search (ILS) seeded with [`greedy`].
+///
+/// Construction is greedy ratio insertion; the local search alternates 2-opt and Or-opt
+/// (which free budget), ratio insertion of unvisited nodes, and replacement moves (an
+/// unvisited node takes the place of a visited one of lower reward, or of equal reward when
+/// that saves cost), until none applies. Each iteration perturbs the current solution
+/// (removes a random segment or random nodes; the strength grows while the search stalls),
+/// re-inserts with randomised ratios (GRASP noise) while the removed nodes are tabu, and
+/// runs the local search again. A slightly worse result is accepted (within 1% of the best
+/// reward, more when stalled); after long stalls the search restarts from an elite solution.
+/// Small instances (see [`SolveOptions::exact_threshold`]) are solved exactly instead.
+/// Never returns less reward than [`greedy`].
+pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
+    let started = Instant::now();
+    let greedy_solution = greedy(problem);
+    let ctx_probe = problem
+        .rewards()
+        .iter()
+        .enumerate()
+        .filter(|&(v, &r)| r > 0.0 && !problem.is_terminal(v))
+        .count();
+    let cap = if problem.vehicles() == 1 {
+        EXACT_MAX_NODES
+    } else {
+        EXACT_MAX_NODES_TEAM
+    };
+    if ctx_probe <= options.exact_threshold.min(cap) {
+        if let Ok(s) = exact(problem) {
+            return s;
+        }
+    }
+    let ctx = Ctx::new(problem, options.neighbours.max(2));
+    let scan_all = problem.len() <= 1500;
+    let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+    let mut cur = State::from_routes(problem, &greedy_solution.routes);
+    cur.local_search(&ctx, &mut rng, scan_all);
+    let mut best = cur.clone();
+    let mut elite: Vec<State> = vec![best.clone()];
+    let mut removed = Vec::new();
+    let mut stall: u64 = 0;
+    let mut strength: usize = 1;
+    let mut iter: u64 = 0;
+    loop {
+        if options.max_iterations.is_some_and(|m| iter >= m)
+            || options.max_stall.is_some_and(|m| stall >= m)
+            || started.elapsed() >= options.time_limit
+        {
+            break;
+        }
+        iter += 1;
+        let mut cand = cur.clone();
+        let visited: usize = cand.routes.iter().map(|r| r.len() - 2).sum();
+        cand.perturb(&ctx, &mut rng, strength, &mut removed);
+        let noise = if rng.random_bool(0.5) { 0.0 } else { 0.3 };
+        cand.fill(&ctx, &removed, noise, &mut rng);
+        cand.local_search(&ctx, &mut rng, scan_all);
+        if better(&cand, &best, ctx.eps) {
+            best = cand.clone();
+            cur = cand;
+            stall = 0;
+            strength = 1;
+            elite.push(best.clone());
+            if elite.len() > 8 {
+                elite.remove(0);
+            }
+            continue;
+        }
+        stall += 1;
+        strength = if strength >= (visited / 3).max(3) { 1 } else { strength + 1 };
+        let slack = if stall > 500 { 0.03 } else { 0.01 };
+        if better(&cand, &cur, ctx.eps) || cand.reward >= best.reward * (1.0 - slack) {
+            cur = cand;
+        }
+        if stall % 1000 == 0 {
+            cur = elite[rng.random_range(0..elite.len())].clone();
+        }
+    }
+    let result = finish(problem, &best);
+    if result.reward + 1e-9 < greedy_solution.reward {
+        greedy_solution
+    } else {
+        result
+    }
+}
