@@ -199,12 +199,24 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
         }
         stall += 1;
         strength = if strength >= (visited / 3).max(3) { 1 } else { strength + 1 };
-        let slack = if stall > 500 { 0.03 } else { 0.01 };
+        // Record-to-record acceptance: stay within a few percent of the best reward.
+        let slack = if stall > 200 { 0.05 } else { 0.02 };
         if better(&cand, &cur, ctx.eps) || cand.reward >= best.reward * (1.0 - slack) {
             cur = cand;
         }
-        if stall % 1000 == 0 {
-            cur = elite[rng.random_range(0..elite.len())].clone();
+        if stall % 300 == 0 {
+            if (stall / 300) % 2 == 1 {
+                // Restart from a randomised (GRASP) construction.
+                cur = State::empty(problem);
+                cur.fill(&ctx, &[], 0.6, &mut rng);
+                cur.local_search(&ctx, &mut rng, scan_all);
+                if better(&cur, &best, ctx.eps) {
+                    best = cur.clone();
+                    stall = 0;
+                }
+            } else {
+                cur = elite[rng.random_range(0..elite.len())].clone();
+            }
         }
     }
     let result = finish(problem, &best);
