@@ -14,11 +14,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut max_n = usize::MAX;
     let mut stall: Option<u64> = None;
     let mut csv: Option<PathBuf> = None;
+    let mut seed = 0u64;
     let mut paths = Vec::new();
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
             "--secs" => secs = args.next().ok_or("--secs needs a value")?.parse()?,
+            "--seed" => seed = args.next().ok_or("--seed needs a value")?.parse()?,
             "--greedy" => kind = SolverKind::Greedy,
             "--max-n" => max_n = args.next().ok_or("--max-n needs a value")?.parse()?,
             "--stall" => stall = Some(args.next().ok_or("--stall needs a value")?.parse()?),
@@ -42,6 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let options = SolveOptions {
         time_limit: Duration::from_secs_f64(secs),
         max_stall: stall,
+        seed,
         ..SolveOptions::default()
     };
     let rows = run_benchmark(&selected, kind, &options, &mut |k, total, row| {

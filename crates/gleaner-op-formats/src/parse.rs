@@ -145,7 +145,8 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
             None => (line, ""),
         };
         match key {
-            "NAME" | "COMMENT" | "TYPE" | "DISPLAY_DATA_TYPE" | "NODE_COORD_TYPE" | "TSP_SOLUTION" => {}
+            // Informational keywords (NAME, COMMENT, TYPE, TSPSOL, DISPLAY_DATA_TYPE...) are
+            // skipped below, as is any other `KEY : value` line.
             "DIMENSION" => {
                 let d: usize = value
                     .parse()
@@ -271,6 +272,7 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                 }
             }
             "EOF" => break,
+            _ if line.contains(':') => {}
             other => return Err(parse_err(name, ln, "keyword", format!("unknown `{other}`"))),
         }
     }

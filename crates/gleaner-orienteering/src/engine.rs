@@ -419,7 +419,8 @@ impl State {
     pub fn or_opt(&mut self, ctx: &Ctx, r: usize) -> bool {
         let mut any = false;
         let ru = r as u32;
-        'outer: loop {
+        loop {
+            let mut improved = false;
             let m = self.routes[r].len();
             for len in 1..=3usize {
                 let mut i = 1;
@@ -480,12 +481,15 @@ impl State {
                         self.refresh_range(r, lo, hi);
                         self.cost[r] += g;
                         any = true;
-                        continue 'outer;
+                        improved = true;
+                        continue;
                     }
                     i += 1;
                 }
             }
-            break;
+            if !improved {
+                break;
+            }
         }
         any
     }
@@ -602,6 +606,49 @@ impl State {
                     self.remove_at(ctx, r, vi);
                 }
                 any = true;
+            }
+        }
+        any
+    }
+
+    /// Shortens route `r` by iterated 2-opt/Or-opt with double-bridge kicks (`kicks`
+    /// attempts, each kept only if the route gets cheaper). Returns true when it did.
+    pub fn kick_tour(&mut self, ctx: &Ctx, r: usize, kicks: usize, rng: &mut ChaCha8Rng) -> bool {
+        let mut any = false;
+        for _ in 0..kicks {
+            let m = self.routes[r].len();
+            if m < 10 {
+                return any;
+            }
+            let saved = self.routes[r].clone();
+            let saved_cost = self.cost[r];
+            // Interior indices 1..m-1; cut into A | B | C | D and reorder A C B D.
+            let mut cuts = [
+                rng.random_range(1..m - 1),
+                rng.random_range(1..m - 1),
+                rng.random_range(1..m - 1),
+            ];
+            cuts.sort_unstable();
+            let [a, b, c] = cuts;
+            if a == b || b == c {
+                continue;
+            }
+            self.routes[r][a..c].rotate_left(b - a);
+            self.refresh(r, 1);
+            self.cost[r] = route_cost(ctx.p, &self.routes[r]);
+            loop {
+                let x = self.two_opt(ctx, r);
+                let y = self.or_opt(ctx, r);
+                if !x && !y {
+                    break;
+                }
+            }
+            if self.cost[r] < saved_cost - ctx.eps {
+                any = true;
+            } else {
+                self.routes[r] = saved;
+                self.cost[r] = saved_cost;
+                self.refresh(r, 1);
             }
         }
         any

@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::engine::{Ctx, State};
+use crate::engine::{Ctx, FREE, State};
 use crate::error::SolveError;
 use crate::exact::{EXACT_MAX_NODES, EXACT_MAX_NODES_TEAM, exact};
 use crate::problem::Problem;
@@ -33,6 +33,8 @@ pub struct SolveOptions {
     /// candidate nodes (positive reward, not start/end) and the exact solver supports it.
     /// 0 disables it.
     pub exact_threshold: usize,
+    /// Double-bridge kicks used to shorten the tours of promising solutions (0 disables).
+    pub kicks: usize,
 }
 
 impl Default for SolveOptions {
@@ -44,6 +46,7 @@ impl Default for SolveOptions {
             max_stall: Some(20_000),
             neighbours: 24,
             exact_threshold: 12,
+            kicks: 30,
         }
     }
 }
@@ -167,7 +170,13 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
     let mut cur = State::from_routes(problem, &greedy_solution.routes);
     cur.local_search(&ctx, &mut rng, scan_all);
     let mut best = cur.clone();
-    let mut elite: Vec<State> = vec![best.clone()];
+    // Multi-start ILS: a run perturbs `cur`, accepting results within a few percent of the
+    // run's best; after `run_len` non-improving iterations a new run starts, alternately
+    // from the overall best and from a randomised construction seeded with a random node.
+    let mut run_best = cur.clone();
+    let run_len = 300 + 2 * ctx.cands.len() as u64;
+    let mut run_stall: u64 = 0;
+    let mut runs: u64 = 0;
     let mut removed = Vec::new();
     let mut stall: u64 = 0;
     let mut strength: usize = 1;
@@ -186,37 +195,64 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
         let noise = if rng.random_bool(0.5) { 0.0 } else { 0.3 };
         cand.fill(&ctx, &removed, noise, &mut rng);
         cand.local_search(&ctx, &mut rng, scan_all);
+        if options.kicks > 0
+            && (better(&cand, &run_best, ctx.eps)
+                || (cand.reward >= run_best.reward - 1e-9 * run_best.reward.abs().max(1.0)
+                    && rng.random_bool(0.02)))
+        {
+            // Promising: intensify by shortening the tours, then refill.
+            let mut shortened = false;
+            for r in 0..cand.routes.len() {
+                shortened |= cand.kick_tour(&ctx, r, options.kicks, &mut rng);
+            }
+            if shortened {
+                cand.local_search(&ctx, &mut rng, scan_all);
+            }
+        }
         if better(&cand, &best, ctx.eps) {
             best = cand.clone();
-            cur = cand;
             stall = 0;
+        } else {
+            stall += 1;
+        }
+        if better(&cand, &run_best, ctx.eps) {
+            run_best = cand.clone();
+            cur = cand;
+            run_stall = 0;
             strength = 1;
-            elite.push(best.clone());
-            if elite.len() > 8 {
-                elite.remove(0);
-            }
             continue;
         }
-        stall += 1;
+        run_stall += 1;
         strength = if strength >= (visited / 3).max(3) { 1 } else { strength + 1 };
-        // Record-to-record acceptance: stay within a few percent of the best reward.
-        let slack = if stall > 200 { 0.05 } else { 0.02 };
-        if better(&cand, &cur, ctx.eps) || cand.reward >= best.reward * (1.0 - slack) {
+        // Record-to-record acceptance: stay within a few percent of the run's best reward.
+        let slack = if run_stall > run_len / 2 { 0.05 } else { 0.02 };
+        if better(&cand, &cur, ctx.eps) || cand.reward >= run_best.reward * (1.0 - slack) {
             cur = cand;
         }
-        if stall % 300 == 0 {
-            if (stall / 300) % 2 == 1 {
-                // Restart from a randomised (GRASP) construction.
-                cur = State::empty(problem);
-                cur.fill(&ctx, &[], 0.6, &mut rng);
-                cur.local_search(&ctx, &mut rng, scan_all);
-                if better(&cur, &best, ctx.eps) {
-                    best = cur.clone();
-                    stall = 0;
-                }
+        if run_stall >= run_len {
+            runs += 1;
+            run_stall = 0;
+            strength = 1;
+            if runs % 2 == 0 {
+                cur = best.clone();
             } else {
-                cur = elite[rng.random_range(0..elite.len())].clone();
+                cur = State::empty(problem);
+                for r in 0..cur.routes.len() {
+                    if ctx.cands.is_empty() {
+                        break;
+                    }
+                    let v = ctx.cands[rng.random_range(0..ctx.cands.len())];
+                    if cur.route_of[v] == FREE
+                        && cur.cost[r] + ctx.insert_delta(problem.start(), v, problem.end())
+                            <= problem.budget() + problem.tolerance()
+                    {
+                        cur.insert(&ctx, r, 1, v);
+                    }
+                }
+                cur.fill(&ctx, &[], 0.3, &mut rng);
+                cur.local_search(&ctx, &mut rng, scan_all);
             }
+            run_best = cur.clone();
         }
     }
     let result = finish(problem, &best);
