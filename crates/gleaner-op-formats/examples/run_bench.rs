@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use gleaner_op_formats::{find_instances, format_csv, format_table, load_instance, run_benchmark};
+use gleaner_op_formats::{find_instances, format_csv, format_table, run_benchmark};
 use gleaner_orienteering::{SolveOptions, SolverKind};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -37,7 +37,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let mut selected = Vec::new();
     for p in paths {
-        if load_instance(&p)?.n <= max_n {
+        // Peek at the size without building the (n x n) problem.
+        let text = std::fs::read_to_string(&p)?;
+        let n = text
+            .lines()
+            .find_map(|l| l.trim().strip_prefix("DIMENSION"))
+            .and_then(|v| v.trim_start_matches([' ', ':']).trim().parse::<usize>().ok())
+            .unwrap_or_else(|| text.lines().count().saturating_sub(1));
+        if n <= max_n {
             selected.push(p);
         }
     }

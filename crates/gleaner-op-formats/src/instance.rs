@@ -180,3 +180,27 @@ impl OpInstance {
         Ok(RouteCheck { score, length })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(rule: DistanceRule, a: [f64; 2], b: [f64; 2], expected: f64) {
+        assert_eq!(rule.distance(a, b), expected, "{rule:?} {a:?} {b:?}");
+    }
+
+    #[test]
+    fn distance_rules() {
+        check(DistanceRule::Euclidean, [0.0, 0.0], [3.0, 4.0], 5.0);
+        check(DistanceRule::Euc2d, [0.0, 0.0], [3.0, 4.4], 5.0); // 5.325 -> 5
+        check(DistanceRule::Euc2d, [0.0, 0.0], [3.0, 4.8], 6.0); // 5.660 -> 6
+        check(DistanceRule::Ceil2d, [0.0, 0.0], [3.0, 4.4], 6.0);
+        check(DistanceRule::Att, [0.0, 0.0], [10.0, 0.0], 4.0); // sqrt(10) = 3.16 -> 4
+        check(DistanceRule::Att, [0.0, 0.0], [0.0, 0.0], 0.0);
+        // Augsburg (48.23, 10.53) to Berlin (52.31, 13.24): 494 km; Sydney to London 17014 km
+        // (values from an independent implementation of the TSPLIB formula).
+        check(DistanceRule::Geo, [48.23, 10.53], [52.31, 13.24], 494.0);
+        check(DistanceRule::Geo, [-33.52, 151.13], [51.30, -0.07], 17014.0);
+        assert!(DistanceRule::Explicit.distance([0.0, 0.0], [1.0, 1.0]).is_nan());
+    }
+}

@@ -314,3 +314,52 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
         target: None,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Parses `text` as OPLib and compares (n, budget, rule, depot, scores) or the error text.
+    fn check(text: &str, expected: Result<(usize, f64, DistanceRule, usize, Vec<f64>), &str>) {
+        let got = parse_oplib("t", "g", text);
+        match (got, expected) {
+            (Ok(i), Ok(e)) => assert_eq!((i.n, i.budget, i.rule, i.start, i.scores), e),
+            (Err(g), Err(e)) => assert!(g.to_string().contains(e), "{g} does not contain {e}"),
+            (g, e) => panic!("got {g:?}, expected {e:?}"),
+        }
+    }
+
+    const EXPLICIT: &str = "NAME: t\nTYPE: OP\nDIMENSION: 3\nCOST_LIMIT : 7\nEDGE_WEIGHT_TYPE: EXPLICIT\nEDGE_WEIGHT_FORMAT: LOWER_DIAG_ROW\nEDGE_WEIGHT_SECTION\n 0 2 0\n 3 4 0\nNODE_SCORE_SECTION\n1 0\n2 5\n3 7\nDEPOT_SECTION\n 2\n-1\nEOF\n";
+
+    #[test]
+    fn oplib() {
+        check(EXPLICIT, Ok((3, 7.0, DistanceRule::Explicit, 1, vec![0.0, 5.0, 7.0])));
+        let i = parse_oplib("t", "g", EXPLICIT).unwrap();
+        assert_eq!((i.distance(0, 1), i.distance(2, 0), i.distance(1, 2)), (2.0, 3.0, 4.0));
+        let upper = EXPLICIT
+            .replace("LOWER_DIAG_ROW", "UPPER_ROW")
+            .replace(" 0 2 0\n 3 4 0\n", "2 3\n4\n");
+        let j = parse_oplib("t", "g", &upper).unwrap();
+        assert_eq!((j.distance(0, 1), j.distance(2, 0), j.distance(1, 2)), (2.0, 3.0, 4.0));
+        check(&EXPLICIT.replace("3 7\n", "3 x\n"), Err("t:12: bad score: `x` is not a number"));
+        check(&EXPLICIT.replace("EXPLICIT", "XRAY1"), Err("unsupported `XRAY1`"));
+        check(&EXPLICIT.replace("COST_LIMIT : 7\n", ""), Err("COST_LIMIT: missing"));
+        check(&EXPLICIT.replace("3 7\n", ""), Err("bad node id"));
+        let coords = "NAME : c\nDIMENSION : 2\nTSPSOL : 9\nCOST_LIMIT : 10\nEDGE_WEIGHT_TYPE : EUC_2D\nNODE_COORD_SECTION\n1 0 0\n2 3 4.4\nNODE_SCORE_SECTION\n1 1\n2 2\nDEPOT_SECTION\n1\n-1\nEOF\n";
+        check(coords, Ok((2, 10.0, DistanceRule::Euc2d, 0, vec![1.0, 2.0])));
+    }
+
+    #[test]
+    fn classic() {
+        let i = parse_classic("c", "s", "10 1\n0 0 0\n1 0 0\n0 2 5\n").unwrap();
+        assert_eq!((i.n, i.budget, i.start, i.end), (3, 10.0, 0, 1));
+        assert_eq!(i.problem.cost(0, 2), 2.0);
+        let e = parse_classic("c", "s", "10 1\n0 0 0\n1 zero 0\n").unwrap_err();
+        assert_eq!(e.to_string(), "c:3: bad y: `zero` is not a number");
+        let e = parse_classic("c", "s", "10\n").unwrap_err();
+        assert!(e.to_string().contains("expected `Tmax P`"));
+        // Budget below the direct start -> end distance.
+        let e = parse_classic("c", "s", "0.5 1\n0 0 0\n1 0 0\n").unwrap_err();
+        assert!(e.to_string().contains("infeasible"));
+    }
+}

@@ -25,6 +25,9 @@ pub(crate) struct Ctx<'a> {
     k: usize,
     /// Improvement threshold (cost unit).
     pub eps: f64,
+    /// Evaluate insertions only next to a node's neighbours (large instances); otherwise at
+    /// every edge (exact cheapest insertion).
+    pub restricted: bool,
 }
 
 impl<'a> Ctx<'a> {
@@ -42,6 +45,7 @@ impl<'a> Ctx<'a> {
             knn,
             k,
             eps,
+            restricted: false,
         }
     }
 
@@ -251,6 +255,27 @@ impl State {
             a: route[0],
             b: route[1],
         };
+        if ctx.restricted && route.len() > 16 {
+            // Edges next to the node's routed neighbours, plus the two terminal edges.
+            let m = route.len();
+            let mut consider = |a: usize, b: usize| {
+                let d = ctx.insert_delta(a, v, b);
+                if d < best.delta {
+                    best = Slot { delta: d, a, b };
+                }
+            };
+            consider(route[0], route[1]);
+            consider(route[m - 2], route[m - 1]);
+            for &x in ctx.neighbours(v) {
+                let x = x as usize;
+                if self.route_of[x] == r as u32 {
+                    let i = self.pos[x] as usize;
+                    consider(route[i - 1], x);
+                    consider(x, route[i + 1]);
+                }
+            }
+            return best;
+        }
         for w in route.windows(2) {
             let d = ctx.insert_delta(w[0], v, w[1]);
             if d < best.delta {
@@ -534,8 +559,11 @@ impl State {
                 }
                 // Three cheapest insertion edges (by index of their first node).
                 let mut top = [(f64::INFINITY, usize::MAX); 3];
-                for (t, w) in route.windows(2).enumerate() {
-                    let d = ctx.insert_delta(w[0], u, w[1]);
+                let mut edges = |t: usize| {
+                    if top.iter().any(|e| e.1 == t) {
+                        return;
+                    }
+                    let d = ctx.insert_delta(route[t], u, route[t + 1]);
                     if d < top[2].0 {
                         top[2] = (d, t);
                         if top[2].0 < top[1].0 {
@@ -544,6 +572,22 @@ impl State {
                                 top.swap(0, 1);
                             }
                         }
+                    }
+                };
+                if ctx.restricted && route.len() > 16 {
+                    edges(0);
+                    edges(route.len() - 2);
+                    for &x in ctx.neighbours(u) {
+                        let x = x as usize;
+                        if self.route_of[x] == r as u32 {
+                            let i = self.pos[x] as usize;
+                            edges(i - 1);
+                            edges(i);
+                        }
+                    }
+                } else {
+                    for t in 0..route.len() - 1 {
+                        edges(t);
                     }
                 }
                 let consider = |vi: usize, best: &mut Option<(f64, f64, usize, usize, usize)>| {

@@ -123,3 +123,44 @@ pub fn evaluate(problem: &Problem, routes: &[Vec<usize>]) -> Result<Solution, So
         costs,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::problem::Metric;
+
+    fn problem() -> Problem {
+        // Square of side 1: 0 (0,0), 1 (1,0), 2 (1,1), 3 (0,1); closed tour at 0.
+        Problem::from_points(
+            &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            Metric::Euclidean,
+            vec![5.0, 1.0, 2.0, 3.0],
+            4.5,
+        )
+        .unwrap()
+        .with_service_costs(vec![0.25, 0.0, 0.0, 0.0])
+        .unwrap()
+    }
+
+    fn check(routes: &[Vec<usize>], expected: Result<(f64, f64), SolutionError>) {
+        let p = problem();
+        let got = evaluate(&p, routes).map(|s| (s.reward, s.total_cost()));
+        assert_eq!(got, expected);
+    }
+
+    #[test]
+    fn evaluation() {
+        check(&[vec![0, 1, 2, 3, 0]], Ok((11.0, 4.25)));
+        check(&[], Ok((5.0, 0.25)));
+        check(&[vec![0, 1, 0]], Ok((6.0, 2.25)));
+        check(&[vec![0, 1, 1, 0]], Err(SolutionError::Duplicate { route: 0, node: 1 }));
+        check(&[vec![1, 0]], Err(SolutionError::BadEndpoints { route: 0, start: 0, end: 0, first: Some(1), last: Some(0) }));
+        check(&[vec![0, 9, 0]], Err(SolutionError::NodeOutOfRange { route: 0, node: 9, nodes: 4 }));
+        check(&[vec![0, 0], vec![0, 0]], Err(SolutionError::TooManyRoutes { routes: 2, vehicles: 1 }));
+        let p = problem().with_budget(4.0).unwrap();
+        assert_eq!(
+            evaluate(&p, &[vec![0, 1, 2, 3, 0]]),
+            Err(SolutionError::OverBudget { route: 0, cost: 4.25, budget: 4.0 })
+        );
+    }
+}

@@ -33,6 +33,9 @@ pub struct SolveOptions {
     /// candidate nodes (positive reward, not start/end) and the exact solver supports it.
     /// 0 disables it.
     pub exact_threshold: usize,
+    /// Instances with more candidate nodes than this evaluate insertions and replacements only
+    /// next to each node's candidate neighbours (faster, slightly approximate).
+    pub full_scan_limit: usize,
     /// Double-bridge kicks used to shorten the tours of promising solutions (0 disables).
     pub kicks: usize,
 }
@@ -44,9 +47,10 @@ impl Default for SolveOptions {
             seed: 0,
             max_iterations: None,
             max_stall: Some(20_000),
-            neighbours: 24,
+            neighbours: 12,
             exact_threshold: 12,
-            kicks: 30,
+            kicks: 10,
+            full_scan_limit: 200,
         }
     }
 }
@@ -122,6 +126,20 @@ fn finish(problem: &Problem, state: &State) -> Solution {
     evaluate(problem, &state.routes).unwrap_or_else(|_| Solution::empty(problem))
 }
 
+/// Empty routes, route 0 sent through `v` first (when it fits), then ratio insertion.
+fn anchored(ctx: &Ctx, v: usize, noise: f64, rng: &mut ChaCha8Rng) -> Option<State> {
+    let p = ctx.p;
+    let mut st = State::empty(p);
+    if st.route_of[v] != FREE
+        || st.cost[0] + ctx.insert_delta(p.start(), v, p.end()) > p.budget() + p.tolerance()
+    {
+        return None;
+    }
+    st.insert(ctx, 0, 1, v);
+    st.fill(ctx, &[], noise, rng);
+    Some(st)
+}
+
 /// Lexicographic objective: more reward, then less total cost.
 fn better(a: &State, b: &State, eps: f64) -> bool {
     if a.reward > b.reward + 1e-9 * b.reward.abs().max(1.0) {
@@ -164,17 +182,56 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
             return s;
         }
     }
-    let ctx = Ctx::new(problem, options.neighbours.max(2));
-    let scan_all = problem.len() <= 1500;
+    let mut ctx = Ctx::new(problem, options.neighbours.max(2));
+    let scan_all = ctx.cands.len() <= options.full_scan_limit;
+    ctx.restricted = !scan_all;
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
     let mut cur = State::from_routes(problem, &greedy_solution.routes);
     cur.local_search(&ctx, &mut rng, scan_all);
     let mut best = cur.clone();
-    // Multi-start ILS: a run perturbs `cur`, accepting results within a few percent of the
-    // run's best; after `run_len` non-improving iterations a new run starts, alternately
-    // from the overall best and from a randomised construction seeded with a random node.
+    // Anchored constructions: route 0 first goes to anchor v, then ratio insertion. Scored
+    // for (a sample of) all candidates; the best few get a local search and seed the pool.
+    let mut anchors: Vec<(f64, usize)> = Vec::new();
+    {
+        let sample: Vec<usize> = if ctx.cands.len() <= 400 {
+            ctx.cands.clone()
+        } else {
+            (0..64)
+                .map(|_| ctx.cands[rng.random_range(0..ctx.cands.len())])
+                .collect()
+        };
+        for &v in &sample {
+            if started.elapsed() >= options.time_limit / 4 {
+                break;
+            }
+            if let Some(st) = anchored(&ctx, v, 0.0, &mut rng) {
+                anchors.push((st.reward, v));
+            }
+        }
+        anchors.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    }
+    let mut elite: Vec<State> = Vec::new();
+    let mut last_reward = f64::NAN;
+    for &(rw, v) in anchors.iter() {
+        if elite.len() >= 4 || started.elapsed() >= options.time_limit / 3 {
+            break;
+        }
+        if rw == last_reward {
+            continue;
+        }
+        last_reward = rw;
+        if let Some(mut st) = anchored(&ctx, v, 0.0, &mut rng) {
+            st.local_search(&ctx, &mut rng, scan_all);
+            if better(&st, &best, ctx.eps) {
+                best = st.clone();
+            }
+            elite.push(st);
+        }
+    }
+    cur = best.clone();
+    let top_anchors: Vec<usize> = anchors.iter().take(20).map(|a| a.1).collect();
     let mut run_best = cur.clone();
-    let run_len = 300 + 2 * ctx.cands.len() as u64;
+    let run_len = 200 + ctx.cands.len() as u64;
     let mut run_stall: u64 = 0;
     let mut runs: u64 = 0;
     let mut removed = Vec::new();
@@ -211,6 +268,10 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
         }
         if better(&cand, &best, ctx.eps) {
             best = cand.clone();
+            elite.push(best.clone());
+            if elite.len() > 8 {
+                elite.remove(0);
+            }
             stall = 0;
         } else {
             stall += 1;
@@ -233,32 +294,125 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
             runs += 1;
             run_stall = 0;
             strength = 1;
-            if runs % 2 == 0 {
-                cur = best.clone();
-            } else {
-                cur = State::empty(problem);
-                for r in 0..cur.routes.len() {
-                    if ctx.cands.is_empty() {
-                        break;
-                    }
-                    let v = ctx.cands[rng.random_range(0..ctx.cands.len())];
-                    if cur.route_of[v] == FREE
-                        && cur.cost[r] + ctx.insert_delta(problem.start(), v, problem.end())
-                            <= problem.budget() + problem.tolerance()
-                    {
-                        cur.insert(&ctx, r, 1, v);
-                    }
+            match runs % 4 {
+                0 => cur = best.clone(),
+                2 if !elite.is_empty() => cur = elite[rng.random_range(0..elite.len())].clone(),
+                _ => {
+                    let pick = if runs % 4 == 1 && !top_anchors.is_empty() {
+                        top_anchors[rng.random_range(0..top_anchors.len())]
+                    } else if !ctx.cands.is_empty() {
+                        ctx.cands[rng.random_range(0..ctx.cands.len())]
+                    } else {
+                        problem.start()
+                    };
+                    cur = anchored(&ctx, pick, 0.3, &mut rng).unwrap_or_else(|| best.clone());
+                    cur.local_search(&ctx, &mut rng, scan_all);
                 }
-                cur.fill(&ctx, &[], 0.3, &mut rng);
-                cur.local_search(&ctx, &mut rng, scan_all);
             }
             run_best = cur.clone();
         }
     }
+    eprintln!("DBG iters {iter} runs {runs} best {} anchors {} t {:?}", best.reward, anchors.len(), started.elapsed());
     let result = finish(problem, &best);
     if result.reward + 1e-9 < greedy_solution.reward {
         greedy_solution
     } else {
         result
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::problem::Metric;
+
+    /// Points on a line at x = 0 (depot), 1, 2, 10 with rewards; closed tour.
+    fn line(rewards: Vec<f64>, budget: f64) -> Problem {
+        Problem::from_points(
+            &[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [10.0, 0.0]],
+            Metric::Euclidean,
+            rewards,
+            budget,
+        )
+        .unwrap()
+    }
+
+    fn check(p: &Problem, kind: SolverKind, expected_routes: &[Vec<usize>], expected_reward: f64) {
+        let s = solve(p, kind, &SolveOptions::default().with_iterations(50)).unwrap();
+        assert_eq!(s.routes, expected_routes);
+        assert!((s.reward - expected_reward).abs() < 1e-9);
+    }
+
+    #[test]
+    fn greedy_takes_ratio_order_and_stops() {
+        // Ratio of node 1: 1/2, node 2: 3/4 (both fit in 4), node 3: 100/20 does not fit.
+        let p = line(vec![0.0, 1.0, 3.0, 100.0], 4.0);
+        check(&p, SolverKind::Greedy, &[vec![0, 1, 2, 0]], 4.0);
+        // With budget 20, node 3 (ratio 5) is taken first, then 1 and 2 at zero extra cost.
+        let p = line(vec![0.0, 1.0, 3.0, 100.0], 20.0);
+        check(&p, SolverKind::Greedy, &[vec![0, 1, 2, 3, 0]], 104.0);
+    }
+
+    #[test]
+    fn greedy_is_beaten_where_ratio_misleads() {
+        // Node 1 has the better ratio (1.6 / 2 > 15 / 20); after it, node 2 no longer fits.
+        let p = Problem::from_points(
+            &[[0.0, 0.0], [0.0, 1.0], [10.0, 0.0]],
+            Metric::Euclidean,
+            vec![0.0, 1.6, 15.0],
+            20.0,
+        )
+        .unwrap();
+        check(&p, SolverKind::Greedy, &[vec![0, 1, 0]], 1.6);
+        check(&p, SolverKind::Exact, &[vec![0, 2, 0]], 15.0);
+        check(&p, SolverKind::Default, &[vec![0, 2, 0]], 15.0);
+        let ils = SolveOptions { exact_threshold: 0, ..SolveOptions::default() }.with_iterations(20);
+        assert_eq!(solve_default(&p, &ils).reward, 15.0);
+    }
+
+    #[test]
+    fn path_and_team() {
+        let p = line(vec![0.0, 1.0, 3.0, 100.0], 2.0).with_endpoints(0, 2).unwrap();
+        check(&p, SolverKind::Exact, &[vec![0, 1, 2]], 4.0);
+        check(&p, SolverKind::Default, &[vec![0, 1, 2]], 4.0);
+        let p = Problem::from_points(
+            &[[0.0, 0.0], [0.0, 3.0], [0.0, -3.0]],
+            Metric::Euclidean,
+            vec![0.0, 2.0, 5.0],
+            6.0,
+        )
+        .unwrap()
+        .with_vehicles(2)
+        .unwrap();
+        let s = exact(&p).unwrap();
+        assert_eq!(s.reward, 7.0);
+        assert_eq!(s.routes.len(), 2);
+        let d = solve_default(&p, &SolveOptions { exact_threshold: 0, ..SolveOptions::default() }.with_iterations(20));
+        assert_eq!(d.reward, 7.0);
+    }
+
+    #[test]
+    fn zero_extra_cost_is_infinite_ratio() {
+        // Node 1 sits on the depot: extra cost 0, taken before the better-reward node 2.
+        let p = Problem::from_points(
+            &[[0.0, 0.0], [0.0, 0.0], [1.0, 0.0]],
+            Metric::Euclidean,
+            vec![0.0, 1.0, 10.0],
+            2.0,
+        )
+        .unwrap();
+        let g = greedy(&p);
+        assert_eq!(g.reward, 11.0);
+    }
+
+    #[test]
+    fn exact_rejects_large() {
+        let n = EXACT_MAX_NODES + 2;
+        let pts: Vec<[f64; 2]> = (0..n).map(|i| [i as f64, 0.0]).collect();
+        let p = Problem::from_points(&pts, Metric::Euclidean, vec![1.0; n], 5.0).unwrap();
+        assert_eq!(
+            exact(&p).unwrap_err(),
+            SolveError::TooLargeForExact { got: n - 1, max: EXACT_MAX_NODES }
+        );
     }
 }
