@@ -42,7 +42,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let n = text
             .lines()
             .find_map(|l| l.trim().strip_prefix("DIMENSION"))
-            .and_then(|v| v.trim_start_matches([' ', ':']).trim().parse::<usize>().ok())
+            .and_then(|v| {
+                v.trim_start_matches([' ', ':'])
+                    .trim()
+                    .parse::<usize>()
+                    .ok()
+            })
             .unwrap_or_else(|| text.lines().count().saturating_sub(1));
         if n <= max_n {
             selected.push(p);

@@ -67,7 +67,10 @@ pub fn parse_oplib_best(text: &str) -> Result<Vec<(String, f64)>, FormatError> {
         let score = tok
             .parse::<f64>()
             .map_err(|_| parse_err("ea4op_best.csv", i + 1, "ea4op_score", format!("`{tok}`")))?;
-        out.push((f.get(ci).map(|s| s.trim().to_string()).unwrap_or_default(), score));
+        out.push((
+            f.get(ci).map(|s| s.trim().to_string()).unwrap_or_default(),
+            score,
+        ));
     }
     Ok(out)
 }
@@ -233,8 +236,13 @@ pub fn run_instance(inst: &OpInstance, solver: SolverKind, options: &SolveOption
                         score += if r == 0 {
                             c.score
                         } else {
-                            c.score - inst.scores[inst.start]
-                                - if inst.end != inst.start { inst.scores[inst.end] } else { 0.0 }
+                            c.score
+                                - inst.scores[inst.start]
+                                - if inst.end != inst.start {
+                                    inst.scores[inst.end]
+                                } else {
+                                    0.0
+                                }
                         };
                     }
                     Err(_) => ok = false,
@@ -294,7 +302,12 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 /// The rows as an aligned text table followed by the summary line.
 pub fn format_table(rows: &[BenchRow]) -> String {
     let mut s = String::new();
-    let w = rows.iter().map(|r| r.instance.len()).max().unwrap_or(8).max(8);
+    let w = rows
+        .iter()
+        .map(|r| r.instance.len())
+        .max()
+        .unwrap_or(8)
+        .max(8);
     let ws = rows.iter().map(|r| r.set.len()).max().unwrap_or(3).max(3);
     let _ = writeln!(
         s,
@@ -320,7 +333,14 @@ pub fn format_table(rows: &[BenchRow]) -> String {
     let _ = writeln!(
         s,
         "{} instances, {} with target: {} matched ({} beat), mean gap {:.3}%, worst gap {:.3}%, {} infeasible, {:.1} s total",
-        sm.count, sm.with_target, sm.matched, sm.beat, sm.mean_gap_pct, sm.worst_gap_pct, sm.infeasible, sm.total_seconds
+        sm.count,
+        sm.with_target,
+        sm.matched,
+        sm.beat,
+        sm.mean_gap_pct,
+        sm.worst_gap_pct,
+        sm.infeasible,
+        sm.total_seconds
     );
     s
 }

@@ -47,7 +47,12 @@ pub enum FormatError {
     },
 }
 
-pub(crate) fn parse_err(file: &str, line: usize, field: &str, message: impl Into<String>) -> FormatError {
+pub(crate) fn parse_err(
+    file: &str,
+    line: usize,
+    field: &str,
+    message: impl Into<String>,
+) -> FormatError {
     FormatError::Parse {
         file: file.to_string(),
         line,

@@ -201,6 +201,10 @@ mod tests {
         // (values from an independent implementation of the TSPLIB formula).
         check(DistanceRule::Geo, [48.23, 10.53], [52.31, 13.24], 494.0);
         check(DistanceRule::Geo, [-33.52, 151.13], [51.30, -0.07], 17014.0);
-        assert!(DistanceRule::Explicit.distance([0.0, 0.0], [1.0, 1.0]).is_nan());
+        assert!(
+            DistanceRule::Explicit
+                .distance([0.0, 0.0], [1.0, 1.0])
+                .is_nan()
+        );
     }
 }

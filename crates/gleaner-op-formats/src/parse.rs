@@ -10,7 +10,12 @@ fn number(file: &str, line: usize, field: &str, tok: &str) -> Result<f64, Format
         .parse()
         .map_err(|_| parse_err(file, line, field, format!("`{tok}` is not a number")))?;
     if !v.is_finite() {
-        return Err(parse_err(file, line, field, format!("`{tok}` is not finite")));
+        return Err(parse_err(
+            file,
+            line,
+            field,
+            format!("`{tok}` is not finite"),
+        ));
     }
     Ok(v)
 }
@@ -64,19 +69,34 @@ pub fn parse_classic(name: &str, set: &str, text: &str) -> Result<OpInstance, Fo
         .ok_or_else(|| parse_err(name, 1, "header", "empty file"))?;
     let toks: Vec<&str> = header.split_whitespace().collect();
     if toks.len() < 2 {
-        return Err(parse_err(name, hl, "header", format!("expected `Tmax P`, got `{header}`")));
+        return Err(parse_err(
+            name,
+            hl,
+            "header",
+            format!("expected `Tmax P`, got `{header}`"),
+        ));
     }
     let budget = number(name, hl, "Tmax", toks[0])?;
     let paths = number(name, hl, "P", toks[1])?;
     if paths < 1.0 || paths.fract() != 0.0 {
-        return Err(parse_err(name, hl, "P", format!("`{}` is not a positive integer", toks[1])));
+        return Err(parse_err(
+            name,
+            hl,
+            "P",
+            format!("`{}` is not a positive integer", toks[1]),
+        ));
     }
     let mut coords = Vec::new();
     let mut scores = Vec::new();
     for (ln, line) in lines {
         let t: Vec<&str> = line.split_whitespace().collect();
         if t.len() < 3 {
-            return Err(parse_err(name, ln, "point", format!("expected `x y S`, got `{line}`")));
+            return Err(parse_err(
+                name,
+                ln,
+                "point",
+                format!("expected `x y S`, got `{line}`"),
+            ));
         }
         let x = number(name, ln, "x", t[0])?;
         let y = number(name, ln, "y", t[1])?;
@@ -85,7 +105,12 @@ pub fn parse_classic(name: &str, set: &str, text: &str) -> Result<OpInstance, Fo
         scores.push(s);
     }
     if coords.len() < 2 {
-        return Err(parse_err(name, 0, "points", format!("need at least 2 points, got {}", coords.len())));
+        return Err(parse_err(
+            name,
+            0,
+            "points",
+            format!("need at least 2 points, got {}", coords.len()),
+        ));
     }
     let problem = build_problem(
         name,
@@ -167,7 +192,12 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                     "GEO" => DistanceRule::Geo,
                     "EXPLICIT" => DistanceRule::Explicit,
                     other => {
-                        return Err(parse_err(name, ln, "EDGE_WEIGHT_TYPE", format!("unsupported `{other}`")));
+                        return Err(parse_err(
+                            name,
+                            ln,
+                            "EDGE_WEIGHT_TYPE",
+                            format!("unsupported `{other}`"),
+                        ));
                     }
                 })
             }
@@ -183,16 +213,29 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                     let t: Vec<&str> = raw.split_whitespace().collect();
                     let width = if key == "NODE_SCORE_SECTION" { 2 } else { 3 };
                     if t.len() < width {
-                        return Err(parse_err(name, row, key, format!("expected {width} fields, got `{}`", raw.trim())));
+                        return Err(parse_err(
+                            name,
+                            row,
+                            key,
+                            format!("expected {width} fields, got `{}`", raw.trim()),
+                        ));
                     }
                     let id = number(name, row, "node id", t[0])?;
                     if id < 1.0 || id > d as f64 || id.fract() != 0.0 {
-                        return Err(parse_err(name, row, "node id", format!("`{}` not in 1..={d}", t[0])));
+                        return Err(parse_err(
+                            name,
+                            row,
+                            "node id",
+                            format!("`{}` not in 1..={d}", t[0]),
+                        ));
                     }
                     let k = id as usize - 1;
                     match key {
                         "NODE_COORD_SECTION" => {
-                            coords[k] = Some([number(name, row, "x", t[1])?, number(name, row, "y", t[2])?]);
+                            coords[k] = Some([
+                                number(name, row, "x", t[1])?,
+                                number(name, row, "y", t[2])?,
+                            ]);
                         }
                         "NODE_SCORE_SECTION" => scores[k] = Some(number(name, row, "score", t[1])?),
                         _ => {}
@@ -206,13 +249,23 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                     "UPPER_ROW" | "LOWER_ROW" => d * (d - 1) / 2,
                     "UPPER_DIAG_ROW" | "LOWER_DIAG_ROW" => d * (d + 1) / 2,
                     other => {
-                        return Err(parse_err(name, ln, "EDGE_WEIGHT_FORMAT", format!("unsupported `{other}`")));
+                        return Err(parse_err(
+                            name,
+                            ln,
+                            "EDGE_WEIGHT_FORMAT",
+                            format!("unsupported `{other}`"),
+                        ));
                     }
                 };
                 let mut vals = Vec::with_capacity(count);
                 while vals.len() < count {
                     let Some(raw) = lines.get(i) else {
-                        return Err(parse_err(name, i + 1, key, format!("only {} of {count} weights", vals.len())));
+                        return Err(parse_err(
+                            name,
+                            i + 1,
+                            key,
+                            format!("only {} of {count} weights", vals.len()),
+                        ));
                     };
                     let row = i + 1;
                     i += 1;
@@ -221,7 +274,12 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                     }
                 }
                 if vals.len() != count {
-                    return Err(parse_err(name, i, key, format!("{} weights, expected {count}", vals.len())));
+                    return Err(parse_err(
+                        name,
+                        i,
+                        key,
+                        format!("{} weights, expected {count}", vals.len()),
+                    ));
                 }
                 let mut m = vec![0.0; d * d];
                 let mut it = vals.into_iter();
@@ -240,10 +298,15 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                             }
                         }
                     }
-                    "UPPER_ROW" => (0..d).for_each(|a| ((a + 1)..d).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))),
-                    "UPPER_DIAG_ROW" => (0..d).for_each(|a| (a..d).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))),
-                    "LOWER_ROW" => (0..d).for_each(|a| (0..a).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))),
-                    _ => (0..d).for_each(|a| (0..=a).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))),
+                    "UPPER_ROW" => (0..d).for_each(|a| {
+                        ((a + 1)..d).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))
+                    }),
+                    "UPPER_DIAG_ROW" => (0..d)
+                        .for_each(|a| (a..d).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))),
+                    "LOWER_ROW" => (0..d)
+                        .for_each(|a| (0..a).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))),
+                    _ => (0..d)
+                        .for_each(|a| (0..=a).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))),
                 }
                 for a in 0..d {
                     m[a * d + a] = 0.0;
@@ -265,7 +328,12 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                     if depot.is_none() {
                         let d = need_dim(dim, row, key)?;
                         if v < 1.0 || v > d as f64 || v.fract() != 0.0 {
-                            return Err(parse_err(name, row, "depot", format!("`{t}` not in 1..={d}")));
+                            return Err(parse_err(
+                                name,
+                                row,
+                                "depot",
+                                format!("`{t}` not in 1..={d}"),
+                            ));
                         }
                         depot = Some(v as usize - 1);
                     }
@@ -282,22 +350,55 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
     let scores: Vec<f64> = scores
         .iter()
         .enumerate()
-        .map(|(k, s)| s.ok_or_else(|| parse_err(name, 0, "NODE_SCORE_SECTION", format!("no score for node {}", k + 1))))
+        .map(|(k, s)| {
+            s.ok_or_else(|| {
+                parse_err(
+                    name,
+                    0,
+                    "NODE_SCORE_SECTION",
+                    format!("no score for node {}", k + 1),
+                )
+            })
+        })
         .collect::<Result<_, _>>()?;
     let coords: Vec<[f64; 2]> = if rule == DistanceRule::Explicit {
         if explicit.is_none() {
-            return Err(parse_err(name, 0, "EDGE_WEIGHT_SECTION", "missing for EXPLICIT"));
+            return Err(parse_err(
+                name,
+                0,
+                "EDGE_WEIGHT_SECTION",
+                "missing for EXPLICIT",
+            ));
         }
         Vec::new()
     } else {
         coords
             .iter()
             .enumerate()
-            .map(|(k, c)| c.ok_or_else(|| parse_err(name, 0, "NODE_COORD_SECTION", format!("no coordinates for node {}", k + 1))))
+            .map(|(k, c)| {
+                c.ok_or_else(|| {
+                    parse_err(
+                        name,
+                        0,
+                        "NODE_COORD_SECTION",
+                        format!("no coordinates for node {}", k + 1),
+                    )
+                })
+            })
             .collect::<Result<_, _>>()?
     };
     let depot = depot.unwrap_or(0);
-    let problem = build_problem(name, rule, &coords, explicit.as_ref(), &scores, budget, depot, depot, 1)?;
+    let problem = build_problem(
+        name,
+        rule,
+        &coords,
+        explicit.as_ref(),
+        &scores,
+        budget,
+        depot,
+        depot,
+        1,
+    )?;
     Ok(OpInstance {
         name: name.to_string(),
         set: set.to_string(),
@@ -333,20 +434,44 @@ mod tests {
 
     #[test]
     fn oplib() {
-        check(EXPLICIT, Ok((3, 7.0, DistanceRule::Explicit, 1, vec![0.0, 5.0, 7.0])));
+        check(
+            EXPLICIT,
+            Ok((3, 7.0, DistanceRule::Explicit, 1, vec![0.0, 5.0, 7.0])),
+        );
         let i = parse_oplib("t", "g", EXPLICIT).unwrap();
-        assert_eq!((i.distance(0, 1), i.distance(2, 0), i.distance(1, 2)), (2.0, 3.0, 4.0));
+        assert_eq!(
+            (i.distance(0, 1), i.distance(2, 0), i.distance(1, 2)),
+            (2.0, 3.0, 4.0)
+        );
         let upper = EXPLICIT
             .replace("LOWER_DIAG_ROW", "UPPER_ROW")
             .replace(" 0 2 0\n 3 4 0\n", "2 3\n4\n");
         let j = parse_oplib("t", "g", &upper).unwrap();
-        assert_eq!((j.distance(0, 1), j.distance(2, 0), j.distance(1, 2)), (2.0, 3.0, 4.0));
-        check(&EXPLICIT.replace("3 7\n", "3 x\n"), Err("t:12: bad score: `x` is not a number"));
-        check(&EXPLICIT.replace("EXPLICIT", "XRAY1"), Err("unsupported `XRAY1`"));
-        check(&EXPLICIT.replace("COST_LIMIT : 7\n", ""), Err("COST_LIMIT: missing"));
-        check(&EXPLICIT.replace("3 7\n", ""), Err("bad node id"));
+        assert_eq!(
+            (j.distance(0, 1), j.distance(2, 0), j.distance(1, 2)),
+            (2.0, 3.0, 4.0)
+        );
+        check(
+            &EXPLICIT.replace("3 7\n", "3 x\n"),
+            Err("t:13: bad score: `x` is not a number"),
+        );
+        check(
+            &EXPLICIT.replace("EXPLICIT", "XRAY1"),
+            Err("unsupported `XRAY1`"),
+        );
+        check(
+            &EXPLICIT.replace("COST_LIMIT : 7\n", ""),
+            Err("COST_LIMIT: missing"),
+        );
+        check(
+            &EXPLICIT.replace("3 7\n", ""),
+            Err("bad NODE_SCORE_SECTION: expected 2 fields, got `DEPOT_SECTION`"),
+        );
         let coords = "NAME : c\nDIMENSION : 2\nTSPSOL : 9\nCOST_LIMIT : 10\nEDGE_WEIGHT_TYPE : EUC_2D\nNODE_COORD_SECTION\n1 0 0\n2 3 4.4\nNODE_SCORE_SECTION\n1 1\n2 2\nDEPOT_SECTION\n1\n-1\nEOF\n";
-        check(coords, Ok((2, 10.0, DistanceRule::Euc2d, 0, vec![1.0, 2.0])));
+        check(
+            coords,
+            Ok((2, 10.0, DistanceRule::Euc2d, 0, vec![1.0, 2.0])),
+        );
     }
 
     #[test]

@@ -11,7 +11,9 @@ use gleaner_orienteering::{SolveOptions, SolverKind, solve_default};
 fn data_dir() -> PathBuf {
     std::env::var_os("GLEANER_DATA_DIR")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data")))
+        .unwrap_or_else(|| {
+            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"))
+        })
         .join("op")
 }
 
@@ -40,14 +42,48 @@ fn oplib_instances_of_every_distance_rule_parse() {
     let dir = data_dir().join("oplib");
     let check = |file: &str, n: usize, budget: f64, rule: DistanceRule, target: f64| {
         let inst = load_instance(&dir.join(file)).unwrap();
-        assert_eq!((inst.n, inst.budget, inst.rule, inst.target), (n, budget, rule, Some(target)), "{file}");
+        assert_eq!(
+            (inst.n, inst.budget, inst.rule, inst.target),
+            (n, budget, rule, Some(target)),
+            "{file}"
+        );
         assert_eq!((inst.start, inst.end), (0, 0));
     };
-    check("gen1/att48-gen1-50.oplib", 48, 5314.0, DistanceRule::Att, 31.0);
-    check("gen1/eil51-gen1-50.oplib", 51, 213.0, DistanceRule::Euc2d, 29.0);
-    check("gen2/gr48-gen2-50.oplib", 48, 2523.0, DistanceRule::Explicit, 1749.0);
-    check("gen3/brazil58-gen3-50.oplib", 58, 12698.0, DistanceRule::Explicit, 1702.0);
-    check("gen1/gr137-gen1-50.oplib", 137, 34927.0, DistanceRule::Geo, 78.0);
+    check(
+        "gen1/att48-gen1-50.oplib",
+        48,
+        5314.0,
+        DistanceRule::Att,
+        31.0,
+    );
+    check(
+        "gen1/eil51-gen1-50.oplib",
+        51,
+        213.0,
+        DistanceRule::Euc2d,
+        29.0,
+    );
+    check(
+        "gen2/gr48-gen2-50.oplib",
+        48,
+        2523.0,
+        DistanceRule::Explicit,
+        1749.0,
+    );
+    check(
+        "gen3/brazil58-gen3-50.oplib",
+        58,
+        12698.0,
+        DistanceRule::Explicit,
+        1702.0,
+    );
+    check(
+        "gen1/gr137-gen1-50.oplib",
+        137,
+        34927.0,
+        DistanceRule::Geo,
+        78.0,
+    );
     assert_eq!(load_target("gr137-gen3-50"), 3954.0);
     // Explicit matrices are symmetric and agree with the generic problem.
     let inst = load_instance(&dir.join("gen1/brazil58-gen1-50.oplib")).unwrap();
@@ -75,7 +111,11 @@ fn solve_to_target(file: &Path, iterations: u64) {
         score += inst.validate_route(route).unwrap().score;
     }
     let target = inst.target.unwrap();
-    assert!(score >= target - 1e-9, "{}: {score} < target {target}", inst.name);
+    assert!(
+        score >= target - 1e-9,
+        "{}: {score} < target {target}",
+        inst.name
+    );
 }
 
 #[test]
@@ -84,7 +124,10 @@ fn small_classic_instances_reach_their_targets() {
     for f in find_instances(&dir.join("Tsiligirides_2")).unwrap() {
         solve_to_target(&f, 300);
     }
-    for name in ["tsiligirides_problem_1_budget_30.txt", "tsiligirides_problem_1_budget_75.txt"] {
+    for name in [
+        "tsiligirides_problem_1_budget_30.txt",
+        "tsiligirides_problem_1_budget_75.txt",
+    ] {
         solve_to_target(&dir.join("Tsiligirides_1").join(name), 1500);
     }
     solve_to_target(&dir.join("ChaoSet_66/set_66_1_050.txt"), 1500);
@@ -93,7 +136,11 @@ fn small_classic_instances_reach_their_targets() {
 #[test]
 fn small_oplib_instances_reach_best_known() {
     let dir = data_dir().join("oplib");
-    for f in ["gen1/att48-gen1-50.oplib", "gen2/eil51-gen2-50.oplib", "gen3/gr48-gen3-50.oplib"] {
+    for f in [
+        "gen1/att48-gen1-50.oplib",
+        "gen2/eil51-gen2-50.oplib",
+        "gen3/gr48-gen3-50.oplib",
+    ] {
         solve_to_target(&dir.join(f), 1500);
     }
 }
@@ -117,13 +164,21 @@ fn runner_rows_summary_and_tables() {
     let dir = data_dir().join("classic/Tsiligirides_2");
     let files: Vec<PathBuf> = find_instances(&dir).unwrap().into_iter().take(3).collect();
     let mut seen = 0;
-    let rows = run_benchmark(&files, SolverKind::Greedy, &options(0), &mut |k, total, _| {
-        seen = k;
-        assert_eq!(total, 3);
-    })
+    let rows = run_benchmark(
+        &files,
+        SolverKind::Greedy,
+        &options(0),
+        &mut |k, total, _| {
+            seen = k;
+            assert_eq!(total, 3);
+        },
+    )
     .unwrap();
     assert_eq!(seen, 3);
-    assert!(rows.iter().all(|r| r.feasible && r.target.is_some() && r.n == 21));
+    assert!(
+        rows.iter()
+            .all(|r| r.feasible && r.target.is_some() && r.n == 21)
+    );
     let s = summarize(&rows);
     assert_eq!((s.count, s.with_target, s.infeasible), (3, 3, 0));
     let table = format_table(&rows);

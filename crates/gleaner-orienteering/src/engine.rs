@@ -15,6 +15,9 @@ pub(crate) const FREE: u32 = u32::MAX;
 /// `route_of` value of the start and end nodes.
 pub(crate) const TERMINAL: u32 = u32::MAX - 1;
 
+/// Routes up to this length (nodes) use exhaustive 2-opt rather than candidate lists.
+const FULL_TWO_OPT: usize = 24;
+
 /// Read-only context: the problem, the candidate nodes and the k-nearest-neighbour lists.
 pub(crate) struct Ctx<'a> {
     pub p: &'a Problem,
@@ -131,11 +134,7 @@ fn neighbour_lists(p: &Problem, k: usize) -> Vec<u32> {
     }
     for i in 0..n {
         buf.clear();
-        buf.extend(
-            (0..n)
-                .filter(|&j| j != i)
-                .map(|j| (p.cost(i, j), j as u32)),
-        );
+        buf.extend((0..n).filter(|&j| j != i).map(|j| (p.cost(i, j), j as u32)));
         if k < buf.len() {
             buf.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             buf.truncate(k);
@@ -388,6 +387,9 @@ impl State {
     /// 2-opt on route `r` with neighbour lists, first improvement until none. Returns true
     /// when the route got cheaper.
     pub fn two_opt(&mut self, ctx: &Ctx, r: usize) -> bool {
+        if self.routes[r].len() <= FULL_TWO_OPT {
+            return self.two_opt_full(ctx, r);
+        }
         let mut any = false;
         let ru = r as u32;
         loop {
@@ -439,6 +441,41 @@ impl State {
         any
     }
 
+    /// 2-opt over all position pairs (short routes: catches long-range moves that candidate
+    /// lists miss on clustered instances).
+    fn two_opt_full(&mut self, ctx: &Ctx, r: usize) -> bool {
+        let mut any = false;
+        loop {
+            let mut improved = false;
+            let m = self.routes[r].len();
+            for i in 0..m.saturating_sub(3) {
+                let route = &self.routes[r];
+                let (a, an) = (route[i], route[i + 1]);
+                let dan = ctx.c(a, an);
+                let mut found = None;
+                for j in (i + 2)..(m - 1) {
+                    let (c, cn) = (route[j], route[j + 1]);
+                    let g = ctx.c(a, c) + ctx.c(an, cn) - dan - ctx.c(c, cn);
+                    if g < -ctx.eps {
+                        found = Some((g, j));
+                        break;
+                    }
+                }
+                if let Some((g, j)) = found {
+                    self.routes[r][i + 1..=j].reverse();
+                    self.refresh_range(r, i + 1, j);
+                    self.cost[r] += g;
+                    improved = true;
+                }
+            }
+            if !improved {
+                break;
+            }
+            any = true;
+        }
+        any
+    }
+
     /// Or-opt on route `r`: moves segments of 1..=3 nodes (either orientation) next to a
     /// neighbour of their ends. Returns true when the route got cheaper.
     pub fn or_opt(&mut self, ctx: &Ctx, r: usize) -> bool {
@@ -479,7 +516,8 @@ impl State {
                                 let base = ctx.c(u, w);
                                 let fwd = ctx.c(u, s0) + ctx.c(sl, w) - base;
                                 let rev = ctx.c(u, sl) + ctx.c(s0, w) - base;
-                                let (ins, reversed) = if rev < fwd { (rev, true) } else { (fwd, false) };
+                                let (ins, reversed) =
+                                    if rev < fwd { (rev, true) } else { (fwd, false) };
                                 let g = ins - removal;
                                 if g < -ctx.eps && found.is_none_or(|f| g < f.0) {
                                     found = Some((g, t, reversed));
@@ -713,7 +751,13 @@ impl State {
 
     /// Perturbation: removes a random segment of up to `strength` nodes from a random
     /// non-empty route, or `strength` random visited nodes. Returns the removed nodes.
-    pub fn perturb(&mut self, ctx: &Ctx, rng: &mut ChaCha8Rng, strength: usize, out: &mut Vec<usize>) {
+    pub fn perturb(
+        &mut self,
+        ctx: &Ctx,
+        rng: &mut ChaCha8Rng,
+        strength: usize,
+        out: &mut Vec<usize>,
+    ) {
         out.clear();
         let nonempty: Vec<usize> = (0..self.routes.len())
             .filter(|&r| self.routes[r].len() > 2)

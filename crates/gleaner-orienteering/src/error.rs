@@ -37,7 +37,9 @@ pub enum ProblemError {
         value: f64,
     },
     /// The matrix is not symmetric.
-    #[error("cost matrix is asymmetric: c[{from}][{to}] = {forward} but c[{to}][{from}] = {backward}")]
+    #[error(
+        "cost matrix is asymmetric: c[{from}][{to}] = {forward} but c[{to}][{from}] = {backward}"
+    )]
     Asymmetric {
         /// Row.
         from: usize,
@@ -156,7 +158,9 @@ pub enum SolutionError {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum SolveError {
     /// The exact solver was given too many candidate nodes.
-    #[error("exact solver supports at most {max} nodes with positive reward besides start/end, got {got}")]
+    #[error(
+        "exact solver supports at most {max} nodes with positive reward besides start/end, got {got}"
+    )]
     TooLargeForExact {
         /// Candidates in the instance.
         got: usize,

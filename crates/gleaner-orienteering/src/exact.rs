@@ -86,8 +86,7 @@ pub fn exact(problem: &Problem) -> Result<Solution, SolveError> {
     if p.vehicles() == 1 {
         let mut best = 0usize;
         for set in 0..full {
-            if value[set] > value[best]
-                || (value[set] == value[best] && closed[set] < closed[best])
+            if value[set] > value[best] || (value[set] == value[best] && closed[set] < closed[best])
             {
                 best = set;
             }

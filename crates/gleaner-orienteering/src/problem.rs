@@ -187,7 +187,10 @@ impl Problem {
     pub fn with_endpoints(mut self, start: usize, end: usize) -> Result<Problem, ProblemError> {
         for node in [start, end] {
             if node >= self.n {
-                return Err(ProblemError::NodeOutOfRange { node, nodes: self.n });
+                return Err(ProblemError::NodeOutOfRange {
+                    node,
+                    nodes: self.n,
+                });
             }
         }
         self.start = start;
@@ -341,34 +344,96 @@ mod tests {
     fn validation() {
         let ok = vec![0.0, 1.0, 2.0, 1.0, 0.0, 1.5, 2.0, 1.5, 0.0];
         check(ok.clone(), vec![0.0, 1.0, 1.0], 3.0, Ok(()));
-        check(vec![0.0; 4], vec![0.0, 1.0, 1.0], 3.0, Err(ProblemError::MatrixSize { len: 4, nodes: 3 }));
+        check(
+            vec![0.0; 4],
+            vec![0.0, 1.0, 1.0],
+            3.0,
+            Err(ProblemError::MatrixSize { len: 4, nodes: 3 }),
+        );
         let mut asym = ok.clone();
         asym[1] = 1.1;
-        check(asym, vec![0.0, 1.0, 1.0], 3.0, Err(ProblemError::Asymmetric { from: 0, to: 1, forward: 1.1, backward: 1.0 }));
+        check(
+            asym,
+            vec![0.0, 1.0, 1.0],
+            3.0,
+            Err(ProblemError::Asymmetric {
+                from: 0,
+                to: 1,
+                forward: 1.1,
+                backward: 1.0,
+            }),
+        );
         let mut neg = ok.clone();
         neg[5] = -1.0;
-        check(neg, vec![0.0, 1.0, 1.0], 3.0, Err(ProblemError::BadCost { from: 1, to: 2, value: -1.0 }));
+        check(
+            neg,
+            vec![0.0, 1.0, 1.0],
+            3.0,
+            Err(ProblemError::BadCost {
+                from: 1,
+                to: 2,
+                value: -1.0,
+            }),
+        );
         let mut nan = ok.clone();
         nan[0] = f64::NAN;
-        assert!(matches!(Problem::new(nan, vec![0.0; 3], 1.0), Err(ProblemError::BadCost { .. })));
-        check(ok.clone(), vec![0.0, -1.0, 1.0], 3.0, Err(ProblemError::BadReward { node: 1, value: -1.0 }));
-        check(ok.clone(), vec![0.0, 1.0, 1.0], f64::INFINITY, Err(ProblemError::BadBudget { value: f64::INFINITY }));
+        assert!(matches!(
+            Problem::new(nan, vec![0.0; 3], 1.0),
+            Err(ProblemError::BadCost { .. })
+        ));
+        check(
+            ok.clone(),
+            vec![0.0, -1.0, 1.0],
+            3.0,
+            Err(ProblemError::BadReward {
+                node: 1,
+                value: -1.0,
+            }),
+        );
+        check(
+            ok.clone(),
+            vec![0.0, 1.0, 1.0],
+            f64::INFINITY,
+            Err(ProblemError::BadBudget {
+                value: f64::INFINITY,
+            }),
+        );
         check(vec![], vec![], 1.0, Err(ProblemError::Empty));
     }
 
     #[test]
     fn endpoints_service_and_infeasible_budget() {
-        let p = Problem::from_points(&[[0.0, 0.0], [3.0, 4.0], [6.0, 8.0]], Metric::Euclidean, vec![0.0, 1.0, 0.0], 10.0)
-            .unwrap();
-        assert_eq!(p.clone().with_endpoints(0, 3).unwrap_err(), ProblemError::NodeOutOfRange { node: 3, nodes: 3 });
+        let p = Problem::from_points(
+            &[[0.0, 0.0], [3.0, 4.0], [6.0, 8.0]],
+            Metric::Euclidean,
+            vec![0.0, 1.0, 0.0],
+            10.0,
+        )
+        .unwrap();
+        assert_eq!(
+            p.clone().with_endpoints(0, 3).unwrap_err(),
+            ProblemError::NodeOutOfRange { node: 3, nodes: 3 }
+        );
         // start 0 -> end 2 costs 10, exactly the budget: allowed.
         let p2 = p.clone().with_endpoints(0, 2).unwrap();
         assert_eq!(p2.empty_route_cost(), 10.0);
         // Service at the end pushes the empty route over the budget.
         let err = p2.with_service_costs(vec![0.0, 0.0, 0.5]).unwrap_err();
-        assert_eq!(err, ProblemError::Infeasible { minimum: 10.5, budget: 10.0 });
-        assert_eq!(p.clone().with_vehicles(0).unwrap_err(), ProblemError::NoVehicles);
-        assert!(matches!(p.with_service_costs(vec![1.0]), Err(ProblemError::LengthMismatch { .. })));
+        assert_eq!(
+            err,
+            ProblemError::Infeasible {
+                minimum: 10.5,
+                budget: 10.0
+            }
+        );
+        assert_eq!(
+            p.clone().with_vehicles(0).unwrap_err(),
+            ProblemError::NoVehicles
+        );
+        assert!(matches!(
+            p.with_service_costs(vec![1.0]),
+            Err(ProblemError::LengthMismatch { .. })
+        ));
     }
 
     #[test]

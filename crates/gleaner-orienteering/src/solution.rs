@@ -153,14 +153,43 @@ mod tests {
         check(&[vec![0, 1, 2, 3, 0]], Ok((11.0, 4.25)));
         check(&[], Ok((5.0, 0.25)));
         check(&[vec![0, 1, 0]], Ok((6.0, 2.25)));
-        check(&[vec![0, 1, 1, 0]], Err(SolutionError::Duplicate { route: 0, node: 1 }));
-        check(&[vec![1, 0]], Err(SolutionError::BadEndpoints { route: 0, start: 0, end: 0, first: Some(1), last: Some(0) }));
-        check(&[vec![0, 9, 0]], Err(SolutionError::NodeOutOfRange { route: 0, node: 9, nodes: 4 }));
-        check(&[vec![0, 0], vec![0, 0]], Err(SolutionError::TooManyRoutes { routes: 2, vehicles: 1 }));
+        check(
+            &[vec![0, 1, 1, 0]],
+            Err(SolutionError::Duplicate { route: 0, node: 1 }),
+        );
+        check(
+            &[vec![1, 0]],
+            Err(SolutionError::BadEndpoints {
+                route: 0,
+                start: 0,
+                end: 0,
+                first: Some(1),
+                last: Some(0),
+            }),
+        );
+        check(
+            &[vec![0, 9, 0]],
+            Err(SolutionError::NodeOutOfRange {
+                route: 0,
+                node: 9,
+                nodes: 4,
+            }),
+        );
+        check(
+            &[vec![0, 0], vec![0, 0]],
+            Err(SolutionError::TooManyRoutes {
+                routes: 2,
+                vehicles: 1,
+            }),
+        );
         let p = problem().with_budget(4.0).unwrap();
         assert_eq!(
             evaluate(&p, &[vec![0, 1, 2, 3, 0]]),
-            Err(SolutionError::OverBudget { route: 0, cost: 4.25, budget: 4.0 })
+            Err(SolutionError::OverBudget {
+                route: 0,
+                cost: 4.25,
+                budget: 4.0
+            })
         );
     }
 }

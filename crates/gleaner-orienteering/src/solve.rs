@@ -284,7 +284,11 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
             continue;
         }
         run_stall += 1;
-        strength = if strength >= (visited / 3).max(3) { 1 } else { strength + 1 };
+        strength = if strength >= (visited / 3).max(3) {
+            1
+        } else {
+            strength + 1
+        };
         // Record-to-record acceptance: stay within a few percent of the run's best reward.
         let slack = if run_stall > run_len / 2 { 0.05 } else { 0.02 };
         if better(&cand, &cur, ctx.eps) || cand.reward >= run_best.reward * (1.0 - slack) {
@@ -312,7 +316,12 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
             run_best = cur.clone();
         }
     }
-    eprintln!("DBG iters {iter} runs {runs} best {} anchors {} t {:?}", best.reward, anchors.len(), started.elapsed());
+    eprintln!(
+        "DBG iters {iter} runs {runs} best {} anchors {} t {:?}",
+        best.reward,
+        anchors.len(),
+        started.elapsed()
+    );
     let result = finish(problem, &best);
     if result.reward + 1e-9 < greedy_solution.reward {
         greedy_solution
@@ -366,13 +375,19 @@ mod tests {
         check(&p, SolverKind::Greedy, &[vec![0, 1, 0]], 1.6);
         check(&p, SolverKind::Exact, &[vec![0, 2, 0]], 15.0);
         check(&p, SolverKind::Default, &[vec![0, 2, 0]], 15.0);
-        let ils = SolveOptions { exact_threshold: 0, ..SolveOptions::default() }.with_iterations(20);
+        let ils = SolveOptions {
+            exact_threshold: 0,
+            ..SolveOptions::default()
+        }
+        .with_iterations(20);
         assert_eq!(solve_default(&p, &ils).reward, 15.0);
     }
 
     #[test]
     fn path_and_team() {
-        let p = line(vec![0.0, 1.0, 3.0, 100.0], 2.0).with_endpoints(0, 2).unwrap();
+        let p = line(vec![0.0, 1.0, 3.0, 100.0], 2.0)
+            .with_endpoints(0, 2)
+            .unwrap();
         check(&p, SolverKind::Exact, &[vec![0, 1, 2]], 4.0);
         check(&p, SolverKind::Default, &[vec![0, 1, 2]], 4.0);
         let p = Problem::from_points(
@@ -387,7 +402,14 @@ mod tests {
         let s = exact(&p).unwrap();
         assert_eq!(s.reward, 7.0);
         assert_eq!(s.routes.len(), 2);
-        let d = solve_default(&p, &SolveOptions { exact_threshold: 0, ..SolveOptions::default() }.with_iterations(20));
+        let d = solve_default(
+            &p,
+            &SolveOptions {
+                exact_threshold: 0,
+                ..SolveOptions::default()
+            }
+            .with_iterations(20),
+        );
         assert_eq!(d.reward, 7.0);
     }
 
@@ -412,7 +434,10 @@ mod tests {
         let p = Problem::from_points(&pts, Metric::Euclidean, vec![1.0; n], 5.0).unwrap();
         assert_eq!(
             exact(&p).unwrap_err(),
-            SolveError::TooLargeForExact { got: n - 1, max: EXACT_MAX_NODES }
+            SolveError::TooLargeForExact {
+                got: n - 1,
+                max: EXACT_MAX_NODES
+            }
         );
     }
 }

@@ -1,8 +1,6 @@
 //! Property tests: solvers are feasible, default >= greedy, default (ILS) == exact optimum.
 
-use gleaner_orienteering::{
-    Metric, Problem, SolveOptions, evaluate, exact, greedy, solve_default,
-};
+use gleaner_orienteering::{Metric, Problem, SolveOptions, evaluate, exact, greedy, solve_default};
 use proptest::prelude::*;
 
 /// A random Euclidean instance with up to 12 nodes, service costs and possibly start != end.
