@@ -1,0 +1,367 @@
+//! Loading benchmark files with their targets, and the benchmark runner.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use gleaner_orienteering::{SolveOptions, SolverKind, solve};
+
+use crate::error::{FormatError, parse_err};
+use crate::instance::{OpFormat, OpInstance};
+use crate::parse::{parse_classic, parse_oplib};
+
+/// Target scores of the classic sets, from `targets.csv` (`set,n,budget,...,target`).
+/// Returns `(set, budget, target)` triples.
+pub fn parse_classic_targets(text: &str) -> Result<Vec<(String, f64, f64)>, FormatError> {
+    let mut out = Vec::new();
+    let mut lines = text.lines().enumerate();
+    let header: Vec<&str> = lines
+        .next()
+        .map(|(_, l)| l.split(',').map(str::trim).collect())
+        .unwrap_or_default();
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| parse_err("targets.csv", 1, name, "missing column"))
+    };
+    let (cs, cb, ct) = (col("set")?, col("budget")?, col("target")?);
+    for (i, line) in lines {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let f: Vec<&str> = line.split(',').collect();
+        let get = |c: usize, field: &str| -> Result<f64, FormatError> {
+            let tok = f.get(c).map(|s| s.trim()).unwrap_or("");
+            tok.parse::<f64>()
+                .map_err(|_| parse_err("targets.csv", i + 1, field, format!("`{tok}`")))
+        };
+        let set = f.get(cs).map(|s| s.trim().to_string()).unwrap_or_default();
+        out.push((set, get(cb, "budget")?, get(ct, "target")?));
+    }
+    Ok(out)
+}
+
+/// Best known scores of OPLib, from `ea4op_best.csv` (`instance,...,ea4op_score,...`).
+/// Returns `(instance, score)` pairs.
+pub fn parse_oplib_best(text: &str) -> Result<Vec<(String, f64)>, FormatError> {
+    let mut out = Vec::new();
+    let mut lines = text.lines().enumerate();
+    let header: Vec<&str> = lines
+        .next()
+        .map(|(_, l)| l.split(',').map(str::trim).collect())
+        .unwrap_or_default();
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| parse_err("ea4op_best.csv", 1, name, "missing column"))
+    };
+    let (ci, cs) = (col("instance")?, col("ea4op_score")?);
+    for (i, line) in lines {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let f: Vec<&str> = line.split(',').collect();
+        let tok = f.get(cs).map(|s| s.trim()).unwrap_or("");
+        let score = tok
+            .parse::<f64>()
+            .map_err(|_| parse_err("ea4op_best.csv", i + 1, "ea4op_score", format!("`{tok}`")))?;
+        out.push((
+            f.get(ci).map(|s| s.trim().to_string()).unwrap_or_default(),
+            score,
+        ));
+    }
+    Ok(out)
+}
+
+fn read(path: &Path) -> Result<String, FormatError> {
+    std::fs::read_to_string(path).map_err(|source| FormatError::Io {
+        file: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Finds `file` in `dir` or its ancestors.
+fn find_up(dir: &Path, file: &str) -> Option<PathBuf> {
+    dir.ancestors().map(|d| d.join(file)).find(|p| p.is_file())
+}
+
+/// Reads one benchmark file: `.oplib` files as OPLib, anything else as the classic format.
+/// The set name is the parent directory's name. The target is looked up by instance name in
+/// `ea4op_best.csv` (OPLib) or by set and budget in `targets.csv` (classic), searched in the
+/// file's directory and its ancestors; a missing table leaves `target` empty.
+pub fn load_instance(path: &Path) -> Result<OpInstance, FormatError> {
+    let text = read(path)?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let set = dir
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let oplib = path.extension().is_some_and(|e| e == "oplib");
+    let mut inst = if oplib {
+        parse_oplib(&name, &set, &text)?
+    } else {
+        parse_classic(&name, &set, &text)?
+    };
+    match inst.format {
+        OpFormat::OpLib => {
+            if let Some(t) = find_up(dir, "ea4op_best.csv") {
+                let best = parse_oplib_best(&read(&t)?)?;
+                inst.target = best.iter().find(|(n, _)| *n == name).map(|(_, s)| *s);
+            }
+        }
+        OpFormat::Classic => {
+            if let Some(t) = find_up(dir, "targets.csv") {
+                let targets = parse_classic_targets(&read(&t)?)?;
+                inst.target = targets
+                    .iter()
+                    .find(|(s, b, _)| *s == set && (b - inst.budget).abs() < 1e-6)
+                    .map(|(_, _, t)| *t);
+            }
+        }
+    }
+    Ok(inst)
+}
+
+/// All benchmark instance files under `dir` (recursively, sorted): `*.oplib` files and the
+/// classic `*.txt` files (except `OP_format.txt`).
+pub fn find_instances(dir: &Path) -> Result<Vec<PathBuf>, FormatError> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        let entries = std::fs::read_dir(&d).map_err(|source| FormatError::Io {
+            file: d.clone(),
+            source,
+        })?;
+        for e in entries.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "oplib")
+                || (p.extension().is_some_and(|x| x == "txt")
+                    && p.file_name().is_some_and(|f| f != "OP_format.txt"))
+            {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
+}
+
+/// One benchmark result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BenchRow {
+    /// Instance name (file stem).
+    pub instance: String,
+    /// Set (directory) name.
+    pub set: String,
+    /// Number of nodes.
+    pub n: usize,
+    /// Budget (distance unit of the instance).
+    pub budget: f64,
+    /// Target / best-known score, when known.
+    pub target: Option<f64>,
+    /// Score found.
+    pub ours: f64,
+    /// `(target - ours) / target · 100` (negative: better than the target).
+    pub gap_pct: Option<f64>,
+    /// Solve time (s).
+    pub seconds: f64,
+    /// The routes passed re-validation with the instance's own distance rule.
+    pub feasible: bool,
+}
+
+/// Aggregate over [`BenchRow`]s.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BenchSummary {
+    /// Number of instances.
+    pub count: usize,
+    /// Instances with a known target.
+    pub with_target: usize,
+    /// Instances reaching or beating the target.
+    pub matched: usize,
+    /// Instances strictly beating the target.
+    pub beat: usize,
+    /// Mean gap over instances with a target (%).
+    pub mean_gap_pct: f64,
+    /// Worst (largest) gap (%).
+    pub worst_gap_pct: f64,
+    /// Instances whose solution failed re-validation.
+    pub infeasible: usize,
+    /// Total solve time (s).
+    pub total_seconds: f64,
+}
+
+/// Solves every file in `paths` with `solver` and `options`, re-validates each route with
+/// the instance's own distance rule, and calls `progress(done, total, row)` after each.
+/// Files that cannot be read or parsed stop the run with their error.
+pub fn run_benchmark(
+    paths: &[PathBuf],
+    solver: SolverKind,
+    options: &SolveOptions,
+    progress: &mut dyn FnMut(usize, usize, &BenchRow),
+) -> Result<Vec<BenchRow>, FormatError> {
+    let mut rows = Vec::with_capacity(paths.len());
+    for (k, path) in paths.iter().enumerate() {
+        let inst = load_instance(path)?;
+        let row = run_instance(&inst, solver, options);
+        progress(k + 1, paths.len(), &row);
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// Solves one instance and builds its row (see [`run_benchmark`]).
+pub fn run_instance(inst: &OpInstance, solver: SolverKind, options: &SolveOptions) -> BenchRow {
+    let t0 = Instant::now();
+    let result = solve(&inst.problem, solver, options);
+    let seconds = t0.elapsed().as_secs_f64();
+    let (ours, feasible) = match result {
+        Ok(sol) => {
+            let mut score = 0.0;
+            let mut ok = true;
+            let mut seen = vec![false; inst.n];
+            for (r, route) in sol.routes.iter().enumerate() {
+                match inst.validate_route(route) {
+                    Ok(c) => {
+                        for &v in &route[1..route.len() - 1] {
+                            ok &= !std::mem::replace(&mut seen[v], true);
+                        }
+                        score += if r == 0 {
+                            c.score
+                        } else {
+                            c.score
+                                - inst.scores[inst.start]
+                                - if inst.end != inst.start {
+                                    inst.scores[inst.end]
+                                } else {
+                                    0.0
+                                }
+                        };
+                    }
+                    Err(_) => ok = false,
+                }
+            }
+            (score, ok)
+        }
+        Err(_) => (0.0, false),
+    };
+    let gap_pct = inst
+        .target
+        .filter(|t| *t > 0.0)
+        .map(|t| (t - ours) / t * 100.0);
+    BenchRow {
+        instance: inst.name.clone(),
+        set: inst.set.clone(),
+        n: inst.n,
+        budget: inst.budget,
+        target: inst.target,
+        ours,
+        gap_pct,
+        seconds,
+        feasible,
+    }
+}
+
+/// Summarises rows (a score counts as matching when within 1e-6 of the target).
+pub fn summarize(rows: &[BenchRow]) -> BenchSummary {
+    let gaps: Vec<f64> = rows.iter().filter_map(|r| r.gap_pct).collect();
+    let with: Vec<&BenchRow> = rows.iter().filter(|r| r.target.is_some()).collect();
+    BenchSummary {
+        count: rows.len(),
+        with_target: with.len(),
+        matched: with
+            .iter()
+            .filter(|r| r.target.is_some_and(|t| r.ours >= t - 1e-6))
+            .count(),
+        beat: with
+            .iter()
+            .filter(|r| r.target.is_some_and(|t| r.ours > t + 1e-6))
+            .count(),
+        mean_gap_pct: if gaps.is_empty() {
+            0.0
+        } else {
+            gaps.iter().sum::<f64>() / gaps.len() as f64
+        },
+        worst_gap_pct: gaps.iter().copied().fold(0.0, f64::max),
+        infeasible: rows.iter().filter(|r| !r.feasible).count(),
+        total_seconds: rows.iter().map(|r| r.seconds).sum(),
+    }
+}
+
+fn opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or_else(|| "-".to_string(), |x| format!("{x:.digits$}"))
+}
+
+/// The rows as an aligned text table followed by the summary line.
+pub fn format_table(rows: &[BenchRow]) -> String {
+    let mut s = String::new();
+    let w = rows
+        .iter()
+        .map(|r| r.instance.len())
+        .max()
+        .unwrap_or(8)
+        .max(8);
+    let ws = rows.iter().map(|r| r.set.len()).max().unwrap_or(3).max(3);
+    let _ = writeln!(
+        s,
+        "{:<w$} {:<ws$} {:>6} {:>10} {:>10} {:>10} {:>8} {:>8} {:>8}",
+        "instance", "set", "n", "budget", "target", "ours", "gap_%", "secs", "feasible"
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{:<w$} {:<ws$} {:>6} {:>10} {:>10} {:>10} {:>8} {:>8.3} {:>8}",
+            r.instance,
+            r.set,
+            r.n,
+            r.budget,
+            opt(r.target, 0),
+            r.ours,
+            opt(r.gap_pct, 2),
+            r.seconds,
+            if r.feasible { "yes" } else { "NO" }
+        );
+    }
+    let sm = summarize(rows);
+    let _ = writeln!(
+        s,
+        "{} instances, {} with target: {} matched ({} beat), mean gap {:.3}%, worst gap {:.3}%, {} infeasible, {:.1} s total",
+        sm.count,
+        sm.with_target,
+        sm.matched,
+        sm.beat,
+        sm.mean_gap_pct,
+        sm.worst_gap_pct,
+        sm.infeasible,
+        sm.total_seconds
+    );
+    s
+}
+
+/// The rows as CSV with a header line (`instance,set,n,budget,target,ours,gap_pct,seconds,feasible`).
+pub fn format_csv(rows: &[BenchRow]) -> String {
+    let mut s = String::from("instance,set,n,budget,target,ours,gap_pct,seconds,feasible\n");
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{:.4},{}",
+            r.instance,
+            r.set,
+            r.n,
+            r.budget,
+            r.target.map_or(String::new(), |t| t.to_string()),
+            r.ours,
+            r.gap_pct.map_or(String::new(), |g| format!("{g:.4}")),
+            r.seconds,
+            r.feasible
+        );
+    }
+    s
+}

@@ -1,0 +1,88 @@
+//! Orienteering (OP) and team orienteering (TOP) solvers.
+//!
+//! A pure, generic optimisation core: nodes with rewards and service costs, a symmetric travel
+//! cost matrix (or planar points and a [`Metric`]), start and end nodes, a per-route budget
+//! and a number of vehicles. It knows nothing about what the nodes are; costs, service costs
+//! and the budget share one unit of the caller's choice (metres, seconds, joules...).
+//!
+//! - [`Problem`] — a validated instance ([`ProblemError`] for bad input).
+//! - [`Solution`] and [`evaluate`] — routes `[start, .., end]`, reward, per-route costs, and
+//!   an independent re-check of any routes against a problem ([`SolutionError`]).
+//! - [`greedy`] — the paper's ratio-insertion heuristic (baseline).
+//! - [`solve_default`] — iterated local search seeded with greedy; never worse than greedy.
+//! - [`exact`] — subset dynamic programming, proves optimality for small instances.
+//! - [`solve`] with [`SolverKind`] and [`SolveOptions`] — one entry point for all three.
+//!
+//! ```
+//! use gleaner_orienteering::{Metric, Problem, SolveOptions, evaluate, greedy, solve_default};
+//! // Depot at the origin (closed tour), four sites; costs are distances in metres.
+//! let points = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0], [50.0, 50.0]];
+//! let rewards = vec![0.0, 1.0, 2.0, 1.0, 10.0];
+//! let problem = Problem::from_points(&points, Metric::Euclidean, rewards, 45.0)?
+//!     .with_service_costs(vec![0.0, 1.0, 1.0, 1.0, 1.0])?;
+//! let options = SolveOptions::default().with_iterations(100).with_seed(7);
+//! let best = solve_default(&problem, &options);
+//! assert_eq!(best.routes[0].first(), Some(&0));
+//! assert!((best.reward - 4.0).abs() < 1e-9); // the far site (141 m round trip) never fits
+//! assert!(best.reward >= greedy(&problem).reward);
+//! assert!(evaluate(&problem, &best.routes).is_ok());
+//! assert!(best.costs[0] <= 45.0);
+//! # Ok::<(), gleaner_orienteering::ProblemError>(())
+//! ```
+//!
+//! # Model
+//!
+//! A route's cost is its travel cost plus the service cost of every node on it (start and end
+//! included; a closed tour pays its depot once). It is feasible when the cost is at most the
+//! budget plus a tolerance of 1e-9 relative to the budget. Each node's reward is collected at
+//! most once over all routes; the start and end rewards are always collected, once. Nodes of
+//! zero reward are never visited. A budget below the cost of the direct start -> end route is
+//! rejected when the problem is built ([`ProblemError::Infeasible`]), so every valid problem
+//! has at least the empty solution.
+//!
+//! # Algorithm design
+//!
+//! - **Greedy** (SPEC §4, faithful to the paper): repeatedly insert the feasible node of
+//!   largest reward / extra cost at its cheapest insertion position (extra travel + service
+//!   cost). Cheapest positions are cached per node and route and updated incrementally
+//!   after each insertion (only the broken edge forces a rescan), so a whole construction
+//!   costs about O(n·m) for m visited nodes.
+//! - **Default: multi-start iterated local search.** Local search = 2-opt and Or-opt (segments
+//!   of 1-3, both orientations) driven by k-nearest candidate lists, which shorten the tours
+//!   and free budget; ratio insertion of unvisited nodes; replacement of a visited node by an
+//!   unvisited one of higher reward (or equal reward at lower cost); repeated until none
+//!   applies. Each iteration perturbs (removes a random segment or random nodes; the strength
+//!   grows while stalled), refills with optionally noisy ratios while the removed nodes are
+//!   tabu, and runs the local search; solutions that improve the run's best are intensified
+//!   by double-bridge kicks on their tours. Acceptance is record-to-record (within 2-5% of
+//!   the run's best). A run ends after `300 + 2·candidates` non-improving iterations; new runs
+//!   restart alternately from the overall best and from a construction seeded with a random
+//!   node (which sends the tour to other regions: on OPLib `pr107-gen3` this is what finds
+//!   the far cluster). Instances with at most [`SolveOptions::exact_threshold`] candidates are
+//!   solved exactly. On more than 1,500 nodes, insertion and replacement only look at edges
+//!   next to a node's candidate neighbours, so 10,000 nodes are practical.
+//! - **Exact**: DP over (subset, last node) of the positive-reward nodes (Held-Karp),
+//!   then the best feasible subset (or, for several vehicles, the best combination of
+//!   disjoint feasible subsets by subset convolution); up to [`EXACT_MAX_NODES`] candidates.
+//!
+//! Determinism: every random choice comes from `ChaCha8Rng::seed_from_u64(options.seed)`.
+//! With `max_iterations` or `max_stall` as the binding limit, results do not depend on the
+//! machine; the time limit only stops the search early.
+//!
+//! # Results (measured; see `gleaner-op-formats/RESULTS.md` for the tables)
+//!
+//! RESULTS_PLACEHOLDER
+#![deny(missing_docs)]
+
+mod engine;
+mod error;
+mod exact;
+mod problem;
+mod solution;
+mod solve;
+
+pub use error::{ProblemError, SolutionError, SolveError};
+pub use exact::{EXACT_MAX_NODES, EXACT_MAX_NODES_TEAM, exact};
+pub use problem::{Metric, Problem};
+pub use solution::{Solution, evaluate, route_cost};
+pub use solve::{SolveOptions, SolverKind, greedy, solve, solve_default};

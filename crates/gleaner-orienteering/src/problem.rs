@@ -1,0 +1,446 @@
+//! The orienteering problem instance: costs, rewards, service costs, endpoints, budget.
+
+use crate::error::ProblemError;
+
+/// Tolerance (relative to the matrix scale) under which `c[i][j]` and `c[j][i]` count as equal.
+const SYMMETRY_TOLERANCE: f64 = 1e-9;
+
+/// A planar metric used by [`Problem::from_points`]; coordinates and costs share one unit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Metric {
+    /// Straight-line (L2) distance.
+    Euclidean,
+    /// Manhattan (L1) distance.
+    Manhattan,
+    /// Chebyshev (L-infinity) distance.
+    Chebyshev,
+}
+
+impl Metric {
+    /// Distance between two points `[x, y]` (same unit as the coordinates).
+    pub fn distance(self, a: [f64; 2], b: [f64; 2]) -> f64 {
+        let dx = (a[0] - b[0]).abs();
+        let dy = (a[1] - b[1]).abs();
+        match self {
+            Metric::Euclidean => dx.hypot(dy),
+            Metric::Manhattan => dx + dy,
+            Metric::Chebyshev => dx.max(dy),
+        }
+    }
+}
+
+/// Travel costs: a dense matrix, or points and a metric evaluated on demand (so 10,000-node
+/// instances do not need an 800 MB matrix).
+#[derive(Debug, Clone)]
+enum Costs {
+    Dense(Vec<f64>),
+    Points(Vec<[f64; 2]>, Metric),
+}
+
+/// A validated (team) orienteering problem.
+///
+/// Costs are in any consistent unit (metres, seconds, joules...): the travel cost matrix, the
+/// node service costs and the budget share it. A route starts at [`Problem::start`], ends at
+/// [`Problem::end`] (equal for a closed tour), and its cost is the travel along its legs plus
+/// the service cost of every node on it (start and end included, counted once each when
+/// equal). Each of the [`Problem::vehicles`] routes must cost at most the budget; a node's
+/// reward is collected at most once overall (start and end included).
+#[derive(Debug, Clone)]
+pub struct Problem {
+    n: usize,
+    cost: Costs,
+    reward: Vec<f64>,
+    service: Vec<f64>,
+    start: usize,
+    end: usize,
+    budget: f64,
+    vehicles: usize,
+}
+
+impl Problem {
+    /// Builds a single-vehicle closed-tour problem (start = end = node 0, no service costs)
+    /// from a dense row-major `n × n` symmetric cost matrix, the node rewards and the budget
+    /// (same unit as the costs).
+    ///
+    /// Errors: matrix size not `n²`, non-finite or negative entries, asymmetry beyond a
+    /// relative tolerance of 1e-9, negative or non-finite rewards or budget, no nodes.
+    pub fn new(cost: Vec<f64>, rewards: Vec<f64>, budget: f64) -> Result<Problem, ProblemError> {
+        let n = rewards.len();
+        if n == 0 {
+            return Err(ProblemError::Empty);
+        }
+        if cost.len() != n * n {
+            return Err(ProblemError::MatrixSize {
+                len: cost.len(),
+                nodes: n,
+            });
+        }
+        let mut scale = 0.0f64;
+        for (k, &c) in cost.iter().enumerate() {
+            if !c.is_finite() || c < 0.0 {
+                return Err(ProblemError::BadCost {
+                    from: k / n,
+                    to: k % n,
+                    value: c,
+                });
+            }
+            scale = scale.max(c);
+        }
+        let tol = SYMMETRY_TOLERANCE * scale.max(1.0);
+        for i in 0..n {
+            for j in (i + 1)..n {
+                let (a, b) = (cost[i * n + j], cost[j * n + i]);
+                if (a - b).abs() > tol {
+                    return Err(ProblemError::Asymmetric {
+                        from: i,
+                        to: j,
+                        forward: a,
+                        backward: b,
+                    });
+                }
+            }
+        }
+        Problem::assemble(n, Costs::Dense(cost), rewards, budget)
+    }
+
+    fn assemble(
+        n: usize,
+        cost: Costs,
+        rewards: Vec<f64>,
+        budget: f64,
+    ) -> Result<Problem, ProblemError> {
+        for (node, &r) in rewards.iter().enumerate() {
+            if !r.is_finite() || r < 0.0 {
+                return Err(ProblemError::BadReward { node, value: r });
+            }
+        }
+        if !budget.is_finite() || budget < 0.0 {
+            return Err(ProblemError::BadBudget { value: budget });
+        }
+        let p = Problem {
+            n,
+            cost,
+            reward: rewards,
+            service: vec![0.0; n],
+            start: 0,
+            end: 0,
+            budget,
+            vehicles: 1,
+        };
+        p.check_budget()?;
+        Ok(p)
+    }
+
+    /// Builds a problem like [`Problem::new`] from planar points `[x, y]` and a [`Metric`];
+    /// costs (in the coordinates' unit) are evaluated on demand rather than stored, which is
+    /// exactly equivalent to the matrix `metric.distance(p_i, p_j)`.
+    pub fn from_points(
+        points: &[[f64; 2]],
+        metric: Metric,
+        rewards: Vec<f64>,
+        budget: f64,
+    ) -> Result<Problem, ProblemError> {
+        if points.len() != rewards.len() {
+            return Err(ProblemError::LengthMismatch {
+                what: "points",
+                len: points.len(),
+                nodes: rewards.len(),
+            });
+        }
+        for (node, p) in points.iter().enumerate() {
+            if !p[0].is_finite() || !p[1].is_finite() {
+                return Err(ProblemError::BadPoint { node });
+            }
+        }
+        if points.is_empty() {
+            return Err(ProblemError::Empty);
+        }
+        Problem::assemble(
+            points.len(),
+            Costs::Points(points.to_vec(), metric),
+            rewards,
+            budget,
+        )
+    }
+
+    /// Sets per-node service costs (same unit as the budget, each finite and >= 0), paid
+    /// whenever the node is on a route.
+    pub fn with_service_costs(mut self, service: Vec<f64>) -> Result<Problem, ProblemError> {
+        if service.len() != self.n {
+            return Err(ProblemError::LengthMismatch {
+                what: "service costs",
+                len: service.len(),
+                nodes: self.n,
+            });
+        }
+        for (node, &s) in service.iter().enumerate() {
+            if !s.is_finite() || s < 0.0 {
+                return Err(ProblemError::BadService { node, value: s });
+            }
+        }
+        self.service = service;
+        self.check_budget()?;
+        Ok(self)
+    }
+
+    /// Sets the start and end nodes (equal for a closed tour).
+    pub fn with_endpoints(mut self, start: usize, end: usize) -> Result<Problem, ProblemError> {
+        for node in [start, end] {
+            if node >= self.n {
+                return Err(ProblemError::NodeOutOfRange {
+                    node,
+                    nodes: self.n,
+                });
+            }
+        }
+        self.start = start;
+        self.end = end;
+        self.check_budget()?;
+        Ok(self)
+    }
+
+    /// Sets the number of vehicles (routes), at least 1: team orienteering.
+    pub fn with_vehicles(mut self, vehicles: usize) -> Result<Problem, ProblemError> {
+        if vehicles == 0 {
+            return Err(ProblemError::NoVehicles);
+        }
+        self.vehicles = vehicles;
+        Ok(self)
+    }
+
+    /// Replaces the budget (same unit as the costs, finite and >= 0).
+    pub fn with_budget(mut self, budget: f64) -> Result<Problem, ProblemError> {
+        if !budget.is_finite() || budget < 0.0 {
+            return Err(ProblemError::BadBudget { value: budget });
+        }
+        self.budget = budget;
+        self.check_budget()?;
+        Ok(self)
+    }
+
+    /// The budget must at least pay for the empty route start -> end; otherwise the problem
+    /// is infeasible and construction fails with [`ProblemError::Infeasible`].
+    fn check_budget(&self) -> Result<(), ProblemError> {
+        let minimum = self.empty_route_cost();
+        if minimum > self.budget + self.tolerance() {
+            return Err(ProblemError::Infeasible {
+                minimum,
+                budget: self.budget,
+            });
+        }
+        Ok(())
+    }
+
+    /// Cost of the route that goes straight from start to end (service costs included).
+    pub fn empty_route_cost(&self) -> f64 {
+        let mut c = self.cost(self.start, self.end) + self.service[self.start];
+        if self.end != self.start {
+            c += self.service[self.end];
+        }
+        c
+    }
+
+    /// Absolute feasibility tolerance: 1e-9 relative to the budget (at least 1e-9).
+    pub fn tolerance(&self) -> f64 {
+        1e-9 * self.budget.abs().max(1.0)
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Always false: a problem has at least one node.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Travel cost from `i` to `j` (budget unit). Panics if out of range.
+    #[inline]
+    pub fn cost(&self, i: usize, j: usize) -> f64 {
+        match &self.cost {
+            Costs::Dense(m) => m[i * self.n + j],
+            Costs::Points(p, metric) => metric.distance(p[i], p[j]),
+        }
+    }
+
+    /// The planar points and metric when the problem was built by [`Problem::from_points`].
+    pub fn points(&self) -> Option<(&[[f64; 2]], Metric)> {
+        match &self.cost {
+            Costs::Dense(_) => None,
+            Costs::Points(p, m) => Some((p, *m)),
+        }
+    }
+
+    /// Reward of node `i`.
+    #[inline]
+    pub fn reward(&self, i: usize) -> f64 {
+        self.reward[i]
+    }
+
+    /// All rewards.
+    pub fn rewards(&self) -> &[f64] {
+        &self.reward
+    }
+
+    /// Service cost of node `i` (budget unit).
+    #[inline]
+    pub fn service(&self, i: usize) -> f64 {
+        self.service[i]
+    }
+
+    /// All service costs.
+    pub fn service_costs(&self) -> &[f64] {
+        &self.service
+    }
+
+    /// Start node of every route.
+    pub fn start(&self) -> usize {
+        self.start
+    }
+
+    /// End node of every route.
+    pub fn end(&self) -> usize {
+        self.end
+    }
+
+    /// Budget per route (cost unit).
+    pub fn budget(&self) -> f64 {
+        self.budget
+    }
+
+    /// Number of vehicles (routes).
+    pub fn vehicles(&self) -> usize {
+        self.vehicles
+    }
+
+    /// True when `i` is the start or the end node.
+    #[inline]
+    pub fn is_terminal(&self, i: usize) -> bool {
+        i == self.start || i == self.end
+    }
+
+    /// Reward collected by the terminals (start, and end if different): always collected.
+    pub fn terminal_reward(&self) -> f64 {
+        let mut r = self.reward[self.start];
+        if self.end != self.start {
+            r += self.reward[self.end];
+        }
+        r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Builds a 3-node problem from a matrix and checks the outcome.
+    fn check(cost: Vec<f64>, rewards: Vec<f64>, budget: f64, expected: Result<(), ProblemError>) {
+        let got = Problem::new(cost, rewards, budget).map(|_| ());
+        assert_eq!(got, expected);
+    }
+
+    #[test]
+    fn validation() {
+        let ok = vec![0.0, 1.0, 2.0, 1.0, 0.0, 1.5, 2.0, 1.5, 0.0];
+        check(ok.clone(), vec![0.0, 1.0, 1.0], 3.0, Ok(()));
+        check(
+            vec![0.0; 4],
+            vec![0.0, 1.0, 1.0],
+            3.0,
+            Err(ProblemError::MatrixSize { len: 4, nodes: 3 }),
+        );
+        let mut asym = ok.clone();
+        asym[1] = 1.1;
+        check(
+            asym,
+            vec![0.0, 1.0, 1.0],
+            3.0,
+            Err(ProblemError::Asymmetric {
+                from: 0,
+                to: 1,
+                forward: 1.1,
+                backward: 1.0,
+            }),
+        );
+        let mut neg = ok.clone();
+        neg[5] = -1.0;
+        check(
+            neg,
+            vec![0.0, 1.0, 1.0],
+            3.0,
+            Err(ProblemError::BadCost {
+                from: 1,
+                to: 2,
+                value: -1.0,
+            }),
+        );
+        let mut nan = ok.clone();
+        nan[0] = f64::NAN;
+        assert!(matches!(
+            Problem::new(nan, vec![0.0; 3], 1.0),
+            Err(ProblemError::BadCost { .. })
+        ));
+        check(
+            ok.clone(),
+            vec![0.0, -1.0, 1.0],
+            3.0,
+            Err(ProblemError::BadReward {
+                node: 1,
+                value: -1.0,
+            }),
+        );
+        check(
+            ok.clone(),
+            vec![0.0, 1.0, 1.0],
+            f64::INFINITY,
+            Err(ProblemError::BadBudget {
+                value: f64::INFINITY,
+            }),
+        );
+        check(vec![], vec![], 1.0, Err(ProblemError::Empty));
+    }
+
+    #[test]
+    fn endpoints_service_and_infeasible_budget() {
+        let p = Problem::from_points(
+            &[[0.0, 0.0], [3.0, 4.0], [6.0, 8.0]],
+            Metric::Euclidean,
+            vec![0.0, 1.0, 0.0],
+            10.0,
+        )
+        .unwrap();
+        assert_eq!(
+            p.clone().with_endpoints(0, 3).unwrap_err(),
+            ProblemError::NodeOutOfRange { node: 3, nodes: 3 }
+        );
+        // start 0 -> end 2 costs 10, exactly the budget: allowed.
+        let p2 = p.clone().with_endpoints(0, 2).unwrap();
+        assert_eq!(p2.empty_route_cost(), 10.0);
+        // Service at the end pushes the empty route over the budget.
+        let err = p2.with_service_costs(vec![0.0, 0.0, 0.5]).unwrap_err();
+        assert_eq!(
+            err,
+            ProblemError::Infeasible {
+                minimum: 10.5,
+                budget: 10.0
+            }
+        );
+        assert_eq!(
+            p.clone().with_vehicles(0).unwrap_err(),
+            ProblemError::NoVehicles
+        );
+        assert!(matches!(
+            p.with_service_costs(vec![1.0]),
+            Err(ProblemError::LengthMismatch { .. })
+        ));
+    }
+
+    #[test]
+    fn metrics() {
+        let (a, b) = ([0.0, 0.0], [3.0, -4.0]);
+        assert_eq!(Metric::Euclidean.distance(a, b), 5.0);
+        assert_eq!(Metric::Manhattan.distance(a, b), 7.0);
+        assert_eq!(Metric::Chebyshev.distance(a, b), 4.0);
+    }
+}

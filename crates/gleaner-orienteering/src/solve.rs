@@ -1,0 +1,443 @@
+//! Solver entry points and options.
+
+use std::time::{Duration, Instant};
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::engine::{Ctx, FREE, State};
+use crate::error::SolveError;
+use crate::exact::{EXACT_MAX_NODES, EXACT_MAX_NODES_TEAM, exact};
+use crate::problem::Problem;
+use crate::solution::{Solution, evaluate};
+
+/// Search settings shared by the solvers.
+///
+/// The search is deterministic for a given `seed` as long as it stops on `max_iterations` or
+/// `max_stall`; `time_limit` only cuts it short (then the result depends on machine speed).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolveOptions {
+    /// Wall-clock limit for the whole solve (s). The best solution so far is returned.
+    pub time_limit: Duration,
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Maximum number of perturbation + local search iterations (`None`: until the time
+    /// limit or the stall limit).
+    pub max_iterations: Option<u64>,
+    /// Stop after this many consecutive iterations without a new best (`None`: never).
+    pub max_stall: Option<u64>,
+    /// Length of the candidate-neighbour lists (k nearest nodes) used by 2-opt, Or-opt and,
+    /// on large instances, replacement moves.
+    pub neighbours: usize,
+    /// The default solver runs [`exact`] instead when the instance has at most this many
+    /// candidate nodes (positive reward, not start/end) and the exact solver supports it.
+    /// 0 disables it.
+    pub exact_threshold: usize,
+    /// Instances with more candidate nodes than this evaluate insertions and replacements only
+    /// next to each node's candidate neighbours (faster, slightly approximate).
+    pub full_scan_limit: usize,
+    /// Double-bridge kicks used to shorten the tours of promising solutions (0 disables).
+    pub kicks: usize,
+}
+
+impl Default for SolveOptions {
+    fn default() -> SolveOptions {
+        SolveOptions {
+            time_limit: Duration::from_secs(2),
+            seed: 0,
+            max_iterations: None,
+            max_stall: Some(20_000),
+            neighbours: 12,
+            exact_threshold: 12,
+            kicks: 10,
+            full_scan_limit: 200,
+        }
+    }
+}
+
+impl SolveOptions {
+    /// Fast configuration: greedy construction then one local search to a local optimum
+    /// (no perturbation), with 12-nearest candidate lists; meant for very large instances.
+    pub fn fast() -> SolveOptions {
+        SolveOptions {
+            max_iterations: Some(0),
+            neighbours: 12,
+            ..SolveOptions::default()
+        }
+    }
+
+    /// Sets the iteration cap (deterministic runs).
+    pub fn with_iterations(mut self, iterations: u64) -> SolveOptions {
+        self.max_iterations = Some(iterations);
+        self
+    }
+
+    /// Sets the time limit.
+    pub fn with_time_limit(mut self, limit: Duration) -> SolveOptions {
+        self.time_limit = limit;
+        self
+    }
+
+    /// Sets the seed.
+    pub fn with_seed(mut self, seed: u64) -> SolveOptions {
+        self.seed = seed;
+        self
+    }
+}
+
+/// Which solver to run through [`solve`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SolverKind {
+    /// [`greedy`]: the paper's ratio-insertion heuristic.
+    Greedy,
+    /// [`solve_default`]: iterated local search seeded with greedy.
+    Default,
+    /// [`exact`]: subset dynamic programming (small instances only).
+    Exact,
+}
+
+/// Runs the chosen solver.
+pub fn solve(
+    problem: &Problem,
+    kind: SolverKind,
+    options: &SolveOptions,
+) -> Result<Solution, SolveError> {
+    match kind {
+        SolverKind::Greedy => Ok(greedy(problem)),
+        SolverKind::Default => Ok(solve_default(problem, options)),
+        SolverKind::Exact => exact(problem),
+    }
+}
+
+/// The paper's heuristic: starting from empty routes, repeatedly inserts the feasible node
+/// with the largest reward / extra cost (extra travel + its service cost, at its cheapest
+/// insertion position) until no node fits. Zero extra cost counts as an infinite ratio;
+/// ties go to the larger reward, then the lower node index, then the lower route index.
+/// Nodes with zero reward are never inserted. Deterministic, no options.
+pub fn greedy(problem: &Problem) -> Solution {
+    let ctx = Ctx::new(problem, 1);
+    let mut state = State::empty(problem);
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    state.fill(&ctx, &[], 0.0, &mut rng);
+    finish(problem, &state)
+}
+
+fn finish(problem: &Problem, state: &State) -> Solution {
+    evaluate(problem, &state.routes).unwrap_or_else(|_| Solution::empty(problem))
+}
+
+/// Empty routes, route 0 sent through `v` first (when it fits), then ratio insertion.
+fn anchored(ctx: &Ctx, v: usize, noise: f64, rng: &mut ChaCha8Rng) -> Option<State> {
+    let p = ctx.p;
+    let mut st = State::empty(p);
+    if st.route_of[v] != FREE
+        || st.cost[0] + ctx.insert_delta(p.start(), v, p.end()) > p.budget() + p.tolerance()
+    {
+        return None;
+    }
+    st.insert(ctx, 0, 1, v);
+    st.fill(ctx, &[], noise, rng);
+    Some(st)
+}
+
+/// Lexicographic objective: more reward, then less total cost.
+fn better(a: &State, b: &State, eps: f64) -> bool {
+    if a.reward > b.reward + 1e-9 * b.reward.abs().max(1.0) {
+        return true;
+    }
+    if a.reward < b.reward - 1e-9 * b.reward.abs().max(1.0) {
+        return false;
+    }
+    a.cost.iter().sum::<f64>() < b.cost.iter().sum::<f64>() - eps
+}
+
+/// The default solver: iterated local search (ILS) seeded with [`greedy`].
+///
+/// Construction is greedy ratio insertion; the local search alternates 2-opt and Or-opt
+/// (which free budget), ratio insertion of unvisited nodes, and replacement moves (an
+/// unvisited node takes the place of a visited one of lower reward, or of equal reward when
+/// that saves cost), until none applies. Each iteration perturbs the current solution
+/// (removes a random segment or random nodes; the strength grows while the search stalls),
+/// re-inserts with randomised ratios (GRASP noise) while the removed nodes are tabu, and
+/// runs the local search again. A slightly worse result is accepted (within 1% of the best
+/// reward, more when stalled); after long stalls the search restarts from an elite solution.
+/// Small instances (see [`SolveOptions::exact_threshold`]) are solved exactly instead.
+/// Never returns less reward than [`greedy`].
+pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
+    let started = Instant::now();
+    let greedy_solution = greedy(problem);
+    let ctx_probe = problem
+        .rewards()
+        .iter()
+        .enumerate()
+        .filter(|&(v, &r)| r > 0.0 && !problem.is_terminal(v))
+        .count();
+    let cap = if problem.vehicles() == 1 {
+        EXACT_MAX_NODES
+    } else {
+        EXACT_MAX_NODES_TEAM
+    };
+    if ctx_probe <= options.exact_threshold.min(cap) {
+        if let Ok(s) = exact(problem) {
+            return s;
+        }
+    }
+    let mut ctx = Ctx::new(problem, options.neighbours.max(2));
+    let scan_all = ctx.cands.len() <= options.full_scan_limit;
+    ctx.restricted = !scan_all;
+    let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+    let mut cur = State::from_routes(problem, &greedy_solution.routes);
+    cur.local_search(&ctx, &mut rng, scan_all);
+    let mut best = cur.clone();
+    // Anchored constructions: route 0 first goes to anchor v, then ratio insertion. Scored
+    // for (a sample of) all candidates; the best few get a local search and seed the pool.
+    let mut anchors: Vec<(f64, usize)> = Vec::new();
+    {
+        let sample: Vec<usize> = if ctx.cands.len() <= 400 {
+            ctx.cands.clone()
+        } else {
+            (0..64)
+                .map(|_| ctx.cands[rng.random_range(0..ctx.cands.len())])
+                .collect()
+        };
+        for &v in &sample {
+            if started.elapsed() >= options.time_limit / 4 {
+                break;
+            }
+            if let Some(st) = anchored(&ctx, v, 0.0, &mut rng) {
+                anchors.push((st.reward, v));
+            }
+        }
+        anchors.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    }
+    let mut elite: Vec<State> = Vec::new();
+    let mut last_reward = f64::NAN;
+    for &(rw, v) in anchors.iter() {
+        if elite.len() >= 4 || started.elapsed() >= options.time_limit / 3 {
+            break;
+        }
+        if rw == last_reward {
+            continue;
+        }
+        last_reward = rw;
+        if let Some(mut st) = anchored(&ctx, v, 0.0, &mut rng) {
+            st.local_search(&ctx, &mut rng, scan_all);
+            if better(&st, &best, ctx.eps) {
+                best = st.clone();
+            }
+            elite.push(st);
+        }
+    }
+    cur = best.clone();
+    let top_anchors: Vec<usize> = anchors.iter().take(20).map(|a| a.1).collect();
+    let mut run_best = cur.clone();
+    let run_len = 200 + ctx.cands.len() as u64;
+    let mut run_stall: u64 = 0;
+    let mut runs: u64 = 0;
+    let mut removed = Vec::new();
+    let mut stall: u64 = 0;
+    let mut strength: usize = 1;
+    let mut iter: u64 = 0;
+    loop {
+        if options.max_iterations.is_some_and(|m| iter >= m)
+            || options.max_stall.is_some_and(|m| stall >= m)
+            || started.elapsed() >= options.time_limit
+        {
+            break;
+        }
+        iter += 1;
+        let mut cand = cur.clone();
+        let visited: usize = cand.routes.iter().map(|r| r.len() - 2).sum();
+        cand.perturb(&ctx, &mut rng, strength, &mut removed);
+        let noise = if rng.random_bool(0.5) { 0.0 } else { 0.3 };
+        cand.fill(&ctx, &removed, noise, &mut rng);
+        cand.local_search(&ctx, &mut rng, scan_all);
+        if options.kicks > 0
+            && (better(&cand, &run_best, ctx.eps)
+                || (cand.reward >= run_best.reward - 1e-9 * run_best.reward.abs().max(1.0)
+                    && rng.random_bool(0.02)))
+        {
+            // Promising: intensify by shortening the tours, then refill.
+            let mut shortened = false;
+            for r in 0..cand.routes.len() {
+                shortened |= cand.kick_tour(&ctx, r, options.kicks, &mut rng);
+            }
+            if shortened {
+                cand.local_search(&ctx, &mut rng, scan_all);
+            }
+        }
+        if better(&cand, &best, ctx.eps) {
+            best = cand.clone();
+            elite.push(best.clone());
+            if elite.len() > 8 {
+                elite.remove(0);
+            }
+            stall = 0;
+        } else {
+            stall += 1;
+        }
+        if better(&cand, &run_best, ctx.eps) {
+            run_best = cand.clone();
+            cur = cand;
+            run_stall = 0;
+            strength = 1;
+            continue;
+        }
+        run_stall += 1;
+        strength = if strength >= (visited / 3).max(3) {
+            1
+        } else {
+            strength + 1
+        };
+        // Record-to-record acceptance: stay within a few percent of the run's best reward.
+        let slack = if run_stall > run_len / 2 { 0.05 } else { 0.02 };
+        if better(&cand, &cur, ctx.eps) || cand.reward >= run_best.reward * (1.0 - slack) {
+            cur = cand;
+        }
+        if run_stall >= run_len {
+            runs += 1;
+            run_stall = 0;
+            strength = 1;
+            match runs % 4 {
+                0 => cur = best.clone(),
+                2 if !elite.is_empty() => cur = elite[rng.random_range(0..elite.len())].clone(),
+                _ => {
+                    let pick = if runs % 4 == 1 && !top_anchors.is_empty() {
+                        top_anchors[rng.random_range(0..top_anchors.len())]
+                    } else if !ctx.cands.is_empty() {
+                        ctx.cands[rng.random_range(0..ctx.cands.len())]
+                    } else {
+                        problem.start()
+                    };
+                    cur = anchored(&ctx, pick, 0.3, &mut rng).unwrap_or_else(|| best.clone());
+                    cur.local_search(&ctx, &mut rng, scan_all);
+                }
+            }
+            run_best = cur.clone();
+        }
+    }
+    eprintln!(
+        "DBG iters {iter} runs {runs} best {} anchors {} t {:?}",
+        best.reward,
+        anchors.len(),
+        started.elapsed()
+    );
+    let result = finish(problem, &best);
+    if result.reward + 1e-9 < greedy_solution.reward {
+        greedy_solution
+    } else {
+        result
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::problem::Metric;
+
+    /// Points on a line at x = 0 (depot), 1, 2, 10 with rewards; closed tour.
+    fn line(rewards: Vec<f64>, budget: f64) -> Problem {
+        Problem::from_points(
+            &[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [10.0, 0.0]],
+            Metric::Euclidean,
+            rewards,
+            budget,
+        )
+        .unwrap()
+    }
+
+    fn check(p: &Problem, kind: SolverKind, expected_routes: &[Vec<usize>], expected_reward: f64) {
+        let s = solve(p, kind, &SolveOptions::default().with_iterations(50)).unwrap();
+        assert_eq!(s.routes, expected_routes);
+        assert!((s.reward - expected_reward).abs() < 1e-9);
+    }
+
+    #[test]
+    fn greedy_takes_ratio_order_and_stops() {
+        // Ratio of node 1: 1/2, node 2: 3/4 (both fit in 4), node 3: 100/20 does not fit.
+        let p = line(vec![0.0, 1.0, 3.0, 100.0], 4.0);
+        check(&p, SolverKind::Greedy, &[vec![0, 1, 2, 0]], 4.0);
+        // With budget 20, node 3 (ratio 5) is taken first, then 1 and 2 at zero extra cost.
+        let p = line(vec![0.0, 1.0, 3.0, 100.0], 20.0);
+        check(&p, SolverKind::Greedy, &[vec![0, 1, 2, 3, 0]], 104.0);
+    }
+
+    #[test]
+    fn greedy_is_beaten_where_ratio_misleads() {
+        // Node 1 has the better ratio (1.6 / 2 > 15 / 20); after it, node 2 no longer fits.
+        let p = Problem::from_points(
+            &[[0.0, 0.0], [0.0, 1.0], [10.0, 0.0]],
+            Metric::Euclidean,
+            vec![0.0, 1.6, 15.0],
+            20.0,
+        )
+        .unwrap();
+        check(&p, SolverKind::Greedy, &[vec![0, 1, 0]], 1.6);
+        check(&p, SolverKind::Exact, &[vec![0, 2, 0]], 15.0);
+        check(&p, SolverKind::Default, &[vec![0, 2, 0]], 15.0);
+        let ils = SolveOptions {
+            exact_threshold: 0,
+            ..SolveOptions::default()
+        }
+        .with_iterations(20);
+        assert_eq!(solve_default(&p, &ils).reward, 15.0);
+    }
+
+    #[test]
+    fn path_and_team() {
+        let p = line(vec![0.0, 1.0, 3.0, 100.0], 2.0)
+            .with_endpoints(0, 2)
+            .unwrap();
+        check(&p, SolverKind::Exact, &[vec![0, 1, 2]], 4.0);
+        check(&p, SolverKind::Default, &[vec![0, 1, 2]], 4.0);
+        let p = Problem::from_points(
+            &[[0.0, 0.0], [0.0, 3.0], [0.0, -3.0]],
+            Metric::Euclidean,
+            vec![0.0, 2.0, 5.0],
+            6.0,
+        )
+        .unwrap()
+        .with_vehicles(2)
+        .unwrap();
+        let s = exact(&p).unwrap();
+        assert_eq!(s.reward, 7.0);
+        assert_eq!(s.routes.len(), 2);
+        let d = solve_default(
+            &p,
+            &SolveOptions {
+                exact_threshold: 0,
+                ..SolveOptions::default()
+            }
+            .with_iterations(20),
+        );
+        assert_eq!(d.reward, 7.0);
+    }
+
+    #[test]
+    fn zero_extra_cost_is_infinite_ratio() {
+        // Node 1 sits on the depot: extra cost 0, taken before the better-reward node 2.
+        let p = Problem::from_points(
+            &[[0.0, 0.0], [0.0, 0.0], [1.0, 0.0]],
+            Metric::Euclidean,
+            vec![0.0, 1.0, 10.0],
+            2.0,
+        )
+        .unwrap();
+        let g = greedy(&p);
+        assert_eq!(g.reward, 11.0);
+    }
+
+    #[test]
+    fn exact_rejects_large() {
+        let n = EXACT_MAX_NODES + 2;
+        let pts: Vec<[f64; 2]> = (0..n).map(|i| [i as f64, 0.0]).collect();
+        let p = Problem::from_points(&pts, Metric::Euclidean, vec![1.0; n], 5.0).unwrap();
+        assert_eq!(
+            exact(&p).unwrap_err(),
+            SolveError::TooLargeForExact {
+                got: n - 1,
+                max: EXACT_MAX_NODES
+            }
+        );
+    }
+}
