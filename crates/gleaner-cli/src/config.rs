@@ -103,9 +103,10 @@ impl ProjectFile {
                 path.display()
             )
         })?;
-        let file: Self =
-            toml::from_str(&text).with_context(|| format!("{}: invalid project file", path.display()))?;
-        file.validate().with_context(|| format!("{}: invalid setting", path.display()))?;
+        let file: Self = toml::from_str(&text)
+            .with_context(|| format!("{}: invalid project file", path.display()))?;
+        file.validate()
+            .with_context(|| format!("{}: invalid setting", path.display()))?;
         Ok(file)
     }
 
@@ -122,7 +123,10 @@ impl ProjectFile {
     fn validate(&self) -> Result<()> {
         self.base()?;
         if !(self.field.cell_size_m.is_finite() && self.field.cell_size_m > 0.0) {
-            bail!("field.cell_size_m = {} must be a positive number of metres", self.field.cell_size_m);
+            bail!(
+                "field.cell_size_m = {} must be a positive number of metres",
+                self.field.cell_size_m
+            );
         }
         if !(self.ingest.bytes_per_reading > 0.0 && self.ingest.default_interval_s > 0.0) {
             bail!("ingest.bytes_per_reading and ingest.default_interval_s must be positive");

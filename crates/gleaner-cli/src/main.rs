@@ -32,7 +32,9 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Create a project from a sensors file: settings, database, sensors and the cell grid.
-    #[command(after_help = "Examples:\n  gleaner init --dir farm --sensors sensors.csv --cell-size 40\n  gleaner init --dir caf --sensors ../shared/data/caf/sensors/CAF_sensor_locations.csv --utm-zone 11N")]
+    #[command(
+        after_help = "Examples:\n  gleaner init --dir farm --sensors sensors.csv --cell-size 40\n  gleaner init --dir caf --sensors ../shared/data/caf/sensors/CAF_sensor_locations.csv --utm-zone 11N"
+    )]
     Init {
         /// Project directory (created if missing).
         #[arg(long, default_value = ".")]
@@ -65,7 +67,9 @@ enum Command {
         force: bool,
     },
     /// Ingest readings files into the project, all or nothing; re-ingesting changes nothing.
-    #[command(after_help = "Formats (auto-detected from the header):\n  long-csv   sensor_id,timestamp,modality,value[,unit]   (RFC 3339 or YYYY-MM-DD)\n  wide-csv   Date[,Time] or timestamp, then one column per sensor (needs --modality)\n  caf-daily  CAF daily files: Location<TAB>Date<TAB>VW_30cm ... T_150cm, NA = missing\n\nExamples:\n  gleaner ingest --project farm readings.csv\n  gleaner ingest --project caf ../shared/data/caf/Daily/*.txt\n  gleaner ingest --project caf --modality vw@30cm hourly.csv")]
+    #[command(
+        after_help = "Formats (auto-detected from the header):\n  long-csv   sensor_id,timestamp,modality,value[,unit]   (RFC 3339 or YYYY-MM-DD)\n  wide-csv   Date[,Time] or timestamp, then one column per sensor (needs --modality)\n  caf-daily  CAF daily files: Location<TAB>Date<TAB>VW_30cm ... T_150cm, NA = missing\n\nExamples:\n  gleaner ingest --project farm readings.csv\n  gleaner ingest --project caf ../shared/data/caf/Daily/*.txt\n  gleaner ingest --project caf --modality vw@30cm hourly.csv"
+    )]
     Ingest {
         /// Files to ingest.
         #[arg(required = true)]
@@ -90,7 +94,9 @@ enum Command {
         on_error: OnErrorArg,
     },
     /// Show the cell table with its metadata (summaries, scores, pending data).
-    #[command(after_help = "Examples:\n  gleaner cells --project farm\n  gleaner cells --project farm --sort score --json")]
+    #[command(
+        after_help = "Examples:\n  gleaner cells --project farm\n  gleaner cells --project farm --sort score --json"
+    )]
     Cells {
         /// Project directory.
         #[arg(long, default_value = ".")]
@@ -103,7 +109,9 @@ enum Command {
         sort: SortArg,
     },
     /// Write a seeded synthetic farm (sensors, long readings, ground truth, faults) as CSV.
-    #[command(after_help = "Defaults are calibrated to the CAF network (VW range, day-to-day change, spatial correlation).\n\nExamples:\n  gleaner synth --out farm-data --sensors 60 --days 120 --seed 1\n  gleaner synth --out big --sensors 10000 --days 365 --scale-extent")]
+    #[command(
+        after_help = "Defaults are calibrated to the CAF network (VW range, day-to-day change, spatial correlation).\n\nExamples:\n  gleaner synth --out farm-data --sensors 60 --days 120 --seed 1\n  gleaner synth --out big --sensors 10000 --days 365 --scale-extent"
+    )]
     Synth {
         /// Output directory (sensors.csv, readings.csv, ground_truth.csv, faults.csv).
         #[arg(long)]
@@ -174,9 +182,17 @@ enum SortArg {
 }
 
 fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
-    let (a, b) = s.split_once(',').ok_or_else(|| format!("expected LAT,LON, got {s:?}"))?;
-    let lat = a.trim().parse().map_err(|_| format!("bad latitude {a:?}"))?;
-    let lon = b.trim().parse().map_err(|_| format!("bad longitude {b:?}"))?;
+    let (a, b) = s
+        .split_once(',')
+        .ok_or_else(|| format!("expected LAT,LON, got {s:?}"))?;
+    let lat = a
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad latitude {a:?}"))?;
+    let lon = b
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad longitude {b:?}"))?;
     Ok((lat, lon))
 }
 
@@ -237,7 +253,11 @@ fn run(cli: Cli) -> Result<()> {
             )?;
             println!("{outcome}");
         }
-        Command::Cells { project, json, sort } => {
+        Command::Cells {
+            project,
+            json,
+            sort,
+        } => {
             let p = Project::open(&project)?;
             let mut rows = cells::cell_rows(&p)?;
             cells::sort(
@@ -250,7 +270,10 @@ fn run(cli: Cli) -> Result<()> {
                 },
             );
             if json {
-                println!("{}", serde_json::to_string_pretty(&rows).context("serialising cells")?);
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&rows).context("serialising cells")?
+                );
             } else {
                 print!("{}", cells::table(&rows));
             }
@@ -288,8 +311,21 @@ fn run(cli: Cli) -> Result<()> {
                 files.faults.display()
             );
         }
-        Command::Demo { dir, seed, sensors, days } => {
-            print!("{}", demo::run(&demo::DemoArgs { dir, seed, sensors, days })?);
+        Command::Demo {
+            dir,
+            seed,
+            sensors,
+            days,
+        } => {
+            print!(
+                "{}",
+                demo::run(&demo::DemoArgs {
+                    dir,
+                    seed,
+                    sensors,
+                    days
+                })?
+            );
         }
     }
     Ok(())

@@ -26,7 +26,8 @@ impl Project {
         if !db.exists() {
             bail!("{}: database missing (run `gleaner init`)", db.display());
         }
-        let store = SqliteStore::open(&db).with_context(|| format!("{}: cannot open database", db.display()))?;
+        let store = SqliteStore::open(&db)
+            .with_context(|| format!("{}: cannot open database", db.display()))?;
         Ok(Self {
             dir: dir.to_path_buf(),
             config,

@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
 }
 
 fn shared_data() -> PathBuf {
@@ -44,7 +46,15 @@ fn s(p: &Path) -> &str {
 fn small_project() -> tempfile::TempDir {
     let dir = tempfile::tempdir().expect("temp dir");
     let sensors = data("sensors.csv");
-    ok(&["init", "--dir", s(dir.path()), "--sensors", s(&sensors), "--base", "46.7800,-117.0805"]);
+    ok(&[
+        "init",
+        "--dir",
+        s(dir.path()),
+        "--sensors",
+        s(&sensors),
+        "--base",
+        "46.7800,-117.0805",
+    ]);
     dir
 }
 
@@ -82,7 +92,12 @@ fn failed_ingest_stores_nothing() {
     let good = std::fs::read_to_string(data("readings.csv")).expect("read");
     std::fs::write(&bad, format!("{good}n1,2014-02-30,vw@30cm,0.3,m3/m3\n")).expect("write");
     let err = fail(&["ingest", "--project", p, s(&bad)]);
-    assert!(err.contains("bad.csv:162: column `timestamp`: invalid or impossible timestamp: \"2014-02-30\""), "{err}");
+    assert!(
+        err.contains(
+            "bad.csv:162: column `timestamp`: invalid or impossible timestamp: \"2014-02-30\""
+        ),
+        "{err}"
+    );
     let json = ok(&["cells", "--project", p, "--json"]);
     assert!(!json.contains("\"count\""), "something was stored: {json}");
     // A conflict with stored data rolls back the whole second ingest.
@@ -96,7 +111,11 @@ fn failed_ingest_stores_nothing() {
     let err = fail(&["ingest", "--project", p, s(&conflict)]);
     assert!(err.contains("nothing was stored"), "{err}");
     let skipped = ok(&["ingest", "--project", p, "--on-error", "skip", s(&conflict)]);
-    assert!(skipped.contains("(1 new, 0 already stored)") && skipped.contains("1 conflicts kept as stored"), "{skipped}");
+    assert!(
+        skipped.contains("(1 new, 0 already stored)")
+            && skipped.contains("1 conflicts kept as stored"),
+        "{skipped}"
+    );
 }
 
 #[test]
@@ -107,15 +126,24 @@ fn ingest_skip_mode_reports_rows() {
     std::fs::write(&bad, "sensor_id,timestamp,modality,value\nn1,2014-01-01,vw@30cm,0.3\nghost,2014-01-01,vw@30cm,0.3\nn2,2014-01-01,vw@30cm,wet\n").expect("write");
     let out = ok(&["ingest", "--project", p, "--on-error", "skip", s(&bad)]);
     assert!(out.contains("2 rows skipped"), "{out}");
-    assert!(out.contains("bad.csv:3: column `sensor_id`: unknown sensor"), "{out}");
-    assert!(out.contains("bad.csv:4: column `value`: not a number: \"wet\""), "{out}");
+    assert!(
+        out.contains("bad.csv:3: column `sensor_id`: unknown sensor"),
+        "{out}"
+    );
+    assert!(
+        out.contains("bad.csv:4: column `value`: not a number: \"wet\""),
+        "{out}"
+    );
 }
 
 #[test]
 fn every_command_has_help_with_an_example() {
     for cmd in ["init", "ingest", "cells"] {
         let out = ok(&[cmd, "--help"]);
-        assert!(out.contains("Example"), "{cmd} --help lacks an example:\n{out}");
+        assert!(
+            out.contains("Example"),
+            "{cmd} --help lacks an example:\n{out}"
+        );
     }
 }
 
@@ -125,7 +153,15 @@ fn caf_project_from_real_data() {
     let p = s(dir.path());
     let d = shared_data();
     let locations = d.join("caf/sensors/CAF_sensor_locations.csv");
-    let init = ok(&["init", "--dir", p, "--sensors", s(&locations), "--utm-zone", "11N"]);
+    let init = ok(&[
+        "init",
+        "--dir",
+        p,
+        "--sensors",
+        s(&locations),
+        "--utm-zone",
+        "11N",
+    ]);
     assert!(init.contains("sensors: 42 (42 new, 0 updated)"), "{init}");
     let mut args: Vec<String> = vec!["ingest".into(), "--project".into(), p.into()];
     let mut files: Vec<PathBuf> = std::fs::read_dir(d.join("caf/Daily"))
@@ -140,14 +176,38 @@ fn caf_project_from_real_data() {
     // The hourly file's midnight readings collide with the daily means (stamped at midnight):
     // a conflict with stored data, so nothing is stored...
     let hourly = d.join("caf/derived/water_content_2015_Jan_April_32_sensors.csv");
-    let err = fail(&["ingest", "--project", p, "--modality", "vw@30cm", s(&hourly)]);
-    assert!(err.contains("conflicting reading(s), nothing written; first: CAF003 vw@30cm"), "{err}");
+    let err = fail(&[
+        "ingest",
+        "--project",
+        p,
+        "--modality",
+        "vw@30cm",
+        s(&hourly),
+    ]);
+    assert!(
+        err.contains("conflicting reading(s), nothing written; first: CAF003 vw@30cm"),
+        "{err}"
+    );
     // ... while as its own modality it goes in whole.
-    let out = ok(&["ingest", "--project", p, "--modality", "vwh@30cm", s(&hourly)]);
+    let out = ok(&[
+        "ingest",
+        "--project",
+        p,
+        "--modality",
+        "vwh@30cm",
+        s(&hourly),
+    ]);
     assert!(out.contains("80672 readings (80672 new"), "{out}");
     let json = ok(&["cells", "--project", p, "--json"]);
     let cells: Vec<serde_json::Value> = serde_json::from_str(&json).expect("json");
-    let sensors: usize = cells.iter().map(|c| c["sensors"].as_array().map_or(0, Vec::len)).sum();
+    let sensors: usize = cells
+        .iter()
+        .map(|c| c["sensors"].as_array().map_or(0, Vec::len))
+        .sum();
     assert_eq!(sensors, 42);
-    assert!(cells.iter().all(|c| !c["summaries"].as_array().expect("summaries").is_empty()));
+    assert!(
+        cells
+            .iter()
+            .all(|c| !c["summaries"].as_array().expect("summaries").is_empty())
+    );
 }

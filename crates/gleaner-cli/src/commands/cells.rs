@@ -106,7 +106,10 @@ pub struct CorrelationJson {
 pub fn cell_rows(project: &Project) -> Result<Vec<CellJson>> {
     let cells = project.store.cells()?;
     let meta = project.store.cell_metadata()?;
-    Ok(cells.iter().map(|c| to_json(c, meta.iter().find(|m| m.cell == c.index))).collect())
+    Ok(cells
+        .iter()
+        .map(|c| to_json(c, meta.iter().find(|m| m.cell == c.index)))
+        .collect())
 }
 
 fn to_json(c: &CellRecord, m: Option<&CellMetadata>) -> CellJson {
@@ -159,7 +162,12 @@ fn to_json(c: &CellRecord, m: Option<&CellMetadata>) -> CellJson {
             })
             .unwrap_or_default(),
         class_probabilities: m
-            .map(|m| m.class_probabilities.iter().map(|p| (p.class.clone(), p.probability)).collect())
+            .map(|m| {
+                m.class_probabilities
+                    .iter()
+                    .map(|p| (p.class.clone(), p.probability))
+                    .collect()
+            })
             .unwrap_or_default(),
     }
 }
@@ -168,13 +176,22 @@ fn to_json(c: &CellRecord, m: Option<&CellMetadata>) -> CellJson {
 pub fn sort(rows: &mut [CellJson], key: SortKey) {
     match key {
         SortKey::Label => rows.sort_by_key(|r| (r.i, r.j)),
-        SortKey::Sensors => rows.sort_by(|a, b| b.sensors.len().cmp(&a.sensors.len()).then((a.i, a.j).cmp(&(b.i, b.j)))),
+        SortKey::Sensors => rows.sort_by(|a, b| {
+            b.sensors
+                .len()
+                .cmp(&a.sensors.len())
+                .then((a.i, a.j).cmp(&(b.i, b.j)))
+        }),
         SortKey::Score => rows.sort_by(|a, b| {
             let sa = a.scores.as_ref().map_or(f64::NEG_INFINITY, |s| s.score);
             let sb = b.scores.as_ref().map_or(f64::NEG_INFINITY, |s| s.score);
             sb.total_cmp(&sa).then((a.i, a.j).cmp(&(b.i, b.j)))
         }),
-        SortKey::Stale => rows.sort_by(|a, b| a.last_collected.cmp(&b.last_collected).then((a.i, a.j).cmp(&(b.i, b.j)))),
+        SortKey::Stale => rows.sort_by(|a, b| {
+            a.last_collected
+                .cmp(&b.last_collected)
+                .then((a.i, a.j).cmp(&(b.i, b.j)))
+        }),
     }
 }
 
@@ -182,11 +199,27 @@ pub fn sort(rows: &mut [CellJson], key: SortKey) {
 pub fn table(rows: &[CellJson]) -> String {
     let mut out = format!(
         "{:<10} {:>10} {:>11} {:>7} {:>8} {:>20} {:>10} {:>6} {:>6} {:>6} {:>6} {:>7}\n",
-        "cell", "lat", "lon", "sensors", "readings", "latest", "pending_kB", "F", "R", "A", "U", "S"
+        "cell",
+        "lat",
+        "lon",
+        "sensors",
+        "readings",
+        "latest",
+        "pending_kB",
+        "F",
+        "R",
+        "A",
+        "U",
+        "S"
     );
     for r in rows {
         let readings: u64 = r.summaries.iter().map(|s| s.count).sum();
-        let latest = r.summaries.iter().map(|s| s.latest_t.as_str()).max().unwrap_or("-");
+        let latest = r
+            .summaries
+            .iter()
+            .map(|s| s.latest_t.as_str())
+            .max()
+            .unwrap_or("-");
         let f = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.3}"));
         let s = r.scores.as_ref();
         out.push_str(&format!(
@@ -197,7 +230,8 @@ pub fn table(rows: &[CellJson]) -> String {
             r.sensors.len(),
             readings,
             latest,
-            r.pending_bytes.map_or("-".to_string(), |b| format!("{:.1}", b / 1000.0)),
+            r.pending_bytes
+                .map_or("-".to_string(), |b| format!("{:.1}", b / 1000.0)),
             f(s.map(|s| s.freshness)),
             f(s.map(|s| s.redundancy)),
             f(s.map(|s| s.anomaly)),

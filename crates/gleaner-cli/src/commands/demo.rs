@@ -23,7 +23,12 @@ pub struct DemoArgs {
 
 /// Removes what an earlier demo run wrote in `dir` (and nothing else).
 fn clean(dir: &Path) -> Result<()> {
-    for name in ["gleaner.toml", "gleaner.db", "gleaner.db-wal", "gleaner.db-shm"] {
+    for name in [
+        "gleaner.toml",
+        "gleaner.db",
+        "gleaner.db-wal",
+        "gleaner.db-shm",
+    ] {
         let p = dir.join(name);
         if p.exists() {
             std::fs::remove_file(&p).with_context(|| format!("{}: cannot remove", p.display()))?;
@@ -56,7 +61,10 @@ pub fn run(args: &DemoArgs) -> Result<String> {
         args.days,
         farm.reading_count(),
         farm.events().len(),
-        files.readings.parent().map_or_else(String::new, |p| p.display().to_string())
+        files
+            .readings
+            .parent()
+            .map_or_else(String::new, |p| p.display().to_string())
     )?;
     let base = farm.base();
     let summary = init::run(&init::InitArgs {
@@ -86,7 +94,11 @@ pub fn run(args: &DemoArgs) -> Result<String> {
     writeln!(out, "3. {outcome}")?;
     let mut rows = cells::cell_rows(&project)?;
     cells::sort(&mut rows, cells::SortKey::Sensors);
-    writeln!(out, "4. cell table ({} cells; the 10 with most sensors):", rows.len())?;
+    writeln!(
+        out,
+        "4. cell table ({} cells; the 10 with most sensors):",
+        rows.len()
+    )?;
     out.push_str(&cells::table(&rows[..rows.len().min(10)]));
     Ok(out)
 }

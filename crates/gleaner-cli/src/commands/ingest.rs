@@ -80,7 +80,15 @@ impl std::fmt::Display for IngestOutcome {
         write!(
             f,
             "ingested {} file(s): {} rows read, {} readings ({} new, {} already stored), {} missing values, {} duplicate rows, {} rows skipped, {} conflicts kept as stored",
-            self.files, r.rows_read, r.readings, self.inserted, self.unchanged, r.missing, r.duplicates, r.skipped, self.conflicts
+            self.files,
+            r.rows_read,
+            r.readings,
+            self.inserted,
+            self.unchanged,
+            r.missing,
+            r.duplicates,
+            r.skipped,
+            self.conflicts
         )?;
         for s in &r.skipped_rows {
             write!(f, "\n  skipped: {}", s.reason)?;
@@ -93,11 +101,18 @@ fn detect(path: &Path) -> Result<Format> {
     let mut head = vec![0u8; 4096];
     let n = {
         use std::io::Read;
-        let mut f = std::fs::File::open(path).with_context(|| format!("{}: cannot read", path.display()))?;
-        f.read(&mut head).with_context(|| format!("{}: cannot read", path.display()))?
+        let mut f = std::fs::File::open(path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        f.read(&mut head)
+            .with_context(|| format!("{}: cannot read", path.display()))?
     };
     let first = String::from_utf8_lossy(&head[..n]);
-    let first = first.trim_start_matches('\u{feff}').lines().next().unwrap_or("").to_ascii_lowercase();
+    let first = first
+        .trim_start_matches('\u{feff}')
+        .lines()
+        .next()
+        .unwrap_or("")
+        .to_ascii_lowercase();
     if first.starts_with("location\tdate") {
         Ok(Format::CafDaily)
     } else if first.split(',').any(|c| c.trim() == "modality") {
@@ -105,7 +120,10 @@ fn detect(path: &Path) -> Result<Format> {
     } else if !first.is_empty() {
         Ok(Format::Wide)
     } else {
-        Err(IngestError::Empty { path: path.to_path_buf() }.into())
+        Err(IngestError::Empty {
+            path: path.to_path_buf(),
+        }
+        .into())
     }
 }
 
@@ -115,7 +133,12 @@ pub fn run(project: &mut Project, args: &IngestArgs) -> Result<IngestOutcome> {
     if args.files.is_empty() {
         bail!("no files to ingest");
     }
-    let known: HashSet<String> = project.store.sensors()?.into_iter().map(|s| s.id.to_string()).collect();
+    let known: HashSet<String> = project
+        .store
+        .sensors()?
+        .into_iter()
+        .map(|s| s.id.to_string())
+        .collect();
     let options = IngestOptions {
         on_error: args.on_error,
         known_sensors: Some(known),
@@ -134,7 +157,10 @@ pub fn run(project: &mut Project, args: &IngestArgs) -> Result<IngestOutcome> {
             Format::Long => read_long_csv(path, &options)?,
             Format::Wide | Format::Auto => {
                 let Some(m) = &args.modality else {
-                    bail!("{}: a wide file needs --modality (e.g. --modality vw@30cm)", path.display());
+                    bail!(
+                        "{}: a wide file needs --modality (e.g. --modality vw@30cm)",
+                        path.display()
+                    );
                 };
                 let mut wide = WideOptions::new(Modality::new(m).context("--modality")?);
                 wide.unit = args.unit.clone();

@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use gleaner_field::{Field, LatLon, LocalPoint, Sensor, TransverseMercator, cell_size_from_half_angle};
+use gleaner_field::{
+    Field, LatLon, LocalPoint, Sensor, TransverseMercator, cell_size_from_half_angle,
+};
 use gleaner_ingest::{SensorsOptions, read_sensors_csv};
 use gleaner_store::{CellRecord, SensorRecord, SqliteStore, Store};
 
@@ -39,11 +41,21 @@ pub const DEFAULT_CELL_SIZE_M: f64 = 40.0;
 pub fn run(args: &InitArgs) -> Result<String> {
     let config_path = args.dir.join(CONFIG_FILE);
     if config_path.exists() && !args.force {
-        bail!("{}: a project already exists here (use --force to overwrite its settings)", config_path.display());
+        bail!(
+            "{}: a project already exists here (use --force to overwrite its settings)",
+            config_path.display()
+        );
     }
-    std::fs::create_dir_all(&args.dir).with_context(|| format!("{}: cannot create", args.dir.display()))?;
+    std::fs::create_dir_all(&args.dir)
+        .with_context(|| format!("{}: cannot create", args.dir.display()))?;
     let utm = args.utm_zone.as_deref().map(parse_utm_zone).transpose()?;
-    let (inputs, _) = read_sensors_csv(&args.sensors, &SensorsOptions { utm, ..Default::default() })?;
+    let (inputs, _) = read_sensors_csv(
+        &args.sensors,
+        &SensorsOptions {
+            utm,
+            ..Default::default()
+        },
+    )?;
     if inputs.is_empty() {
         bail!("{}: no sensors", args.sensors.display());
     }
@@ -53,7 +65,9 @@ pub fn run(args: &InitArgs) -> Result<String> {
         None => default_base(&sensors),
     };
     let cell_size_m = match (args.cell_size_m, args.coverage) {
-        (Some(_), Some(_)) => bail!("give either --cell-size or --altitude with --half-angle, not both"),
+        (Some(_), Some(_)) => {
+            bail!("give either --cell-size or --altitude with --half-angle, not both")
+        }
         (Some(s), None) => s,
         (None, Some((h, a))) => cell_size_from_half_angle(h, a)?,
         (None, None) => DEFAULT_CELL_SIZE_M,
@@ -86,7 +100,10 @@ pub fn run(args: &InitArgs) -> Result<String> {
     };
     let field = Field::build(&sensors, base, &file.field_config())?;
     let mut store = SqliteStore::open(&args.dir.join(&file.project.database))?;
-    let source = args.sensors.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let source = args
+        .sensors
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
     let records: Vec<SensorRecord> = sensors
         .iter()
         .map(|s| SensorRecord {

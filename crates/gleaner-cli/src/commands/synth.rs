@@ -66,22 +66,32 @@ pub fn config(args: &SynthArgs) -> SynthConfig {
         interval_s: args.interval_s,
         event_count: args.events,
         correlation_length_m: args.correlation_length_m,
-        faults: if args.no_faults { FaultRates::none() } else { FaultRates::default() },
+        faults: if args.no_faults {
+            FaultRates::none()
+        } else {
+            FaultRates::default()
+        },
         scale_extent_with_sensors: args.scale_extent,
         ..SynthConfig::default()
     }
 }
 
-fn write_file(path: &Path, f: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>) -> Result<()> {
+fn write_file(
+    path: &Path,
+    f: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> Result<()> {
     let file = File::create(path).with_context(|| format!("{}: cannot create", path.display()))?;
     let mut w = BufWriter::with_capacity(1 << 20, file);
-    f(&mut w).and_then(|()| w.flush()).with_context(|| format!("{}: cannot write", path.display()))
+    f(&mut w)
+        .and_then(|()| w.flush())
+        .with_context(|| format!("{}: cannot write", path.display()))
 }
 
 /// Generates the farm and writes its four files; returns the farm and the file names.
 pub fn run(args: &SynthArgs) -> Result<(SynthFarm, SynthFiles)> {
     let farm = generate(&config(args)).context("invalid synthetic farm settings")?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot create", args.out.display()))?;
     let files = SynthFiles::in_dir(&args.out);
     write_file(&files.sensors, |w| write_sensors_csv(&farm, w))?;
     write_file(&files.readings, |w| write_readings_csv(&farm, w))?;

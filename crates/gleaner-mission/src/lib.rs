@@ -1,0 +1,347 @@
+//! gleaner's farming layer over the generic orienteering solver.
+//!
+//! [`plan_mission`] takes scored cells ([`Candidate`]: centre in the local frame, score S,
+//! hover time) and a [`MissionEnergyModel`], builds an orienteering instance — node 0 is the
+//! base station (start and end), every cell with S > 0 is a node whose reward is S and whose
+//! service cost is its hover + receiver energy, travel costs are propulsion energies in J, the
+//! budget is the usable battery energy less the fixed take-off/landing energy — solves it, and
+//! re-checks the chosen route with the energy model's own breakdown ([`MissionPlan::energy`]).
+//!
+//! Cells with S <= 0 are never worth a detour (SPEC §2) and are left out of the instance.
+//!
+//! ```
+//! use gleaner_energy::{EnergyConfig, MissionEnergyModel};
+//! use gleaner_field::LocalPoint;
+//! use gleaner_mission::{Candidate, PlanOptions, plan_mission};
+//! let model = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+//! let cells: Vec<Candidate> = (0..20)
+//!     .map(|k| Candidate {
+//!         centre: LocalPoint::new(40.0 * k as f64 + 20.0, 20.0),
+//!         score: 1.0 + (k % 3) as f64,
+//!         hover_s: 30.0,
+//!     })
+//!     .collect();
+//! let plan = plan_mission(&model, LocalPoint::new(0.0, 0.0), &cells, &PlanOptions::default()).unwrap();
+//! assert!(plan.energy.feasible);
+//! assert!(plan.energy.total_j <= plan.energy.budget_j);
+//! ```
+#![deny(missing_docs)]
+
+use std::time::{Duration, Instant};
+
+use gleaner_energy::{CellVisit, EnergyError, MissionEnergy, MissionEnergyModel};
+use gleaner_field::LocalPoint;
+use gleaner_orienteering::{Problem, ProblemError, SolveError, SolveOptions, SolverKind, solve};
+use thiserror::Error;
+
+/// A cell that may be visited.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Candidate {
+    /// Cell centre in the local frame (base station at the origin), metres.
+    pub centre: LocalPoint,
+    /// Utility score S (dimensionless); cells with S <= 0 are never planned.
+    pub score: f64,
+    /// Hover time needed to collect the cell, seconds.
+    pub hover_s: f64,
+}
+
+/// Which route planner to use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Planner {
+    /// The paper's heuristic: repeated best reward / extra-energy insertion.
+    Greedy,
+    /// gleaner's default: iterated local search seeded with greedy (exact when tiny).
+    #[default]
+    Default,
+    /// Proven optimum by dynamic programming (small instances only).
+    Exact,
+}
+
+impl Planner {
+    /// The planner's name as written in outputs: `greedy`, `default`, `exact`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Planner::Greedy => "greedy",
+            Planner::Default => "default",
+            Planner::Exact => "exact",
+        }
+    }
+}
+
+/// Planner settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanOptions {
+    /// Planner.
+    pub planner: Planner,
+    /// Wall-clock limit, seconds; the best route so far is returned.
+    pub time_limit: Duration,
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Iteration cap for deterministic runs (`None`: until the time or stall limit).
+    pub max_iterations: Option<u64>,
+}
+
+impl Default for PlanOptions {
+    /// Default planner, 5 s, seed 0, no iteration cap.
+    fn default() -> Self {
+        Self {
+            planner: Planner::Default,
+            time_limit: Duration::from_secs(5),
+            seed: 0,
+            max_iterations: None,
+        }
+    }
+}
+
+/// A planned mission.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MissionPlan {
+    /// Visiting order, as indices into the candidate slice.
+    pub order: Vec<usize>,
+    /// Sum of S over the visited cells.
+    pub total_score: f64,
+    /// The energy model's breakdown of the route (E_t, E_h, E_c, E_r, per leg, per cell).
+    pub energy: MissionEnergy,
+    /// Candidates with S > 0 that the planner could choose from.
+    pub considered: usize,
+    /// The planner used.
+    pub planner: Planner,
+    /// Wall-clock time spent solving, seconds (informational; never affects the result when an
+    /// iteration cap is set).
+    pub solve_seconds: f64,
+}
+
+/// Why a mission could not be planned.
+#[derive(Debug, Error)]
+pub enum PlanError {
+    /// The energy model rejected an input.
+    #[error("energy model: {0}")]
+    Energy(#[from] EnergyError),
+    /// The orienteering instance is invalid.
+    #[error("orienteering instance: {0}")]
+    Problem(#[from] ProblemError),
+    /// The solver failed (e.g. `exact` on too large an instance).
+    #[error("route planner: {0}")]
+    Solve(#[from] SolveError),
+    /// A candidate with a non-finite score or hover time.
+    #[error("cell {index}: invalid {what} {value}")]
+    InvalidCandidate {
+        /// Position in the candidate slice.
+        index: usize,
+        /// Which field.
+        what: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// The solver returned a route the energy model finds infeasible (a bug; reported, never
+    /// handed to an operator).
+    #[error("planned route needs {total_j:.1} J but only {budget_j:.1} J are usable")]
+    Infeasible {
+        /// Energy of the route, J.
+        total_j: f64,
+        /// Usable budget, J.
+        budget_j: f64,
+    },
+}
+
+/// Plans one sortie from `base` (local frame, metres) over `candidates`; see the crate docs.
+pub fn plan_mission(
+    model: &MissionEnergyModel,
+    base: LocalPoint,
+    candidates: &[Candidate],
+    options: &PlanOptions,
+) -> Result<MissionPlan, PlanError> {
+    for (index, c) in candidates.iter().enumerate() {
+        if !c.score.is_finite() {
+            return Err(PlanError::InvalidCandidate {
+                index,
+                what: "score",
+                value: c.score,
+            });
+        }
+        if !(c.hover_s.is_finite() && c.hover_s >= 0.0) {
+            return Err(PlanError::InvalidCandidate {
+                index,
+                what: "hover time (s)",
+                value: c.hover_s,
+            });
+        }
+    }
+    let chosen: Vec<usize> = (0..candidates.len())
+        .filter(|&k| candidates[k].score > 0.0)
+        .collect();
+    let started = Instant::now();
+    let mut order = Vec::new();
+    let budget = model.usable_budget_j() - model.sortie_fixed_j();
+    if !chosen.is_empty() && budget > 0.0 {
+        let mut points = Vec::with_capacity(chosen.len() + 1);
+        points.push(base);
+        points.extend(chosen.iter().map(|&k| candidates[k].centre));
+        let cost = model.travel_cost_matrix(&points).into_vec();
+        let mut rewards = vec![0.0];
+        rewards.extend(chosen.iter().map(|&k| candidates[k].score));
+        let mut service = vec![0.0];
+        service.extend(
+            chosen
+                .iter()
+                .map(|&k| model.service_energy_j(candidates[k].hover_s)),
+        );
+        let problem = Problem::new(cost, rewards, budget)?
+            .with_service_costs(service)?
+            .with_endpoints(0, 0)?;
+        let mut solve_options = SolveOptions::default()
+            .with_time_limit(options.time_limit)
+            .with_seed(options.seed);
+        solve_options.max_iterations = options.max_iterations;
+        let kind = match options.planner {
+            Planner::Greedy => SolverKind::Greedy,
+            Planner::Default => SolverKind::Default,
+            Planner::Exact => SolverKind::Exact,
+        };
+        let solution = solve(&problem, kind, &solve_options)?;
+        order = solution.routes[0]
+            .iter()
+            .filter(|&&node| node != 0)
+            .map(|&node| chosen[node - 1])
+            .collect();
+    }
+    let solve_seconds = started.elapsed().as_secs_f64();
+    let visits: Vec<CellVisit> = order
+        .iter()
+        .map(|&k| CellVisit {
+            centre: candidates[k].centre,
+            hover_s: candidates[k].hover_s,
+        })
+        .collect();
+    let energy = model.breakdown(base, &visits)?;
+    if !energy.feasible {
+        return Err(PlanError::Infeasible {
+            total_j: energy.total_j,
+            budget_j: energy.budget_j,
+        });
+    }
+    Ok(MissionPlan {
+        total_score: order.iter().map(|&k| candidates[k].score).sum(),
+        order,
+        energy,
+        considered: chosen.len(),
+        planner: options.planner,
+        solve_seconds,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gleaner_energy::EnergyConfig;
+    use proptest::prelude::*;
+
+    fn model() -> MissionEnergyModel {
+        MissionEnergyModel::new(&EnergyConfig::paper()).expect("paper preset is valid")
+    }
+
+    fn opts(planner: Planner) -> PlanOptions {
+        PlanOptions {
+            planner,
+            max_iterations: Some(300),
+            time_limit: Duration::from_secs(30),
+            seed: 1,
+        }
+    }
+
+    #[test]
+    fn nonpositive_scores_are_never_planned() {
+        let cells = [
+            Candidate {
+                centre: LocalPoint::new(20.0, 20.0),
+                score: 0.0,
+                hover_s: 30.0,
+            },
+            Candidate {
+                centre: LocalPoint::new(60.0, 20.0),
+                score: -1.0,
+                hover_s: 30.0,
+            },
+            Candidate {
+                centre: LocalPoint::new(100.0, 20.0),
+                score: 0.5,
+                hover_s: 30.0,
+            },
+        ];
+        let plan = plan_mission(
+            &model(),
+            LocalPoint::default(),
+            &cells,
+            &opts(Planner::Default),
+        )
+        .unwrap();
+        assert_eq!(plan.order, vec![2]);
+        assert_eq!(plan.considered, 1);
+    }
+
+    #[test]
+    fn the_paper_budget_fits_eleven_to_thirteen_30_s_hovers() {
+        // 30 s hovers at 168.5 W cost 5,055 J each: 66,500 J allows at most 13 with no travel.
+        let cells: Vec<Candidate> = (0..40)
+            .map(|k| Candidate {
+                centre: LocalPoint::new(
+                    40.0 * f64::from(k % 8) + 20.0,
+                    40.0 * f64::from(k / 8) + 20.0,
+                ),
+                score: 1.0,
+                hover_s: 30.0,
+            })
+            .collect();
+        let plan = plan_mission(
+            &model(),
+            LocalPoint::default(),
+            &cells,
+            &opts(Planner::Default),
+        )
+        .unwrap();
+        assert!(
+            (11..=13).contains(&plan.order.len()),
+            "{}",
+            plan.order.len()
+        );
+        assert!(plan.energy.utilisation > 0.9);
+    }
+
+    #[test]
+    fn invalid_candidates_are_errors() {
+        let cells = [Candidate {
+            centre: LocalPoint::new(1.0, 1.0),
+            score: f64::NAN,
+            hover_s: 30.0,
+        }];
+        let e = plan_mission(
+            &model(),
+            LocalPoint::default(),
+            &cells,
+            &opts(Planner::Greedy),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("cell 0: invalid score NaN"), "{e}");
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+        #[test]
+        fn routes_fit_the_battery_and_default_beats_greedy(
+            cells in proptest::collection::vec((0.0f64..800.0, 0.0f64..500.0, -0.5f64..3.0, 30.0f64..90.0), 1..40)
+        ) {
+            let cands: Vec<Candidate> = cells
+                .iter()
+                .map(|&(e, n, score, hover_s)| Candidate { centre: LocalPoint::new(e, n), score, hover_s })
+                .collect();
+            let m = model();
+            let g = plan_mission(&m, LocalPoint::default(), &cands, &opts(Planner::Greedy)).unwrap();
+            let d = plan_mission(&m, LocalPoint::default(), &cands, &opts(Planner::Default)).unwrap();
+            for p in [&g, &d] {
+                prop_assert!(p.energy.total_j <= p.energy.budget_j * (1.0 + 1e-9));
+                prop_assert!(p.order.iter().all(|&k| cands[k].score > 0.0));
+            }
+            prop_assert!(d.total_score >= g.total_score - 1e-9);
+        }
+    }
+}
