@@ -1,0 +1,247 @@
+//! Scoring every cell from scratch (SPEC §2): plain in-memory inputs in, terms out.
+
+use rayon::prelude::*;
+
+use crate::probabilities::check_distribution;
+use crate::terms::{anomaly, freshness, redundancy, score, uncertainty};
+use crate::{Series, UtilityConfig, UtilityError};
+use gleaner_field::UnixSeconds;
+
+/// Everything the score needs to know about one cell, borrowed from the caller.
+///
+/// Cells are referred to by their position in the slice given to [`score_cells`] (use
+/// [`gleaner_field::CellId::index`] for a field's cells).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct CellInputs<'a> {
+    /// Last collection time of each of the cell's sensors, s (`None` = never collected).
+    /// At least one sensor.
+    pub last_collected: &'a [Option<UnixSeconds>],
+    /// The cell series x̂_i^m, one per modality position (same number for every cell; an empty
+    /// series means the cell lacks the modality), on the dataset's time grid (see
+    /// [`cell_series`](crate::cell_series)). Only collected data belongs here.
+    pub series: Vec<Series<'a>>,
+    /// Neighbour cells N_i, as positions in the same slice.
+    pub neighbours: &'a [usize],
+    /// Class probabilities p_i1..p_iK from the condition model or the user (same K >= 2 for
+    /// every cell, summing to 1), or empty for every cell when there is no model (U = 0).
+    pub probabilities: &'a [f64],
+}
+
+/// The terms of one cell's score. Per-modality entries are `None` where the cell lacks the
+/// modality (no point in the history window).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CellTerms {
+    /// Freshness F_i, dimensionless in [0, 1].
+    pub f: f64,
+    /// Redundancy R_i, dimensionless in [0, 1].
+    pub r: f64,
+    /// Anomaly as used in the score: raw A_i or its bounded form, per
+    /// [`UtilityConfig::anomaly_form`].
+    pub a: f64,
+    /// Raw anomaly A_i, standard deviations, >= 0.
+    pub a_raw: f64,
+    /// Model uncertainty U_i, dimensionless in [0, 1].
+    pub u: f64,
+    /// Score S_i = alpha·F + beta·A + gamma·U − delta·R.
+    pub s: f64,
+    /// R_i^m per modality position.
+    pub r_by_modality: Vec<Option<f64>>,
+    /// Raw A_i^m per modality position, standard deviations.
+    pub a_by_modality: Vec<Option<f64>>,
+    /// The class probabilities U was computed from (empty without a model).
+    pub probabilities: Vec<f64>,
+}
+
+/// Checks the inputs and returns the number of modalities; `parallel` spreads the per-cell
+/// checks over rayon's pool (the first bad cell in order is still the one reported).
+fn validate(
+    cells: &[CellInputs<'_>],
+    config: &UtilityConfig,
+    parallel: bool,
+) -> Result<usize, UtilityError> {
+    let n_modalities = cells.first().map_or(0, |c| c.series.len());
+    config.validate(n_modalities)?;
+    let k = cells.first().map_or(0, |c| c.probabilities.len());
+    let check = |i: usize| check_cell(cells, i, n_modalities, k).err();
+    let first_error = if parallel {
+        (0..cells.len()).into_par_iter().find_map_first(check)
+    } else {
+        (0..cells.len()).find_map(check)
+    };
+    match first_error {
+        Some(e) => Err(e),
+        None => Ok(n_modalities),
+    }
+}
+
+fn check_cell(
+    cells: &[CellInputs<'_>],
+    i: usize,
+    n_modalities: usize,
+    k: usize,
+) -> Result<(), UtilityError> {
+    let c = &cells[i];
+    if c.last_collected.is_empty() {
+        return Err(UtilityError::NoSensors(i));
+    }
+    if c.series.len() != n_modalities {
+        return Err(UtilityError::ModalityCount {
+            cell: i,
+            got: c.series.len(),
+            expected: n_modalities,
+        });
+    }
+    for (m, s) in c.series.iter().enumerate() {
+        check_series(i, m, *s)?;
+    }
+    if let Some(&j) = c.neighbours.iter().find(|&&j| j >= cells.len() || j == i) {
+        return Err(UtilityError::Neighbour {
+            cell: i,
+            neighbour: j,
+            cells: cells.len(),
+        });
+    }
+    if k > 0 || !c.probabilities.is_empty() {
+        check_distribution(c.probabilities, k).map_err(|reason| UtilityError::Probabilities {
+            cell: format!("#{i}"),
+            reason,
+        })?;
+    }
+    Ok(())
+}
+
+/// Checks that a series has equal lengths, strictly increasing times and finite values.
+pub(crate) fn check_series(
+    cell: usize,
+    modality: usize,
+    s: Series<'_>,
+) -> Result<(), UtilityError> {
+    if s.times.len() != s.values.len() {
+        return Err(UtilityError::SeriesLength {
+            cell,
+            modality,
+            times: s.times.len(),
+            values: s.values.len(),
+        });
+    }
+    if let Some(w) = s.times.windows(2).find(|w| w[1] <= w[0]) {
+        return Err(UtilityError::SeriesOrder {
+            cell,
+            modality,
+            time: w[1],
+        });
+    }
+    if let Some(k) = s.values.iter().position(|v| !v.is_finite()) {
+        return Err(UtilityError::NonFinite {
+            cell,
+            modality,
+            time: s.times[k],
+            value: s.values[k],
+        });
+    }
+    Ok(())
+}
+
+/// Terms of cell `i` (inputs already validated).
+fn cell_terms(
+    cells: &[CellInputs<'_>],
+    i: usize,
+    t: UnixSeconds,
+    config: &UtilityConfig,
+    n_modalities: usize,
+) -> CellTerms {
+    let cell = &cells[i];
+    let from = config.window.start(t);
+    let f = freshness(t, cell.last_collected, config.lambda_per_s());
+    let mut r_by = Vec::with_capacity(n_modalities);
+    let mut a_by = Vec::with_capacity(n_modalities);
+    let mut neighbour_series = Vec::with_capacity(cell.neighbours.len());
+    for m in 0..n_modalities {
+        let own = cell.series[m].between(from, t);
+        if own.is_empty() {
+            r_by.push(None);
+            a_by.push(None);
+            continue;
+        }
+        neighbour_series.clear();
+        neighbour_series.extend(
+            cell.neighbours
+                .iter()
+                .map(|&j| cells[j].series[m].between(from, t)),
+        );
+        r_by.push(Some(redundancy(own, &neighbour_series, config.min_overlap)));
+        a_by.push(Some(anomaly(own, config.epsilon)));
+    }
+    finish_terms(f, r_by, a_by, cell.probabilities, config)
+}
+
+/// Combines per-modality terms, F and the probabilities into [`CellTerms`].
+pub(crate) fn finish_terms(
+    f: f64,
+    r_by_modality: Vec<Option<f64>>,
+    a_by_modality: Vec<Option<f64>>,
+    probabilities: &[f64],
+    config: &UtilityConfig,
+) -> CellTerms {
+    let r = config
+        .redundancy_weights
+        .combine(&r_by_modality)
+        .clamp(0.0, 1.0);
+    let a_raw = config.anomaly_weights.combine(&a_by_modality).max(0.0);
+    let a = config.anomaly_form.apply(a_raw);
+    let u = uncertainty(probabilities);
+    CellTerms {
+        f,
+        r,
+        a,
+        a_raw,
+        u,
+        s: score(f, a, u, r, config),
+        r_by_modality,
+        a_by_modality,
+        probabilities: probabilities.to_vec(),
+    }
+}
+
+/// Scores every cell at mission time `t` (s) from its full series, on one thread. Only points
+/// at or before `t` and inside [`UtilityConfig::window`] are used.
+///
+/// ```
+/// use gleaner_utility::{score_cells, CellInputs, Series, UtilityConfig};
+/// let times: Vec<i64> = (0..12).map(|d| d * 86_400).collect();
+/// let a: Vec<f64> = (0..12).map(|d| 0.30 + 0.001 * d as f64).collect();
+/// let b: Vec<f64> = (0..12).map(|d| 0.25 + 0.002 * (d % 3) as f64).collect();
+/// let last = [Some(11 * 86_400)];
+/// let cells = vec![
+///     CellInputs { last_collected: &last, series: vec![Series::new(&times, &a)],
+///                  neighbours: &[1], probabilities: &[0.5, 0.5] },
+///     CellInputs { last_collected: &last, series: vec![Series::new(&times, &b)],
+///                  neighbours: &[0], probabilities: &[1.0, 0.0] },
+/// ];
+/// let terms = score_cells(&cells, 12 * 86_400, &UtilityConfig::default()).unwrap();
+/// assert!((terms[0].u - 1.0).abs() < 1e-12 && terms[1].u == 0.0);
+/// assert!((terms[0].f - (1.0 - 0.5f64.powf(1.0 / 3.0))).abs() < 1e-12);
+/// ```
+pub fn score_cells(
+    cells: &[CellInputs<'_>],
+    t: UnixSeconds,
+    config: &UtilityConfig,
+) -> Result<Vec<CellTerms>, UtilityError> {
+    let n_modalities = validate(cells, config, false)?;
+    Ok((0..cells.len())
+        .map(|i| cell_terms(cells, i, t, config, n_modalities))
+        .collect())
+}
+
+/// [`score_cells`] on all cores (rayon's global pool); same result.
+pub fn score_cells_parallel(
+    cells: &[CellInputs<'_>],
+    t: UnixSeconds,
+    config: &UtilityConfig,
+) -> Result<Vec<CellTerms>, UtilityError> {
+    let n_modalities = validate(cells, config, true)?;
+    Ok((0..cells.len())
+        .into_par_iter()
+        .map(|i| cell_terms(cells, i, t, config, n_modalities))
+        .collect())
+}

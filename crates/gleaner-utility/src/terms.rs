@@ -1,0 +1,217 @@
+//! The four terms of SPEC §2 as pure functions of plain values.
+
+use crate::{Series, UtilityConfig};
+use gleaner_field::UnixSeconds;
+
+/// A sum of squared deviations `m2` over `n` points with mean `mean` counts as zero variance
+/// when the standard deviation is below 1e-12 of the mean's magnitude (or `m2` is not
+/// positive): rounding in the mean of a constant series must not fake a variance.
+pub(crate) fn is_degenerate(m2: f64, n: f64, mean: f64) -> bool {
+    m2.is_nan() || m2 <= 0.0 || m2 <= n * (1e-12 * mean).powi(2)
+}
+
+/// Freshness F_i = mean over the cell's sensors of 1 − exp(−lambda·(t − t_j^l)) (SPEC §2),
+/// dimensionless in [0, 1].
+///
+/// `t` is the mission time (s), `last_collected` the sensors' last collection times (s;
+/// `None` = never collected, term 1), `lambda_per_s` the decay rate (1/s, e.g.
+/// [`UtilityConfig::lambda_per_s`]). A collection time after `t` counts as age 0. A cell without
+/// sensors is maximally stale (1).
+///
+/// ```
+/// use gleaner_utility::freshness;
+/// let lambda = std::f64::consts::LN_2 / 259_200.0; // 3-day half-life
+/// let f = freshness(1_036_800, &[Some(777_600), None], lambda); // 3 days old, never
+/// assert!((f - 0.75).abs() < 1e-12);
+/// ```
+pub fn freshness(t: UnixSeconds, last_collected: &[Option<UnixSeconds>], lambda_per_s: f64) -> f64 {
+    if last_collected.is_empty() {
+        return 1.0;
+    }
+    let total: f64 = last_collected
+        .iter()
+        .map(|l| match l {
+            None => 1.0,
+            Some(l) => {
+                let age = (t.saturating_sub(*l)).max(0) as f64;
+                -(-lambda_per_s * age).exp_m1()
+            }
+        })
+        .sum();
+    (total / last_collected.len() as f64).clamp(0.0, 1.0)
+}
+
+/// Pearson correlation of two equally long samples, or `None` when fewer than 2 points or
+/// either sample has zero variance. Two-pass (means first), clamped to [−1, 1]. Symmetric.
+///
+/// ```
+/// use gleaner_utility::pearson;
+/// let r = pearson(&[1.0, 2.0, 3.0], &[2.0, 4.0, 7.0]).unwrap();
+/// assert!((r - 0.9933992677987828).abs() < 1e-12);
+/// assert_eq!(pearson(&[1.0, 1.0, 1.0], &[1.0, 2.0, 3.0]), None);
+/// ```
+pub fn pearson(x: &[f64], y: &[f64]) -> Option<f64> {
+    let n = x.len().min(y.len());
+    if n < 2 {
+        return None;
+    }
+    let (x, y) = (&x[..n], &y[..n]);
+    let nf = n as f64;
+    let mx = x.iter().sum::<f64>() / nf;
+    let my = y.iter().sum::<f64>() / nf;
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        let (dx, dy) = (a - mx, b - my);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    }
+    finish_pearson(nf, mx, my, sxx, syy, sxy)
+}
+
+pub(crate) fn finish_pearson(
+    n: f64,
+    mx: f64,
+    my: f64,
+    sxx: f64,
+    syy: f64,
+    sxy: f64,
+) -> Option<f64> {
+    if is_degenerate(sxx, n, mx) || is_degenerate(syy, n, my) {
+        return None;
+    }
+    Some((sxy / (sxx.sqrt() * syy.sqrt())).clamp(-1.0, 1.0))
+}
+
+/// Pearson correlation of two series over the timestamps where both have a value (SPEC §2):
+/// 0 when there are fewer than `min_overlap` common timestamps or either side has zero
+/// variance (no evidence of redundancy). Dimensionless in [−1, 1].
+pub fn series_correlation(a: Series<'_>, b: Series<'_>, min_overlap: usize) -> f64 {
+    let (na, nb) = (a.len(), b.len());
+    if na.min(nb) < min_overlap.max(2) {
+        return 0.0;
+    }
+    if a.times[..na] == b.times[..nb] {
+        return pearson(&a.values[..na], &b.values[..nb]).unwrap_or(0.0);
+    }
+    // Merge join over the common timestamps, twice (two-pass for accuracy).
+    let common = |f: &mut dyn FnMut(f64, f64)| {
+        let (mut i, mut j) = (0, 0);
+        while i < na && j < nb {
+            match a.times[i].cmp(&b.times[j]) {
+                std::cmp::Ordering::Less => i += 1,
+                std::cmp::Ordering::Greater => j += 1,
+                std::cmp::Ordering::Equal => {
+                    f(a.values[i], b.values[j]);
+                    i += 1;
+                    j += 1;
+                }
+            }
+        }
+    };
+    let (mut n, mut sx, mut sy) = (0usize, 0.0, 0.0);
+    common(&mut |x, y| {
+        n += 1;
+        sx += x;
+        sy += y;
+    });
+    if n < min_overlap.max(2) {
+        return 0.0;
+    }
+    let nf = n as f64;
+    let (mx, my) = (sx / nf, sy / nf);
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    common(&mut |x, y| {
+        let (dx, dy) = (x - mx, y - my);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    });
+    finish_pearson(nf, mx, my, sxx, syy, sxy).unwrap_or(0.0)
+}
+
+/// Redundancy of one modality R_i^m = (1/|N_i|)·Σ_j max(0, corr(x̂_i^m, x̂_j^m)) (SPEC §2),
+/// dimensionless in [0, 1]. `neighbours` holds the neighbours' series of modality m (an empty
+/// series for a neighbour lacking m: it contributes 0 but still counts in |N_i|). No neighbours
+/// gives 0. Window the series (e.g. with [`Series::between`]) before calling.
+///
+/// ```
+/// use gleaner_utility::{redundancy, Series};
+/// let t: Vec<i64> = (0..10).collect();
+/// let x: Vec<f64> = (0..10).map(|k| k as f64).collect();
+/// let r = redundancy(Series::new(&t, &x), &[Series::new(&t, &x), Series::empty()], 10);
+/// assert!((r - 0.5).abs() < 1e-12); // one identical neighbour, one without the modality
+/// ```
+pub fn redundancy(cell: Series<'_>, neighbours: &[Series<'_>], min_overlap: usize) -> f64 {
+    if neighbours.is_empty() {
+        return 0.0;
+    }
+    let total: f64 = neighbours
+        .iter()
+        .map(|nb| series_correlation(cell, *nb, min_overlap).max(0.0))
+        .sum();
+    (total / neighbours.len() as f64).clamp(0.0, 1.0)
+}
+
+/// Anomaly of one modality A_i^m = |x̂(t*) − mu| / (sigma + epsilon) (SPEC §2), in standard
+/// deviations, >= 0: t* is the series' last timestamp, mu and sigma the mean and the sample
+/// standard deviation (n − 1) of the points before t*. Fewer than 2 such points gives 0.
+/// `epsilon` is in the modality's unit. Window the series before calling.
+///
+/// ```
+/// use gleaner_utility::{anomaly, Series};
+/// let (t, v) = (vec![0, 1, 2, 3], vec![1.0, 2.0, 3.0, 6.0]);
+/// let a = anomaly(Series::new(&t, &v), 1e-6); // mu = 2, sigma = 1
+/// assert!((a - 4.0 / (1.0 + 1e-6)).abs() < 1e-12);
+/// ```
+pub fn anomaly(series: Series<'_>, epsilon: f64) -> f64 {
+    let n = series.len();
+    if n < 3 {
+        return 0.0;
+    }
+    let past = &series.values[..n - 1];
+    let latest = series.values[n - 1];
+    let k = past.len() as f64;
+    let mu = past.iter().sum::<f64>() / k;
+    let m2: f64 = past.iter().map(|x| (x - mu) * (x - mu)).sum();
+    anomaly_from_stats(latest, mu, m2 / (k - 1.0), epsilon)
+}
+
+/// A_i^m from the latest value, the past mean and the past sample variance (unit²).
+pub(crate) fn anomaly_from_stats(latest: f64, mu: f64, variance: f64, epsilon: f64) -> f64 {
+    (latest - mu).abs() / (variance.max(0.0).sqrt() + epsilon)
+}
+
+/// Model uncertainty U_i = −(1/ln K)·Σ_k p_k ln p_k, with 0·ln 0 = 0 (SPEC §2): the normalised
+/// entropy of a class distribution, dimensionless in [0, 1]. Fewer than 2 classes gives 0.
+/// The probabilities are assumed valid (see [`validate_probabilities`](crate::validate_probabilities)).
+///
+/// ```
+/// use gleaner_utility::uncertainty;
+/// assert!((uncertainty(&[0.25; 4]) - 1.0).abs() < 1e-12);
+/// assert_eq!(uncertainty(&[0.0, 1.0, 0.0]), 0.0);
+/// ```
+pub fn uncertainty(probabilities: &[f64]) -> f64 {
+    let k = probabilities.len();
+    if k < 2 {
+        return 0.0;
+    }
+    let h: f64 = probabilities
+        .iter()
+        .filter(|&&p| p > 0.0)
+        .map(|&p| -p * p.ln())
+        .sum();
+    (h / (k as f64).ln()).clamp(0.0, 1.0)
+}
+
+/// The score S_i = alpha·F + beta·A + gamma·U − delta·R (SPEC §2) with the weights of
+/// `config`; `a` is the anomaly in the form the configuration uses (raw or bounded).
+///
+/// ```
+/// use gleaner_utility::{score, UtilityConfig};
+/// let s = score(0.5, 1.0, 0.25, 0.75, &UtilityConfig::default());
+/// assert!((s - 1.0).abs() < 1e-12);
+/// ```
+pub fn score(f: f64, a: f64, u: f64, r: f64, config: &UtilityConfig) -> f64 {
+    config.alpha * f + config.beta * a + config.gamma * u - config.delta * r
+}
