@@ -643,3 +643,159 @@ fn cholesky_solve(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
     }
     Some(x)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn quantiles_and_classes() {
+        let th = quantile_thresholds(&[4.0, 1.0, 3.0, 2.0, f64::NAN], 3).unwrap();
+        assert!(
+            (th[0] - 2.0).abs() < 1e-12 && (th[1] - 3.0).abs() < 1e-12,
+            "{th:?}"
+        );
+        assert_eq!(class_of(1.9, &th), 0);
+        assert_eq!(class_of(2.0, &th), 1);
+        assert_eq!(class_of(5.0, &th), 2);
+        assert!(quantile_thresholds(&[], 3).is_err());
+    }
+
+    #[test]
+    fn features_by_hand() {
+        let t = [0, 86_400, 2 * 86_400, 3 * 86_400];
+        let v = [1.0, 2.0, 3.0, 10.0];
+        let nt = [0, 86_400];
+        let nv = [5.0, 7.0];
+        let s = Series::new(&t, &v);
+        // Known until day 2 (so day 3 is unknown), predicting day 5.
+        let f = condition_features(
+            s,
+            &[Series::new(&nt, &nv), Series::empty()],
+            5 * 86_400,
+            2 * 86_400,
+            5,
+        )
+        .unwrap();
+        assert_eq!(f[0], 3.0);
+        assert_eq!(f[1], 3.0);
+        assert_eq!(f[2], 9.0);
+        assert!((f[3] - 1.0).abs() < 1e-12);
+        assert!((f[4] - 3.0).abs() < 1e-12);
+        assert!((f[5].powi(2) + f[6].powi(2) - 1.0).abs() < 1e-12);
+        assert_eq!(f[7], 7.0);
+        assert_eq!(f[8], 21.0);
+        assert!(condition_features(s, &[], 5, -1, 5).is_none());
+    }
+
+    /// Synthetic cells: a noisy seasonal moisture cycle with cell offsets.
+    fn synthetic(seed: u64) -> (Vec<Vec<i64>>, Vec<Vec<f64>>) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut times = Vec::new();
+        let mut values = Vec::new();
+        for c in 0..6 {
+            let offset = 0.01 * c as f64;
+            let mut x = 0.0;
+            let (mut ts, mut vs) = (Vec::new(), Vec::new());
+            for d in 0..730i64 {
+                x = 0.9 * x + rng.random_range(-0.02..0.02);
+                if rng.random_bool(0.8) {
+                    ts.push(d * 86_400);
+                    vs.push(
+                        0.3 + offset + 0.08 * (d as f64 * std::f64::consts::TAU / 365.0).sin() + x,
+                    );
+                }
+            }
+            times.push(ts);
+            values.push(vs);
+        }
+        (times, values)
+    }
+
+    #[test]
+    fn model_beats_the_baseline_and_flattens_with_staleness() {
+        let (times, values) = synthetic(3);
+        let cells: Vec<Series> = times
+            .iter()
+            .zip(&values)
+            .map(|(t, v)| Series::new(t, v))
+            .collect();
+        let neighbours: Vec<Vec<usize>> = (0..6).map(|i| vec![(i + 1) % 6, (i + 5) % 6]).collect();
+        let config = ConditionConfig::default();
+        let split = 500 * 86_400;
+        let model = ConditionModel::fit(&cells, &neighbours, 0, split, &config).unwrap();
+        let test = TrainingSet::build(
+            &cells,
+            &neighbours,
+            model.thresholds(),
+            split,
+            i64::MAX,
+            &config,
+        );
+        let e = model.evaluate(&test);
+        assert!(e.n > 1000);
+        assert!(e.accuracy > e.baseline_accuracy + 0.1, "{e:?}");
+        assert!(e.log_loss < e.baseline_log_loss, "{e:?}");
+        // Same cell, same known data: the further t is from the last collection, the flatter.
+        let known = 600 * 86_400;
+        let entropy = |lag: i64| {
+            let f = condition_features(cells[0], &[], known + lag * 86_400, known, 5).unwrap();
+            crate::uncertainty(&model.predict_features(&f))
+        };
+        assert!(
+            entropy(14) > entropy(1),
+            "{} vs {}",
+            entropy(14),
+            entropy(1)
+        );
+        let p = model.predict_proba(&cells, &neighbours, known);
+        assert!(
+            p.iter()
+                .all(|p| (p.iter().sum::<f64>() - 1.0).abs() < 1e-12)
+        );
+        // Training is deterministic.
+        assert_eq!(
+            ConditionModel::fit(&cells, &neighbours, 0, split, &config).unwrap(),
+            model
+        );
+    }
+
+    #[test]
+    fn bad_configurations() {
+        let (t, v) = (vec![0i64], vec![1.0]);
+        let cells = [Series::new(&t, &v)];
+        for c in [
+            ConditionConfig {
+                n_classes: 1,
+                ..Default::default()
+            },
+            ConditionConfig {
+                thresholds: ClassThresholds::Fixed(vec![0.3]),
+                ..Default::default()
+            },
+            ConditionConfig {
+                thresholds: ClassThresholds::Fixed(vec![0.3, 0.2]),
+                ..Default::default()
+            },
+            ConditionConfig {
+                lags_days: vec![0],
+                ..Default::default()
+            },
+            ConditionConfig {
+                trend_points: 1,
+                ..Default::default()
+            },
+        ] {
+            assert!(
+                ConditionModel::fit(&cells, &[vec![]], 0, 10, &c).is_err(),
+                "{c:?}"
+            );
+        }
+        // No rows at all (nothing before the lag).
+        assert!(
+            ConditionModel::fit(&cells, &[vec![]], 0, 10, &ConditionConfig::default()).is_err()
+        );
+    }
+}

@@ -225,3 +225,72 @@ impl UtilityConfig {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weights_renormalise_over_present_modalities() {
+        assert_eq!(
+            ModalityWeights::Equal.normalised(&[true, false, true]),
+            vec![0.5, 0.0, 0.5]
+        );
+        let w = ModalityWeights::Given(vec![1.0, 2.0, 3.0]);
+        assert_eq!(w.normalised(&[false, true, true]), vec![0.0, 0.4, 0.6]);
+        assert_eq!(w.normalised(&[false, false, false]), vec![0.0; 3]);
+        assert!((w.combine(&[Some(1.0), None, Some(2.0)]) - 1.75).abs() < 1e-12);
+    }
+
+    #[test]
+    fn lambda_and_forms() {
+        let c = UtilityConfig::default();
+        assert!((c.lambda_per_s() - std::f64::consts::LN_2 / 259_200.0).abs() < 1e-20);
+        let b = AnomalyForm::Bounded { kappa: 2.0 };
+        assert!((b.apply(2.0) - (1.0 - (-1.0f64).exp())).abs() < 1e-12);
+        assert_eq!(AnomalyForm::Raw.apply(7.5), 7.5);
+        assert_eq!(b.label(), "bounded(kappa=2)");
+    }
+
+    #[test]
+    fn invalid_configurations_are_rejected() {
+        let bad = [
+            UtilityConfig {
+                freshness_half_life_s: 0.0,
+                ..Default::default()
+            },
+            UtilityConfig {
+                alpha: f64::NAN,
+                ..Default::default()
+            },
+            UtilityConfig {
+                min_overlap: 1,
+                ..Default::default()
+            },
+            UtilityConfig {
+                epsilon: 0.0,
+                ..Default::default()
+            },
+            UtilityConfig {
+                window: HistoryWindow::Last { seconds: 0 },
+                ..Default::default()
+            },
+            UtilityConfig {
+                anomaly_form: AnomalyForm::Bounded { kappa: -1.0 },
+                ..Default::default()
+            },
+            UtilityConfig {
+                redundancy_weights: ModalityWeights::Given(vec![1.0]),
+                ..Default::default()
+            },
+            UtilityConfig {
+                anomaly_weights: ModalityWeights::Given(vec![1.0, -1.0]),
+                ..Default::default()
+            },
+        ];
+        for c in bad {
+            assert!(c.validate(2).is_err(), "{c:?} accepted");
+        }
+        assert!(UtilityConfig::default().validate(2).is_ok());
+    }
+}

@@ -101,11 +101,18 @@ fn check_cell(
             cells: cells.len(),
         });
     }
-    if k > 0 || !c.probabilities.is_empty() {
-        check_distribution(c.probabilities, k).map_err(|reason| UtilityError::Probabilities {
-            cell: format!("#{i}"),
-            reason,
-        })?;
+    let err = |reason: String| UtilityError::Probabilities {
+        cell: format!("#{i}"),
+        reason,
+    };
+    if k == 0 && !c.probabilities.is_empty() {
+        return Err(err(format!(
+            "{} probabilities but cell #0 has none (give every cell probabilities, or none)",
+            c.probabilities.len()
+        )));
+    }
+    if k > 0 {
+        check_distribution(c.probabilities, k).map_err(err)?;
     }
     Ok(())
 }
@@ -244,4 +251,131 @@ pub fn score_cells_parallel(
         .into_par_iter()
         .map(|i| cell_terms(cells, i, t, config, n_modalities))
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{AnomalyForm, HistoryWindow};
+
+    const DAY: i64 = 86_400;
+
+    #[test]
+    fn window_missing_modality_and_forms() {
+        let t: Vec<i64> = (0..30).map(|d| d * DAY).collect();
+        let up: Vec<f64> = (0..30).map(|d| d as f64).collect();
+        let zig: Vec<f64> = (0..30)
+            .map(|d| if d < 15 { d as f64 } else { -(d as f64) })
+            .collect();
+        let last = [Some(29 * DAY)];
+        let cells = vec![
+            CellInputs {
+                last_collected: &last,
+                series: vec![Series::new(&t, &up), Series::new(&t, &up)],
+                neighbours: &[1],
+                probabilities: &[],
+            },
+            CellInputs {
+                last_collected: &last,
+                series: vec![Series::new(&t, &zig), Series::empty()],
+                neighbours: &[0],
+                probabilities: &[],
+            },
+        ];
+        let all = score_cells(&cells, 29 * DAY, &UtilityConfig::default()).unwrap();
+        // Cell 1 lacks modality 1: its terms come from modality 0 alone.
+        assert_eq!(all[1].r_by_modality[1], None);
+        assert_eq!(all[1].r, all[1].r_by_modality[0].unwrap());
+        // Cell 0: modality 1's neighbour lacks it (0), modality 0 correlates weakly positive.
+        assert_eq!(all[0].r_by_modality[1], Some(0.0));
+        assert!((all[0].r - all[0].r_by_modality[0].unwrap() / 2.0).abs() < 1e-15);
+        // The last 14 days only: zig is strictly decreasing there, anti-correlated with up.
+        let window = UtilityConfig {
+            window: HistoryWindow::Last { seconds: 13 * DAY },
+            ..Default::default()
+        };
+        let w = score_cells(&cells, 29 * DAY, &window).unwrap();
+        assert_eq!(w[0].r_by_modality[0], Some(0.0));
+        // Data after t is ignored: scoring at day 9 sees days 0..9 only (fewer than 10 -> R 0).
+        let early = score_cells(&cells, 8 * DAY, &UtilityConfig::default()).unwrap();
+        assert_eq!(early[0].r, 0.0);
+        let bounded = UtilityConfig {
+            anomaly_form: AnomalyForm::Bounded { kappa: 3.0 },
+            ..Default::default()
+        };
+        let b = score_cells(&cells, 29 * DAY, &bounded).unwrap();
+        assert_eq!(b[1].a_raw, all[1].a_raw);
+        assert!((b[1].a - (1.0 - (-all[1].a_raw / 3.0).exp())).abs() < 1e-12);
+        assert_eq!(
+            score_cells_parallel(&cells, 29 * DAY, &UtilityConfig::default()).unwrap(),
+            all
+        );
+    }
+
+    #[test]
+    fn invalid_inputs_name_the_cell() {
+        let t = [0, DAY, DAY];
+        let v = [1.0, 2.0, 3.0];
+        let last = [None];
+        let good = CellInputs {
+            last_collected: &last,
+            series: vec![Series::new(&t[..2], &v[..2])],
+            neighbours: &[],
+            probabilities: &[],
+        };
+        let cases: Vec<(CellInputs, &str)> = vec![
+            (
+                CellInputs {
+                    series: vec![Series::new(&t, &v)],
+                    ..good.clone()
+                },
+                "cell 1, modality 0: timestamps not strictly increasing at 86400 s",
+            ),
+            (
+                CellInputs {
+                    series: vec![Series::new(&t[..2], &v)],
+                    ..good.clone()
+                },
+                "cell 1, modality 0: 2 times but 3 values",
+            ),
+            (
+                CellInputs {
+                    last_collected: &[],
+                    ..good.clone()
+                },
+                "cell 1 has no sensors",
+            ),
+            (
+                CellInputs {
+                    neighbours: &[1],
+                    ..good.clone()
+                },
+                "cell 1: invalid neighbour 1",
+            ),
+            (
+                CellInputs {
+                    series: vec![],
+                    ..good.clone()
+                },
+                "cell 1: 0 modality series, expected 1",
+            ),
+            (
+                CellInputs {
+                    probabilities: &[0.5, 0.5],
+                    ..good.clone()
+                },
+                "cell #1: 2 probabilities but cell #0 has none",
+            ),
+        ];
+        for (bad, want) in cases {
+            let e = score_cells(&[good.clone(), bad], DAY, &UtilityConfig::default()).unwrap_err();
+            assert!(e.to_string().contains(want), "{e} lacks {want:?}");
+        }
+        let nan = [f64::NAN, 1.0];
+        let bad = CellInputs {
+            series: vec![Series::new(&t[..2], &nan)],
+            ..good.clone()
+        };
+        assert!(score_cells_parallel(&[good, bad], DAY, &UtilityConfig::default()).is_err());
+    }
 }

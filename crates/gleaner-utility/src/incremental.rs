@@ -617,3 +617,293 @@ impl IncrementalState {
         &self.neighbours
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{CellInputs, Series, cell_series, score_cells};
+    use rand::seq::SliceRandom;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    const DAY: i64 = 86_400;
+
+    #[test]
+    fn running_stats_remove_inverts_push() {
+        let mut s = RunningStats::default();
+        for x in [1.0, 4.0, 2.0, 8.0] {
+            s.push(x);
+        }
+        s.remove(4.0);
+        assert_eq!(s.count(), 3);
+        assert!((s.mean() - 11.0 / 3.0).abs() < 1e-12);
+        let m = 11.0 / 3.0;
+        let m2 = (1.0f64 - m).powi(2) + (2.0f64 - m).powi(2) + (8.0f64 - m).powi(2);
+        assert!((s.variance() - m2 / 2.0).abs() < 1e-12);
+        let mut p = PairStats::default();
+        for (x, y) in [(1.0, 2.0), (2.0, 4.0), (3.0, 7.0), (9.0, -1.0)] {
+            p.push(x, y);
+        }
+        p.remove(9.0, -1.0);
+        let want = 5.0 / (2.0f64 * 38.0 / 3.0).sqrt();
+        assert!((p.correlation(3) - want).abs() < 1e-12);
+        assert_eq!(p.correlation(4), 0.0);
+    }
+
+    fn rel_close(got: f64, want: f64, what: &str) {
+        assert!(
+            (got - want).abs() <= 1e-9 * want.abs().max(1e-3),
+            "{what}: incremental {got} vs scratch {want}"
+        );
+    }
+
+    /// Random field: per cell, per sensor, per modality a daily series with gaps; some cells
+    /// lack a modality entirely; neighbours random and sometimes one-sided.
+    struct World {
+        sensors: Vec<usize>,
+        neighbours: Vec<Vec<usize>>,
+        /// (cell, sensor, modality, time, value)
+        readings: Vec<Reading>,
+        last: Vec<Vec<Option<i64>>>,
+    }
+
+    fn world(seed: u64) -> World {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let n = 25;
+        let sensors: Vec<usize> = (0..n).map(|_| rng.random_range(1..4)).collect();
+        let neighbours: Vec<Vec<usize>> = (0..n)
+            .map(|i| {
+                let mut nb: Vec<usize> = (0..rng.random_range(0..6))
+                    .map(|_| rng.random_range(0..n))
+                    .filter(|&j| j != i)
+                    .collect();
+                nb.sort_unstable();
+                nb.dedup();
+                nb
+            })
+            .collect();
+        let mut readings = Vec::new();
+        for (cell, &ns) in sensors.iter().enumerate() {
+            for modality in 0..3 {
+                if rng.random_bool(0.1) {
+                    continue; // the cell lacks this modality
+                }
+                let base = 0.2 + 0.1 * modality as f64;
+                for sensor in 0..ns {
+                    let mut x = base;
+                    for d in 0..40 {
+                        x += rng.random_range(-0.01..0.01);
+                        if rng.random_bool(0.7) {
+                            let jitter = rng.random_range(0..3600);
+                            readings.push(Reading {
+                                cell,
+                                sensor,
+                                modality,
+                                time: d * DAY + jitter,
+                                value: x,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        let last = sensors
+            .iter()
+            .map(|&ns| {
+                (0..ns)
+                    .map(|_| rng.random_bool(0.8).then(|| rng.random_range(0..41) * DAY))
+                    .collect()
+            })
+            .collect();
+        readings.shuffle(&mut rng);
+        World {
+            sensors,
+            neighbours,
+            readings,
+            last,
+        }
+    }
+
+    fn scratch(w: &World, t: i64, config: &UtilityConfig, p: &[Vec<f64>]) -> Vec<CellTerms> {
+        let n = w.sensors.len();
+        let series: Vec<Vec<OwnedSeries>> = (0..n)
+            .map(|cell| {
+                (0..3)
+                    .map(|m| {
+                        let per_sensor: Vec<(Vec<i64>, Vec<f64>)> = (0..w.sensors[cell])
+                            .map(|s| {
+                                let mut pts: Vec<(i64, f64)> = w
+                                    .readings
+                                    .iter()
+                                    .filter(|r| r.cell == cell && r.modality == m && r.sensor == s)
+                                    .map(|r| (r.time, r.value))
+                                    .collect();
+                                pts.sort_by_key(|p| p.0);
+                                pts.into_iter().unzip()
+                            })
+                            .collect();
+                        let views: Vec<Series> =
+                            per_sensor.iter().map(|(t, v)| Series::new(t, v)).collect();
+                        cell_series(&views, TimeGrid::DAILY)
+                    })
+                    .collect()
+            })
+            .collect();
+        let inputs: Vec<CellInputs> = (0..n)
+            .map(|i| CellInputs {
+                last_collected: &w.last[i],
+                series: series[i].iter().map(OwnedSeries::as_series).collect(),
+                neighbours: &w.neighbours[i],
+                probabilities: p.get(i).map_or(&[][..], Vec::as_slice),
+            })
+            .collect();
+        score_cells(&inputs, t, config).unwrap()
+    }
+
+    #[test]
+    fn incremental_equals_scratch_on_random_data() {
+        let config = UtilityConfig {
+            min_overlap: 5,
+            ..UtilityConfig::default()
+        };
+        for seed in 0..6 {
+            let w = world(seed);
+            let mut state =
+                IncrementalState::new(&w.sensors, &w.neighbours, 3, TimeGrid::DAILY).unwrap();
+            for (cell, ls) in w.last.iter().enumerate() {
+                for (s, l) in ls.iter().enumerate() {
+                    if let Some(l) = l {
+                        state.record_collection(cell, s, *l).unwrap();
+                    }
+                }
+            }
+            // Out of order across cells and sensors, in uneven batches.
+            let mut rng = ChaCha8Rng::seed_from_u64(seed + 100);
+            let mut rest = &w.readings[..];
+            while !rest.is_empty() {
+                let k = rng.random_range(1..50).min(rest.len());
+                state.add_readings(&rest[..k]).unwrap();
+                rest = &rest[k..];
+            }
+            let p: Vec<Vec<f64>> = (0..w.sensors.len())
+                .map(|i| vec![0.1 * (i % 5) as f64 + 0.1, 0.9 - 0.1 * (i % 5) as f64])
+                .collect();
+            let t = 41 * DAY;
+            let want = scratch(&w, t, &config, &p);
+            let got = state.score(t, &config, &p).unwrap();
+            let mut nonzero_r = 0;
+            for (i, (g, e)) in got.iter().zip(&want).enumerate() {
+                let what = format!("seed {seed} cell {i}");
+                for (name, a, b) in [
+                    ("F", g.f, e.f),
+                    ("R", g.r, e.r),
+                    ("A", g.a, e.a),
+                    ("U", g.u, e.u),
+                    ("S", g.s, e.s),
+                ] {
+                    rel_close(a, b, &format!("{what} {name}"));
+                }
+                for m in 0..3 {
+                    assert_eq!(
+                        g.r_by_modality[m].is_some(),
+                        e.r_by_modality[m].is_some(),
+                        "{what}"
+                    );
+                    if let (Some(a), Some(b)) = (g.a_by_modality[m], e.a_by_modality[m]) {
+                        rel_close(a, b, &format!("{what} A^{m}"));
+                    }
+                }
+                nonzero_r += usize::from(g.r > 0.0);
+                let st = state.series_stats(i, 0);
+                let s = state.cell_series(i, 0);
+                if !s.is_empty() {
+                    let mn = s.values.iter().copied().fold(f64::INFINITY, f64::min);
+                    let mx = s.values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    assert_eq!((st.min, st.max), (mn, mx), "{what} min/max");
+                    assert_eq!(st.all.count() as usize, s.len());
+                    assert_eq!(st.latest.map(|l| l.0), s.times.last().copied());
+                }
+            }
+            assert!(
+                nonzero_r > 3,
+                "seed {seed}: the test should exercise redundancy"
+            );
+        }
+    }
+
+    #[test]
+    fn retention_keeps_statistics_exact_and_rejects_old_readings() {
+        let w = world(7);
+        let mut readings = w.readings.clone();
+        readings.sort_by_key(|r| r.time);
+        let mut state =
+            IncrementalState::new(&w.sensors, &w.neighbours, 3, TimeGrid::DAILY).unwrap();
+        state.set_retention(Some(5 * DAY));
+        for chunk in readings.chunks(97) {
+            state.add_readings(chunk).unwrap();
+        }
+        let mut full =
+            IncrementalState::new(&w.sensors, &w.neighbours, 3, TimeGrid::DAILY).unwrap();
+        full.add_readings(&readings).unwrap();
+        let config = UtilityConfig {
+            min_overlap: 5,
+            ..UtilityConfig::default()
+        };
+        let a = state.score(41 * DAY, &config, &[]).unwrap();
+        let b = full.score(41 * DAY, &config, &[]).unwrap();
+        for (x, y) in a.iter().zip(&b) {
+            rel_close(x.s, y.s, "retention");
+        }
+        assert!(state.cell_series(0, 0).len() <= 7);
+        let old = Reading {
+            cell: 0,
+            sensor: 0,
+            modality: 0,
+            time: 0,
+            value: 1.0,
+        };
+        assert!(matches!(
+            state.add_reading(old),
+            Err(UtilityError::BeyondRetention { .. })
+        ));
+    }
+
+    #[test]
+    fn bad_readings_and_windows_are_rejected() {
+        let mut s = IncrementalState::new(&[1, 2], &[vec![1], vec![]], 1, TimeGrid::DAILY).unwrap();
+        let ok = Reading {
+            cell: 1,
+            sensor: 1,
+            modality: 0,
+            time: 0,
+            value: 1.0,
+        };
+        for bad in [
+            Reading { cell: 2, ..ok },
+            Reading { sensor: 2, ..ok },
+            Reading { modality: 1, ..ok },
+            Reading {
+                value: f64::NAN,
+                ..ok
+            },
+        ] {
+            assert!(s.add_readings(&[ok, bad]).is_err(), "{bad:?}");
+        }
+        assert_eq!(
+            s.series_stats(1, 0).all.count(),
+            0,
+            "a failed batch changes nothing"
+        );
+        let windowed = UtilityConfig {
+            window: HistoryWindow::Last { seconds: DAY },
+            ..Default::default()
+        };
+        assert_eq!(
+            s.score(0, &windowed, &[]),
+            Err(UtilityError::WindowNotIncremental(DAY))
+        );
+        assert!(IncrementalState::new(&[1], &[vec![0]], 1, TimeGrid::DAILY).is_err());
+        assert!(IncrementalState::new(&[0], &[vec![]], 1, TimeGrid::DAILY).is_err());
+        assert!(s.record_collection(0, 1, 5).is_err());
+    }
+}

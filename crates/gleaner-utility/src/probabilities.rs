@@ -87,3 +87,56 @@ pub fn validate_probabilities(
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(rows: &[(&str, &[f64])], expected_error: Option<&str>) {
+        let ids: Vec<String> = ["a", "b"].iter().map(|s| s.to_string()).collect();
+        let rows: Vec<(String, Vec<f64>)> = rows
+            .iter()
+            .map(|(c, p)| (c.to_string(), p.to_vec()))
+            .collect();
+        match (validate_probabilities(&ids, &rows), expected_error) {
+            (Ok(p), None) => assert_eq!(p.len(), 2),
+            (Err(e), Some(want)) => assert!(e.to_string().contains(want), "{e} lacks {want:?}"),
+            (got, want) => panic!("got {got:?}, wanted error {want:?}"),
+        }
+    }
+
+    #[test]
+    fn validation() {
+        check(&[("a", &[0.5, 0.5]), ("b", &[0.0, 1.0])], None);
+        check(&[("a", &[0.5, 0.5 + 1e-7]), ("b", &[0.0, 1.0])], None);
+        check(&[("a", &[0.5, 0.5])], Some("cell b: no probabilities"));
+        check(
+            &[("a", &[0.5, 0.5]), ("c", &[0.5, 0.5])],
+            Some("cell c: unknown"),
+        );
+        check(
+            &[("a", &[0.5, 0.5]), ("a", &[0.5, 0.5])],
+            Some("cell a: listed more than once"),
+        );
+        check(
+            &[("a", &[0.5, 0.5]), ("b", &[0.2, 0.3, 0.5])],
+            Some("cell b: 3 probabilities, expected 2"),
+        );
+        check(
+            &[("a", &[1.5, -0.5]), ("b", &[0.5, 0.5])],
+            Some("cell a: probability of class 2 is -0.5"),
+        );
+        check(
+            &[("a", &[0.5, 0.4]), ("b", &[0.5, 0.5])],
+            Some("cell a: probabilities sum to 0.9"),
+        );
+        check(
+            &[("a", &[f64::NAN, 1.0]), ("b", &[0.5, 0.5])],
+            Some("cell a: probability of class 1 is NaN"),
+        );
+        check(
+            &[("a", &[1.0]), ("b", &[1.0])],
+            Some("cell a: need at least 2 classes"),
+        );
+    }
+}

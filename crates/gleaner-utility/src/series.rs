@@ -77,6 +77,16 @@ impl OwnedSeries {
     pub fn as_series(&self) -> Series<'_> {
         Series::new(&self.times, &self.values)
     }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.times.len()
+    }
+
+    /// True when the series has no point.
+    pub fn is_empty(&self) -> bool {
+        self.times.is_empty()
+    }
 }
 
 /// The dataset's sampling grid: slots of `step_s` seconds starting at `origin` (s). Every
@@ -152,4 +162,95 @@ pub fn cell_series(sensors: &[Series<'_>], grid: TimeGrid) -> OwnedSeries {
         out.values.push(sum / n as f64);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn check(sensors: &[(&[i64], &[f64])], grid: TimeGrid, expected: &[(i64, f64)]) {
+        let views: Vec<Series> = sensors.iter().map(|(t, v)| Series::new(t, v)).collect();
+        let s = cell_series(&views, grid);
+        let got: Vec<(i64, f64)> = s
+            .times
+            .iter()
+            .copied()
+            .zip(s.values.iter().copied())
+            .collect();
+        assert_eq!(got.len(), expected.len(), "{got:?}");
+        for (g, e) in got.iter().zip(expected) {
+            assert!(
+                g.0 == e.0 && (g.1 - e.1).abs() < 1e-12,
+                "{got:?} != {expected:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn cell_series_by_hand() {
+        let daily = TimeGrid::DAILY;
+        // Mean over the sensors having a reading; missing is skipped.
+        check(
+            &[(&[0, 86_400], &[1.0, 2.0]), (&[0], &[3.0])],
+            daily,
+            &[(0, 2.0), (86_400, 2.0)],
+        );
+        // Readings a few seconds apart share a slot; NaN counts as missing.
+        check(
+            &[(&[10, 86_410], &[1.0, f64::NAN]), (&[20], &[2.0])],
+            daily,
+            &[(0, 1.5)],
+        );
+        // Hourly grid keeps them apart; negative times snap down.
+        check(
+            &[(&[-10, 3_700], &[1.0, 2.0])],
+            TimeGrid::HOURLY,
+            &[(-3_600, 1.0), (3_600, 2.0)],
+        );
+        check(&[], daily, &[]);
+    }
+
+    #[test]
+    fn series_windows() {
+        let (t, v) = (vec![0, 10, 20, 30], vec![1.0, 2.0, 3.0, 4.0]);
+        let s = Series::new(&t, &v);
+        assert_eq!(s.between(10, 20).values, &[2.0, 3.0]);
+        assert_eq!(s.between(11, 19).len(), 0);
+        assert_eq!(s.between(40, 10).len(), 0);
+        assert_eq!(s.last(), Some((30, 4.0)));
+        assert_eq!(s.value_at(20), Some(3.0));
+        assert_eq!(s.value_at(21), None);
+    }
+
+    proptest! {
+        /// Missing readings never count as zeros: the cell value is the mean of the present
+        /// readings only, whatever is missing.
+        #[test]
+        fn missing_never_counts_as_zero(
+            rows in proptest::collection::vec(proptest::collection::vec(proptest::option::of(1.0f64..2.0), 1..5), 1..20)
+        ) {
+            let n_sensors = rows.iter().map(Vec::len).max().unwrap_or(0);
+            let mut data: Vec<(Vec<i64>, Vec<f64>)> = vec![(vec![], vec![]); n_sensors];
+            for (d, row) in rows.iter().enumerate() {
+                for (k, v) in row.iter().enumerate() {
+                    if let Some(v) = v {
+                        data[k].0.push(d as i64 * 86_400);
+                        data[k].1.push(*v);
+                    }
+                }
+            }
+            let views: Vec<Series> = data.iter().map(|(t, v)| Series::new(t, v)).collect();
+            let s = cell_series(&views, TimeGrid::DAILY);
+            for (t, v) in s.times.iter().zip(&s.values) {
+                // All readings are in [1, 2): a zero counted in would drag the mean below 1.
+                prop_assert!(*v >= 1.0 && *v < 2.0);
+                let present: Vec<f64> = rows[(*t / 86_400) as usize].iter().flatten().copied().collect();
+                let mean = present.iter().sum::<f64>() / present.len() as f64;
+                prop_assert!((v - mean).abs() < 1e-12);
+            }
+            let expected_days = rows.iter().filter(|r| r.iter().any(Option::is_some)).count();
+            prop_assert_eq!(s.len(), expected_days);
+        }
+    }
 }

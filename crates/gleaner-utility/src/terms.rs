@@ -215,3 +215,200 @@ pub fn uncertainty(probabilities: &[f64]) -> f64 {
 pub fn score(f: f64, a: f64, u: f64, r: f64, config: &UtilityConfig) -> f64 {
     config.alpha * f + config.beta * a + config.gamma * u - config.delta * r
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    const DAY: i64 = 86_400;
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-12 * b.abs().max(1.0)
+    }
+
+    /// Freshness of `last` (days before t, None = never) with a 3-day half-life.
+    fn check_freshness(last_days_ago: &[Option<i64>], expected: f64) {
+        let t = 100 * DAY;
+        let last: Vec<Option<i64>> = last_days_ago
+            .iter()
+            .map(|d| d.map(|d| t - d * DAY))
+            .collect();
+        let f = freshness(t, &last, std::f64::consts::LN_2 / (3 * DAY) as f64);
+        assert!(close(f, expected), "{last_days_ago:?}: {f} != {expected}");
+    }
+
+    #[test]
+    fn freshness_by_hand() {
+        check_freshness(&[Some(0)], 0.0);
+        check_freshness(&[Some(3)], 0.5);
+        check_freshness(&[Some(6)], 0.75);
+        check_freshness(&[None], 1.0);
+        check_freshness(&[Some(3), None], 0.75);
+        check_freshness(&[Some(-2)], 0.0); // collected "after" t: age 0
+        check_freshness(&[], 1.0);
+    }
+
+    fn check_correlation(
+        a: (&[i64], &[f64]),
+        b: (&[i64], &[f64]),
+        min_overlap: usize,
+        expected: f64,
+    ) {
+        let r = series_correlation(Series::new(a.0, a.1), Series::new(b.0, b.1), min_overlap);
+        assert!(close(r, expected), "{r} != {expected}");
+        let r2 = series_correlation(Series::new(b.0, b.1), Series::new(a.0, a.1), min_overlap);
+        assert_eq!(r, r2, "not symmetric");
+    }
+
+    #[test]
+    fn correlation_by_hand() {
+        // x = 1,2,3 ; y = 2,4,7: sxy = 5, sxx = 2, syy = 12.667 -> 5/sqrt(25.333)
+        let want = 5.0 / (2.0f64 * 38.0 / 3.0).sqrt();
+        check_correlation(
+            (&[0, 1, 2], &[1.0, 2.0, 3.0]),
+            (&[0, 1, 2], &[2.0, 4.0, 7.0]),
+            3,
+            want,
+        );
+        // Same through gaps: only the common timestamps 0, 2, 4 count.
+        check_correlation(
+            (&[0, 1, 2, 4], &[1.0, 100.0, 2.0, 3.0]),
+            (&[0, 2, 3, 4], &[2.0, 4.0, -50.0, 7.0]),
+            3,
+            want,
+        );
+        // Too few common points, constant series, perfect anti-correlation.
+        check_correlation(
+            (&[0, 1, 2], &[1.0, 2.0, 3.0]),
+            (&[0, 1, 2], &[2.0, 4.0, 7.0]),
+            4,
+            0.0,
+        );
+        check_correlation(
+            (&[0, 1, 2], &[0.1, 0.1, 0.1]),
+            (&[0, 1, 2], &[2.0, 4.0, 7.0]),
+            3,
+            0.0,
+        );
+        check_correlation(
+            (&[0, 1, 2], &[1.0, 2.0, 3.0]),
+            (&[0, 1, 2], &[3.0, 2.0, 1.0]),
+            3,
+            -1.0,
+        );
+    }
+
+    #[test]
+    fn redundancy_by_hand() {
+        let t: Vec<i64> = (0..10).collect();
+        let x: Vec<f64> = (0..10).map(|k| (k * k) as f64).collect();
+        let neg: Vec<f64> = x.iter().map(|v| -v).collect();
+        let own = Series::new(&t, &x);
+        // Identical (1), anti-correlated (clipped to 0), lacking the modality (0): 1/3.
+        let r = redundancy(own, &[own, Series::new(&t, &neg), Series::empty()], 10);
+        assert!(close(r, 1.0 / 3.0), "{r}");
+        assert_eq!(redundancy(own, &[], 10), 0.0);
+        // Only 9 common points: below min_overlap.
+        assert_eq!(redundancy(own, &[Series::new(&t[1..], &x[1..])], 10), 0.0);
+    }
+
+    #[test]
+    fn anomaly_by_hand() {
+        let t = [0, 1, 2, 3];
+        // Past 1, 2, 3: mean 2, sample std 1; latest 6 -> 4 / (1 + eps).
+        assert!(close(
+            anomaly(Series::new(&t, &[1.0, 2.0, 3.0, 6.0]), 1e-6),
+            4.0 / (1.0 + 1e-6)
+        ));
+        // Past 2, 4 (two points): mean 3, std sqrt(2); latest 3 -> 0.
+        assert_eq!(anomaly(Series::new(&t[..3], &[2.0, 4.0, 3.0]), 1e-6), 0.0);
+        // One past point: 0.
+        assert_eq!(anomaly(Series::new(&t[..2], &[2.0, 40.0]), 1e-6), 0.0);
+        // Constant past: |x - mu| / epsilon.
+        assert!(close(
+            anomaly(Series::new(&t, &[1.0, 1.0, 1.0, 1.5]), 0.01),
+            50.0
+        ));
+    }
+
+    #[test]
+    fn uncertainty_by_hand() {
+        assert_eq!(uncertainty(&[1.0, 0.0, 0.0]), 0.0);
+        assert!(close(uncertainty(&[1.0 / 3.0; 3]), 1.0));
+        let p = [0.2, 0.5, 0.3];
+        let h = -(0.2f64 * 0.2f64.ln() + 0.5 * 0.5f64.ln() + 0.3 * 0.3f64.ln()) / 3f64.ln();
+        assert!(close(uncertainty(&p), h));
+        assert!(close(uncertainty(&[0.5, 0.5, 0.0]), 2f64.ln() / 3f64.ln()));
+        assert_eq!(uncertainty(&[1.0]), 0.0);
+    }
+
+    #[test]
+    fn score_by_hand() {
+        let c = UtilityConfig {
+            alpha: 2.0,
+            beta: 0.5,
+            gamma: 3.0,
+            delta: 4.0,
+            ..UtilityConfig::default()
+        };
+        assert!(close(score(0.5, 2.0, 0.1, 0.25, &c), 1.0 + 1.0 + 0.3 - 1.0));
+    }
+
+    fn series_strategy() -> impl Strategy<Value = (Vec<i64>, Vec<f64>)> {
+        proptest::collection::btree_map(0i64..60, -100.0f64..100.0, 0..40)
+            .prop_map(|m| m.into_iter().unzip())
+    }
+
+    proptest! {
+        #[test]
+        fn pearson_is_symmetric_and_bounded(
+            pairs in proptest::collection::vec((-1e3f64..1e3, -1e3f64..1e3), 0..50)
+        ) {
+            let (x, y): (Vec<f64>, Vec<f64>) = pairs.into_iter().unzip();
+            let a = pearson(&x, &y);
+            prop_assert_eq!(a, pearson(&y, &x));
+            if let Some(r) = a {
+                prop_assert!((-1.0..=1.0).contains(&r));
+            }
+        }
+
+        #[test]
+        fn terms_stay_in_range(
+            a in series_strategy(),
+            nbs in proptest::collection::vec(series_strategy(), 0..4),
+            ages in proptest::collection::vec(proptest::option::of(0i64..10_000_000), 1..5),
+            raw_p in proptest::collection::vec(0.0f64..1.0, 2..6),
+            min_overlap in 2usize..12,
+        ) {
+            let own = Series::new(&a.0, &a.1);
+            let views: Vec<Series> = nbs.iter().map(|(t, v)| Series::new(t, v)).collect();
+            let r = redundancy(own, &views, min_overlap);
+            prop_assert!((0.0..=1.0).contains(&r));
+            prop_assert!(anomaly(own, 1e-6) >= 0.0);
+            let t = 10_000_000;
+            let last: Vec<Option<i64>> = ages.iter().map(|a| a.map(|a| t - a)).collect();
+            let f = freshness(t, &last, 1e-5);
+            prop_assert!((0.0..=1.0).contains(&f));
+            let total: f64 = raw_p.iter().sum();
+            if total > 0.0 {
+                let p: Vec<f64> = raw_p.iter().map(|x| x / total).collect();
+                let u = uncertainty(&p);
+                prop_assert!((0.0..=1.0).contains(&u));
+            }
+            for v in &views {
+                let c = series_correlation(own, *v, min_overlap);
+                prop_assert!((-1.0..=1.0).contains(&c));
+                prop_assert_eq!(c, series_correlation(*v, own, min_overlap));
+            }
+        }
+
+        #[test]
+        fn uniform_is_one_and_one_hot_is_zero(k in 2usize..20, hot in 0usize..20) {
+            prop_assert!((uncertainty(&vec![1.0 / k as f64; k]) - 1.0).abs() < 1e-12);
+            let mut p = vec![0.0; k];
+            p[hot % k] = 1.0;
+            prop_assert_eq!(uncertainty(&p), 0.0);
+        }
+    }
+}
