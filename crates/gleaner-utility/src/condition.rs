@@ -278,7 +278,7 @@ impl TrainingSet {
     }
 }
 
-/// Held-out performance of a model, next to the majority-class baseline.
+/// Held-out performance of a model, next to the majority-class and persistence baselines.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Evaluation {
     /// Number of rows evaluated.
@@ -291,6 +291,8 @@ pub struct Evaluation {
     pub baseline_accuracy: f64,
     /// Log-loss of predicting the training class frequencies everywhere (nats).
     pub baseline_log_loss: f64,
+    /// Accuracy of persistence: predicting the class of the last collected value.
+    pub persistence_accuracy: f64,
 }
 
 /// A trained multinomial logistic regression over [`FEATURE_NAMES`].
@@ -570,6 +572,7 @@ impl ConditionModel {
             .max_by(|&a, &b| self.prior[a].total_cmp(&self.prior[b]).then(b.cmp(&a)))
             .unwrap_or(0);
         let (mut hits, mut loss, mut base_hits, mut base_loss) = (0usize, 0.0, 0usize, 0.0);
+        let mut persistence_hits = 0usize;
         for (x, &y) in set.features.iter().zip(&set.labels) {
             let p = self.predict_features(x);
             let best = (0..self.n_classes)
@@ -578,6 +581,7 @@ impl ConditionModel {
             hits += usize::from(best == y);
             loss -= p.get(y).copied().unwrap_or(0.0).max(1e-15).ln();
             base_hits += usize::from(majority == y);
+            persistence_hits += usize::from(class_of(x[0], &self.thresholds) == y);
             base_loss -= self.prior.get(y).copied().unwrap_or(0.0).max(1e-15).ln();
         }
         let nf = n.max(1) as f64;
@@ -587,6 +591,7 @@ impl ConditionModel {
             log_loss: loss / nf,
             baseline_accuracy: base_hits as f64 / nf,
             baseline_log_loss: base_loss / nf,
+            persistence_accuracy: persistence_hits as f64 / nf,
         }
     }
 
