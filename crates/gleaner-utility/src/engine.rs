@@ -3,7 +3,9 @@
 use rayon::prelude::*;
 
 use crate::probabilities::check_distribution;
-use crate::terms::{anomaly, freshness, redundancy, score, uncertainty};
+use crate::terms::{
+    Moments, aligned_correlation, anomaly, freshness, score, series_correlation, uncertainty,
+};
 use crate::{Series, UtilityConfig, UtilityError};
 use gleaner_field::UnixSeconds;
 
@@ -149,9 +151,31 @@ pub(crate) fn check_series(
     Ok(())
 }
 
-/// Terms of cell `i` (inputs already validated).
+/// Moments of every cell's windowed series, cell-major (cell × modality).
+fn all_moments(
+    cells: &[CellInputs<'_>],
+    t: UnixSeconds,
+    config: &UtilityConfig,
+    parallel: bool,
+) -> Vec<Moments> {
+    let from = config.window.start(t);
+    let one = |c: &CellInputs<'_>| -> Vec<Moments> {
+        c.series
+            .iter()
+            .map(|s| Moments::of(s.between(from, t).values))
+            .collect()
+    };
+    if parallel {
+        cells.par_iter().flat_map_iter(one).collect()
+    } else {
+        cells.iter().flat_map(one).collect()
+    }
+}
+
+/// Terms of cell `i` (inputs already validated; `moments` from [`all_moments`]).
 fn cell_terms(
     cells: &[CellInputs<'_>],
+    moments: &[Moments],
     i: usize,
     t: UnixSeconds,
     config: &UtilityConfig,
@@ -162,7 +186,6 @@ fn cell_terms(
     let f = freshness(t, cell.last_collected, config.lambda_per_s());
     let mut r_by = Vec::with_capacity(n_modalities);
     let mut a_by = Vec::with_capacity(n_modalities);
-    let mut neighbour_series = Vec::with_capacity(cell.neighbours.len());
     for m in 0..n_modalities {
         let own = cell.series[m].between(from, t);
         if own.is_empty() {
@@ -170,13 +193,30 @@ fn cell_terms(
             a_by.push(None);
             continue;
         }
-        neighbour_series.clear();
-        neighbour_series.extend(
-            cell.neighbours
-                .iter()
-                .map(|&j| cells[j].series[m].between(from, t)),
-        );
-        r_by.push(Some(redundancy(own, &neighbour_series, config.min_overlap)));
+        let own_moments = moments[i * n_modalities + m];
+        let mut total = 0.0;
+        for &j in cell.neighbours {
+            let other = cells[j].series[m].between(from, t);
+            let corr = if own.times == other.times {
+                let other_moments = moments[j * n_modalities + m];
+                aligned_correlation(
+                    own.values,
+                    own_moments,
+                    other.values,
+                    other_moments,
+                    config.min_overlap,
+                )
+            } else {
+                series_correlation(own, other, config.min_overlap)
+            };
+            total += corr.max(0.0);
+        }
+        let r = if cell.neighbours.is_empty() {
+            0.0
+        } else {
+            (total / cell.neighbours.len() as f64).clamp(0.0, 1.0)
+        };
+        r_by.push(Some(r));
         a_by.push(Some(anomaly(own, config.epsilon)));
     }
     finish_terms(f, r_by, a_by, cell.probabilities, config)
@@ -235,8 +275,9 @@ pub fn score_cells(
     config: &UtilityConfig,
 ) -> Result<Vec<CellTerms>, UtilityError> {
     let n_modalities = validate(cells, config, false)?;
+    let moments = all_moments(cells, t, config, false);
     Ok((0..cells.len())
-        .map(|i| cell_terms(cells, i, t, config, n_modalities))
+        .map(|i| cell_terms(cells, &moments, i, t, config, n_modalities))
         .collect())
 }
 
@@ -247,9 +288,10 @@ pub fn score_cells_parallel(
     config: &UtilityConfig,
 ) -> Result<Vec<CellTerms>, UtilityError> {
     let n_modalities = validate(cells, config, true)?;
+    let moments = all_moments(cells, t, config, true);
     Ok((0..cells.len())
         .into_par_iter()
-        .map(|i| cell_terms(cells, i, t, config, n_modalities))
+        .map(|i| cell_terms(cells, &moments, i, t, config, n_modalities))
         .collect())
 }
 

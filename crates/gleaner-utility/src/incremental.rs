@@ -581,30 +581,39 @@ impl IncrementalState {
         Ok((0..n)
             .map(|i| {
                 let f = freshness(t, &self.last_collected[i], lambda);
+                let nbs = &self.neighbour_pair[i];
+                let mut r_sum = [0.0; 8];
+                let mut r_sum_vec;
+                let r_sum: &mut [f64] = if m_count <= 8 {
+                    &mut r_sum[..m_count]
+                } else {
+                    r_sum_vec = vec![0.0; m_count];
+                    &mut r_sum_vec
+                };
+                for &p in nbs {
+                    let pairs = &self.pairs[p * m_count..(p + 1) * m_count];
+                    for (acc, pair) in r_sum.iter_mut().zip(pairs) {
+                        *acc += pair.correlation(config.min_overlap).max(0.0);
+                    }
+                }
                 let mut r_by = Vec::with_capacity(m_count);
                 let mut a_by = Vec::with_capacity(m_count);
-                let nbs = &self.neighbour_pair[i];
-                for m in 0..m_count {
-                    let st = &self.stats[i * m_count + m];
-                    let Some(a) = st.anomaly(config.epsilon) else {
-                        r_by.push(None);
-                        a_by.push(None);
-                        continue;
-                    };
-                    let r = if nbs.is_empty() {
-                        0.0
-                    } else {
-                        nbs.iter()
-                            .map(|&p| {
-                                self.pairs[p * m_count + m]
-                                    .correlation(config.min_overlap)
-                                    .max(0.0)
-                            })
-                            .sum::<f64>()
-                            / nbs.len() as f64
-                    };
-                    r_by.push(Some(r.clamp(0.0, 1.0)));
-                    a_by.push(Some(a));
+                for (m, &total) in r_sum.iter().enumerate() {
+                    match self.stats[i * m_count + m].anomaly(config.epsilon) {
+                        None => {
+                            r_by.push(None);
+                            a_by.push(None);
+                        }
+                        Some(a) => {
+                            let r = if nbs.is_empty() {
+                                0.0
+                            } else {
+                                (total / nbs.len() as f64).clamp(0.0, 1.0)
+                            };
+                            r_by.push(Some(r));
+                            a_by.push(Some(a));
+                        }
+                    }
                 }
                 let p = probabilities.get(i).map_or(&[][..], Vec::as_slice);
                 finish_terms(f, r_by, a_by, p, config)
