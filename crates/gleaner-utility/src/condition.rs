@@ -13,13 +13,16 @@
 //! | 2 | x_l · a | unit·days |
 //! | 3 | trend: least-squares slope over the last `trend_points` collected points | unit/day |
 //! | 4 | trend · a (linear extrapolation) | unit |
-//! | 5, 6 | season: sin, cos of 2π·(t in days)/365.2425 (day-of-year phase) | — |
+//! | 5, 6 | season: sin, cos of 2π·(t in days)/365.2425 (day-of-year phase; 0 if disabled) | — |
 //! | 7 | mean of the neighbours' latest values (x_l when none has data) | unit |
 //! | 8 | that mean · a | unit·days |
+//! | 9.. | per threshold θ_k: (x_l − θ_k) / √(a + 0.5) | unit/√day |
 //!
 //! The interactions with the age let the model learn that an old value says less than a fresh
-//! one, so the predicted distribution flattens (U grows) with staleness; values near a class
-//! threshold give split probabilities too.
+//! one, so the predicted distribution flattens (U grows) with staleness. The threshold
+//! distances are what a random walk from the last value would give (its spread grows as
+//! √age): the logits are sharp near a fresh value and soften as it ages, and values near a
+//! class threshold give split probabilities.
 //!
 //! Training set: for every cell and every time t of its series inside the training period, and
 //! for every lag L in `lags_days`, the features are computed as if the data known were only the
@@ -29,13 +32,15 @@
 use crate::{DAY_S, Series, UtilityError};
 use gleaner_field::UnixSeconds;
 
-/// Number of features.
-const D: usize = 9;
-/// Parameters per class: bias + features.
-const F: usize = D + 1;
+/// Number of features before the threshold distances.
+const BASE: usize = 9;
 
-/// Names of the model's features, in order (see the module docs for their units).
-pub const FEATURE_NAMES: [&str; D] = [
+/// Age offset in the threshold distances, days (keeps them finite at age 0).
+const AGE_OFFSET_DAYS: f64 = 0.5;
+
+/// Names of the model's first features, in order (see the module docs for their units); the
+/// K − 1 threshold distances follow.
+pub const FEATURE_NAMES: [&str; BASE] = [
     "last_value",
     "age_days",
     "last_value_x_age",
@@ -68,7 +73,10 @@ pub struct ConditionConfig {
     pub lags_days: Vec<i64>,
     /// Points in the trend's least-squares fit (default 5, >= 2).
     pub trend_points: usize,
-    /// L2 penalty on the standardised weights (default 1e-3; the bias gets 1e-6).
+    /// Use the season features (default true, as SPEC §2 lists them; with only a couple of
+    /// training years they can learn one year's weather, see the crate's CAF evaluation).
+    pub season: bool,
+    /// L2 penalty on the standardised weights (default 1e-4; the bias gets 1e-6).
     pub l2: f64,
     /// Newton iterations at most (default 100).
     pub max_iterations: usize,
@@ -83,7 +91,8 @@ impl Default for ConditionConfig {
             thresholds: ClassThresholds::Quantiles,
             lags_days: vec![1, 2, 3, 5, 7, 10, 14],
             trend_points: 5,
-            l2: 1e-3,
+            season: true,
+            l2: 1e-4,
             max_iterations: 100,
             tolerance: 1e-9,
         }
@@ -177,21 +186,26 @@ fn trend_per_day(s: Series<'_>, k: usize) -> f64 {
     if sxx > 0.0 { sxy / sxx } else { 0.0 }
 }
 
-/// The model's features (see [`FEATURE_NAMES`]) for a cell at time `t` (s) when only the
-/// points at or before `known_until` (s) are known: `cell` is the cell's series of the class
-/// modality, `neighbours` the neighbours' series. `None` when the cell has no known point.
+/// The model's features (see [`FEATURE_NAMES`], then one distance per threshold) for a cell at
+/// time `t` (s) when only the points at or before `known_until` (s) are known: `cell` is the
+/// cell's series of the class modality, `neighbours` the neighbours' series, `thresholds` the
+/// class thresholds (unit); `config` gives the trend length and whether the season is used.
+/// `None` when the cell has no known point.
 pub fn condition_features(
     cell: Series<'_>,
     neighbours: &[Series<'_>],
     t: UnixSeconds,
     known_until: UnixSeconds,
-    trend_points: usize,
-) -> Option<[f64; D]> {
+    thresholds: &[f64],
+    config: &ConditionConfig,
+) -> Option<Vec<f64>> {
+    let trend_points = config.trend_points;
     let known = cell.between(UnixSeconds::MIN, known_until);
     let (t_last, x_last) = known.last()?;
     let age = (t - t_last).max(0) as f64 / DAY_S;
     let trend = trend_per_day(known, trend_points);
     let phase = std::f64::consts::TAU * (t as f64 / DAY_S) / 365.2425;
+    let season = if config.season { 1.0 } else { 0.0 };
     let (mut sum, mut count) = (0.0, 0usize);
     for nb in neighbours {
         if let Some((_, v)) = nb.between(UnixSeconds::MIN, known_until).last() {
@@ -204,24 +218,28 @@ pub fn condition_features(
     } else {
         x_last
     };
-    Some([
+    let mut out = Vec::with_capacity(BASE + thresholds.len());
+    out.extend_from_slice(&[
         x_last,
         age,
         x_last * age,
         trend,
         trend * age,
-        phase.sin(),
-        phase.cos(),
+        season * phase.sin(),
+        season * phase.cos(),
         nb_mean,
         nb_mean * age,
-    ])
+    ]);
+    let spread = (age + AGE_OFFSET_DAYS).sqrt();
+    out.extend(thresholds.iter().map(|th| (x_last - th) / spread));
+    Some(out)
 }
 
 /// Rows for training or evaluating the model (see the module docs for the construction).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct TrainingSet {
     /// Feature rows.
-    pub features: Vec<[f64; D]>,
+    pub features: Vec<Vec<f64>>,
     /// Class of the true value, 0-based.
     pub labels: Vec<usize>,
     /// Label time of each row, s.
@@ -254,7 +272,7 @@ impl TrainingSet {
                 for &lag in &config.lags_days {
                     let known = t - lag * 86_400;
                     if let Some(f) =
-                        condition_features(*cell, &nb_series, t, known, config.trend_points)
+                        condition_features(*cell, &nb_series, t, known, thresholds, config)
                     {
                         set.features.push(f);
                         set.labels.push(class_of(x, thresholds));
@@ -315,10 +333,10 @@ pub struct Evaluation {
 pub struct ConditionModel {
     thresholds: Vec<f64>,
     n_classes: usize,
-    trend_points: usize,
-    mean: [f64; D],
-    scale: [f64; D],
-    /// Class-major: weights[k * F + 0] is the bias, weights[k * F + 1 + f] feature f's weight.
+    config: ConditionConfig,
+    mean: Vec<f64>,
+    scale: Vec<f64>,
+    /// Class-major with a stride of (features + 1): the bias, then the features' weights.
     weights: Vec<f64>,
     prior: Vec<f64>,
 }
@@ -348,6 +366,28 @@ impl ConditionModel {
         Self::train(&set, thresholds, config)
     }
 
+    /// Trains on the label times [`from`, `split`) and evaluates on [`split`, `to`) (s): the
+    /// held-out rows use the training thresholds; their features may use any data before the
+    /// label time minus the lag, as in operation.
+    pub fn fit_and_evaluate(
+        cells: &[Series<'_>],
+        neighbours: &[Vec<usize>],
+        from: UnixSeconds,
+        split: UnixSeconds,
+        to: UnixSeconds,
+        config: &ConditionConfig,
+    ) -> Result<(Self, Evaluation), UtilityError> {
+        let model = Self::fit(cells, neighbours, from, split, config)?;
+        let test = TrainingSet::build(cells, neighbours, &model.thresholds, split, to, config);
+        if test.is_empty() {
+            return Err(UtilityError::Model(format!(
+                "no held-out rows with label times in [{split}, {to}) s"
+            )));
+        }
+        let evaluation = model.evaluate(&test);
+        Ok((model, evaluation))
+    }
+
     /// Trains on `set` with the given thresholds (K − 1 of them, K = `config.n_classes`).
     pub fn train(
         set: &TrainingSet,
@@ -370,16 +410,23 @@ impl ConditionModel {
                 "label {bad} out of range for {k} classes"
             )));
         }
+        let d = BASE + k - 1;
+        if let Some(row) = set.features.iter().find(|r| r.len() != d) {
+            return Err(UtilityError::Model(format!(
+                "feature row of length {}, expected {d}",
+                row.len()
+            )));
+        }
         let n = set.len() as f64;
-        let mut mean = [0.0; D];
-        let mut scale = [0.0; D];
+        let mut mean = vec![0.0; d];
+        let mut scale = vec![0.0; d];
         for row in &set.features {
-            for f in 0..D {
+            for f in 0..d {
                 mean[f] += row[f] / n;
             }
         }
         for row in &set.features {
-            for f in 0..D {
+            for f in 0..d {
                 scale[f] += (row[f] - mean[f]).powi(2) / n;
             }
         }
@@ -393,31 +440,37 @@ impl ConditionModel {
         let mut model = ConditionModel {
             thresholds,
             n_classes: k,
-            trend_points: config.trend_points,
+            config: config.clone(),
             mean,
             scale,
-            weights: vec![0.0; k * F],
+            weights: vec![0.0; k * (d + 1)],
             prior,
         };
-        let rows: Vec<[f64; F]> = set.features.iter().map(|x| model.design(x)).collect();
+        let rows: Vec<Vec<f64>> = set.features.iter().map(|x| model.design(x)).collect();
         model.newton(&rows, &set.labels, config);
         Ok(model)
     }
 
     /// Bias term and standardised features.
-    fn design(&self, x: &[f64; D]) -> [f64; F] {
-        let mut z = [1.0; F];
-        for f in 0..D {
-            z[f + 1] = (x[f] - self.mean[f]) / self.scale[f];
+    fn design(&self, x: &[f64]) -> Vec<f64> {
+        let mut z = vec![1.0; self.mean.len() + 1];
+        for (f, (m, s)) in self.mean.iter().zip(&self.scale).enumerate() {
+            z[f + 1] = (x.get(f).copied().unwrap_or(*m) - m) / s;
         }
         z
     }
 
-    fn softmax(&self, w: &[f64], z: &[f64; F], out: &mut [f64]) {
+    /// Parameters per class (bias + features).
+    fn stride(&self) -> usize {
+        self.mean.len() + 1
+    }
+
+    fn softmax(&self, w: &[f64], z: &[f64], out: &mut [f64]) {
         let k = self.n_classes;
+        let stride = self.stride();
         let mut max = f64::NEG_INFINITY;
         for c in 0..k {
-            let s: f64 = (0..F).map(|f| w[c * F + f] * z[f]).sum();
+            let s: f64 = (0..stride).map(|f| w[c * stride + f] * z[f]).sum();
             out[c] = s;
             max = max.max(s);
         }
@@ -439,10 +492,11 @@ impl ConditionModel {
     fn objective(
         &self,
         w: &[f64],
-        rows: &[[f64; F]],
+        rows: &[Vec<f64>],
         labels: &[usize],
         config: &ConditionConfig,
     ) -> f64 {
+        let stride = self.stride();
         let mut p = vec![0.0; self.n_classes];
         let mut nll = 0.0;
         for (z, &y) in rows.iter().zip(labels) {
@@ -452,15 +506,16 @@ impl ConditionModel {
         let reg: f64 = w
             .iter()
             .enumerate()
-            .map(|(i, v)| 0.5 * Self::penalty(config, i % F) * v * v)
+            .map(|(i, v)| 0.5 * Self::penalty(config, i % stride) * v * v)
             .sum();
         nll / rows.len() as f64 + reg
     }
 
     /// Damped Newton's method on the (strictly convex) penalised log-likelihood.
-    fn newton(&mut self, rows: &[[f64; F]], labels: &[usize], config: &ConditionConfig) {
+    fn newton(&mut self, rows: &[Vec<f64>], labels: &[usize], config: &ConditionConfig) {
         let k = self.n_classes;
-        let p_len = k * F;
+        let stride = self.stride();
+        let p_len = k * stride;
         let n = rows.len() as f64;
         let mut p = vec![0.0; k];
         let mut current = self.objective(&self.weights, rows, labels, config);
@@ -471,15 +526,15 @@ impl ConditionModel {
                 self.softmax(&self.weights, z, &mut p);
                 for c in 0..k {
                     let r = p[c] - if c == y { 1.0 } else { 0.0 };
-                    for f in 0..F {
-                        grad[c * F + f] += r * z[f];
+                    for f in 0..stride {
+                        grad[c * stride + f] += r * z[f];
                     }
                     for c2 in c..k {
                         let w = p[c] * (if c == c2 { 1.0 } else { 0.0 } - p[c2]);
-                        for f in 0..F {
+                        for f in 0..stride {
                             let wz = w * z[f];
-                            let row = (c * F + f) * p_len + c2 * F;
-                            for g in 0..F {
+                            let row = (c * stride + f) * p_len + c2 * stride;
+                            for g in 0..stride {
                                 hess[row + g] += wz * z[g];
                             }
                         }
@@ -487,16 +542,16 @@ impl ConditionModel {
                 }
             }
             for i in 0..p_len {
-                grad[i] = grad[i] / n + Self::penalty(config, i % F) * self.weights[i];
+                grad[i] = grad[i] / n + Self::penalty(config, i % stride) * self.weights[i];
                 for j in 0..p_len {
                     hess[i * p_len + j] /= n;
                 }
-                hess[i * p_len + i] += Self::penalty(config, i % F);
+                hess[i * p_len + i] += Self::penalty(config, i % stride);
             }
             // Mirror the upper block triangle.
             for i in 0..p_len {
                 for j in 0..p_len {
-                    if j / F < i / F {
+                    if j / stride < i / stride {
                         hess[i * p_len + j] = hess[j * p_len + i];
                     }
                 }
@@ -532,7 +587,7 @@ impl ConditionModel {
     }
 
     /// Class probabilities for one feature row (see [`condition_features`]).
-    pub fn predict_features(&self, x: &[f64; D]) -> Vec<f64> {
+    pub fn predict_features(&self, x: &[f64]) -> Vec<f64> {
         let mut p = vec![0.0; self.n_classes];
         self.softmax(&self.weights, &self.design(x), &mut p);
         p
@@ -556,7 +611,7 @@ impl ConditionModel {
                 if let Some(nbs) = neighbours.get(i) {
                     nb_series.extend(nbs.iter().filter_map(|&j| cells.get(j).copied()));
                 }
-                match condition_features(*cell, &nb_series, t, t, self.trend_points) {
+                match condition_features(*cell, &nb_series, t, t, &self.thresholds, &self.config) {
                     Some(x) => self.predict_features(&x),
                     None => vec![1.0 / self.n_classes as f64; self.n_classes],
                 }
@@ -581,7 +636,8 @@ impl ConditionModel {
             hits += usize::from(best == y);
             loss -= p.get(y).copied().unwrap_or(0.0).max(1e-15).ln();
             base_hits += usize::from(majority == y);
-            persistence_hits += usize::from(class_of(x[0], &self.thresholds) == y);
+            let last = x.first().copied().unwrap_or(f64::NAN);
+            persistence_hits += usize::from(class_of(last, &self.thresholds) == y);
             base_loss -= self.prior.get(y).copied().unwrap_or(0.0).max(1e-15).ln();
         }
         let nf = n.max(1) as f64;
@@ -610,9 +666,10 @@ impl ConditionModel {
         &self.prior
     }
 
-    /// Weight of feature `f` ([`FEATURE_NAMES`] order, standardised scale) for class `class`.
+    /// Weight of feature `f` ([`FEATURE_NAMES`] order, then the threshold distances;
+    /// standardised scale) for class `class`.
     pub fn weight(&self, class: usize, f: usize) -> f64 {
-        self.weights[class * F + 1 + f]
+        self.weights[class * self.stride() + 1 + f]
     }
 }
 
@@ -681,9 +738,13 @@ mod tests {
             &[Series::new(&nt, &nv), Series::empty()],
             5 * 86_400,
             2 * 86_400,
-            5,
+            &[2.0, 7.0],
+            &ConditionConfig::default(),
         )
         .unwrap();
+        assert_eq!(f.len(), 11);
+        assert!((f[9] - 1.0 / 3.5f64.sqrt()).abs() < 1e-12);
+        assert!((f[10] + 4.0 / 3.5f64.sqrt()).abs() < 1e-12);
         assert_eq!(f[0], 3.0);
         assert_eq!(f[1], 3.0);
         assert_eq!(f[2], 9.0);
@@ -692,7 +753,7 @@ mod tests {
         assert!((f[5].powi(2) + f[6].powi(2) - 1.0).abs() < 1e-12);
         assert_eq!(f[7], 7.0);
         assert_eq!(f[8], 21.0);
-        assert!(condition_features(s, &[], 5, -1, 5).is_none());
+        assert!(condition_features(s, &[], 5, -1, &[], &ConditionConfig::default()).is_none());
     }
 
     /// Synthetic cells: a noisy seasonal moisture cycle with cell offsets.
@@ -746,7 +807,15 @@ mod tests {
         // Same cell, same known data: the further t is from the last collection, the flatter.
         let known = 600 * 86_400;
         let entropy = |lag: i64| {
-            let f = condition_features(cells[0], &[], known + lag * 86_400, known, 5).unwrap();
+            let f = condition_features(
+                cells[0],
+                &[],
+                known + lag * 86_400,
+                known,
+                model.thresholds(),
+                &config,
+            )
+            .unwrap();
             crate::uncertainty(&model.predict_features(&f))
         };
         assert!(

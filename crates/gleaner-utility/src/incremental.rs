@@ -24,6 +24,8 @@
 //! - each (sensor, modality, grid slot) reading must be added once (the store deduplicates);
 //!   several readings falling in one slot are averaged, as in [`cell_series`](crate::cell_series).
 
+use rayon::prelude::*;
+
 use crate::engine::{CellTerms, finish_terms};
 use crate::probabilities::check_distribution;
 use crate::terms::{anomaly_from_stats, finish_pearson, freshness};
@@ -164,7 +166,8 @@ pub struct SeriesStats {
     pub before_latest: RunningStats,
     /// The latest point (s, value).
     pub latest: Option<(UnixSeconds, f64)>,
-    /// Smallest value (+inf when empty).
+    /// Smallest value (+inf when empty). Exact without a retention horizon; with one, a slot
+    /// update that removes the extreme rescans the retained slots only.
     pub min: f64,
     /// Largest value (−inf when empty).
     pub max: f64,
@@ -556,6 +559,80 @@ impl IncrementalState {
         config: &UtilityConfig,
         probabilities: &[Vec<f64>],
     ) -> Result<Vec<CellTerms>, UtilityError> {
+        self.check_scoring(config, probabilities)?;
+        Ok((0..self.n_cells())
+            .map(|i| self.cell_terms(i, t, config, probabilities))
+            .collect())
+    }
+
+    /// [`score`](Self::score) on all cores (rayon's global pool); same result.
+    pub fn score_parallel(
+        &self,
+        t: UnixSeconds,
+        config: &UtilityConfig,
+        probabilities: &[Vec<f64>],
+    ) -> Result<Vec<CellTerms>, UtilityError> {
+        self.check_scoring(config, probabilities)?;
+        Ok((0..self.n_cells())
+            .into_par_iter()
+            .map(|i| self.cell_terms(i, t, config, probabilities))
+            .collect())
+    }
+
+    fn cell_terms(
+        &self,
+        i: usize,
+        t: UnixSeconds,
+        config: &UtilityConfig,
+        probabilities: &[Vec<f64>],
+    ) -> CellTerms {
+        let lambda = config.lambda_per_s();
+        let m_count = self.n_modalities;
+
+        let f = freshness(t, &self.last_collected[i], lambda);
+        let nbs = &self.neighbour_pair[i];
+        let mut r_sum = [0.0; 8];
+        let mut r_sum_vec;
+        let r_sum: &mut [f64] = if m_count <= 8 {
+            &mut r_sum[..m_count]
+        } else {
+            r_sum_vec = vec![0.0; m_count];
+            &mut r_sum_vec
+        };
+        for &p in nbs {
+            let pairs = &self.pairs[p * m_count..(p + 1) * m_count];
+            for (acc, pair) in r_sum.iter_mut().zip(pairs) {
+                *acc += pair.correlation(config.min_overlap).max(0.0);
+            }
+        }
+        let mut r_by = Vec::with_capacity(m_count);
+        let mut a_by = Vec::with_capacity(m_count);
+        for (m, &total) in r_sum.iter().enumerate() {
+            match self.stats[i * m_count + m].anomaly(config.epsilon) {
+                None => {
+                    r_by.push(None);
+                    a_by.push(None);
+                }
+                Some(a) => {
+                    let r = if nbs.is_empty() {
+                        0.0
+                    } else {
+                        (total / nbs.len() as f64).clamp(0.0, 1.0)
+                    };
+                    r_by.push(Some(r));
+                    a_by.push(Some(a));
+                }
+            }
+        }
+        let p = probabilities.get(i).map_or(&[][..], Vec::as_slice);
+        finish_terms(f, r_by, a_by, p, config)
+    }
+
+    fn check_scoring(
+        &self,
+        config: &UtilityConfig,
+        probabilities: &[Vec<f64>],
+    ) -> Result<(), UtilityError> {
         config.validate(self.n_modalities)?;
         if let HistoryWindow::Last { seconds } = config.window {
             return Err(UtilityError::WindowNotIncremental(seconds));
@@ -576,49 +653,7 @@ impl IncrementalState {
                 })?;
             }
         }
-        let lambda = config.lambda_per_s();
-        let m_count = self.n_modalities;
-        Ok((0..n)
-            .map(|i| {
-                let f = freshness(t, &self.last_collected[i], lambda);
-                let nbs = &self.neighbour_pair[i];
-                let mut r_sum = [0.0; 8];
-                let mut r_sum_vec;
-                let r_sum: &mut [f64] = if m_count <= 8 {
-                    &mut r_sum[..m_count]
-                } else {
-                    r_sum_vec = vec![0.0; m_count];
-                    &mut r_sum_vec
-                };
-                for &p in nbs {
-                    let pairs = &self.pairs[p * m_count..(p + 1) * m_count];
-                    for (acc, pair) in r_sum.iter_mut().zip(pairs) {
-                        *acc += pair.correlation(config.min_overlap).max(0.0);
-                    }
-                }
-                let mut r_by = Vec::with_capacity(m_count);
-                let mut a_by = Vec::with_capacity(m_count);
-                for (m, &total) in r_sum.iter().enumerate() {
-                    match self.stats[i * m_count + m].anomaly(config.epsilon) {
-                        None => {
-                            r_by.push(None);
-                            a_by.push(None);
-                        }
-                        Some(a) => {
-                            let r = if nbs.is_empty() {
-                                0.0
-                            } else {
-                                (total / nbs.len() as f64).clamp(0.0, 1.0)
-                            };
-                            r_by.push(Some(r));
-                            a_by.push(Some(a));
-                        }
-                    }
-                }
-                let p = probabilities.get(i).map_or(&[][..], Vec::as_slice);
-                finish_terms(f, r_by, a_by, p, config)
-            })
-            .collect())
+        Ok(())
     }
 
     /// The neighbour lists the state was built with.
@@ -859,7 +894,8 @@ mod tests {
             ..UtilityConfig::default()
         };
         let a = state.score(41 * DAY, &config, &[]).unwrap();
-        let b = full.score(41 * DAY, &config, &[]).unwrap();
+        let b = full.score_parallel(41 * DAY, &config, &[]).unwrap();
+        assert_eq!(b, full.score(41 * DAY, &config, &[]).unwrap());
         for (x, y) in a.iter().zip(&b) {
             rel_close(x.s, y.s, "retention");
         }

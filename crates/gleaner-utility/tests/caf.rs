@@ -176,6 +176,47 @@ fn caf_scores_and_condition_model() {
         e.baseline_log_loss,
         e.persistence_accuracy
     );
+    // Staleness raises the uncertainty: mean U of held-out rows by age of the last value.
+    let mean_u = |lo: f64, hi: f64| {
+        let us: Vec<f64> = test
+            .features
+            .iter()
+            .filter(|x| x[1] >= lo && x[1] < hi)
+            .map(|x| gleaner_utility::uncertainty(&model.predict_features(x)))
+            .collect();
+        us.iter().sum::<f64>() / us.len().max(1) as f64
+    };
+    let (fresh, stale) = (mean_u(0.0, 2.5), mean_u(9.5, 30.0));
+    println!("CAF held-out mean U: age <= 2 days {fresh:.3}, age 10-30 days {stale:.3}");
+    assert!(stale > fresh);
+    let no_season = ConditionConfig {
+        season: false,
+        ..ConditionConfig::default()
+    };
+    let (_, e2) = ConditionModel::fit_and_evaluate(
+        &vw30,
+        &neighbours,
+        from,
+        split,
+        date(2014, 7, 1),
+        &no_season,
+    )
+    .unwrap();
+    println!(
+        "CAF condition model without season: accuracy={:.4} log-loss={:.4}",
+        e2.accuracy, e2.log_loss
+    );
+    assert!(e2.accuracy > e2.baseline_accuracy && e2.log_loss < e2.baseline_log_loss);
+    let (_, same) = ConditionModel::fit_and_evaluate(
+        &vw30,
+        &neighbours,
+        from,
+        split,
+        date(2014, 7, 1),
+        &config,
+    )
+    .unwrap();
+    assert_eq!(same, e);
     assert!(e.n > 10_000, "{e:?}");
     assert!(e.accuracy > e.baseline_accuracy, "{e:?}");
     assert!(e.log_loss < e.baseline_log_loss, "{e:?}");
