@@ -1,0 +1,875 @@
+//! The agricultural-condition model behind the uncertainty term U (SPEC §2).
+//!
+//! Classes come from one modality (by default soil moisture at 30 cm: K = 3, dry / adequate /
+//! wet) cut at thresholds given in the configuration or taken at the quantiles 1/K, 2/K, … of
+//! the training history. A multinomial logistic regression (softmax, L2-regularised,
+//! standardised features, trained by damped Newton's method — deterministic, no seed needed)
+//! predicts the class at time t from what is known when the cell was last collected:
+//!
+//! | # | feature ([`FEATURE_NAMES`]) | unit |
+//! |---|---|---|
+//! | 0 | last collected value x_l | modality unit |
+//! | 1 | its age a = t − t_l | days |
+//! | 2 | x_l · a | unit·days |
+//! | 3 | trend: least-squares slope over the last `trend_points` collected points | unit/day |
+//! | 4 | trend · a (linear extrapolation) | unit |
+//! | 5, 6 | season: sin, cos of 2π·(t in days)/365.2425 (day-of-year phase; 0 if disabled) | — |
+//! | 7 | mean of the neighbours' latest values (x_l when none has data) | unit |
+//! | 8 | that mean · a | unit·days |
+//! | 9.. | per threshold θ_k: (x_l − θ_k) / √(a + 0.5) | unit/√day |
+//!
+//! The interactions with the age let the model learn that an old value says less than a fresh
+//! one, so the predicted distribution flattens (U grows) with staleness. The threshold
+//! distances are what a random walk from the last value would give (its spread grows as
+//! √age): the logits are sharp near a fresh value and soften as it ages, and values near a
+//! class threshold give split probabilities.
+//!
+//! Training set: for every cell and every time t of its series inside the training period, and
+//! for every lag L in `lags_days`, the features are computed as if the data known were only the
+//! cell's and neighbours' points at or before t − L (days); the label is the class of the true
+//! value at t. A train/test split is a split of the label times.
+
+use crate::{DAY_S, Series, UtilityError};
+use gleaner_field::UnixSeconds;
+
+/// Number of features before the threshold distances.
+const BASE: usize = 9;
+
+/// Age offset in the threshold distances, days (keeps them finite at age 0).
+const AGE_OFFSET_DAYS: f64 = 0.5;
+
+/// Names of the model's first features, in order (see the module docs for their units); the
+/// K − 1 threshold distances follow.
+pub const FEATURE_NAMES: [&str; BASE] = [
+    "last_value",
+    "age_days",
+    "last_value_x_age",
+    "trend_per_day",
+    "trend_x_age",
+    "season_sin",
+    "season_cos",
+    "neighbour_mean",
+    "neighbour_mean_x_age",
+];
+
+/// Where the class thresholds come from.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum ClassThresholds {
+    /// Quantiles 1/K, …, (K−1)/K of the training history's values (the default).
+    #[default]
+    Quantiles,
+    /// K − 1 strictly increasing thresholds in the modality's unit (e.g. m³/m³).
+    Fixed(Vec<f64>),
+}
+
+/// Configuration of the condition model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConditionConfig {
+    /// Number of classes K (default 3: dry / adequate / wet), >= 2.
+    pub n_classes: usize,
+    /// Class thresholds (default: quantiles of the history).
+    pub thresholds: ClassThresholds,
+    /// Simulated staleness of the training rows, days (default 1, 2, 3, 5, 7, 10, 14).
+    pub lags_days: Vec<i64>,
+    /// Points in the trend's least-squares fit (default 5, >= 2).
+    pub trend_points: usize,
+    /// Use the season features (default true, as SPEC §2 lists them; with only a couple of
+    /// training years they can learn one year's weather, see the crate's CAF evaluation).
+    pub season: bool,
+    /// L2 penalty on the standardised weights (default 1e-4; the bias gets 1e-6).
+    pub l2: f64,
+    /// Newton iterations at most (default 100).
+    pub max_iterations: usize,
+    /// Stop when the largest gradient component is below this (default 1e-9).
+    pub tolerance: f64,
+}
+
+impl Default for ConditionConfig {
+    fn default() -> Self {
+        Self {
+            n_classes: 3,
+            thresholds: ClassThresholds::Quantiles,
+            lags_days: vec![1, 2, 3, 5, 7, 10, 14],
+            trend_points: 5,
+            season: true,
+            l2: 1e-4,
+            max_iterations: 100,
+            tolerance: 1e-9,
+        }
+    }
+}
+
+impl ConditionConfig {
+    fn validate(&self) -> Result<(), UtilityError> {
+        let bad = |m: String| Err(UtilityError::Model(m));
+        if self.n_classes < 2 {
+            return bad(format!("need at least 2 classes, got {}", self.n_classes));
+        }
+        if let ClassThresholds::Fixed(th) = &self.thresholds {
+            if th.len() != self.n_classes - 1 {
+                return bad(format!(
+                    "{} thresholds for {} classes (need {})",
+                    th.len(),
+                    self.n_classes,
+                    self.n_classes - 1
+                ));
+            }
+            if th.iter().any(|x| !x.is_finite()) || th.windows(2).any(|w| w[1] <= w[0]) {
+                return bad(format!(
+                    "thresholds {th:?} must be finite and strictly increasing"
+                ));
+            }
+        }
+        if self.lags_days.is_empty() || self.lags_days.iter().any(|&l| l <= 0) {
+            return bad(format!(
+                "lags {:?} days must be non-empty and positive",
+                self.lags_days
+            ));
+        }
+        if self.trend_points < 2 {
+            return bad(format!(
+                "trend_points {} must be at least 2",
+                self.trend_points
+            ));
+        }
+        if !(self.l2.is_finite() && self.l2 >= 0.0) {
+            return bad(format!("l2 {} must be finite and non-negative", self.l2));
+        }
+        Ok(())
+    }
+}
+
+/// Thresholds at the quantiles j/K (j = 1..K−1) of `values` (linear interpolation between
+/// order statistics, "type 7"). Non-finite values are ignored; empty input gives an error.
+pub fn quantile_thresholds(values: &[f64], n_classes: usize) -> Result<Vec<f64>, UtilityError> {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return Err(UtilityError::Model(
+            "no values to take quantiles of".to_string(),
+        ));
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    Ok((1..n_classes)
+        .map(|j| {
+            let h = (n - 1) as f64 * j as f64 / n_classes as f64;
+            let lo = h.floor() as usize;
+            let hi = (lo + 1).min(n - 1);
+            v[lo] + (h - lo as f64) * (v[hi] - v[lo])
+        })
+        .collect())
+}
+
+/// The class (0-based) of value `x`: the number of thresholds at or below it.
+pub fn class_of(x: f64, thresholds: &[f64]) -> usize {
+    thresholds.iter().filter(|&&th| x >= th).count()
+}
+
+/// Least-squares slope (unit per day) of the last `k` points of `s`; 0 with fewer than 2.
+fn trend_per_day(s: Series<'_>, k: usize) -> f64 {
+    let n = s.len();
+    let start = n.saturating_sub(k);
+    let (times, values) = (&s.times[start..n], &s.values[start..n]);
+    let m = times.len();
+    if m < 2 {
+        return 0.0;
+    }
+    let t0 = times[m - 1];
+    let x: Vec<f64> = times.iter().map(|&t| (t - t0) as f64 / DAY_S).collect();
+    let mx = x.iter().sum::<f64>() / m as f64;
+    let my = values.iter().sum::<f64>() / m as f64;
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (a, b) in x.iter().zip(values) {
+        sxy += (a - mx) * (b - my);
+        sxx += (a - mx) * (a - mx);
+    }
+    if sxx > 0.0 { sxy / sxx } else { 0.0 }
+}
+
+/// The model's features (see [`FEATURE_NAMES`], then one distance per threshold) for a cell at
+/// time `t` (s) when only the points at or before `known_until` (s) are known: `cell` is the
+/// cell's series of the class modality, `neighbours` the neighbours' series, `thresholds` the
+/// class thresholds (unit); `config` gives the trend length and whether the season is used.
+/// `None` when the cell has no known point.
+pub fn condition_features(
+    cell: Series<'_>,
+    neighbours: &[Series<'_>],
+    t: UnixSeconds,
+    known_until: UnixSeconds,
+    thresholds: &[f64],
+    config: &ConditionConfig,
+) -> Option<Vec<f64>> {
+    let trend_points = config.trend_points;
+    let known = cell.between(UnixSeconds::MIN, known_until);
+    let (t_last, x_last) = known.last()?;
+    let age = (t - t_last).max(0) as f64 / DAY_S;
+    let trend = trend_per_day(known, trend_points);
+    let phase = std::f64::consts::TAU * (t as f64 / DAY_S) / 365.2425;
+    let season = if config.season { 1.0 } else { 0.0 };
+    let (mut sum, mut count) = (0.0, 0usize);
+    for nb in neighbours {
+        if let Some((_, v)) = nb.between(UnixSeconds::MIN, known_until).last() {
+            sum += v;
+            count += 1;
+        }
+    }
+    let nb_mean = if count > 0 {
+        sum / count as f64
+    } else {
+        x_last
+    };
+    let mut out = Vec::with_capacity(BASE + thresholds.len());
+    out.extend_from_slice(&[
+        x_last,
+        age,
+        x_last * age,
+        trend,
+        trend * age,
+        season * phase.sin(),
+        season * phase.cos(),
+        nb_mean,
+        nb_mean * age,
+    ]);
+    let spread = (age + AGE_OFFSET_DAYS).sqrt();
+    out.extend(thresholds.iter().map(|th| (x_last - th) / spread));
+    Some(out)
+}
+
+/// Rows for training or evaluating the model (see the module docs for the construction).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TrainingSet {
+    /// Feature rows.
+    pub features: Vec<Vec<f64>>,
+    /// Class of the true value, 0-based.
+    pub labels: Vec<usize>,
+    /// Label time of each row, s.
+    pub times: Vec<UnixSeconds>,
+    /// Cell position of each row.
+    pub cells: Vec<usize>,
+}
+
+impl TrainingSet {
+    /// Rows for every cell, every label time `from <= t < to` (s) of its series and every lag
+    /// of `config.lags_days`. `cells[i]` is cell i's series of the class modality,
+    /// `neighbours[i]` its neighbour positions (out-of-range positions are skipped).
+    pub fn build(
+        cells: &[Series<'_>],
+        neighbours: &[Vec<usize>],
+        thresholds: &[f64],
+        from: UnixSeconds,
+        to: UnixSeconds,
+        config: &ConditionConfig,
+    ) -> TrainingSet {
+        let mut set = TrainingSet::default();
+        let mut nb_series = Vec::new();
+        for (i, cell) in cells.iter().enumerate() {
+            nb_series.clear();
+            if let Some(nbs) = neighbours.get(i) {
+                nb_series.extend(nbs.iter().filter_map(|&j| cells.get(j).copied()));
+            }
+            let window = cell.between(from, to.saturating_sub(1));
+            for (&t, &x) in window.times.iter().zip(window.values) {
+                for &lag in &config.lags_days {
+                    let known = t - lag * 86_400;
+                    if let Some(f) =
+                        condition_features(*cell, &nb_series, t, known, thresholds, config)
+                    {
+                        set.features.push(f);
+                        set.labels.push(class_of(x, thresholds));
+                        set.times.push(t);
+                        set.cells.push(i);
+                    }
+                }
+            }
+        }
+        set
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.labels.len()
+    }
+
+    /// True without rows.
+    pub fn is_empty(&self) -> bool {
+        self.labels.is_empty()
+    }
+}
+
+/// Held-out performance of a model, next to the majority-class and persistence baselines.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Evaluation {
+    /// Number of rows evaluated.
+    pub n: usize,
+    /// Fraction of rows whose most probable class is the true one.
+    pub accuracy: f64,
+    /// Mean −ln p(true class) (nats), probabilities clipped at 1e-15.
+    pub log_loss: f64,
+    /// Accuracy of always predicting the training set's most frequent class.
+    pub baseline_accuracy: f64,
+    /// Log-loss of predicting the training class frequencies everywhere (nats).
+    pub baseline_log_loss: f64,
+    /// Accuracy of persistence: predicting the class of the last collected value.
+    pub persistence_accuracy: f64,
+}
+
+/// A trained multinomial logistic regression over [`FEATURE_NAMES`].
+///
+/// ```
+/// use gleaner_utility::{ConditionConfig, ConditionModel, Series};
+/// // One cell whose moisture follows a slow seasonal cycle, daily for two years.
+/// let times: Vec<i64> = (0..730).map(|d| d * 86_400).collect();
+/// let values: Vec<f64> = (0..730)
+///     .map(|d| 0.3 + 0.1 * (d as f64 * std::f64::consts::TAU / 365.0).sin())
+///     .collect();
+/// let cells = [Series::new(&times, &values)];
+/// let config = ConditionConfig { lags_days: vec![1, 7], ..ConditionConfig::default() };
+/// let model = ConditionModel::fit(&cells, &[vec![]], 0, 365 * 86_400, &config).unwrap();
+/// let p = model.predict_proba(&cells, &[vec![]], 400 * 86_400);
+/// assert_eq!(p[0].len(), 3);
+/// assert!((p[0].iter().sum::<f64>() - 1.0).abs() < 1e-12);
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConditionModel {
+    thresholds: Vec<f64>,
+    n_classes: usize,
+    config: ConditionConfig,
+    mean: Vec<f64>,
+    scale: Vec<f64>,
+    /// Class-major with a stride of (features + 1): the bias, then the features' weights.
+    weights: Vec<f64>,
+    prior: Vec<f64>,
+}
+
+impl ConditionModel {
+    /// Thresholds from the configuration or from the quantiles of the values with time in
+    /// [`from`, `to`) (s), then a training set over the same period, then [`train`](Self::train).
+    pub fn fit(
+        cells: &[Series<'_>],
+        neighbours: &[Vec<usize>],
+        from: UnixSeconds,
+        to: UnixSeconds,
+        config: &ConditionConfig,
+    ) -> Result<Self, UtilityError> {
+        config.validate()?;
+        let thresholds = match &config.thresholds {
+            ClassThresholds::Fixed(th) => th.clone(),
+            ClassThresholds::Quantiles => {
+                let values: Vec<f64> = cells
+                    .iter()
+                    .flat_map(|s| s.between(from, to.saturating_sub(1)).values.iter().copied())
+                    .collect();
+                quantile_thresholds(&values, config.n_classes)?
+            }
+        };
+        let set = TrainingSet::build(cells, neighbours, &thresholds, from, to, config);
+        Self::train(&set, thresholds, config)
+    }
+
+    /// Trains on the label times [`from`, `split`) and evaluates on [`split`, `to`) (s): the
+    /// held-out rows use the training thresholds; their features may use any data before the
+    /// label time minus the lag, as in operation.
+    pub fn fit_and_evaluate(
+        cells: &[Series<'_>],
+        neighbours: &[Vec<usize>],
+        from: UnixSeconds,
+        split: UnixSeconds,
+        to: UnixSeconds,
+        config: &ConditionConfig,
+    ) -> Result<(Self, Evaluation), UtilityError> {
+        let model = Self::fit(cells, neighbours, from, split, config)?;
+        let test = TrainingSet::build(cells, neighbours, &model.thresholds, split, to, config);
+        if test.is_empty() {
+            return Err(UtilityError::Model(format!(
+                "no held-out rows with label times in [{split}, {to}) s"
+            )));
+        }
+        let evaluation = model.evaluate(&test);
+        Ok((model, evaluation))
+    }
+
+    /// Trains on `set` with the given thresholds (K − 1 of them, K = `config.n_classes`).
+    pub fn train(
+        set: &TrainingSet,
+        thresholds: Vec<f64>,
+        config: &ConditionConfig,
+    ) -> Result<Self, UtilityError> {
+        config.validate()?;
+        let k = config.n_classes;
+        if thresholds.len() != k - 1 {
+            return Err(UtilityError::Model(format!(
+                "{} thresholds for {k} classes",
+                thresholds.len()
+            )));
+        }
+        if set.is_empty() {
+            return Err(UtilityError::Model("empty training set".to_string()));
+        }
+        if let Some(&bad) = set.labels.iter().find(|&&y| y >= k) {
+            return Err(UtilityError::Model(format!(
+                "label {bad} out of range for {k} classes"
+            )));
+        }
+        let d = BASE + k - 1;
+        if let Some(row) = set.features.iter().find(|r| r.len() != d) {
+            return Err(UtilityError::Model(format!(
+                "feature row of length {}, expected {d}",
+                row.len()
+            )));
+        }
+        let n = set.len() as f64;
+        let mut mean = vec![0.0; d];
+        let mut scale = vec![0.0; d];
+        for row in &set.features {
+            for f in 0..d {
+                mean[f] += row[f] / n;
+            }
+        }
+        for row in &set.features {
+            for f in 0..d {
+                scale[f] += (row[f] - mean[f]).powi(2) / n;
+            }
+        }
+        for s in &mut scale {
+            *s = if *s > 0.0 { s.sqrt() } else { 1.0 };
+        }
+        let mut prior = vec![0.0; k];
+        for &y in &set.labels {
+            prior[y] += 1.0 / n;
+        }
+        let mut model = ConditionModel {
+            thresholds,
+            n_classes: k,
+            config: config.clone(),
+            mean,
+            scale,
+            weights: vec![0.0; k * (d + 1)],
+            prior,
+        };
+        let rows: Vec<Vec<f64>> = set.features.iter().map(|x| model.design(x)).collect();
+        model.newton(&rows, &set.labels, config);
+        Ok(model)
+    }
+
+    /// Bias term and standardised features.
+    fn design(&self, x: &[f64]) -> Vec<f64> {
+        let mut z = vec![1.0; self.mean.len() + 1];
+        for (f, (m, s)) in self.mean.iter().zip(&self.scale).enumerate() {
+            z[f + 1] = (x.get(f).copied().unwrap_or(*m) - m) / s;
+        }
+        z
+    }
+
+    /// Parameters per class (bias + features).
+    fn stride(&self) -> usize {
+        self.mean.len() + 1
+    }
+
+    fn softmax(&self, w: &[f64], z: &[f64], out: &mut [f64]) {
+        let k = self.n_classes;
+        let stride = self.stride();
+        let mut max = f64::NEG_INFINITY;
+        for c in 0..k {
+            let s: f64 = (0..stride).map(|f| w[c * stride + f] * z[f]).sum();
+            out[c] = s;
+            max = max.max(s);
+        }
+        let mut total = 0.0;
+        for o in out.iter_mut().take(k) {
+            *o = (*o - max).exp();
+            total += *o;
+        }
+        for o in out.iter_mut().take(k) {
+            *o /= total;
+        }
+    }
+
+    fn penalty(config: &ConditionConfig, f: usize) -> f64 {
+        if f == 0 { 1e-6 } else { config.l2 }
+    }
+
+    /// Mean negative log-likelihood plus the L2 penalty.
+    fn objective(
+        &self,
+        w: &[f64],
+        rows: &[Vec<f64>],
+        labels: &[usize],
+        config: &ConditionConfig,
+    ) -> f64 {
+        let stride = self.stride();
+        let mut p = vec![0.0; self.n_classes];
+        let mut nll = 0.0;
+        for (z, &y) in rows.iter().zip(labels) {
+            self.softmax(w, z, &mut p);
+            nll -= p[y].max(1e-300).ln();
+        }
+        let reg: f64 = w
+            .iter()
+            .enumerate()
+            .map(|(i, v)| 0.5 * Self::penalty(config, i % stride) * v * v)
+            .sum();
+        nll / rows.len() as f64 + reg
+    }
+
+    /// Damped Newton's method on the (strictly convex) penalised log-likelihood.
+    fn newton(&mut self, rows: &[Vec<f64>], labels: &[usize], config: &ConditionConfig) {
+        let k = self.n_classes;
+        let stride = self.stride();
+        let p_len = k * stride;
+        let n = rows.len() as f64;
+        let mut p = vec![0.0; k];
+        let mut current = self.objective(&self.weights, rows, labels, config);
+        for _ in 0..config.max_iterations {
+            let mut grad = vec![0.0; p_len];
+            let mut hess = vec![0.0; p_len * p_len];
+            for (z, &y) in rows.iter().zip(labels) {
+                self.softmax(&self.weights, z, &mut p);
+                for c in 0..k {
+                    let r = p[c] - if c == y { 1.0 } else { 0.0 };
+                    for f in 0..stride {
+                        grad[c * stride + f] += r * z[f];
+                    }
+                    for c2 in c..k {
+                        let w = p[c] * (if c == c2 { 1.0 } else { 0.0 } - p[c2]);
+                        for f in 0..stride {
+                            let wz = w * z[f];
+                            let row = (c * stride + f) * p_len + c2 * stride;
+                            for g in 0..stride {
+                                hess[row + g] += wz * z[g];
+                            }
+                        }
+                    }
+                }
+            }
+            for i in 0..p_len {
+                grad[i] = grad[i] / n + Self::penalty(config, i % stride) * self.weights[i];
+                for j in 0..p_len {
+                    hess[i * p_len + j] /= n;
+                }
+                hess[i * p_len + i] += Self::penalty(config, i % stride);
+            }
+            // Mirror the upper block triangle.
+            for i in 0..p_len {
+                for j in 0..p_len {
+                    if j / stride < i / stride {
+                        hess[i * p_len + j] = hess[j * p_len + i];
+                    }
+                }
+            }
+            if grad.iter().all(|g| g.abs() < config.tolerance) {
+                break;
+            }
+            let Some(step) = cholesky_solve(&hess, &grad, p_len) else {
+                break;
+            };
+            let mut t = 1.0;
+            let mut improved = false;
+            for _ in 0..40 {
+                let trial: Vec<f64> = self
+                    .weights
+                    .iter()
+                    .zip(&step)
+                    .map(|(w, s)| w - t * s)
+                    .collect();
+                let value = self.objective(&trial, rows, labels, config);
+                if value <= current {
+                    improved = value < current;
+                    self.weights = trial;
+                    current = value;
+                    break;
+                }
+                t *= 0.5;
+            }
+            if !improved {
+                break;
+            }
+        }
+    }
+
+    /// Class probabilities for one feature row (see [`condition_features`]).
+    pub fn predict_features(&self, x: &[f64]) -> Vec<f64> {
+        let mut p = vec![0.0; self.n_classes];
+        self.softmax(&self.weights, &self.design(x), &mut p);
+        p
+    }
+
+    /// Class probabilities of every cell at time `t` (s), from all the data in `cells` up to
+    /// `t` (pass only collected data) and the neighbours' latest values. A cell with no data
+    /// gets the uniform distribution (U = 1).
+    pub fn predict_proba(
+        &self,
+        cells: &[Series<'_>],
+        neighbours: &[Vec<usize>],
+        t: UnixSeconds,
+    ) -> Vec<Vec<f64>> {
+        let mut nb_series = Vec::new();
+        cells
+            .iter()
+            .enumerate()
+            .map(|(i, cell)| {
+                nb_series.clear();
+                if let Some(nbs) = neighbours.get(i) {
+                    nb_series.extend(nbs.iter().filter_map(|&j| cells.get(j).copied()));
+                }
+                match condition_features(*cell, &nb_series, t, t, &self.thresholds, &self.config) {
+                    Some(x) => self.predict_features(&x),
+                    None => vec![1.0 / self.n_classes as f64; self.n_classes],
+                }
+            })
+            .collect()
+    }
+
+    /// Accuracy and log-loss on `set` (e.g. rows with label times after the training period),
+    /// next to the majority-class / class-frequency baselines of the training set.
+    pub fn evaluate(&self, set: &TrainingSet) -> Evaluation {
+        let n = set.len();
+        let majority = (0..self.n_classes)
+            .max_by(|&a, &b| self.prior[a].total_cmp(&self.prior[b]).then(b.cmp(&a)))
+            .unwrap_or(0);
+        let (mut hits, mut loss, mut base_hits, mut base_loss) = (0usize, 0.0, 0usize, 0.0);
+        let mut persistence_hits = 0usize;
+        for (x, &y) in set.features.iter().zip(&set.labels) {
+            let p = self.predict_features(x);
+            let best = (0..self.n_classes)
+                .max_by(|&a, &b| p[a].total_cmp(&p[b]).then(b.cmp(&a)))
+                .unwrap_or(0);
+            hits += usize::from(best == y);
+            loss -= p.get(y).copied().unwrap_or(0.0).max(1e-15).ln();
+            base_hits += usize::from(majority == y);
+            let last = x.first().copied().unwrap_or(f64::NAN);
+            persistence_hits += usize::from(class_of(last, &self.thresholds) == y);
+            base_loss -= self.prior.get(y).copied().unwrap_or(0.0).max(1e-15).ln();
+        }
+        let nf = n.max(1) as f64;
+        Evaluation {
+            n,
+            accuracy: hits as f64 / nf,
+            log_loss: loss / nf,
+            baseline_accuracy: base_hits as f64 / nf,
+            baseline_log_loss: base_loss / nf,
+            persistence_accuracy: persistence_hits as f64 / nf,
+        }
+    }
+
+    /// The class thresholds (K − 1, ascending, the class modality's unit).
+    pub fn thresholds(&self) -> &[f64] {
+        &self.thresholds
+    }
+
+    /// Number of classes K.
+    pub fn n_classes(&self) -> usize {
+        self.n_classes
+    }
+
+    /// Training class frequencies.
+    pub fn prior(&self) -> &[f64] {
+        &self.prior
+    }
+
+    /// Weight of feature `f` ([`FEATURE_NAMES`] order, then the threshold distances;
+    /// standardised scale) for class `class`.
+    pub fn weight(&self, class: usize, f: usize) -> f64 {
+        self.weights[class * self.stride() + 1 + f]
+    }
+}
+
+/// Solves the symmetric positive definite system A x = b (n × n, row-major) by Cholesky;
+/// `None` if A is not positive definite.
+fn cholesky_solve(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
+    let mut l = vec![0.0; n * n];
+    for i in 0..n {
+        for j in 0..=i {
+            let mut s = a[i * n + j];
+            for k in 0..j {
+                s -= l[i * n + k] * l[j * n + k];
+            }
+            if i == j {
+                if s.is_nan() || s <= 0.0 {
+                    return None;
+                }
+                l[i * n + i] = s.sqrt();
+            } else {
+                l[i * n + j] = s / l[j * n + j];
+            }
+        }
+    }
+    let mut y = vec![0.0; n];
+    for i in 0..n {
+        let s: f64 = (0..i).map(|k| l[i * n + k] * y[k]).sum();
+        y[i] = (b[i] - s) / l[i * n + i];
+    }
+    let mut x = vec![0.0; n];
+    for i in (0..n).rev() {
+        let s: f64 = (i + 1..n).map(|k| l[k * n + i] * x[k]).sum();
+        x[i] = (y[i] - s) / l[i * n + i];
+    }
+    Some(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn quantiles_and_classes() {
+        let th = quantile_thresholds(&[4.0, 1.0, 3.0, 2.0, f64::NAN], 3).unwrap();
+        assert!(
+            (th[0] - 2.0).abs() < 1e-12 && (th[1] - 3.0).abs() < 1e-12,
+            "{th:?}"
+        );
+        assert_eq!(class_of(1.9, &th), 0);
+        assert_eq!(class_of(2.0, &th), 1);
+        assert_eq!(class_of(5.0, &th), 2);
+        assert!(quantile_thresholds(&[], 3).is_err());
+    }
+
+    #[test]
+    fn features_by_hand() {
+        let t = [0, 86_400, 2 * 86_400, 3 * 86_400];
+        let v = [1.0, 2.0, 3.0, 10.0];
+        let nt = [0, 86_400];
+        let nv = [5.0, 7.0];
+        let s = Series::new(&t, &v);
+        // Known until day 2 (so day 3 is unknown), predicting day 5.
+        let f = condition_features(
+            s,
+            &[Series::new(&nt, &nv), Series::empty()],
+            5 * 86_400,
+            2 * 86_400,
+            &[2.0, 7.0],
+            &ConditionConfig::default(),
+        )
+        .unwrap();
+        assert_eq!(f.len(), 11);
+        assert!((f[9] - 1.0 / 3.5f64.sqrt()).abs() < 1e-12);
+        assert!((f[10] + 4.0 / 3.5f64.sqrt()).abs() < 1e-12);
+        assert_eq!(f[0], 3.0);
+        assert_eq!(f[1], 3.0);
+        assert_eq!(f[2], 9.0);
+        assert!((f[3] - 1.0).abs() < 1e-12);
+        assert!((f[4] - 3.0).abs() < 1e-12);
+        assert!((f[5].powi(2) + f[6].powi(2) - 1.0).abs() < 1e-12);
+        assert_eq!(f[7], 7.0);
+        assert_eq!(f[8], 21.0);
+        assert!(condition_features(s, &[], 5, -1, &[], &ConditionConfig::default()).is_none());
+    }
+
+    /// Synthetic cells: a noisy seasonal moisture cycle with cell offsets.
+    fn synthetic(seed: u64) -> (Vec<Vec<i64>>, Vec<Vec<f64>>) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut times = Vec::new();
+        let mut values = Vec::new();
+        for c in 0..6 {
+            let offset = 0.01 * c as f64;
+            let mut x = 0.0;
+            let (mut ts, mut vs) = (Vec::new(), Vec::new());
+            for d in 0..730i64 {
+                x = 0.9 * x + rng.random_range(-0.02..0.02);
+                if rng.random_bool(0.8) {
+                    ts.push(d * 86_400);
+                    vs.push(
+                        0.3 + offset + 0.08 * (d as f64 * std::f64::consts::TAU / 365.0).sin() + x,
+                    );
+                }
+            }
+            times.push(ts);
+            values.push(vs);
+        }
+        (times, values)
+    }
+
+    #[test]
+    fn model_beats_the_baseline_and_flattens_with_staleness() {
+        let (times, values) = synthetic(3);
+        let cells: Vec<Series> = times
+            .iter()
+            .zip(&values)
+            .map(|(t, v)| Series::new(t, v))
+            .collect();
+        let neighbours: Vec<Vec<usize>> = (0..6).map(|i| vec![(i + 1) % 6, (i + 5) % 6]).collect();
+        let config = ConditionConfig::default();
+        let split = 500 * 86_400;
+        let model = ConditionModel::fit(&cells, &neighbours, 0, split, &config).unwrap();
+        let test = TrainingSet::build(
+            &cells,
+            &neighbours,
+            model.thresholds(),
+            split,
+            i64::MAX,
+            &config,
+        );
+        let e = model.evaluate(&test);
+        assert!(e.n > 1000);
+        assert!(e.accuracy > e.baseline_accuracy + 0.1, "{e:?}");
+        assert!(e.log_loss < e.baseline_log_loss, "{e:?}");
+        // Same cell, same known data: the further t is from the last collection, the flatter.
+        let known = 600 * 86_400;
+        let entropy = |lag: i64| {
+            let f = condition_features(
+                cells[0],
+                &[],
+                known + lag * 86_400,
+                known,
+                model.thresholds(),
+                &config,
+            )
+            .unwrap();
+            crate::uncertainty(&model.predict_features(&f))
+        };
+        assert!(
+            entropy(14) > entropy(1),
+            "{} vs {}",
+            entropy(14),
+            entropy(1)
+        );
+        let p = model.predict_proba(&cells, &neighbours, known);
+        assert!(
+            p.iter()
+                .all(|p| (p.iter().sum::<f64>() - 1.0).abs() < 1e-12)
+        );
+        // Training is deterministic.
+        assert_eq!(
+            ConditionModel::fit(&cells, &neighbours, 0, split, &config).unwrap(),
+            model
+        );
+    }
+
+    #[test]
+    fn bad_configurations() {
+        let (t, v) = (vec![0i64], vec![1.0]);
+        let cells = [Series::new(&t, &v)];
+        for c in [
+            ConditionConfig {
+                n_classes: 1,
+                ..Default::default()
+            },
+            ConditionConfig {
+                thresholds: ClassThresholds::Fixed(vec![0.3]),
+                ..Default::default()
+            },
+            ConditionConfig {
+                thresholds: ClassThresholds::Fixed(vec![0.3, 0.2]),
+                ..Default::default()
+            },
+            ConditionConfig {
+                lags_days: vec![0],
+                ..Default::default()
+            },
+            ConditionConfig {
+                trend_points: 1,
+                ..Default::default()
+            },
+        ] {
+            assert!(
+                ConditionModel::fit(&cells, &[vec![]], 0, 10, &c).is_err(),
+                "{c:?}"
+            );
+        }
+        // No rows at all (nothing before the lag).
+        assert!(
+            ConditionModel::fit(&cells, &[vec![]], 0, 10, &ConditionConfig::default()).is_err()
+        );
+    }
+}
