@@ -23,6 +23,15 @@ pub struct ProjectFile {
     /// `[ingest]`
     #[serde(default)]
     pub ingest: IngestSection,
+    /// `[utility]`
+    #[serde(default)]
+    pub utility: UtilitySection,
+    /// `[energy]`
+    #[serde(default)]
+    pub energy: EnergySection,
+    /// `[planner]`
+    #[serde(default)]
+    pub planner: PlannerSection,
 }
 
 /// `[project]`: name and database.
@@ -90,6 +99,218 @@ impl Default for IngestSection {
             bytes_per_reading: 16.0,
             default_interval_s: 86_400.0,
         }
+    }
+}
+
+/// `[utility]`: the score S = alpha·F + beta·A + gamma·U − delta·R (SPEC §2).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct UtilitySection {
+    /// Weight of freshness F (default 1).
+    pub alpha: f64,
+    /// Weight of anomaly A (default 1).
+    pub beta: f64,
+    /// Weight of model uncertainty U (default 1).
+    pub gamma: f64,
+    /// Weight of redundancy R (default 1).
+    pub delta: f64,
+    /// Freshness half-life, seconds (default 259 200 = 3 days); lambda = ln 2 / half-life.
+    pub freshness_half_life_s: f64,
+    /// History window for R and A, days (default: all history).
+    pub history_window_days: Option<f64>,
+    /// Fewest common timestamps for a correlation to count (default 10).
+    pub min_overlap: usize,
+    /// Added to sigma in A, in the modality's unit (default 1e-6).
+    pub epsilon: f64,
+    /// `raw` (default, the paper's) or `bounded` (1 − exp(−A/kappa)).
+    pub anomaly_form: String,
+    /// kappa of the bounded anomaly, standard deviations (default 3).
+    pub anomaly_kappa: f64,
+    /// A collection with A^m at or above this is flagged in the anomaly history (default 3).
+    pub anomaly_flag: f64,
+    /// omega: redundancy weight per modality name (default equal; missing names weigh 0).
+    pub redundancy_weights: Option<std::collections::BTreeMap<String, f64>>,
+    /// phi: anomaly weight per modality name (default equal; missing names weigh 0).
+    pub anomaly_weights: Option<std::collections::BTreeMap<String, f64>>,
+    /// Modality the condition classes come from (default `vw@30cm`, else the first `vw@...`).
+    pub condition_modality: Option<String>,
+    /// Number of condition classes K (default 3: dry / adequate / wet).
+    pub condition_classes: usize,
+    /// K − 1 class thresholds in the modality's unit (default: quantiles of the history).
+    pub condition_thresholds: Option<Vec<f64>>,
+}
+
+impl Default for UtilitySection {
+    fn default() -> Self {
+        Self {
+            alpha: 1.0,
+            beta: 1.0,
+            gamma: 1.0,
+            delta: 1.0,
+            freshness_half_life_s: 259_200.0,
+            history_window_days: None,
+            min_overlap: 10,
+            epsilon: 1e-6,
+            anomaly_form: "raw".into(),
+            anomaly_kappa: 3.0,
+            anomaly_flag: 3.0,
+            redundancy_weights: None,
+            anomaly_weights: None,
+            condition_modality: None,
+            condition_classes: 3,
+            condition_thresholds: None,
+        }
+    }
+}
+
+/// `[energy]`: the UAV energy model (SPEC §3). Every field left out takes the preset's value.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct EnergySection {
+    /// `paper` (70 kJ, 5% reserve: 66.5 kJ usable) or `large-pack` (77 Wh, 20% reserve).
+    pub preset: String,
+    /// Cruise speed: `max-endurance` (default), `max-range`, or a number in m/s.
+    pub cruise: String,
+    /// Battery capacity, J.
+    pub battery_j: Option<f64>,
+    /// Reserve fraction of the battery never planned (0..1).
+    pub reserve_fraction: Option<f64>,
+    /// Flight altitude, m.
+    pub altitude_m: Option<f64>,
+    /// Fixed hover overhead per cell, s.
+    pub overhead_s: Option<f64>,
+    /// Minimum hover per cell, s.
+    pub min_hover_s: Option<f64>,
+    /// Receiver/processing power during collection, W.
+    pub rx_power_w: Option<f64>,
+    /// OFDMA bandwidth shared by a cell's sensors, Hz.
+    pub bandwidth_hz: Option<f64>,
+    /// Sensor transmit power, dBm.
+    pub tx_power_dbm: Option<f64>,
+    /// Receiver noise power, dBm.
+    pub noise_power_dbm: Option<f64>,
+    /// Sensor logging interval, s.
+    pub reading_interval_s: Option<f64>,
+    /// Bytes per logged reading.
+    pub bytes_per_reading: Option<f64>,
+}
+
+impl Default for EnergySection {
+    fn default() -> Self {
+        Self {
+            preset: "paper".into(),
+            cruise: "max-endurance".into(),
+            battery_j: None,
+            reserve_fraction: None,
+            altitude_m: None,
+            overhead_s: None,
+            min_hover_s: None,
+            rx_power_w: None,
+            bandwidth_hz: None,
+            tx_power_dbm: None,
+            noise_power_dbm: None,
+            reading_interval_s: None,
+            bytes_per_reading: None,
+        }
+    }
+}
+
+/// `[planner]`: route planner defaults.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlannerSection {
+    /// `default`, `greedy` or `exact`.
+    pub solver: String,
+    /// Time limit, seconds.
+    pub time_limit_s: f64,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl Default for PlannerSection {
+    fn default() -> Self {
+        Self {
+            solver: "default".into(),
+            time_limit_s: 5.0,
+            seed: 0,
+        }
+    }
+}
+
+impl UtilitySection {
+    /// The core configuration, with modality weights laid out in `modalities` order.
+    pub fn to_core(&self, modalities: &[String]) -> Result<gleaner_utility::UtilityConfig> {
+        use gleaner_utility::{AnomalyForm, HistoryWindow, ModalityWeights, UtilityConfig};
+        let weights = |w: &Option<std::collections::BTreeMap<String, f64>>| match w {
+            None => ModalityWeights::Equal,
+            Some(map) => ModalityWeights::Given(
+                modalities.iter().map(|m| map.get(m).copied().unwrap_or(0.0)).collect(),
+            ),
+        };
+        let config = UtilityConfig {
+            alpha: self.alpha,
+            beta: self.beta,
+            gamma: self.gamma,
+            delta: self.delta,
+            freshness_half_life_s: self.freshness_half_life_s,
+            window: match self.history_window_days {
+                None => HistoryWindow::All,
+                Some(d) => HistoryWindow::Last {
+                    seconds: (d * 86_400.0).round() as i64,
+                },
+            },
+            min_overlap: self.min_overlap,
+            epsilon: self.epsilon,
+            redundancy_weights: weights(&self.redundancy_weights),
+            anomaly_weights: weights(&self.anomaly_weights),
+            anomaly_form: match self.anomaly_form.as_str() {
+                "raw" => AnomalyForm::Raw,
+                "bounded" => AnomalyForm::Bounded {
+                    kappa: self.anomaly_kappa,
+                },
+                other => bail!("utility.anomaly_form = {other:?}: expected \"raw\" or \"bounded\""),
+            },
+        };
+        config
+            .validate(modalities.len())
+            .context("[utility] settings")?;
+        Ok(config)
+    }
+}
+
+impl EnergySection {
+    /// The core energy configuration: the preset with every given field overridden.
+    pub fn to_core(&self) -> Result<gleaner_energy::EnergyConfig> {
+        use gleaner_energy::{CruiseSpeed, EnergyConfig};
+        let mut c = match self.preset.as_str() {
+            "paper" => EnergyConfig::paper(),
+            "large-pack" => EnergyConfig::large_pack(),
+            other => bail!("energy.preset = {other:?}: expected \"paper\" or \"large-pack\""),
+        };
+        c.cruise = match self.cruise.as_str() {
+            "max-endurance" => CruiseSpeed::MaxEndurance,
+            "max-range" => CruiseSpeed::MaxRange,
+            v => CruiseSpeed::Fixed(v.parse().with_context(|| {
+                format!("energy.cruise = {v:?}: expected max-endurance, max-range or a speed in m/s")
+            })?),
+        };
+        let set = |field: &mut f64, v: Option<f64>| {
+            if let Some(v) = v {
+                *field = v;
+            }
+        };
+        set(&mut c.battery.capacity_j, self.battery_j);
+        set(&mut c.battery.reserve_fraction, self.reserve_fraction);
+        set(&mut c.link.altitude_m, self.altitude_m);
+        set(&mut c.hover.overhead_s, self.overhead_s);
+        set(&mut c.hover.min_hover_s, self.min_hover_s);
+        set(&mut c.rx_power_w, self.rx_power_w);
+        set(&mut c.link.bandwidth_hz, self.bandwidth_hz);
+        set(&mut c.link.tx_power_dbm, self.tx_power_dbm);
+        set(&mut c.link.noise_power_dbm, self.noise_power_dbm);
+        set(&mut c.logging.reading_interval_s, self.reading_interval_s);
+        set(&mut c.logging.bytes_per_reading, self.bytes_per_reading);
+        Ok(c)
     }
 }
 

@@ -15,7 +15,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 
-use commands::{cells, demo, ingest, init, synth};
+use commands::{cells, demo, ingest, init, score, synth};
 use project::Project;
 
 /// Utility-driven UAV data collection for farm sensor networks.
@@ -108,6 +108,27 @@ enum Command {
         #[arg(long, value_enum, default_value_t = SortArg::Label)]
         sort: SortArg,
     },
+    /// Score every cell at a mission time: F, R, A, U and S, printed and kept in the cell
+    /// metadata table.
+    #[command(after_help = "S = alpha·F + beta·A + gamma·U − delta·R with the weights of [utility] in gleaner.toml.\nU comes from the built-in condition model (dry/adequate/wet from soil moisture) or from\n--probabilities (CSV: cell_id,p_1,...,p_K with a header).\n\nExamples:\n  gleaner score --project caf --at 2014-03-01\n  gleaner score --project farm --json --limit 20")]
+    Score {
+        /// Project directory.
+        #[arg(long, default_value = ".")]
+        project: PathBuf,
+        /// Mission time (RFC 3339 or YYYY-MM-DD, UTC) [default: the latest reading]. Only data
+        /// up to this time is used.
+        #[arg(long, value_parser = parse_time)]
+        at: Option<i64>,
+        /// Per-cell class probabilities from your own model, instead of the built-in one.
+        #[arg(long)]
+        probabilities: Option<PathBuf>,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+        /// Rows of the table (highest S first).
+        #[arg(long, default_value_t = 20)]
+        limit: usize,
+    },
     /// Write a seeded synthetic farm (sensors, long readings, ground truth, faults) as CSV.
     #[command(
         after_help = "Defaults are calibrated to the CAF network (VW range, day-to-day change, spatial correlation).\n\nExamples:\n  gleaner synth --out farm-data --sensors 60 --days 120 --seed 1\n  gleaner synth --out big --sensors 10000 --days 365 --scale-extent"
@@ -196,6 +217,11 @@ fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
     Ok((lat, lon))
 }
 
+fn parse_time(s: &str) -> Result<i64, String> {
+    gleaner_ingest::time::parse_timestamp(s)
+        .ok_or_else(|| format!("expected RFC 3339 (2014-03-01T12:00:00Z) or a date (2014-03-01), got {s:?}"))
+}
+
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Init {
@@ -276,6 +302,23 @@ fn run(cli: Cli) -> Result<()> {
                 );
             } else {
                 print!("{}", cells::table(&rows));
+            }
+        }
+        Command::Score {
+            project,
+            at,
+            probabilities,
+            json,
+            limit,
+        } => {
+            let mut p = Project::open(&project)?;
+            let scoring = score::score(&p, at, probabilities.as_deref())?;
+            score::store_scores(&mut p, &scoring)?;
+            let doc = score::to_json(&p, &scoring);
+            if json {
+                println!("{}", serde_json::to_string_pretty(&doc).context("serialising scores")?);
+            } else {
+                print!("{}", score::table(&doc, limit));
             }
         }
         Command::Synth {

@@ -97,6 +97,9 @@ pub fn run(args: &InitArgs) -> Result<String> {
             utm_zone: args.utm_zone.clone(),
         },
         ingest: IngestSection::default(),
+        utility: Default::default(),
+        energy: Default::default(),
+        planner: Default::default(),
     };
     let field = Field::build(&sensors, base, &file.field_config())?;
     let mut store = SqliteStore::open(&args.dir.join(&file.project.database))?;

@@ -5,4 +5,5 @@ pub mod cells;
 pub mod demo;
 pub mod ingest;
 pub mod init;
+pub mod score;
 pub mod synth;
