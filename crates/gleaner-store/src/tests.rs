@@ -74,6 +74,15 @@ fn dump(store: &SqliteStore) -> BTreeMap<(String, String, UnixSeconds), f64> {
         .collect()
 }
 
+/// The trait stays usable as `dyn Store` (so callers can hold any backend).
+#[test]
+fn store_is_object_safe() {
+    let mut concrete = memory_store();
+    let store: &mut dyn Store = &mut concrete;
+    store.set_sensor_collected(&sid("a"), T0).unwrap();
+    assert_eq!(store.sensor_last_collected().unwrap(), vec![(sid("a"), T0)]);
+}
+
 #[test]
 fn migration_from_empty_creates_every_table() {
     let dir = tempfile::tempdir().unwrap();
