@@ -189,6 +189,36 @@ fn newer_schema_is_refused() {
 }
 
 #[test]
+fn foreign_files_are_refused_untouched() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("no/such/dir/g.db");
+    let err = SqliteStore::open(&missing).unwrap_err();
+    assert!(err.to_string().contains("no/such/dir/g.db"), "{err}");
+
+    let other = dir.path().join("other.db");
+    {
+        let c = rusqlite::Connection::open(&other).unwrap();
+        c.execute_batch("CREATE TABLE photos (x INTEGER);").unwrap();
+    }
+    let err = SqliteStore::open(&other).unwrap_err();
+    assert!(err.to_string().contains("not a gleaner database"), "{err}");
+    let c = rusqlite::Connection::open(&other).unwrap();
+    let n: i64 = c
+        .query_row("SELECT COUNT(*) FROM sqlite_master", [], |r| r.get(0))
+        .unwrap();
+    assert_eq!(n, 1, "nothing may be added to a foreign database");
+    let mode: String = c
+        .query_row("PRAGMA journal_mode", [], |r| r.get(0))
+        .unwrap();
+    assert_eq!(mode, "delete", "a foreign database keeps its journal mode");
+
+    let text = dir.path().join("notes.txt");
+    std::fs::write(&text, "this is not a database, just some text long enough to matter......................................................................................").unwrap();
+    let err = SqliteStore::open(&text).unwrap_err();
+    assert!(err.to_string().contains("notes.txt"), "{err}");
+}
+
+#[test]
 fn later_migrations_apply_in_order_and_failed_ones_roll_back() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("g.db");
