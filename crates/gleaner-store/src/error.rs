@@ -17,6 +17,23 @@ pub enum StoreError {
     /// The database engine reported an error (IO, corruption, constraint, ...).
     #[error("database error: {0}")]
     Sqlite(#[from] rusqlite::Error),
+    /// The database file could not be opened (missing directory, permissions, not SQLite).
+    #[error("cannot open database {path}: {source}")]
+    Open {
+        /// The path given.
+        path: std::path::PathBuf,
+        /// The engine's error.
+        source: rusqlite::Error,
+    },
+    /// The file is an SQLite database of some other application (it has tables but no
+    /// gleaner schema history); gleaner does not add its tables to it.
+    #[error("{path} is not a gleaner database (it has tables {tables:?} but no schema_migrations)")]
+    NotAGleanerDatabase {
+        /// The path given.
+        path: String,
+        /// Some of its tables.
+        tables: Vec<String>,
+    },
     /// The database was written by a newer gleaner whose schema this build does not know.
     #[error(
         "database schema version {found} is newer than this gleaner supports ({supported}); \

@@ -36,8 +36,8 @@ CREATE TABLE modalities (
 );
 
 CREATE TABLE readings (
-    sensor   INTEGER NOT NULL REFERENCES sensors (id),
-    modality INTEGER NOT NULL REFERENCES modalities (id),
+    sensor   INTEGER NOT NULL,
+    modality INTEGER NOT NULL,
     t        INTEGER NOT NULL,
     value    REAL    NOT NULL,
     PRIMARY KEY (sensor, modality, t)

@@ -40,7 +40,17 @@ pub struct SqliteStore {
 impl SqliteStore {
     /// Opens (creating if needed) the database file at `path` and migrates it.
     pub fn open(path: &Path) -> Result<Self> {
-        Self::setup(Connection::open(path)?)
+        let wrap = |source| StoreError::Open {
+            path: path.to_path_buf(),
+            source,
+        };
+        let conn = Connection::open(path).map_err(wrap)?;
+        // The first statement is where SQLite notices a file that is not a database.
+        conn.query_row("SELECT COUNT(*) FROM sqlite_master", [], |r| {
+            r.get::<_, i64>(0)
+        })
+        .map_err(wrap)?;
+        Self::setup(conn)
     }
 
     /// A fresh database in memory (for tests and dry runs).
@@ -50,6 +60,20 @@ impl SqliteStore {
 
     fn setup(mut conn: Connection) -> Result<Self> {
         conn.busy_timeout(BUSY_TIMEOUT)?;
+        let foreign: Vec<String> = conn
+            .prepare(
+                "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'
+                 AND NOT EXISTS (SELECT 1 FROM sqlite_master WHERE name = 'schema_migrations')
+                 ORDER BY name LIMIT 5",
+            )?
+            .query_map([], |r| r.get(0))?
+            .collect::<rusqlite::Result<_>>()?;
+        if !foreign.is_empty() {
+            return Err(StoreError::NotAGleanerDatabase {
+                path: conn.path().unwrap_or(":memory:").to_string(),
+                tables: foreign,
+            });
+        }
         // journal_mode answers with the mode in force ("memory" for in-memory databases).
         let _mode: String = conn.query_row("PRAGMA journal_mode = WAL", [], |r| r.get(0))?;
         conn.execute_batch(

@@ -74,6 +74,15 @@ fn dump(store: &SqliteStore) -> BTreeMap<(String, String, UnixSeconds), f64> {
         .collect()
 }
 
+/// The trait stays usable as `dyn Store` (so callers can hold any backend).
+#[test]
+fn store_is_object_safe() {
+    let mut concrete = memory_store();
+    let store: &mut dyn Store = &mut concrete;
+    store.set_sensor_collected(&sid("a"), T0).unwrap();
+    assert_eq!(store.sensor_last_collected().unwrap(), vec![(sid("a"), T0)]);
+}
+
 #[test]
 fn migration_from_empty_creates_every_table() {
     let dir = tempfile::tempdir().unwrap();
@@ -177,6 +186,36 @@ fn newer_schema_is_refused() {
     }
     let err = SqliteStore::open(&path2).unwrap_err();
     assert!(err.to_string().contains("version 7 is newer"), "{err}");
+}
+
+#[test]
+fn foreign_files_are_refused_untouched() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("no/such/dir/g.db");
+    let err = SqliteStore::open(&missing).unwrap_err();
+    assert!(err.to_string().contains("no/such/dir/g.db"), "{err}");
+
+    let other = dir.path().join("other.db");
+    {
+        let c = rusqlite::Connection::open(&other).unwrap();
+        c.execute_batch("CREATE TABLE photos (x INTEGER);").unwrap();
+    }
+    let err = SqliteStore::open(&other).unwrap_err();
+    assert!(err.to_string().contains("not a gleaner database"), "{err}");
+    let c = rusqlite::Connection::open(&other).unwrap();
+    let n: i64 = c
+        .query_row("SELECT COUNT(*) FROM sqlite_master", [], |r| r.get(0))
+        .unwrap();
+    assert_eq!(n, 1, "nothing may be added to a foreign database");
+    let mode: String = c
+        .query_row("PRAGMA journal_mode", [], |r| r.get(0))
+        .unwrap();
+    assert_eq!(mode, "delete", "a foreign database keeps its journal mode");
+
+    let text = dir.path().join("notes.txt");
+    std::fs::write(&text, "this is not a database, just some text long enough to matter......................................................................................").unwrap();
+    let err = SqliteStore::open(&text).unwrap_err();
+    assert!(err.to_string().contains("notes.txt"), "{err}");
 }
 
 #[test]
@@ -870,5 +909,103 @@ proptest! {
         prop_assert_eq!(second.inserted, 0);
         prop_assert_eq!(second.unchanged as usize + second.conflicts.len(), rows.len());
         prop_assert_eq!(store.reading_count().unwrap() as usize, distinct.len());
+    }
+}
+
+/// Naive statistics of a series given as `t -> value`.
+fn naive_stats(series: &BTreeMap<i64, f64>) -> SeriesStats {
+    let n = series.len() as f64;
+    let mean = series.values().sum::<f64>() / n;
+    let ss: f64 = series.values().map(|v| (v - mean) * (v - mean)).sum();
+    let (&latest_t, &latest_value) = series.iter().next_back().unwrap();
+    SeriesStats {
+        count: series.len() as u64,
+        mean,
+        std: (series.len() >= 2).then(|| (ss / (n - 1.0)).sqrt()),
+        min: series.values().copied().fold(f64::INFINITY, f64::min),
+        max: series.values().copied().fold(f64::NEG_INFINITY, f64::max),
+        latest_t,
+        latest_value,
+    }
+}
+
+fn assert_stats_close(got: &SeriesStats, want: &SeriesStats) {
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (1.0 + a.abs().max(b.abs()));
+    assert_eq!((got.count, got.latest_t), (want.count, want.latest_t));
+    assert!(close(got.mean, want.mean), "{got:?} vs {want:?}");
+    assert!(
+        close(got.min, want.min) && close(got.max, want.max),
+        "{got:?} vs {want:?}"
+    );
+    assert!(
+        close(got.latest_value, want.latest_value),
+        "{got:?} vs {want:?}"
+    );
+    match (got.std, want.std) {
+        (Some(a), Some(b)) => assert!(close(a, b), "{got:?} vs {want:?}"),
+        (a, b) => assert_eq!(a, b),
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(32))]
+    /// Readings come back exactly; SQL summaries (per sensor, and per cell over the cell series)
+    /// agree with a naive computation in Rust.
+    #[test]
+    fn stored_readings_and_summaries_match_a_naive_model(
+        rows in proptest::collection::vec((0usize..3, 0usize..2, 0i64..30, -1e3f64..1e3), 1..200)
+    ) {
+        let mut store = memory_store();
+        store.replace_cells(&[cell(0, 0, &["a", "b"]), cell(1, 0, &["c"])]).unwrap();
+        let sensors = ["a", "b", "c"];
+        let modalities = ["vw@30cm", "t@30cm"];
+        // First occurrence of a key wins (as the store keeps it under Skip).
+        let mut model: BTreeMap<(usize, usize, i64), f64> = BTreeMap::new();
+        let mut b = ReadingBatchBuilder::new();
+        for &(s, m, t, v) in &rows {
+            model.entry((s, m, t)).or_insert(v);
+            b.push(&sid(sensors[s]), &md(modalities[m]), T0 + t * DAY, v);
+        }
+        store.insert_readings(&b.finish(), ConflictPolicy::Skip).unwrap();
+        let stored = dump(&store);
+        let expected: BTreeMap<(String, String, i64), f64> = model
+            .iter()
+            .map(|(&(s, m, t), &v)| ((sensors[s].to_string(), modalities[m].to_string(), T0 + t * DAY), v))
+            .collect();
+        prop_assert_eq!(&stored, &expected);
+
+        let mut per_sensor: BTreeMap<(String, String), BTreeMap<i64, f64>> = BTreeMap::new();
+        for ((s, m, t), v) in &stored {
+            per_sensor.entry((s.clone(), m.clone())).or_default().insert(*t, *v);
+        }
+        let summaries = store.sensor_summaries().unwrap();
+        prop_assert_eq!(summaries.len(), per_sensor.len());
+        for (s, ((sensor, modality), series)) in summaries.iter().zip(&per_sensor) {
+            prop_assert_eq!((s.sensor.as_str(), s.modality.as_str()), (sensor.as_str(), modality.as_str()));
+            assert_stats_close(&s.stats, &naive_stats(series));
+        }
+
+        // Cell series: mean over the cell's sensors present at each t.
+        let cell_of = |s: &str| if s == "c" { 1 } else { 0 };
+        let mut sums: BTreeMap<(usize, String), BTreeMap<i64, (f64, f64)>> = BTreeMap::new();
+        for ((s, m, t), v) in &stored {
+            let e = sums.entry((cell_of(s), m.clone())).or_default().entry(*t).or_insert((0.0, 0.0));
+            e.0 += v;
+            e.1 += 1.0;
+        }
+        store.refresh_cell_summaries(&RefreshParams { now: T0, bytes_per_reading: 1.0, default_interval_s: 1.0 }).unwrap();
+        let mdata = store.cell_metadata().unwrap();
+        let mut got = 0;
+        for (k, md) in mdata.iter().enumerate() {
+            for s in &md.summaries {
+                let series: BTreeMap<i64, f64> = sums[&(k, s.modality.to_string())]
+                    .iter()
+                    .map(|(t, (sum, n))| (*t, sum / n))
+                    .collect();
+                assert_stats_close(&s.stats, &naive_stats(&series));
+                got += 1;
+            }
+        }
+        prop_assert_eq!(got, sums.len());
     }
 }
