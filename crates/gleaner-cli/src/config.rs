@@ -244,7 +244,10 @@ impl UtilitySection {
         let weights = |w: &Option<std::collections::BTreeMap<String, f64>>| match w {
             None => ModalityWeights::Equal,
             Some(map) => ModalityWeights::Given(
-                modalities.iter().map(|m| map.get(m).copied().unwrap_or(0.0)).collect(),
+                modalities
+                    .iter()
+                    .map(|m| map.get(m).copied().unwrap_or(0.0))
+                    .collect(),
             ),
         };
         let config = UtilityConfig {
@@ -291,7 +294,9 @@ impl EnergySection {
             "max-endurance" => CruiseSpeed::MaxEndurance,
             "max-range" => CruiseSpeed::MaxRange,
             v => CruiseSpeed::Fixed(v.parse().with_context(|| {
-                format!("energy.cruise = {v:?}: expected max-endurance, max-range or a speed in m/s")
+                format!(
+                    "energy.cruise = {v:?}: expected max-endurance, max-range or a speed in m/s"
+                )
             })?),
         };
         let set = |field: &mut f64, v: Option<f64>| {

@@ -110,7 +110,9 @@ enum Command {
     },
     /// Score every cell at a mission time: F, R, A, U and S, printed and kept in the cell
     /// metadata table.
-    #[command(after_help = "S = alpha·F + beta·A + gamma·U − delta·R with the weights of [utility] in gleaner.toml.\nU comes from the built-in condition model (dry/adequate/wet from soil moisture) or from\n--probabilities (CSV: cell_id,p_1,...,p_K with a header).\n\nExamples:\n  gleaner score --project caf --at 2014-03-01\n  gleaner score --project farm --json --limit 20")]
+    #[command(
+        after_help = "S = alpha·F + beta·A + gamma·U − delta·R with the weights of [utility] in gleaner.toml.\nU comes from the built-in condition model (dry/adequate/wet from soil moisture) or from\n--probabilities (CSV: cell_id,p_1,...,p_K with a header).\n\nExamples:\n  gleaner score --project caf --at 2014-03-01 --history-from 2011-01-01 --history-until 2013-12-31\n  gleaner score --project farm --json --limit 20"
+    )]
     Score {
         /// Project directory.
         #[arg(long, default_value = ".")]
@@ -119,6 +121,13 @@ enum Command {
         /// up to this time is used.
         #[arg(long, value_parser = parse_time)]
         at: Option<i64>,
+        /// Use only readings from this time on (RFC 3339 or date) as collected history.
+        #[arg(long, value_parser = parse_time)]
+        history_from: Option<i64>,
+        /// Use only readings up to this time as collected history (later ones are not yet
+        /// collected at the mission time), e.g. score 2014 from 2011-2013 data.
+        #[arg(long, value_parser = parse_time)]
+        history_until: Option<i64>,
         /// Per-cell class probabilities from your own model, instead of the built-in one.
         #[arg(long)]
         probabilities: Option<PathBuf>,
@@ -218,8 +227,9 @@ fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
 }
 
 fn parse_time(s: &str) -> Result<i64, String> {
-    gleaner_ingest::time::parse_timestamp(s)
-        .ok_or_else(|| format!("expected RFC 3339 (2014-03-01T12:00:00Z) or a date (2014-03-01), got {s:?}"))
+    gleaner_ingest::time::parse_timestamp(s).ok_or_else(|| {
+        format!("expected RFC 3339 (2014-03-01T12:00:00Z) or a date (2014-03-01), got {s:?}")
+    })
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -307,16 +317,25 @@ fn run(cli: Cli) -> Result<()> {
         Command::Score {
             project,
             at,
+            history_from,
+            history_until,
             probabilities,
             json,
             limit,
         } => {
             let mut p = Project::open(&project)?;
-            let scoring = score::score(&p, at, probabilities.as_deref())?;
+            let history = score::History {
+                from: history_from.unwrap_or(i64::MIN),
+                until: history_until.unwrap_or(i64::MAX),
+            };
+            let scoring = score::score(&p, at, history, probabilities.as_deref())?;
             score::store_scores(&mut p, &scoring)?;
             let doc = score::to_json(&p, &scoring);
             if json {
-                println!("{}", serde_json::to_string_pretty(&doc).context("serialising scores")?);
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&doc).context("serialising scores")?
+                );
             } else {
                 print!("{}", score::table(&doc, limit));
             }

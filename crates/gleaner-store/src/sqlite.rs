@@ -288,7 +288,7 @@ impl Store for SqliteStore {
                 });
             }
         }
-        let tx = self.conn.transaction()?;
+        let tx = self.conn.savepoint()?;
         let mut stats = UpsertStats::default();
         {
             let mut get = tx.prepare_cached("SELECT unit FROM modalities WHERE name = ?1")?;
@@ -401,7 +401,7 @@ impl Store for SqliteStore {
         let mut rows: Vec<Reading> = batch.rows.clone();
         rows.sort_by_key(key);
 
-        let tx = self.conn.transaction()?;
+        let tx = self.conn.savepoint()?;
         let mut stats = InsertStats::default();
         {
             let many_sql = format!(
@@ -573,6 +573,40 @@ impl Store for SqliteStore {
             });
         }
         Ok(out)
+    }
+
+    fn ingest(
+        &mut self,
+        modalities: &[ModalityRecord],
+        batch: &ReadingBatch,
+        policy: ConflictPolicy,
+        provenance: &[IngestRecord],
+    ) -> Result<InsertStats> {
+        // One outer savepoint: the nested savepoints of the steps release into it, and any
+        // error rolls all of them back together.
+        self.conn.execute_batch("SAVEPOINT gleaner_ingest")?;
+        let result = (|| {
+            self.upsert_modalities(modalities)?;
+            let stats = self.insert_readings(batch, policy)?;
+            for record in provenance {
+                let mut r = record.clone();
+                r.rows_inserted = stats.inserted;
+                r.rows_unchanged = stats.unchanged;
+                self.record_ingest(&r)?;
+            }
+            Ok(stats)
+        })();
+        match result {
+            Ok(stats) => {
+                self.conn.execute_batch("RELEASE gleaner_ingest")?;
+                Ok(stats)
+            }
+            Err(e) => {
+                self.conn
+                    .execute_batch("ROLLBACK TO gleaner_ingest; RELEASE gleaner_ingest")?;
+                Err(e)
+            }
+        }
     }
 
     fn record_ingest(&mut self, ingest: &IngestRecord) -> Result<i64> {

@@ -51,6 +51,16 @@ pub trait Store {
     /// Count, mean, sample std, min, max and latest value per sensor and modality, sorted by
     /// sensor id then modality name.
     fn sensor_summaries(&self) -> Result<Vec<SensorSummary>>;
+    /// One whole ingest in one transaction: upserts `modalities`, inserts `batch` under
+    /// `policy`, and records each `provenance` entry (its inserted/unchanged counts set from
+    /// the insert). On any error nothing is written.
+    fn ingest(
+        &mut self,
+        modalities: &[ModalityRecord],
+        batch: &ReadingBatch,
+        policy: ConflictPolicy,
+        provenance: &[IngestRecord],
+    ) -> Result<InsertStats>;
     /// Records the provenance of an ingest; returns its row id.
     fn record_ingest(&mut self, ingest: &IngestRecord) -> Result<i64>;
     /// All ingest records, oldest first.

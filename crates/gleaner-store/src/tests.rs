@@ -367,6 +367,60 @@ fn conflicts_fail_or_skip() {
 }
 
 #[test]
+fn a_failed_ingest_writes_no_modality_reading_or_provenance() {
+    let mut store = memory_store();
+    store
+        .insert_readings(&batch(&[("a", "vw@30cm", T0, 0.3)]), ConflictPolicy::Fail)
+        .unwrap();
+    let new_modality = ModalityRecord {
+        modality: md("humidity"),
+        unit: Some("%".into()),
+    };
+    let provenance = IngestRecord {
+        file_name: "x.csv".into(),
+        format: "long-csv".into(),
+        rows_read: 2,
+        rows_inserted: 0,
+        rows_unchanged: 0,
+        rows_skipped: 0,
+        at: T0,
+    };
+    let incoming = batch(&[("b", "humidity", T0, 40.0), ("a", "vw@30cm", T0, 0.4)]);
+    let err = store
+        .ingest(
+            &[new_modality.clone()],
+            &incoming,
+            ConflictPolicy::Fail,
+            &[provenance.clone()],
+        )
+        .unwrap_err();
+    assert!(matches!(err, StoreError::Conflicts(_)), "{err:?}");
+    assert_eq!(
+        store.modalities().unwrap().len(),
+        2,
+        "modality must roll back"
+    );
+    assert!(
+        store.ingests().unwrap().is_empty(),
+        "provenance must roll back"
+    );
+    assert_eq!(store.reading_count().unwrap(), 1);
+    // The same ingest under Skip goes through whole, with its counts in the provenance.
+    let stats = store
+        .ingest(
+            &[new_modality],
+            &incoming,
+            ConflictPolicy::Skip,
+            &[provenance],
+        )
+        .unwrap();
+    assert_eq!((stats.inserted, stats.conflicts.len()), (1, 1));
+    assert_eq!(store.modalities().unwrap().len(), 3);
+    let ingests = store.ingests().unwrap();
+    assert_eq!((ingests.len(), ingests[0].rows_inserted), (1, 1));
+}
+
+#[test]
 fn duplicates_within_a_batch() {
     let mut store = memory_store();
     let b = batch(&[

@@ -225,14 +225,10 @@ fn store_readings(
             at,
         })
         .collect();
-    project.store.upsert_modalities(&modalities)?;
     let stats = project
         .store
-        .insert_readings(&batch, policy)
+        .ingest(&modalities, &batch, policy, &records)
         .context("storing the readings (nothing was stored)")?;
-    for r in &records {
-        project.store.record_ingest(r)?;
-    }
     outcome.inserted = stats.inserted;
     outcome.unchanged = stats.unchanged;
     outcome.conflicts = stats.conflicts.len() as u64;

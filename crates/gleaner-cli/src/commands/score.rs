@@ -52,12 +52,34 @@ fn sampling_step(times: &[Vec<UnixSeconds>]) -> i64 {
     *gaps.select_nth_unstable(mid).1
 }
 
-/// Loads everything collected at or before `t` (default: the latest reading).
-pub fn knowledge(project: &Project, t: Option<UnixSeconds>) -> Result<Knowledge> {
+/// Which stored readings count as collected: those with times in `from..=until` (seconds).
+#[derive(Debug, Clone, Copy)]
+pub struct History {
+    /// Earliest reading used.
+    pub from: UnixSeconds,
+    /// Latest reading used.
+    pub until: UnixSeconds,
+}
+
+impl Default for History {
+    fn default() -> Self {
+        Self {
+            from: UnixSeconds::MIN,
+            until: UnixSeconds::MAX,
+        }
+    }
+}
+
+/// Loads everything collected at or before `t` (default: the latest reading), within `history`.
+pub fn knowledge(project: &Project, t: Option<UnixSeconds>, history: History) -> Result<Knowledge> {
     let (sensors, field) = project.field()?;
-    let index: HashMap<&str, usize> = sensors.iter().enumerate().map(|(k, s)| (s.id.as_str(), k)).collect();
-    let until = t.unwrap_or(UnixSeconds::MAX);
-    let batch = project.store.readings_for(None, UnixSeconds::MIN..=until)?;
+    let index: HashMap<&str, usize> = sensors
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (s.id.as_str(), k))
+        .collect();
+    let until = t.unwrap_or(UnixSeconds::MAX).min(history.until);
+    let batch = project.store.readings_for(None, history.from..=until)?;
     let mut modalities: Vec<String> = batch.modalities.iter().map(ToString::to_string).collect();
     modalities.sort();
     modalities.dedup();
@@ -92,8 +114,16 @@ pub fn knowledge(project: &Project, t: Option<UnixSeconds>) -> Result<Knowledge>
         }
     }
     let step = sampling_step(&times);
-    let origin = times.iter().filter_map(|t| t.first()).min().copied().unwrap_or(0);
-    let grid = TimeGrid { origin, step_s: step.max(1) };
+    let origin = times
+        .iter()
+        .filter_map(|t| t.first())
+        .min()
+        .copied()
+        .unwrap_or(0);
+    let grid = TimeGrid {
+        origin,
+        step_s: step.max(1),
+    };
     let series = field
         .cells()
         .iter()
@@ -123,9 +153,15 @@ pub fn knowledge(project: &Project, t: Option<UnixSeconds>) -> Result<Knowledge>
 
 /// Per-cell class probabilities from a user's CSV: `cell_id,p_1,...,p_K` with a header.
 fn read_probabilities(path: &Path, field: &Field) -> Result<Vec<Vec<f64>>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
     let mut rows: Vec<(String, Vec<f64>)> = Vec::new();
-    for (k, line) in text.trim_start_matches('\u{feff}').lines().enumerate().skip(1) {
+    for (k, line) in text
+        .trim_start_matches('\u{feff}')
+        .lines()
+        .enumerate()
+        .skip(1)
+    {
         if line.trim().is_empty() {
             continue;
         }
@@ -135,14 +171,20 @@ fn read_probabilities(path: &Path, field: &Field) -> Result<Vec<Vec<f64>>> {
             .enumerate()
             .map(|(c, v)| {
                 v.parse::<f64>().map_err(|_| {
-                    anyhow::anyhow!("{}:{}: column p_{}: not a number: {v:?}", path.display(), k + 1, c + 1)
+                    anyhow::anyhow!(
+                        "{}:{}: column p_{}: not a number: {v:?}",
+                        path.display(),
+                        k + 1,
+                        c + 1
+                    )
                 })
             })
             .collect::<Result<Vec<f64>>>()?;
         rows.push((cell, p));
     }
     let labels: Vec<String> = field.cells().iter().map(|c| c.index.to_string()).collect();
-    let ordered = validate_probabilities(&labels, &rows).with_context(|| format!("{}", path.display()))?;
+    let ordered =
+        validate_probabilities(&labels, &rows).with_context(|| format!("{}", path.display()))?;
     Ok(ordered)
 }
 
@@ -198,7 +240,12 @@ fn condition(project: &Project, k: &Knowledge, t: UnixSeconds) -> Result<Option<
         },
         ..ConditionConfig::default()
     };
-    let from = cells.iter().filter_map(|s| s.times.first()).min().copied().unwrap_or(t);
+    let from = cells
+        .iter()
+        .filter_map(|s| s.times.first())
+        .min()
+        .copied()
+        .unwrap_or(t);
     match ConditionModel::fit(&cells, &neighbours, from, t, &config) {
         Ok(model) => Ok(Some(ConditionOutput {
             modality: name,
@@ -236,8 +283,13 @@ pub struct Scoring {
 }
 
 /// Scores every cell at `t` (default: the latest reading), from the stored history.
-pub fn score(project: &Project, at: Option<UnixSeconds>, probabilities: Option<&Path>) -> Result<Scoring> {
-    let k = knowledge(project, at)?;
+pub fn score(
+    project: &Project,
+    at: Option<UnixSeconds>,
+    history: History,
+    probabilities: Option<&Path>,
+) -> Result<Scoring> {
+    let k = knowledge(project, at, history)?;
     let Some(t) = at.or(k.latest) else {
         bail!("no readings: ingest some data first");
     };
@@ -279,7 +331,11 @@ pub fn score(project: &Project, at: Option<UnixSeconds>, probabilities: Option<&
     drop(inputs);
     Ok(Scoring {
         t,
-        cells: terms.into_iter().enumerate().map(|(cell, terms)| ScoredCell { cell, terms }).collect(),
+        cells: terms
+            .into_iter()
+            .enumerate()
+            .map(|(cell, terms)| ScoredCell { cell, terms })
+            .collect(),
         knowledge: k,
         condition,
         anomaly_form: config.anomaly_form.label(),
@@ -298,7 +354,11 @@ pub fn store_scores(project: &mut Project, s: &Scoring) -> Result<()> {
         .map(|c| {
             let cell = &k.field.cells()[c.cell];
             let mut m = CellMetadata::new(cell.index);
-            m.last_collected = cell.sensors.iter().filter_map(|&x| k.last_collected[x]).max();
+            m.last_collected = cell
+                .sensors
+                .iter()
+                .filter_map(|&x| k.last_collected[x])
+                .max();
             m.scores = Some(CellScores {
                 freshness: c.terms.f,
                 redundancy: c.terms.r,
@@ -312,19 +372,26 @@ pub fn store_scores(project: &mut Project, s: &Scoring) -> Result<()> {
                     .classes
                     .iter()
                     .zip(&cond.probabilities[c.cell])
-                    .map(|(class, &p)| ClassProbability { class: class.clone(), probability: p })
+                    .map(|(class, &p)| ClassProbability {
+                        class: class.clone(),
+                        probability: p,
+                    })
                     .collect();
             }
             for &nb in k.field.neighbours(gleaner_field::CellId(c.cell as u32)) {
                 for (mi, name) in k.modalities.iter().enumerate() {
-                    let (a, b) = (k.series[c.cell][mi].as_series(), k.series[nb.index()][mi].as_series());
+                    let (a, b) = (
+                        k.series[c.cell][mi].as_series(),
+                        k.series[nb.index()][mi].as_series(),
+                    );
                     if a.is_empty() || b.is_empty() {
                         continue;
                     }
                     let overlap = common_points(a, b);
                     m.correlations.push(Correlation {
                         neighbour: k.field.cells()[nb.index()].index,
-                        modality: gleaner_field::Modality::new(name).expect("stored modality is valid"),
+                        modality: gleaner_field::Modality::new(name)
+                            .expect("stored modality is valid"),
                         correlation: series_correlation(a, b, min_overlap),
                         overlap,
                     });
@@ -333,7 +400,8 @@ pub fn store_scores(project: &mut Project, s: &Scoring) -> Result<()> {
             for (mi, a) in c.terms.a_by_modality.iter().enumerate() {
                 if let (Some(a), Some((t_star, _))) = (a, k.series[c.cell][mi].as_series().last()) {
                     m.anomalies.push(AnomalyRecord {
-                        modality: gleaner_field::Modality::new(&k.modalities[mi]).expect("stored modality is valid"),
+                        modality: gleaner_field::Modality::new(&k.modalities[mi])
+                            .expect("stored modality is valid"),
                         t: t_star,
                         anomaly: *a,
                         flagged: *a >= flag,
@@ -411,8 +479,15 @@ pub struct ScoringJson {
 
 /// Which weighted term contributes most to S.
 pub fn driver(t: &CellTerms, w: [f64; 4]) -> &'static str {
-    let parts = [("freshness", w[0] * t.f), ("anomaly", w[1] * t.a), ("uncertainty", w[2] * t.u)];
-    parts.iter().max_by(|a, b| a.1.total_cmp(&b.1)).map_or("none", |p| p.0)
+    let parts = [
+        ("freshness", w[0] * t.f),
+        ("anomaly", w[1] * t.a),
+        ("uncertainty", w[2] * t.u),
+    ];
+    parts
+        .iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or("none", |p| p.0)
 }
 
 /// The JSON document, cells sorted by descending S.
@@ -437,8 +512,18 @@ pub fn to_json(project: &Project, s: &Scoring) -> ScoringJson {
                 u: c.terms.u,
                 s: c.terms.s,
                 driver: driver(&c.terms, w),
-                r_by_modality: k.modalities.iter().cloned().zip(c.terms.r_by_modality.iter().copied()).collect(),
-                a_by_modality: k.modalities.iter().cloned().zip(c.terms.a_by_modality.iter().copied()).collect(),
+                r_by_modality: k
+                    .modalities
+                    .iter()
+                    .cloned()
+                    .zip(c.terms.r_by_modality.iter().copied())
+                    .collect(),
+                a_by_modality: k
+                    .modalities
+                    .iter()
+                    .cloned()
+                    .zip(c.terms.a_by_modality.iter().copied())
+                    .collect(),
                 probabilities: c.terms.probabilities.clone(),
             }
         })
@@ -448,7 +533,10 @@ pub fn to_json(project: &Project, s: &Scoring) -> ScoringJson {
         t: format_rfc3339(s.t),
         weights: w,
         anomaly_form: s.anomaly_form.clone(),
-        condition: s.condition.as_ref().map(|c| (c.modality.clone(), c.classes.clone(), c.thresholds.clone())),
+        condition: s
+            .condition
+            .as_ref()
+            .map(|c| (c.modality.clone(), c.classes.clone(), c.thresholds.clone())),
         cells,
     }
 }
@@ -463,9 +551,10 @@ pub fn table(doc: &ScoringJson, limit: usize) -> String {
         doc.weights[2],
         doc.weights[3],
         doc.anomaly_form,
-        doc.condition
-            .as_ref()
-            .map_or(String::from(", no condition model: U = 0"), |(m, c, _)| format!(", U from {m}: {}", c.join("/")))
+        doc.condition.as_ref().map_or(
+            String::from(", no condition model: U = 0"),
+            |(m, c, _)| format!(", U from {m}: {}", c.join("/"))
+        )
     );
     out.push_str(&format!(
         "{:<10} {:>7} {:>6} {:>6} {:>8} {:>6} {:>8}  {}\n",
