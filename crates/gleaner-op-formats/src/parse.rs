@@ -20,6 +20,7 @@ fn number(file: &str, line: usize, field: &str, tok: &str) -> Result<f64, Format
     Ok(v)
 }
 
+#[allow(clippy::too_many_arguments)] // private helper shared by the two parsers
 fn build_problem(
     name: &str,
     rule: DistanceRule,

@@ -177,10 +177,10 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
     } else {
         EXACT_MAX_NODES_TEAM
     };
-    if ctx_probe <= options.exact_threshold.min(cap) {
-        if let Ok(s) = exact(problem) {
-            return s;
-        }
+    if ctx_probe <= options.exact_threshold.min(cap)
+        && let Ok(s) = exact(problem)
+    {
+        return s;
     }
     let mut ctx = Ctx::new(problem, options.neighbours.max(2));
     let scan_all = ctx.cands.len() <= options.full_scan_limit;
