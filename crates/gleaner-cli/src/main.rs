@@ -15,7 +15,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 
-use commands::{cells, demo, ingest, init, score, synth};
+use commands::{cells, demo, ingest, init, plan, score, synth};
 use project::Project;
 
 /// Utility-driven UAV data collection for farm sensor networks.
@@ -137,6 +137,45 @@ enum Command {
         /// Rows of the table (highest S first).
         #[arg(long, default_value_t = 20)]
         limit: usize,
+    },
+    /// Plan a mission: score the cells (or read --scores), then choose and order the cells that
+    /// fit the battery, and print the mission summary (table or JSON). The mission is stored as
+    /// planned.
+    #[command(
+        after_help = "Energy settings come from [energy] in gleaner.toml (preset `paper`: 66.5 kJ usable,\nmax-endurance cruise, 30 s hover overhead).\n\nExamples:\n  gleaner plan --project farm\n  gleaner plan --project caf --at 2014-03-01 --history-until 2013-12-31 --solver greedy\n  gleaner plan --project farm --scores my_scores.csv --json"
+    )]
+    Plan {
+        /// Project directory.
+        #[arg(long, default_value = ".")]
+        project: PathBuf,
+        /// Mission time (RFC 3339 or date) [default: the latest reading].
+        #[arg(long, value_parser = parse_time)]
+        at: Option<i64>,
+        /// Use only readings from this time on as collected history.
+        #[arg(long, value_parser = parse_time)]
+        history_from: Option<i64>,
+        /// Use only readings up to this time as collected history.
+        #[arg(long, value_parser = parse_time)]
+        history_until: Option<i64>,
+        /// Per-cell scores (CSV `cell_id,score` with a header) instead of the utility engine;
+        /// cells left out score 0.
+        #[arg(long)]
+        scores: Option<PathBuf>,
+        /// Route planner: default (iterated local search), greedy (the paper's), exact.
+        #[arg(long)]
+        solver: Option<String>,
+        /// Planner time limit, seconds [default: [planner] time_limit_s, 5].
+        #[arg(long)]
+        time_limit: Option<f64>,
+        /// Seed of the planner [default: [planner] seed, 0].
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+        /// Do not store the mission.
+        #[arg(long)]
+        dry_run: bool,
     },
     /// Write a seeded synthetic farm (sensors, long readings, ground truth, faults) as CSV.
     #[command(
@@ -338,6 +377,43 @@ fn run(cli: Cli) -> Result<()> {
                 );
             } else {
                 print!("{}", score::table(&doc, limit));
+            }
+        }
+        Command::Plan {
+            project,
+            at,
+            history_from,
+            history_until,
+            scores,
+            solver,
+            time_limit,
+            seed,
+            json,
+            dry_run,
+        } => {
+            let mut p = Project::open(&project)?;
+            let defaults = p.config.planner.clone();
+            let args = plan::PlanArgs {
+                at,
+                history: score::History {
+                    from: history_from.unwrap_or(i64::MIN),
+                    until: history_until.unwrap_or(i64::MAX),
+                },
+                scores,
+                planner: plan::parse_planner(solver.as_deref().unwrap_or(&defaults.solver))?,
+                time_limit_s: time_limit.unwrap_or(defaults.time_limit_s),
+                seed: seed.unwrap_or(defaults.seed),
+                save: !dry_run,
+            };
+            let planned = plan::run(&mut p, &args)?;
+            let doc = plan::to_json(&p, &planned, &args);
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&doc).context("serialising the mission")?
+                );
+            } else {
+                print!("{}", plan::table(&doc));
             }
         }
         Command::Synth {

@@ -5,5 +5,6 @@ pub mod cells;
 pub mod demo;
 pub mod ingest;
 pub mod init;
+pub mod plan;
 pub mod score;
 pub mod synth;
