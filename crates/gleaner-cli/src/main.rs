@@ -15,7 +15,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 
-use commands::{cells, demo, ingest, init, plan, score, synth};
+use commands::{bench, cells, demo, ingest, init, plan, record, score, synth};
 use project::Project;
 
 /// Utility-driven UAV data collection for farm sensor networks.
@@ -177,6 +177,30 @@ enum Command {
         #[arg(long)]
         dry_run: bool,
     },
+    /// Record a flown mission: the cells visited, when, and the readings brought back; the
+    /// visited cells' sensors count as collected from then on.
+    #[command(
+        after_help = "Examples:\n  gleaner record --project farm --mission 1\n  gleaner record --project farm --mission 1 --at 2014-06-30T10:00:00Z --cells x1y2,x3y0 flight1.csv"
+    )]
+    Record {
+        /// Project directory.
+        #[arg(long, default_value = ".")]
+        project: PathBuf,
+        /// The planned mission's id (printed by `gleaner plan`).
+        #[arg(long)]
+        mission: i64,
+        /// Collection time (RFC 3339 or date) [default: the mission's planned time].
+        #[arg(long, value_parser = parse_time)]
+        at: Option<i64>,
+        /// Cells actually visited, comma-separated, in order [default: the planned stops].
+        #[arg(long, value_delimiter = ',')]
+        cells: Option<Vec<String>>,
+        /// Readings files brought back (any format `gleaner ingest` reads).
+        files: Vec<PathBuf>,
+    },
+    /// Benchmarks.
+    #[command(subcommand)]
+    Bench(BenchCommand),
     /// Write a seeded synthetic farm (sensors, long readings, ground truth, faults) as CSV.
     #[command(
         after_help = "Defaults are calibrated to the CAF network (VW range, day-to-day change, spatial correlation).\n\nExamples:\n  gleaner synth --out farm-data --sensors 60 --days 120 --seed 1\n  gleaner synth --out big --sensors 10000 --days 365 --scale-extent"
@@ -225,6 +249,35 @@ enum Command {
         /// Days of history.
         #[arg(long, default_value_t = 180)]
         days: u32,
+    },
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// Solve standard orienteering benchmarks (classic Tsiligirides/Chao sets and OPLib) and
+    /// compare with the known targets; every route is re-checked with the instance's own
+    /// distance rule.
+    #[command(
+        after_help = "Examples:\n  gleaner bench op ../shared/data/op/classic --time-limit 1\n  gleaner bench op ../shared/data/op/oplib --max-n 400 --time-limit 10 --csv oplib.csv\n  gleaner bench op ../shared/data/op/classic/Tsiligirides_1 --solver greedy"
+    )]
+    Op {
+        /// A benchmark file, or a directory searched recursively.
+        path: PathBuf,
+        /// Solver: default, greedy (the paper's heuristic) or exact (small instances).
+        #[arg(long, default_value = "default")]
+        solver: String,
+        /// Time limit per instance, seconds.
+        #[arg(long, default_value_t = 1.0)]
+        time_limit: f64,
+        /// Seed.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Skip instances with more nodes than this.
+        #[arg(long)]
+        max_n: Option<usize>,
+        /// Also write the rows as CSV to this file.
+        #[arg(long)]
+        csv: Option<PathBuf>,
     },
 }
 
@@ -415,6 +468,53 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 print!("{}", plan::table(&doc));
             }
+        }
+        Command::Record {
+            project,
+            mission,
+            at,
+            cells,
+            files,
+        } => {
+            let mut p = Project::open(&project)?;
+            let ingest_args = ingest::IngestArgs {
+                files: files.clone(),
+                format: ingest::Format::Auto,
+                modality: None,
+                unit: None,
+                utc_offset_h: 0.0,
+                on_error: gleaner_ingest::OnError::Fail,
+                now: at,
+            };
+            let summary = record::run(
+                &mut p,
+                &record::RecordArgs {
+                    mission,
+                    at,
+                    cells,
+                    files,
+                    ingest: Some(ingest_args),
+                },
+            )?;
+            println!("{summary}");
+        }
+        Command::Bench(BenchCommand::Op {
+            path,
+            solver,
+            time_limit,
+            seed,
+            max_n,
+            csv,
+        }) => {
+            let (_, table) = bench::run(&bench::BenchOpArgs {
+                path,
+                solver: bench::parse_solver(&solver)?,
+                time_limit_s: time_limit,
+                seed,
+                max_n,
+                csv,
+            })?;
+            print!("{table}");
         }
         Command::Synth {
             out,

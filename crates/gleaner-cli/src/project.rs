@@ -1,6 +1,6 @@
 //! A gleaner project on disk: a directory with `gleaner.toml` and the SQLite database.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use gleaner_field::{Field, Sensor};
@@ -10,8 +10,6 @@ use crate::config::ProjectFile;
 
 /// An open project.
 pub struct Project {
-    /// The project directory.
-    pub dir: PathBuf,
     /// Its configuration.
     pub config: ProjectFile,
     /// Its database.
@@ -28,11 +26,7 @@ impl Project {
         }
         let store = SqliteStore::open(&db)
             .with_context(|| format!("{}: cannot open database", db.display()))?;
-        Ok(Self {
-            dir: dir.to_path_buf(),
-            config,
-            store,
-        })
+        Ok(Self { config, store })
     }
 
     /// The sensors, sorted by id, as core values.

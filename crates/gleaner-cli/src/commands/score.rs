@@ -78,7 +78,24 @@ pub fn knowledge(project: &Project, t: Option<UnixSeconds>, history: History) ->
         .enumerate()
         .map(|(k, s)| (s.id.as_str(), k))
         .collect();
-    let until = t.unwrap_or(UnixSeconds::MAX).min(history.until);
+    let t_max = t.unwrap_or(UnixSeconds::MAX);
+    // A reading is known when it lies in the history window, or when a recorded collection of
+    // its sensor (at or before t) brought it back.
+    let mut collected: Vec<Option<UnixSeconds>> = vec![None; sensors.len()];
+    for (id, at) in project.store.sensor_last_collected()? {
+        if let Some(&s) = index.get(id.as_str())
+            && at <= t_max
+        {
+            collected[s] = collected[s].max(Some(at));
+        }
+    }
+    let horizon = collected
+        .iter()
+        .flatten()
+        .copied()
+        .max()
+        .unwrap_or(UnixSeconds::MIN);
+    let until = t_max.min(history.until.max(horizon));
     let batch = project.store.readings_for(None, history.from..=until)?;
     let mut modalities: Vec<String> = batch.modalities.iter().map(ToString::to_string).collect();
     modalities.sort();
@@ -92,26 +109,22 @@ pub fn knowledge(project: &Project, t: Option<UnixSeconds>, history: History) ->
     // Per (sensor, modality): times and values, in time order (the store returns them so).
     let mut times: Vec<Vec<UnixSeconds>> = vec![Vec::new(); sensors.len() * nm];
     let mut values: Vec<Vec<f64>> = vec![Vec::new(); sensors.len() * nm];
-    let mut last_collected: Vec<Option<UnixSeconds>> = vec![None; sensors.len()];
+    let mut last_collected = collected.clone();
     let mut first_reading: Vec<Option<UnixSeconds>> = vec![None; sensors.len()];
     let mut latest = None;
     for r in &batch.rows {
         let Some(&s) = index.get(batch.sensors[r.sensor as usize].as_str()) else {
             continue;
         };
+        if r.t > t_max.min(history.until.max(collected[s].unwrap_or(UnixSeconds::MIN))) {
+            continue;
+        }
         let k = s * nm + mpos[r.modality as usize];
         times[k].push(r.t);
         values[k].push(r.value);
         last_collected[s] = last_collected[s].max(Some(r.t));
         first_reading[s] = Some(first_reading[s].map_or(r.t, |f: i64| f.min(r.t)));
         latest = latest.max(Some(r.t));
-    }
-    for (id, at) in project.store.sensor_last_collected()? {
-        if let Some(&s) = index.get(id.as_str())
-            && at <= until
-        {
-            last_collected[s] = last_collected[s].max(Some(at));
-        }
     }
     let step = sampling_step(&times);
     let origin = times
