@@ -172,10 +172,72 @@ fn all_moments(
     }
 }
 
-/// Terms of cell `i` (inputs already validated; `moments` from [`all_moments`]).
-fn cell_terms(
+/// Correlation of cell `i` with neighbour `j` for modality `m` over the window.
+fn pair_correlation(
     cells: &[CellInputs<'_>],
     moments: &[Moments],
+    (i, j, m): (usize, usize, usize),
+    t: UnixSeconds,
+    config: &UtilityConfig,
+    n_modalities: usize,
+) -> f64 {
+    let from = config.window.start(t);
+    let own = cells[i].series[m].between(from, t);
+    let other = cells[j].series[m].between(from, t);
+    if own.times == other.times {
+        aligned_correlation(
+            own.values,
+            moments[i * n_modalities + m],
+            other.values,
+            moments[j * n_modalities + m],
+            config.min_overlap,
+        )
+    } else {
+        series_correlation(own, other, config.min_overlap)
+    }
+}
+
+/// Whether edge (i -> j) is computed by cell i; otherwise j computed the same pair (the
+/// correlation is symmetric) and i reads it.
+fn owns_edge(cells: &[CellInputs<'_>], i: usize, j: usize) -> bool {
+    i < j || !cells[j].neighbours.contains(&i)
+}
+
+/// Per cell: the correlations with its neighbours, neighbour-major (k × modality), NaN for
+/// edges whose pair is computed by the neighbour.
+fn edge_correlations(
+    cells: &[CellInputs<'_>],
+    moments: &[Moments],
+    t: UnixSeconds,
+    config: &UtilityConfig,
+    n_modalities: usize,
+    parallel: bool,
+) -> Vec<Vec<f64>> {
+    let one = |i: usize| -> Vec<f64> {
+        let mut out = Vec::with_capacity(cells[i].neighbours.len() * n_modalities);
+        for &j in cells[i].neighbours {
+            let owned = owns_edge(cells, i, j);
+            for m in 0..n_modalities {
+                out.push(if owned {
+                    pair_correlation(cells, moments, (i, j, m), t, config, n_modalities)
+                } else {
+                    f64::NAN
+                });
+            }
+        }
+        out
+    };
+    if parallel {
+        (0..cells.len()).into_par_iter().map(one).collect()
+    } else {
+        (0..cells.len()).map(one).collect()
+    }
+}
+
+/// Terms of cell `i` (inputs already validated; `edges` from [`edge_correlations`]).
+fn cell_terms(
+    cells: &[CellInputs<'_>],
+    edges: &[Vec<f64>],
     i: usize,
     t: UnixSeconds,
     config: &UtilityConfig,
@@ -193,21 +255,17 @@ fn cell_terms(
             a_by.push(None);
             continue;
         }
-        let own_moments = moments[i * n_modalities + m];
         let mut total = 0.0;
-        for &j in cell.neighbours {
-            let other = cells[j].series[m].between(from, t);
-            let corr = if own.times == other.times {
-                let other_moments = moments[j * n_modalities + m];
-                aligned_correlation(
-                    own.values,
-                    own_moments,
-                    other.values,
-                    other_moments,
-                    config.min_overlap,
-                )
+        for (k, &j) in cell.neighbours.iter().enumerate() {
+            let corr = if owns_edge(cells, i, j) {
+                edges[i][k * n_modalities + m]
             } else {
-                series_correlation(own, other, config.min_overlap)
+                let back = cells[j]
+                    .neighbours
+                    .iter()
+                    .position(|&x| x == i)
+                    .unwrap_or(0);
+                edges[j][back * n_modalities + m]
             };
             total += corr.max(0.0);
         }
@@ -276,8 +334,9 @@ pub fn score_cells(
 ) -> Result<Vec<CellTerms>, UtilityError> {
     let n_modalities = validate(cells, config, false)?;
     let moments = all_moments(cells, t, config, false);
+    let edges = edge_correlations(cells, &moments, t, config, n_modalities, false);
     Ok((0..cells.len())
-        .map(|i| cell_terms(cells, &moments, i, t, config, n_modalities))
+        .map(|i| cell_terms(cells, &edges, i, t, config, n_modalities))
         .collect())
 }
 
@@ -289,9 +348,10 @@ pub fn score_cells_parallel(
 ) -> Result<Vec<CellTerms>, UtilityError> {
     let n_modalities = validate(cells, config, true)?;
     let moments = all_moments(cells, t, config, true);
+    let edges = edge_correlations(cells, &moments, t, config, n_modalities, true);
     Ok((0..cells.len())
         .into_par_iter()
-        .map(|i| cell_terms(cells, &moments, i, t, config, n_modalities))
+        .map(|i| cell_terms(cells, &edges, i, t, config, n_modalities))
         .collect())
 }
 

@@ -92,6 +92,7 @@ impl RunningStats {
 }
 
 /// Co-moment statistics of a pair of series over their common timestamps, with removal.
+/// The correlation is refreshed on every change, so scoring only reads it.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct PairStats {
     n: u64,
@@ -100,6 +101,8 @@ pub struct PairStats {
     m2x: f64,
     m2y: f64,
     cxy: f64,
+    /// Pearson correlation of the points (0 below 2 points or with zero variance).
+    corr: f64,
 }
 
 impl PairStats {
@@ -114,6 +117,23 @@ impl PairStats {
         self.m2x += dx * (x - self.mean_x);
         self.m2y += dy * (y - self.mean_y);
         self.cxy += dx * (y - self.mean_y);
+        self.refresh();
+    }
+
+    fn refresh(&mut self) {
+        self.corr = if self.n < 2 {
+            0.0
+        } else {
+            finish_pearson(
+                self.n as f64,
+                self.mean_x,
+                self.mean_y,
+                self.m2x,
+                self.m2y,
+                self.cxy,
+            )
+            .unwrap_or(0.0)
+        };
     }
 
     /// Removes a common point previously added.
@@ -131,6 +151,7 @@ impl PairStats {
         self.mean_x = mx;
         self.mean_y = my;
         self.n -= 1;
+        self.refresh();
     }
 
     /// Number of common points.
@@ -145,15 +166,7 @@ impl PairStats {
         if self.n < min_overlap.max(2) as u64 {
             return 0.0;
         }
-        finish_pearson(
-            self.n as f64,
-            self.mean_x,
-            self.mean_y,
-            self.m2x,
-            self.m2y,
-            self.cxy,
-        )
-        .unwrap_or(0.0)
+        self.corr
     }
 }
 
