@@ -21,6 +21,9 @@
 //!   (newest time seen − retention) are forgotten and readings older than that are rejected
 //!   ([`UtilityError::BeyondRetention`]); the statistics stay exact. Without one (the default)
 //!   every slot is kept (24 bytes per cell, modality and grid slot).
+//! - the state lives in memory: a process rebuilds it from the stored readings once
+//!   ([`IncrementalState::add_readings`], O(history)), then keeps it up to date; the summaries
+//!   and pair statistics can be stored and restored through their `from_parts` / `parts`.
 //! - each (sensor, modality, grid slot) reading must be added once (the store deduplicates);
 //!   several readings falling in one slot are averaged, as in [`cell_series`](crate::cell_series).
 
@@ -41,6 +44,15 @@ pub struct RunningStats {
 }
 
 impl RunningStats {
+    /// Statistics from stored parts: count, mean (unit), sum of squared deviations (unit²).
+    pub fn from_parts(count: u64, mean: f64, m2: f64) -> Self {
+        Self {
+            n: count,
+            mean,
+            m2: m2.max(0.0),
+        }
+    }
+
     /// Adds a value.
     pub fn push(&mut self, x: f64) {
         self.n += 1;
@@ -106,6 +118,34 @@ pub struct PairStats {
 }
 
 impl PairStats {
+    /// Statistics from stored parts, as returned by [`parts`](Self::parts).
+    pub fn from_parts(parts: [f64; 6]) -> Self {
+        let [n, mean_x, mean_y, m2x, m2y, cxy] = parts;
+        let mut s = Self {
+            n: n.max(0.0) as u64,
+            mean_x,
+            mean_y,
+            m2x,
+            m2y,
+            cxy,
+            corr: 0.0,
+        };
+        s.refresh();
+        s
+    }
+
+    /// The stored parts: [n, mean_x, mean_y, M2x, M2y, Cxy] (x is the lower cell position).
+    pub fn parts(&self) -> [f64; 6] {
+        [
+            self.n as f64,
+            self.mean_x,
+            self.mean_y,
+            self.m2x,
+            self.m2y,
+            self.cxy,
+        ]
+    }
+
     /// Adds a common point.
     pub fn push(&mut self, x: f64, y: f64) {
         self.n += 1;
@@ -601,7 +641,6 @@ impl IncrementalState {
     ) -> CellTerms {
         let lambda = config.lambda_per_s();
         let m_count = self.n_modalities;
-
         let f = freshness(t, &self.last_collected[i], lambda);
         let nbs = &self.neighbour_pair[i];
         let mut r_sum = [0.0; 8];
@@ -702,6 +741,9 @@ mod tests {
             p.push(x, y);
         }
         p.remove(9.0, -1.0);
+        assert_eq!(PairStats::from_parts(p.parts()), p);
+        let r = RunningStats::from_parts(s.count(), s.mean(), s.m2());
+        assert_eq!(r, s);
         let want = 5.0 / (2.0f64 * 38.0 / 3.0).sqrt();
         assert!((p.correlation(3) - want).abs() < 1e-12);
         assert_eq!(p.correlation(4), 0.0);
