@@ -4,7 +4,7 @@ use rayon::prelude::*;
 
 use crate::probabilities::check_distribution;
 use crate::terms::{
-    Moments, aligned_correlation, anomaly, freshness, score, series_correlation, uncertainty,
+    Moments, aligned_correlation, anomaly, freshness, merged_correlation, score, uncertainty,
 };
 use crate::{Series, UtilityConfig, UtilityError};
 use gleaner_field::UnixSeconds;
@@ -172,6 +172,9 @@ fn all_moments(
     }
 }
 
+/// Reusable gather buffers of the merge join.
+type Buffers = (Vec<f64>, Vec<f64>);
+
 /// Correlation of cell `i` with neighbour `j` for modality `m` over the window.
 fn pair_correlation(
     cells: &[CellInputs<'_>],
@@ -180,6 +183,7 @@ fn pair_correlation(
     t: UnixSeconds,
     config: &UtilityConfig,
     n_modalities: usize,
+    buffers: &mut Buffers,
 ) -> f64 {
     let from = config.window.start(t);
     let own = cells[i].series[m].between(from, t);
@@ -193,7 +197,13 @@ fn pair_correlation(
             config.min_overlap,
         )
     } else {
-        series_correlation(own, other, config.min_overlap)
+        merged_correlation(
+            own,
+            other,
+            config.min_overlap,
+            &mut buffers.0,
+            &mut buffers.1,
+        )
     }
 }
 
@@ -213,13 +223,13 @@ fn edge_correlations(
     n_modalities: usize,
     parallel: bool,
 ) -> Vec<Vec<f64>> {
-    let one = |i: usize| -> Vec<f64> {
+    let one = |buffers: &mut Buffers, i: usize| -> Vec<f64> {
         let mut out = Vec::with_capacity(cells[i].neighbours.len() * n_modalities);
         for &j in cells[i].neighbours {
             let owned = owns_edge(cells, i, j);
             for m in 0..n_modalities {
                 out.push(if owned {
-                    pair_correlation(cells, moments, (i, j, m), t, config, n_modalities)
+                    pair_correlation(cells, moments, (i, j, m), t, config, n_modalities, buffers)
                 } else {
                     f64::NAN
                 });
@@ -228,9 +238,13 @@ fn edge_correlations(
         out
     };
     if parallel {
-        (0..cells.len()).into_par_iter().map(one).collect()
+        (0..cells.len())
+            .into_par_iter()
+            .map_init(Buffers::default, one)
+            .collect()
     } else {
-        (0..cells.len()).map(one).collect()
+        let mut buffers = Buffers::default();
+        (0..cells.len()).map(|i| one(&mut buffers, i)).collect()
     }
 }
 

@@ -169,11 +169,28 @@ pub fn series_correlation(a: Series<'_>, b: Series<'_>, min_overlap: usize) -> f
     if a.times[..na] == b.times[..nb] {
         return pearson(&a.values[..na], &b.values[..nb]).unwrap_or(0.0);
     }
+    merged_correlation(a, b, min_overlap, &mut Vec::new(), &mut Vec::new())
+}
+
+/// The merge-join path of [`series_correlation`], gathering into reusable buffers.
+pub(crate) fn merged_correlation(
+    a: Series<'_>,
+    b: Series<'_>,
+    min_overlap: usize,
+    xs: &mut Vec<f64>,
+    ys: &mut Vec<f64>,
+) -> f64 {
+    let (na, nb) = (a.len(), b.len());
+    if na.min(nb) < min_overlap.max(2) {
+        return 0.0;
+    }
     // Gather the common points with a branch-free merge join (every step writes a candidate
     // pair and advances the count only on a match), then the two-pass Pearson.
     let cap = na.min(nb) + 1;
-    let mut xs = vec![0.0; cap];
-    let mut ys = vec![0.0; cap];
+    xs.clear();
+    ys.clear();
+    xs.resize(cap, 0.0);
+    ys.resize(cap, 0.0);
     let (mut i, mut j, mut k) = (0, 0, 0);
     while i < na && j < nb {
         let (ta, tb) = (a.times[i], b.times[j]);
@@ -183,12 +200,10 @@ pub fn series_correlation(a: Series<'_>, b: Series<'_>, min_overlap: usize) -> f
         i += usize::from(ta <= tb);
         j += usize::from(tb <= ta);
     }
-    xs.truncate(k);
-    ys.truncate(k);
-    if xs.len() < min_overlap.max(2) {
+    if k < min_overlap.max(2) {
         return 0.0;
     }
-    pearson(&xs, &ys).unwrap_or(0.0)
+    pearson(&xs[..k], &ys[..k]).unwrap_or(0.0)
 }
 
 /// Redundancy of one modality R_i^m = (1/|N_i|)·Σ_j max(0, corr(x̂_i^m, x̂_j^m)) (SPEC §2),
