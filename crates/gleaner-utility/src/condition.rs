@@ -673,7 +673,7 @@ impl ConditionModel {
     }
 
     /// Weight of feature `f` ([`FEATURE_NAMES`] order, then the threshold distances;
-    /// standardised scale) for class `class`.
+    /// standardised scale) for class `class`. Panics on positions out of range.
     pub fn weight(&self, class: usize, f: usize) -> f64 {
         self.weights[class * self.stride() + 1 + f]
     }

@@ -412,6 +412,10 @@ mod tests {
         };
         let w = score_cells(&cells, 29 * DAY, &window).unwrap();
         assert_eq!(w[0].r_by_modality[0], Some(0.0));
+        // Anomaly in the window: days 16..29, the latest (29) against days 16..28.
+        let want = crate::anomaly(Series::new(&t[16..], &zig[16..]), 1e-6);
+        assert_eq!(w[1].a_by_modality[0], Some(want));
+        assert!(want > 0.0 && want != all[1].a_by_modality[0].unwrap());
         // Data after t is ignored: scoring at day 9 sees days 0..9 only (fewer than 10 -> R 0).
         let early = score_cells(&cells, 8 * DAY, &UtilityConfig::default()).unwrap();
         assert_eq!(early[0].r, 0.0);
