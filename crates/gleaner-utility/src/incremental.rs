@@ -583,12 +583,14 @@ impl IncrementalState {
         &self.stats[cell * self.n_modalities + modality]
     }
 
-    /// Co-moments of cell `cell` with its `k`-th neighbour for `modality`.
+    /// Co-moments of cell `cell` with its `k`-th neighbour for `modality` (panics on
+    /// out-of-range positions).
     pub fn neighbour_pair(&self, cell: usize, k: usize, modality: usize) -> &PairStats {
         &self.pairs[self.neighbour_pair[cell][k] * self.n_modalities + modality]
     }
 
-    /// The retained points of the cell series (s, unit), as an owned series.
+    /// The retained points of the cell series (s, unit), as an owned series (panics on
+    /// out-of-range positions).
     pub fn cell_series(&self, cell: usize, modality: usize) -> OwnedSeries {
         let slots = &self.slots[cell * self.n_modalities + modality];
         OwnedSeries {
@@ -597,7 +599,7 @@ impl IncrementalState {
         }
     }
 
-    /// Last collection time of each sensor of `cell`, s.
+    /// Last collection time of each sensor of `cell`, s (panics on an out-of-range cell).
     pub fn last_collected(&self, cell: usize) -> &[Option<UnixSeconds>] {
         &self.last_collected[cell]
     }
