@@ -1,6 +1,7 @@
 //! Speed targets of the utility engine (see the crate docs):
 //! - scoring 100,000 cells (8 neighbours, 3 modalities) from maintained statistics, one thread;
-//! - scoring the same cells from scratch over 365 daily points each, all cores (rayon);
+//! - scoring the same cells from scratch over 365 daily points each, all cores (rayon), with
+//!   complete series and with 10% of the days missing;
 //! - the incremental update after a 10-cell mission (7 days × 3 modalities per cell).
 
 use std::hint::black_box;
@@ -155,6 +156,34 @@ fn benches(c: &mut Criterion) {
     group.bench_function("score_100k_cells_365_days_from_scratch_all_cores", |b| {
         b.iter(|| black_box(score_cells_parallel(&inputs, 365 * DAY, &config).unwrap()))
     });
+
+    // 2b. The same with 10% of the days missing (64 gap patterns): the merge-join path.
+    let patterns: Vec<Vec<i64>> = (0..64)
+        .map(|_| {
+            (0..365)
+                .filter(|_| rng.random_bool(0.9))
+                .map(|d| d * DAY)
+                .collect()
+        })
+        .collect();
+    let gappy: Vec<CellInputs> = (0..n)
+        .map(|i| CellInputs {
+            last_collected: &last[i],
+            series: (0..MODALITIES)
+                .map(|m| {
+                    let times = &patterns[(i * 7 + m * 13) % patterns.len()];
+                    let off = (i * 151 + m * 5_003_003) % (pool.len() - 365);
+                    Series::new(times, &pool[off..off + times.len()])
+                })
+                .collect(),
+            neighbours: &neighbours[i],
+            probabilities: &p[i],
+        })
+        .collect();
+    group.bench_function(
+        "score_100k_cells_365_days_10pct_missing_from_scratch_all_cores",
+        |b| b.iter(|| black_box(score_cells_parallel(&gappy, 365 * DAY, &config).unwrap())),
+    );
     group.finish();
 }
 

@@ -28,6 +28,12 @@
 //! for every lag L in `lags_days`, the features are computed as if the data known were only the
 //! cell's and neighbours' points at or before t − L (days); the label is the class of the true
 //! value at t. A train/test split is a split of the label times.
+//!
+//! On the CAF network (42 sensors, vw@30cm, trained on 2011–2012, tested on 2013 to mid-2014,
+//! see `tests/caf.rs`) the default model reaches about 0.89 held-out accuracy and 0.29 nats
+//! log-loss against 0.31 / 1.10 for the majority class / class frequencies; persisting the last
+//! value's class is right 0.91 of the time (it gives no probabilities). Mean U is about 0.20
+//! for values at most 2 days old and 0.42 for values 10–30 days old.
 
 use crate::{DAY_S, Series, UtilityError};
 use gleaner_field::UnixSeconds;
@@ -667,7 +673,7 @@ impl ConditionModel {
     }
 
     /// Weight of feature `f` ([`FEATURE_NAMES`] order, then the threshold distances;
-    /// standardised scale) for class `class`.
+    /// standardised scale) for class `class`. Panics on positions out of range.
     pub fn weight(&self, class: usize, f: usize) -> f64 {
         self.weights[class * self.stride() + 1 + f]
     }

@@ -4,7 +4,7 @@ use rayon::prelude::*;
 
 use crate::probabilities::check_distribution;
 use crate::terms::{
-    Moments, aligned_correlation, anomaly, freshness, score, series_correlation, uncertainty,
+    Moments, aligned_correlation, anomaly, freshness, merged_correlation, score, uncertainty,
 };
 use crate::{Series, UtilityConfig, UtilityError};
 use gleaner_field::UnixSeconds;
@@ -172,10 +172,86 @@ fn all_moments(
     }
 }
 
-/// Terms of cell `i` (inputs already validated; `moments` from [`all_moments`]).
-fn cell_terms(
+/// Reusable gather buffers of the merge join.
+type Buffers = (Vec<f64>, Vec<f64>);
+
+/// Correlation of cell `i` with neighbour `j` for modality `m` over the window.
+fn pair_correlation(
     cells: &[CellInputs<'_>],
     moments: &[Moments],
+    (i, j, m): (usize, usize, usize),
+    t: UnixSeconds,
+    config: &UtilityConfig,
+    n_modalities: usize,
+    buffers: &mut Buffers,
+) -> f64 {
+    let from = config.window.start(t);
+    let own = cells[i].series[m].between(from, t);
+    let other = cells[j].series[m].between(from, t);
+    if own.times == other.times {
+        aligned_correlation(
+            own.values,
+            moments[i * n_modalities + m],
+            other.values,
+            moments[j * n_modalities + m],
+            config.min_overlap,
+        )
+    } else {
+        merged_correlation(
+            own,
+            other,
+            config.min_overlap,
+            &mut buffers.0,
+            &mut buffers.1,
+        )
+    }
+}
+
+/// Whether edge (i -> j) is computed by cell i; otherwise j computed the same pair (the
+/// correlation is symmetric) and i reads it.
+fn owns_edge(cells: &[CellInputs<'_>], i: usize, j: usize) -> bool {
+    i < j || !cells[j].neighbours.contains(&i)
+}
+
+/// Per cell: the correlations with its neighbours, neighbour-major (k × modality), NaN for
+/// edges whose pair is computed by the neighbour.
+fn edge_correlations(
+    cells: &[CellInputs<'_>],
+    moments: &[Moments],
+    t: UnixSeconds,
+    config: &UtilityConfig,
+    n_modalities: usize,
+    parallel: bool,
+) -> Vec<Vec<f64>> {
+    let one = |buffers: &mut Buffers, i: usize| -> Vec<f64> {
+        let mut out = Vec::with_capacity(cells[i].neighbours.len() * n_modalities);
+        for &j in cells[i].neighbours {
+            let owned = owns_edge(cells, i, j);
+            for m in 0..n_modalities {
+                out.push(if owned {
+                    pair_correlation(cells, moments, (i, j, m), t, config, n_modalities, buffers)
+                } else {
+                    f64::NAN
+                });
+            }
+        }
+        out
+    };
+    if parallel {
+        (0..cells.len())
+            .into_par_iter()
+            .map_init(Buffers::default, one)
+            .collect()
+    } else {
+        let mut buffers = Buffers::default();
+        (0..cells.len()).map(|i| one(&mut buffers, i)).collect()
+    }
+}
+
+/// Terms of cell `i` (inputs already validated; `edges` from [`edge_correlations`]).
+fn cell_terms(
+    cells: &[CellInputs<'_>],
+    edges: &[Vec<f64>],
     i: usize,
     t: UnixSeconds,
     config: &UtilityConfig,
@@ -193,21 +269,17 @@ fn cell_terms(
             a_by.push(None);
             continue;
         }
-        let own_moments = moments[i * n_modalities + m];
         let mut total = 0.0;
-        for &j in cell.neighbours {
-            let other = cells[j].series[m].between(from, t);
-            let corr = if own.times == other.times {
-                let other_moments = moments[j * n_modalities + m];
-                aligned_correlation(
-                    own.values,
-                    own_moments,
-                    other.values,
-                    other_moments,
-                    config.min_overlap,
-                )
+        for (k, &j) in cell.neighbours.iter().enumerate() {
+            let corr = if owns_edge(cells, i, j) {
+                edges[i][k * n_modalities + m]
             } else {
-                series_correlation(own, other, config.min_overlap)
+                let back = cells[j]
+                    .neighbours
+                    .iter()
+                    .position(|&x| x == i)
+                    .unwrap_or(0);
+                edges[j][back * n_modalities + m]
             };
             total += corr.max(0.0);
         }
@@ -276,8 +348,9 @@ pub fn score_cells(
 ) -> Result<Vec<CellTerms>, UtilityError> {
     let n_modalities = validate(cells, config, false)?;
     let moments = all_moments(cells, t, config, false);
+    let edges = edge_correlations(cells, &moments, t, config, n_modalities, false);
     Ok((0..cells.len())
-        .map(|i| cell_terms(cells, &moments, i, t, config, n_modalities))
+        .map(|i| cell_terms(cells, &edges, i, t, config, n_modalities))
         .collect())
 }
 
@@ -289,9 +362,10 @@ pub fn score_cells_parallel(
 ) -> Result<Vec<CellTerms>, UtilityError> {
     let n_modalities = validate(cells, config, true)?;
     let moments = all_moments(cells, t, config, true);
+    let edges = edge_correlations(cells, &moments, t, config, n_modalities, true);
     Ok((0..cells.len())
         .into_par_iter()
-        .map(|i| cell_terms(cells, &moments, i, t, config, n_modalities))
+        .map(|i| cell_terms(cells, &edges, i, t, config, n_modalities))
         .collect())
 }
 
@@ -338,6 +412,10 @@ mod tests {
         };
         let w = score_cells(&cells, 29 * DAY, &window).unwrap();
         assert_eq!(w[0].r_by_modality[0], Some(0.0));
+        // Anomaly in the window: days 16..29, the latest (29) against days 16..28.
+        let want = crate::anomaly(Series::new(&t[16..], &zig[16..]), 1e-6);
+        assert_eq!(w[1].a_by_modality[0], Some(want));
+        assert!(want > 0.0 && want != all[1].a_by_modality[0].unwrap());
         // Data after t is ignored: scoring at day 9 sees days 0..9 only (fewer than 10 -> R 0).
         let early = score_cells(&cells, 8 * DAY, &UtilityConfig::default()).unwrap();
         assert_eq!(early[0].r, 0.0);

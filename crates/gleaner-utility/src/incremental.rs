@@ -21,6 +21,9 @@
 //!   (newest time seen − retention) are forgotten and readings older than that are rejected
 //!   ([`UtilityError::BeyondRetention`]); the statistics stay exact. Without one (the default)
 //!   every slot is kept (24 bytes per cell, modality and grid slot).
+//! - the state lives in memory: a process rebuilds it from the stored readings once
+//!   ([`IncrementalState::add_readings`], O(history)), then keeps it up to date; the summaries
+//!   and pair statistics can be stored and restored through their `from_parts` / `parts`.
 //! - each (sensor, modality, grid slot) reading must be added once (the store deduplicates);
 //!   several readings falling in one slot are averaged, as in [`cell_series`](crate::cell_series).
 
@@ -41,6 +44,15 @@ pub struct RunningStats {
 }
 
 impl RunningStats {
+    /// Statistics from stored parts: count, mean (unit), sum of squared deviations (unit²).
+    pub fn from_parts(count: u64, mean: f64, m2: f64) -> Self {
+        Self {
+            n: count,
+            mean,
+            m2: m2.max(0.0),
+        }
+    }
+
     /// Adds a value.
     pub fn push(&mut self, x: f64) {
         self.n += 1;
@@ -92,6 +104,7 @@ impl RunningStats {
 }
 
 /// Co-moment statistics of a pair of series over their common timestamps, with removal.
+/// The correlation is refreshed on every change, so scoring only reads it.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct PairStats {
     n: u64,
@@ -100,9 +113,39 @@ pub struct PairStats {
     m2x: f64,
     m2y: f64,
     cxy: f64,
+    /// Pearson correlation of the points (0 below 2 points or with zero variance).
+    corr: f64,
 }
 
 impl PairStats {
+    /// Statistics from stored parts, as returned by [`parts`](Self::parts).
+    pub fn from_parts(parts: [f64; 6]) -> Self {
+        let [n, mean_x, mean_y, m2x, m2y, cxy] = parts;
+        let mut s = Self {
+            n: n.max(0.0) as u64,
+            mean_x,
+            mean_y,
+            m2x,
+            m2y,
+            cxy,
+            corr: 0.0,
+        };
+        s.refresh();
+        s
+    }
+
+    /// The stored parts: [n, mean_x, mean_y, M2x, M2y, Cxy] (x is the lower cell position).
+    pub fn parts(&self) -> [f64; 6] {
+        [
+            self.n as f64,
+            self.mean_x,
+            self.mean_y,
+            self.m2x,
+            self.m2y,
+            self.cxy,
+        ]
+    }
+
     /// Adds a common point.
     pub fn push(&mut self, x: f64, y: f64) {
         self.n += 1;
@@ -114,6 +157,23 @@ impl PairStats {
         self.m2x += dx * (x - self.mean_x);
         self.m2y += dy * (y - self.mean_y);
         self.cxy += dx * (y - self.mean_y);
+        self.refresh();
+    }
+
+    fn refresh(&mut self) {
+        self.corr = if self.n < 2 {
+            0.0
+        } else {
+            finish_pearson(
+                self.n as f64,
+                self.mean_x,
+                self.mean_y,
+                self.m2x,
+                self.m2y,
+                self.cxy,
+            )
+            .unwrap_or(0.0)
+        };
     }
 
     /// Removes a common point previously added.
@@ -131,6 +191,7 @@ impl PairStats {
         self.mean_x = mx;
         self.mean_y = my;
         self.n -= 1;
+        self.refresh();
     }
 
     /// Number of common points.
@@ -145,15 +206,7 @@ impl PairStats {
         if self.n < min_overlap.max(2) as u64 {
             return 0.0;
         }
-        finish_pearson(
-            self.n as f64,
-            self.mean_x,
-            self.mean_y,
-            self.m2x,
-            self.m2y,
-            self.cxy,
-        )
-        .unwrap_or(0.0)
+        self.corr
     }
 }
 
@@ -530,12 +583,14 @@ impl IncrementalState {
         &self.stats[cell * self.n_modalities + modality]
     }
 
-    /// Co-moments of cell `cell` with its `k`-th neighbour for `modality`.
+    /// Co-moments of cell `cell` with its `k`-th neighbour for `modality` (panics on
+    /// out-of-range positions).
     pub fn neighbour_pair(&self, cell: usize, k: usize, modality: usize) -> &PairStats {
         &self.pairs[self.neighbour_pair[cell][k] * self.n_modalities + modality]
     }
 
-    /// The retained points of the cell series (s, unit), as an owned series.
+    /// The retained points of the cell series (s, unit), as an owned series (panics on
+    /// out-of-range positions).
     pub fn cell_series(&self, cell: usize, modality: usize) -> OwnedSeries {
         let slots = &self.slots[cell * self.n_modalities + modality];
         OwnedSeries {
@@ -544,7 +599,7 @@ impl IncrementalState {
         }
     }
 
-    /// Last collection time of each sensor of `cell`, s.
+    /// Last collection time of each sensor of `cell`, s (panics on an out-of-range cell).
     pub fn last_collected(&self, cell: usize) -> &[Option<UnixSeconds>] {
         &self.last_collected[cell]
     }
@@ -588,7 +643,6 @@ impl IncrementalState {
     ) -> CellTerms {
         let lambda = config.lambda_per_s();
         let m_count = self.n_modalities;
-
         let f = freshness(t, &self.last_collected[i], lambda);
         let nbs = &self.neighbour_pair[i];
         let mut r_sum = [0.0; 8];
@@ -689,6 +743,9 @@ mod tests {
             p.push(x, y);
         }
         p.remove(9.0, -1.0);
+        assert_eq!(PairStats::from_parts(p.parts()), p);
+        let r = RunningStats::from_parts(s.count(), s.mean(), s.m2());
+        assert_eq!(r, s);
         let want = 5.0 / (2.0f64 * 38.0 / 3.0).sqrt();
         assert!((p.correlation(3) - want).abs() < 1e-12);
         assert_eq!(p.correlation(4), 0.0);

@@ -169,40 +169,41 @@ pub fn series_correlation(a: Series<'_>, b: Series<'_>, min_overlap: usize) -> f
     if a.times[..na] == b.times[..nb] {
         return pearson(&a.values[..na], &b.values[..nb]).unwrap_or(0.0);
     }
-    // Merge join over the common timestamps, twice (two-pass for accuracy).
-    let common = |f: &mut dyn FnMut(f64, f64)| {
-        let (mut i, mut j) = (0, 0);
-        while i < na && j < nb {
-            match a.times[i].cmp(&b.times[j]) {
-                std::cmp::Ordering::Less => i += 1,
-                std::cmp::Ordering::Greater => j += 1,
-                std::cmp::Ordering::Equal => {
-                    f(a.values[i], b.values[j]);
-                    i += 1;
-                    j += 1;
-                }
-            }
-        }
-    };
-    let (mut n, mut sx, mut sy) = (0usize, 0.0, 0.0);
-    common(&mut |x, y| {
-        n += 1;
-        sx += x;
-        sy += y;
-    });
-    if n < min_overlap.max(2) {
+    merged_correlation(a, b, min_overlap, &mut Vec::new(), &mut Vec::new())
+}
+
+/// The merge-join path of [`series_correlation`], gathering into reusable buffers.
+pub(crate) fn merged_correlation(
+    a: Series<'_>,
+    b: Series<'_>,
+    min_overlap: usize,
+    xs: &mut Vec<f64>,
+    ys: &mut Vec<f64>,
+) -> f64 {
+    let (na, nb) = (a.len(), b.len());
+    if na.min(nb) < min_overlap.max(2) {
         return 0.0;
     }
-    let nf = n as f64;
-    let (mx, my) = (sx / nf, sy / nf);
-    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
-    common(&mut |x, y| {
-        let (dx, dy) = (x - mx, y - my);
-        sxx += dx * dx;
-        syy += dy * dy;
-        sxy += dx * dy;
-    });
-    finish_pearson(nf, mx, my, sxx, syy, sxy).unwrap_or(0.0)
+    // Gather the common points with a branch-free merge join (every step writes a candidate
+    // pair and advances the count only on a match), then the two-pass Pearson.
+    let cap = na.min(nb) + 1;
+    xs.clear();
+    ys.clear();
+    xs.resize(cap, 0.0);
+    ys.resize(cap, 0.0);
+    let (mut i, mut j, mut k) = (0, 0, 0);
+    while i < na && j < nb {
+        let (ta, tb) = (a.times[i], b.times[j]);
+        xs[k] = a.values[i];
+        ys[k] = b.values[j];
+        k += usize::from(ta == tb);
+        i += usize::from(ta <= tb);
+        j += usize::from(tb <= ta);
+    }
+    if k < min_overlap.max(2) {
+        return 0.0;
+    }
+    pearson(&xs[..k], &ys[..k]).unwrap_or(0.0)
 }
 
 /// Redundancy of one modality R_i^m = (1/|N_i|)·Σ_j max(0, corr(x̂_i^m, x̂_j^m)) (SPEC §2),
