@@ -1,12 +1,13 @@
-//! `gleaner demo`: the main job on built-in data — a synthetic farm, a project, an ingest and
-//! the cell summary (later steps: scoring, planning, mission files).
+//! `gleaner demo`: the main job on built-in data — a synthetic farm, a project, an ingest, the
+//! cell table, scoring, a planned mission (against the paper's greedy), the recorded flight and
+//! the rescoring that follows it.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
-use crate::commands::{cells, ingest, init, synth};
+use crate::commands::{cells, ingest, init, plan, record, score, synth};
 use crate::project::Project;
 
 /// Settings from the command line.
@@ -96,9 +97,69 @@ pub fn run(args: &DemoArgs) -> Result<String> {
     cells::sort(&mut rows, cells::SortKey::Sensors);
     writeln!(
         out,
-        "4. cell table ({} cells; the 10 with most sensors):",
+        "4. cell table ({} cells; the 5 with most sensors):",
         rows.len()
     )?;
-    out.push_str(&cells::table(&rows[..rows.len().min(10)]));
+    out.push_str(&cells::table(&rows[..rows.len().min(5)]));
+
+    // The exploration flew until 30 days before the end of the record; the mission is planned
+    // 10 days later, from what was collected by then.
+    let end = farm.times().last().copied().unwrap_or_default();
+    let history = score::History {
+        from: i64::MIN,
+        until: end - 30 * 86_400,
+    };
+    let t = end - 20 * 86_400;
+    let scoring = score::score(&project, Some(t), history, None)?;
+    score::store_scores(&mut project, &scoring)?;
+    let doc = score::to_json(&project, &scoring);
+    writeln!(
+        out,
+        "5. scores (history until {}, the 8 best cells):",
+        gleaner_ingest::time::format_rfc3339(history.until)
+    )?;
+    out.push_str(&score::table(&doc, 8));
+    let plan_args = plan::PlanArgs {
+        at: Some(t),
+        history,
+        scores: None,
+        planner: gleaner_mission::Planner::Default,
+        time_limit_s: 2.0,
+        seed: args.seed,
+        save: true,
+    };
+    let planned = plan::run(&mut project, &plan_args)?;
+    let mission = plan::to_json(&project, &planned, &plan_args);
+    writeln!(out, "6. {}", plan::table(&mission).trim_end())?;
+    let id = planned.mission_id.context("the mission was stored")?;
+    let recorded = record::run(
+        &mut project,
+        &record::RecordArgs {
+            mission: id,
+            at: Some(t),
+            cells: None,
+            files: Vec::new(),
+            ingest: None,
+        },
+    )?;
+    writeln!(out, "7. {recorded}")?;
+    let after = score::score(&project, Some(t + 86_400), history, None)?;
+    score::store_scores(&mut project, &after)?;
+    let after_doc = score::to_json(&project, &after);
+    writeln!(
+        out,
+        "8. a day later the visited cells are fresh again (before -> after):"
+    )?;
+    for stop in mission.stops.iter().take(5) {
+        let before = doc.cells.iter().find(|c| c.cell == stop.cell);
+        let now = after_doc.cells.iter().find(|c| c.cell == stop.cell);
+        if let (Some(b), Some(a)) = (before, now) {
+            writeln!(
+                out,
+                "   {:<10} F {:.3} -> {:.3}   U {:.3} -> {:.3}   S {:.3} -> {:.3}",
+                stop.cell, b.f, a.f, b.u, a.u, b.s, a.s
+            )?;
+        }
+    }
     Ok(out)
 }
