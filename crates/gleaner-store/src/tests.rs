@@ -388,10 +388,10 @@ fn a_failed_ingest_writes_no_modality_reading_or_provenance() {
     let incoming = batch(&[("b", "humidity", T0, 40.0), ("a", "vw@30cm", T0, 0.4)]);
     let err = store
         .ingest(
-            &[new_modality.clone()],
+            std::slice::from_ref(&new_modality),
             &incoming,
             ConflictPolicy::Fail,
-            &[provenance.clone()],
+            std::slice::from_ref(&provenance),
         )
         .unwrap_err();
     assert!(matches!(err, StoreError::Conflicts(_)), "{err:?}");
