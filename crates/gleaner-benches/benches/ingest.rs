@@ -61,7 +61,67 @@ fn long_csv(c: &mut Criterion) {
                 .sum::<usize>()
         })
     });
+    group.bench_function("caf_daily_42_files_into_fresh_db", |b| {
+        b.iter_with_setup(
+            || tempfile::tempdir().expect("temp dir"),
+            |dir| caf_into_fresh_db(&files, &dir.path().join("caf.db")),
+        )
+    });
     group.finish();
+}
+
+/// What `gleaner ingest` does with the CAF daily files: parse all 42, then one store
+/// transaction (sensors, modalities, readings).
+fn caf_into_fresh_db(files: &[PathBuf], db: &std::path::Path) -> u64 {
+    use gleaner_store::{
+        ConflictPolicy, ModalityRecord, Reading, ReadingBatch, SensorRecord, SqliteStore, Store,
+    };
+    let mut all = gleaner_ingest::Readings::default();
+    for f in files {
+        all.append(
+            read_caf_daily(f, &IngestOptions::default())
+                .expect("parse")
+                .0,
+        );
+    }
+    let mut store = SqliteStore::open(db).expect("open");
+    let sensors: Vec<SensorRecord> = all
+        .sensors
+        .iter()
+        .map(|id| SensorRecord {
+            id: id.clone(),
+            position: gleaner_field::LatLon::new(46.78, -117.08).expect("valid"),
+            elevation_m: None,
+            source: "bench".into(),
+        })
+        .collect();
+    store.upsert_sensors(&sensors).expect("sensors");
+    let modalities: Vec<ModalityRecord> = all
+        .modalities
+        .iter()
+        .map(|m| ModalityRecord {
+            modality: m.modality.clone(),
+            unit: m.unit.clone(),
+        })
+        .collect();
+    let batch = ReadingBatch {
+        sensors: all.sensors.clone(),
+        modalities: all.modalities.iter().map(|m| m.modality.clone()).collect(),
+        rows: all
+            .rows
+            .iter()
+            .map(|r| Reading {
+                sensor: r.sensor,
+                modality: r.modality,
+                t: r.t,
+                value: r.value,
+            })
+            .collect(),
+    };
+    store
+        .ingest(&modalities, &batch, ConflictPolicy::Fail, &[])
+        .expect("insert")
+        .inserted
 }
 
 criterion_group!(benches, long_csv);

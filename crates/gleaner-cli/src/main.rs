@@ -203,7 +203,7 @@ enum Command {
     Bench(BenchCommand),
     /// Write a seeded synthetic farm (sensors, long readings, ground truth, faults) as CSV.
     #[command(
-        after_help = "Defaults are calibrated to the CAF network (VW range, day-to-day change, spatial correlation).\n\nExamples:\n  gleaner synth --out farm-data --sensors 60 --days 120 --seed 1\n  gleaner synth --out big --sensors 10000 --days 365 --scale-extent"
+        after_help = "Defaults are calibrated to the CAF network (VW range, day-to-day change, spatial correlation).\n\nExamples:\n  gleaner synth --out farm-data --sensors 60 --days 120 --seed 1\n  gleaner synth --out big --sensors 10000 --days 365 --scale-extent --vw-depths 30 --t-depths 30"
     )]
     Synth {
         /// Output directory (sensors.csv, readings.csv, ground_truth.csv, faults.csv).
@@ -233,6 +233,12 @@ enum Command {
         /// Grow the field with the sensor count to keep CAF's sensor density.
         #[arg(long)]
         scale_extent: bool,
+        /// Soil-moisture depths, cm (modalities vw@<d>cm); empty for none.
+        #[arg(long, value_delimiter = ',', default_value = "30,60,90")]
+        vw_depths: Vec<u32>,
+        /// Soil-temperature depths, cm (modalities t@<d>cm); empty for none.
+        #[arg(long, value_delimiter = ',', default_value = "30")]
+        t_depths: Vec<u32>,
     },
     /// The main job on built-in data: synthetic farm -> project -> ingest -> cell summary.
     #[command(after_help = "Example:\n  gleaner demo --dir gleaner-demo --seed 1")]
@@ -526,6 +532,8 @@ fn run(cli: Cli) -> Result<()> {
             correlation_length,
             no_faults,
             scale_extent,
+            vw_depths,
+            t_depths,
         } => {
             let (farm, files) = synth::run(&synth::SynthArgs {
                 out,
@@ -537,6 +545,8 @@ fn run(cli: Cli) -> Result<()> {
                 correlation_length_m: correlation_length,
                 no_faults,
                 scale_extent,
+                vw_depths_cm: vw_depths,
+                t_depths_cm: t_depths,
             })?;
             println!(
                 "wrote {} sensors, {} readings, {} events: {}, {}, {}, {}",

@@ -138,7 +138,9 @@ fn ingest_skip_mode_reports_rows() {
 
 #[test]
 fn every_command_has_help_with_an_example() {
-    for cmd in ["init", "ingest", "cells", "score", "plan", "record", "synth", "demo"] {
+    for cmd in [
+        "init", "ingest", "cells", "score", "plan", "record", "synth", "demo",
+    ] {
         let out = ok(&[cmd, "--help"]);
         assert!(
             out.contains("Example"),
@@ -235,27 +237,60 @@ fn score_plan_record_cycle() {
     assert_eq!(doc["anomaly_form"], "raw");
     // The terms are kept in the cell metadata table.
     let table = ok(&["cells", "--project", p, "--sort", "score"]);
-    assert!(!table.lines().nth(1).expect("a row").ends_with(" -"), "{table}");
+    assert!(
+        !table.lines().nth(1).expect("a row").ends_with(" -"),
+        "{table}"
+    );
 
-    let plan = ok(&["plan", "--project", p, "--at", "2014-01-25", "--json", "--time-limit", "1"]);
+    let plan = ok(&[
+        "plan",
+        "--project",
+        p,
+        "--at",
+        "2014-01-25",
+        "--json",
+        "--time-limit",
+        "1",
+    ]);
     let m: serde_json::Value = serde_json::from_str(&plan).expect("json");
     let e = &m["energy"];
     let total = e["total_j"].as_f64().expect("total");
     assert!(total <= e["budget_j"].as_f64().expect("budget"));
-    let parts: f64 = ["travel_j", "hover_j", "comm_j", "return_j"].iter().map(|k| e[k].as_f64().expect("part")).sum();
+    let parts: f64 = ["travel_j", "hover_j", "comm_j", "return_j"]
+        .iter()
+        .map(|k| e[k].as_f64().expect("part"))
+        .sum();
     assert!((parts - total).abs() < 1e-6 * total);
     assert_eq!(m["mission_id"], 1);
-    assert!(m["total_score"].as_f64().expect("score") >= m["greedy_baseline"]["total_score"].as_f64().expect("greedy") - 1e-9);
+    assert!(
+        m["total_score"].as_f64().expect("score")
+            >= m["greedy_baseline"]["total_score"]
+                .as_f64()
+                .expect("greedy")
+                - 1e-9
+    );
     let stops = m["stops"].as_array().expect("stops");
     assert!(!stops.is_empty());
     let first = stops[0]["cell"].as_str().expect("cell").to_string();
 
     let rec = ok(&["record", "--project", p, "--mission", "1"]);
-    assert!(rec.contains("mission #1 recorded as flown at 2014-01-25T00:00:00Z"), "{rec}");
+    assert!(
+        rec.contains("mission #1 recorded as flown at 2014-01-25T00:00:00Z"),
+        "{rec}"
+    );
     let json = ok(&["score", "--project", p, "--at", "2014-01-25", "--json"]);
     let doc: serde_json::Value = serde_json::from_str(&json).expect("json");
-    let visited = doc["cells"].as_array().expect("cells").iter().find(|c| c["cell"] == first.as_str()).expect("visited cell");
-    assert_eq!(visited["f"].as_f64(), Some(0.0), "a cell collected at t is perfectly fresh");
+    let visited = doc["cells"]
+        .as_array()
+        .expect("cells")
+        .iter()
+        .find(|c| c["cell"] == first.as_str())
+        .expect("visited cell");
+    assert_eq!(
+        visited["f"].as_f64(),
+        Some(0.0),
+        "a cell collected at t is perfectly fresh"
+    );
     let err = fail(&["record", "--project", p, "--mission", "9"]);
     assert!(err.contains("no mission #9"), "{err}");
 }
@@ -267,15 +302,30 @@ fn plan_from_a_scores_file_and_its_errors() {
     ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
     let scores = dir.path().join("scores.csv");
     std::fs::write(&scores, "cell_id,score\nx0y0,2.0\nx2y1,-1\n").expect("write");
-    let out = ok(&["plan", "--project", p, "--scores", s(&scores), "--solver", "greedy", "--dry-run"]);
+    let out = ok(&[
+        "plan",
+        "--project",
+        p,
+        "--scores",
+        s(&scores),
+        "--solver",
+        "greedy",
+        "--dry-run",
+    ]);
     assert!(out.contains("1 of 1 candidate cells"), "{out}");
     assert!(out.contains("x0y0"), "{out}");
     std::fs::write(&scores, "cell_id,score\nx9y9,2.0\n").expect("write");
     let err = fail(&["plan", "--project", p, "--scores", s(&scores)]);
-    assert!(err.contains("scores.csv:2: column `cell_id`: unknown cell: \"x9y9\""), "{err}");
+    assert!(
+        err.contains("scores.csv:2: column `cell_id`: unknown cell: \"x9y9\""),
+        "{err}"
+    );
     std::fs::write(&scores, "cell_id,score\nx0y0,high\n").expect("write");
     let err = fail(&["plan", "--project", p, "--scores", s(&scores)]);
-    assert!(err.contains("scores.csv:2: column `score`: not a finite number: \"high\""), "{err}");
+    assert!(
+        err.contains("scores.csv:2: column `score`: not a finite number: \"high\""),
+        "{err}"
+    );
 }
 
 #[test]
@@ -284,12 +334,36 @@ fn user_probabilities_are_validated() {
     let p = s(dir.path());
     ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
     let probs = dir.path().join("p.csv");
-    std::fs::write(&probs, "cell_id,p_1,p_2\nx0y0,0.5,0.5\nx2y0,1,0\nx2y1,0.2,0.8\n").expect("write");
-    let json = ok(&["score", "--project", p, "--probabilities", s(&probs), "--json"]);
+    std::fs::write(
+        &probs,
+        "cell_id,p_1,p_2\nx0y0,0.5,0.5\nx2y0,1,0\nx2y1,0.2,0.8\n",
+    )
+    .expect("write");
+    let json = ok(&[
+        "score",
+        "--project",
+        p,
+        "--probabilities",
+        s(&probs),
+        "--json",
+    ]);
     let doc: serde_json::Value = serde_json::from_str(&json).expect("json");
-    let u = |cell: &str| doc["cells"].as_array().expect("cells").iter().find(|c| c["cell"] == cell).expect("cell")["u"].as_f64().expect("u");
+    let u = |cell: &str| {
+        doc["cells"]
+            .as_array()
+            .expect("cells")
+            .iter()
+            .find(|c| c["cell"] == cell)
+            .expect("cell")["u"]
+            .as_f64()
+            .expect("u")
+    };
     assert!((u("x0y0") - 1.0).abs() < 1e-12 && u("x2y0") == 0.0);
-    std::fs::write(&probs, "cell_id,p_1,p_2\nx0y0,0.5,0.6\nx2y0,1,0\nx2y1,0.2,0.8\n").expect("write");
+    std::fs::write(
+        &probs,
+        "cell_id,p_1,p_2\nx0y0,0.5,0.6\nx2y0,1,0\nx2y1,0.2,0.8\n",
+    )
+    .expect("write");
     let err = fail(&["score", "--project", p, "--probabilities", s(&probs)]);
     assert!(err.contains("x0y0"), "{err}");
 }
@@ -297,10 +371,16 @@ fn user_probabilities_are_validated() {
 #[test]
 fn bench_op_on_a_classic_instance() {
     let d = shared_data().join("op/classic/Tsiligirides_1");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&d).expect("dir").map(|e| e.expect("entry").path()).collect();
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&d)
+        .expect("dir")
+        .map(|e| e.expect("entry").path())
+        .collect();
     files.sort();
     let out = ok(&["bench", "op", s(&files[0]), "--time-limit", "1"]);
-    assert!(out.contains("1 instances, 1 with target: 1 matched"), "{out}");
+    assert!(
+        out.contains("1 instances, 1 with target: 1 matched"),
+        "{out}"
+    );
     assert!(out.contains(" yes"), "{out}");
 }
 
@@ -310,20 +390,62 @@ fn synth_is_deterministic() {
     let a = dir.path().join("a");
     let b = dir.path().join("b");
     for out in [&a, &b] {
-        ok(&["synth", "--out", s(out), "--sensors", "8", "--days", "20", "--seed", "5"]);
+        ok(&[
+            "synth",
+            "--out",
+            s(out),
+            "--sensors",
+            "8",
+            "--days",
+            "20",
+            "--seed",
+            "5",
+        ]);
     }
-    for f in ["sensors.csv", "readings.csv", "ground_truth.csv", "faults.csv"] {
-        assert_eq!(std::fs::read(a.join(f)).expect("a"), std::fs::read(b.join(f)).expect("b"), "{f}");
+    for f in [
+        "sensors.csv",
+        "readings.csv",
+        "ground_truth.csv",
+        "faults.csv",
+    ] {
+        assert_eq!(
+            std::fs::read(a.join(f)).expect("a"),
+            std::fs::read(b.join(f)).expect("b"),
+            "{f}"
+        );
     }
 }
 
 #[test]
 fn demo_runs_end_to_end() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let out = ok(&["demo", "--dir", s(dir.path()), "--sensors", "30", "--days", "90"]);
-    for step in ["1. synthetic farm", "3. ingested", "5. scores", "6. mission #1", "7. mission #1 recorded", "8. a day later"] {
+    let out = ok(&[
+        "demo",
+        "--dir",
+        s(dir.path()),
+        "--sensors",
+        "30",
+        "--days",
+        "90",
+    ]);
+    for step in [
+        "1. synthetic farm",
+        "3. ingested",
+        "5. scores",
+        "6. mission #1",
+        "7. mission #1 recorded",
+        "8. a day later",
+    ] {
         assert!(out.contains(step), "demo output lacks {step:?}:\n{out}");
     }
     // A second run starts over in the same directory.
-    ok(&["demo", "--dir", s(dir.path()), "--sensors", "30", "--days", "90"]);
+    ok(&[
+        "demo",
+        "--dir",
+        s(dir.path()),
+        "--sensors",
+        "30",
+        "--days",
+        "90",
+    ]);
 }

@@ -53,6 +53,8 @@ pub fn run(args: &DemoArgs) -> Result<String> {
         correlation_length_m: 500.0,
         no_faults: false,
         scale_extent: false,
+        vw_depths_cm: vec![30, 60, 90],
+        t_depths_cm: vec![30],
     })?;
     writeln!(
         out,

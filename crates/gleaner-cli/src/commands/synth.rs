@@ -55,6 +55,10 @@ pub struct SynthArgs {
     pub no_faults: bool,
     /// Keep CAF's sensor density by growing the field with the sensor count.
     pub scale_extent: bool,
+    /// Depths of the soil-moisture modalities `vw@<d>cm`, centimetres.
+    pub vw_depths_cm: Vec<u32>,
+    /// Depths of the soil-temperature modalities `t@<d>cm`, centimetres.
+    pub t_depths_cm: Vec<u32>,
 }
 
 /// The core configuration for these settings.
@@ -72,6 +76,8 @@ pub fn config(args: &SynthArgs) -> SynthConfig {
             FaultRates::default()
         },
         scale_extent_with_sensors: args.scale_extent,
+        vw_depths_cm: args.vw_depths_cm.clone(),
+        t_depths_cm: args.t_depths_cm.clone(),
         ..SynthConfig::default()
     }
 }
