@@ -168,6 +168,10 @@ pub fn run(project: &mut Project, args: &IngestArgs) -> Result<IngestOutcome> {
                 read_wide_csv(path, &wide, &options)?
             }
         };
+        pb.set_message(
+            path.file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+        );
         provenance.push((path.clone(), format, report.clone()));
         outcome.report.merge(&report);
         all.append(readings);
@@ -225,10 +229,12 @@ fn store_readings(
             at,
         })
         .collect();
+    let spin = progress::spinner(&format!("storing {} readings", batch.rows.len()));
     let stats = project
         .store
         .ingest(&modalities, &batch, policy, &records)
         .context("storing the readings (nothing was stored)")?;
+    spin.set_message("updating cell summaries");
     outcome.inserted = stats.inserted;
     outcome.unchanged = stats.unchanged;
     outcome.conflicts = stats.conflicts.len() as u64;
@@ -239,6 +245,7 @@ fn store_readings(
         bytes_per_reading: project.config.ingest.bytes_per_reading,
         default_interval_s: project.config.ingest.default_interval_s,
     })?;
+    spin.finish_and_clear();
     Ok(())
 }
 
