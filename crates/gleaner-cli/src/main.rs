@@ -4,6 +4,7 @@
 //! This binary is the only place that knows clap: arguments are parsed here, turned into plain
 //! settings, and handed to the `commands` modules.
 
+mod cell_csv;
 mod commands;
 mod config;
 mod progress;

@@ -28,6 +28,7 @@ mod error;
 mod grid;
 mod projection;
 mod sensor;
+pub mod time;
 
 pub use error::FieldError;
 pub use grid::{

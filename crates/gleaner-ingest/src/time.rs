@@ -2,68 +2,7 @@
 //! converted to [`UnixSeconds`] (UTC). Impossible dates (`2014-02-30`) are errors.
 
 use gleaner_field::UnixSeconds;
-
-/// Days since 1970-01-01 of a proleptic Gregorian date, or `None` when the date does not
-/// exist (month outside 1..=12, day outside the month, year outside 1..=9999).
-pub fn days_from_civil(year: i64, month: u32, day: u32) -> Option<i64> {
-    if !(1..=9999).contains(&year) || !(1..=12).contains(&month) || day == 0 {
-        return None;
-    }
-    let leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
-    let dim = [
-        31,
-        if leap { 29 } else { 28 },
-        31,
-        30,
-        31,
-        30,
-        31,
-        31,
-        30,
-        31,
-        30,
-        31,
-    ];
-    if day > dim[month as usize - 1] {
-        return None;
-    }
-    // Days-from-civil in the era-based form (eras of 400 years, March-based years).
-    let y = if month <= 2 { year - 1 } else { year };
-    let era = y.div_euclid(400);
-    let yoe = y - era * 400;
-    let m = i64::from(month);
-    let mp = if m > 2 { m - 3 } else { m + 9 };
-    let doy = (153 * mp + 2) / 5 + i64::from(day) - 1;
-    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-    Some(era * 146_097 + doe - 719_468)
-}
-
-/// The civil date (year, month, day) of a day count since 1970-01-01.
-pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    (y, m, d)
-}
-
-/// Formats `t` as RFC 3339 UTC, e.g. `2014-01-01T00:00:00Z`.
-pub fn format_rfc3339(t: UnixSeconds) -> String {
-    let days = t.div_euclid(86_400);
-    let secs = t.rem_euclid(86_400);
-    let (y, m, d) = civil_from_days(days);
-    format!(
-        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
-        secs / 3600,
-        (secs / 60) % 60,
-        secs % 60
-    )
-}
+pub use gleaner_field::time::{civil_from_days, days_from_civil, format_rfc3339};
 
 fn digits(s: &[u8]) -> Option<i64> {
     if s.is_empty() || s.len() > 9 || !s.iter().all(u8::is_ascii_digit) {
@@ -209,12 +148,6 @@ mod tests {
     }
 
     proptest! {
-        #[test]
-        fn civil_round_trip(days in -700_000i64..2_900_000) {
-            let (y, m, d) = civil_from_days(days);
-            prop_assert_eq!(days_from_civil(y, m, d), Some(days));
-        }
-
         #[test]
         fn format_parse_round_trip(t in -62_000_000_000i64..253_000_000_000) {
             prop_assert_eq!(parse_timestamp(&format_rfc3339(t)), Some(t));

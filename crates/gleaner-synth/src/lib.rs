@@ -141,7 +141,6 @@ mod error;
 mod farm;
 mod model;
 mod random;
-mod time;
 mod write;
 
 pub use calibration::{DailyPanel, DistanceBin, PanelStats, StatsOptions, panel_stats};

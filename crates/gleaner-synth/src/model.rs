@@ -11,7 +11,7 @@ use crate::farm::{EventKind, FaultKind, FaultRecord, GroundTruthEvent, ModalityS
 use crate::random::{
     Domain, SpatialField, exponential, geometric_len, normal, poisson, stream, uniform,
 };
-use crate::time::day_of_year;
+use gleaner_field::time::day_of_year;
 
 /// Depths (cm) at which the per-depth soil-water constants below are given; other depths
 /// interpolate linearly and clamp at the ends.

@@ -6,7 +6,7 @@ use std::io::{self, Write};
 use rayon::prelude::*;
 
 use crate::SynthFarm;
-use crate::time::rfc3339;
+use gleaner_field::time::format_rfc3339 as rfc3339;
 
 /// Header of the sensors CSV.
 pub const SENSORS_HEADER: &str = "id,lat,lon,elevation_m";

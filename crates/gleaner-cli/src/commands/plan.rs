@@ -13,6 +13,7 @@ use gleaner_store::{MissionKind, NewMission, Store};
 use gleaner_utility::CellTerms;
 use serde::Serialize;
 
+use crate::cell_csv;
 use crate::commands::score::{self, History, Knowledge};
 use crate::project::Project;
 
@@ -45,8 +46,6 @@ pub fn parse_planner(name: &str) -> Result<Planner> {
 }
 
 fn read_scores(path: &Path, k: &Knowledge) -> Result<Vec<f64>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read", path.display()))?;
     let labels: Vec<String> = k
         .field
         .cells()
@@ -54,42 +53,22 @@ fn read_scores(path: &Path, k: &Knowledge) -> Result<Vec<f64>> {
         .map(|c| c.index.to_string())
         .collect();
     let mut scores: Vec<Option<f64>> = vec![None; labels.len()];
-    for (n, line) in text
-        .trim_start_matches('\u{feff}')
-        .lines()
-        .enumerate()
-        .skip(1)
-    {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let (cell, value) = line
-            .split_once(',')
-            .with_context(|| format!("{}:{}: expected `cell_id,score`", path.display(), n + 1))?;
-        let (cell, value) = (cell.trim(), value.trim());
-        let pos = labels.iter().position(|l| l == cell).with_context(|| {
-            format!(
-                "{}:{}: column `cell_id`: unknown cell: {cell:?}",
-                path.display(),
-                n + 1
-            )
-        })?;
-        let v: f64 = value
-            .parse()
-            .ok()
-            .filter(|v: &f64| v.is_finite())
-            .with_context(|| {
-                format!(
-                    "{}:{}: column `score`: not a finite number: {value:?}",
-                    path.display(),
-                    n + 1
-                )
-            })?;
-        if scores[pos].replace(v).is_some() {
+    for row in cell_csv::read(path)? {
+        let at = |what: &str| format!("{}:{}: {what}", path.display(), row.line);
+        let [score] = row.values[..] else {
+            bail!("{}", at("expected `cell_id,score`"));
+        };
+        let pos = labels
+            .iter()
+            .position(|l| *l == row.cell)
+            .with_context(|| at(&format!("column `cell_id`: unknown cell: {:?}", row.cell)))?;
+        if scores[pos].replace(score).is_some() {
             bail!(
-                "{}:{}: column `cell_id`: cell {cell:?} listed twice",
-                path.display(),
-                n + 1
+                "{}",
+                at(&format!(
+                    "column `cell_id`: cell {:?} listed twice",
+                    row.cell
+                ))
             );
         }
     }

@@ -16,6 +16,7 @@ use gleaner_utility::{
 };
 use serde::Serialize;
 
+use crate::cell_csv;
 use crate::project::Project;
 
 /// What the planner knows at time t: the field and, per cell and modality, the collected
@@ -166,35 +167,10 @@ pub fn knowledge(project: &Project, t: Option<UnixSeconds>, history: History) ->
 
 /// Per-cell class probabilities from a user's CSV: `cell_id,p_1,...,p_K` with a header.
 fn read_probabilities(path: &Path, field: &Field) -> Result<Vec<Vec<f64>>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read", path.display()))?;
-    let mut rows: Vec<(String, Vec<f64>)> = Vec::new();
-    for (k, line) in text
-        .trim_start_matches('\u{feff}')
-        .lines()
-        .enumerate()
-        .skip(1)
-    {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let mut fields = line.split(',').map(str::trim);
-        let cell = fields.next().unwrap_or_default().to_string();
-        let p = fields
-            .enumerate()
-            .map(|(c, v)| {
-                v.parse::<f64>().map_err(|_| {
-                    anyhow::anyhow!(
-                        "{}:{}: column p_{}: not a number: {v:?}",
-                        path.display(),
-                        k + 1,
-                        c + 1
-                    )
-                })
-            })
-            .collect::<Result<Vec<f64>>>()?;
-        rows.push((cell, p));
-    }
+    let rows: Vec<(String, Vec<f64>)> = cell_csv::read(path)?
+        .into_iter()
+        .map(|r| (r.cell, r.values))
+        .collect();
     let labels: Vec<String> = field.cells().iter().map(|c| c.index.to_string()).collect();
     let ordered =
         validate_probabilities(&labels, &rows).with_context(|| format!("{}", path.display()))?;
