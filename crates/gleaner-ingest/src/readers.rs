@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use gleaner_field::{LatLon, LocalPoint, Modality, Sensor, SensorId, TransverseMercator};
 
-use crate::readings::{Interner, Row};
+use crate::readings::{Interner, Row, known};
 use crate::time::{parse_clock, parse_date, parse_timestamp, parse_us_date};
 use crate::{IngestError, IngestOptions, IngestReport, OnError, Problem, Readings, default_unit};
 
@@ -178,13 +178,6 @@ fn finish(
     Ok(out)
 }
 
-fn known(options: &IngestOptions, id: &str) -> bool {
-    options
-        .known_sensors
-        .as_ref()
-        .is_none_or(|k| k.contains(id))
-}
-
 /// Reads gleaner's generic long readings CSV: a header with `sensor_id`, `timestamp`,
 /// `modality`, `value` and optionally `unit` (any order, case-insensitive; `sensor` and `time`
 /// are accepted aliases). Timestamps are RFC 3339 (offsets honoured, no offset = UTC) or dates
@@ -210,7 +203,6 @@ pub fn read_long_csv(
     let mut report = IngestReport::default();
     let mut interner = Interner::default();
     // Rows are usually grouped by sensor and modality: cache the last lookups.
-    let mut last_sensor: Option<(String, u32)> = None;
     let mut modality_cache: HashMap<(String, String), u32> = HashMap::new();
     while let Some(line) = table.next()? {
         report.rows_read += 1;
@@ -236,31 +228,11 @@ pub fn read_long_csv(
             continue;
         }
         let sensor_s = field!(c_sensor);
-        let sensor = match &last_sensor {
-            Some((s, k)) if s == sensor_s => *k,
-            _ => {
-                if !known(options, sensor_s) {
-                    policy.bad(
-                        &mut report,
-                        line,
-                        &names[c_sensor],
-                        sensor_s,
-                        Problem::UnknownSensor,
-                    )?;
-                    continue;
-                }
-                let Some(k) = interner.sensor(sensor_s) else {
-                    policy.bad(
-                        &mut report,
-                        line,
-                        &names[c_sensor],
-                        sensor_s,
-                        Problem::BadSensorId,
-                    )?;
-                    continue;
-                };
-                last_sensor = Some((sensor_s.to_string(), k));
-                k
+        let sensor = match interner.known_sensor(sensor_s, options) {
+            Ok(k) => k,
+            Err(p) => {
+                policy.bad(&mut report, line, &names[c_sensor], sensor_s, p)?;
+                continue;
             }
         };
         let time_s = field!(c_time);
@@ -525,7 +497,6 @@ pub fn read_caf_daily(
         columns.push((k, id));
     }
     let ncols = names.len();
-    let mut last_sensor: Option<(String, u32)> = None;
     while let Some(line) = table.next()? {
         report.rows_read += 1;
         if table.record.len() != ncols {
@@ -534,25 +505,11 @@ pub fn read_caf_daily(
             continue;
         }
         let loc = table.field(c_loc).unwrap_or("");
-        let sensor = match &last_sensor {
-            Some((s, k)) if s == loc => *k,
-            _ => {
-                if !known(options, loc) {
-                    policy.bad(
-                        &mut report,
-                        line,
-                        &names[c_loc],
-                        loc,
-                        Problem::UnknownSensor,
-                    )?;
-                    continue;
-                }
-                let Some(k) = interner.sensor(loc) else {
-                    policy.bad(&mut report, line, &names[c_loc], loc, Problem::BadSensorId)?;
-                    continue;
-                };
-                last_sensor = Some((loc.to_string(), k));
-                k
+        let sensor = match interner.known_sensor(loc, options) {
+            Ok(k) => k,
+            Err(p) => {
+                policy.bad(&mut report, line, &names[c_loc], loc, p)?;
+                continue;
             }
         };
         let ds = table.field(c_date).unwrap_or("");

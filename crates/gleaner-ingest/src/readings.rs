@@ -4,6 +4,8 @@ use std::collections::{HashMap, HashSet};
 
 use gleaner_field::{Modality, SensorId, UnixSeconds};
 
+use crate::Problem;
+
 /// What to do with a bad row.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum OnError {
@@ -113,10 +115,21 @@ impl IngestReport {
     }
 }
 
+/// Whether the options allow readings of sensor `id`.
+pub(crate) fn known(options: &IngestOptions, id: &str) -> bool {
+    options
+        .known_sensors
+        .as_ref()
+        .is_none_or(|k| k.contains(id))
+}
+
 /// Interns sensors and modalities while a reader runs.
 #[derive(Default)]
 pub(crate) struct Interner {
     sensors: HashMap<Box<str>, u32>,
+    /// The last sensor looked up by [`Interner::known_sensor`]: rows usually come grouped by
+    /// sensor, so this skips the hash lookup.
+    last: Option<(Box<str>, u32)>,
     modalities: HashMap<Modality, u32>,
     pub(crate) out: Readings,
 }
@@ -131,6 +144,26 @@ impl Interner {
         self.out.sensors.push(sid);
         self.sensors.insert(id.into(), k);
         Some(k)
+    }
+
+    /// Interns a sensor the options allow: [`Problem::UnknownSensor`] for one the project does
+    /// not know, [`Problem::BadSensorId`] for an invalid id.
+    pub(crate) fn known_sensor(
+        &mut self,
+        id: &str,
+        options: &IngestOptions,
+    ) -> Result<u32, Problem> {
+        if let Some((last, k)) = &self.last
+            && &**last == id
+        {
+            return Ok(*k);
+        }
+        if !known(options, id) {
+            return Err(Problem::UnknownSensor);
+        }
+        let k = self.sensor(id).ok_or(Problem::BadSensorId)?;
+        self.last = Some((id.into(), k));
+        Ok(k)
     }
 
     /// Interns a modality; `Err(expected unit)` when the unit differs from an earlier one.
