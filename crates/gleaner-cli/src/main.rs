@@ -16,7 +16,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 
-use commands::{bench, cells, demo, ingest, init, plan, record, score, synth};
+use commands::{bench, cells, demo, explore, ingest, init, plan, record, score, synth};
 use project::Project;
 
 /// Utility-driven UAV data collection for farm sensor networks.
@@ -175,6 +175,25 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// Do not store the mission.
+        #[arg(long)]
+        dry_run: bool,
+    },
+    /// Plan the exploration phase: as few sorties as possible, each within the battery, that
+    /// together visit every cell; each sortie is stored as an exploration mission.
+    #[command(
+        after_help = "Examples:\n  gleaner explore --project farm\n  gleaner explore --project caf --json --dry-run"
+    )]
+    Explore {
+        /// Project directory.
+        #[arg(long, default_value = ".")]
+        project: PathBuf,
+        /// Planning time (RFC 3339 or date) [default: the latest reading].
+        #[arg(long, value_parser = parse_time)]
+        at: Option<i64>,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+        /// Do not store the sorties.
         #[arg(long)]
         dry_run: bool,
     },
@@ -474,6 +493,23 @@ fn run(cli: Cli) -> Result<()> {
                 );
             } else {
                 print!("{}", plan::table(&doc));
+            }
+        }
+        Command::Explore {
+            project,
+            at,
+            json,
+            dry_run,
+        } => {
+            let mut p = Project::open(&project)?;
+            let e = explore::run(&mut p, at, !dry_run)?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&e).context("serialising the plan")?
+                );
+            } else {
+                print!("{}", explore::table(&e));
             }
         }
         Command::Record {

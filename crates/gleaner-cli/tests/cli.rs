@@ -449,3 +449,56 @@ fn demo_runs_end_to_end() {
         "90",
     ]);
 }
+
+#[test]
+fn exploration_visits_every_cell_once_within_budget() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let p = s(dir.path());
+    let data_dir = dir.path().join("data");
+    ok(&[
+        "synth",
+        "--out",
+        s(&data_dir),
+        "--sensors",
+        "80",
+        "--days",
+        "10",
+        "--seed",
+        "3",
+    ]);
+    ok(&[
+        "init",
+        "--dir",
+        p,
+        "--sensors",
+        s(&data_dir.join("sensors.csv")),
+    ]);
+    ok(&["ingest", "--project", p, s(&data_dir.join("readings.csv"))]);
+    let e: serde_json::Value =
+        serde_json::from_str(&ok(&["explore", "--project", p, "--json"])).expect("json");
+    let budget = e["budget_j"].as_f64().expect("budget");
+    let mut seen: Vec<String> = Vec::new();
+    for sortie in e["sorties"].as_array().expect("sorties") {
+        assert!(sortie["energy_j"].as_f64().expect("energy") <= budget);
+        seen.extend(
+            sortie["cells"]
+                .as_array()
+                .expect("cells")
+                .iter()
+                .map(|c| c.as_str().expect("id").to_string()),
+        );
+    }
+    let cells: Vec<serde_json::Value> =
+        serde_json::from_str(&ok(&["cells", "--project", p, "--json"])).expect("json");
+    let mut all: Vec<String> = cells
+        .iter()
+        .map(|c| c["cell"].as_str().expect("id").to_string())
+        .collect();
+    seen.sort();
+    all.sort();
+    assert_eq!(seen, all, "every cell exactly once");
+    assert!(
+        e["sorties"].as_array().expect("sorties").len()
+            >= e["lower_bound_sorties"].as_u64().expect("bound") as usize
+    );
+}
