@@ -135,9 +135,12 @@ enum Command {
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
-        /// Rows of the table (highest S first).
+        /// Rows of the table.
         #[arg(long, default_value_t = 20)]
         limit: usize,
+        /// Order of the rows (largest first; `cell` by id).
+        #[arg(long, value_enum, default_value_t = ScoreSortArg::S)]
+        sort: ScoreSortArg,
     },
     /// Plan a mission: score the cells (or read --scores), then choose and order the cells that
     /// fit the battery, and print the mission summary (table or JSON). The mission is stored as
@@ -322,6 +325,16 @@ enum OnErrorArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum ScoreSortArg {
+    S,
+    F,
+    R,
+    A,
+    U,
+    Cell,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum SortArg {
     Label,
     Sensors,
@@ -440,6 +453,7 @@ fn run(cli: Cli) -> Result<()> {
             probabilities,
             json,
             limit,
+            sort,
         } => {
             let mut p = Project::open(&project)?;
             let history = score::History {
@@ -448,7 +462,18 @@ fn run(cli: Cli) -> Result<()> {
             };
             let scoring = score::score(&p, at, history, probabilities.as_deref())?;
             score::store_scores(&mut p, &scoring)?;
-            let doc = score::to_json(&p, &scoring);
+            let mut doc = score::to_json(&p, &scoring);
+            score::sort(
+                &mut doc,
+                match sort {
+                    ScoreSortArg::S => score::ScoreSort::Score,
+                    ScoreSortArg::F => score::ScoreSort::Freshness,
+                    ScoreSortArg::R => score::ScoreSort::Redundancy,
+                    ScoreSortArg::A => score::ScoreSort::Anomaly,
+                    ScoreSortArg::U => score::ScoreSort::Uncertainty,
+                    ScoreSortArg::Cell => score::ScoreSort::Cell,
+                },
+            );
             if json {
                 println!(
                     "{}",

@@ -479,6 +479,41 @@ pub fn driver(t: &CellTerms, w: [f64; 4]) -> &'static str {
         .map_or("none", |p| p.0)
 }
 
+/// How to order scored cells.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ScoreSort {
+    /// Highest S first (the default).
+    #[default]
+    Score,
+    /// Highest F first.
+    Freshness,
+    /// Highest R first.
+    Redundancy,
+    /// Highest A first.
+    Anomaly,
+    /// Highest U first.
+    Uncertainty,
+    /// By cell id.
+    Cell,
+}
+
+/// Sorts the document's cells (ties by cell id).
+pub fn sort(doc: &mut ScoringJson, key: ScoreSort) {
+    let value = |c: &ScoreJson| match key {
+        ScoreSort::Score | ScoreSort::Cell => c.s,
+        ScoreSort::Freshness => c.f,
+        ScoreSort::Redundancy => c.r,
+        ScoreSort::Anomaly => c.a,
+        ScoreSort::Uncertainty => c.u,
+    };
+    if key == ScoreSort::Cell {
+        doc.cells.sort_by(|a, b| a.cell.cmp(&b.cell));
+    } else {
+        doc.cells
+            .sort_by(|a, b| value(b).total_cmp(&value(a)).then(a.cell.cmp(&b.cell)));
+    }
+}
+
 /// The JSON document, cells sorted by descending S.
 pub fn to_json(project: &Project, s: &Scoring) -> ScoringJson {
     let u = &project.config.utility;
