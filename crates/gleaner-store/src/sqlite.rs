@@ -938,44 +938,71 @@ impl Store for SqliteStore {
         let written;
         {
             // Cell series: mean over the cell's sensors at each t; then two-pass statistics.
-            let mut stmt = tx.prepare(
-                "WITH series AS MATERIALIZED (
-                     SELECT cs.cell AS cell, r.modality AS modality, r.t AS t, AVG(r.value) AS v
-                     FROM cell_sensors cs JOIN readings r ON r.sensor = cs.sensor
-                     GROUP BY cs.cell, r.modality, r.t
-                 ),
-                 st AS MATERIALIZED (
-                     SELECT cell, modality, COUNT(*) AS n, AVG(v) AS mean, MIN(v) AS mn,
-                            MAX(v) AS mx, MAX(t) AS latest_t
-                     FROM series GROUP BY cell, modality
-                 ),
-                 dev AS (
-                     SELECT s.cell AS cell, s.modality AS modality,
-                            SUM((s.v - st.mean) * (s.v - st.mean)) AS ss,
-                            MAX(CASE WHEN s.t = st.latest_t THEN s.v END) AS latest_v
-                     FROM series s JOIN st ON s.cell = st.cell AND s.modality = st.modality
-                     GROUP BY s.cell, s.modality
-                 )
-                 SELECT st.cell, st.modality, st.n, st.mean, dev.ss, st.mn, st.mx, st.latest_t,
-                        dev.latest_v
-                 FROM st JOIN dev ON dev.cell = st.cell AND dev.modality = st.modality",
-            )?;
+            // One scan of the readings in key order (no sort) and the aggregation in memory:
+            // several times faster than GROUP BY (cell, modality, t) in SQL on millions of rows.
+            let cell_of: HashMap<i64, i64> = {
+                let mut stmt = tx.prepare("SELECT sensor, cell FROM cell_sensors")?;
+                let rows = stmt.query_map([], |r| Ok((r.get(0)?, r.get(1)?)))?;
+                rows.collect::<rusqlite::Result<_>>()?
+            };
+            let mut slots: HashMap<(i64, i64), HashMap<i64, (f64, u32)>> = HashMap::new();
+            {
+                let mut stmt = tx.prepare("SELECT sensor, modality, t, value FROM readings")?;
+                let mut rows = stmt.query([])?;
+                let mut current: Option<(i64, i64)> = None;
+                let mut target: Option<(i64, i64)> = None;
+                while let Some(r) = rows.next()? {
+                    let (sensor, modality): (i64, i64) = (r.get(0)?, r.get(1)?);
+                    if current != Some((sensor, modality)) {
+                        current = Some((sensor, modality));
+                        target = cell_of.get(&sensor).map(|&cell| (cell, modality));
+                    }
+                    if let Some(key) = target {
+                        let slot = slots
+                            .entry(key)
+                            .or_default()
+                            .entry(r.get(2)?)
+                            .or_insert((0.0, 0));
+                        slot.0 += r.get::<_, f64>(3)?;
+                        slot.1 += 1;
+                    }
+                }
+            }
             type Row = (i64, i64, i64, f64, Option<f64>, f64, f64, i64, f64);
-            let rows: Vec<Row> = stmt
-                .query_map([], |r| {
-                    Ok((
-                        r.get(0)?,
-                        r.get(1)?,
-                        r.get(2)?,
-                        r.get(3)?,
-                        r.get(4)?,
-                        r.get(5)?,
-                        r.get(6)?,
-                        r.get(7)?,
-                        r.get(8)?,
-                    ))
-                })?
-                .collect::<rusqlite::Result<_>>()?;
+            let mut rows: Vec<Row> = slots
+                .into_iter()
+                .map(|((cell, modality), series)| {
+                    let mut points: Vec<(i64, f64)> = series
+                        .into_iter()
+                        .map(|(t, (sum, n))| (t, sum / f64::from(n)))
+                        .collect();
+                    points.sort_unstable_by_key(|p| p.0);
+                    let n = points.len();
+                    let mean = points.iter().map(|p| p.1).sum::<f64>() / n as f64;
+                    let ss = points
+                        .iter()
+                        .map(|p| (p.1 - mean) * (p.1 - mean))
+                        .sum::<f64>();
+                    let (min, max) = points
+                        .iter()
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                            (a.min(p.1), b.max(p.1))
+                        });
+                    let (latest_t, latest_v) = points[n - 1];
+                    (
+                        cell,
+                        modality,
+                        n as i64,
+                        mean,
+                        Some(ss),
+                        min,
+                        max,
+                        latest_t,
+                        latest_v,
+                    )
+                })
+                .collect();
+            rows.sort_unstable_by_key(|r| (r.0, r.1));
             tx.execute("DELETE FROM cell_summaries", [])?;
             let mut insert = tx.prepare_cached(
                 "INSERT INTO cell_summaries (cell, modality, count, mean, std, min, max, latest_t,
