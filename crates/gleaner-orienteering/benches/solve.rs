@@ -19,7 +19,7 @@ fn instance(n: usize, seed: u64) -> Problem {
         rewards.push(f64::from(rng.random_range(1u32..=100)));
     }
     // A tour through k random points of a square of area A is about 0.7 sqrt(k A) long.
-    let budget = 0.7 * (0.15 * n as f64 * 1.0e6).sqrt() * 0.6;
+    let budget = 0.7 * (0.15 * n as f64 * 1.0e6).sqrt() * 0.45;
     Problem::from_points(&pts, Metric::Euclidean, rewards, budget).expect("valid instance")
 }
 

@@ -126,16 +126,21 @@ fn finish(problem: &Problem, state: &State) -> Solution {
     evaluate(problem, &state.routes).unwrap_or_else(|_| Solution::empty(problem))
 }
 
-/// Empty routes, route 0 sent through `v` first (when it fits), then ratio insertion.
-fn anchored(ctx: &Ctx, v: usize, noise: f64, rng: &mut ChaCha8Rng) -> Option<State> {
+/// Empty routes, route 0 sent through the `anchors` in order (when they fit), then ratio
+/// insertion with the given noise.
+fn anchored(ctx: &Ctx, anchors: &[usize], noise: f64, rng: &mut ChaCha8Rng) -> Option<State> {
     let p = ctx.p;
     let mut st = State::empty(p);
-    if st.route_of[v] != FREE
-        || st.cost[0] + ctx.insert_delta(p.start(), v, p.end()) > p.budget() + p.tolerance()
-    {
-        return None;
+    for (k, &v) in anchors.iter().enumerate() {
+        let route = &st.routes[0];
+        let (a, b) = (route[k], route[k + 1]);
+        if st.route_of[v] != FREE
+            || st.cost[0] + ctx.insert_delta(a, v, b) > p.budget() + p.tolerance()
+        {
+            return None;
+        }
+        st.insert(ctx, 0, k + 1, v);
     }
-    st.insert(ctx, 0, 1, v);
     st.fill(ctx, &[], noise, rng);
     Some(st)
 }
@@ -200,12 +205,17 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
                 .map(|_| ctx.cands[rng.random_range(0..ctx.cands.len())])
                 .collect()
         };
-        for &v in &sample {
+        let search = options.max_iterations.is_none_or(|m| m > 0);
+        for &v in sample.iter().filter(|_| search) {
             if started.elapsed() >= options.time_limit / 4 {
                 break;
             }
-            if let Some(st) = anchored(&ctx, v, 0.0, &mut rng) {
+            if let Some(mut st) = anchored(&ctx, &[v], 0.0, &mut rng) {
+                st.local_search(&ctx, &mut rng, scan_all);
                 anchors.push((st.reward, v));
+                if better(&st, &best, ctx.eps) {
+                    best = st;
+                }
             }
         }
         anchors.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
@@ -220,7 +230,7 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
             continue;
         }
         last_reward = rw;
-        if let Some(mut st) = anchored(&ctx, v, 0.0, &mut rng) {
+        if let Some(mut st) = anchored(&ctx, &[v], 0.0, &mut rng) {
             st.local_search(&ctx, &mut rng, scan_all);
             if better(&st, &best, ctx.eps) {
                 best = st.clone();
@@ -229,9 +239,10 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
         }
     }
     cur = best.clone();
+    elite.push(best.clone());
     let top_anchors: Vec<usize> = anchors.iter().take(20).map(|a| a.1).collect();
     let mut run_best = cur.clone();
-    let run_len = 200 + ctx.cands.len() as u64;
+    let run_len = 150 + ctx.cands.len() as u64 / 2;
     let mut run_stall: u64 = 0;
     let mut runs: u64 = 0;
     let mut removed = Vec::new();
@@ -298,30 +309,34 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
             runs += 1;
             run_stall = 0;
             strength = 1;
-            match runs % 4 {
+            // Restart schedule: overall best, an elite solution, or a fresh construction
+            // through one or two anchors (from the best anchors or at random).
+            let pick = |top: bool, rng: &mut ChaCha8Rng| {
+                if top && !top_anchors.is_empty() {
+                    top_anchors[rng.random_range(0..top_anchors.len())]
+                } else {
+                    ctx.cands[rng.random_range(0..ctx.cands.len())]
+                }
+            };
+            match runs % 6 {
+                _ if ctx.cands.is_empty() => cur = best.clone(),
                 0 => cur = best.clone(),
-                2 if !elite.is_empty() => cur = elite[rng.random_range(0..elite.len())].clone(),
-                _ => {
-                    let pick = if runs % 4 == 1 && !top_anchors.is_empty() {
-                        top_anchors[rng.random_range(0..top_anchors.len())]
-                    } else if !ctx.cands.is_empty() {
-                        ctx.cands[rng.random_range(0..ctx.cands.len())]
-                    } else {
-                        problem.start()
-                    };
-                    cur = anchored(&ctx, pick, 0.3, &mut rng).unwrap_or_else(|| best.clone());
+                3 => cur = elite[rng.random_range(0..elite.len())].clone(),
+                1 => {
+                    let a = pick(true, &mut rng);
+                    cur = anchored(&ctx, &[a], 0.3, &mut rng).unwrap_or_else(|| best.clone());
+                    cur.local_search(&ctx, &mut rng, scan_all);
+                }
+                k => {
+                    let a = pick(k != 4, &mut rng);
+                    let b = pick(k == 5, &mut rng);
+                    cur = anchored(&ctx, &[a, b], 0.3, &mut rng).unwrap_or_else(|| best.clone());
                     cur.local_search(&ctx, &mut rng, scan_all);
                 }
             }
             run_best = cur.clone();
         }
     }
-    eprintln!(
-        "DBG iters {iter} runs {runs} best {} anchors {} t {:?}",
-        best.reward,
-        anchors.len(),
-        started.elapsed()
-    );
     let result = finish(problem, &best);
     if result.reward + 1e-9 < greedy_solution.reward {
         greedy_solution
