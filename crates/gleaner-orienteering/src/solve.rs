@@ -141,6 +141,15 @@ fn anchored(ctx: &Ctx, anchors: &[usize], noise: f64, rng: &mut ChaCha8Rng) -> O
         }
         st.insert(ctx, 0, k + 1, v);
     }
+    // Teams: every other route starts through a random node of its own.
+    for r in 1..st.routes.len() {
+        let v = ctx.cands[rng.random_range(0..ctx.cands.len())];
+        if st.route_of[v] == FREE
+            && st.cost[r] + ctx.insert_delta(p.start(), v, p.end()) <= p.budget() + p.tolerance()
+        {
+            st.insert(ctx, r, 1, v);
+        }
+    }
     st.fill(ctx, &[], noise, rng);
     Some(st)
 }
