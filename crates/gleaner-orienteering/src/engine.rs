@@ -355,8 +355,19 @@ impl State {
                     if noise > 0.0 && ratio.is_finite() {
                         ratio *= 1.0 + noise * (2.0 * rng.random::<f64>() - 1.0);
                     }
-                    // Ties: larger reward, then lower index (free is ascending), lower route.
-                    if ratio > best_key.0 || (ratio == best_key.0 && rw > best_key.1) {
+                    // Ties: larger reward, then lower node index, then lower route. The key
+                    // is a total order, so a stale bound never ties with the winner.
+                    let wins = match best {
+                        None => true,
+                        Some((bf, br)) => {
+                            ratio > best_key.0
+                                || (ratio == best_key.0
+                                    && (rw > best_key.1
+                                        || (rw == best_key.1
+                                            && (v < free[bf] || (v == free[bf] && r < br)))))
+                        }
+                    };
+                    if wins {
                         best_key = (ratio, rw);
                         best = Some((fi, r));
                     }

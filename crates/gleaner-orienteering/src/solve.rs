@@ -143,6 +143,9 @@ fn anchored(ctx: &Ctx, anchors: &[usize], noise: f64, rng: &mut ChaCha8Rng) -> O
     }
     // Teams: every other route starts through a random node of its own.
     for r in 1..st.routes.len() {
+        if ctx.cands.is_empty() {
+            break;
+        }
         let v = ctx.cands[rng.random_range(0..ctx.cands.len())];
         if st.route_of[v] == FREE
             && st.cost[r] + ctx.insert_delta(p.start(), v, p.end()) <= p.budget() + p.tolerance()
@@ -449,6 +452,22 @@ mod tests {
         .unwrap();
         let g = greedy(&p);
         assert_eq!(g.reward, 11.0);
+    }
+
+    #[test]
+    fn degenerate_instances() {
+        let one = Problem::new(vec![0.0], vec![3.0], 0.0).unwrap();
+        for kind in [SolverKind::Greedy, SolverKind::Default, SolverKind::Exact] {
+            check(&one, kind, &[vec![0, 0]], 3.0);
+        }
+        let nothing = line(vec![0.0; 4], 100.0).with_vehicles(3).unwrap();
+        let ils = SolveOptions {
+            exact_threshold: 0,
+            ..SolveOptions::default()
+        }
+        .with_iterations(5);
+        assert_eq!(solve_default(&nothing, &ils).reward, 0.0);
+        assert_eq!(solve_default(&nothing, &ils).routes, vec![vec![0, 0]; 3]);
     }
 
     #[test]
