@@ -47,8 +47,8 @@ fn reference_greedy(p: &Problem) -> Vec<Vec<usize>> {
     let mut on = vec![false; p.len()];
     loop {
         let mut best: Option<(f64, f64, usize, usize, usize, f64)> = None;
-        for v in 0..p.len() {
-            if on[v] || p.is_terminal(v) || p.reward(v) <= 0.0 {
+        for (v, _) in on.iter().enumerate().filter(|&(_, &seen)| !seen) {
+            if p.is_terminal(v) || p.reward(v) <= 0.0 {
                 continue;
             }
             for (r, route) in routes.iter().enumerate() {
