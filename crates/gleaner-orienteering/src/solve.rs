@@ -168,18 +168,26 @@ fn better(a: &State, b: &State, eps: f64) -> bool {
     a.cost.iter().sum::<f64>() < b.cost.iter().sum::<f64>() - eps
 }
 
-/// The default solver: iterated local search (ILS) seeded with [`greedy`].
+/// The default solver: multi-start iterated local search (ILS) seeded with [`greedy`].
 ///
-/// Construction is greedy ratio insertion; the local search alternates 2-opt and Or-opt
-/// (which free budget), ratio insertion of unvisited nodes, and replacement moves (an
-/// unvisited node takes the place of a visited one of lower reward, or of equal reward when
-/// that saves cost), until none applies. Each iteration perturbs the current solution
-/// (removes a random segment or random nodes; the strength grows while the search stalls),
-/// re-inserts with randomised ratios (GRASP noise) while the removed nodes are tabu, and
-/// runs the local search again. A slightly worse result is accepted (within 1% of the best
-/// reward, more when stalled); after long stalls the search restarts from an elite solution.
-/// Small instances (see [`SolveOptions::exact_threshold`]) are solved exactly instead.
-/// Never returns less reward than [`greedy`].
+/// 1. Greedy construction, then local search: 2-opt and Or-opt on candidate lists (shorter
+///    tours free budget), ratio insertion of unvisited nodes, replacement of a visited node
+///    by an unvisited one of higher reward (or equal reward at lower cost), and for teams
+///    relocation/exchange of nodes between routes; repeated until none applies.
+/// 2. Anchored constructions: for every candidate node (a sample of 64 above 400), a route
+///    sent through it first, then ratio insertion and local search; the best become the
+///    elite pool and the "top anchors" (skipped by [`SolveOptions::fast`]).
+/// 3. Iterations: perturb (remove a random segment or random nodes; the strength grows while
+///    stalled), refill with optionally noisy ratios while the removed nodes are tabu, local
+///    search; a new best of the run is intensified with double-bridge kicks on its tours.
+///    Record-to-record acceptance within 2-5% of the run's best reward.
+/// 4. A run ends after `150 + candidates / 2` iterations without improvement; the next starts
+///    from the overall best, an elite solution, or a fresh construction through one or two
+///    anchors (top or random) — this is what finds far-away clusters.
+///
+/// Instances with at most [`SolveOptions::exact_threshold`] candidates are solved exactly.
+/// Deterministic for a seed when an iteration or stall limit binds. Never returns less reward
+/// than [`greedy`].
 pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
     let started = Instant::now();
     let greedy_solution = greedy(problem);
