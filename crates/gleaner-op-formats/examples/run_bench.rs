@@ -15,11 +15,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut stall: Option<u64> = None;
     let mut csv: Option<PathBuf> = None;
     let mut seed = 0u64;
+    let mut k: Option<usize> = None;
+    let mut kicks: Option<usize> = None;
     let mut paths = Vec::new();
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
             "--secs" => secs = args.next().ok_or("--secs needs a value")?.parse()?,
+            "--k" => k = Some(args.next().ok_or("--k needs a value")?.parse()?),
+            "--kicks" => kicks = Some(args.next().ok_or("--kicks needs a value")?.parse()?),
             "--seed" => seed = args.next().ok_or("--seed needs a value")?.parse()?,
             "--greedy" => kind = SolverKind::Greedy,
             "--max-n" => max_n = args.next().ok_or("--max-n needs a value")?.parse()?,
@@ -53,12 +57,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             selected.push(p);
         }
     }
-    let options = SolveOptions {
+    let mut options = SolveOptions {
         time_limit: Duration::from_secs_f64(secs),
         max_stall: stall,
         seed,
         ..SolveOptions::default()
     };
+    if let Some(k) = k {
+        options.neighbours = k;
+    }
+    if let Some(kicks) = kicks {
+        options.kicks = kicks;
+    }
     let rows = run_benchmark(&selected, kind, &options, &mut |k, total, row| {
         eprintln!(
             "[{k}/{total}] {} n={} target={:?} ours={} gap={:?} {:.2}s feasible={}",

@@ -19,8 +19,37 @@ fn instance(n: usize, seed: u64) -> Problem {
         rewards.push(f64::from(rng.random_range(1u32..=100)));
     }
     // A tour through k random points of a square of area A is about 0.7 sqrt(k A) long.
-    let budget = 0.7 * (0.15 * n as f64 * 1.0e6).sqrt() * 0.6;
+    let budget = 0.7 * (0.15 * n as f64 * 1.0e6).sqrt() * 0.45;
     Problem::from_points(&pts, Metric::Euclidean, rewards, budget).expect("valid instance")
+}
+
+/// Counts, by exhaustive scans, unvisited nodes that could still be inserted somewhere within
+/// the budget, and improving 2-opt moves (all position pairs).
+fn local_optimality(p: &Problem, route: &[usize], cost: f64) -> (usize, usize) {
+    let mut on = vec![false; p.len()];
+    route.iter().for_each(|&v| on[v] = true);
+    let slack = p.budget() - cost;
+    let fits = (0..p.len())
+        .filter(|&v| !on[v] && p.reward(v) > 0.0)
+        .filter(|&v| {
+            route.windows(2).any(|w| {
+                p.cost(w[0], v) + p.cost(v, w[1]) - p.cost(w[0], w[1]) + p.service(v) <= slack
+            })
+        })
+        .count();
+    let m = route.len();
+    let mut two_opt = 0;
+    for i in 0..m - 1 {
+        for j in (i + 2)..m - 1 {
+            let g = p.cost(route[i], route[j]) + p.cost(route[i + 1], route[j + 1])
+                - p.cost(route[i], route[i + 1])
+                - p.cost(route[j], route[j + 1]);
+            if g < -1e-9 {
+                two_opt += 1;
+            }
+        }
+    }
+    (fits, two_opt)
 }
 
 fn bench(c: &mut Criterion) {
@@ -31,8 +60,10 @@ fn bench(c: &mut Criterion) {
         let opts = SolveOptions::fast();
         let s = solve_default(&p, &opts);
         let checked = evaluate(&p, &s.routes).expect("feasible");
+        let (fits, two_opt) = local_optimality(&p, &s.routes[0], checked.costs[0]);
         eprintln!(
-            "n = {n}: visited {} nodes ({:.1}%), reward {}, cost {:.1} of {:.1}",
+            "n = {n}: visited {} nodes ({:.1}%), reward {}, cost {:.1} of {:.1}; \
+             feasible insertions left (full scan): {fits}; improving 2-opt moves (full scan): {two_opt}",
             s.visited(),
             100.0 * s.visited() as f64 / n as f64,
             checked.reward,

@@ -160,9 +160,12 @@ pub(crate) struct State {
 /// Cached cheapest insertion of a free node into one route: edge `(a, b)`, extra cost.
 #[derive(Clone, Copy)]
 struct Slot {
+    /// Extra cost; a lower bound when `stale`.
     delta: f64,
     a: usize,
     b: usize,
+    /// The edge was broken by an insertion and the true cheapest position not yet rescanned.
+    stale: bool,
 }
 
 impl State {
@@ -253,6 +256,7 @@ impl State {
             delta: f64::INFINITY,
             a: route[0],
             b: route[1],
+            stale: false,
         };
         if ctx.restricted && route.len() > 16 {
             // Edges next to the node's routed neighbours, plus the two terminal edges.
@@ -260,7 +264,12 @@ impl State {
             let mut consider = |a: usize, b: usize| {
                 let d = ctx.insert_delta(a, v, b);
                 if d < best.delta {
-                    best = Slot { delta: d, a, b };
+                    best = Slot {
+                        delta: d,
+                        a,
+                        b,
+                        stale: false,
+                    };
                 }
             };
             consider(route[0], route[1]);
@@ -282,6 +291,7 @@ impl State {
                     delta: d,
                     a: w[0],
                     b: w[1],
+                    stale: false,
                 };
             }
         }
@@ -345,14 +355,30 @@ impl State {
                     if noise > 0.0 && ratio.is_finite() {
                         ratio *= 1.0 + noise * (2.0 * rng.random::<f64>() - 1.0);
                     }
-                    // Ties: larger reward, then lower index (free is ascending), lower route.
-                    if ratio > best_key.0 || (ratio == best_key.0 && rw > best_key.1) {
+                    // Ties: larger reward, then lower node index, then lower route. The key
+                    // is a total order, so a stale bound never ties with the winner.
+                    let wins = match best {
+                        None => true,
+                        Some((bf, br)) => {
+                            ratio > best_key.0
+                                || (ratio == best_key.0
+                                    && (rw > best_key.1
+                                        || (rw == best_key.1
+                                            && (v < free[bf] || (v == free[bf] && r < br)))))
+                        }
+                    };
+                    if wins {
                         best_key = (ratio, rw);
                         best = Some((fi, r));
                     }
                 }
             }
             let Some((fi, r)) = best else { break };
+            if slots[fi * nr + r].stale {
+                // Its bound won: compute the true cheapest position and select again.
+                slots[fi * nr + r] = self.cheapest_in(ctx, r, free[fi]);
+                continue;
+            }
             let v = free[fi];
             let s = slots[fi * nr + r];
             let idx = self.edge_index(r, s.a, s.b).map_or(1, |i| i + 1);
@@ -367,17 +393,28 @@ impl State {
             let (a, b) = (s.a, s.b);
             for (fj, &w) in free.iter().enumerate() {
                 let slot = &mut slots[fj * nr + r];
+                // A broken best edge leaves its old cost as a lower bound (every other old
+                // edge costs at least as much); the two new edges are evaluated exactly, and
+                // one that beats the bound is the true cheapest position.
                 if slot.a == a && slot.b == b {
-                    *slot = self.cheapest_in(ctx, r, w);
-                } else {
-                    let d1 = ctx.insert_delta(a, w, v);
-                    if d1 < slot.delta {
-                        *slot = Slot { delta: d1, a, b: v };
-                    }
-                    let d2 = ctx.insert_delta(v, w, b);
-                    if d2 < slot.delta {
-                        *slot = Slot { delta: d2, a: v, b };
-                    }
+                    slot.stale = true;
+                }
+                let d1 = ctx.insert_delta(a, w, v);
+                let d2 = ctx.insert_delta(v, w, b);
+                if d1 <= d2 && d1 < slot.delta {
+                    *slot = Slot {
+                        delta: d1,
+                        a,
+                        b: v,
+                        stale: false,
+                    };
+                } else if d2 < d1 && d2 < slot.delta {
+                    *slot = Slot {
+                        delta: d2,
+                        a: v,
+                        b,
+                        stale: false,
+                    };
                 }
             }
         }
@@ -736,13 +773,77 @@ impl State {
         any
     }
 
+    /// Team moves: relocates a visited node to another route when that lowers the total
+    /// cost (the receiving route staying within budget). Returns true on any move.
+    pub fn relocate(&mut self, ctx: &Ctx) -> bool {
+        let nr = self.routes.len();
+        let mut any = false;
+        for r in 0..nr {
+            let mut i = 1;
+            while i + 1 < self.routes[r].len() {
+                let route = &self.routes[r];
+                let (a, v, b) = (route[i - 1], route[i], route[i + 1]);
+                let saving = ctx.insert_delta(a, v, b);
+                let mut target: Option<(f64, usize, usize)> = None;
+                for r2 in (0..nr).filter(|&r2| r2 != r) {
+                    let slot = self.cheapest_in(ctx, r2, v);
+                    if slot.delta < saving - ctx.eps
+                        && self.fits(ctx, r2, slot.delta)
+                        && target.is_none_or(|t| slot.delta < t.0)
+                        && let Some(e) = self.edge_index(r2, slot.a, slot.b)
+                    {
+                        target = Some((slot.delta, r2, e + 1));
+                    }
+                }
+                if let Some((_, r2, idx)) = target {
+                    self.remove_at(ctx, r, i);
+                    self.insert(ctx, r2, idx, v);
+                    any = true;
+                    continue;
+                }
+                i += 1;
+            }
+        }
+        // Exchange of two nodes between routes, each taking the other's place.
+        let visited: usize = self.routes.iter().map(|x| x.len() - 2).sum();
+        if visited > 2000 {
+            return any;
+        }
+        for r in 0..nr {
+            for r2 in (r + 1)..nr {
+                for i in 1..self.routes[r].len() - 1 {
+                    for j in 1..self.routes[r2].len() - 1 {
+                        let (x, y) = (&self.routes[r], &self.routes[r2]);
+                        let (a, v, b) = (x[i - 1], x[i], x[i + 1]);
+                        let (c, w, d) = (y[j - 1], y[j], y[j + 1]);
+                        let d1 = ctx.insert_delta(a, w, b) - ctx.insert_delta(a, v, b);
+                        let d2 = ctx.insert_delta(c, v, d) - ctx.insert_delta(c, w, d);
+                        if d1 + d2 < -ctx.eps && self.fits(ctx, r, d1) && self.fits(ctx, r2, d2) {
+                            self.routes[r][i] = w;
+                            self.routes[r2][j] = v;
+                            self.route_of[w] = r as u32;
+                            self.pos[w] = i as u32;
+                            self.route_of[v] = r2 as u32;
+                            self.pos[v] = j as u32;
+                            self.cost[r] += d1;
+                            self.cost[r2] += d2;
+                            any = true;
+                        }
+                    }
+                }
+            }
+        }
+        any
+    }
+
     /// Full local search: tour improvement, insertion and replacement until stable.
     pub fn local_search(&mut self, ctx: &Ctx, rng: &mut ChaCha8Rng, scan_all: bool) {
         loop {
             self.improve_tours(ctx);
             let ins = self.fill(ctx, &[], 0.0, rng);
             let sw = self.swap(ctx, scan_all);
-            if ins == 0 && !sw {
+            let moved = self.routes.len() > 1 && self.relocate(ctx);
+            if ins == 0 && !sw && !moved {
                 break;
             }
         }
@@ -763,6 +864,31 @@ impl State {
             .filter(|&r| self.routes[r].len() > 2)
             .collect();
         if nonempty.is_empty() {
+            return;
+        }
+        if nonempty.len() > 1 && rng.random_bool(0.5) {
+            // Team perturbation: random nodes from any route.
+            for _ in 0..strength.max(2) {
+                let r = rng.random_range(0..self.routes.len());
+                let m = self.routes[r].len() - 2;
+                if m > 0 {
+                    let idx = rng.random_range(1..=m);
+                    let v = self.remove_at(ctx, r, idx);
+                    // Half of the time the node is forced into another route (cheapest
+                    // position, if it fits) rather than dropped.
+                    let r2 = rng.random_range(0..self.routes.len());
+                    if r2 != r && rng.random_bool(0.5) {
+                        let slot = self.cheapest_in(ctx, r2, v);
+                        if self.fits(ctx, r2, slot.delta)
+                            && let Some(e) = self.edge_index(r2, slot.a, slot.b)
+                        {
+                            self.insert(ctx, r2, e + 1, v);
+                            continue;
+                        }
+                    }
+                    out.push(v);
+                }
+            }
             return;
         }
         let r = nonempty[rng.random_range(0..nonempty.len())];

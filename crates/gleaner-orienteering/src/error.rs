@@ -45,9 +45,9 @@ pub enum ProblemError {
         from: usize,
         /// Column.
         to: usize,
-        /// c[from][to].
+        /// `c[from][to]`.
         forward: f64,
-        /// c[to][from].
+        /// `c[to][from]`.
         backward: f64,
     },
     /// A point has a non-finite coordinate.

@@ -22,7 +22,7 @@ impl Metric {
         let dx = (a[0] - b[0]).abs();
         let dy = (a[1] - b[1]).abs();
         match self {
-            Metric::Euclidean => dx.hypot(dy),
+            Metric::Euclidean => (dx * dx + dy * dy).sqrt(),
             Metric::Manhattan => dx + dy,
             Metric::Chebyshev => dx.max(dy),
         }

@@ -126,16 +126,33 @@ fn finish(problem: &Problem, state: &State) -> Solution {
     evaluate(problem, &state.routes).unwrap_or_else(|_| Solution::empty(problem))
 }
 
-/// Empty routes, route 0 sent through `v` first (when it fits), then ratio insertion.
-fn anchored(ctx: &Ctx, v: usize, noise: f64, rng: &mut ChaCha8Rng) -> Option<State> {
+/// Empty routes, route 0 sent through the `anchors` in order (when they fit), then ratio
+/// insertion with the given noise.
+fn anchored(ctx: &Ctx, anchors: &[usize], noise: f64, rng: &mut ChaCha8Rng) -> Option<State> {
     let p = ctx.p;
     let mut st = State::empty(p);
-    if st.route_of[v] != FREE
-        || st.cost[0] + ctx.insert_delta(p.start(), v, p.end()) > p.budget() + p.tolerance()
-    {
-        return None;
+    for (k, &v) in anchors.iter().enumerate() {
+        let route = &st.routes[0];
+        let (a, b) = (route[k], route[k + 1]);
+        if st.route_of[v] != FREE
+            || st.cost[0] + ctx.insert_delta(a, v, b) > p.budget() + p.tolerance()
+        {
+            return None;
+        }
+        st.insert(ctx, 0, k + 1, v);
     }
-    st.insert(ctx, 0, 1, v);
+    // Teams: every other route starts through a random node of its own.
+    for r in 1..st.routes.len() {
+        if ctx.cands.is_empty() {
+            break;
+        }
+        let v = ctx.cands[rng.random_range(0..ctx.cands.len())];
+        if st.route_of[v] == FREE
+            && st.cost[r] + ctx.insert_delta(p.start(), v, p.end()) <= p.budget() + p.tolerance()
+        {
+            st.insert(ctx, r, 1, v);
+        }
+    }
     st.fill(ctx, &[], noise, rng);
     Some(st)
 }
@@ -151,18 +168,26 @@ fn better(a: &State, b: &State, eps: f64) -> bool {
     a.cost.iter().sum::<f64>() < b.cost.iter().sum::<f64>() - eps
 }
 
-/// The default solver: iterated local search (ILS) seeded with [`greedy`].
+/// The default solver: multi-start iterated local search (ILS) seeded with [`greedy`].
 ///
-/// Construction is greedy ratio insertion; the local search alternates 2-opt and Or-opt
-/// (which free budget), ratio insertion of unvisited nodes, and replacement moves (an
-/// unvisited node takes the place of a visited one of lower reward, or of equal reward when
-/// that saves cost), until none applies. Each iteration perturbs the current solution
-/// (removes a random segment or random nodes; the strength grows while the search stalls),
-/// re-inserts with randomised ratios (GRASP noise) while the removed nodes are tabu, and
-/// runs the local search again. A slightly worse result is accepted (within 1% of the best
-/// reward, more when stalled); after long stalls the search restarts from an elite solution.
-/// Small instances (see [`SolveOptions::exact_threshold`]) are solved exactly instead.
-/// Never returns less reward than [`greedy`].
+/// 1. Greedy construction, then local search: 2-opt and Or-opt on candidate lists (shorter
+///    tours free budget), ratio insertion of unvisited nodes, replacement of a visited node
+///    by an unvisited one of higher reward (or equal reward at lower cost), and for teams
+///    relocation/exchange of nodes between routes; repeated until none applies.
+/// 2. Anchored constructions: for every candidate node (a sample of 64 above 400), a route
+///    sent through it first, then ratio insertion and local search; the best become the
+///    elite pool and the "top anchors" (skipped by [`SolveOptions::fast`]).
+/// 3. Iterations: perturb (remove a random segment or random nodes; the strength grows while
+///    stalled), refill with optionally noisy ratios while the removed nodes are tabu, local
+///    search; a new best of the run is intensified with double-bridge kicks on its tours.
+///    Record-to-record acceptance within 2-5% of the run's best reward.
+/// 4. A run ends after `150 + candidates / 2` iterations without improvement; the next starts
+///    from the overall best, an elite solution, or a fresh construction through one or two
+///    anchors (top or random) — this is what finds far-away clusters.
+///
+/// Instances with at most [`SolveOptions::exact_threshold`] candidates are solved exactly.
+/// Deterministic for a seed when an iteration or stall limit binds. Never returns less reward
+/// than [`greedy`].
 pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
     let started = Instant::now();
     let greedy_solution = greedy(problem);
@@ -200,12 +225,17 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
                 .map(|_| ctx.cands[rng.random_range(0..ctx.cands.len())])
                 .collect()
         };
-        for &v in &sample {
+        let search = options.max_iterations.is_none_or(|m| m > 0);
+        for &v in sample.iter().filter(|_| search) {
             if started.elapsed() >= options.time_limit / 4 {
                 break;
             }
-            if let Some(st) = anchored(&ctx, v, 0.0, &mut rng) {
+            if let Some(mut st) = anchored(&ctx, &[v], 0.0, &mut rng) {
+                st.local_search(&ctx, &mut rng, scan_all);
                 anchors.push((st.reward, v));
+                if better(&st, &best, ctx.eps) {
+                    best = st;
+                }
             }
         }
         anchors.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
@@ -220,7 +250,7 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
             continue;
         }
         last_reward = rw;
-        if let Some(mut st) = anchored(&ctx, v, 0.0, &mut rng) {
+        if let Some(mut st) = anchored(&ctx, &[v], 0.0, &mut rng) {
             st.local_search(&ctx, &mut rng, scan_all);
             if better(&st, &best, ctx.eps) {
                 best = st.clone();
@@ -229,9 +259,10 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
         }
     }
     cur = best.clone();
+    elite.push(best.clone());
     let top_anchors: Vec<usize> = anchors.iter().take(20).map(|a| a.1).collect();
     let mut run_best = cur.clone();
-    let run_len = 200 + ctx.cands.len() as u64;
+    let run_len = 150 + ctx.cands.len() as u64 / 2;
     let mut run_stall: u64 = 0;
     let mut runs: u64 = 0;
     let mut removed = Vec::new();
@@ -298,30 +329,34 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
             runs += 1;
             run_stall = 0;
             strength = 1;
-            match runs % 4 {
+            // Restart schedule: overall best, an elite solution, or a fresh construction
+            // through one or two anchors (from the best anchors or at random).
+            let pick = |top: bool, rng: &mut ChaCha8Rng| {
+                if top && !top_anchors.is_empty() {
+                    top_anchors[rng.random_range(0..top_anchors.len())]
+                } else {
+                    ctx.cands[rng.random_range(0..ctx.cands.len())]
+                }
+            };
+            match runs % 6 {
+                _ if ctx.cands.is_empty() => cur = best.clone(),
                 0 => cur = best.clone(),
-                2 if !elite.is_empty() => cur = elite[rng.random_range(0..elite.len())].clone(),
-                _ => {
-                    let pick = if runs % 4 == 1 && !top_anchors.is_empty() {
-                        top_anchors[rng.random_range(0..top_anchors.len())]
-                    } else if !ctx.cands.is_empty() {
-                        ctx.cands[rng.random_range(0..ctx.cands.len())]
-                    } else {
-                        problem.start()
-                    };
-                    cur = anchored(&ctx, pick, 0.3, &mut rng).unwrap_or_else(|| best.clone());
+                3 => cur = elite[rng.random_range(0..elite.len())].clone(),
+                1 => {
+                    let a = pick(true, &mut rng);
+                    cur = anchored(&ctx, &[a], 0.3, &mut rng).unwrap_or_else(|| best.clone());
+                    cur.local_search(&ctx, &mut rng, scan_all);
+                }
+                k => {
+                    let a = pick(k != 4, &mut rng);
+                    let b = pick(k == 5, &mut rng);
+                    cur = anchored(&ctx, &[a, b], 0.3, &mut rng).unwrap_or_else(|| best.clone());
                     cur.local_search(&ctx, &mut rng, scan_all);
                 }
             }
             run_best = cur.clone();
         }
     }
-    eprintln!(
-        "DBG iters {iter} runs {runs} best {} anchors {} t {:?}",
-        best.reward,
-        anchors.len(),
-        started.elapsed()
-    );
     let result = finish(problem, &best);
     if result.reward + 1e-9 < greedy_solution.reward {
         greedy_solution
@@ -425,6 +460,22 @@ mod tests {
         .unwrap();
         let g = greedy(&p);
         assert_eq!(g.reward, 11.0);
+    }
+
+    #[test]
+    fn degenerate_instances() {
+        let one = Problem::new(vec![0.0], vec![3.0], 0.0).unwrap();
+        for kind in [SolverKind::Greedy, SolverKind::Default, SolverKind::Exact] {
+            check(&one, kind, &[vec![0, 0]], 3.0);
+        }
+        let nothing = line(vec![0.0; 4], 100.0).with_vehicles(3).unwrap();
+        let ils = SolveOptions {
+            exact_threshold: 0,
+            ..SolveOptions::default()
+        }
+        .with_iterations(5);
+        assert_eq!(solve_default(&nothing, &ils).reward, 0.0);
+        assert_eq!(solve_default(&nothing, &ils).routes, vec![vec![0, 0]; 3]);
     }
 
     #[test]
