@@ -307,6 +307,10 @@ enum BenchCommand {
         /// Also write the rows as CSV to this file.
         #[arg(long)]
         csv: Option<PathBuf>,
+        /// Stop an instance after this many iterations without a new best; 0 = search for the
+        /// whole time limit.
+        #[arg(long, default_value_t = 20_000)]
+        max_stall: u64,
     },
 }
 
@@ -573,6 +577,7 @@ fn run(cli: Cli) -> Result<()> {
             seed,
             max_n,
             csv,
+            max_stall,
         }) => {
             let (_, table) = bench::run(&bench::BenchOpArgs {
                 path,
@@ -581,6 +586,7 @@ fn run(cli: Cli) -> Result<()> {
                 seed,
                 max_n,
                 csv,
+                max_stall: (max_stall > 0).then_some(max_stall),
             })?;
             print!("{table}");
         }

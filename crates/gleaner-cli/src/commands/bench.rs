@@ -26,6 +26,9 @@ pub struct BenchOpArgs {
     pub max_n: Option<usize>,
     /// Also write the rows as CSV here.
     pub csv: Option<PathBuf>,
+    /// Stop an instance after this many iterations without improvement (`None`: use the
+    /// whole time limit).
+    pub max_stall: Option<u64>,
 }
 
 /// Parses a solver name.
@@ -62,9 +65,10 @@ pub fn run(args: &BenchOpArgs) -> Result<(Vec<BenchRow>, String)> {
     if files.is_empty() {
         bail!("{}: no benchmark instances found", args.path.display());
     }
-    let options = SolveOptions::default()
+    let mut options = SolveOptions::default()
         .with_time_limit(Duration::from_secs_f64(args.time_limit_s.max(0.0)))
         .with_seed(args.seed);
+    options.max_stall = args.max_stall;
     let pb = progress::bar(files.len() as u64, "solving");
     let rows = run_benchmark(&files, args.solver, &options, &mut |done, _, row| {
         pb.set_position(done as u64);
