@@ -307,9 +307,9 @@ enum BenchCommand {
         /// Also write the rows as CSV to this file.
         #[arg(long)]
         csv: Option<PathBuf>,
-        /// Stop an instance after this many iterations without a new best; 0 = search for the
-        /// whole time limit.
-        #[arg(long, default_value_t = 20_000)]
+        /// Stop an instance after this many iterations without a new best; 0 (the default)
+        /// searches for the whole time limit.
+        #[arg(long, default_value_t = 0)]
         max_stall: u64,
     },
 }
