@@ -154,6 +154,28 @@ fn parse_value(s: &str) -> Result<f64, Problem> {
     }
 }
 
+/// Adds `row` with the value parsed from `text` (missing: counted, no row; bad: the policy).
+fn push_value(
+    interner: &mut Interner,
+    report: &mut IngestReport,
+    policy: &Policy<'_>,
+    row: Row,
+    column: &str,
+    text: &str,
+) -> Result<(), IngestError> {
+    if is_missing(text) {
+        report.missing += 1;
+        return Ok(());
+    }
+    match parse_value(text) {
+        Ok(value) => {
+            interner.out.rows.push(Row { value, ..row });
+            Ok(())
+        }
+        Err(p) => policy.bad(report, u64::from(row.line), column, text, p),
+    }
+}
+
 /// Sorts, removes duplicates, and turns a conflicting duplicate into an error.
 fn finish(
     mut interner: Interner,
@@ -427,20 +449,14 @@ pub fn read_wide_csv(
                     continue;
                 }
             };
-            if is_missing(v) {
-                report.missing += 1;
-                continue;
-            }
-            match parse_value(v) {
-                Ok(value) => interner.out.rows.push(Row {
-                    sensor,
-                    modality,
-                    t,
-                    value,
-                    line: line as u32,
-                }),
-                Err(p) => policy.bad(&mut report, line, &names[c], v, p)?,
-            }
+            let row = Row {
+                sensor,
+                modality,
+                t,
+                value: 0.0,
+                line: line as u32,
+            };
+            push_value(&mut interner, &mut report, &policy, row, &names[c], v)?;
         }
     }
     let readings = finish(interner, &policy, &mut report, wide.modality.as_str())?;
@@ -519,20 +535,14 @@ pub fn read_caf_daily(
         };
         for &(c, modality) in &columns {
             let v = table.field(c).unwrap_or("");
-            if is_missing(v) {
-                report.missing += 1;
-                continue;
-            }
-            match parse_value(v) {
-                Ok(value) => interner.out.rows.push(Row {
-                    sensor,
-                    modality,
-                    t,
-                    value,
-                    line: line as u32,
-                }),
-                Err(p) => policy.bad(&mut report, line, &names[c], v, p)?,
-            }
+            let row = Row {
+                sensor,
+                modality,
+                t,
+                value: 0.0,
+                line: line as u32,
+            };
+            push_value(&mut interner, &mut report, &policy, row, &names[c], v)?;
         }
     }
     let readings = finish(interner, &policy, &mut report, "value")?;
