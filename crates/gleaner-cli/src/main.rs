@@ -14,7 +14,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use commands::{bench, cells, demo, explore, ingest, init, plan, record, score, synth};
 use project::Project;
@@ -118,17 +118,8 @@ enum Command {
         /// Project directory.
         #[arg(long, default_value = ".")]
         project: PathBuf,
-        /// Mission time (RFC 3339 or YYYY-MM-DD, UTC) [default: the latest reading]. Only data
-        /// up to this time is used.
-        #[arg(long, value_parser = parse_time)]
-        at: Option<i64>,
-        /// Use only readings from this time on (RFC 3339 or date) as collected history.
-        #[arg(long, value_parser = parse_time)]
-        history_from: Option<i64>,
-        /// Use only readings up to this time as collected history (later ones are not yet
-        /// collected at the mission time), e.g. score 2014 from 2011-2013 data.
-        #[arg(long, value_parser = parse_time)]
-        history_until: Option<i64>,
+        #[command(flatten)]
+        when: WhenArgs,
         /// Per-cell class probabilities from your own model, instead of the built-in one.
         #[arg(long)]
         probabilities: Option<PathBuf>,
@@ -152,15 +143,8 @@ enum Command {
         /// Project directory.
         #[arg(long, default_value = ".")]
         project: PathBuf,
-        /// Mission time (RFC 3339 or date) [default: the latest reading].
-        #[arg(long, value_parser = parse_time)]
-        at: Option<i64>,
-        /// Use only readings from this time on as collected history.
-        #[arg(long, value_parser = parse_time)]
-        history_from: Option<i64>,
-        /// Use only readings up to this time as collected history.
-        #[arg(long, value_parser = parse_time)]
-        history_until: Option<i64>,
+        #[command(flatten)]
+        when: WhenArgs,
         /// Per-cell scores (CSV `cell_id,score` with a header) instead of the utility engine;
         /// cells left out score 0.
         #[arg(long)]
@@ -279,6 +263,32 @@ enum Command {
         #[arg(long, default_value_t = 180)]
         days: u32,
     },
+}
+
+/// The mission time and which stored readings count as collected by then.
+#[derive(Args)]
+struct WhenArgs {
+    /// Mission time (RFC 3339 or YYYY-MM-DD, UTC) [default: the latest reading]. Only data up
+    /// to this time is used.
+    #[arg(long, value_parser = parse_time)]
+    at: Option<i64>,
+    /// Use only readings from this time on (RFC 3339 or date) as collected history.
+    #[arg(long, value_parser = parse_time)]
+    history_from: Option<i64>,
+    /// Use only readings up to this time as collected history (later ones are not yet
+    /// collected at the mission time, unless a recorded collection brought them back), e.g.
+    /// score 2014 from 2011-2013 data.
+    #[arg(long, value_parser = parse_time)]
+    history_until: Option<i64>,
+}
+
+impl WhenArgs {
+    fn history(&self) -> score::History {
+        score::History {
+            from: self.history_from.unwrap_or(i64::MIN),
+            until: self.history_until.unwrap_or(i64::MAX),
+        }
+    }
 }
 
 #[derive(Subcommand)]
@@ -451,20 +461,14 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Score {
             project,
-            at,
-            history_from,
-            history_until,
+            when,
             probabilities,
             json,
             limit,
             sort,
         } => {
             let mut p = Project::open(&project)?;
-            let history = score::History {
-                from: history_from.unwrap_or(i64::MIN),
-                until: history_until.unwrap_or(i64::MAX),
-            };
-            let scoring = score::score(&p, at, history, probabilities.as_deref())?;
+            let scoring = score::score(&p, when.at, when.history(), probabilities.as_deref())?;
             score::store_scores(&mut p, &scoring)?;
             let mut doc = score::to_json(&p, &scoring);
             score::sort(
@@ -489,9 +493,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Plan {
             project,
-            at,
-            history_from,
-            history_until,
+            when,
             scores,
             solver,
             time_limit,
@@ -502,11 +504,8 @@ fn run(cli: Cli) -> Result<()> {
             let mut p = Project::open(&project)?;
             let defaults = p.config.planner.clone();
             let args = plan::PlanArgs {
-                at,
-                history: score::History {
-                    from: history_from.unwrap_or(i64::MIN),
-                    until: history_until.unwrap_or(i64::MAX),
-                },
+                at: when.at,
+                history: when.history(),
                 scores,
                 planner: plan::parse_planner(solver.as_deref().unwrap_or(&defaults.solver))?,
                 time_limit_s: time_limit.unwrap_or(defaults.time_limit_s),
