@@ -272,6 +272,27 @@ fn score_plan_record_cycle() {
     let stops = m["stops"].as_array().expect("stops");
     assert!(!stops.is_empty());
     let first = stops[0]["cell"].as_str().expect("cell").to_string();
+    // Scoring and planning fill the metadata table without losing what ingest put there.
+    let cells: Vec<serde_json::Value> =
+        serde_json::from_str(&ok(&["cells", "--project", p, "--json"])).expect("json");
+    for c in &cells {
+        assert!(
+            c["expected_energy_j"].as_f64().expect("energy") > 5_000.0,
+            "{c}"
+        );
+        assert!(c["pending_bytes"].is_number(), "{c}");
+        assert!(
+            c["scores"].is_object() && !c["summaries"].as_array().expect("summaries").is_empty(),
+            "{c}"
+        );
+        assert!(
+            !c["class_probabilities"]
+                .as_array()
+                .expect("probabilities")
+                .is_empty(),
+            "{c}"
+        );
+    }
 
     let rec = ok(&["record", "--project", p, "--mission", "1"]);
     assert!(

@@ -95,6 +95,26 @@ pub fn services(
         .context("collection times")
 }
 
+/// Keeps each cell's expected collection energy (J) and pending data (bytes, from the energy
+/// model's backlog) in the cell metadata table; the other fields stay as stored.
+fn store_expected_energy(
+    project: &mut Project,
+    k: &Knowledge,
+    services: &[CellService],
+) -> Result<()> {
+    let mut metadata = project.store.cell_metadata()?;
+    for m in &mut metadata {
+        m.summaries.clear();
+        m.correlations.clear();
+        m.anomalies.clear();
+        if let Some(c) = k.field.cells().iter().position(|c| c.index == m.cell) {
+            m.expected_energy_j = Some(services[c].energy_j);
+        }
+    }
+    project.store.upsert_cell_metadata(&metadata)?;
+    Ok(())
+}
+
 /// A planned mission with everything needed to report it.
 pub struct Planned {
     /// Mission time, seconds.
@@ -146,6 +166,7 @@ pub fn run(project: &mut Project, args: &PlanArgs) -> Result<Planned> {
     let model =
         MissionEnergyModel::new(&project.config.energy.to_core()?).context("[energy] settings")?;
     let services = services(&model, &knowledge, t)?;
+    store_expected_energy(project, &knowledge, &services)?;
     let candidates: Vec<Candidate> = knowledge
         .field
         .cells()

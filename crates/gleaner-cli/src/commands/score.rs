@@ -337,12 +337,23 @@ pub fn store_scores(project: &mut Project, s: &Scoring) -> Result<()> {
     let k = &s.knowledge;
     let min_overlap = project.config.utility.min_overlap;
     let flag = project.config.utility.anomaly_flag;
+    // Scalar fields are replaced on upsert: carry over what scoring does not compute.
+    let stored: HashMap<gleaner_field::CellIndex, CellMetadata> = project
+        .store
+        .cell_metadata()?
+        .into_iter()
+        .map(|m| (m.cell, m))
+        .collect();
     let metadata: Vec<CellMetadata> = s
         .cells
         .iter()
         .map(|c| {
             let cell = &k.field.cells()[c.cell];
             let mut m = CellMetadata::new(cell.index);
+            if let Some(old) = stored.get(&cell.index) {
+                m.pending_bytes = old.pending_bytes;
+                m.expected_energy_j = old.expected_energy_j;
+            }
             m.last_collected = cell
                 .sensors
                 .iter()
