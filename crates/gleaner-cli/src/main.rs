@@ -16,7 +16,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use commands::{bench, cells, demo, explore, ingest, init, plan, record, score, synth};
+use commands::{bench, cells, demo, explore, export, ingest, init, plan, record, score, synth};
 use project::Project;
 
 /// Utility-driven UAV data collection for farm sensor networks.
@@ -183,6 +183,22 @@ enum Command {
         /// Do not store the sorties.
         #[arg(long)]
         dry_run: bool,
+    },
+    /// Export a planned mission for flying and mapping: GeoJSON (cells with their scores, the
+    /// route, the base), a QGroundControl .plan and a QGC WPL 110 waypoint file.
+    #[command(
+        after_help = "Waypoints: take-off, one NAV_WAYPOINT (16) per cell at the cell centre holding for the\nplanned hover time (param 1), return-to-launch (20); altitude from [energy] altitude_m.\n\nExamples:\n  gleaner export --project farm --mission 1\n  gleaner export --project farm --mission 1 --out flight1"
+    )]
+    Export {
+        /// Project directory.
+        #[arg(long, default_value = ".")]
+        project: PathBuf,
+        /// The mission's id (printed by `gleaner plan`).
+        #[arg(long)]
+        mission: i64,
+        /// Output directory [default: <project>/missions/<id>].
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Record a flown mission: the cells visited, when, and the readings brought back; the
     /// visited cells' sensors count as collected from then on.
@@ -539,6 +555,20 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 print!("{}", explore::table(&e));
             }
+        }
+        Command::Export {
+            project,
+            mission,
+            out,
+        } => {
+            let p = Project::open(&project)?;
+            let files = export::run(&p, &project, mission, out.as_deref())?;
+            println!(
+                "wrote {}, {}, {}",
+                files.geojson.display(),
+                files.plan.display(),
+                files.waypoints.display()
+            );
         }
         Command::Record {
             project,

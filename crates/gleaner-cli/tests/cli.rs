@@ -523,3 +523,75 @@ fn exploration_visits_every_cell_once_within_budget() {
             >= e["lower_bound_sorties"].as_u64().expect("bound") as usize
     );
 }
+
+#[test]
+fn export_writes_geojson_qgc_plan_and_wpl() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    ok(&[
+        "plan",
+        "--project",
+        p,
+        "--at",
+        "2014-01-25",
+        "--solver",
+        "exact",
+    ]);
+    let out = dir.path().join("export");
+    ok(&["export", "--project", p, "--mission", "1", "--out", s(&out)]);
+
+    let waypoints = std::fs::read_to_string(out.join("mission.waypoints")).expect("wpl");
+    insta::assert_snapshot!("export_waypoints", waypoints);
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("mission.plan")).expect("plan"))
+            .expect("json");
+    insta::assert_json_snapshot!("export_plan", plan);
+    assert_eq!(plan["fileType"], "Plan");
+    assert_eq!(plan["mission"]["version"], 2);
+    assert_eq!(plan["geoFence"]["version"], 2);
+    assert_eq!(plan["rallyPoints"]["version"], 2);
+
+    let g: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("mission.geojson")).expect("geojson"),
+    )
+    .expect("json");
+    assert_eq!(g["type"], "FeatureCollection");
+    assert!(g.get("crs").is_none(), "RFC 7946: no crs member");
+    let features = g["features"].as_array().expect("features");
+    let polygons: Vec<&serde_json::Value> = features
+        .iter()
+        .filter(|f| f["geometry"]["type"] == "Polygon")
+        .collect();
+    assert_eq!(polygons.len(), 3);
+    for f in &polygons {
+        let ring: Vec<[f64; 2]> = f["geometry"]["coordinates"][0]
+            .as_array()
+            .expect("ring")
+            .iter()
+            .map(|c| [c[0].as_f64().expect("lon"), c[1].as_f64().expect("lat")])
+            .collect();
+        assert_eq!(ring.first(), ring.last(), "closed ring");
+        // [lon, lat] order: longitudes near -117, latitudes near 46.78.
+        assert!(
+            ring.iter()
+                .all(|c| (c[0] + 117.08).abs() < 0.01 && (c[1] - 46.78).abs() < 0.01)
+        );
+        let area2: f64 = ring
+            .windows(2)
+            .map(|w| w[0][0] * w[1][1] - w[1][0] * w[0][1])
+            .sum();
+        assert!(area2 > 0.0, "outer ring must be counter-clockwise");
+    }
+    let route = features
+        .iter()
+        .find(|f| f["geometry"]["type"] == "LineString")
+        .expect("route");
+    let line = route["geometry"]["coordinates"].as_array().expect("line");
+    assert_eq!(line.first(), line.last(), "the route returns to the base");
+    assert!(
+        features
+            .iter()
+            .any(|f| f["geometry"]["type"] == "Point" && f["properties"]["kind"] == "base")
+    );
+}

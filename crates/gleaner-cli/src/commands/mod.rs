@@ -5,6 +5,7 @@ pub mod bench;
 pub mod cells;
 pub mod demo;
 pub mod explore;
+pub mod export;
 pub mod ingest;
 pub mod init;
 pub mod plan;
