@@ -564,10 +564,11 @@ fn run(cli: Cli) -> Result<()> {
             let p = Project::open(&project)?;
             let files = export::run(&p, &project, mission, out.as_deref())?;
             println!(
-                "wrote {}, {}, {}",
+                "wrote {}, {}, {}, {}",
                 files.geojson.display(),
                 files.plan.display(),
-                files.waypoints.display()
+                files.waypoints.display(),
+                files.map.display()
             );
         }
         Command::Record {

@@ -16,9 +16,24 @@ use crate::project::Project;
 /// The fields of a stored mission summary that export needs (written by `gleaner plan`).
 #[derive(Deserialize)]
 struct StoredMission {
+    planned_at: String,
+    planner: String,
     base_lon_lat: [f64; 2],
     cruise_speed_mps: f64,
     stops: Vec<StoredStop>,
+    energy: StoredEnergy,
+    total_score: f64,
+}
+
+#[derive(Deserialize)]
+struct StoredEnergy {
+    travel_j: f64,
+    hover_j: f64,
+    comm_j: f64,
+    return_j: f64,
+    total_j: f64,
+    budget_j: f64,
+    utilisation: f64,
 }
 
 #[derive(Deserialize)]
@@ -37,6 +52,8 @@ pub struct Exported {
     pub plan: PathBuf,
     /// `mission.waypoints`.
     pub waypoints: PathBuf,
+    /// `mission.svg`.
+    pub map: PathBuf,
 }
 
 /// Rounds a WGS84 coordinate to 1e-7 degrees (about 1 cm), as autopilots store them.
@@ -229,7 +246,212 @@ fn wpl(m: &StoredMission, alt: f64) -> String {
     out
 }
 
-/// Writes the three files for mission `id` into `out` (default: `<project>/missions/<id>`).
+/// A colour for `x` in [0, 1]: a perceptually ordered ramp from dark blue through teal to yellow
+/// (viridis-like, 5 stops, linearly interpolated).
+fn ramp(x: f64) -> String {
+    const STOPS: [[f64; 3]; 5] = [
+        [68.0, 1.0, 84.0],
+        [59.0, 82.0, 139.0],
+        [33.0, 145.0, 140.0],
+        [94.0, 201.0, 98.0],
+        [253.0, 231.0, 37.0],
+    ];
+    let x = if x.is_finite() {
+        x.clamp(0.0, 1.0)
+    } else {
+        0.0
+    } * 4.0;
+    let k = (x.floor() as usize).min(3);
+    let f = x - k as f64;
+    let c: Vec<u8> = (0..3)
+        .map(|i| (STOPS[k][i] + f * (STOPS[k + 1][i] - STOPS[k][i])).round() as u8)
+        .collect();
+    format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
+}
+
+/// A round scale-bar length, metres: 1, 2 or 5 times a power of ten, about a fifth of `span_m`.
+fn scale_bar_m(span_m: f64) -> f64 {
+    let target = (span_m / 5.0).max(1.0);
+    let p = 10f64.powf(target.log10().floor());
+    [5.0, 2.0, 1.0]
+        .into_iter()
+        .map(|k| k * p)
+        .find(|&v| v <= target)
+        .unwrap_or(p)
+}
+
+/// The mission map as SVG: cells coloured by S, visited cells outlined with their visiting
+/// order, the route from the base and back, a scale bar, a colour legend and the energy
+/// summary. North is up; the drawing is in the local east/north frame (metres).
+fn svg_map(project: &Project, m: &StoredMission) -> Result<String> {
+    use std::fmt::Write as _;
+    let (_, field) = project.field()?;
+    let metadata = project.store.cell_metadata()?;
+    let size = field.cell_size_m();
+    let base = gleaner_field::LocalPoint::new(0.0, 0.0);
+    let (mut e0, mut e1, mut n0, mut n1) = (base.e, base.e, base.n, base.n);
+    for k in 0..field.cells().len() {
+        for p in field.cell_corners(gleaner_field::CellId(k as u32)) {
+            e0 = e0.min(p.e);
+            e1 = e1.max(p.e);
+            n0 = n0.min(p.n);
+            n1 = n1.max(p.n);
+        }
+    }
+    let pad = size;
+    let (w_m, h_m) = (e1 - e0 + 2.0 * pad, n1 - n0 + 2.0 * pad);
+    let scale = 900.0 / w_m.max(h_m);
+    let (w, h) = (w_m * scale, h_m * scale);
+    let x = |e: f64| (e - e0 + pad) * scale;
+    let y = |n: f64| (n1 + pad - n) * scale;
+    let scores: Vec<Option<f64>> = field
+        .cells()
+        .iter()
+        .map(|c| {
+            metadata
+                .iter()
+                .find(|x| x.cell == c.index)
+                .and_then(|x| x.scores.as_ref())
+                .map(|s| s.score)
+        })
+        .collect();
+    let (lo, hi) = scores
+        .iter()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let norm = |v: f64| if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
+    let panel = 260.0;
+    let mut out = String::new();
+    writeln!(
+        out,
+        r##"<svg xmlns="http://www.w3.org/2000/svg" width="{:.0}" height="{:.0}" viewBox="0 0 {:.0} {:.0}" font-family="sans-serif" font-size="12">"##,
+        w + panel,
+        h.max(320.0),
+        w + panel,
+        h.max(320.0)
+    )?;
+    writeln!(
+        out,
+        r##"<rect width="100%" height="100%" fill="#ffffff"/>"##
+    )?;
+    for (k, cell) in field.cells().iter().enumerate() {
+        let c = field.cell_corners(gleaner_field::CellId(k as u32));
+        let fill = scores[k].map_or_else(|| "#dddddd".to_string(), |v| ramp(norm(v)));
+        writeln!(
+            out,
+            r##"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="{fill}" stroke="#555555" stroke-width="0.5"><title>{} S={}</title></rect>"##,
+            x(c[0].e),
+            y(c[2].n),
+            size * scale,
+            size * scale,
+            cell.index,
+            scores[k].map_or("n/a".to_string(), |v| format!("{v:.3}"))
+        )?;
+    }
+    let frame = field.frame();
+    let local = |lon_lat: [f64; 2]| -> Result<gleaner_field::LocalPoint> {
+        Ok(frame.forward(gleaner_field::LatLon::new(lon_lat[1], lon_lat[0])?))
+    };
+    let mut path = vec![base];
+    for s in &m.stops {
+        path.push(local(s.centre_lon_lat)?);
+    }
+    path.push(base);
+    let points: Vec<String> = path
+        .iter()
+        .map(|p| format!("{:.1},{:.1}", x(p.e), y(p.n)))
+        .collect();
+    writeln!(
+        out,
+        r##"<polyline points="{}" fill="none" stroke="#d62728" stroke-width="2.5" stroke-linejoin="round"/>"##,
+        points.join(" ")
+    )?;
+    for s in &m.stops {
+        let p = local(s.centre_lon_lat)?;
+        writeln!(
+            out,
+            r##"<circle cx="{:.1}" cy="{:.1}" r="9" fill="#ffffff" stroke="#d62728" stroke-width="2"/><text x="{:.1}" y="{:.1}" text-anchor="middle" font-size="10" font-weight="bold">{}</text>"##,
+            x(p.e),
+            y(p.n),
+            x(p.e),
+            y(p.n) + 3.5,
+            s.order
+        )?;
+    }
+    writeln!(
+        out,
+        r##"<rect x="{:.1}" y="{:.1}" width="14" height="14" fill="#000000"/><text x="{:.1}" y="{:.1}" font-weight="bold">base</text>"##,
+        x(base.e) - 7.0,
+        y(base.n) - 7.0,
+        x(base.e) + 10.0,
+        y(base.n) + 4.0
+    )?;
+    let bar = scale_bar_m(w_m);
+    writeln!(
+        out,
+        r##"<line x1="20" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#000000" stroke-width="3"/><text x="20" y="{:.1}">{bar} m</text><text x="{:.1}" y="24" font-size="16" font-weight="bold">N ↑</text>"##,
+        h - 20.0,
+        20.0 + bar * scale,
+        h - 20.0,
+        h - 28.0,
+        w - 40.0
+    )?;
+    let px = w + 20.0;
+    writeln!(
+        out,
+        r##"<text x="{px:.0}" y="30" font-size="14" font-weight="bold">gleaner mission</text>"##
+    )?;
+    let lines = [
+        format!("planned for {}", m.planned_at),
+        format!("planner: {}", m.planner),
+        format!("{} cells, total S = {:.3}", m.stops.len(), m.total_score),
+        format!("E_t travel  {:>9.1} J", m.energy.travel_j),
+        format!("E_h hover   {:>9.1} J", m.energy.hover_j),
+        format!("E_c comm    {:>9.1} J", m.energy.comm_j),
+        format!("E_r return  {:>9.1} J", m.energy.return_j),
+        format!(
+            "total {:.1} of {:.1} J",
+            m.energy.total_j, m.energy.budget_j
+        ),
+        format!("utilisation {:.1}%", 100.0 * m.energy.utilisation),
+    ];
+    for (k, line) in lines.iter().enumerate() {
+        writeln!(
+            out,
+            r##"<text x="{px:.0}" y="{:.0}">{line}</text>"##,
+            55.0 + 18.0 * k as f64
+        )?;
+    }
+    let ly = 55.0 + 18.0 * lines.len() as f64 + 20.0;
+    writeln!(
+        out,
+        r##"<text x="{px:.0}" y="{ly:.0}" font-weight="bold">score S</text>"##
+    )?;
+    for k in 0..10 {
+        writeln!(
+            out,
+            r##"<rect x="{:.0}" y="{:.0}" width="20" height="12" fill="{}"/>"##,
+            px + 20.0 * k as f64,
+            ly + 8.0,
+            ramp(k as f64 / 9.0)
+        )?;
+    }
+    if hi >= lo {
+        writeln!(
+            out,
+            r##"<text x="{px:.0}" y="{:.0}">{lo:.2}</text><text x="{:.0}" y="{:.0}" text-anchor="end">{hi:.2}</text>"##,
+            ly + 36.0,
+            px + 200.0,
+            ly + 36.0
+        )?;
+    }
+    writeln!(out, "</svg>")?;
+    Ok(out)
+}
+
+/// Writes the files for mission `id` into `out` (default: `<project>/missions/<id>`).
 pub fn run(project: &Project, project_dir: &Path, id: i64, out: Option<&Path>) -> Result<Exported> {
     let missions = project.store.missions()?;
     let Some(mission) = missions.iter().find(|m| m.id.0 == id) else {
@@ -248,6 +470,7 @@ pub fn run(project: &Project, project_dir: &Path, id: i64, out: Option<&Path>) -
         geojson: dir.join("mission.geojson"),
         plan: dir.join("mission.plan"),
         waypoints: dir.join("mission.waypoints"),
+        map: dir.join("mission.svg"),
     };
     let write = |path: &Path, text: String| {
         std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
@@ -261,5 +484,6 @@ pub fn run(project: &Project, project_dir: &Path, id: i64, out: Option<&Path>) -
         serde_json::to_string_pretty(&qgc_plan(&m, alt))?,
     )?;
     write(&files.waypoints, wpl(&m, alt))?;
+    write(&files.map, svg_map(project, &m)?)?;
     Ok(files)
 }
