@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
-use crate::commands::{cells, ingest, init, plan, record, score, synth};
+use crate::commands::{cells, export, ingest, init, plan, record, score, synth};
 use crate::project::Project;
 
 /// Settings from the command line.
@@ -134,6 +134,15 @@ pub fn run(args: &DemoArgs) -> Result<String> {
     let mission = plan::to_json(&project, &planned, &plan_args);
     writeln!(out, "6. {}", plan::table(&mission).trim_end())?;
     let id = planned.mission_id.context("the mission was stored")?;
+    let files = export::run(&project, &args.dir, id, None)?;
+    writeln!(
+        out,
+        "   mission files: {}, {}, {}, {}",
+        files.geojson.display(),
+        files.plan.display(),
+        files.waypoints.display(),
+        files.map.display()
+    )?;
     let recorded = record::run(
         &mut project,
         &record::RecordArgs {
