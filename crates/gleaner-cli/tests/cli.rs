@@ -454,6 +454,8 @@ fn demo_runs_end_to_end() {
         "3. ingested",
         "5. scores",
         "6. mission #1",
+        "mission.plan",
+        "mission.svg",
         "7. mission #1 recorded",
         "8. a day later",
     ] {
