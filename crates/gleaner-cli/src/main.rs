@@ -47,6 +47,10 @@ enum Command {
         /// Read positions as UTM easting/northing in this zone, e.g. `11N` (EPSG:26911/32611).
         #[arg(long)]
         utm_zone: Option<String>,
+        /// The sensors file's layout: `generic` (id,lat,lon...) or `hubbard-brook`
+        /// (sensor_metadata.csv: one sensor per logger probe, id `<logger>:p<port>`).
+        #[arg(long, value_enum, default_value_t = SensorsFormatArg::Generic)]
+        sensors_format: SensorsFormatArg,
         /// Base station (take-off and landing) as `LAT,LON` in WGS84 degrees [default: 10 m
         /// south of the middle of the sensors' southern edge].
         #[arg(long, value_parser = parse_lat_lon, allow_hyphen_values = true)]
@@ -69,7 +73,7 @@ enum Command {
     },
     /// Ingest readings files into the project, all or nothing; re-ingesting changes nothing.
     #[command(
-        after_help = "Formats (auto-detected from the header):\n  long-csv   sensor_id,timestamp,modality,value[,unit]   (RFC 3339 or YYYY-MM-DD)\n  wide-csv   Date[,Time] or timestamp, then one column per sensor (needs --modality)\n  caf-daily  CAF daily files: Location<TAB>Date<TAB>VW_30cm ... T_150cm, NA = missing\n\nExamples:\n  gleaner ingest --project farm readings.csv\n  gleaner ingest --project caf ../shared/data/caf/Daily/*.txt\n  gleaner ingest --project caf --modality vw@30cm hourly.csv"
+        after_help = "Formats (auto-detected from the header):\n  long-csv   sensor_id,timestamp,modality,value[,unit]   (RFC 3339 or YYYY-MM-DD)\n  wide-csv   Date[,Time] or timestamp, then one column per sensor (needs --modality)\n  caf-daily  CAF daily files: Location<TAB>Date<TAB>VW_30cm ... T_150cm, NA = missing\n  hubbard-brook  logger files timestamp,p<port>:<model>:<variable>:<unit> (UTC-04:00), with\n             sensor_metadata.csv beside them or --metadata\n\nExamples:\n  gleaner ingest --project farm readings.csv\n  gleaner ingest --project caf ../shared/data/caf/Daily/*.txt\n  gleaner ingest --project caf --modality vw@30cm hourly.csv"
     )]
     Ingest {
         /// Files to ingest.
@@ -93,6 +97,10 @@ enum Command {
         /// What to do with a bad row: stop and store nothing, or skip it and report it.
         #[arg(long, value_enum, default_value_t = OnErrorArg::Fail)]
         on_error: OnErrorArg,
+        /// Hubbard Brook logger files: the probe metadata [default: sensor_metadata.csv beside
+        /// each file].
+        #[arg(long)]
+        metadata: Option<PathBuf>,
     },
     /// Show the cell table with its metadata (summaries, scores, pending data).
     #[command(
@@ -346,6 +354,13 @@ enum FormatArg {
     LongCsv,
     WideCsv,
     CafDaily,
+    HubbardBrook,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SensorsFormatArg {
+    Generic,
+    HubbardBrook,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -399,6 +414,7 @@ fn run(cli: Cli) -> Result<()> {
             dir,
             sensors,
             utm_zone,
+            sensors_format,
             base,
             cell_size,
             altitude,
@@ -410,6 +426,7 @@ fn run(cli: Cli) -> Result<()> {
                 dir,
                 sensors,
                 utm_zone,
+                hubbard_brook: matches!(sensors_format, SensorsFormatArg::HubbardBrook),
                 base,
                 cell_size_m: cell_size,
                 coverage: altitude.zip(half_angle),
@@ -426,6 +443,7 @@ fn run(cli: Cli) -> Result<()> {
             unit,
             utc_offset,
             on_error,
+            metadata,
         } => {
             let mut p = Project::open(&project)?;
             let outcome = ingest::run(
@@ -437,6 +455,7 @@ fn run(cli: Cli) -> Result<()> {
                         FormatArg::LongCsv => ingest::Format::Long,
                         FormatArg::WideCsv => ingest::Format::Wide,
                         FormatArg::CafDaily => ingest::Format::CafDaily,
+                        FormatArg::HubbardBrook => ingest::Format::HubbardBrook,
                     },
                     modality,
                     unit,
@@ -445,6 +464,7 @@ fn run(cli: Cli) -> Result<()> {
                         OnErrorArg::Fail => gleaner_ingest::OnError::Fail,
                         OnErrorArg::Skip => gleaner_ingest::OnError::Skip,
                     },
+                    metadata,
                     now: None,
                 },
             )?;
@@ -586,6 +606,7 @@ fn run(cli: Cli) -> Result<()> {
                 unit: None,
                 utc_offset_h: 0.0,
                 on_error: gleaner_ingest::OnError::Fail,
+                metadata: None,
                 now: at,
             };
             let summary = record::run(

@@ -597,3 +597,54 @@ fn export_writes_geojson_qgc_plan_and_wpl() {
             .any(|f| f["geometry"]["type"] == "Point" && f["properties"]["kind"] == "base")
     );
 }
+
+#[test]
+fn hubbard_brook_project_from_real_data() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let p = s(dir.path());
+    let d = shared_data().join("hubbard_brook");
+    let meta = d.join("sensor_metadata.csv");
+    let init = ok(&[
+        "init",
+        "--dir",
+        p,
+        "--sensors",
+        s(&meta),
+        "--sensors-format",
+        "hubbard-brook",
+    ]);
+    assert!(init.contains("sensors: 77 (77 new"), "{init}");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&d)
+        .expect("dir")
+        .map(|e| e.expect("entry").path())
+        .filter(|f| {
+            f.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("z6-"))
+        })
+        .collect();
+    files.sort();
+    let mut argv = vec!["ingest", "--project", p];
+    argv.extend(files.iter().map(|f| s(f)));
+    let out = ok(&argv);
+    assert!(
+        out.contains("ingested 12 file(s)") && out.contains("0 rows skipped"),
+        "{out}"
+    );
+    let doc: serde_json::Value =
+        serde_json::from_str(&ok(&["score", "--project", p, "--json"])).expect("json");
+    assert!(doc["cells"].as_array().expect("cells").len() >= 10);
+    let m: serde_json::Value = serde_json::from_str(&ok(&[
+        "plan",
+        "--project",
+        p,
+        "--json",
+        "--time-limit",
+        "1",
+        "--dry-run",
+    ]))
+    .expect("json");
+    assert!(
+        m["energy"]["total_j"].as_f64().expect("total")
+            <= m["energy"]["budget_j"].as_f64().expect("budget")
+    );
+}

@@ -12,6 +12,8 @@
 //! - [`read_wide_csv`]: any wide table with time columns and one column per sensor (the CAF
 //!   hourly file is one).
 //! - [`read_caf_daily`]: the CAF daily files (tab-separated, `Location, Date, VW_30cm, ...`).
+//! - [`read_hubbard_brook_sensors`] / [`read_hubbard_brook_logger`]: the Hubbard Brook soil
+//!   moisture network's probe metadata and logger files.
 //!
 //! Bad input is an [`IngestError`] naming the file, the line, the column and the offending value.
 //! With [`OnError::Skip`] bad rows are skipped and counted instead, except for structural
@@ -32,11 +34,16 @@
 #![deny(missing_docs)]
 
 mod error;
+mod hubbard_brook;
 mod readers;
 mod readings;
 pub mod time;
 
 pub use error::{IngestError, Problem};
+pub use hubbard_brook::{
+    HUBBARD_BROOK_UTC_OFFSET_S, HubbardBrookMetadata, read_hubbard_brook_logger,
+    read_hubbard_brook_sensors,
+};
 pub use readers::{
     SensorInput, SensorsOptions, WideOptions, read_caf_daily, read_long_csv, read_sensors_csv,
     read_wide_csv,

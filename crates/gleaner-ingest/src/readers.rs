@@ -10,7 +10,7 @@ use crate::time::{parse_clock, parse_date, parse_timestamp, parse_us_date};
 use crate::{IngestError, IngestOptions, IngestReport, OnError, Problem, Readings, default_unit};
 
 /// Reads the whole file, strips a UTF-8 byte-order mark.
-fn read_file(path: &Path) -> Result<Vec<u8>, IngestError> {
+pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, IngestError> {
     let mut bytes = std::fs::read(path).map_err(|source| IngestError::Io {
         path: path.to_path_buf(),
         source,
@@ -22,15 +22,15 @@ fn read_file(path: &Path) -> Result<Vec<u8>, IngestError> {
 }
 
 /// A CSV/TSV table: header and a record iterator with 1-based line numbers.
-struct Table<'a> {
+pub(crate) struct Table<'a> {
     path: PathBuf,
-    header: Vec<String>,
+    pub(crate) header: Vec<String>,
     reader: csv::Reader<&'a [u8]>,
-    record: csv::ByteRecord,
+    pub(crate) record: csv::ByteRecord,
 }
 
 impl<'a> Table<'a> {
-    fn open(path: &Path, bytes: &'a [u8], delimiter: u8) -> Result<Self, IngestError> {
+    pub(crate) fn open(path: &Path, bytes: &'a [u8], delimiter: u8) -> Result<Self, IngestError> {
         let mut reader = csv::ReaderBuilder::new()
             .delimiter(delimiter)
             .has_headers(false)
@@ -64,7 +64,7 @@ impl<'a> Table<'a> {
             .find_map(|n| self.header.iter().position(|h| h.eq_ignore_ascii_case(n)))
     }
 
-    fn require(&self, names: &[&str]) -> Result<usize, IngestError> {
+    pub(crate) fn require(&self, names: &[&str]) -> Result<usize, IngestError> {
         self.find(names).ok_or_else(|| IngestError::MissingColumn {
             path: self.path.clone(),
             column: names.join("|"),
@@ -73,7 +73,7 @@ impl<'a> Table<'a> {
     }
 
     /// Advances to the next non-blank record; returns its line number.
-    fn next(&mut self) -> Result<Option<u64>, IngestError> {
+    pub(crate) fn next(&mut self) -> Result<Option<u64>, IngestError> {
         loop {
             let got = self
                 .reader
@@ -89,7 +89,7 @@ impl<'a> Table<'a> {
         }
     }
 
-    fn field(&self, k: usize) -> Result<&str, Problem> {
+    pub(crate) fn field(&self, k: usize) -> Result<&str, Problem> {
         std::str::from_utf8(self.record.get(k).unwrap_or_default())
             .map(str::trim)
             .map_err(|_| Problem::NotUtf8)
@@ -110,13 +110,13 @@ fn csv_error(path: &Path, e: csv::Error) -> IngestError {
 }
 
 /// Applies the bad-row policy: an error under `Fail`, a counted skip under `Skip`.
-struct Policy<'p> {
-    path: &'p Path,
-    on_error: OnError,
+pub(crate) struct Policy<'p> {
+    pub(crate) path: &'p Path,
+    pub(crate) on_error: OnError,
 }
 
 impl Policy<'_> {
-    fn bad(
+    pub(crate) fn bad(
         &self,
         report: &mut IngestReport,
         line: u64,
@@ -155,7 +155,7 @@ fn parse_value(s: &str) -> Result<f64, Problem> {
 }
 
 /// Adds `row` with the value parsed from `text` (missing: counted, no row; bad: the policy).
-fn push_value(
+pub(crate) fn push_value(
     interner: &mut Interner,
     report: &mut IngestReport,
     policy: &Policy<'_>,
@@ -177,7 +177,7 @@ fn push_value(
 }
 
 /// Sorts, removes duplicates, and turns a conflicting duplicate into an error.
-fn finish(
+pub(crate) fn finish(
     mut interner: Interner,
     policy: &Policy<'_>,
     report: &mut IngestReport,

@@ -295,3 +295,53 @@ fn caf_hourly_wide_file_ingests() {
     assert_eq!(r.rows.iter().map(|x| x.t).max(), Some(1_429_693_200));
     assert_eq!(r.rows.len() as u64, 32 * report.rows_read);
 }
+
+#[test]
+fn hubbard_brook_network_ingests() {
+    use gleaner_ingest::{
+        HubbardBrookMetadata, read_hubbard_brook_logger, read_hubbard_brook_sensors,
+    };
+    let dir = shared_data().join("hubbard_brook");
+    let meta_path = dir.join("sensor_metadata.csv");
+    let (sensors, _) = read_hubbard_brook_sensors(&meta_path).unwrap();
+    assert_eq!(sensors.len(), 77);
+    assert!(
+        sensors
+            .iter()
+            .all(|s| (43.9..44.0).contains(&s.sensor.position.lat()))
+    );
+    let metadata = HubbardBrookMetadata::read(&meta_path).unwrap();
+    let opts = IngestOptions {
+        on_error: OnError::Fail,
+        known_sensors: Some(sensors.iter().map(|s| s.sensor.id.to_string()).collect()),
+    };
+    let (r, report) =
+        read_hubbard_brook_logger(&dir.join("z6-19506.csv"), &metadata, &opts).unwrap();
+    assert_eq!(report.rows_read, 16_264);
+    assert_eq!(r.sensors.len(), 6, "six probes on this logger");
+    let names: Vec<&str> = r.modalities.iter().map(|m| m.modality.as_str()).collect();
+    for m in ["vw@15cm", "t@15cm", "matric@15cm", "ec@15cm", "ec_sat@15cm"] {
+        assert!(names.contains(&m), "{m} missing from {names:?}");
+    }
+    let unit = |m: &str| {
+        r.modalities
+            .iter()
+            .find(|x| x.modality.as_str() == m)
+            .and_then(|x| x.unit.clone())
+    };
+    assert_eq!(unit("vw@15cm").as_deref(), Some("m3/m3"));
+    assert_eq!(unit("matric@15cm").as_deref(), Some("kPa"));
+    // 2023-07-25 17:00 at UTC-04:00 is 21:00 UTC.
+    assert_eq!(r.rows.iter().map(|x| x.t).min(), Some(1_690_318_800));
+    let vw = r
+        .modalities
+        .iter()
+        .position(|x| x.modality.as_str().starts_with("vw@"))
+        .unwrap() as u32;
+    assert!(
+        r.rows
+            .iter()
+            .filter(|x| x.modality == vw)
+            .all(|x| (0.0..=0.8).contains(&x.value))
+    );
+}

@@ -74,6 +74,7 @@ pub fn run(args: &DemoArgs) -> Result<String> {
         dir: args.dir.clone(),
         sensors: files.sensors.clone(),
         utm_zone: None,
+        hubbard_brook: false,
         base: Some((base.lat(), base.lon())),
         cell_size_m: Some(init::DEFAULT_CELL_SIZE_M),
         coverage: None,
@@ -91,6 +92,7 @@ pub fn run(args: &DemoArgs) -> Result<String> {
             unit: None,
             utc_offset_h: 0.0,
             on_error: gleaner_ingest::OnError::Fail,
+            metadata: None,
             now: None,
         },
     )?;

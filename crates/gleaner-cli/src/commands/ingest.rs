@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use gleaner_field::Modality;
 use gleaner_ingest::{
-    IngestError, IngestOptions, IngestReport, OnError, Readings, WideOptions, read_caf_daily,
-    read_long_csv, read_wide_csv,
+    HubbardBrookMetadata, IngestError, IngestOptions, IngestReport, OnError, Readings, WideOptions,
+    read_caf_daily, read_hubbard_brook_logger, read_long_csv, read_wide_csv,
 };
 use gleaner_store::{
     ConflictPolicy, IngestRecord, ModalityRecord, Reading, ReadingBatch, RefreshParams, Store,
@@ -27,6 +27,8 @@ pub enum Format {
     Wide,
     /// A CAF daily file.
     CafDaily,
+    /// A Hubbard Brook logger file (`sensor_metadata.csv` beside it, or `--metadata`).
+    HubbardBrook,
 }
 
 impl Format {
@@ -36,6 +38,7 @@ impl Format {
             Format::Long => "long-csv",
             Format::Wide => "wide-csv",
             Format::CafDaily => "caf-daily",
+            Format::HubbardBrook => "hubbard-brook",
         }
     }
 }
@@ -54,6 +57,8 @@ pub struct IngestArgs {
     pub utc_offset_h: f64,
     /// Bad-row policy.
     pub on_error: OnError,
+    /// Hubbard Brook: the probe metadata file [default: `sensor_metadata.csv` beside each file].
+    pub metadata: Option<PathBuf>,
     /// The mission time "now" for pending-volume estimates, seconds since the epoch; default:
     /// the latest reading.
     pub now: Option<i64>,
@@ -115,6 +120,8 @@ fn detect(path: &Path) -> Result<Format> {
         .to_ascii_lowercase();
     if first.starts_with("location\tdate") {
         Ok(Format::CafDaily)
+    } else if first.starts_with("timestamp,p1:") {
+        Ok(Format::HubbardBrook)
     } else if first.split(',').any(|c| c.trim() == "modality") {
         Ok(Format::Long)
     } else if !first.is_empty() {
@@ -155,6 +162,19 @@ pub fn run(project: &mut Project, args: &IngestArgs) -> Result<IngestOutcome> {
         let (readings, report) = match format {
             Format::CafDaily => read_caf_daily(path, &options)?,
             Format::Long => read_long_csv(path, &options)?,
+            Format::HubbardBrook => {
+                let meta = match &args.metadata {
+                    Some(m) => m.clone(),
+                    None => path.with_file_name("sensor_metadata.csv"),
+                };
+                let metadata = HubbardBrookMetadata::read(&meta).with_context(|| {
+                    format!(
+                        "{}: probe metadata for this logger file (--metadata)",
+                        path.display()
+                    )
+                })?;
+                read_hubbard_brook_logger(path, &metadata, &options)?
+            }
             Format::Wide | Format::Auto => {
                 let Some(m) = &args.modality else {
                     bail!(

@@ -6,7 +6,7 @@ use anyhow::{Context, Result, bail};
 use gleaner_field::{
     Field, LatLon, LocalPoint, Sensor, TransverseMercator, cell_size_from_half_angle,
 };
-use gleaner_ingest::{SensorsOptions, read_sensors_csv};
+use gleaner_ingest::{SensorsOptions, read_hubbard_brook_sensors, read_sensors_csv};
 use gleaner_store::{CellRecord, SensorRecord, SqliteStore, Store};
 
 use crate::config::{
@@ -22,6 +22,8 @@ pub struct InitArgs {
     pub sensors: PathBuf,
     /// UTM zone for easting/northing input, e.g. `11N`.
     pub utm_zone: Option<String>,
+    /// The sensors file is Hubbard Brook's `sensor_metadata.csv` (one sensor per probe).
+    pub hubbard_brook: bool,
     /// Base station `(lat, lon)`, degrees; default: the middle of the sensors' southern edge.
     pub base: Option<(f64, f64)>,
     /// Cell side, metres.
@@ -49,13 +51,17 @@ pub fn run(args: &InitArgs) -> Result<String> {
     std::fs::create_dir_all(&args.dir)
         .with_context(|| format!("{}: cannot create", args.dir.display()))?;
     let utm = args.utm_zone.as_deref().map(parse_utm_zone).transpose()?;
-    let (inputs, _) = read_sensors_csv(
-        &args.sensors,
-        &SensorsOptions {
-            utm,
-            ..Default::default()
-        },
-    )?;
+    let (inputs, _) = if args.hubbard_brook {
+        read_hubbard_brook_sensors(&args.sensors)?
+    } else {
+        read_sensors_csv(
+            &args.sensors,
+            &SensorsOptions {
+                utm,
+                ..Default::default()
+            },
+        )?
+    };
     if inputs.is_empty() {
         bail!("{}: no sensors", args.sensors.display());
     }

@@ -1,0 +1,232 @@
+//! The USDA Forest Soil Moisture Monitoring Network loggers at Hubbard Brook (NH).
+//!
+//! - `sensor_metadata.csv` maps (logger, port) to a site, WGS84 lat/lon and a depth. Every
+//!   probe (a logger port) is one gleaner sensor, id `<logger>:p<port>` (e.g. `z6-19506:p3`),
+//!   at its site's position: replicate probes at one site then share a cell, whose series
+//!   averages them (SPEC §2).
+//! - Each logger file `z6-NNNNN.csv` has a `timestamp` column (`YYYY-MM-DD HH:MM`, fixed
+//!   UTC−04:00) and columns `p<port>:<model>:<variable>:<unit>`; empty = missing. Variables
+//!   become quantities at the probe's depth: `Water_Content` -> `vw`, `Soil_Temperature` ->
+//!   `t`, `Bulk_EC` -> `ec`, `Saturation_Extract_EC` -> `ec_sat`, `Matric_Potential` ->
+//!   `matric` (e.g. `vw@15cm` in m3/m3, `t@15cm` in degC, `matric@50cm` in kPa).
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use gleaner_field::{LatLon, Modality, Sensor, SensorId};
+
+use crate::readers::{Policy, Table, finish, push_value, read_file};
+use crate::readings::{Interner, Row};
+use crate::time::{parse_clock, parse_date};
+use crate::{IngestError, IngestOptions, IngestReport, Problem, Readings, SensorInput};
+
+/// The loggers' clock: fixed UTC−04:00, seconds.
+pub const HUBBARD_BROOK_UTC_OFFSET_S: i64 = -4 * 3600;
+
+/// Probe depths from `sensor_metadata.csv`: sensor id (`<logger>:p<port>`) -> depth, cm.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HubbardBrookMetadata {
+    depths: HashMap<String, u32>,
+}
+
+/// One probe row of the metadata: line, sensor id, latitude and longitude (degrees), depth (cm).
+type ProbeRow = (u64, String, f64, f64, u32);
+
+fn metadata_rows(path: &Path) -> Result<Vec<ProbeRow>, IngestError> {
+    let bytes = read_file(path)?;
+    let mut table = Table::open(path, &bytes, b',')?;
+    let c_logger = table.require(&["logger"])?;
+    let c_port = table.require(&["port"])?;
+    let c_lat = table.require(&["lat"])?;
+    let c_lon = table.require(&["lon"])?;
+    let c_depth = table.require(&["depth_cm"])?;
+    let names = table.header.clone();
+    let mut out = Vec::new();
+    while let Some(line) = table.next()? {
+        let field = |k: usize| table.field(k).unwrap_or("").to_string();
+        let bad = |k: usize, problem: Problem| IngestError::Field {
+            path: path.to_path_buf(),
+            line,
+            column: names[k].clone(),
+            value: field(k),
+            problem,
+        };
+        let id = format!("{}:p{}", field(c_logger), field(c_port));
+        let lat: f64 = field(c_lat)
+            .parse()
+            .map_err(|_| bad(c_lat, Problem::NotANumber))?;
+        let lon: f64 = field(c_lon)
+            .parse()
+            .map_err(|_| bad(c_lon, Problem::NotANumber))?;
+        let depth: u32 = field(c_depth)
+            .parse()
+            .map_err(|_| bad(c_depth, Problem::NotANumber))?;
+        out.push((line, id, lat, lon, depth));
+    }
+    Ok(out)
+}
+
+impl HubbardBrookMetadata {
+    /// Reads `sensor_metadata.csv`.
+    pub fn read(path: &Path) -> Result<Self, IngestError> {
+        Ok(Self {
+            depths: metadata_rows(path)?
+                .into_iter()
+                .map(|(_, id, _, _, d)| (id, d))
+                .collect(),
+        })
+    }
+}
+
+/// The probes of `sensor_metadata.csv` as sensors (id `<logger>:p<port>`, WGS84 position of
+/// their site). Duplicate (logger, port) rows are errors.
+pub fn read_hubbard_brook_sensors(
+    path: &Path,
+) -> Result<(Vec<SensorInput>, IngestReport), IngestError> {
+    let mut seen: HashMap<String, u64> = HashMap::new();
+    let mut out = Vec::new();
+    let rows = metadata_rows(path)?;
+    let mut report = IngestReport {
+        rows_read: rows.len() as u64,
+        ..Default::default()
+    };
+    for (line, id, lat, lon, _) in rows {
+        let field_err = |value: String, problem| IngestError::Field {
+            path: path.to_path_buf(),
+            line,
+            column: "logger/port".into(),
+            value,
+            problem,
+        };
+        if let Some(&first_line) = seen.get(&id) {
+            return Err(field_err(id, Problem::DuplicateSensor { first_line }));
+        }
+        let position = LatLon::new(lat, lon)
+            .map_err(|_| field_err(format!("{lat}, {lon}"), Problem::BadPosition))?;
+        let sid =
+            SensorId::new(id.clone()).map_err(|_| field_err(id.clone(), Problem::BadSensorId))?;
+        seen.insert(id, line);
+        out.push(SensorInput {
+            sensor: Sensor::new(sid, position),
+            line,
+        });
+    }
+    report.readings = out.len() as u64;
+    Ok((out, report))
+}
+
+fn quantity(variable: &str) -> Option<&'static str> {
+    Some(match variable {
+        "Water_Content" => "vw",
+        "Soil_Temperature" => "t",
+        "Bulk_EC" => "ec",
+        "Saturation_Extract_EC" => "ec_sat",
+        "Matric_Potential" => "matric",
+        _ => return None,
+    })
+}
+
+fn unit(raw: &str) -> String {
+    raw.replace("_per_", "/")
+}
+
+/// Reads one logger file (its name, without `.csv`, is the logger id). A column whose probe is
+/// not in `metadata`, or not a known variable, is an error on line 1 (skipped whole under
+/// [`crate::OnError::Skip`]).
+pub fn read_hubbard_brook_logger(
+    path: &Path,
+    metadata: &HubbardBrookMetadata,
+    options: &IngestOptions,
+) -> Result<(Readings, IngestReport), IngestError> {
+    let logger = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let bytes = read_file(path)?;
+    let mut table = Table::open(path, &bytes, b',')?;
+    let c_time = table.require(&["timestamp"])?;
+    let names = table.header.clone();
+    let policy = Policy {
+        path,
+        on_error: options.on_error,
+    };
+    let mut report = IngestReport::default();
+    let mut interner = Interner::default();
+    let mut columns: Vec<(usize, u32, u32)> = Vec::new();
+    for (k, name) in names.iter().enumerate() {
+        if k == c_time {
+            continue;
+        }
+        let parts: Vec<&str> = name.split(':').collect();
+        let parsed = match parts[..] {
+            [port, _model, variable, unit_raw] => {
+                let id = format!("{logger}:{port}");
+                match (metadata.depths.get(&id), quantity(variable)) {
+                    (Some(&depth), Some(q)) => {
+                        Some((id, Modality::at_depth(q, Some(depth)).ok(), unit(unit_raw)))
+                    }
+                    _ => None,
+                }
+            }
+            _ => None,
+        };
+        let Some((id, Some(modality), unit)) = parsed else {
+            policy.bad(&mut report, 1, name, name, Problem::BadModality)?;
+            continue;
+        };
+        let sensor = match interner.known_sensor(&id, options) {
+            Ok(s) => s,
+            Err(p) => {
+                policy.bad(&mut report, 1, name, &id, p)?;
+                continue;
+            }
+        };
+        let m = interner
+            .modality(modality, Some(&unit))
+            .map_err(|expected| IngestError::Field {
+                path: path.to_path_buf(),
+                line: 1,
+                column: name.clone(),
+                value: unit.clone(),
+                problem: Problem::UnitMismatch { expected },
+            })?;
+        columns.push((k, sensor, m));
+    }
+    let ncols = names.len();
+    while let Some(line) = table.next()? {
+        report.rows_read += 1;
+        if table.record.len() != ncols {
+            let found = table.record.len().to_string();
+            policy.bad(&mut report, line, "*", &found, Problem::FieldCount)?;
+            continue;
+        }
+        let stamp = table.field(c_time).unwrap_or("");
+        let t = stamp
+            .split_once(' ')
+            .and_then(|(d, c)| Some(parse_date(d)? + parse_clock(c)?))
+            .map(|local| local - HUBBARD_BROOK_UTC_OFFSET_S);
+        let Some(t) = t else {
+            policy.bad(
+                &mut report,
+                line,
+                &names[c_time],
+                stamp,
+                Problem::BadTimestamp,
+            )?;
+            continue;
+        };
+        for &(c, sensor, modality) in &columns {
+            let v = table.field(c).unwrap_or("");
+            let row = Row {
+                sensor,
+                modality,
+                t,
+                value: 0.0,
+                line: line as u32,
+            };
+            push_value(&mut interner, &mut report, &policy, row, &names[c], v)?;
+        }
+    }
+    let readings = finish(interner, &policy, &mut report, "value")?;
+    Ok((readings, report))
+}
