@@ -80,9 +80,10 @@
 //!
 //! - Classic sets (Tsiligirides 1-3, Chao 64/66), 1 s each: all 89 at their target, none
 //!   infeasible. The paper's greedy reaches 8 of 89 (mean gap 12.8%).
-//! - OPLib gen1-3 with n <= 400, 10 s each, one thread: mean gap -0.54% to the EA4OP scores
-//!   (negative = better), worst +3.17% (`pr226-gen1-50`), 123 of 135 equal or better, 66
-//!   strictly better. Greedy's mean gap is 24.2%.
+//! - OPLib gen1-3 with n <= 400, 10 s each, one thread: mean gap -0.63% to the EA4OP scores
+//!   (negative = better), worst +1.41% (`rd400-gen2-50`), 129 of 135 equal or better, 71
+//!   strictly better (before the shift perturbation: -0.54%, worst +3.17% on
+//!   `pr226-gen1-50`, 123 and 66). Greedy's mean gap is 24.2%.
 //! - Random uniform instances with a depot at the centre, [`SolveOptions::fast`] (greedy, then
 //!   local search to a local optimum), criterion medians: 1,000 nodes in 11 ms, 10,000 nodes
 //!   in 0.31 s, with about 16% of the nodes visited. An exhaustive check afterwards finds no
