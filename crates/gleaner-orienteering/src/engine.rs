@@ -850,6 +850,74 @@ impl State {
         self.resync(ctx.p);
     }
 
+    /// Shift perturbation: forces a random free candidate and up to `strength - 1` of its
+    /// free nearest neighbours into a random route (cheapest positions, budget ignored),
+    /// shortens that route, then drops the visited nodes of largest saving per reward (the
+    /// forced ones last) until the route fits again. Moves a tour toward unvisited regions.
+    /// The dropped nodes are returned in `out` (to be kept out of the next refill).
+    pub fn shift(
+        &mut self,
+        ctx: &Ctx,
+        rng: &mut ChaCha8Rng,
+        strength: usize,
+        out: &mut Vec<usize>,
+    ) {
+        out.clear();
+        let free: Vec<usize> = ctx
+            .cands
+            .iter()
+            .copied()
+            .filter(|&v| self.route_of[v] == FREE)
+            .collect();
+        if free.is_empty() {
+            return;
+        }
+        let r = rng.random_range(0..self.routes.len());
+        let u = free[rng.random_range(0..free.len())];
+        let want = strength.clamp(1, ctx.k + 1);
+        let mut forced = vec![u];
+        for &x in ctx.neighbours(u) {
+            if forced.len() >= want {
+                break;
+            }
+            let x = x as usize;
+            if self.route_of[x] == FREE && ctx.p.reward(x) > 0.0 {
+                forced.push(x);
+            }
+        }
+        for &v in &forced {
+            let slot = self.cheapest_in(ctx, r, v);
+            let idx = self.edge_index(r, slot.a, slot.b).map_or(1, |i| i + 1);
+            self.insert(ctx, r, idx, v);
+        }
+        loop {
+            let a = self.two_opt(ctx, r);
+            let b = self.or_opt(ctx, r);
+            if !a && !b {
+                break;
+            }
+        }
+        while !self.fits(ctx, r, 0.0) && self.routes[r].len() > 2 {
+            let route = &self.routes[r];
+            let mut pick: Option<(bool, f64, usize)> = None;
+            for i in 1..route.len() - 1 {
+                let v = route[i];
+                let keep = forced.contains(&v);
+                let score =
+                    ctx.insert_delta(route[i - 1], v, route[i + 1]) / ctx.p.reward(v).max(1e-12);
+                let wins = match pick {
+                    None => true,
+                    Some((k, s, _)) => (!keep && k) || (keep == k && score > s),
+                };
+                if wins {
+                    pick = Some((keep, score, i));
+                }
+            }
+            let Some((_, _, i)) = pick else { break };
+            out.push(self.remove_at(ctx, r, i));
+        }
+    }
+
     /// Perturbation: removes a random segment of up to `strength` nodes from a random
     /// non-empty route, or `strength` random visited nodes. Returns the removed nodes.
     pub fn perturb(

@@ -51,16 +51,23 @@
 //!   of 1-3, both orientations) driven by k-nearest candidate lists, which shorten the tours
 //!   and free budget; ratio insertion of unvisited nodes; replacement of a visited node by an
 //!   unvisited one of higher reward (or equal reward at lower cost); repeated until none
-//!   applies. Each iteration perturbs (removes a random segment or random nodes; the strength
-//!   grows while stalled), refills with optionally noisy ratios while the removed nodes are
-//!   tabu, and runs the local search; solutions that improve the run's best are intensified
-//!   by double-bridge kicks on their tours. Acceptance is record-to-record (within 2-5% of
-//!   the run's best). A run ends after `300 + 2·candidates` non-improving iterations; new runs
-//!   restart alternately from the overall best and from a construction seeded with a random
-//!   node (which sends the tour to other regions: on OPLib `pr107-gen3` this is what finds
-//!   the far cluster). Instances with at most [`SolveOptions::exact_threshold`] candidates are
-//!   solved exactly. On more than 1,500 nodes, insertion and replacement only look at edges
-//!   next to a node's candidate neighbours, so 10,000 nodes are practical.
+//!   applies. Before the iterations, a route is built through every candidate as a first
+//!   stop (a sample of 64 above 400 candidates); the best of these seed the elite pool and
+//!   the "top anchors". Each iteration perturbs, refills with optionally noisy ratios while
+//!   the removed nodes are tabu, and runs the local search. Perturbations (the strength grows
+//!   while stalled): remove a random segment or random nodes, or, in 30% of the iterations,
+//!   *shift* a route: force a random unvisited node and up to `strength - 1` of its unvisited
+//!   nearest neighbours in (budget ignored), then drop the nodes of largest saving per reward
+//!   until it fits. The shift moves tours toward unvisited regions; on the clustered OPLib
+//!   `pr226-gen1-50` it lifts the score from 122 to 126. Solutions that improve the run's
+//!   best are intensified by double-bridge kicks on their tours. Acceptance is
+//!   record-to-record (within 2-5% of the run's best). A run ends after
+//!   `150 + candidates / 2` non-improving iterations; new runs restart from the overall best,
+//!   an elite solution, or a construction through one or two anchors (top or random: on
+//!   OPLib `pr107-gen3` this is what finds the far cluster). Instances with at most
+//!   [`SolveOptions::exact_threshold`] candidates are solved exactly. Above
+//!   [`SolveOptions::full_scan_limit`] candidates, insertion and replacement only look at
+//!   edges next to a node's candidate neighbours, so 10,000 nodes are practical.
 //! - **Exact**: DP over (subset, last node) of the positive-reward nodes (Held-Karp),
 //!   then the best feasible subset (or, for several vehicles, the best combination of
 //!   disjoint feasible subsets by subset convolution); up to [`EXACT_MAX_NODES`] candidates.
@@ -73,9 +80,10 @@
 //!
 //! - Classic sets (Tsiligirides 1-3, Chao 64/66), 1 s each: all 89 at their target, none
 //!   infeasible. The paper's greedy reaches 8 of 89 (mean gap 12.8%).
-//! - OPLib gen1-3 with n <= 400, 10 s each, one thread: mean gap -0.54% to the EA4OP scores
-//!   (negative = better), worst +3.17% (`pr226-gen1-50`), 123 of 135 equal or better, 66
-//!   strictly better. Greedy's mean gap is 24.2%.
+//! - OPLib gen1-3 with n <= 400, 10 s each, one thread: mean gap -0.63% to the EA4OP scores
+//!   (negative = better), worst +1.41% (`rd400-gen2-50`), 129 of 135 equal or better, 71
+//!   strictly better (before the shift perturbation: -0.54%, worst +3.17% on
+//!   `pr226-gen1-50`, 123 and 66). Greedy's mean gap is 24.2%.
 //! - Random uniform instances with a depot at the centre, [`SolveOptions::fast`] (greedy, then
 //!   local search to a local optimum), criterion medians: 1,000 nodes in 11 ms, 10,000 nodes
 //!   in 0.31 s, with about 16% of the nodes visited. An exhaustive check afterwards finds no

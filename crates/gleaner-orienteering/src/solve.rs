@@ -177,8 +177,10 @@ fn better(a: &State, b: &State, eps: f64) -> bool {
 /// 2. Anchored constructions: for every candidate node (a sample of 64 above 400), a route
 ///    sent through it first, then ratio insertion and local search; the best become the
 ///    elite pool and the "top anchors" (skipped by [`SolveOptions::fast`]).
-/// 3. Iterations: perturb (remove a random segment or random nodes; the strength grows while
-///    stalled), refill with optionally noisy ratios while the removed nodes are tabu, local
+/// 3. Iterations: perturb (remove a random segment or random nodes, or in 30% of the
+///    iterations shift a route toward a random unvisited node and its unvisited neighbours,
+///    dropping the nodes of largest saving per reward until it fits; the strength grows
+///    while stalled), refill with optionally noisy ratios while the removed nodes are tabu, local
 ///    search; a new best of the run is intensified with double-bridge kicks on its tours.
 ///    Record-to-record acceptance within 2-5% of the run's best reward.
 /// 4. A run ends after `150 + candidates / 2` iterations without improvement; the next starts
@@ -279,7 +281,12 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
         iter += 1;
         let mut cand = cur.clone();
         let visited: usize = cand.routes.iter().map(|r| r.len() - 2).sum();
-        cand.perturb(&ctx, &mut rng, strength, &mut removed);
+        // Perturbation: 30% shift toward a free region, else segment or random removal.
+        if rng.random_bool(0.3) {
+            cand.shift(&ctx, &mut rng, strength, &mut removed);
+        } else {
+            cand.perturb(&ctx, &mut rng, strength, &mut removed);
+        }
         let noise = if rng.random_bool(0.5) { 0.0 } else { 0.3 };
         cand.fill(&ctx, &removed, noise, &mut rng);
         cand.local_search(&ctx, &mut rng, scan_all);
