@@ -193,7 +193,7 @@ enum Command {
         dry_run: bool,
     },
     /// Export a planned mission for flying and mapping: GeoJSON (cells with their scores, the
-    /// route, the base), a QGroundControl .plan and a QGC WPL 110 waypoint file.
+    /// route, the base), a QGroundControl .plan, a QGC WPL 110 waypoint file and an SVG map.
     #[command(
         after_help = "Waypoints: take-off, one NAV_WAYPOINT (16) per cell at the cell centre holding for the\nplanned hover time (param 1), return-to-launch (20); altitude from [energy] altitude_m.\n\nExamples:\n  gleaner export --project farm --mission 1\n  gleaner export --project farm --mission 1 --out flight1"
     )]
@@ -271,7 +271,8 @@ enum Command {
         #[arg(long, value_delimiter = ',', default_value = "30")]
         t_depths: Vec<u32>,
     },
-    /// The main job on built-in data: synthetic farm -> project -> ingest -> cell summary.
+    /// The main job on built-in data: synthetic farm -> project -> ingest -> scores -> mission
+    /// (against the paper's greedy) -> mission files -> recorded flight -> rescoring.
     #[command(after_help = "Example:\n  gleaner demo --dir gleaner-demo --seed 1")]
     Demo {
         /// Working directory; the files the demo writes there are replaced.
