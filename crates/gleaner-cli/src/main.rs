@@ -346,6 +346,10 @@ enum BenchCommand {
         /// searches for the whole time limit.
         #[arg(long, default_value_t = 0)]
         max_stall: u64,
+        /// Stop each instance after this many search iterations, so that results do not depend
+        /// on the machine's speed (the time limit still applies).
+        #[arg(long)]
+        iterations: Option<u64>,
     },
 }
 
@@ -630,6 +634,7 @@ fn run(cli: Cli) -> Result<()> {
             max_n,
             csv,
             max_stall,
+            iterations,
         }) => {
             let (_, table) = bench::run(&bench::BenchOpArgs {
                 path,
@@ -639,6 +644,7 @@ fn run(cli: Cli) -> Result<()> {
                 max_n,
                 csv,
                 max_stall: (max_stall > 0).then_some(max_stall),
+                iterations,
             })?;
             print!("{table}");
         }

@@ -403,6 +403,25 @@ fn bench_op_on_a_classic_instance() {
         "{out}"
     );
     assert!(out.contains(" yes"), "{out}");
+    // With an iteration cap the scores do not depend on the machine's speed.
+    let capped = |_: u8| {
+        let out = ok(&[
+            "bench",
+            "op",
+            s(&files[3]),
+            "--iterations",
+            "500",
+            "--time-limit",
+            "60",
+            "--seed",
+            "4",
+        ]);
+        out.lines()
+            .nth(1)
+            .map(|l| l.split_whitespace().take(6).collect::<Vec<_>>().join(" "))
+            .expect("a row")
+    };
+    assert_eq!(capped(1), capped(2));
 }
 
 #[test]

@@ -29,6 +29,9 @@ pub struct BenchOpArgs {
     /// Stop an instance after this many iterations without improvement (`None`: use the
     /// whole time limit).
     pub max_stall: Option<u64>,
+    /// Stop each instance after this many search iterations (machine-independent results);
+    /// the time limit still applies.
+    pub iterations: Option<u64>,
 }
 
 /// Parses a solver name.
@@ -69,6 +72,7 @@ pub fn run(args: &BenchOpArgs) -> Result<(Vec<BenchRow>, String)> {
         .with_time_limit(Duration::from_secs_f64(args.time_limit_s.max(0.0)))
         .with_seed(args.seed);
     options.max_stall = args.max_stall;
+    options.max_iterations = args.iterations;
     let pb = progress::bar(files.len() as u64, "solving");
     let rows = run_benchmark(&files, args.solver, &options, &mut |done, _, row| {
         pb.set_position(done as u64);
