@@ -110,6 +110,7 @@ fn bench(c: &mut Criterion) {
         now: T0 + STEPS as i64 * 3600,
         bytes_per_reading: 8.0,
         default_interval_s: 3600.0,
+        changed_sensors: None,
     };
     let mut group = c.benchmark_group("summaries");
     group.sample_size(10);

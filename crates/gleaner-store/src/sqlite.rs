@@ -945,26 +945,57 @@ impl Store for SqliteStore {
                 let rows = stmt.query_map([], |r| Ok((r.get(0)?, r.get(1)?)))?;
                 rows.collect::<rusqlite::Result<_>>()?
             };
+            // The cells to recompute: all, or those holding a changed sensor.
+            let targets: Option<HashSet<i64>> = match &params.changed_sensors {
+                None => None,
+                Some(changed) => {
+                    let ids = Self::sensor_ids(&tx)?;
+                    let cells: HashSet<i64> = changed
+                        .iter()
+                        .filter_map(|s| ids.get(s.as_str()))
+                        .filter_map(|id| cell_of.get(id).copied())
+                        .collect();
+                    // Every cell changed (a first ingest): one sequential scan is faster than
+                    // a query per sensor.
+                    let all: HashSet<i64> = cell_of.values().copied().collect();
+                    (cells.len() < all.len()).then_some(cells)
+                }
+            };
             let mut slots: HashMap<(i64, i64), HashMap<i64, (f64, u32)>> = HashMap::new();
-            {
-                let mut stmt = tx.prepare("SELECT sensor, modality, t, value FROM readings")?;
-                let mut rows = stmt.query([])?;
-                let mut current: Option<(i64, i64)> = None;
-                let mut target: Option<(i64, i64)> = None;
-                while let Some(r) = rows.next()? {
-                    let (sensor, modality): (i64, i64) = (r.get(0)?, r.get(1)?);
-                    if current != Some((sensor, modality)) {
-                        current = Some((sensor, modality));
-                        target = cell_of.get(&sensor).map(|&cell| (cell, modality));
+            let mut add = |sensor: i64, modality: i64, t: i64, value: f64| {
+                if let Some(&cell) = cell_of.get(&sensor) {
+                    let slot = slots
+                        .entry((cell, modality))
+                        .or_default()
+                        .entry(t)
+                        .or_insert((0.0, 0));
+                    slot.0 += value;
+                    slot.1 += 1;
+                }
+            };
+            match &targets {
+                None => {
+                    let mut stmt = tx.prepare("SELECT sensor, modality, t, value FROM readings")?;
+                    let mut rows = stmt.query([])?;
+                    while let Some(r) = rows.next()? {
+                        add(r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?);
                     }
-                    if let Some(key) = target {
-                        let slot = slots
-                            .entry(key)
-                            .or_default()
-                            .entry(r.get(2)?)
-                            .or_insert((0.0, 0));
-                        slot.0 += r.get::<_, f64>(3)?;
-                        slot.1 += 1;
+                }
+                Some(cells) => {
+                    let mut stmt =
+                        tx.prepare("SELECT modality, t, value FROM readings WHERE sensor = ?1")?;
+                    // Sensors in key order, so that sums are formed in the same order every run.
+                    let mut sensors: Vec<i64> = cell_of
+                        .iter()
+                        .filter(|(_, cell)| cells.contains(cell))
+                        .map(|(&s, _)| s)
+                        .collect();
+                    sensors.sort_unstable();
+                    for sensor in sensors {
+                        let mut rows = stmt.query([sensor])?;
+                        while let Some(r) = rows.next()? {
+                            add(sensor, r.get(0)?, r.get(1)?, r.get(2)?);
+                        }
                     }
                 }
             }
@@ -1003,7 +1034,17 @@ impl Store for SqliteStore {
                 })
                 .collect();
             rows.sort_unstable_by_key(|r| (r.0, r.1));
-            tx.execute("DELETE FROM cell_summaries", [])?;
+            match &targets {
+                None => {
+                    tx.execute("DELETE FROM cell_summaries", [])?;
+                }
+                Some(cells) => {
+                    let mut delete = tx.prepare("DELETE FROM cell_summaries WHERE cell = ?1")?;
+                    for cell in cells {
+                        delete.execute([cell])?;
+                    }
+                }
+            }
             let mut insert = tx.prepare_cached(
                 "INSERT INTO cell_summaries (cell, modality, count, mean, std, min, max, latest_t,
                                              latest_value)

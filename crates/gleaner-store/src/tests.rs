@@ -779,6 +779,7 @@ fn refresh_cell_summaries_matches_hand_computed_values() {
             now: T0 + 5 * DAY,
             bytes_per_reading: 10.0,
             default_interval_s: 3600.0,
+            changed_sensors: None,
         })
         .unwrap();
     assert_eq!(written, 2);
@@ -806,9 +807,34 @@ fn refresh_cell_summaries_matches_hand_computed_values() {
             now: T0 + 5 * DAY,
             bytes_per_reading: 10.0,
             default_interval_s: 3600.0,
+            changed_sensors: None,
         })
         .unwrap();
     assert_eq!(store.cell_metadata().unwrap(), mdata);
+    // New readings of one sensor: refreshing only its cell gives what a full refresh gives.
+    store
+        .insert_readings(
+            &batch(&[("c", "t@30cm", T0 + 3 * DAY, 9.0)]),
+            ConflictPolicy::Fail,
+        )
+        .unwrap();
+    let params = |changed| RefreshParams {
+        now: T0 + 5 * DAY,
+        bytes_per_reading: 10.0,
+        default_interval_s: 3600.0,
+        changed_sensors: changed,
+    };
+    store
+        .refresh_cell_summaries(&params(Some(vec![sid("c")])))
+        .unwrap();
+    let partial = store.cell_metadata().unwrap();
+    assert_eq!(
+        partial[0], mdata[0],
+        "the untouched cell keeps its summaries"
+    );
+    assert_eq!(partial[1].summaries[0].stats.count, 2);
+    store.refresh_cell_summaries(&params(None)).unwrap();
+    assert_eq!(store.cell_metadata().unwrap(), partial);
 }
 
 #[test]
@@ -1047,7 +1073,7 @@ proptest! {
             e.0 += v;
             e.1 += 1.0;
         }
-        store.refresh_cell_summaries(&RefreshParams { now: T0, bytes_per_reading: 1.0, default_interval_s: 1.0 }).unwrap();
+        store.refresh_cell_summaries(&RefreshParams { now: T0, bytes_per_reading: 1.0, default_interval_s: 1.0, changed_sensors: None }).unwrap();
         let mdata = store.cell_metadata().unwrap();
         let mut got = 0;
         for (k, md) in mdata.iter().enumerate() {

@@ -357,6 +357,10 @@ pub struct RefreshParams {
     pub bytes_per_reading: f64,
     /// Logging interval, seconds, assumed for a series with fewer than 2 readings.
     pub default_interval_s: f64,
+    /// Recompute the per-modality summaries only of the cells holding these sensors (those
+    /// whose readings changed), at a cost proportional to those cells' readings; `None`
+    /// recomputes every cell. Last collection and pending volume are always refreshed.
+    pub changed_sensors: Option<Vec<SensorId>>,
 }
 
 /// Whether a mission explores (visits every cell) or adapts (visits the best cells).

@@ -264,6 +264,8 @@ fn store_readings(
         now,
         bytes_per_reading: project.config.ingest.bytes_per_reading,
         default_interval_s: project.config.ingest.default_interval_s,
+        // Only the cells of sensors with readings in this ingest change.
+        changed_sensors: Some(all.sensors.clone()),
     })?;
     spin.finish_and_clear();
     Ok(())

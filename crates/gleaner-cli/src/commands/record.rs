@@ -78,6 +78,9 @@ pub fn run(project: &mut Project, args: &RecordArgs) -> Result<String> {
         now: at,
         bytes_per_reading: project.config.ingest.bytes_per_reading,
         default_interval_s: project.config.ingest.default_interval_s,
+        // Readings brought back were summarised by the ingest above; collection times only
+        // change last collection and pending volume.
+        changed_sensors: Some(Vec::new()),
     })?;
     Ok(format!(
         "mission #{} recorded as flown at {}: {} cells, {} sensors collected",
