@@ -192,14 +192,7 @@ pub fn read_hubbard_brook_logger(
             })?;
         columns.push((k, sensor, m));
     }
-    let ncols = names.len();
-    while let Some(line) = table.next()? {
-        report.rows_read += 1;
-        if table.record.len() != ncols {
-            let found = table.record.len().to_string();
-            policy.bad(&mut report, line, "*", &found, Problem::FieldCount)?;
-            continue;
-        }
+    while let Some(line) = table.next_row(&policy, &mut report)? {
         let stamp = table.field(c_time).unwrap_or("");
         let t = stamp
             .split_once(' ')

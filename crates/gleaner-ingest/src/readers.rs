@@ -89,6 +89,24 @@ impl<'a> Table<'a> {
         }
     }
 
+    /// Advances to the next data row with as many fields as the header, counting every row
+    /// read; a row with another number of fields goes to the policy (error or counted skip).
+    pub(crate) fn next_row(
+        &mut self,
+        policy: &Policy<'_>,
+        report: &mut IngestReport,
+    ) -> Result<Option<u64>, IngestError> {
+        while let Some(line) = self.next()? {
+            report.rows_read += 1;
+            if self.record.len() == self.header.len() {
+                return Ok(Some(line));
+            }
+            let found = self.record.len().to_string();
+            policy.bad(report, line, "*", &found, Problem::FieldCount)?;
+        }
+        Ok(None)
+    }
+
     pub(crate) fn field(&self, k: usize) -> Result<&str, Problem> {
         std::str::from_utf8(self.record.get(k).unwrap_or_default())
             .map(str::trim)
@@ -217,7 +235,6 @@ pub fn read_long_csv(
     let c_value = table.require(&["value"])?;
     let c_unit = table.find(&["unit"]);
     let names = table.header.clone();
-    let ncols = names.len();
     let policy = Policy {
         path,
         on_error: options.on_error,
@@ -226,13 +243,7 @@ pub fn read_long_csv(
     let mut interner = Interner::default();
     // Rows are usually grouped by sensor and modality: cache the last lookups.
     let mut modality_cache: HashMap<(String, String), u32> = HashMap::new();
-    while let Some(line) = table.next()? {
-        report.rows_read += 1;
-        if table.record.len() != ncols {
-            let found = table.record.len().to_string();
-            policy.bad(&mut report, line, "*", &found, Problem::FieldCount)?;
-            continue;
-        }
+    while let Some(line) = table.next_row(&policy, &mut report)? {
         macro_rules! field {
             ($k:expr) => {
                 match table.field($k) {
@@ -402,14 +413,7 @@ pub fn read_wide_csv(
             None => policy.bad(&mut report, 1, name, name, Problem::BadSensorId)?,
         }
     }
-    let ncols = names.len();
-    while let Some(line) = table.next()? {
-        report.rows_read += 1;
-        if table.record.len() != ncols {
-            let found = table.record.len().to_string();
-            policy.bad(&mut report, line, "*", &found, Problem::FieldCount)?;
-            continue;
-        }
+    while let Some(line) = table.next_row(&policy, &mut report)? {
         let t = if let Some(c) = c_stamp {
             let s = table.field(c).unwrap_or("");
             match parse_timestamp(s) {
@@ -512,14 +516,7 @@ pub fn read_caf_daily(
             })?;
         columns.push((k, id));
     }
-    let ncols = names.len();
-    while let Some(line) = table.next()? {
-        report.rows_read += 1;
-        if table.record.len() != ncols {
-            let found = table.record.len().to_string();
-            policy.bad(&mut report, line, "*", &found, Problem::FieldCount)?;
-            continue;
-        }
+    while let Some(line) = table.next_row(&policy, &mut report)? {
         let loc = table.field(c_loc).unwrap_or("");
         let sensor = match interner.known_sensor(loc, options) {
             Ok(k) => k,
@@ -615,14 +612,7 @@ pub fn read_sensors_csv(
     let mut report = IngestReport::default();
     let mut out: Vec<SensorInput> = Vec::new();
     let mut seen: HashMap<String, u64> = HashMap::new();
-    let ncols = names.len();
-    while let Some(line) = table.next()? {
-        report.rows_read += 1;
-        if table.record.len() != ncols {
-            let found = table.record.len().to_string();
-            policy.bad(&mut report, line, "*", &found, Problem::FieldCount)?;
-            continue;
-        }
+    while let Some(line) = table.next_row(&policy, &mut report)? {
         let id_s = table.field(c_id).unwrap_or("");
         let Ok(id) = SensorId::new(id_s) else {
             policy.bad(&mut report, line, &names[c_id], id_s, Problem::BadSensorId)?;
