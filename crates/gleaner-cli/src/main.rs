@@ -392,6 +392,24 @@ enum SortArg {
     Stale,
 }
 
+/// Prints `value` as pretty JSON when `json`, else the text `table` renders.
+fn emit<T: serde::Serialize>(
+    json: bool,
+    value: &T,
+    what: &str,
+    table: impl FnOnce() -> String,
+) -> Result<()> {
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(value).with_context(|| what.to_string())?
+        );
+    } else {
+        print!("{}", table());
+    }
+    Ok(())
+}
+
 fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
     let (a, b) = s
         .split_once(',')
@@ -491,14 +509,7 @@ fn run(cli: Cli) -> Result<()> {
                     SortArg::Stale => cells::SortKey::Stale,
                 },
             );
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&rows).context("serialising cells")?
-                );
-            } else {
-                print!("{}", cells::table(&rows));
-            }
+            emit(json, &rows, "serialising cells", || cells::table(&rows))?;
         }
         Command::Score {
             project,
@@ -523,14 +534,9 @@ fn run(cli: Cli) -> Result<()> {
                     ScoreSortArg::Cell => score::ScoreSort::Cell,
                 },
             );
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&doc).context("serialising scores")?
-                );
-            } else {
-                print!("{}", score::table(&doc, limit));
-            }
+            emit(json, &doc, "serialising scores", || {
+                score::table(&doc, limit)
+            })?;
         }
         Command::Plan {
             project,
@@ -555,14 +561,7 @@ fn run(cli: Cli) -> Result<()> {
             };
             let planned = plan::run(&mut p, &args)?;
             let doc = plan::to_json(&p, &planned, &args);
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&doc).context("serialising the mission")?
-                );
-            } else {
-                print!("{}", plan::table(&doc));
-            }
+            emit(json, &doc, "serialising the mission", || plan::table(&doc))?;
         }
         Command::Explore {
             project,
@@ -572,14 +571,7 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let mut p = Project::open(&project)?;
             let e = explore::run(&mut p, at, !dry_run)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&e).context("serialising the plan")?
-                );
-            } else {
-                print!("{}", explore::table(&e));
-            }
+            emit(json, &e, "serialising the plan", || explore::table(&e))?;
         }
         Command::Export {
             project,
