@@ -14,16 +14,35 @@ use crate::Conflict;
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum StoreError {
-    /// The database engine reported an error (IO, corruption, constraint, ...).
+    /// The database engine reported an error (IO, corruption, constraint, lock timeout, ...);
+    /// the engine's message as text, so that no backend type leaks into the interface.
     #[error("database error: {0}")]
-    Sqlite(#[from] rusqlite::Error),
-    /// The database file could not be opened (missing directory, permissions, not SQLite).
-    #[error("cannot open database {path}: {source}")]
+    Backend(String),
+    /// The database could not be opened (missing directory, permissions, not a database).
+    #[error("cannot open database {path}: {reason}")]
     Open {
-        /// The path given.
-        path: std::path::PathBuf,
-        /// The engine's error.
-        source: rusqlite::Error,
+        /// The path or address given.
+        path: String,
+        /// The engine's message.
+        reason: String,
+    },
+    /// A modality arrived with a unit other than the one its stored readings are in.
+    #[error("modality {modality}: readings are stored in {stored:?}, refusing {incoming:?} (convert the file, or ingest it as another modality)")]
+    UnitMismatch {
+        /// The modality.
+        modality: Modality,
+        /// The stored unit.
+        stored: String,
+        /// The unit offered.
+        incoming: String,
+    },
+    /// A mission already recorded as flown was recorded again without asking to amend it.
+    #[error("mission #{mission} was already recorded as flown at t = {flown_at} s; pass amend to replace that record")]
+    AlreadyFlown {
+        /// The mission id.
+        mission: i64,
+        /// When it was recorded as flown, seconds since the Unix epoch (UTC).
+        flown_at: UnixSeconds,
     },
     /// The file is an SQLite database of some other application (it has tables but no
     /// gleaner schema history); gleaner does not add its tables to it.

@@ -91,13 +91,13 @@ mod tests;
 
 pub use error::{Result, StoreError};
 pub use sqlite::SqliteStore;
-pub use store::Store;
+pub use store::{Store, StoreRead, StoreWrite};
 pub use types::{
     AnomalyRecord, CellMetadata, CellRecord, CellScores, ClassProbability, Conflict,
-    ConflictPolicy, Correlation, IngestRecord, InsertStats, MissionId, MissionKind, MissionRecord,
-    MissionStatus, ModalityRecord, ModalitySummary, NewMission, Reading, ReadingBatch,
-    ReadingBatchBuilder, RefreshParams, ReplaceCellsStats, SensorRecord, SensorSummary,
-    SeriesStats, UpsertStats, VisitRecord,
+    ConflictPolicy, Correlation, EnergyBreakdown, FlightProfile, IngestRecord, InsertStats,
+    MissionId, MissionKind, MissionRecord, MissionStatus, ModalityRecord, ModalitySummary,
+    NewMission, Reading, ReadingBatch, ReadingBatchBuilder, ReplaceCellsStats, SensorRecord,
+    SensorSummary, SeriesStats, StopRecord, UpsertStats, VisitRecord,
 };
 
 /// The schema version this build of gleaner writes.

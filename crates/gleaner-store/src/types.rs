@@ -348,21 +348,6 @@ impl CellMetadata {
     }
 }
 
-/// Inputs of [`crate::Store::refresh_cell_summaries`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct RefreshParams {
-    /// The time the pending volume is estimated at, seconds since the Unix epoch (UTC).
-    pub now: UnixSeconds,
-    /// Bytes one reading of one modality occupies in a sensor's log.
-    pub bytes_per_reading: f64,
-    /// Logging interval, seconds, assumed for a series with fewer than 2 readings.
-    pub default_interval_s: f64,
-    /// Recompute the per-modality summaries only of the cells holding these sensors (those
-    /// whose readings changed), at a cost proportional to those cells' readings; `None`
-    /// recomputes every cell. Last collection and pending volume are always refreshed.
-    pub changed_sensors: Option<Vec<SensorId>>,
-}
-
 /// Whether a mission explores (visits every cell) or adapts (visits the best cells).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MissionKind {
@@ -427,6 +412,70 @@ impl fmt::Display for MissionId {
     }
 }
 
+/// The energy breakdown of a sortie B -> c_1 -> ... -> c_k -> B (SPEC §3).
+///
+/// `total_j = travel_j + hover_j + comm_j + return_j`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct EnergyBreakdown {
+    /// E_t: cruise from the base through the cells (with climb and descent), J.
+    pub travel_j: f64,
+    /// E_h: hover energy over all cells, J.
+    pub hover_j: f64,
+    /// E_c: receiver energy over all cells, J.
+    pub comm_j: f64,
+    /// E_r: return leg to the base, J.
+    pub return_j: f64,
+    /// E_t + E_h + E_c + E_r, J.
+    pub total_j: f64,
+    /// Usable budget the route was planned against, J.
+    pub budget_j: f64,
+    /// Cruise distance including the return leg, m.
+    pub distance_m: f64,
+    /// Flight time including hovers, s.
+    pub flight_time_s: f64,
+}
+
+/// How the aircraft is to fly a mission: what the energy model assumed, so that flight files
+/// command exactly that.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlightProfile {
+    /// Base station (take-off and landing), WGS84 degrees.
+    pub base: LatLon,
+    /// Base station altitude above mean sea level, m.
+    pub base_alt_m: f64,
+    /// Flight altitude above the base, m.
+    pub altitude_m: f64,
+    /// Cruise ground speed between cells, m/s.
+    pub cruise_speed_mps: f64,
+}
+
+/// One planned stop of a mission, in visiting order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StopRecord {
+    /// Position in the visiting order, from 0.
+    pub order: u32,
+    /// The cell (stored by label, so history survives a new grid).
+    pub cell: CellIndex,
+    /// Cell centre, WGS84 degrees: where the aircraft hovers.
+    pub centre: LatLon,
+    /// Score S when planned (0 for exploration sorties), dimensionless.
+    pub score: f64,
+    /// F, R, A, U when planned (absent for exploration or scores from a file).
+    pub terms: Option<[f64; 4]>,
+    /// Leg from the previous stop (the base for the first), m.
+    pub leg_distance_m: f64,
+    /// Propulsion energy of that leg, J.
+    pub leg_energy_j: f64,
+    /// Upload time t_comm, s.
+    pub collection_s: f64,
+    /// Hover time at the cell, s.
+    pub hover_s: f64,
+    /// Hover energy, J.
+    pub hover_j: f64,
+    /// Receiver energy, J.
+    pub comm_j: f64,
+}
+
 /// A mission to create (status `planned`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct NewMission {
@@ -436,17 +485,27 @@ pub struct NewMission {
     pub kind: MissionKind,
     /// The mission time t it was planned for, seconds since the Unix epoch (UTC).
     pub planned_at: UnixSeconds,
-    /// The planner that produced it (e.g. `greedy`, `ils`).
+    /// The planner that produced it (e.g. `greedy`, `default`, `exploration`).
     pub solver: String,
-    /// Usable energy budget, joules.
-    pub budget_j: f64,
-    /// Planned energy, joules.
-    pub energy_j: f64,
-    /// The mission summary as JSON text (written by the outer layer; stored verbatim).
-    pub summary_json: String,
+    /// The planner's seed.
+    pub seed: u64,
+    /// Utility weights alpha, beta, gamma, delta the scores were computed with.
+    pub weights: [f64; 4],
+    /// The anomaly form label (`raw`, `bounded(kappa=3)`, `n/a`).
+    pub anomaly_form: String,
+    /// Sum of S over the stops.
+    pub total_score: f64,
+    /// How the aircraft flies it.
+    pub profile: FlightProfile,
+    /// The energy model's breakdown of the route.
+    pub energy: EnergyBreakdown,
+    /// Return leg from the last stop to the base, m.
+    pub return_distance_m: f64,
+    /// The stops, in visiting order.
+    pub stops: Vec<StopRecord>,
 }
 
-/// A stored mission with its visits.
+/// A stored mission with its stops and visits.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MissionRecord {
     /// Its id.
@@ -455,6 +514,8 @@ pub struct MissionRecord {
     pub mission: NewMission,
     /// Planned or flown.
     pub status: MissionStatus,
+    /// When it was recorded as flown, seconds since the Unix epoch (UTC).
+    pub flown_at: Option<UnixSeconds>,
     /// The recorded visits in visiting order (empty while planned).
     pub visits: Vec<VisitRecord>,
 }
