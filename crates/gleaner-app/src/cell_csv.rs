@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow};
+use crate::error::{AppError, Result};
 
 /// One data row: its 1-based line, the cell id, and the numbers after it.
 pub struct CellRow {
@@ -18,13 +18,14 @@ pub struct CellRow {
 /// Reads the file; a field that is not a finite number is an error naming file, line and
 /// column (from the header). Blank lines are skipped; a UTF-8 BOM and CRLF are accepted.
 pub fn read(path: &Path) -> Result<Vec<CellRow>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let text = std::fs::read_to_string(path).map_err(|e| AppError::io(path, e))?;
     let mut lines = text.trim_start_matches('\u{feff}').lines().enumerate();
     let header: Vec<String> = lines
         .next()
         .map(|(_, h)| h.split(',').map(|c| c.trim().to_string()).collect())
-        .with_context(|| format!("{}: empty file: expected a header line", path.display()))?;
+        .ok_or_else(|| {
+            AppError::Invalid(format!("{}: empty file: expected a header line", path.display()))
+        })?;
     let mut rows = Vec::new();
     for (k, line) in lines {
         if line.trim().is_empty() {
@@ -40,11 +41,11 @@ pub fn read(path: &Path) -> Result<Vec<CellRow>> {
                     .ok()
                     .filter(|x| x.is_finite())
                     .ok_or_else(|| {
-                        anyhow!(
+                        AppError::Invalid(format!(
                             "{}:{}: column `{column}`: not a finite number: {v:?}",
                             path.display(),
                             k + 1
-                        )
+                        ))
                     })
             })
             .collect::<Result<Vec<f64>>>()?;

@@ -1,11 +1,19 @@
 //! The project file `gleaner.toml`: the serialisable counterpart of the core configuration
-//! types, converted explicitly. Only this module knows the TOML layout.
+//! types, converted explicitly. Only this module knows the TOML layout. Every default is taken
+//! from the core's own defaults, so the two cannot drift.
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
 use gleaner_field::{FieldConfig, LatLon};
 use serde::{Deserialize, Serialize};
+
+use crate::error::{AppError, Result};
+
+macro_rules! bail {
+    ($($arg:tt)*) => {
+        return Err(AppError::Invalid(format!($($arg)*)))
+    };
+}
 
 /// File name of the project configuration inside a project directory.
 pub const CONFIG_FILE: &str = "gleaner.toml";
@@ -13,7 +21,7 @@ pub const CONFIG_FILE: &str = "gleaner.toml";
 /// `gleaner.toml`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct ProjectFile {
+pub struct Settings {
     /// `[project]`
     pub project: ProjectSection,
     /// `[field]`
@@ -66,17 +74,168 @@ pub struct FieldSection {
 }
 
 fn default_k() -> usize {
-    3
+    FieldConfig::default().fallback_k
 }
 fn default_radius() -> f64 {
-    200.0
+    FieldConfig::default().fallback_radius_m
 }
 
 /// `[sensors]`: where the sensor table came from.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SensorsSection {
-    /// The sensors file given to `init`, as given.
+    /// The sensors file given to `init`, relative to the project directory (or absolute when
+    /// it is on another volume).
+    pub file: String,
+    /// Its UTM zone when positions were read as easting/northing (e.g. `11N`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub utm_zone: Option<String>,
+}
+
+/// `[ingest]`: how pending data volume is estimated.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct IngestSection {
+    /// Bytes one reading of one modality takes in a sensor's log (default 16).
+    pub bytes_per_reading: f64,
+    /// Logging interval, seconds, assumed when a series has fewer than 2 readings (default 86 400).
+    pub default_interval_s: f64,
+}
+
+impl Default for IngestSection {
+    fn default() -> Self {
+        Self {
+            bytes_per_reading: 16.0,
+            default_interval_s: 86_400.0,
+        }
+    }
+}
+
+/// `[utility]`: the score S = alpha·F + beta·A + gamma·U − delta·R (SPEC §2).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct UtilitySection {
+    /// Weight of freshness F (default 1).
+    pub alpha: f64,
+    /// Weight of anomaly A (default 1).
+    pub beta: f64,
+    /// Weight of model uncertainty U (default 1).
+    pub gamma: f64,
+    /// Weight of redundancy R (default 1).
+    pub delta: f64,
+    /// Freshness half-life, seconds (default 259 200 = 3 days); lambda = ln 2 / half-life.
+    pub freshness_half_life_s: f64,
+    /// History window for R and A, days (default: all history).
+    pub history_window_days: Option<f64>,
+    /// Fewest common timestamps for a correlation to count (default 10).
+    pub min_overlap: usize,
+    /// Added to sigma in A, in the modality's unit (default 1e-6).
+    pub epsilon: f64,
+    /// `raw` (default, the paper's) or `bounded` (1 − exp(−A/kappa)).
+    pub anomaly_form: String,
+    /// kappa of the bounded anomaly, standard deviations (default 3).
+    pub anomaly_kappa: f64,
+    /// A collection with A^m at or above this is flagged in the anomaly history (default 3).
+    pub anomaly_flag: f64,
+    /// omega: redundancy weight per modality name (default equal; missing names weigh 0).
+    pub redundancy_weights: Option<std::collections::BTreeMap<String, f64>>,
+    /// phi: anomaly weight per modality name (default equal; missing names weigh 0).
+    pub anomaly_weights: Option<std::collections::BTreeMap<String, f64>>,
+    /// Modality the condition classes come from (default `vw@30cm`, else the first `vw@...`).
+    pub condition_modality: Option<String>,
+    /// Number of condition classes K (default 3: dry / adequate / wet).
+    pub condition_classes: usize,
+    /// K − 1 class thresholds in the modality's unit (default: quantiles of the history).
+    pub condition_thresholds: Option<Vec<f64>>,
+}
+
+impl Default for UtilitySection {
+    /// The core's defaults ([`gleaner_utility::UtilityConfig::default`],
+    /// [`gleaner_utility::ConditionConfig::default`]).
+    fn default() -> Self {
+        use gleaner_utility::{AnomalyForm, ConditionConfig, HistoryWindow, UtilityConfig};
+        let core = UtilityConfig::default();
+        let condition = ConditionConfig::default();
+        let (anomaly_form, anomaly_kappa) = match core.anomaly_form {
+            AnomalyForm::Raw => ("raw".to_string(), 3.0),
+            AnomalyForm::Bounded { kappa } => ("bounded".to_string(), kappa),
+        };
+        Self {
+            alpha: core.alpha,
+            beta: core.beta,
+            gamma: core.gamma,
+            delta: core.delta,
+            freshness_half_life_s: core.freshness_half_life_s,
+            history_window_days: match core.window {
+                HistoryWindow::All => None,
+                HistoryWindow::Last { seconds } => Some(seconds as f64 / 86_400.0),
+            },
+            min_overlap: core.min_overlap,
+            epsilon: core.epsilon,
+            anomaly_form,
+            anomaly_kappa,
+            anomaly_flag: 3.0,
+            redundancy_weights: None,
+            anomaly_weights: None,
+            condition_modality: None,
+            condition_classes: condition.n_classes,
+            condition_thresholds: None,
+        }
+    }
+}
+
+/// `[energy]`
+    #[serde(default)]
+    pub energy: EnergySection,
+    /// `[planner]`
+    #[serde(default)]
+    pub planner: PlannerSection,
+}
+
+/// `[project]`: name and database.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ProjectSection {
+    /// A display name.
+    pub name: String,
+    /// SQLite database file, relative to the project directory.
+    pub database: PathBuf,
+}
+
+/// `[field]`: base station and grid.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FieldSection {
+    /// Base station latitude, WGS84 degrees.
+    pub base_lat: f64,
+    /// Base station longitude, WGS84 degrees.
+    pub base_lon: f64,
+    /// Base station altitude, metres.
+    #[serde(default)]
+    pub base_alt_m: f64,
+    /// Cell side, metres (the UAV's ground coverage).
+    pub cell_size_m: f64,
+    /// Neighbour fallback: k nearest non-empty cells for a cell with no 8-neighbour.
+    #[serde(default = "default_k")]
+    pub neighbour_k: usize,
+    /// Neighbour fallback radius, metres.
+    #[serde(default = "default_radius")]
+    pub neighbour_radius_m: f64,
+}
+
+fn default_k() -> usize {
+    FieldConfig::default().fallback_k
+}
+fn default_radius() -> f64 {
+    FieldConfig::default().fallback_radius_m
+}
+
+/// `[sensors]`: where the sensor table came from.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SensorsSection {
+    /// The sensors file given to `init`, relative to the project directory (or absolute when
+    /// it is on another volume).
     pub file: String,
     /// Its UTM zone when positions were read as easting/northing (e.g. `11N`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -228,11 +387,13 @@ pub struct PlannerSection {
 }
 
 impl Default for PlannerSection {
+    /// The core's defaults ([`gleaner_mission::PlanOptions::default`]).
     fn default() -> Self {
+        let core = gleaner_mission::PlanOptions::default();
         Self {
-            solver: "default".into(),
-            time_limit_s: 5.0,
-            seed: 0,
+            solver: core.planner.name().into(),
+            time_limit_s: core.time_limit.as_secs_f64(),
+            seed: core.seed,
         }
     }
 }
@@ -276,7 +437,7 @@ impl UtilitySection {
         };
         config
             .validate(modalities.len())
-            .context("[utility] settings")?;
+            .map_err(|e| AppError::core("[utility] settings", e))?;
         Ok(config)
     }
 }
@@ -293,11 +454,16 @@ impl EnergySection {
         c.cruise = match self.cruise.as_str() {
             "max-endurance" => CruiseSpeed::MaxEndurance,
             "max-range" => CruiseSpeed::MaxRange,
-            v => CruiseSpeed::Fixed(v.parse().with_context(|| {
-                format!(
-                    "energy.cruise = {v:?}: expected max-endurance, max-range or a speed in m/s"
-                )
-            })?),
+            v => CruiseSpeed::Fixed(
+                v.parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite() && *x > 0.0)
+                    .ok_or_else(|| {
+                        AppError::Invalid(format!(
+                            "energy.cruise = {v:?}: expected max-endurance, max-range or a positive speed in m/s"
+                        ))
+                    })?,
+            ),
         };
         let set = |field: &mut f64, v: Option<f64>| {
             if let Some(v) = v {
@@ -319,51 +485,106 @@ impl EnergySection {
     }
 }
 
-impl ProjectFile {
+impl Settings {
     /// Reads and validates `dir/gleaner.toml`.
     pub fn load(dir: &Path) -> Result<Self> {
         let path = dir.join(CONFIG_FILE);
-        let text = std::fs::read_to_string(&path).with_context(|| {
-            format!(
-                "{}: cannot read the project file (run `gleaner init` first, or pass --project)",
-                path.display()
-            )
+        let text = std::fs::read_to_string(&path).map_err(|e| AppError::Settings {
+            path: path.display().to_string(),
+            reason: format!(
+                "cannot read the project file ({e}); run `gleaner init` first, or pass --project"
+            ),
         })?;
-        let file: Self = toml::from_str(&text)
-            .with_context(|| format!("{}: invalid project file", path.display()))?;
-        file.validate()
-            .with_context(|| format!("{}: invalid setting", path.display()))?;
+        Self::parse(&text).map_err(|reason| AppError::Settings {
+            path: path.display().to_string(),
+            reason,
+        })
+    }
+
+    /// Parses and validates the text of a project file; the error names the setting.
+    pub fn parse(text: &str) -> std::result::Result<Self, String> {
+        let file: Self = toml::from_str(text).map_err(|e| format!("invalid project file: {e}"))?;
+        file.validate().map_err(|e| e.to_string())?;
         Ok(file)
+    }
+
+    /// The text of the project file.
+    pub fn to_toml(&self) -> Result<String> {
+        let body = toml::to_string_pretty(self)
+            .map_err(|e| AppError::Invalid(format!("cannot write the settings: {e}")))?;
+        Ok(format!(
+            "# gleaner project file. Units: degrees (WGS84), metres, seconds, bytes.\n{body}"
+        ))
     }
 
     /// Writes `dir/gleaner.toml`.
     pub fn save(&self, dir: &Path) -> Result<()> {
         let path = dir.join(CONFIG_FILE);
-        let text = format!(
-            "# gleaner project file. Units: degrees (WGS84), metres, seconds, bytes.\n{}",
-            toml::to_string_pretty(self)?
-        );
-        std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))
+        std::fs::write(&path, self.to_toml()?).map_err(|e| AppError::io(&path, e))
     }
 
-    fn validate(&self) -> Result<()> {
+    /// Checks every setting a use case relies on; the error names the setting and value.
+    pub fn validate(&self) -> Result<()> {
         self.base()?;
-        if !(self.field.cell_size_m.is_finite() && self.field.cell_size_m > 0.0) {
+        if !self.field.base_alt_m.is_finite() {
+            bail!("field.base_alt_m = {} must be a finite number of metres", self.field.base_alt_m);
+        }
+        if !(self.field.cell_size_m.is_finite() && self.field.cell_size_m >= 0.5) {
             bail!(
-                "field.cell_size_m = {} must be a positive number of metres",
+                "field.cell_size_m = {} must be a number of metres >= 0.5",
                 self.field.cell_size_m
             );
         }
-        if !(self.ingest.bytes_per_reading > 0.0 && self.ingest.default_interval_s > 0.0) {
-            bail!("ingest.bytes_per_reading and ingest.default_interval_s must be positive");
+        if !(self.field.neighbour_radius_m.is_finite()
+            && self.field.neighbour_radius_m >= 0.0
+            && self.field.neighbour_radius_m <= 100.0 * self.field.cell_size_m.max(1.0))
+        {
+            bail!(
+                "field.neighbour_radius_m = {} must be between 0 and 100 cell sides",
+                self.field.neighbour_radius_m
+            );
+        }
+        if self.field.neighbour_k > 64 {
+            bail!("field.neighbour_k = {} must be at most 64", self.field.neighbour_k);
+        }
+        if !(self.ingest.bytes_per_reading.is_finite()
+            && self.ingest.bytes_per_reading > 0.0
+            && self.ingest.default_interval_s.is_finite()
+            && self.ingest.default_interval_s > 0.0)
+        {
+            bail!("ingest.bytes_per_reading and ingest.default_interval_s must be positive numbers");
+        }
+        if !(2..=20).contains(&self.utility.condition_classes) {
+            bail!(
+                "utility.condition_classes = {} must be between 2 and 20",
+                self.utility.condition_classes
+            );
+        }
+        if !(self.planner.time_limit_s.is_finite()
+            && (0.0..=86_400.0).contains(&self.planner.time_limit_s))
+        {
+            bail!(
+                "planner.time_limit_s = {} must be between 0 and 86400 seconds",
+                self.planner.time_limit_s
+            );
+        }
+        crate::plan::parse_planner(&self.planner.solver)?;
+        self.utility.to_core(&[])?;
+        let energy = self.energy.to_core()?;
+        gleaner_energy::MissionEnergyModel::new(&energy)
+            .map_err(|e| AppError::core("[energy] settings", e))?;
+        let alt = energy.link.altitude_m;
+        if !(alt.is_finite() && alt > 0.0 && alt <= 120.0) {
+            bail!("energy.altitude_m = {alt} must be in (0, 120] metres");
         }
         Ok(())
     }
 
     /// The base station position.
     pub fn base(&self) -> Result<LatLon> {
-        LatLon::new(self.field.base_lat, self.field.base_lon)
-            .with_context(|| "field.base_lat / field.base_lon")
+        LatLon::new(self.field.base_lat, self.field.base_lon).map_err(|e| {
+            AppError::Invalid(format!("field.base_lat / field.base_lon: {e}"))
+        })
     }
 
     /// The core grid configuration.
@@ -389,7 +610,7 @@ pub fn parse_utm_zone(s: &str) -> Result<(u8, bool)> {
         .parse()
         .ok()
         .filter(|z| (1..=60).contains(z))
-        .with_context(|| format!("invalid UTM zone {s:?}: zone must be 1..=60"))?;
+        .ok_or_else(|| AppError::Invalid(format!("invalid UTM zone {s:?}: zone must be 1..=60")))?;
     Ok((zone, north))
 }
 

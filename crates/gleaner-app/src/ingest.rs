@@ -1,0 +1,346 @@
+//! Ingest: readings files into the project, all or nothing; re-ingesting changes nothing.
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+use gleaner_field::{Modality, SensorId, UnixSeconds};
+use gleaner_ingest::{
+    HubbardBrookMetadata, IngestError, IngestOptions, IngestReport, OnError, Readings, WideOptions,
+    read_caf_daily, read_hubbard_brook_logger, read_long_csv, read_wide_csv,
+};
+use gleaner_store::{
+    ConflictPolicy, IngestRecord, InsertStats, ModalityRecord, Reading, ReadingBatch, Store,
+    StoreRead, StoreWrite,
+};
+
+use crate::error::{AppError, Result};
+use crate::progress::Progress;
+use crate::project::Project;
+use crate::summaries;
+
+/// A readings file format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Format {
+    /// Decide from the file's header.
+    #[default]
+    Auto,
+    /// gleaner's long CSV (`sensor_id,timestamp,modality,value[,unit]`).
+    Long,
+    /// A wide CSV (time columns + one column per sensor; needs a modality).
+    Wide,
+    /// A CAF daily file.
+    CafDaily,
+    /// A Hubbard Brook logger file (`sensor_metadata.csv` beside it, or given).
+    HubbardBrook,
+}
+
+impl Format {
+    /// The name recorded in the provenance table.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Auto => "auto",
+            Format::Long => "long-csv",
+            Format::Wide => "wide-csv",
+            Format::CafDaily => "caf-daily",
+            Format::HubbardBrook => "hubbard-brook",
+        }
+    }
+}
+
+/// What to ingest and how.
+#[derive(Debug, Clone, Default)]
+pub struct IngestRequest {
+    /// Files to ingest.
+    pub files: Vec<PathBuf>,
+    /// Their format.
+    pub format: Format,
+    /// Wide files: the modality of every sensor column (e.g. `vw@30cm`).
+    pub modality: Option<String>,
+    /// Wide files: the unit of the values.
+    pub unit: Option<String>,
+    /// Wide files: hours the file's clock is ahead of UTC, in [-14, 14].
+    pub utc_offset_h: f64,
+    /// Bad-row policy: stop and store nothing, or skip and report.
+    pub on_error: OnError,
+    /// Hubbard Brook: the probe metadata file [default: `sensor_metadata.csv` beside each file].
+    pub metadata: Option<PathBuf>,
+    /// The time pending volumes are estimated at, seconds [default: the latest reading].
+    pub now: Option<UnixSeconds>,
+}
+
+/// What an ingest did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct IngestOutcome {
+    /// Files read.
+    pub files: usize,
+    /// Reader counts, summed over files.
+    pub report: IngestReport,
+    /// Readings newly stored.
+    pub inserted: u64,
+    /// Readings already stored identically.
+    pub unchanged: u64,
+    /// Readings that conflicted with stored values and were skipped.
+    pub conflicts: u64,
+    /// Cells whose summaries were recomputed.
+    pub cells_refreshed: usize,
+}
+
+/// Files read and parsed, ready to store.
+pub(crate) struct Parsed {
+    /// Per file: path, format, readings, reader counts.
+    pub files: Vec<(PathBuf, Format, Readings, IngestReport)>,
+    /// Reader counts summed over files.
+    pub report: IngestReport,
+}
+
+impl Parsed {
+    /// Number of readings over all files.
+    pub fn len(&self) -> usize {
+        self.files.iter().map(|f| f.2.rows.len()).sum()
+    }
+    /// The latest reading's time, seconds.
+    pub fn latest(&self) -> Option<UnixSeconds> {
+        self.files.iter().flat_map(|f| f.2.rows.iter().map(|r| r.t)).max()
+    }
+    /// Every sensor with a reading, sorted, without duplicates.
+    pub fn sensors(&self) -> Vec<SensorId> {
+        let mut s: Vec<SensorId> = self
+            .files
+            .iter()
+            .flat_map(|f| {
+                let used: HashSet<u32> = f.2.rows.iter().map(|r| r.sensor).collect();
+                f.2.sensors
+                    .iter()
+                    .enumerate()
+                    .filter(move |(k, _)| used.contains(&(*k as u32)))
+                    .map(|(_, id)| id.clone())
+            })
+            .collect();
+        s.sort();
+        s.dedup();
+        s
+    }
+}
+
+/// Decides a file's format from its first line.
+pub fn detect(path: &Path) -> Result<Format> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path).map_err(|e| AppError::io(path, e))?;
+    if !meta.is_file() {
+        return Err(AppError::io(
+            path,
+            "not a regular file: give the readings as a file (pipes and devices are not read)",
+        ));
+    }
+    let mut head = vec![0u8; 4096];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .map_err(|e| AppError::io(path, e))?;
+    let first = String::from_utf8_lossy(&head[..n]);
+    let first = first
+        .trim_start_matches('\u{feff}')
+        .lines()
+        .next()
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    if first.starts_with("location\tdate") {
+        Ok(Format::CafDaily)
+    } else if first.starts_with("timestamp,p1:") {
+        Ok(Format::HubbardBrook)
+    } else if first.split(',').any(|c| c.trim() == "modality") {
+        Ok(Format::Long)
+    } else if !first.is_empty() {
+        Ok(Format::Wide)
+    } else {
+        Err(IngestError::Empty {
+            path: path.to_path_buf(),
+        }
+        .into())
+    }
+}
+
+/// Reads and checks every file; stores nothing.
+pub(crate) fn parse_files(
+    request: &IngestRequest,
+    known: HashSet<String>,
+    progress: &dyn Progress,
+) -> Result<Parsed> {
+    if request.files.is_empty() {
+        return Err(AppError::Invalid("no files to ingest".into()));
+    }
+    if !(request.utc_offset_h.is_finite() && request.utc_offset_h.abs() <= 14.0) {
+        return Err(AppError::Invalid(format!(
+            "UTC offset {} h: expected hours in [-14, 14]",
+            request.utc_offset_h
+        )));
+    }
+    let options = IngestOptions {
+        on_error: request.on_error,
+        known_sensors: Some(known),
+    };
+    let mut files: Vec<(PathBuf, Format, Readings, IngestReport)> = Vec::new();
+    let mut report = IngestReport::default();
+    progress.start("reading", Some(request.files.len() as u64));
+    for path in &request.files {
+        let format = match request.format {
+            Format::Auto => detect(path)?,
+            f => f,
+        };
+        let (readings, file_report) = match format {
+            Format::CafDaily => read_caf_daily(path, &options)?,
+            Format::Long => read_long_csv(path, &options)?,
+            Format::HubbardBrook => {
+                let meta = match &request.metadata {
+                    Some(m) => m.clone(),
+                    None => path.with_file_name("sensor_metadata.csv"),
+                };
+                let metadata = HubbardBrookMetadata::read(&meta)?;
+                read_hubbard_brook_logger(path, &metadata, &options)?
+            }
+            Format::Wide | Format::Auto => {
+                let Some(m) = &request.modality else {
+                    return Err(AppError::Invalid(format!(
+                        "{}: a wide file needs a modality (e.g. --modality vw@30cm)",
+                        path.display()
+                    )));
+                };
+                let modality = Modality::new(m)
+                    .map_err(|e| AppError::Invalid(format!("modality {m:?}: {e}")))?;
+                let mut wide = WideOptions::new(modality);
+                wide.unit = request.unit.clone();
+                wide.utc_offset_s = (request.utc_offset_h * 3600.0).round() as i64;
+                read_wide_csv(path, &wide, &options)?
+            }
+        };
+        for earlier in &files {
+            check_units(&earlier.2, &readings, path)?;
+        }
+        report.merge(&file_report);
+        files.push((path.clone(), format, readings, file_report));
+        progress.advance(1);
+    }
+    progress.finish();
+    Ok(Parsed { files, report })
+}
+
+/// Two files of one ingest must agree on each modality's unit.
+fn check_units(all: &Readings, next: &Readings, path: &Path) -> Result<()> {
+    for m in &next.modalities {
+        if let Some(prev) = all.modalities.iter().find(|p| p.modality == m.modality)
+            && let (Some(a), Some(b)) = (&prev.unit, &m.unit)
+            && a != b
+        {
+            return Err(AppError::Invalid(format!(
+                "{}: modality {} in {b:?}, but an earlier file of this ingest has it in {a:?}",
+                path.display(),
+                m.modality
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The store's batch of parsed readings.
+pub(crate) fn batch_of(all: &Readings) -> (Vec<ModalityRecord>, ReadingBatch) {
+    let modalities = all
+        .modalities
+        .iter()
+        .map(|m| ModalityRecord {
+            modality: m.modality.clone(),
+            unit: m.unit.clone(),
+        })
+        .collect();
+    let batch = ReadingBatch {
+        sensors: all.sensors.clone(),
+        modalities: all.modalities.iter().map(|m| m.modality.clone()).collect(),
+        rows: all
+            .rows
+            .iter()
+            .map(|r| Reading {
+                sensor: r.sensor,
+                modality: r.modality,
+                t: r.t,
+                value: r.value,
+            })
+            .collect(),
+    };
+    (modalities, batch)
+}
+
+/// Stores parsed readings inside a transaction: modalities, readings, provenance, and the
+/// refreshed summaries of the cells whose sensors got readings.
+pub(crate) fn store_parsed<W: StoreWrite>(
+    tx: &mut W,
+    parsed: &Parsed,
+    policy: ConflictPolicy,
+    at: UnixSeconds,
+    now: UnixSeconds,
+    settings: &crate::settings::Settings,
+) -> std::result::Result<(InsertStats, usize), AppError> {
+    let mut stats = InsertStats::default();
+    for (path, format, readings, report) in &parsed.files {
+        let (modalities, batch) = batch_of(readings);
+        tx.upsert_modalities(&modalities)?;
+        let s = tx.insert_readings(&batch, policy)?;
+        tx.record_ingest(&IngestRecord {
+            file_name: path.display().to_string(),
+            format: format.name().to_string(),
+            rows_read: report.rows_read,
+            rows_inserted: s.inserted,
+            rows_unchanged: s.unchanged,
+            rows_skipped: report.skipped + s.conflicts.len() as u64,
+            at,
+        })?;
+        stats.inserted += s.inserted;
+        stats.unchanged += s.unchanged;
+        stats.conflicts.extend(s.conflicts);
+    }
+    let changed: Vec<SensorId> = if stats.inserted > 0 {
+        parsed.sensors()
+    } else {
+        Vec::new()
+    };
+    let refreshed = summaries::refresh_cells(tx, &changed, now, settings)?;
+    Ok((stats, refreshed))
+}
+
+/// The use case: reads every file, then stores all readings, their provenance and the
+/// refreshed cell summaries in one transaction: a failure anywhere stores nothing.
+/// `clock_now` is the wall-clock time recorded as provenance (seconds).
+pub fn ingest<S: Store>(
+    project: &mut Project<S>,
+    request: &IngestRequest,
+    clock_now: UnixSeconds,
+    progress: &dyn Progress,
+) -> Result<IngestOutcome> {
+    let known: HashSet<String> = project
+        .store()
+        .sensors()?
+        .into_iter()
+        .map(|s| s.id.to_string())
+        .collect();
+    let parsed = parse_files(request, known, progress)?;
+    let policy = match request.on_error {
+        OnError::Fail => ConflictPolicy::Fail,
+        OnError::Skip => ConflictPolicy::Skip,
+    };
+    let latest = parsed.latest();
+    let now = request.now.or(latest).unwrap_or(clock_now);
+    let settings = project.settings().clone();
+    progress.start(
+        &format!("storing {} readings", parsed.len()),
+        None,
+    );
+    let (stats, refreshed) = project
+        .store_mut()
+        .write(|tx| store_parsed(tx, &parsed, policy, clock_now, now, &settings))?;
+    progress.finish();
+    Ok(IngestOutcome {
+        files: request.files.len(),
+        report: parsed.report,
+        inserted: stats.inserted,
+        unchanged: stats.unchanged,
+        conflicts: stats.conflicts.len() as u64,
+        cells_refreshed: refreshed,
+    })
+}

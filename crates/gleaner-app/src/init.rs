@@ -1,0 +1,273 @@
+//! Creating a project from a sensors file: settings, database, sensors and the cell grid.
+
+use std::path::{Component, Path, PathBuf};
+
+use gleaner_field::{
+    Field, LatLon, LocalPoint, Sensor, TransverseMercator, cell_size_from_half_angle,
+};
+use gleaner_ingest::{SensorsOptions, read_hubbard_brook_sensors, read_sensors_csv};
+use gleaner_store::{
+    CellRecord, ReplaceCellsStats, SensorRecord, SqliteStore, Store, StoreWrite, UpsertStats,
+};
+
+use crate::error::{AppError, Result};
+use crate::project::Project;
+use crate::settings::{
+    CONFIG_FILE, FieldSection, IngestSection, ProjectSection, SensorsSection, Settings,
+    parse_utm_zone,
+};
+
+/// Default cell side, metres: the paper scenario's 40 m cells.
+pub const DEFAULT_CELL_SIZE_M: f64 = 40.0;
+
+/// A new project.
+#[derive(Debug, Clone, Default)]
+pub struct InitRequest {
+    /// Project directory (created if missing).
+    pub dir: PathBuf,
+    /// Sensors file.
+    pub sensors: PathBuf,
+    /// UTM zone for easting/northing input, e.g. `11N`.
+    pub utm_zone: Option<String>,
+    /// The sensors file is Hubbard Brook's `sensor_metadata.csv` (one sensor per probe).
+    pub hubbard_brook: bool,
+    /// Base station, WGS84 [default: 10 m south of the middle of the sensors' southern edge].
+    pub base: Option<LatLon>,
+    /// Base altitude above mean sea level, m [default 0].
+    pub base_alt_m: Option<f64>,
+    /// Cell side, metres [default 40].
+    pub cell_size_m: Option<f64>,
+    /// UAV altitude (m) and antenna half-angle (degrees) to derive the cell side.
+    pub coverage: Option<(f64, f64)>,
+    /// Project name [default: the directory's name].
+    pub name: Option<String>,
+    /// Overwrite an existing project file (its database is kept and updated).
+    pub force: bool,
+}
+
+/// What `init` did.
+#[derive(Debug, Clone)]
+pub struct InitOutcome {
+    /// The settings written.
+    pub settings: Settings,
+    /// Sensors read.
+    pub sensors: usize,
+    /// Sensor upsert counts.
+    pub upsert: UpsertStats,
+    /// Grid replacement counts.
+    pub cells: ReplaceCellsStats,
+    /// Number of non-empty cells.
+    pub n_cells: usize,
+}
+
+/// The use case, on the default backend (an SQLite file in the project directory).
+pub fn init(request: &InitRequest) -> Result<(Project<SqliteStore>, InitOutcome)> {
+    let config_path = request.dir.join(CONFIG_FILE);
+    if config_path.exists() && !request.force {
+        return Err(AppError::Invalid(format!(
+            "{}: a project already exists here (use --force to overwrite its settings)",
+            config_path.display()
+        )));
+    }
+    std::fs::create_dir_all(&request.dir).map_err(|e| AppError::io(&request.dir, e))?;
+    let settings = settings_for(request)?;
+    let store = SqliteStore::open(&request.dir.join(&settings.project.database))?;
+    let mut project = Project::new(&request.dir, settings, store);
+    let outcome = init_store(&mut project, request)?;
+    outcome.settings.save(&request.dir)?;
+    Ok((project, outcome))
+}
+
+/// The settings for a new project (reads the sensors file to place the base).
+fn settings_for(request: &InitRequest) -> Result<Settings> {
+    let sensors = read_sensors(request)?;
+    let base = match request.base {
+        Some(b) => b,
+        None => default_base(&sensors),
+    };
+    let cell_size_m = match (request.cell_size_m, request.coverage) {
+        (Some(_), Some(_)) => {
+            return Err(AppError::Invalid(
+                "give either a cell size or an altitude with a half-angle, not both".into(),
+            ));
+        }
+        (Some(s), None) => s,
+        (None, Some((h, a))) => {
+            cell_size_from_half_angle(h, a).map_err(|e| AppError::core("cell size", e))?
+        }
+        (None, None) => DEFAULT_CELL_SIZE_M,
+    };
+    let name = request.name.clone().unwrap_or_else(|| {
+        request
+            .dir
+            .canonicalize()
+            .ok()
+            .and_then(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .unwrap_or_else(|| "gleaner".into())
+    });
+    let defaults = gleaner_field::FieldConfig::default();
+    let settings = Settings {
+        project: ProjectSection {
+            name,
+            database: PathBuf::from("gleaner.db"),
+        },
+        field: FieldSection {
+            base_lat: base.lat(),
+            base_lon: base.lon(),
+            base_alt_m: request.base_alt_m.unwrap_or(0.0),
+            cell_size_m,
+            neighbour_k: defaults.fallback_k,
+            neighbour_radius_m: defaults.fallback_radius_m,
+        },
+        sensors: SensorsSection {
+            file: relative_to(&request.sensors, &request.dir),
+            utm_zone: request.utm_zone.clone(),
+        },
+        ingest: IngestSection::default(),
+        utility: Default::default(),
+        energy: Default::default(),
+        planner: Default::default(),
+    };
+    settings.validate()?;
+    check_grid_size(&sensors, base, &settings)?;
+    Ok(settings)
+}
+
+/// Refuses grids so fine that building them would take minutes (the neighbour search grows
+/// with (radius / cell side)^2 per cell): at most 1e6 cells' worth of extent.
+fn check_grid_size(sensors: &[Sensor], base: LatLon, settings: &Settings) -> Result<()> {
+    let frame = TransverseMercator::local(base);
+    let (mut e0, mut e1, mut n0, mut n1) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for s in sensors {
+        let p = frame.forward(s.position);
+        e0 = e0.min(p.e);
+        e1 = e1.max(p.e);
+        n0 = n0.min(p.n);
+        n1 = n1.max(p.n);
+    }
+    let side = settings.field.cell_size_m;
+    let extent_cells = ((e1 - e0) / side + 1.0) * ((n1 - n0) / side + 1.0);
+    let reach = (settings.field.neighbour_radius_m / side).powi(2);
+    if extent_cells > 1e8 || reach * sensors.len() as f64 > 1e8 {
+        return Err(AppError::Invalid(format!(
+            "cell side {side} m over sensors spread {:.0} m x {:.0} m (neighbour radius {} m) \
+             makes a grid too large to build; use larger cells",
+            e1 - e0,
+            n1 - n0,
+            settings.field.neighbour_radius_m
+        )));
+    }
+    Ok(())
+}
+
+fn read_sensors(request: &InitRequest) -> Result<Vec<Sensor>> {
+    let utm = request.utm_zone.as_deref().map(parse_utm_zone).transpose()?;
+    let (inputs, _) = if request.hubbard_brook {
+        read_hubbard_brook_sensors(&request.sensors)?
+    } else {
+        read_sensors_csv(
+            &request.sensors,
+            &SensorsOptions {
+                utm,
+                ..Default::default()
+            },
+        )?
+    };
+    if inputs.is_empty() {
+        return Err(AppError::Invalid(format!(
+            "{}: no sensors",
+            request.sensors.display()
+        )));
+    }
+    Ok(inputs.into_iter().map(|s| s.sensor).collect())
+}
+
+/// Writes the sensors and the grid into the project's store, in one transaction.
+pub fn init_store<S: Store>(project: &mut Project<S>, request: &InitRequest) -> Result<InitOutcome> {
+    let sensors = read_sensors(request)?;
+    let settings = project.settings().clone();
+    let field = Field::build(&sensors, settings.base()?, &settings.field_config())
+        .map_err(|e| AppError::core("cell grid", e))?;
+    let source = request
+        .sensors
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let records: Vec<SensorRecord> = sensors
+        .iter()
+        .map(|s| SensorRecord {
+            id: s.id.clone(),
+            position: s.position,
+            elevation_m: s.elevation_m,
+            source: source.clone(),
+        })
+        .collect();
+    let cells = cell_records(&sensors, &field);
+    let (upsert, replaced) = project.store_mut().write(|tx| {
+        let upsert = tx.upsert_sensors(&records)?;
+        let replaced = tx.replace_cells(&cells)?;
+        Ok::<_, AppError>((upsert, replaced))
+    })?;
+    Ok(InitOutcome {
+        settings,
+        sensors: sensors.len(),
+        upsert,
+        cells: replaced,
+        n_cells: field.cells().len(),
+    })
+}
+
+/// The store's view of the field's cells.
+pub fn cell_records(sensors: &[Sensor], field: &Field) -> Vec<CellRecord> {
+    field
+        .cells()
+        .iter()
+        .map(|c| CellRecord {
+            index: c.index,
+            centre: field.frame().inverse(c.centre),
+            cell_size_m: field.cell_size_m(),
+            sensors: c.sensors.iter().map(|&k| sensors[k].id.clone()).collect(),
+        })
+        .collect()
+}
+
+/// The default base station: 10 m south of the middle of the southern edge of the sensors'
+/// bounding box (operators usually launch from the field's edge).
+fn default_base(sensors: &[Sensor]) -> LatLon {
+    let frame = TransverseMercator::local(sensors[0].position);
+    let pts: Vec<LocalPoint> = sensors.iter().map(|s| frame.forward(s.position)).collect();
+    let (mut e0, mut e1, mut n0) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY);
+    for p in &pts {
+        e0 = e0.min(p.e);
+        e1 = e1.max(p.e);
+        n0 = n0.min(p.n);
+    }
+    frame.inverse(LocalPoint::new((e0 + e1) / 2.0, n0 - 10.0))
+}
+
+/// `path` relative to `dir` (both made absolute), so the project file stays valid wherever
+/// the project is opened from; absolute when they share no ancestor.
+pub fn relative_to(path: &Path, dir: &Path) -> String {
+    let abs = |p: &Path| -> PathBuf {
+        let p = p.canonicalize().unwrap_or_else(|_| {
+            std::env::current_dir()
+                .map(|c| c.join(p))
+                .unwrap_or_else(|_| p.to_path_buf())
+        });
+        p.components().collect()
+    };
+    let (path, dir) = (abs(path), abs(dir));
+    let a: Vec<Component<'_>> = path.components().collect();
+    let b: Vec<Component<'_>> = dir.components().collect();
+    let common = a.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    if common <= 1 {
+        return path.display().to_string();
+    }
+    let mut rel = PathBuf::new();
+    for _ in common..b.len() {
+        rel.push("..");
+    }
+    for c in &a[common..] {
+        rel.push(c.as_os_str());
+    }
+    rel.display().to_string()
+}

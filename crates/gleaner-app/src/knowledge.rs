@@ -1,0 +1,186 @@
+//! What is known at mission time t: the field and the collected history.
+
+use std::collections::HashMap;
+
+use gleaner_field::{Field, Sensor, UnixSeconds};
+use gleaner_store::{Store, StoreRead};
+use gleaner_utility::{OwnedSeries, Series, TimeGrid, cell_series};
+
+use crate::error::Result;
+use crate::project::Project;
+
+/// Which stored readings count as collected: those with times in `from..=until` (seconds),
+/// plus whatever a recorded collection brought back.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct History {
+    /// Earliest reading used, seconds since the Unix epoch.
+    pub from: UnixSeconds,
+    /// Latest reading used (unless a recorded collection brought later ones back), seconds.
+    pub until: UnixSeconds,
+}
+
+impl Default for History {
+    /// Everything stored.
+    fn default() -> Self {
+        Self {
+            from: UnixSeconds::MIN,
+            until: UnixSeconds::MAX,
+        }
+    }
+}
+
+/// What the planner knows at time t: the field and, per cell and modality, the collected
+/// cell series; per sensor, the last collection time.
+pub struct Knowledge {
+    /// The sensors, sorted by id (positions as in `field`).
+    pub sensors: Vec<Sensor>,
+    /// The grid.
+    pub field: Field,
+    /// Modality names, sorted.
+    pub modalities: Vec<String>,
+    /// `series[cell][modality]`: the cell series x̂ on the dataset's time grid.
+    pub series: Vec<Vec<OwnedSeries>>,
+    /// Per sensor: the later of its recorded collection and its latest known reading at or
+    /// before t (a reading in the database has been collected), seconds.
+    pub last_collected: Vec<Option<UnixSeconds>>,
+    /// Per sensor: its earliest reading, seconds (the start of its log, for pending volume).
+    pub first_reading: Vec<Option<UnixSeconds>>,
+    /// The latest known reading at or before t, seconds.
+    pub latest: Option<UnixSeconds>,
+}
+
+/// The median spacing of consecutive readings, seconds (the dataset's sampling interval).
+fn sampling_step(times: &[Vec<UnixSeconds>]) -> i64 {
+    let mut gaps: Vec<i64> = times
+        .iter()
+        .flat_map(|t| t.windows(2).map(|w| w[1] - w[0]))
+        .filter(|&g| g > 0)
+        .collect();
+    if gaps.is_empty() {
+        return 86_400;
+    }
+    let mid = gaps.len() / 2;
+    *gaps.select_nth_unstable(mid).1
+}
+
+/// Loads everything collected at or before `t` (default: the latest reading), within
+/// `history`. A reading is known when it lies in the history window, or when a recorded
+/// collection of its sensor at or before t brought it back.
+pub fn knowledge<S: Store>(
+    project: &Project<S>,
+    t: Option<UnixSeconds>,
+    history: History,
+) -> Result<Knowledge> {
+    let (sensors, field) = project.field()?;
+    let index: HashMap<&str, usize> = sensors
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (s.id.as_str(), k))
+        .collect();
+    let t_max = t.unwrap_or(UnixSeconds::MAX);
+    let mut collected: Vec<Option<UnixSeconds>> = vec![None; sensors.len()];
+    for (id, at) in project.store().sensor_last_collected()? {
+        if let Some(&s) = index.get(id.as_str())
+            && at <= t_max
+        {
+            collected[s] = collected[s].max(Some(at));
+        }
+    }
+    let horizon = collected
+        .iter()
+        .flatten()
+        .copied()
+        .max()
+        .unwrap_or(UnixSeconds::MIN);
+    let until = t_max.min(history.until.max(horizon));
+    if history.from > until {
+        return Ok(empty(sensors, field, collected));
+    }
+    let batch = project.store().readings_for(None, history.from..=until)?;
+    let mut modalities: Vec<String> = batch.modalities.iter().map(ToString::to_string).collect();
+    modalities.sort();
+    modalities.dedup();
+    let mpos: Vec<usize> = batch
+        .modalities
+        .iter()
+        .map(|m| modalities.binary_search(&m.to_string()).unwrap_or(0))
+        .collect();
+    let nm = modalities.len();
+    // Per (sensor, modality): times and values, in time order (the store returns them so).
+    let mut times: Vec<Vec<UnixSeconds>> = vec![Vec::new(); sensors.len() * nm];
+    let mut values: Vec<Vec<f64>> = vec![Vec::new(); sensors.len() * nm];
+    let mut last_collected = collected.clone();
+    let mut first_reading: Vec<Option<UnixSeconds>> = vec![None; sensors.len()];
+    let mut latest = None;
+    for r in &batch.rows {
+        let Some(&s) = batch
+            .sensors
+            .get(r.sensor as usize)
+            .and_then(|id| index.get(id.as_str()))
+        else {
+            continue;
+        };
+        if r.t > t_max.min(history.until.max(collected[s].unwrap_or(UnixSeconds::MIN))) {
+            continue;
+        }
+        let Some(&m) = mpos.get(r.modality as usize) else {
+            continue;
+        };
+        let k = s * nm + m;
+        times[k].push(r.t);
+        values[k].push(r.value);
+        last_collected[s] = last_collected[s].max(Some(r.t));
+        first_reading[s] = Some(first_reading[s].map_or(r.t, |f: i64| f.min(r.t)));
+        latest = latest.max(Some(r.t));
+    }
+    let step = sampling_step(&times);
+    let origin = times
+        .iter()
+        .filter_map(|t| t.first())
+        .min()
+        .copied()
+        .unwrap_or(0);
+    let grid = TimeGrid {
+        origin,
+        step_s: step.max(1),
+    };
+    let series = field
+        .cells()
+        .iter()
+        .map(|cell| {
+            (0..nm)
+                .map(|m| {
+                    let members: Vec<Series<'_>> = cell
+                        .sensors
+                        .iter()
+                        .map(|&s| Series::new(&times[s * nm + m], &values[s * nm + m]))
+                        .collect();
+                    cell_series(&members, grid)
+                })
+                .collect()
+        })
+        .collect();
+    Ok(Knowledge {
+        sensors,
+        field,
+        modalities,
+        series,
+        last_collected,
+        first_reading,
+        latest,
+    })
+}
+
+fn empty(sensors: Vec<Sensor>, field: Field, collected: Vec<Option<UnixSeconds>>) -> Knowledge {
+    let n_cells = field.cells().len();
+    let n = sensors.len();
+    Knowledge {
+        sensors,
+        field,
+        modalities: Vec::new(),
+        series: vec![Vec::new(); n_cells],
+        last_collected: collected,
+        first_reading: vec![None; n],
+        latest: None,
+    }
+}

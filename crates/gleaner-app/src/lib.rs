@@ -1,0 +1,70 @@
+//! gleaner's application layer: every use case of the mission lifecycle, over any
+//! [`gleaner_store::Store`].
+//!
+//! This crate plays the role rust-analyzer's `ide` crate plays: adapters (the CLI, the HTTP
+//! server, the campaign simulator) call these functions and translate their plain typed
+//! results into text, JSON or files. Nothing here parses arguments, prints, reads the wall
+//! clock or knows SQL: the clock comes in as an argument (`clock_now`, seconds since the Unix
+//! epoch, recorded as provenance only, never used for results), progress goes out through
+//! [`Progress`], and errors are one typed [`AppError`].
+//!
+//! The use cases, each one transaction when it writes (a failure writes nothing):
+//!
+//! | use case | reads | writes |
+//! |---|---|---|
+//! | [`init()`] / [`init_store`] | a sensors file | sensors, cells, `gleaner.toml` |
+//! | [`ingest()`] | readings files | modalities, readings, provenance, changed cells' summaries |
+//! | [`score()`] (and [`compute`]) | what is known at t | the cell metadata table |
+//! | [`plan()`] | scores (or a scores file), the energy model | scoring, expected energies, the mission with its stops |
+//! | [`explore()`] | the grid, the energy model | one exploration mission per sortie |
+//! | [`export()`] | a mission | nothing (checks it is safe to fly) |
+//! | [`record_flight`] | a mission, visited cells, readings files | readings, collections, visits, summaries |
+//!
+//! Read models: [`field_view`] (the cell table), [`missions`], [`mission`].
+//!
+//! Units: times are seconds since 1970-01-01T00:00:00Z (UTC); positions WGS84 ([`LatLon`],
+//! lat then lon); lengths metres; energies joules; data volumes bytes.
+//!
+//! [`LatLon`]: gleaner_field::LatLon
+#![deny(missing_docs)]
+
+mod cell_csv;
+mod error;
+mod explore;
+mod ingest;
+mod init;
+mod knowledge;
+mod plan;
+mod progress;
+mod project;
+mod record;
+mod score;
+pub mod settings;
+mod summaries;
+mod view;
+
+pub use error::{AppError, Result};
+pub use explore::{Exploration, ExploreRequest, explore};
+pub use ingest::{Format, IngestOutcome, IngestRequest, detect, ingest};
+pub use init::{DEFAULT_CELL_SIZE_M, InitOutcome, InitRequest, init, init_store, relative_to};
+pub use knowledge::{History, Knowledge, knowledge};
+pub use plan::{
+    Baseline, PlanRequest, PlannedMission, energy_model, flight_profile, parse_planner, plan,
+};
+pub use progress::{Progress, Silent};
+pub use project::Project;
+pub use record::{RecordOutcome, RecordRequest, record_flight};
+pub use score::{Condition, ScoreRequest, Scoring, compute, driver, score};
+pub use settings::Settings;
+pub use summaries::{pending_bytes, series_summary};
+pub use view::{
+    CellView, FieldView, MissionExport, check_flyable, export, field_view, mission, missions,
+};
+
+/// Re-exported so adapters name one crate for the lifecycle's data.
+pub use gleaner_ingest::OnError;
+pub use gleaner_mission::Planner;
+pub use gleaner_store::{
+    CellMetadata, CellScores, EnergyBreakdown, FlightProfile, MissionId, MissionKind,
+    MissionRecord, MissionStatus, NewMission, StopRecord, VisitRecord,
+};

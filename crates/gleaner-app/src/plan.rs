@@ -1,0 +1,366 @@
+//! Planning: scores (from the utility engine, or a file) + the energy model -> a route and the
+//! mission of SPEC §6, stored with its stops and energy breakdown in one transaction.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use gleaner_energy::{CellService, MissionEnergy, MissionEnergyModel};
+use gleaner_field::{LocalPoint, UnixSeconds};
+use gleaner_mission::{Candidate, MissionPlan, PlanOptions, Planner, plan_mission};
+use gleaner_store::{
+    EnergyBreakdown, FlightProfile, MissionId, MissionKind, NewMission, StopRecord, Store,
+};
+
+use crate::cell_csv;
+use crate::error::{AppError, Result};
+use crate::knowledge::{History, Knowledge, knowledge};
+use crate::project::Project;
+use crate::score::{self, ScoreRequest, Scoring};
+
+/// Parses a planner name: `default`, `greedy` or `exact`.
+pub fn parse_planner(name: &str) -> Result<Planner> {
+    Ok(match name {
+        "default" => Planner::Default,
+        "greedy" => Planner::Greedy,
+        "exact" => Planner::Exact,
+        other => {
+            return Err(AppError::Invalid(format!(
+                "unknown solver {other:?}: expected default, greedy or exact"
+            )));
+        }
+    })
+}
+
+/// What to plan.
+#[derive(Debug, Clone, Default)]
+pub struct PlanRequest {
+    /// Mission time t, seconds [default: the latest known reading].
+    pub at: Option<UnixSeconds>,
+    /// Which stored readings count as collected.
+    pub history: History,
+    /// Per-cell scores from a CSV (`cell_id,score`) instead of the utility engine.
+    pub scores: Option<PathBuf>,
+    /// Planner [default: the project's `[planner] solver`].
+    pub planner: Option<Planner>,
+    /// Planner time limit, seconds [default: the project's], in [0, 86400].
+    pub time_limit_s: Option<f64>,
+    /// Seed [default: the project's].
+    pub seed: Option<u64>,
+    /// Iteration cap, for results that do not depend on the machine's speed.
+    pub max_iterations: Option<u64>,
+    /// Plan only; write nothing.
+    pub dry_run: bool,
+}
+
+/// The headline numbers of a comparison plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Baseline {
+    /// Planner.
+    pub planner: Planner,
+    /// Cells visited.
+    pub cells: usize,
+    /// Sum of S.
+    pub total_score: f64,
+    /// Energy, J.
+    pub energy_j: f64,
+}
+
+/// A planned mission.
+pub struct PlannedMission {
+    /// Its id, unless a dry run.
+    pub id: Option<MissionId>,
+    /// The mission as stored (stops, energy breakdown, flight profile).
+    pub mission: NewMission,
+    /// The scoring behind it (absent when scores came from a file).
+    pub scoring: Option<Scoring>,
+    /// Cells with S > 0 the planner chose from.
+    pub candidates: usize,
+    /// The paper's greedy heuristic on the same instance.
+    pub greedy: Baseline,
+    /// Planner seed and time limit used.
+    pub seed: u64,
+    /// Time limit, seconds.
+    pub time_limit_s: f64,
+}
+
+fn read_scores(path: &Path, k: &Knowledge) -> Result<Vec<f64>> {
+    let labels: Vec<String> = k
+        .field
+        .cells()
+        .iter()
+        .map(|c| c.index.to_string())
+        .collect();
+    let mut scores: Vec<Option<f64>> = vec![None; labels.len()];
+    for row in cell_csv::read(path)? {
+        let at = |what: &str| AppError::Invalid(format!("{}:{}: {what}", path.display(), row.line));
+        let [score] = row.values[..] else {
+            return Err(at("expected `cell_id,score`"));
+        };
+        let pos = labels
+            .iter()
+            .position(|l| *l == row.cell)
+            .ok_or_else(|| at(&format!("column `cell_id`: unknown cell: {:?}", row.cell)))?;
+        if scores[pos].replace(score).is_some() {
+            return Err(at(&format!(
+                "column `cell_id`: cell {:?} listed twice",
+                row.cell
+            )));
+        }
+    }
+    // Cells the file leaves out score 0: never worth a detour.
+    Ok(scores.into_iter().map(|s| s.unwrap_or(0.0)).collect())
+}
+
+/// The energy model of the project's `[energy]` settings.
+pub fn energy_model<S: Store>(project: &Project<S>) -> Result<MissionEnergyModel> {
+    MissionEnergyModel::new(&project.settings().energy.to_core()?)
+        .map_err(|e| AppError::core("[energy] settings", e))
+}
+
+/// How the aircraft flies missions of this project: base, altitudes, cruise speed.
+pub fn flight_profile<S: Store>(
+    project: &Project<S>,
+    model: &MissionEnergyModel,
+) -> Result<FlightProfile> {
+    Ok(FlightProfile {
+        base: project.settings().base()?,
+        base_alt_m: project.settings().field.base_alt_m,
+        altitude_m: model.link().altitude_m,
+        cruise_speed_mps: model.cruise_speed_mps(),
+    })
+}
+
+/// Per-cell collection service at time `t` and pending volume (bytes), from the sensors'
+/// backlog: the data logged since each sensor's last collection, or since its first reading.
+pub(crate) fn services(
+    model: &MissionEnergyModel,
+    k: &Knowledge,
+    t: UnixSeconds,
+) -> Result<(Vec<CellService>, Vec<f64>)> {
+    let elapsed: Vec<f64> = (0..k.sensors.len())
+        .map(|s| {
+            let since = k.last_collected[s]
+                .or(k.first_reading[s])
+                .unwrap_or(t - 86_400);
+            (t - since).max(0) as f64
+        })
+        .collect();
+    let mut services = Vec::with_capacity(k.field.cells().len());
+    let mut pending = Vec::with_capacity(k.field.cells().len());
+    for c in 0..k.field.cells().len() {
+        let backlog = model
+            .cell_backlog(&k.field, gleaner_field::CellId(c as u32), &elapsed)
+            .map_err(|e| AppError::core("collection times", e))?;
+        pending.push(backlog.iter().map(|b| b.pending_bytes).sum());
+        services.push(
+            model
+                .cell_service(&backlog)
+                .map_err(|e| AppError::core("collection times", e))?,
+        );
+    }
+    Ok((services, pending))
+}
+
+/// The stops of a route with the energy model's breakdown.
+pub(crate) fn stops(
+    k: &Knowledge,
+    order: &[usize],
+    energy: &MissionEnergy,
+    services: &[CellService],
+    scores: &[f64],
+    terms: Option<&[gleaner_utility::CellTerms]>,
+) -> Vec<StopRecord> {
+    order
+        .iter()
+        .enumerate()
+        .map(|(n, &c)| {
+            let cell = &k.field.cells()[c];
+            StopRecord {
+                order: n as u32,
+                cell: cell.index,
+                centre: k.field.frame().inverse(cell.centre),
+                score: scores.get(c).copied().unwrap_or(0.0),
+                terms: terms.map(|t| [t[c].f, t[c].r, t[c].a, t[c].u]),
+                leg_distance_m: energy.legs[n].distance_m,
+                leg_energy_j: energy.legs[n].energy_j,
+                collection_s: services[c].collection_s,
+                hover_s: energy.cells[n].hover_s,
+                hover_j: energy.cells[n].hover_j,
+                comm_j: energy.cells[n].comm_j,
+            }
+        })
+        .collect()
+}
+
+/// The store's energy breakdown of a route.
+pub(crate) fn breakdown(e: &MissionEnergy) -> EnergyBreakdown {
+    EnergyBreakdown {
+        travel_j: e.travel_j,
+        hover_j: e.hover_j,
+        comm_j: e.comm_j,
+        return_j: e.return_j,
+        total_j: e.total_j,
+        budget_j: e.budget_j,
+        distance_m: e.distance_m,
+        flight_time_s: e.flight_time_s,
+    }
+}
+
+/// The use case: scores the cells (or reads scores), plans the route, and unless a dry run
+/// stores the scoring, each cell's expected collection energy and pending volume, and the
+/// mission with its stops — one transaction. The planned route is re-checked by the energy
+/// model; a route the budget cannot carry is never returned. `clock_now` (seconds) is
+/// recorded as the mission's creation time.
+pub fn plan<S: Store>(
+    project: &mut Project<S>,
+    request: &PlanRequest,
+    clock_now: UnixSeconds,
+) -> Result<PlannedMission> {
+    let settings = project.settings().clone();
+    let planner = match request.planner {
+        Some(p) => p,
+        None => parse_planner(&settings.planner.solver)?,
+    };
+    let time_limit_s = request.time_limit_s.unwrap_or(settings.planner.time_limit_s);
+    if !(time_limit_s.is_finite() && (0.0..=86_400.0).contains(&time_limit_s)) {
+        return Err(AppError::Invalid(format!(
+            "time limit {time_limit_s} s: expected a number of seconds in [0, 86400]"
+        )));
+    }
+    let seed = request.seed.unwrap_or(settings.planner.seed);
+    let (file_knowledge, scoring, scores, t, anomaly_form, weights) = match &request.scores {
+        Some(path) => {
+            let k = knowledge(project, request.at, request.history)?;
+            let t = request.at.or(k.latest).ok_or_else(|| {
+                AppError::Invalid("no readings and no mission time: cannot tell the time".into())
+            })?;
+            let s = read_scores(path, &k)?;
+            (Some(k), None, s, t, "n/a (scores from file)".to_string(), [0.0; 4])
+        }
+        None => {
+            let scoring = score::compute(
+                project,
+                &ScoreRequest {
+                    at: request.at,
+                    history: request.history,
+                    probabilities: None,
+                    dry_run: true,
+                },
+            )?;
+            let scores: Vec<f64> = scoring.terms.iter().map(|c| c.s).collect();
+            let (t, form, w) = (scoring.t, scoring.anomaly_form.clone(), scoring.weights);
+            (None, Some(scoring), scores, t, form, w)
+        }
+    };
+    let k = scoring
+        .as_ref()
+        .map(|s| &s.knowledge)
+        .or(file_knowledge.as_ref())
+        .ok_or_else(|| AppError::Invalid("nothing known at the mission time".into()))?;
+    let model = energy_model(project)?;
+    let profile = flight_profile(project, &model)?;
+    let (services, pending) = services(&model, k, t)?;
+    let candidates: Vec<Candidate> = k
+        .field
+        .cells()
+        .iter()
+        .zip(&scores)
+        .zip(&services)
+        .map(|((c, &score), svc)| Candidate {
+            centre: c.centre,
+            score,
+            hover_s: svc.hover_s,
+        })
+        .collect();
+    let options = PlanOptions {
+        planner,
+        time_limit: Duration::from_secs_f64(time_limit_s),
+        seed,
+        max_iterations: request.max_iterations,
+    };
+    let base = LocalPoint::new(0.0, 0.0);
+    let plan = plan_mission(&model, base, &candidates, &options)
+        .map_err(|e| AppError::core("planner", e))?;
+    let greedy = plan_mission(
+        &model,
+        base,
+        &candidates,
+        &PlanOptions {
+            planner: Planner::Greedy,
+            ..options
+        },
+    )
+    .map_err(|e| AppError::core("planner", e))?;
+    check_feasible(&plan)?;
+    let terms = scoring.as_ref().map(|s| s.terms.as_slice());
+    let mission = NewMission {
+        created_at: clock_now,
+        kind: MissionKind::Adaptive,
+        planned_at: t,
+        solver: planner.name().to_string(),
+        seed,
+        weights,
+        anomaly_form,
+        total_score: plan.total_score,
+        profile,
+        energy: breakdown(&plan.energy),
+        return_distance_m: if plan.order.is_empty() {
+            0.0
+        } else {
+            plan.energy.legs.last().map_or(0.0, |l| l.distance_m)
+        },
+        stops: stops(k, &plan.order, &plan.energy, &services, &scores, terms),
+    };
+    let mut planned = PlannedMission {
+        id: None,
+        mission,
+        scoring,
+        candidates: plan.considered,
+        greedy: Baseline {
+            planner: Planner::Greedy,
+            cells: greedy.order.len(),
+            total_score: greedy.total_score,
+            energy_j: greedy.energy.total_j,
+        },
+        seed,
+        time_limit_s,
+    };
+    if !request.dry_run {
+        let rows = match &planned.scoring {
+            Some(s) => {
+                let extra: HashMap<usize, (f64, f64)> = services
+                    .iter()
+                    .enumerate()
+                    .map(|(c, svc)| (c, (svc.energy_j, pending[c])))
+                    .collect();
+                score::metadata_rows(project, s, &extra)
+            }
+            None => Vec::new(),
+        };
+        let mission = &planned.mission;
+        let id = project.store_mut().write(|tx| {
+            if !rows.is_empty() {
+                score::write_scoring(tx, rows)?;
+            }
+            Ok::<_, AppError>(tx.create_mission(mission)?)
+        })?;
+        planned.id = Some(id);
+    }
+    Ok(planned)
+}
+
+/// Refuses a route the energy model says the budget cannot carry.
+fn check_feasible(plan: &MissionPlan) -> Result<()> {
+    let e = &plan.energy;
+    if !(e.feasible && e.total_j <= e.budget_j && e.total_j.is_finite()) {
+        return Err(AppError::Core {
+            context: "planner",
+            message: format!(
+                "the route needs {:.1} J but only {:.1} J are usable; refusing it",
+                e.total_j, e.budget_j
+            ),
+        });
+    }
+    Ok(())
+}

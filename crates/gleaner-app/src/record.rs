@@ -1,0 +1,172 @@
+//! Recording a flight (SPEC §5 step 5): the cells actually visited, when, and the readings
+//! brought home — one transaction.
+
+use std::collections::{HashMap, HashSet};
+
+use gleaner_field::{CellIndex, SensorId, UnixSeconds};
+use gleaner_ingest::time::format_rfc3339;
+use gleaner_store::{ConflictPolicy, MissionId, MissionStatus, Store, StoreRead, StoreWrite, VisitRecord};
+
+use crate::error::{AppError, Result};
+use crate::ingest::{IngestRequest, parse_files, store_parsed};
+use crate::progress::Progress;
+use crate::project::Project;
+use crate::summaries;
+
+/// A flown mission to record.
+#[derive(Debug, Clone)]
+pub struct RecordRequest {
+    /// The planned mission.
+    pub mission: MissionId,
+    /// When the data was collected, seconds [default: the mission's planned time].
+    pub at: Option<UnixSeconds>,
+    /// Cells actually visited, in order (ids like `x3y-1`) [default: the planned stops].
+    pub cells: Option<Vec<String>>,
+    /// The readings brought back (files and how to read them), if any.
+    pub readings: Option<IngestRequest>,
+    /// Replace an earlier record of this mission instead of refusing.
+    pub amend: bool,
+}
+
+/// What was recorded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordOutcome {
+    /// The mission.
+    pub mission: MissionId,
+    /// Collection time, seconds.
+    pub at: UnixSeconds,
+    /// Cells visited, in order.
+    pub cells: Vec<CellIndex>,
+    /// Sensors marked collected.
+    pub sensors_collected: usize,
+    /// Readings brought back and newly stored.
+    pub readings_inserted: u64,
+    /// Readings brought back that were already stored.
+    pub readings_unchanged: u64,
+    /// Whether an earlier record was replaced.
+    pub amended: bool,
+}
+
+/// The use case: checks the flight against the plan and the grid, then in one transaction
+/// stores the readings brought back, marks the visited cells' sensors collected at `at`,
+/// records the visits and refreshes those cells' summaries. Refused, writing nothing: an
+/// unknown mission or cell; a mission already recorded (unless `amend`); a reading from a
+/// sensor outside the visited cells, or dated after the collection time.
+pub fn record_flight<S: Store>(
+    project: &mut Project<S>,
+    request: &RecordRequest,
+    clock_now: UnixSeconds,
+    progress: &dyn Progress,
+) -> Result<RecordOutcome> {
+    let mission = project
+        .store()
+        .mission(request.mission)?
+        .ok_or_else(|| AppError::NotFound {
+            what: "mission",
+            id: format!("#{}", request.mission),
+        })?;
+    if mission.status == MissionStatus::Flown && !request.amend {
+        return Err(AppError::Invalid(format!(
+            "mission #{} was already recorded as flown{}; pass --amend to replace that record",
+            request.mission,
+            mission
+                .flown_at
+                .map_or(String::new(), |t| format!(" at {}", format_rfc3339(t)))
+        )));
+    }
+    let at = request.at.unwrap_or(mission.mission.planned_at);
+    let labels: Vec<String> = match &request.cells {
+        Some(c) => c.clone(),
+        None => mission.mission.stops.iter().map(|s| s.cell.to_string()).collect(),
+    };
+    let cells = project.store().cells()?;
+    let mut visits = Vec::new();
+    let mut collected: Vec<(SensorId, UnixSeconds)> = Vec::new();
+    let mut cell_of: HashMap<SensorId, CellIndex> = HashMap::new();
+    for cell in &cells {
+        for s in &cell.sensors {
+            cell_of.insert(s.clone(), cell.index);
+        }
+    }
+    let mut seen = HashSet::new();
+    for (order, label) in labels.iter().enumerate() {
+        let index = CellIndex::parse(label.trim())
+            .map_err(|e| AppError::Invalid(format!("cell {label:?}: {e}")))?;
+        let cell = cells
+            .iter()
+            .find(|c| c.index == index)
+            .ok_or_else(|| AppError::NotFound {
+                what: "cell",
+                id: format!("{label} in the project's grid"),
+            })?;
+        if !seen.insert(index) {
+            return Err(AppError::Invalid(format!("cell {label} is listed twice")));
+        }
+        collected.extend(cell.sensors.iter().map(|s| (s.clone(), at)));
+        visits.push(VisitRecord {
+            order: order as u32,
+            cell: index,
+            arrived_at: Some(at),
+            energy_j: None,
+        });
+    }
+    let visited: HashSet<&SensorId> = collected.iter().map(|(s, _)| s).collect();
+    let parsed = match &request.readings {
+        Some(r) if !r.files.is_empty() => {
+            let known = cell_of.keys().map(ToString::to_string).collect();
+            let parsed = parse_files(r, known, progress)?;
+            for (path, _, readings, _) in &parsed.files {
+                for row in &readings.rows {
+                    let Some(sensor) = readings.sensors.get(row.sensor as usize) else {
+                        continue;
+                    };
+                    if !visited.contains(sensor) {
+                        return Err(AppError::Invalid(format!(
+                            "{}: sensor {sensor} is in cell {}, which this flight did not visit \
+                             (visited: {}); nothing was recorded",
+                            path.display(),
+                            cell_of.get(sensor).map_or("?".into(), ToString::to_string),
+                            labels.join(",")
+                        )));
+                    }
+                    if row.t > at {
+                        return Err(AppError::Invalid(format!(
+                            "{}: reading of {sensor} at {} is after the collection time {}; \
+                             nothing was recorded",
+                            path.display(),
+                            format_rfc3339(row.t),
+                            format_rfc3339(at)
+                        )));
+                    }
+                }
+            }
+            Some(parsed)
+        }
+        _ => None,
+    };
+    let settings = project.settings().clone();
+    let id = request.mission;
+    let amend = request.amend;
+    let (inserted, unchanged) = project.store_mut().write(|tx| {
+        let mut stats = (0, 0);
+        if let Some(parsed) = &parsed {
+            let (s, _) = store_parsed(tx, parsed, ConflictPolicy::Fail, clock_now, at, &settings)?;
+            stats = (s.inserted, s.unchanged);
+        }
+        tx.set_sensors_collected(&collected)?;
+        tx.record_visits(id, &visits, at, amend)?;
+        let sensors: Vec<SensorId> = collected.iter().map(|(s, _)| s.clone()).collect();
+        summaries::refresh_cells(tx, &sensors, at, &settings)?;
+        Ok::<_, AppError>(stats)
+    })?;
+    Ok(RecordOutcome {
+        mission: id,
+        at,
+        cells: visits.iter().map(|v| v.cell).collect(),
+        sensors_collected: collected.len(),
+        readings_inserted: inserted,
+        readings_unchanged: unchanged,
+        amended: mission.status == MissionStatus::Flown,
+    })
+}
+

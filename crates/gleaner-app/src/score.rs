@@ -1,0 +1,355 @@
+//! Scoring: the utility terms F, R, A, U and the score S of every cell at a mission time
+//! (SPEC §2), and the cell metadata they become (SPEC §5).
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+use gleaner_field::{CellId, Field, Modality, UnixSeconds};
+use gleaner_store::{
+    AnomalyRecord, CellMetadata, CellScores, ClassProbability, Correlation, Store, StoreRead,
+    StoreWrite,
+};
+use gleaner_utility::{
+    CellInputs, CellTerms, ClassThresholds, ConditionConfig, ConditionModel, OwnedSeries, Series,
+    score_cells_parallel, series_correlation, validate_probabilities,
+};
+
+use crate::cell_csv;
+use crate::error::{AppError, Result};
+use crate::knowledge::{History, Knowledge, knowledge};
+use crate::project::Project;
+use crate::summaries;
+
+/// What to score.
+#[derive(Debug, Clone, Default)]
+pub struct ScoreRequest {
+    /// Mission time t, seconds since the Unix epoch [default: the latest known reading].
+    pub at: Option<UnixSeconds>,
+    /// Which stored readings count as collected.
+    pub history: History,
+    /// Per-cell class probabilities from the user's own model (CSV `cell_id,p_1,...,p_K`)
+    /// instead of the built-in condition model.
+    pub probabilities: Option<PathBuf>,
+    /// Compute only; write nothing.
+    pub dry_run: bool,
+}
+
+/// The condition model's output: class names and one distribution per cell.
+#[derive(Debug, Clone)]
+pub struct Condition {
+    /// The modality the classes come from (`user` for user probabilities).
+    pub modality: String,
+    /// Class thresholds in the modality's unit (empty for user probabilities).
+    pub thresholds: Vec<f64>,
+    /// Class names.
+    pub classes: Vec<String>,
+    /// One distribution per cell, in field order.
+    pub probabilities: Vec<Vec<f64>>,
+}
+
+/// The result of scoring every cell at t.
+pub struct Scoring {
+    /// Mission time t, seconds since the Unix epoch.
+    pub t: UnixSeconds,
+    /// What was known at t.
+    pub knowledge: Knowledge,
+    /// The terms of every cell, in field order.
+    pub terms: Vec<CellTerms>,
+    /// The condition model's output, if any.
+    pub condition: Option<Condition>,
+    /// Weights alpha, beta, gamma, delta.
+    pub weights: [f64; 4],
+    /// The anomaly form label (`raw` or `bounded(kappa=...)`).
+    pub anomaly_form: String,
+    /// Things the user should know (e.g. no condition model could be fitted: U = 0).
+    pub warnings: Vec<String>,
+}
+
+/// Which weighted term contributes most to S: `freshness`, `anomaly`, `uncertainty` or `none`.
+pub fn driver(t: &CellTerms, w: [f64; 4]) -> &'static str {
+    let parts = [
+        ("freshness", w[0] * t.f),
+        ("anomaly", w[1] * t.a),
+        ("uncertainty", w[2] * t.u),
+    ];
+    parts
+        .iter()
+        .filter(|p| p.1 > 0.0)
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or("none", |p| p.0)
+}
+
+fn class_names(k: usize) -> Vec<String> {
+    if k == 3 {
+        vec!["dry".into(), "adequate".into(), "wet".into()]
+    } else {
+        (1..=k).map(|c| format!("class_{c}")).collect()
+    }
+}
+
+pub(crate) fn neighbour_lists(field: &Field) -> Vec<Vec<usize>> {
+    field
+        .all_neighbours()
+        .iter()
+        .map(|n| n.iter().map(|c| c.index()).collect())
+        .collect()
+}
+
+/// Trains the built-in condition model on the collected history and predicts every cell at
+/// `t`; `Ok(None)` with a warning when there is no suitable modality or too little data.
+fn condition<S: Store>(
+    project: &Project<S>,
+    k: &Knowledge,
+    t: UnixSeconds,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Condition>> {
+    let u = &project.settings().utility;
+    let name = match &u.condition_modality {
+        Some(m) => Some(m.clone()),
+        None => k
+            .modalities
+            .iter()
+            .find(|m| *m == "vw@30cm")
+            .or_else(|| k.modalities.iter().find(|m| m.starts_with("vw@")))
+            .cloned(),
+    };
+    let Some(name) = name else {
+        warnings.push("no soil-moisture modality: U = 0 for every cell".into());
+        return Ok(None);
+    };
+    let Some(m) = k.modalities.iter().position(|x| *x == name) else {
+        return Err(AppError::Invalid(format!(
+            "utility.condition_modality = {name:?} has no readings"
+        )));
+    };
+    let cells: Vec<Series<'_>> = k.series.iter().map(|s| s[m].as_series()).collect();
+    let neighbours = neighbour_lists(&k.field);
+    let config = ConditionConfig {
+        n_classes: u.condition_classes,
+        thresholds: match &u.condition_thresholds {
+            Some(th) => ClassThresholds::Fixed(th.clone()),
+            None => ClassThresholds::Quantiles,
+        },
+        ..ConditionConfig::default()
+    };
+    let from = cells
+        .iter()
+        .filter_map(|s| s.times.first())
+        .min()
+        .copied()
+        .unwrap_or(t);
+    match ConditionModel::fit(&cells, &neighbours, from, t, &config) {
+        Ok(model) => Ok(Some(Condition {
+            modality: name,
+            thresholds: model.thresholds().to_vec(),
+            classes: class_names(model.n_classes()),
+            probabilities: model.predict_proba(&cells, &neighbours, t),
+        })),
+        Err(e) => {
+            warnings.push(format!("no condition model ({e}); U = 0 for every cell"));
+            Ok(None)
+        }
+    }
+}
+
+/// Scores every cell at the requested time from what is known then. Writes nothing: see
+/// [`score`] for the use case that also keeps the result.
+pub fn compute<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
+    let k = knowledge(project, request.at, request.history)?;
+    let Some(t) = request.at.or(k.latest) else {
+        return Err(AppError::Invalid(
+            "no readings: ingest some data first (or give the mission time)".into(),
+        ));
+    };
+    let settings = project.settings();
+    let config = settings.utility.to_core(&k.modalities)?;
+    let mut warnings = Vec::new();
+    let condition = match &request.probabilities {
+        Some(path) => {
+            let rows: Vec<(String, Vec<f64>)> = cell_csv::read(path)?
+                .into_iter()
+                .map(|r| (r.cell, r.values))
+                .collect();
+            let labels: Vec<String> = k.field.cells().iter().map(|c| c.index.to_string()).collect();
+            let p = validate_probabilities(&labels, &rows)
+                .map_err(|e| AppError::Invalid(format!("{}: {e}", path.display())))?;
+            let kk = p.first().map_or(0, Vec::len);
+            Some(Condition {
+                modality: "user".into(),
+                thresholds: Vec::new(),
+                classes: class_names(kk),
+                probabilities: p,
+            })
+        }
+        None => condition(project, &k, t, &mut warnings)?,
+    };
+    let neighbours = neighbour_lists(&k.field);
+    let last: Vec<Vec<Option<UnixSeconds>>> = k
+        .field
+        .cells()
+        .iter()
+        .map(|c| c.sensors.iter().map(|&s| k.last_collected[s]).collect())
+        .collect();
+    let inputs: Vec<CellInputs<'_>> = (0..k.field.cells().len())
+        .map(|i| CellInputs {
+            last_collected: &last[i],
+            series: k.series[i].iter().map(OwnedSeries::as_series).collect(),
+            neighbours: &neighbours[i],
+            probabilities: condition.as_ref().map_or(&[][..], |c| &c.probabilities[i]),
+        })
+        .collect();
+    let terms =
+        score_cells_parallel(&inputs, t, &config).map_err(|e| AppError::core("scoring", e))?;
+    drop(inputs);
+    let u = &settings.utility;
+    Ok(Scoring {
+        t,
+        knowledge: k,
+        terms,
+        condition,
+        weights: [u.alpha, u.beta, u.gamma, u.delta],
+        anomaly_form: config.anomaly_form.label(),
+        warnings,
+    })
+}
+
+/// The use case: scores every cell at t and, unless a dry run, keeps the terms, class
+/// probabilities, neighbour correlations, anomaly history and series summaries in the cell
+/// metadata table, in one transaction.
+pub fn score<S: Store>(project: &mut Project<S>, request: &ScoreRequest) -> Result<Scoring> {
+    let scoring = compute(project, request)?;
+    if !request.dry_run {
+        let rows = metadata_rows(project, &scoring, &HashMap::new());
+        project
+            .store_mut()
+            .write(|tx| write_scoring(tx, rows))?;
+    }
+    Ok(scoring)
+}
+
+/// Writes scoring rows, carrying over what scoring does not compute (expected energy, and a
+/// pending volume the caller did not set) from the stored rows.
+pub(crate) fn write_scoring<W: StoreWrite>(
+    tx: &mut W,
+    mut rows: Vec<CellMetadata>,
+) -> std::result::Result<(), AppError> {
+    let stored: HashMap<gleaner_field::CellIndex, CellMetadata> = tx
+        .cell_metadata()?
+        .into_iter()
+        .map(|m| (m.cell, m))
+        .collect();
+    for m in &mut rows {
+        if let Some(old) = stored.get(&m.cell) {
+            m.expected_energy_j = m.expected_energy_j.or(old.expected_energy_j);
+            m.pending_bytes = m.pending_bytes.or(old.pending_bytes);
+            m.last_collected = m.last_collected.max(old.last_collected);
+        }
+    }
+    tx.upsert_cell_metadata(&rows)?;
+    Ok(())
+}
+
+/// The cell metadata rows of a scoring: terms, class probabilities, correlations with every
+/// neighbour, the latest anomaly per modality, and the series summaries. `extra` sets expected
+/// energy (J) and pending volume (bytes) per cell position.
+pub(crate) fn metadata_rows<S: Store>(
+    project: &Project<S>,
+    s: &Scoring,
+    extra: &HashMap<usize, (f64, f64)>,
+) -> Vec<CellMetadata> {
+    let k = &s.knowledge;
+    let min_overlap = project.settings().utility.min_overlap;
+    let flag = project.settings().utility.anomaly_flag;
+    let modalities: Vec<Option<Modality>> =
+        k.modalities.iter().map(|m| Modality::new(m).ok()).collect();
+    s.terms
+        .iter()
+        .enumerate()
+        .map(|(c, terms)| {
+            let cell = &k.field.cells()[c];
+            let mut m = CellMetadata::new(cell.index);
+            if let Some(&(energy, pending)) = extra.get(&c) {
+                m.expected_energy_j = Some(energy);
+                m.pending_bytes = Some(pending);
+            }
+            m.last_collected = cell
+                .sensors
+                .iter()
+                .filter_map(|&x| k.last_collected[x])
+                .max();
+            m.scores = Some(CellScores {
+                freshness: terms.f,
+                redundancy: terms.r,
+                anomaly: terms.a,
+                uncertainty: terms.u,
+                score: terms.s,
+                computed_at: s.t,
+            });
+            if let Some(cond) = &s.condition {
+                m.class_probabilities = cond
+                    .classes
+                    .iter()
+                    .zip(&cond.probabilities[c])
+                    .map(|(class, &p)| ClassProbability {
+                        class: class.clone(),
+                        probability: p,
+                    })
+                    .collect();
+            }
+            for &nb in k.field.neighbours(CellId(c as u32)) {
+                for (mi, modality) in modalities.iter().enumerate() {
+                    let Some(modality) = modality else { continue };
+                    let (a, b) = (
+                        k.series[c][mi].as_series(),
+                        k.series[nb.index()][mi].as_series(),
+                    );
+                    if a.is_empty() || b.is_empty() {
+                        continue;
+                    }
+                    m.correlations.push(Correlation {
+                        neighbour: k.field.cells()[nb.index()].index,
+                        modality: modality.clone(),
+                        correlation: series_correlation(a, b, min_overlap),
+                        overlap: common_points(a, b),
+                    });
+                }
+            }
+            for (mi, a) in terms.a_by_modality.iter().enumerate() {
+                if let (Some(a), Some((t_star, _)), Some(Some(modality))) =
+                    (a, k.series[c][mi].as_series().last(), modalities.get(mi))
+                {
+                    m.anomalies.push(AnomalyRecord {
+                        modality: modality.clone(),
+                        t: t_star,
+                        anomaly: *a,
+                        flagged: *a >= flag,
+                    });
+                }
+            }
+            m.summaries = modalities
+                .iter()
+                .zip(&k.series[c])
+                .filter_map(|(modality, series)| {
+                    summaries::series_summary(modality.as_ref()?, series.as_series())
+                })
+                .collect();
+            m
+        })
+        .collect()
+}
+
+fn common_points(a: Series<'_>, b: Series<'_>) -> u64 {
+    let (mut i, mut j, mut n) = (0, 0, 0u64);
+    while i < a.times.len() && j < b.times.len() {
+        match a.times[i].cmp(&b.times[j]) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => {
+                n += 1;
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    n
+}

@@ -1,0 +1,155 @@
+//! Read models: the cell table, the field for maps, missions, and a mission ready to export.
+
+use std::collections::HashMap;
+
+use gleaner_field::{CellId, CellIndex, LatLon, SensorId};
+use gleaner_store::{CellMetadata, MissionId, MissionRecord, Store, StoreRead};
+
+use crate::error::{AppError, Result};
+use crate::project::Project;
+
+/// One cell with its metadata (SPEC §5).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CellView {
+    /// Grid index (`x12y-3`).
+    pub index: CellIndex,
+    /// Centre, WGS84.
+    pub centre: LatLon,
+    /// The square's corners, WGS84, counter-clockwise from south-west.
+    pub corners: [LatLon; 4],
+    /// Its sensors, sorted.
+    pub sensors: Vec<SensorId>,
+    /// Its metadata row (empty when never described).
+    pub metadata: CellMetadata,
+}
+
+/// The field for maps and exports: grid, metadata, sensors, base.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FieldView {
+    /// Project name.
+    pub project: String,
+    /// Base station, WGS84.
+    pub base: LatLon,
+    /// Base altitude above mean sea level, m.
+    pub base_alt_m: f64,
+    /// Cell side, m.
+    pub cell_size_m: f64,
+    /// Cells, by grid index.
+    pub cells: Vec<CellView>,
+    /// Sensors with their positions, sorted by id.
+    pub sensors: Vec<(SensorId, LatLon)>,
+}
+
+/// The cell table with its metadata, by grid index.
+pub fn field_view<S: Store>(project: &Project<S>) -> Result<FieldView> {
+    let (sensors, field) = project.field()?;
+    let mut metadata: HashMap<CellIndex, CellMetadata> = project
+        .store()
+        .cell_metadata()?
+        .into_iter()
+        .map(|m| (m.cell, m))
+        .collect();
+    let frame = field.frame();
+    let cells = field
+        .cells()
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let corners = field.cell_corners(CellId(k as u32)).map(|p| frame.inverse(p));
+            let mut ids: Vec<SensorId> = c.sensors.iter().map(|&s| sensors[s].id.clone()).collect();
+            ids.sort();
+            CellView {
+                index: c.index,
+                centre: frame.inverse(c.centre),
+                corners,
+                sensors: ids,
+                metadata: metadata
+                    .remove(&c.index)
+                    .unwrap_or_else(|| CellMetadata::new(c.index)),
+            }
+        })
+        .collect();
+    let settings = project.settings();
+    Ok(FieldView {
+        project: settings.project.name.clone(),
+        base: settings.base()?,
+        base_alt_m: settings.field.base_alt_m,
+        cell_size_m: field.cell_size_m(),
+        cells,
+        sensors: sensors.into_iter().map(|s| (s.id, s.position)).collect(),
+    })
+}
+
+/// All missions with their stops and visits, oldest first.
+pub fn missions<S: Store>(project: &Project<S>) -> Result<Vec<MissionRecord>> {
+    Ok(project.store().missions()?)
+}
+
+/// One mission, or [`AppError::NotFound`].
+pub fn mission<S: Store>(project: &Project<S>, id: MissionId) -> Result<MissionRecord> {
+    project
+        .store()
+        .mission(id)?
+        .ok_or_else(|| AppError::NotFound {
+            what: "mission",
+            id: format!("#{id}"),
+        })
+}
+
+/// A mission with everything its files and maps need.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MissionExport {
+    /// The field, with the latest scores.
+    pub field: FieldView,
+    /// The mission.
+    pub mission: MissionRecord,
+}
+
+/// The use case behind every export: the mission and its field, checked safe to fly — the
+/// planned energy within the budget it was planned against, a finite positive cruise speed,
+/// an altitude in (0, 120] m, finite non-negative hover times. A mission failing any check is
+/// refused: no flight file is ever written for a route the battery cannot carry.
+pub fn export<S: Store>(project: &Project<S>, id: MissionId) -> Result<MissionExport> {
+    let mission = mission(project, id)?;
+    check_flyable(&mission)?;
+    Ok(MissionExport {
+        field: field_view(project)?,
+        mission,
+    })
+}
+
+/// The safety checks of [`export`].
+pub fn check_flyable(m: &MissionRecord) -> Result<()> {
+    let refuse = |why: String| {
+        Err(AppError::Invalid(format!(
+            "mission #{} cannot be exported for flight: {why}",
+            m.id
+        )))
+    };
+    let e = &m.mission.energy;
+    if !(e.total_j.is_finite() && e.budget_j.is_finite() && e.total_j <= e.budget_j) {
+        return refuse(format!(
+            "it needs {:.1} J but {:.1} J are usable",
+            e.total_j, e.budget_j
+        ));
+    }
+    let p = &m.mission.profile;
+    if !(p.cruise_speed_mps.is_finite() && p.cruise_speed_mps > 0.0) {
+        return refuse(format!("cruise speed {} m/s", p.cruise_speed_mps));
+    }
+    if !(p.altitude_m.is_finite() && p.altitude_m > 0.0 && p.altitude_m <= 120.0) {
+        return refuse(format!("altitude {} m is outside (0, 120] m", p.altitude_m));
+    }
+    if !p.base_alt_m.is_finite() {
+        return refuse(format!("base altitude {} m", p.base_alt_m));
+    }
+    if let Some(s) = m
+        .mission
+        .stops
+        .iter()
+        .find(|s| !(s.hover_s.is_finite() && s.hover_s >= 0.0))
+    {
+        return refuse(format!("hover time {} s at cell {}", s.hover_s, s.cell));
+    }
+    Ok(())
+}
