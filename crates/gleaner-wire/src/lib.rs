@@ -12,6 +12,9 @@
 
 use serde::{Deserialize, Serialize};
 
+pub mod convert;
+pub mod docs;
+
 /// Format name and version of [`MissionDoc`].
 pub const MISSION_FORMAT: &str = "gleaner.mission";
 /// Format name and version of [`FieldDoc`].

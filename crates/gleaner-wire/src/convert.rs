@@ -1,0 +1,280 @@
+//! Explicit conversions from the application layer's data to the documents.
+
+use gleaner_app::{
+    CellView, Exploration, FieldView, MissionId, MissionKind, MissionRecord, MissionStatus,
+    NewMission, PlannedMission, Scoring, driver,
+};
+use gleaner_ingest::time::format_rfc3339;
+
+use crate::docs::{
+    CellRowDoc, CellScoresDoc, ConditionDoc, CorrelationDoc, ExplorationDoc, ScoreRowDoc,
+    ScoringDoc, SummaryDoc,
+};
+use crate::{
+    BaselineDoc, CellDoc, EnergyDoc, FIELD_FORMAT, FieldDoc, MISSION_FORMAT, MissionDoc,
+    ProfileDoc, ScoresDoc, SensorDoc, StopDoc, VERSION,
+};
+
+fn lon_lat(p: gleaner_field::LatLon) -> [f64; 2] {
+    [p.lon(), p.lat()]
+}
+
+/// A mission document from a mission's fields.
+pub fn mission_doc(
+    id: Option<MissionId>,
+    m: &NewMission,
+    status: &str,
+    flown_at: Option<i64>,
+) -> MissionDoc {
+    let e = &m.energy;
+    MissionDoc {
+        format: MISSION_FORMAT.into(),
+        version: VERSION,
+        mission_id: id.map(|i| i.0),
+        kind: m.kind.as_str().into(),
+        status: status.into(),
+        planned_at: format_rfc3339(m.planned_at),
+        planned_at_s: m.planned_at,
+        flown_at: flown_at.map(format_rfc3339),
+        planner: m.solver.clone(),
+        seed: m.seed,
+        weights: m.weights,
+        anomaly_form: m.anomaly_form.clone(),
+        profile: ProfileDoc {
+            base_lon_lat: lon_lat(m.profile.base),
+            base_alt_m: m.profile.base_alt_m,
+            altitude_m: m.profile.altitude_m,
+            cruise_speed_mps: m.profile.cruise_speed_mps,
+        },
+        stops: m
+            .stops
+            .iter()
+            .map(|s| StopDoc {
+                order: s.order + 1,
+                cell: s.cell.to_string(),
+                centre_lon_lat: lon_lat(s.centre),
+                s: s.score,
+                terms: s.terms,
+                leg_distance_m: s.leg_distance_m,
+                leg_energy_j: s.leg_energy_j,
+                collection_s: s.collection_s,
+                hover_s: s.hover_s,
+                hover_j: s.hover_j,
+                comm_j: s.comm_j,
+            })
+            .collect(),
+        return_distance_m: m.return_distance_m,
+        energy: EnergyDoc {
+            travel_j: e.travel_j,
+            hover_j: e.hover_j,
+            comm_j: e.comm_j,
+            return_j: e.return_j,
+            total_j: e.total_j,
+            budget_j: e.budget_j,
+            utilisation: if e.budget_j > 0.0 {
+                e.total_j / e.budget_j
+            } else {
+                0.0
+            },
+            distance_m: e.distance_m,
+            flight_time_s: e.flight_time_s,
+        },
+        total_score: m.total_score,
+        candidates: None,
+        greedy_baseline: None,
+    }
+}
+
+/// A stored mission.
+pub fn stored_mission(m: &MissionRecord) -> MissionDoc {
+    let status = match m.status {
+        MissionStatus::Planned => "planned",
+        MissionStatus::Flown => "flown",
+    };
+    mission_doc(Some(m.id), &m.mission, status, m.flown_at)
+}
+
+/// A mission just planned (with the candidates and the greedy baseline).
+pub fn planned_mission(p: &PlannedMission) -> MissionDoc {
+    let mut doc = mission_doc(
+        p.id,
+        &p.mission,
+        if p.id.is_some() { "planned" } else { "dry-run" },
+        None,
+    );
+    doc.candidates = Some(p.candidates);
+    doc.greedy_baseline = Some(BaselineDoc {
+        planner: p.greedy.planner.name().into(),
+        cells: p.greedy.cells,
+        total_score: p.greedy.total_score,
+        energy_j: p.greedy.energy_j,
+    });
+    doc
+}
+
+/// An exploration plan.
+pub fn exploration(e: &Exploration) -> ExplorationDoc {
+    ExplorationDoc {
+        planned_at: format_rfc3339(e.planned_at),
+        cells: e.cells,
+        budget_j: e.budget_j,
+        lower_bound_sorties: e.lower_bound_sorties,
+        total_energy_j: e.total_energy_j,
+        sorties: e
+            .sorties
+            .iter()
+            .map(|(id, m)| mission_doc(*id, m, if id.is_some() { "planned" } else { "dry-run" }, None))
+            .collect(),
+    }
+}
+
+/// The field for maps.
+pub fn field(f: &FieldView) -> FieldDoc {
+    FieldDoc {
+        format: FIELD_FORMAT.into(),
+        version: VERSION,
+        project: f.project.clone(),
+        cell_size_m: f.cell_size_m,
+        base_lon_lat: lon_lat(f.base),
+        cells: f
+            .cells
+            .iter()
+            .map(|c| {
+                let mut ring: Vec<[f64; 2]> = c.corners.iter().map(|&p| lon_lat(p)).collect();
+                ring.push(lon_lat(c.corners[0]));
+                CellDoc {
+                    cell: c.index.to_string(),
+                    centre_lon_lat: lon_lat(c.centre),
+                    ring_lon_lat: ring,
+                    sensors: c.sensors.len(),
+                    scores: c.metadata.scores.as_ref().map(|s| ScoresDoc {
+                        f: s.freshness,
+                        r: s.redundancy,
+                        a: s.anomaly,
+                        u: s.uncertainty,
+                        s: s.score,
+                        computed_at_s: s.computed_at,
+                    }),
+                }
+            })
+            .collect(),
+        sensors: f
+            .sensors
+            .iter()
+            .map(|(id, p)| SensorDoc {
+                id: id.to_string(),
+                lon_lat: lon_lat(*p),
+            })
+            .collect(),
+    }
+}
+
+/// One row of the cell table.
+pub fn cell_row(c: &CellView, cell_size_m: f64) -> CellRowDoc {
+    let m = &c.metadata;
+    CellRowDoc {
+        cell: c.index.to_string(),
+        i: c.index.i,
+        j: c.index.j,
+        centre_lon_lat: lon_lat(c.centre),
+        cell_size_m,
+        sensors: c.sensors.iter().map(ToString::to_string).collect(),
+        last_collected: m.last_collected.map(format_rfc3339),
+        pending_bytes: m.pending_bytes,
+        expected_energy_j: m.expected_energy_j,
+        scores: m.scores.as_ref().map(|s| CellScoresDoc {
+            freshness: s.freshness,
+            redundancy: s.redundancy,
+            anomaly: s.anomaly,
+            uncertainty: s.uncertainty,
+            score: s.score,
+            computed_at: format_rfc3339(s.computed_at),
+        }),
+        summaries: m
+            .summaries
+            .iter()
+            .map(|s| SummaryDoc {
+                modality: s.modality.to_string(),
+                count: s.stats.count,
+                mean: s.stats.mean,
+                std: s.stats.std,
+                min: s.stats.min,
+                max: s.stats.max,
+                latest_value: s.stats.latest_value,
+                latest_t: format_rfc3339(s.stats.latest_t),
+            })
+            .collect(),
+        correlations: m
+            .correlations
+            .iter()
+            .map(|c| CorrelationDoc {
+                neighbour: c.neighbour.to_string(),
+                modality: c.modality.to_string(),
+                correlation: c.correlation,
+                overlap: c.overlap,
+            })
+            .collect(),
+        class_probabilities: m
+            .class_probabilities
+            .iter()
+            .map(|p| (p.class.clone(), p.probability))
+            .collect(),
+    }
+}
+
+/// A scoring, cells by descending S (ties by cell id).
+pub fn scoring(s: &Scoring) -> ScoringDoc {
+    let k = &s.knowledge;
+    let mut cells: Vec<ScoreRowDoc> = s
+        .terms
+        .iter()
+        .enumerate()
+        .map(|(c, t)| {
+            let cell = &k.field.cells()[c];
+            let centre = k.field.frame().inverse(cell.centre);
+            ScoreRowDoc {
+                cell: cell.index.to_string(),
+                centre_lon_lat: lon_lat(centre),
+                sensors: cell.sensors.len(),
+                f: t.f,
+                r: t.r,
+                a: t.a,
+                a_raw: t.a_raw,
+                u: t.u,
+                s: t.s,
+                driver: driver(t, s.weights).into(),
+                r_by_modality: k
+                    .modalities
+                    .iter()
+                    .cloned()
+                    .zip(t.r_by_modality.iter().copied())
+                    .collect(),
+                a_by_modality: k
+                    .modalities
+                    .iter()
+                    .cloned()
+                    .zip(t.a_by_modality.iter().copied())
+                    .collect(),
+                probabilities: t.probabilities.clone(),
+            }
+        })
+        .collect();
+    cells.sort_by(|a, b| b.s.total_cmp(&a.s).then(a.cell.cmp(&b.cell)));
+    ScoringDoc {
+        t: format_rfc3339(s.t),
+        weights: s.weights,
+        anomaly_form: s.anomaly_form.clone(),
+        condition: s.condition.as_ref().map(|c| ConditionDoc {
+            modality: c.modality.clone(),
+            classes: c.classes.clone(),
+            thresholds: c.thresholds.clone(),
+        }),
+        warnings: s.warnings.clone(),
+        cells,
+    }
+}
+
+/// Whether a mission is an exploration sortie.
+pub fn is_exploration(m: &MissionRecord) -> bool {
+    m.mission.kind == MissionKind::Exploration
+}

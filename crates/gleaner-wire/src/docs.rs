@@ -1,0 +1,163 @@
+//! The CLI's and the HTTP API's JSON documents for cells, scorings and explorations.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+/// Latest F, R, A, U, S of a cell.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CellScoresDoc {
+    /// Freshness in [0, 1].
+    pub freshness: f64,
+    /// Redundancy in [0, 1].
+    pub redundancy: f64,
+    /// Anomaly, >= 0.
+    pub anomaly: f64,
+    /// Uncertainty in [0, 1].
+    pub uncertainty: f64,
+    /// Score.
+    pub score: f64,
+    /// When computed, RFC 3339 UTC.
+    pub computed_at: String,
+}
+
+/// A cell series summary, values in the modality's unit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SummaryDoc {
+    /// Modality.
+    pub modality: String,
+    /// Points.
+    pub count: u64,
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation.
+    pub std: Option<f64>,
+    /// Minimum.
+    pub min: f64,
+    /// Maximum.
+    pub max: f64,
+    /// Latest value.
+    pub latest_value: f64,
+    /// Latest time, RFC 3339 UTC.
+    pub latest_t: String,
+}
+
+/// A neighbour correlation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CorrelationDoc {
+    /// Neighbour cell id.
+    pub neighbour: String,
+    /// Modality.
+    pub modality: String,
+    /// Pearson correlation.
+    pub correlation: f64,
+    /// Common points.
+    pub overlap: u64,
+}
+
+/// One row of the cell metadata table (SPEC §5). Positions `[lon, lat]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CellRowDoc {
+    /// Cell id, e.g. `x3y-1`.
+    pub cell: String,
+    /// Grid column.
+    pub i: i32,
+    /// Grid row.
+    pub j: i32,
+    /// Centre, `[lon, lat]` degrees.
+    pub centre_lon_lat: [f64; 2],
+    /// Side, metres.
+    pub cell_size_m: f64,
+    /// Sensor ids.
+    pub sensors: Vec<String>,
+    /// Last collection, RFC 3339 UTC.
+    pub last_collected: Option<String>,
+    /// Estimated pending data, bytes.
+    pub pending_bytes: Option<f64>,
+    /// Expected collection energy, J.
+    pub expected_energy_j: Option<f64>,
+    /// Latest utility terms.
+    pub scores: Option<CellScoresDoc>,
+    /// Per-modality summaries of the cell series.
+    pub summaries: Vec<SummaryDoc>,
+    /// Correlations with neighbours.
+    pub correlations: Vec<CorrelationDoc>,
+    /// Class probabilities behind U.
+    pub class_probabilities: Vec<(String, f64)>,
+}
+
+/// One scored cell. Positions `[lon, lat]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScoreRowDoc {
+    /// Cell id.
+    pub cell: String,
+    /// Centre `[lon, lat]`, degrees.
+    pub centre_lon_lat: [f64; 2],
+    /// Number of sensors.
+    pub sensors: usize,
+    /// Freshness F.
+    pub f: f64,
+    /// Redundancy R.
+    pub r: f64,
+    /// Anomaly A as used in S (see `anomaly_form`).
+    pub a: f64,
+    /// Raw anomaly.
+    pub a_raw: f64,
+    /// Uncertainty U.
+    pub u: f64,
+    /// Score S.
+    pub s: f64,
+    /// The largest weighted term: what drives S.
+    pub driver: String,
+    /// R per modality (null where the cell lacks it).
+    pub r_by_modality: BTreeMap<String, Option<f64>>,
+    /// A per modality.
+    pub a_by_modality: BTreeMap<String, Option<f64>>,
+    /// Class probabilities.
+    pub probabilities: Vec<f64>,
+}
+
+/// The condition model behind U.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConditionDoc {
+    /// Modality the classes come from (`user` for user probabilities).
+    pub modality: String,
+    /// Class names.
+    pub classes: Vec<String>,
+    /// Class thresholds in the modality's unit.
+    pub thresholds: Vec<f64>,
+}
+
+/// A scoring at mission time t.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScoringDoc {
+    /// Mission time, RFC 3339.
+    pub t: String,
+    /// Weights alpha, beta, gamma, delta.
+    pub weights: [f64; 4],
+    /// `raw` or `bounded(kappa=..)`.
+    pub anomaly_form: String,
+    /// The condition model, if any.
+    pub condition: Option<ConditionDoc>,
+    /// Warnings (e.g. no condition model: U = 0).
+    pub warnings: Vec<String>,
+    /// Cells.
+    pub cells: Vec<ScoreRowDoc>,
+}
+
+/// An exploration plan: its sorties as missions.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExplorationDoc {
+    /// Planned for, RFC 3339.
+    pub planned_at: String,
+    /// Cells to visit.
+    pub cells: usize,
+    /// Usable budget per sortie, J.
+    pub budget_j: f64,
+    /// A lower bound on the number of sorties.
+    pub lower_bound_sorties: usize,
+    /// Total energy over all sorties, J.
+    pub total_energy_j: f64,
+    /// The sorties.
+    pub sorties: Vec<crate::MissionDoc>,
+}
