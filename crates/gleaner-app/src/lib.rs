@@ -63,8 +63,10 @@ pub use view::{
 
 /// Re-exported so adapters name one crate for the lifecycle's data.
 pub use gleaner_ingest::OnError;
+pub use gleaner_ingest::time::{format_rfc3339, parse_timestamp};
 pub use gleaner_mission::Planner;
 pub use gleaner_store::{
+    SqliteStore, Store, StoreRead, StoreWrite,
     CellMetadata, CellScores, EnergyBreakdown, FlightProfile, MissionId, MissionKind,
     MissionRecord, MissionStatus, NewMission, StopRecord, VisitRecord,
 };

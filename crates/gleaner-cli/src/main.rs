@@ -4,20 +4,18 @@
 //! This binary is the only place that knows clap: arguments are parsed here, turned into plain
 //! settings, and handed to the `commands` modules.
 
-mod cell_csv;
 mod commands;
-mod config;
 mod progress;
-mod project;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use gleaner_app as app;
+use gleaner_app::{MissionId, Project};
 
-use commands::{bench, cells, demo, explore, export, ingest, init, plan, record, score, synth};
-use project::Project;
+use commands::{bench, cells, demo, export, plan, score, synth};
 
 /// Utility-driven UAV data collection for farm sensor networks.
 ///
@@ -55,6 +53,10 @@ enum Command {
         /// south of the middle of the sensors' southern edge].
         #[arg(long, value_parser = parse_lat_lon, allow_hyphen_values = true)]
         base: Option<(f64, f64)>,
+        /// Base station altitude above mean sea level, metres (the flight files' home
+        /// altitude) [default: 0].
+        #[arg(long, allow_hyphen_values = true)]
+        base_alt: Option<f64>,
         /// Cell side in metres (the UAV's ground coverage) [default: 40].
         #[arg(long)]
         cell_size: Option<f64>,
@@ -166,6 +168,10 @@ enum Command {
         /// Seed of the planner [default: [planner] seed, 0].
         #[arg(long)]
         seed: Option<u64>,
+        /// Stop the search after this many iterations, so the route does not depend on the
+        /// machine's speed (the time limit still applies).
+        #[arg(long)]
+        iterations: Option<u64>,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
@@ -208,6 +214,17 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Draw the exploration overview: every exploration sortie on one map, one colour each
+    /// (SVG and PNG).
+    #[command(after_help = "Example:\n  gleaner map-exploration --project farm")]
+    MapExploration {
+        /// Project directory.
+        #[arg(long, default_value = ".")]
+        project: PathBuf,
+        /// Output directory [default: <project>/missions].
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Record a flown mission: the cells visited, when, and the readings brought back; the
     /// visited cells' sensors count as collected from then on.
     #[command(
@@ -226,8 +243,28 @@ enum Command {
         /// Cells actually visited, comma-separated, in order [default: the planned stops].
         #[arg(long, value_delimiter = ',')]
         cells: Option<Vec<String>>,
-        /// Readings files brought back (any format `gleaner ingest` reads).
+        /// Replace an earlier record of this mission (otherwise recording a mission twice is
+        /// refused).
+        #[arg(long)]
+        amend: bool,
+        /// Readings files brought back (any format `gleaner ingest` reads); every reading must
+        /// come from a sensor in a visited cell and be dated no later than the collection.
         files: Vec<PathBuf>,
+    },
+    /// List the missions (planned and flown), or show one with its stops.
+    #[command(
+        after_help = "Examples:\n  gleaner missions --project farm\n  gleaner missions --project farm --mission 3 --json"
+    )]
+    Missions {
+        /// Project directory.
+        #[arg(long, default_value = ".")]
+        project: PathBuf,
+        /// Show this mission with its stops and energy breakdown.
+        #[arg(long)]
+        mission: Option<i64>,
+        /// Print JSON (the `gleaner.mission` document) instead of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Benchmarks.
     #[command(subcommand)]
@@ -287,6 +324,10 @@ enum Command {
         /// Days of history.
         #[arg(long, default_value_t = 180)]
         days: u32,
+        /// Run on the real CAF network instead (the shared data directory, e.g.
+        /// ../shared/data), with the paper's energy preset.
+        #[arg(long)]
+        data: Option<PathBuf>,
     },
 }
 
@@ -308,8 +349,8 @@ struct WhenArgs {
 }
 
 impl WhenArgs {
-    fn history(&self) -> score::History {
-        score::History {
+    fn history(&self) -> app::History {
+        app::History {
             from: self.history_from.unwrap_or(i64::MIN),
             until: self.history_until.unwrap_or(i64::MAX),
         }
@@ -350,6 +391,10 @@ enum BenchCommand {
         /// on the machine's speed (the time limit still applies).
         #[arg(long)]
         iterations: Option<u64>,
+        /// Also write every route (node ids as numbered in the instance file) to this file, so
+        /// anyone can re-check a score with their own tools.
+        #[arg(long)]
+        routes: Option<PathBuf>,
     },
 }
 
@@ -431,7 +476,104 @@ fn parse_time(s: &str) -> Result<i64, String> {
     })
 }
 
+/// The wall clock, seconds since the epoch: provenance only (creation times), never results.
+fn clock_now() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs() as i64)
+}
+
+fn format_arg(f: FormatArg) -> app::Format {
+    match f {
+        FormatArg::Auto => app::Format::Auto,
+        FormatArg::LongCsv => app::Format::Long,
+        FormatArg::WideCsv => app::Format::Wide,
+        FormatArg::CafDaily => app::Format::CafDaily,
+        FormatArg::HubbardBrook => app::Format::HubbardBrook,
+    }
+}
+
+/// The one-line summary of an ingest.
+fn ingest_line(o: &app::IngestOutcome) -> String {
+    let r = &o.report;
+    let mut out = format!(
+        "ingested {} file(s): {} rows read, {} readings ({} new, {} already stored), {} missing values, {} duplicate rows, {} rows skipped, {} conflicts kept as stored",
+        o.files,
+        r.rows_read,
+        r.readings,
+        o.inserted,
+        o.unchanged,
+        r.missing,
+        r.duplicates,
+        r.skipped,
+        o.conflicts
+    );
+    for s in &r.skipped_rows {
+        out.push_str(&format!("\n  skipped: {}", s.reason));
+    }
+    out
+}
+
+fn init_line(o: &app::InitOutcome, dir: &Path) -> String {
+    format!(
+        "project {} in {}\n  sensors: {} ({} new, {} updated)\n  base station: {:.6}, {:.6}\n  cells: {} non-empty cells of {} m ({} kept, {} added, {} removed)",
+        o.settings.project.name,
+        dir.display(),
+        o.sensors,
+        o.upsert.added.len(),
+        o.upsert.updated.len(),
+        o.settings.field.base_lat,
+        o.settings.field.base_lon,
+        o.n_cells,
+        o.settings.field.cell_size_m,
+        o.cells.kept,
+        o.cells.added,
+        o.cells.removed,
+    )
+}
+
+fn record_line(o: &app::RecordOutcome) -> String {
+    format!(
+        "mission #{} recorded as flown at {}{}: {} cells, {} sensors collected, {} readings brought back ({} new)",
+        o.mission,
+        app::format_rfc3339(o.at),
+        if o.amended { " (amended)" } else { "" },
+        o.cells.len(),
+        o.sensors_collected,
+        o.readings_inserted + o.readings_unchanged,
+        o.readings_inserted
+    )
+}
+
+fn missions_table(missions: &[app::MissionRecord]) -> String {
+    let mut out = format!(
+        "{:>4} {:<11} {:<8} {:<20} {:<11} {:>5} {:>9} {:>11} {:>6}\n",
+        "id", "kind", "status", "planned_at", "planner", "cells", "total_S", "energy_J", "use"
+    );
+    for m in missions {
+        let e = &m.mission.energy;
+        out.push_str(&format!(
+            "{:>4} {:<11} {:<8} {:<20} {:<11} {:>5} {:>9.3} {:>11.1} {:>5.1}%\n",
+            m.id,
+            m.mission.kind.as_str(),
+            m.status.as_str(),
+            app::format_rfc3339(m.mission.planned_at),
+            m.mission.solver,
+            m.mission.stops.len(),
+            m.mission.total_score,
+            e.total_j,
+            if e.budget_j > 0.0 {
+                100.0 * e.total_j / e.budget_j
+            } else {
+                0.0
+            }
+        ));
+    }
+    out
+}
+
 fn run(cli: Cli) -> Result<()> {
+    let progress = progress::Terminal::default();
     match cli.command {
         Command::Init {
             dir,
@@ -439,24 +581,29 @@ fn run(cli: Cli) -> Result<()> {
             utm_zone,
             sensors_format,
             base,
+            base_alt,
             cell_size,
             altitude,
             half_angle,
             name,
             force,
         } => {
-            let summary = init::run(&init::InitArgs {
-                dir,
+            let base = base
+                .map(|(lat, lon)| gleaner_field::LatLon::new(lat, lon).context("--base"))
+                .transpose()?;
+            let (_, outcome) = app::init(&app::InitRequest {
+                dir: dir.clone(),
                 sensors,
                 utm_zone,
                 hubbard_brook: matches!(sensors_format, SensorsFormatArg::HubbardBrook),
                 base,
+                base_alt_m: base_alt,
                 cell_size_m: cell_size,
                 coverage: altitude.zip(half_angle),
                 name,
                 force,
             })?;
-            println!("{summary}");
+            println!("{}", init_line(&outcome, &dir));
         }
         Command::Ingest {
             files,
@@ -469,29 +616,25 @@ fn run(cli: Cli) -> Result<()> {
             metadata,
         } => {
             let mut p = Project::open(&project)?;
-            let outcome = ingest::run(
+            let outcome = app::ingest(
                 &mut p,
-                &ingest::IngestArgs {
+                &app::IngestRequest {
                     files,
-                    format: match format {
-                        FormatArg::Auto => ingest::Format::Auto,
-                        FormatArg::LongCsv => ingest::Format::Long,
-                        FormatArg::WideCsv => ingest::Format::Wide,
-                        FormatArg::CafDaily => ingest::Format::CafDaily,
-                        FormatArg::HubbardBrook => ingest::Format::HubbardBrook,
-                    },
+                    format: format_arg(format),
                     modality,
                     unit,
                     utc_offset_h: utc_offset,
                     on_error: match on_error {
-                        OnErrorArg::Fail => gleaner_ingest::OnError::Fail,
-                        OnErrorArg::Skip => gleaner_ingest::OnError::Skip,
+                        OnErrorArg::Fail => app::OnError::Fail,
+                        OnErrorArg::Skip => app::OnError::Skip,
                     },
                     metadata,
                     now: None,
                 },
+                clock_now(),
+                &progress,
             )?;
-            println!("{outcome}");
+            println!("{}", ingest_line(&outcome));
         }
         Command::Cells {
             project,
@@ -499,7 +642,12 @@ fn run(cli: Cli) -> Result<()> {
             sort,
         } => {
             let p = Project::open(&project)?;
-            let mut rows = cells::cell_rows(&p)?;
+            let view = app::field_view(&p)?;
+            let mut rows: Vec<_> = view
+                .cells
+                .iter()
+                .map(|c| gleaner_wire::convert::cell_row(c, view.cell_size_m))
+                .collect();
             cells::sort(
                 &mut rows,
                 match sort {
@@ -520,9 +668,19 @@ fn run(cli: Cli) -> Result<()> {
             sort,
         } => {
             let mut p = Project::open(&project)?;
-            let scoring = score::score(&p, when.at, when.history(), probabilities.as_deref())?;
-            score::store_scores(&mut p, &scoring)?;
-            let mut doc = score::to_json(&p, &scoring);
+            let scoring = app::score(
+                &mut p,
+                &app::ScoreRequest {
+                    at: when.at,
+                    history: when.history(),
+                    probabilities,
+                    dry_run: false,
+                },
+            )?;
+            for w in &scoring.warnings {
+                eprintln!("warning: {w}");
+            }
+            let mut doc = gleaner_wire::convert::scoring(&scoring);
             score::sort(
                 &mut doc,
                 match sort {
@@ -545,22 +703,31 @@ fn run(cli: Cli) -> Result<()> {
             solver,
             time_limit,
             seed,
+            iterations,
             json,
             dry_run,
         } => {
             let mut p = Project::open(&project)?;
-            let defaults = p.config.planner.clone();
-            let args = plan::PlanArgs {
-                at: when.at,
-                history: when.history(),
-                scores,
-                planner: plan::parse_planner(solver.as_deref().unwrap_or(&defaults.solver))?,
-                time_limit_s: time_limit.unwrap_or(defaults.time_limit_s),
-                seed: seed.unwrap_or(defaults.seed),
-                save: !dry_run,
-            };
-            let planned = plan::run(&mut p, &args)?;
-            let doc = plan::to_json(&p, &planned, &args);
+            let planned = app::plan(
+                &mut p,
+                &app::PlanRequest {
+                    at: when.at,
+                    history: when.history(),
+                    scores,
+                    planner: solver.as_deref().map(app::parse_planner).transpose()?,
+                    time_limit_s: time_limit,
+                    seed,
+                    max_iterations: iterations,
+                    dry_run,
+                },
+                clock_now(),
+            )?;
+            if let Some(s) = &planned.scoring {
+                for w in &s.warnings {
+                    eprintln!("warning: {w}");
+                }
+            }
+            let doc = gleaner_wire::convert::planned_mission(&planned);
             emit(json, &doc, "serialising the mission", || plan::table(&doc))?;
         }
         Command::Explore {
@@ -570,8 +737,11 @@ fn run(cli: Cli) -> Result<()> {
             dry_run,
         } => {
             let mut p = Project::open(&project)?;
-            let e = explore::run(&mut p, at, !dry_run)?;
-            emit(json, &e, "serialising the plan", || explore::table(&e))?;
+            let e = app::explore(&mut p, &app::ExploreRequest { at, dry_run }, clock_now())?;
+            let doc = gleaner_wire::convert::exploration(&e);
+            emit(json, &doc, "serialising the plan", || {
+                plan::exploration_table(&doc)
+            })?;
         }
         Command::Export {
             project,
@@ -579,44 +749,66 @@ fn run(cli: Cli) -> Result<()> {
             out,
         } => {
             let p = Project::open(&project)?;
-            let files = export::run(&p, &project, mission, out.as_deref())?;
-            println!(
-                "wrote {}, {}, {}, {}",
-                files.geojson.display(),
-                files.plan.display(),
-                files.waypoints.display(),
-                files.map.display()
-            );
+            let export = app::export(&p, MissionId(mission))?;
+            let dir = out.unwrap_or_else(|| project.join("missions").join(mission.to_string()));
+            let written = export::write_files(&export, &dir)?;
+            let names: Vec<String> = written
+                .files
+                .iter()
+                .map(|f| f.display().to_string())
+                .collect();
+            println!("wrote {}", names.join(", "));
+        }
+        Command::MapExploration { project, out } => {
+            let p = Project::open(&project)?;
+            let dir = out.unwrap_or_else(|| project.join("missions"));
+            let files = export::write_exploration_map(&p, &dir)?;
+            println!("wrote {}", files.join(", "));
         }
         Command::Record {
             project,
             mission,
             at,
             cells,
+            amend,
             files,
         } => {
             let mut p = Project::open(&project)?;
-            let ingest_args = ingest::IngestArgs {
-                files: files.clone(),
-                format: ingest::Format::Auto,
-                modality: None,
-                unit: None,
-                utc_offset_h: 0.0,
-                on_error: gleaner_ingest::OnError::Fail,
-                metadata: None,
-                now: at,
-            };
-            let summary = record::run(
+            let outcome = app::record_flight(
                 &mut p,
-                &record::RecordArgs {
-                    mission,
+                &app::RecordRequest {
+                    mission: MissionId(mission),
                     at,
                     cells,
-                    files,
-                    ingest: Some(ingest_args),
+                    readings: (!files.is_empty()).then(|| app::IngestRequest {
+                        files,
+                        ..Default::default()
+                    }),
+                    amend,
                 },
+                clock_now(),
+                &progress,
             )?;
-            println!("{summary}");
+            println!("{}", record_line(&outcome));
+        }
+        Command::Missions {
+            project,
+            mission,
+            json,
+        } => {
+            let p = Project::open(&project)?;
+            match mission {
+                Some(id) => {
+                    let m = app::mission(&p, MissionId(id))?;
+                    let doc = gleaner_wire::convert::stored_mission(&m);
+                    emit(json, &doc, "serialising the mission", || plan::table(&doc))?;
+                }
+                None => {
+                    let all = app::missions(&p)?;
+                    let docs: Vec<_> = all.iter().map(gleaner_wire::convert::stored_mission).collect();
+                    emit(json, &docs, "serialising missions", || missions_table(&all))?;
+                }
+            }
         }
         Command::Bench(BenchCommand::Op {
             path,
@@ -627,6 +819,7 @@ fn run(cli: Cli) -> Result<()> {
             csv,
             max_stall,
             iterations,
+            routes,
         }) => {
             let (_, table) = bench::run(&bench::BenchOpArgs {
                 path,
@@ -637,6 +830,7 @@ fn run(cli: Cli) -> Result<()> {
                 csv,
                 max_stall: (max_stall > 0).then_some(max_stall),
                 iterations,
+                routes,
             })?;
             print!("{table}");
         }
@@ -667,14 +861,11 @@ fn run(cli: Cli) -> Result<()> {
                 t_depths_cm: t_depths,
             })?;
             println!(
-                "wrote {} sensors, {} readings, {} events: {}, {}, {}, {}",
-                farm.sensors().len(),
+                "wrote {} sensors, {} readings, {} events to {}",
+                sensors,
                 farm.reading_count(),
                 farm.events().len(),
-                files.sensors.display(),
-                files.readings.display(),
-                files.ground_truth.display(),
-                files.faults.display()
+                files.sensors.parent().map_or(String::new(), |p| p.display().to_string())
             );
         }
         Command::Demo {
@@ -682,6 +873,7 @@ fn run(cli: Cli) -> Result<()> {
             seed,
             sensors,
             days,
+            data,
         } => {
             print!(
                 "{}",
@@ -689,7 +881,8 @@ fn run(cli: Cli) -> Result<()> {
                     dir,
                     seed,
                     sensors,
-                    days
+                    days,
+                    data,
                 })?
             );
         }
@@ -697,11 +890,25 @@ fn run(cli: Cli) -> Result<()> {
     Ok(())
 }
 
+/// The error and its causes, each said once: a cause whose text the message already contains
+/// is not repeated.
+fn error_report(e: &anyhow::Error) -> String {
+    let mut out = e.to_string();
+    for cause in e.chain().skip(1) {
+        let text = cause.to_string();
+        if !out.contains(&text) {
+            out.push_str(": ");
+            out.push_str(&text);
+        }
+    }
+    out
+}
+
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_report(&e));
             ExitCode::FAILURE
         }
     }

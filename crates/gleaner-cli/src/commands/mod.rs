@@ -1,14 +1,10 @@
-//! One module per subcommand. Each takes plain settings (already parsed from the command line)
-//! and returns values or text; only `main.rs` knows clap.
+//! One module per subcommand: each turns parsed arguments into an application-layer call and
+//! its typed result into text, JSON or files. No lifecycle logic lives here.
 
 pub mod bench;
 pub mod cells;
 pub mod demo;
-pub mod explore;
 pub mod export;
-pub mod ingest;
-pub mod init;
 pub mod plan;
-pub mod record;
 pub mod score;
 pub mod synth;
