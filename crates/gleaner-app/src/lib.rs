@@ -40,6 +40,7 @@ mod project;
 mod record;
 mod score;
 pub mod settings;
+mod simulate;
 mod summaries;
 mod view;
 
@@ -56,6 +57,7 @@ pub use project::Project;
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use score::{Condition, ScoreRequest, Scoring, compute, driver, score};
 pub use settings::Settings;
+pub use simulate::{Truth, fly};
 pub use summaries::{pending_bytes, series_summary};
 pub use view::{
     CellView, FieldView, MissionExport, check_flyable, export, field_view, mission, missions,

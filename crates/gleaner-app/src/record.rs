@@ -8,7 +8,7 @@ use gleaner_ingest::time::format_rfc3339;
 use gleaner_store::{ConflictPolicy, MissionId, MissionStatus, Store, StoreRead, StoreWrite, VisitRecord};
 
 use crate::error::{AppError, Result};
-use crate::ingest::{IngestRequest, parse_files, store_parsed};
+use crate::ingest::{IngestRequest, Parsed, parse_files, store_parsed};
 use crate::progress::Progress;
 use crate::project::Project;
 use crate::summaries;
@@ -57,6 +57,28 @@ pub fn record_flight<S: Store>(
     request: &RecordRequest,
     clock_now: UnixSeconds,
     progress: &dyn Progress,
+) -> Result<RecordOutcome> {
+    let parsed = match &request.readings {
+        Some(r) if !r.files.is_empty() => {
+            let known = project
+                .store()
+                .sensors()?
+                .into_iter()
+                .map(|s| s.id.to_string())
+                .collect();
+            Some(parse_files(r, known, progress)?)
+        }
+        _ => None,
+    };
+    record_parsed(project, request, parsed, clock_now)
+}
+
+/// [`record_flight`] with the readings already read (from files, or from a simulated flight).
+pub(crate) fn record_parsed<S: Store>(
+    project: &mut Project<S>,
+    request: &RecordRequest,
+    parsed: Option<Parsed>,
+    clock_now: UnixSeconds,
 ) -> Result<RecordOutcome> {
     let mission = project
         .store()
@@ -111,10 +133,7 @@ pub fn record_flight<S: Store>(
         });
     }
     let visited: HashSet<&SensorId> = collected.iter().map(|(s, _)| s).collect();
-    let parsed = match &request.readings {
-        Some(r) if !r.files.is_empty() => {
-            let known = cell_of.keys().map(ToString::to_string).collect();
-            let parsed = parse_files(r, known, progress)?;
+    if let Some(parsed) = &parsed {
             for (path, _, readings, _) in &parsed.files {
                 for row in &readings.rows {
                     let Some(sensor) = readings.sensors.get(row.sensor as usize) else {
@@ -140,10 +159,7 @@ pub fn record_flight<S: Store>(
                     }
                 }
             }
-            Some(parsed)
-        }
-        _ => None,
-    };
+    }
     let settings = project.settings().clone();
     let id = request.mission;
     let amend = request.amend;

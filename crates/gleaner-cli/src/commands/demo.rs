@@ -1,26 +1,35 @@
-//! `gleaner demo`: the main job on built-in data — a synthetic farm, a project, an ingest, the
-//! cell table, scoring, a planned mission (against the paper's greedy), the recorded flight and
-//! the rescoring that follows it.
+//! `gleaner demo`: the whole story on built-in data (a seeded synthetic farm) or on the real
+//! CAF network — exploration sorties that visit every cell, then adaptive missions, each
+//! planned, exported, flown in simulation, recorded with the readings brought back, and
+//! followed by a rescoring. Every step is an application-layer call; this module only
+//! chooses the scenario and prints.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use gleaner_app::{self as app, MissionId, Project, SqliteStore};
 
-use crate::commands::{cells, export, ingest, init, plan, record, score, synth};
-use crate::project::Project;
+use crate::commands::{export, plan, synth};
+use crate::progress::Terminal;
 
 /// Settings from the command line.
 pub struct DemoArgs {
     /// Working directory (created; the files the demo writes there are replaced).
     pub dir: PathBuf,
-    /// Seed of the synthetic farm.
+    /// Seed of the synthetic farm and of the planner.
     pub seed: u64,
-    /// Number of sensors.
+    /// Number of sensors (synthetic farm).
     pub sensors: usize,
-    /// Number of days of history.
+    /// Number of days of record (synthetic farm).
     pub days: u32,
+    /// The shared data directory: run on the CAF network instead.
+    pub data: Option<PathBuf>,
 }
+
+/// Adaptive missions flown after the exploration.
+const MISSIONS: i64 = 5;
+const DAY: i64 = 86_400;
 
 /// Removes what an earlier demo run wrote in `dir` (and nothing else).
 fn clean(dir: &Path) -> Result<()> {
@@ -35,20 +44,199 @@ fn clean(dir: &Path) -> Result<()> {
             std::fs::remove_file(&p).with_context(|| format!("{}: cannot remove", p.display()))?;
         }
     }
+    let missions = dir.join("missions");
+    if missions.exists() {
+        std::fs::remove_dir_all(&missions)
+            .with_context(|| format!("{}: cannot remove", missions.display()))?;
+    }
     Ok(())
+}
+
+fn clock_now() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs() as i64)
+}
+
+/// The paper's line: "selected 8 cells; 55,309.8 J of 66,500 J, 83.2%".
+fn paper_line(m: &gleaner_wire::MissionDoc) -> String {
+    format!(
+        "selected {} cells; {} J of {} J, {:.1}%",
+        m.stops.len(),
+        thousands(m.energy.total_j),
+        thousands(m.energy.budget_j),
+        100.0 * m.energy.utilisation
+    )
+}
+
+/// 55309.8 -> "55,309.8".
+fn thousands(x: f64) -> String {
+    let s = format!("{x:.1}");
+    let (int, frac) = s.split_once('.').unwrap_or((&s, "0"));
+    let (sign, digits) = int.strip_prefix('-').map_or(("", int), |d| ("-", d));
+    let mut out = String::new();
+    for (k, c) in digits.chars().enumerate() {
+        if k > 0 && (digits.len() - k) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    format!("{sign}{out}.{frac}")
 }
 
 /// Runs the demo; returns its report.
 pub fn run(args: &DemoArgs) -> Result<String> {
     let mut out = String::new();
+    std::fs::create_dir_all(&args.dir)
+        .with_context(|| format!("{}: cannot create", args.dir.display()))?;
     clean(&args.dir)?;
-    let data_dir = args.dir.join("data");
+    let progress = Terminal::default();
+    let (mut project, truth, t0) = match &args.data {
+        None => synthetic(args, &mut out, &progress)?,
+        Some(data) => caf(args, data, &mut out, &progress)?,
+    };
+    let dir = args.dir.clone();
+
+    // Exploration: every cell once, in as few sorties as the battery allows.
+    let exploration = app::explore(
+        &mut project,
+        &app::ExploreRequest {
+            at: Some(t0),
+            dry_run: false,
+        },
+        clock_now(),
+    )?;
+    let doc = gleaner_wire::convert::exploration(&exploration);
+    writeln!(
+        out,
+        "3. exploration at {}: {} cells in {} sorties (lower bound {}), {:.1} kJ in all",
+        doc.planned_at,
+        doc.cells,
+        doc.sorties.len(),
+        doc.lower_bound_sorties,
+        doc.total_energy_j / 1000.0
+    )?;
+    for (id, _) in &exploration.sorties {
+        let id = id.context("the sortie was stored")?;
+        let rec = app::fly(&mut project, &truth, id, t0, clock_now())?;
+        let m = app::mission(&project, id)?;
+        let files = export::write_files(
+            &app::export(&project, id)?,
+            &dir.join("missions").join(id.to_string()),
+        )?;
+        writeln!(
+            out,
+            "   sortie #{id}: {}; brought back {} readings from {} sensors ({} files)",
+            paper_line(&gleaner_wire::convert::stored_mission(&m)),
+            rec.readings_inserted,
+            rec.sensors_collected,
+            files.files.len()
+        )?;
+    }
+    let map = export::write_exploration_map(&project, &dir.join("missions"))?;
+    writeln!(out, "   overview map: {}", map.join(", "))?;
+
+    // Adaptive missions, one a day.
+    writeln!(
+        out,
+        "4. {MISSIONS} adaptive missions, one a day, each planned from what was collected, flown in simulation and recorded:"
+    )?;
+    let mut first: Option<(MissionId, gleaner_wire::docs::ScoringDoc)> = None;
+    for k in 1..=MISSIONS {
+        let t = t0 + k * DAY;
+        let planned = app::plan(
+            &mut project,
+            &app::PlanRequest {
+                at: Some(t),
+                time_limit_s: Some(2.0),
+                seed: Some(args.seed),
+                max_iterations: Some(3_000),
+                ..Default::default()
+            },
+            clock_now(),
+        )?;
+        let id = planned.id.context("the mission was stored")?;
+        let doc = gleaner_wire::convert::planned_mission(&planned);
+        if first.is_none()
+            && let Some(s) = &planned.scoring
+        {
+            first = Some((id, gleaner_wire::convert::scoring(s)));
+        }
+        let files = export::write_files(
+            &app::export(&project, id)?,
+            &dir.join("missions").join(id.to_string()),
+        )?;
+        let rec = app::fly(&mut project, &truth, id, t, clock_now())?;
+        writeln!(
+            out,
+            "   mission #{id} at {}: {}; total S = {:.3} (paper's greedy {:.3}); brought back {} readings; files in {}",
+            doc.planned_at,
+            paper_line(&doc),
+            doc.total_score,
+            doc.greedy_baseline.as_ref().map_or(0.0, |g| g.total_score),
+            rec.readings_inserted,
+            files
+                .files
+                .first()
+                .and_then(|f| f.parent())
+                .map_or(String::new(), |p| p.display().to_string())
+        )?;
+        if k == 1 {
+            writeln!(out, "{}", indent(&plan::table(&doc)))?;
+        }
+    }
+
+    // The first mission's cells after their collection: fresh again.
+    if let Some((id, before)) = first {
+        let after = app::score(
+            &mut project,
+            &app::ScoreRequest {
+                at: Some(t0 + (MISSIONS + 1) * DAY),
+                ..Default::default()
+            },
+        )?;
+        let after = gleaner_wire::convert::scoring(&after);
+        let m = app::mission(&project, id)?;
+        writeln!(
+            out,
+            "5. mission #{id}'s cells, scored before it and after the campaign (F resets when collected):"
+        )?;
+        for stop in m.mission.stops.iter().take(5) {
+            let label = stop.cell.to_string();
+            let b = before.cells.iter().find(|c| c.cell == label);
+            let a = after.cells.iter().find(|c| c.cell == label);
+            if let (Some(b), Some(a)) = (b, a) {
+                writeln!(
+                    out,
+                    "   {label:<10} F {:.3} -> {:.3}   U {:.3} -> {:.3}   S {:.3} -> {:.3}",
+                    b.f, a.f, b.u, a.u, b.s, a.s
+                )?;
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn indent(s: &str) -> String {
+    s.lines()
+        .map(|l| format!("     {l}"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// A seeded synthetic farm: its files, a project, and the ground truth. The exploration flies
+/// 6 days before the end of the record.
+fn synthetic(
+    args: &DemoArgs,
+    out: &mut String,
+    progress: &Terminal,
+) -> Result<(Project<SqliteStore>, app::Truth, i64)> {
     let (farm, files) = synth::run(&synth::SynthArgs {
-        out: data_dir,
+        out: args.dir.join("data"),
         seed: args.seed,
         sensors: args.sensors,
         days: args.days,
-        interval_s: 86_400,
+        interval_s: DAY,
         events: 3,
         correlation_length_m: 500.0,
         no_faults: false,
@@ -64,115 +252,91 @@ pub fn run(args: &DemoArgs) -> Result<String> {
         args.days,
         farm.reading_count(),
         farm.events().len(),
-        files
-            .readings
-            .parent()
-            .map_or_else(String::new, |p| p.display().to_string())
+        args.dir.join("data").display()
     )?;
     let base = farm.base();
-    let summary = init::run(&init::InitArgs {
+    let (project, init) = app::init(&app::InitRequest {
         dir: args.dir.clone(),
         sensors: files.sensors.clone(),
-        utm_zone: None,
-        hubbard_brook: false,
-        base: Some((base.lat(), base.lon())),
-        cell_size_m: Some(init::DEFAULT_CELL_SIZE_M),
-        coverage: None,
+        base: Some(base),
+        cell_size_m: Some(app::DEFAULT_CELL_SIZE_M),
         name: Some("demo".into()),
         force: true,
+        ..Default::default()
     })?;
-    writeln!(out, "2. {summary}")?;
-    let mut project = Project::open(&args.dir)?;
-    let outcome = ingest::run(
-        &mut project,
-        &ingest::IngestArgs {
+    let truth = app::Truth::from_files(
+        &project,
+        &app::IngestRequest {
             files: vec![files.readings.clone()],
-            format: ingest::Format::Long,
-            modality: None,
-            unit: None,
-            utc_offset_h: 0.0,
-            on_error: gleaner_ingest::OnError::Fail,
-            metadata: None,
-            now: None,
+            format: app::Format::Long,
+            ..Default::default()
         },
+        DAY,
+        progress,
     )?;
-    writeln!(out, "3. {outcome}")?;
-    let mut rows = cells::cell_rows(&project)?;
-    cells::sort(&mut rows, cells::SortKey::Sensors);
     writeln!(
         out,
-        "4. cell table ({} cells; the 5 with most sensors):",
-        rows.len()
+        "2. project {}: {} sensors in {} cells of {} m; the sensors log {} readings, none collected yet",
+        init.settings.project.name,
+        init.sensors,
+        init.n_cells,
+        init.settings.field.cell_size_m,
+        truth.len()
     )?;
-    out.push_str(&cells::table(&rows[..rows.len().min(5)]));
-
-    // The exploration flew until 30 days before the end of the record; the mission is planned
-    // 10 days later, from what was collected by then.
     let end = farm.times().last().copied().unwrap_or_default();
-    let history = score::History {
-        from: i64::MIN,
-        until: end - 30 * 86_400,
-    };
-    let t = end - 20 * 86_400;
-    let scoring = score::score(&project, Some(t), history, None)?;
-    score::store_scores(&mut project, &scoring)?;
-    let doc = score::to_json(&project, &scoring);
-    writeln!(
-        out,
-        "5. scores (history until {}, the 8 best cells):",
-        gleaner_ingest::time::format_rfc3339(history.until)
-    )?;
-    out.push_str(&score::table(&doc, 8));
-    let plan_args = plan::PlanArgs {
-        at: Some(t),
-        history,
-        scores: None,
-        planner: gleaner_mission::Planner::Default,
-        time_limit_s: 2.0,
-        seed: args.seed,
-        save: true,
-    };
-    let planned = plan::run(&mut project, &plan_args)?;
-    let mission = plan::to_json(&project, &planned, &plan_args);
-    writeln!(out, "6. {}", plan::table(&mission).trim_end())?;
-    let id = planned.mission_id.context("the mission was stored")?;
-    let files = export::run(&project, &args.dir, id, None)?;
-    writeln!(
-        out,
-        "   mission files: {}, {}, {}, {}",
-        files.geojson.display(),
-        files.plan.display(),
-        files.waypoints.display(),
-        files.map.display()
-    )?;
-    let recorded = record::run(
-        &mut project,
-        &record::RecordArgs {
-            mission: id,
-            at: Some(t),
-            cells: None,
-            files: Vec::new(),
-            ingest: None,
+    let t0 = end - MISSIONS * DAY;
+    Ok((project, truth, t0))
+}
+
+/// The CAF network (Gasch & Brown 2017): sensors in UTM 11N, daily files as ground truth;
+/// the exploration flies on 2014-03-01 and the missions follow it, with the paper preset.
+fn caf(
+    args: &DemoArgs,
+    data: &Path,
+    out: &mut String,
+    progress: &Terminal,
+) -> Result<(Project<SqliteStore>, app::Truth, i64)> {
+    let caf = data.join("caf");
+    let sensors = caf.join("sensors").join("CAF_sensor_locations.csv");
+    let mut daily: Vec<PathBuf> = std::fs::read_dir(caf.join("Daily"))
+        .with_context(|| format!("{}: cannot list the CAF daily files", caf.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "txt"))
+        .collect();
+    daily.sort();
+    let (project, init) = app::init(&app::InitRequest {
+        dir: args.dir.clone(),
+        sensors,
+        utm_zone: Some("11N".into()),
+        name: Some("caf-demo".into()),
+        force: true,
+        ..Default::default()
+    })?;
+    let truth = app::Truth::from_files(
+        &project,
+        &app::IngestRequest {
+            files: daily.clone(),
+            format: app::Format::CafDaily,
+            ..Default::default()
         },
+        DAY,
+        progress,
     )?;
-    writeln!(out, "7. {recorded}")?;
-    let after = score::score(&project, Some(t + 86_400), history, None)?;
-    score::store_scores(&mut project, &after)?;
-    let after_doc = score::to_json(&project, &after);
     writeln!(
         out,
-        "8. a day later the visited cells are fresh again (before -> after):"
+        "1. CAF network (doi:10.15482/USDA.ADC/1349683): {} daily files, {} readings",
+        daily.len(),
+        truth.len()
     )?;
-    for stop in mission.stops.iter().take(5) {
-        let before = doc.cells.iter().find(|c| c.cell == stop.cell);
-        let now = after_doc.cells.iter().find(|c| c.cell == stop.cell);
-        if let (Some(b), Some(a)) = (before, now) {
-            writeln!(
-                out,
-                "   {:<10} F {:.3} -> {:.3}   U {:.3} -> {:.3}   S {:.3} -> {:.3}",
-                stop.cell, b.f, a.f, b.u, a.u, b.s, a.s
-            )?;
-        }
-    }
-    Ok(out)
+    writeln!(
+        out,
+        "2. project {}: {} sensors in {} cells of {} m, energy preset {}",
+        init.settings.project.name,
+        init.sensors,
+        init.n_cells,
+        init.settings.field.cell_size_m,
+        init.settings.energy.preset
+    )?;
+    let t0 = app::parse_timestamp("2014-03-01").context("demo date")?;
+    Ok((project, truth, t0))
 }
