@@ -1,0 +1,274 @@
+//! The whole mission lifecycle through the application layer on the real CAF network:
+//! init -> ingest (2011-2013) -> explore -> score -> plan -> export check -> record a flight
+//! with a readings file (the visited sensors' real 2014 data) -> rescore.
+
+use std::collections::HashSet;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use gleaner_app::{self as app, MissionId, Silent};
+
+fn shared_data() -> PathBuf {
+    std::env::var_os("GLEANER_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"))
+}
+
+/// CAF's `MM/DD/YYYY` as (year, month, day).
+fn ymd(date: &str) -> Option<(i32, u32, u32)> {
+    let mut p = date.split('/');
+    let m = p.next()?.parse().ok()?;
+    let d = p.next()?.parse().ok()?;
+    let y = p.next()?.parse().ok()?;
+    Some((y, m, d))
+}
+
+/// Copies of the CAF daily files holding the rows of 2011-2013 only.
+fn history_files(daily: &Path, out: &Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    let mut names: Vec<_> = std::fs::read_dir(daily)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    names.sort();
+    for path in names {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let mut lines = text.lines();
+        let mut kept = vec![lines.next().unwrap().to_string()];
+        kept.extend(
+            lines
+                .filter(|l| {
+                    l.split('\t')
+                        .nth(1)
+                        .and_then(ymd)
+                        .is_some_and(|(y, _, _)| (2011..=2013).contains(&y))
+                })
+                .map(str::to_string),
+        );
+        let target = out.join(path.file_name().unwrap());
+        std::fs::write(&target, kept.join("\n") + "\n").unwrap();
+        files.push(target);
+    }
+    files
+}
+
+/// The visited sensors' real VW_30cm readings of January-February 2014 as a long CSV.
+fn flight_file(daily: &Path, sensors: &HashSet<String>, out: &Path) -> (PathBuf, usize) {
+    let path = out.join("flight.csv");
+    let mut f = std::fs::File::create(&path).unwrap();
+    writeln!(f, "sensor_id,timestamp,modality,value,unit").unwrap();
+    let mut n = 0;
+    for sensor in sensors {
+        let text = std::fs::read_to_string(daily.join(format!("{sensor}.txt"))).unwrap();
+        for line in text.lines().skip(1) {
+            let cols: Vec<&str> = line.split('\t').collect();
+            let Some((y, m, d)) = ymd(cols[1]) else {
+                continue;
+            };
+            if y == 2014 && m <= 2 && cols[2] != "NA" {
+                writeln!(f, "{sensor},{y:04}-{m:02}-{d:02},vw@30cm,{},m3/m3", cols[2]).unwrap();
+                n += 1;
+            }
+        }
+    }
+    (path, n)
+}
+
+#[test]
+fn caf_lifecycle_through_the_app_layer() {
+    let data = shared_data();
+    let daily = data.join("caf/Daily");
+    let tmp = tempfile::tempdir().unwrap();
+    let input = tmp.path().join("input");
+    std::fs::create_dir_all(&input).unwrap();
+    let files = history_files(&daily, &input);
+    assert_eq!(files.len(), 42, "42 CAF stations");
+
+    let dir = tmp.path().join("caf");
+    let (mut project, init) = app::init(&app::InitRequest {
+        dir: dir.clone(),
+        sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
+        utm_zone: Some("11N".into()),
+        name: Some("caf".into()),
+        ..Default::default()
+    })
+    .unwrap();
+    assert_eq!(init.sensors, 42);
+    let n_cells = init.n_cells;
+    assert!((30..=42).contains(&n_cells), "{n_cells} cells");
+    // The sensors file is kept relative to the project.
+    assert!(!Path::new(&init.settings.sensors.file).is_absolute());
+    assert!(dir.join(&init.settings.sensors.file).exists());
+
+    let ingest = app::ingest(
+        &mut project,
+        &app::IngestRequest {
+            files: files.clone(),
+            ..Default::default()
+        },
+        0,
+        &Silent,
+    )
+    .unwrap();
+    assert!(ingest.inserted > 300_000, "{} readings", ingest.inserted);
+    // Re-ingesting changes nothing.
+    let again = app::ingest(
+        &mut project,
+        &app::IngestRequest {
+            files,
+            ..Default::default()
+        },
+        0,
+        &Silent,
+    )
+    .unwrap();
+    assert_eq!((again.inserted, again.unchanged), (0, ingest.inserted));
+
+    // Exploration: every cell exactly once, every sortie within the budget.
+    let t = app::parse_timestamp("2014-03-01").unwrap();
+    let exploration = app::explore(
+        &mut project,
+        &app::ExploreRequest {
+            at: Some(t),
+            dry_run: true,
+        },
+        0,
+    )
+    .unwrap();
+    let visited: Vec<_> = exploration
+        .sorties
+        .iter()
+        .flat_map(|(_, m)| m.stops.iter().map(|s| s.cell))
+        .collect();
+    assert_eq!(visited.len(), n_cells);
+    assert_eq!(visited.iter().collect::<HashSet<_>>().len(), n_cells);
+    for (id, m) in &exploration.sorties {
+        assert!(id.is_none(), "a dry run stores nothing");
+        assert!(m.energy.total_j <= m.energy.budget_j);
+    }
+    assert!(app::missions(&project).unwrap().is_empty());
+
+    // Scoring at t from 2011-2013.
+    let scoring = app::score(
+        &mut project,
+        &app::ScoreRequest {
+            at: Some(t),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(scoring.terms.len(), n_cells);
+    for c in &scoring.terms {
+        assert!((0.0..=1.0).contains(&c.f) && (0.0..=1.0).contains(&c.r));
+        assert!((0.0..=1.0).contains(&c.u) && c.a >= 0.0);
+    }
+    // Two months without a collection: everything is stale.
+    assert!(scoring.terms.iter().all(|c| c.f > 0.99));
+
+    // Planning with an iteration cap: a route within the paper's 66.5 kJ.
+    let planned = app::plan(
+        &mut project,
+        &app::PlanRequest {
+            at: Some(t),
+            time_limit_s: Some(30.0),
+            max_iterations: Some(2_000),
+            ..Default::default()
+        },
+        1_700_000_000,
+    )
+    .unwrap();
+    let id = planned.id.unwrap();
+    let e = &planned.mission.energy;
+    assert!((e.budget_j - 66_500.0).abs() < 1e-6, "budget {}", e.budget_j);
+    assert!(e.total_j <= e.budget_j && e.total_j > 0.9 * e.budget_j);
+    assert!(planned.mission.stops.len() >= 8, "{} cells", planned.mission.stops.len());
+    assert!(planned.mission.total_score >= planned.greedy.total_score);
+    let sum = e.travel_j + e.hover_j + e.comm_j + e.return_j;
+    assert!((sum - e.total_j).abs() < 1e-6 * e.total_j);
+
+    // The stored mission is what was planned, with typed stops.
+    let stored = app::mission(&project, id).unwrap();
+    assert_eq!(stored.mission, planned.mission);
+    assert_eq!(stored.status, app::MissionStatus::Planned);
+
+    // Export: the checked bundle.
+    let export = app::export(&project, id).unwrap();
+    assert_eq!(export.field.cells.len(), n_cells);
+    assert!(export.field.cells.iter().all(|c| c.metadata.scores.is_some()));
+
+    // Record the flight with the visited sensors' real readings of Jan-Feb 2014.
+    let visited_cells: HashSet<_> = stored.mission.stops.iter().map(|s| s.cell).collect();
+    let sensors: HashSet<String> = export
+        .field
+        .cells
+        .iter()
+        .filter(|c| visited_cells.contains(&c.index))
+        .flat_map(|c| c.sensors.iter().map(ToString::to_string))
+        .collect();
+    let (flight, n_readings) = flight_file(&daily, &sensors, tmp.path());
+    assert!(n_readings > 100, "{n_readings} readings");
+    let record = app::record_flight(
+        &mut project,
+        &app::RecordRequest {
+            mission: id,
+            at: Some(t),
+            cells: None,
+            readings: Some(app::IngestRequest {
+                files: vec![flight.clone()],
+                ..Default::default()
+            }),
+            amend: false,
+        },
+        1_700_000_100,
+        &Silent,
+    )
+    .unwrap();
+    assert_eq!(record.readings_inserted as usize, n_readings);
+    assert_eq!(record.sensors_collected, sensors.len());
+    // Recording it again is refused, and stores nothing.
+    let count = project_reading_count(&project);
+    let err = app::record_flight(
+        &mut project,
+        &app::RecordRequest {
+            mission: id,
+            at: Some(t),
+            cells: None,
+            readings: None,
+            amend: false,
+        },
+        0,
+        &Silent,
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("already recorded"), "{err}");
+    assert_eq!(project_reading_count(&project), count);
+
+    // Rescoring at t: the visited cells are fresh (F = 0), the others still stale.
+    let after = app::score(
+        &mut project,
+        &app::ScoreRequest {
+            at: Some(t),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let k = &after.knowledge;
+    for (c, terms) in after.terms.iter().enumerate() {
+        let index = k.field.cells()[c].index;
+        if visited_cells.contains(&index) {
+            assert!(terms.f < 1e-9, "{index}: F = {}", terms.f);
+        } else {
+            assert!(terms.f > 0.99, "{index}: F = {}", terms.f);
+        }
+    }
+    let missions = app::missions(&project).unwrap();
+    assert_eq!(missions.len(), 1);
+    assert_eq!(missions[0].status, app::MissionStatus::Flown);
+    assert_eq!(missions[0].visits.len(), stored.mission.stops.len());
+    let _ = MissionId(0);
+}
+
+fn project_reading_count(p: &app::Project<app::SqliteStore>) -> u64 {
+    use app::StoreRead as _;
+    p.store().reading_count().unwrap()
+}
