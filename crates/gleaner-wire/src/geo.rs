@@ -164,7 +164,7 @@ fn cell_ring(cell: &str, ring: &[[f64; 2]]) -> Result<Vec<[f64; 2]>, ExportError
     Ok(out)
 }
 
-/// The GeoJSON map of a mission as a value (see [`geojson`]).
+/// The GeoJSON map of a mission as a value (see [`geojson()`]).
 ///
 /// # Errors
 /// [`ExportError::UnsupportedDocument`], [`ExportError::Coordinate`], [`ExportError::Ring`],

@@ -22,7 +22,7 @@
 //! | --- | --- | --- |
 //! | [`qgc_plan`] | QGroundControl `.plan` (JSON, fileType Plan v1, mission v2) | `params` and `plannedHomePosition`: **lat, lon**, alt |
 //! | [`wpl`] | `QGC WPL 110` text (tab-separated, line 0 = home) | **lat, lon**, alt |
-//! | [`geojson`] | GeoJSON FeatureCollection (RFC 7946) | **`[lon, lat]`** |
+//! | [`geojson()`] | GeoJSON FeatureCollection (RFC 7946) | **`[lon, lat]`** |
 //! | [`flight_notes`] | plain text for the operator, beside the WPL | labelled |
 //!
 //! Both autopilot files command the same MAVLink items, in this order:
