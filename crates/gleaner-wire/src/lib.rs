@@ -62,6 +62,22 @@
 //! Point per stop with its planned energy, the base Point and the sensors as Points. Each
 //! feature's `properties.kind` says which (`cell`, `route`, `stop`, `base`, `sensor`).
 //!
+//! ```
+//! use gleaner_wire::{check_flyable, qgc_plan, samples, wpl, ExportError};
+//!
+//! let mission = samples::adaptive_mission();
+//! check_flyable(&mission)?;
+//! let plan = qgc_plan(&mission)?; // JSON text for mission.plan
+//! let waypoints = wpl(&mission)?; // text for mission.waypoints
+//! assert!(waypoints.lines().any(|l| l.starts_with("2\t0\t2\t178\t1\t10.21\t-1\t")));
+//! assert!(plan.contains("\"hoverSpeed\": 10.21"));
+//!
+//! let mut over = mission.clone();
+//! over.energy.total_j = 87_000.0; // e.g. flown at the autopilot's default 5 m/s
+//! assert!(matches!(wpl(&over), Err(ExportError::OverBudget { .. })));
+//! # Ok::<(), ExportError>(())
+//! ```
+//!
 //! The files are checked against real consumers (pymavlink's `MAVWPLoader`, MAVSDK's QGC and
 //! Mission Planner importers, the `geojson` and `shapely` Python packages) by
 //! `tests/real_consumers.rs`; run `scripts/python-env.sh` once to create their environment.
