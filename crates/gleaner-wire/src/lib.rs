@@ -1,4 +1,5 @@
-//! gleaner's wire formats: versioned serde documents, apart from the application layer.
+//! gleaner's wire formats: versioned serde documents, apart from the application layer, and
+//! the flight files written from them.
 //!
 //! - [`MissionDoc`] (`gleaner.mission` version 1): a planned or flown mission — the JSON
 //!   output of `plan --json`, `explore --json`, the HTTP API's mission resource — and the
@@ -8,12 +9,102 @@
 //!
 //! Positions in documents are WGS84 `[lon, lat]` degrees (GeoJSON order) unless a field's name
 //! says otherwise; lengths m, times s (and RFC 3339 text), energies J, speeds m/s.
+//!
+//! # Flight files
+//!
+//! Pure functions from documents to text; the caller writes the files. Each refuses, with a
+//! typed [`ExportError`], a mission that would not fly as planned (see [`check_flyable`]):
+//! energy over budget, altitude not in (0, 120] m, cruise speed not finite and positive, hover
+//! times not finite and >= 0, positions out of range. Exploration sorties are missions like
+//! any other.
+//!
+//! | function | file | order of coordinates |
+//! | --- | --- | --- |
+//! | [`qgc_plan`] | QGroundControl `.plan` (JSON, fileType Plan v1, mission v2) | `params` and `plannedHomePosition`: **lat, lon**, alt |
+//! | [`wpl`] | `QGC WPL 110` text (tab-separated, line 0 = home) | **lat, lon**, alt |
+//! | [`geojson()`] | GeoJSON FeatureCollection (RFC 7946) | **`[lon, lat]`** |
+//! | [`flight_notes`] | plain text for the operator, beside the WPL | labelled |
+//!
+//! Both autopilot files command the same MAVLink items, in this order:
+//!
+//! 1. (WPL only, line 0) home: `NAV_WAYPOINT` (16), frame 0 (`GLOBAL`), at the base, altitude
+//!    `profile.base_alt_m` m above mean sea level. In the `.plan` the same position is
+//!    `mission.plannedHomePosition` = `[lat, lon, base_alt_m]`.
+//! 2. `NAV_TAKEOFF` (22), frame 3 (`GLOBAL_RELATIVE_ALT`), at the base, to
+//!    `profile.altitude_m` m above home.
+//! 3. `DO_CHANGE_SPEED` (178), frame 2: param1 = 1 (ground speed), param2 =
+//!    `profile.cruise_speed_mps` m/s, param3 = -1 (throttle unchanged). The energy model
+//!    assumed this speed; an autopilot left at its default speed may run out of battery. The
+//!    `.plan`'s `cruiseSpeed` and `hoverSpeed` are the same speed.
+//! 4. One `NAV_WAYPOINT` (16) per stop in visiting order, frame 3, at the cell centre (lat/lon
+//!    rounded to 1e-7 degrees, i.e. within 6 mm), `profile.altitude_m` m above home; param1 =
+//!    hold time, s = the stop's `hover_s` rounded **up** to 0.1 s (also as a MAVLink
+//!    `float32`), so the aircraft hovers at least as long as planned.
+//! 5. `NAV_RETURN_TO_LAUNCH` (20), frame 2.
+//!
+//! Yaw: param4 of take-off and waypoints is NaN — `null` in the `.plan` (as QGroundControl
+//! writes it; MAVSDK reads `null` as NaN) and `nan` in the WPL (as QGroundControl writes it;
+//! pymavlink, MAVSDK and QGroundControl parse it). In MAVLink NaN means "keep the autopilot's
+//! yaw behaviour"; 0 would command a north heading at every waypoint on PX4. param4 of
+//! `DO_CHANGE_SPEED` and all parameters of return-to-launch are 0.
+//!
+//! Metadata: the `.plan` carries a top-level `"gleaner"` object and the GeoJSON collection a
+//! `"gleaner"` foreign member (RFC 7946 §6.1), both a [`FlightMeta`]: mission id, kind,
+//! status, time, planner, weights, anomaly form, base and its altitude, flight altitude,
+//! cruise speed, hold rule, yaw note and the energy breakdown against the budget.
+//! QGroundControl and MAVSDK ignore unknown top-level keys. The WPL carries none:
+//! QGroundControl rejects a file with any line that is not 12 tab-separated fields, so a
+//! `#` comment (which pymavlink and MAVSDK skip) would make it unloadable there; write
+//! [`flight_notes`] beside it.
+//!
+//! The GeoJSON map holds every cell as a Polygon (closed counter-clockwise ring) with its
+//! latest S, F, R, A, U and visiting order, the route LineString base → stops → base, one
+//! Point per stop with its planned energy, the base Point and the sensors as Points. Each
+//! feature's `properties.kind` says which (`cell`, `route`, `stop`, `base`, `sensor`).
+//!
+//! ```
+//! use gleaner_wire::{check_flyable, qgc_plan, samples, wpl, ExportError};
+//!
+//! let mission = samples::adaptive_mission();
+//! check_flyable(&mission)?;
+//! let plan = qgc_plan(&mission)?; // JSON text for mission.plan
+//! let waypoints = wpl(&mission)?; // text for mission.waypoints
+//! assert!(waypoints.lines().any(|l| l.starts_with("2\t0\t2\t178\t1\t10.21\t-1\t")));
+//! assert!(plan.contains("\"hoverSpeed\": 10.21"));
+//!
+//! let mut over = mission.clone();
+//! over.energy.total_j = 87_000.0; // e.g. flown at the autopilot's default 5 m/s
+//! assert!(matches!(wpl(&over), Err(ExportError::OverBudget { .. })));
+//! # Ok::<(), ExportError>(())
+//! ```
+//!
+//! The files are checked against real consumers (pymavlink's `MAVWPLoader`, MAVSDK's QGC and
+//! Mission Planner importers, the `geojson` and `shapely` Python packages) by
+//! `tests/real_consumers.rs`; run `scripts/python-env.sh` once to create their environment.
 #![deny(missing_docs)]
 
 use serde::{Deserialize, Serialize};
 
+mod check;
 pub mod convert;
 pub mod docs;
+mod error;
+mod flight;
+mod geo;
+pub mod samples;
+
+pub use check::{MAX_ALTITUDE_M, MAX_HOVER_S, check_flyable};
+pub use error::ExportError;
+pub use flight::{
+    FlightMeta, HOLD_NOTE, MAV_CMD_DO_CHANGE_SPEED, MAV_CMD_NAV_RETURN_TO_LAUNCH,
+    MAV_CMD_NAV_TAKEOFF, MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL, MAV_FRAME_GLOBAL_RELATIVE_ALT,
+    MAV_FRAME_MISSION, QgcGeoFence, QgcItem, QgcMission, QgcPlan, QgcRallyPoints,
+    SPEED_TYPE_GROUND, THROTTLE_UNCHANGED, YAW_NOTE, flight_notes, qgc_plan, qgc_plan_doc, wpl,
+};
+pub use geo::{
+    BaseProperties, CellProperties, RouteProperties, SensorProperties, StopProperties, geojson,
+    geojson_doc,
+};
 
 /// Format name and version of [`MissionDoc`].
 pub const MISSION_FORMAT: &str = "gleaner.mission";
@@ -202,3 +293,6 @@ pub struct FieldDoc {
     /// Sensors, sorted by id.
     pub sensors: Vec<SensorDoc>,
 }
+
+#[cfg(test)]
+mod tests;
