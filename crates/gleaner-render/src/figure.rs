@@ -198,9 +198,10 @@ impl EnergyTable {
         for (k, h) in self.heads.iter().enumerate() {
             let (markup, _) = subscripted(h, font, true);
             svg.line(format_args!(
-                r#"<text x="{}" y="{}" text-anchor="end" font-weight="bold">{markup}</text>"#,
+                r#"<text x="{}" y="{}" font-size="{}" text-anchor="end" font-weight="bold">{markup}</text>"#,
                 N(rights[k]),
-                N(y1)
+                N(y1),
+                N(font)
             ));
         }
         let mid = top + 0.3 * font + lh + 0.1 * font;
@@ -209,9 +210,9 @@ impl EnergyTable {
         let y3 = y2 + lh;
         svg.text(x, y2, font, Anchor::Start, false, Self::ROW_KJ);
         svg.text(x, y3, font, Anchor::Start, false, Self::ROW_PCT);
-        for k in 0..6 {
-            svg.text(rights[k], y2, font, Anchor::End, k == 4, &self.kj[k]);
-            svg.text(rights[k], y3, font, Anchor::End, k == 4, &self.pct[k]);
+        for (k, &r) in rights.iter().enumerate() {
+            svg.text(r, y2, font, Anchor::End, k == 4, &self.kj[k]);
+            svg.text(r, y3, font, Anchor::End, k == 4, &self.pct[k]);
         }
         let bottom = y3 + (lh - 0.5 * lh - 0.5 * cap) + 0.1 * font;
         rule(svg, bottom, 0.6);
@@ -366,7 +367,7 @@ pub fn mission_figure_svg(
         },
         Entry {
             symbol: Symbol::Stop(frame::stop_radius(font, 1)),
-            text: "stop, in order".into(),
+            text: "stop, visiting order".into(),
         },
         Entry {
             symbol: Symbol::Route(ROUTE, 0),

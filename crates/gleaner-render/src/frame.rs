@@ -212,12 +212,15 @@ impl Scene {
     }
 }
 
+/// A mission's base and stops in the local frame, m.
+pub(crate) type Route = ((f64, f64), Vec<(f64, f64)>);
+
 /// Checks a mission's numbers and returns its base and stops in the local frame.
 pub(crate) fn mission_points(
     projection: &Projection,
     m: &MissionDoc,
     label: &str,
-) -> Result<((f64, f64), Vec<(f64, f64)>), RenderError> {
+) -> Result<Route, RenderError> {
     let base = projection.local(lon_lat(|| format!("{label} base"), m.profile.base_lon_lat)?);
     let mut stops = Vec::with_capacity(m.stops.len());
     for s in &m.stops {
@@ -361,8 +364,8 @@ fn axis_ticks(
 pub(crate) struct Axes {
     pub(crate) x: Vec<Tick>,
     pub(crate) y: Vec<Tick>,
-    pub(crate) x_title: &'static str,
-    pub(crate) y_title: &'static str,
+    pub(crate) x_title: String,
+    pub(crate) y_title: String,
 }
 
 impl Axes {
@@ -385,10 +388,25 @@ impl Axes {
             font,
             false,
         );
-        let (x_title, y_title) = match coords {
-            Coordinates::LocalMetres => ("metres east of base", "metres north of base"),
-            Coordinates::Degrees => ("longitude (°E)", "latitude (°N)"),
+        let (x_long, y_long, x_short, y_short) = match coords {
+            Coordinates::LocalMetres => (
+                "metres east of base",
+                "metres north of base",
+                "east (m)",
+                "north (m)",
+            ),
+            Coordinates::Degrees => ("longitude (°E)", "latitude (°N)", "lon (°)", "lat (°)"),
         };
+        // The long title when it fits along the axis, else the short one (cut if need be).
+        let pick = |long: &'static str, short: &'static str, len: f64| -> String {
+            if text_width(long, font, false) <= len {
+                long.to_string()
+            } else {
+                crate::svg::fit(short, font, false, len)
+            }
+        };
+        let x_title = pick(x_long, x_short, view.w);
+        let y_title = pick(y_long, y_short, view.h);
         Self {
             x,
             y,
@@ -481,7 +499,7 @@ pub(crate) fn draw_axes(
         font,
         Anchor::Middle,
         false,
-        axes.x_title,
+        &axes.x_title,
     );
     let (cx, cy) = (y_title_x + 0.93 * font, view.y + 0.5 * view.h);
     svg.text_attrs(
@@ -491,7 +509,7 @@ pub(crate) fn draw_axes(
         Anchor::Middle,
         false,
         &format!(r#"transform="rotate(-90 {} {})""#, N(cx), N(cy)),
-        axes.y_title,
+        &axes.y_title,
     );
     svg.line(format_args!("</g>"));
 }
@@ -857,8 +875,28 @@ pub(crate) fn legend_row_height(font: f64) -> f64 {
     1.3 * font
 }
 
-/// Lays the entries out in as many equal columns as fit in `width` pt, row by row, from
-/// `top`. Returns the height used, pt.
+/// The legend's columns: entries are listed down the columns in order (so related entries
+/// stay together); as many columns as fit in `width` pt. Returns the rows and each column's
+/// width, pt.
+fn legend_columns(entries: &[Entry], width: f64, font: f64) -> (usize, Vec<f64>) {
+    let item = |e: &Entry| symbol_width(font) + 0.4 * font + text_width(&e.text, font, false);
+    let gap = LEGEND_COL_GAP * font;
+    for cols in (1..=entries.len()).rev() {
+        let rows = entries.len().div_ceil(cols);
+        let widths: Vec<f64> = entries
+            .chunks(rows)
+            .map(|col| col.iter().map(item).fold(0.0, f64::max))
+            .collect();
+        let total = widths.iter().sum::<f64>() + gap * (widths.len() as f64 - 1.0);
+        if total <= width || cols == 1 {
+            return (rows, widths);
+        }
+    }
+    (0, Vec::new())
+}
+
+/// Draws the legend from `top` at `x`, at most `width` pt wide, columns spread over the
+/// width. Returns the height used, pt.
 pub(crate) fn draw_legend(
     svg: &mut Svg,
     id: &str,
@@ -871,42 +909,38 @@ pub(crate) fn draw_legend(
     if entries.is_empty() {
         return 0.0;
     }
-    let sw = symbol_width(font);
-    let gap = 0.4 * font;
-    let col_w = entries
-        .iter()
-        .map(|e| sw + gap + text_width(&e.text, font, false) + LEGEND_COL_GAP * font)
-        .fold(0.0, f64::max);
-    let cols = ((width + LEGEND_COL_GAP * font) / col_w)
-        .floor()
-        .clamp(1.0, entries.len() as f64) as usize;
-    let rows = entries.len().div_ceil(cols);
-    // Spread the columns over the width.
-    let col_w = if cols > 1 {
-        col_w.max(width / cols as f64)
+    let (rows, widths) = legend_columns(entries, width, font);
+    let used: f64 = widths.iter().sum();
+    // Spread the spare width between the columns.
+    let gap = if widths.len() > 1 {
+        ((width - used) / (widths.len() as f64 - 1.0)).min(3.0 * font)
     } else {
-        width
+        0.0
     };
+    let sw = symbol_width(font);
     let lh = legend_row_height(font);
     svg.line(format_args!(r#"<g id="{id}">"#));
-    for (k, e) in entries.iter().enumerate() {
-        let (row, col) = (k / cols, k % cols);
-        let ex = x + col as f64 * col_w;
-        let cy = top + (row as f64 + 0.5) * lh;
-        svg.line(format_args!(r#"<g class="legend-entry">"#));
-        draw_symbol(svg, &e.symbol, ex, cy, font);
-        let max_text = col_w - sw - gap - 0.4 * font;
-        let text = crate::svg::fit(&e.text, font, false, max_text);
-        svg.text_attrs(
-            ex + sw + gap,
-            cy + 0.5 * CAP_HEIGHT_EM * font,
-            font,
-            Anchor::Start,
-            false,
-            &format!(r#"fill="{INK}""#),
-            &text,
-        );
-        svg.line(format_args!("</g>"));
+    let mut col_x = x;
+    for (c, col) in entries.chunks(rows.max(1)).enumerate() {
+        let col_w = widths.get(c).copied().unwrap_or(width);
+        for (row, e) in col.iter().enumerate() {
+            let cy = top + (row as f64 + 0.5) * lh;
+            svg.line(format_args!(r#"<g class="legend-entry">"#));
+            draw_symbol(svg, &e.symbol, col_x, cy, font);
+            let max_text = (x + width - col_x) - sw - 0.4 * font;
+            let text = crate::svg::fit(&e.text, font, false, max_text);
+            svg.text_attrs(
+                col_x + sw + 0.4 * font,
+                cy + 0.5 * CAP_HEIGHT_EM * font,
+                font,
+                Anchor::Start,
+                false,
+                &format!(r#"fill="{INK}""#),
+                &text,
+            );
+            svg.line(format_args!("</g>"));
+        }
+        col_x += col_w + gap;
     }
     svg.line(format_args!("</g>"));
     rows as f64 * lh
@@ -917,19 +951,7 @@ pub(crate) fn legend_height(entries: &[Entry], width: f64, font: f64) -> f64 {
     if entries.is_empty() {
         return 0.0;
     }
-    let col_w = entries
-        .iter()
-        .map(|e| {
-            symbol_width(font)
-                + 0.4 * font
-                + text_width(&e.text, font, false)
-                + LEGEND_COL_GAP * font
-        })
-        .fold(0.0, f64::max);
-    let cols = ((width + LEGEND_COL_GAP * font) / col_w)
-        .floor()
-        .clamp(1.0, entries.len() as f64) as usize;
-    entries.len().div_ceil(cols) as f64 * legend_row_height(font)
+    legend_columns(entries, width, font).0 as f64 * legend_row_height(font)
 }
 
 /// Draws a route: the outbound legs solid, the return leg dashed, each leg with an arrowhead
