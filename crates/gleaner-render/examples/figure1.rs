@@ -1,4 +1,5 @@
-//! Renders the example mission figure and exploration map (SVG and PNG) into a directory.
+//! Renders the example mission figure and exploration map into a directory: SVG (text as
+//! text, DejaVu Sans), SVG with the text outlined (needs no font: for PDF/LaTeX) and PNG.
 //!
 //! ```text
 //! cargo run -p gleaner-render --example figure1 -- [OUT_DIR] [WIDTH_PX]
@@ -7,7 +8,9 @@
 
 use std::path::PathBuf;
 
-use gleaner_render::{FigureOptions, example, exploration_map_svg, mission_figure_svg, svg_to_png};
+use gleaner_render::{
+    FigureOptions, example, exploration_map_svg, mission_figure_svg, outline_text, svg_to_png,
+};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -32,9 +35,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (name, svg) in figures {
         let svg_path = dir.join(format!("{name}.svg"));
         let png_path = dir.join(format!("{name}.png"));
+        let outlined_path = dir.join(format!("{name}-outlined.svg"));
         std::fs::write(&svg_path, &svg)?;
+        std::fs::write(&outlined_path, outline_text(&svg)?)?;
         std::fs::write(&png_path, svg_to_png(&svg, width_px)?)?;
-        println!("{}\n{}", svg_path.display(), png_path.display());
+        for p in [svg_path, outlined_path, png_path] {
+            println!("{}", p.display());
+        }
     }
     Ok(())
 }

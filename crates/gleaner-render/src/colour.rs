@@ -53,6 +53,21 @@ pub(crate) fn sequential(t: f64) -> Rgb {
     Rgb(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
+/// The `<stop>`s of an SVG gradient equal to [`sequential`] over [0, 1].
+pub(crate) fn ramp_stops() -> String {
+    VIRIDIS
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            format!(
+                r#"<stop offset="{}" stop-color="{}"/>"#,
+                k as f64 / (VIRIDIS.len() - 1) as f64,
+                c.hex()
+            )
+        })
+        .collect()
+}
+
 /// Okabe & Ito's colour-blind-safe qualitative palette, without its yellow (too light for
 /// lines on white) and black (the base and sensors are black).
 const QUALITATIVE: [Rgb; 6] = [

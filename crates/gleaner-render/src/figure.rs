@@ -462,21 +462,18 @@ pub fn mission_figure_svg(
             &format!(r#"fill="{INK}""#),
             "S",
         );
-        // The bar as thin bands, top = high S.
-        let bands = 64;
-        for b in 0..bands {
-            let t0 = b as f64 / bands as f64;
-            let y0 = bar_bottom - (t0 + 1.0 / bands as f64) * len;
-            let c = colour::sequential(t0 + 0.5 / bands as f64);
-            svg.line(format_args!(
-                r#"<rect x="{}" y="{}" width="{}" height="{}" fill="{}"/>"#,
-                N(bx),
-                N(y0),
-                N(bar_w),
-                N(len / bands as f64 + 0.05),
-                c.hex()
-            ));
-        }
+        // The bar: a vertical gradient through the colour map's anchors, top = high S.
+        svg.line(format_args!(
+            r#"<defs><linearGradient id="s-ramp" x1="0" y1="1" x2="0" y2="0">{}</linearGradient></defs>"#,
+            colour::ramp_stops()
+        ));
+        svg.line(format_args!(
+            r#"<rect x="{}" y="{}" width="{}" height="{}" fill="url(#s-ramp)"/>"#,
+            N(bx),
+            N(bar_top),
+            N(bar_w),
+            N(len)
+        ));
         svg.line(format_args!(
             r#"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="{INK}" stroke-width="0.4"/>"#,
             N(bx),

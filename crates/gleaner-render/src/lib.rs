@@ -7,7 +7,8 @@
 //!   scale bar, a legend and the energy breakdown in kJ.
 //! - [`exploration_map_svg`]: the exploration sorties on one map, one colour per sortie.
 //! - [`svg_to_png`]: rasterises either with resvg, loading only the bundled DejaVu Sans
-//!   ([`FONT_FAMILY`]), so output is the same on every machine.
+//!   ([`FONT_FAMILY`]), so output is the same on every machine; [`outline_text`] turns the
+//!   text of a figure into outlines of that font for a vector file that needs no fonts.
 //!
 //! Inputs are the wire documents ([`FieldDoc`], [`MissionDoc`]); positions are WGS84
 //! `[lon, lat]` degrees, projected here onto a local equirectangular frame centred on the
@@ -40,7 +41,7 @@ mod ticks;
 pub use exploration::exploration_map_svg;
 pub use figure::mission_figure_svg;
 pub use font::FONT_FAMILY;
-pub use png::{MAX_PNG_SIDE_PX, parse_svg, svg_to_png};
+pub use png::{MAX_PNG_SIDE_PX, outline_text, parse_svg, svg_to_png};
 
 /// The SVG parser used by [`parse_svg`] (resvg's), for inspecting parsed figures.
 pub use resvg::usvg;

@@ -40,6 +40,44 @@ pub fn parse_svg(svg: &str) -> Result<usvg::Tree, RenderError> {
     usvg::Tree::from_str(svg, &opts).map_err(|e| RenderError::Svg(e.to_string()))
 }
 
+/// A figure of this crate with its text turned into outlines (paths) of the bundled font:
+/// a self-contained vector file that looks the same in any SVG viewer or converter
+/// (Inkscape, rsvg-convert to PDF for LaTeX) whatever fonts it has. The physical size is
+/// kept, in mm.
+///
+/// Errors: SVG that does not parse.
+pub fn outline_text(svg: &str) -> Result<String, RenderError> {
+    let tree = parse_svg(svg)?;
+    let opts = usvg::WriteOptions {
+        coordinates_precision: 3,
+        transforms_precision: 5,
+        ..usvg::WriteOptions::default()
+    };
+    let out = tree.to_string(&opts);
+    // usvg writes the size in CSS px (96 per inch); state it in mm as the figure did.
+    let size = tree.size();
+    let mm = |px: f32| format!("{:.2}mm", f64::from(px) * 25.4 / 96.0);
+    let Some(end) = out.find('>') else {
+        return Ok(out);
+    };
+    let (head, rest) = out.split_at(end);
+    let head = replace_attr(head, "width", &mm(size.width()));
+    let head = replace_attr(&head, "height", &mm(size.height()));
+    Ok(head + rest)
+}
+
+/// `tag` with attribute `name`'s value set to `value` (unchanged if it has none).
+fn replace_attr(tag: &str, name: &str, value: &str) -> String {
+    let key = format!(" {name}=\"");
+    if let Some(start) = tag.find(&key) {
+        let from = start + key.len();
+        if let Some(len) = tag[from..].find('"') {
+            return format!("{}{value}{}", &tag[..from], &tag[from + len..]);
+        }
+    }
+    tag.to_string()
+}
+
 /// Renders SVG text to a PNG `width_px` pixels wide (height from the SVG's aspect ratio),
 /// with the bundled DejaVu Sans for all text. An 85 mm figure at 300 dpi is 1004 px wide.
 ///

@@ -211,6 +211,22 @@ fn pngs_decode_at_the_asked_width() {
 }
 
 #[test]
+fn outlined_text_needs_no_font() {
+    let (field, mission) = (example::field(), example::mission());
+    let svg = mission_figure_svg(&field, &mission, &FigureOptions::default()).unwrap();
+    let out = gleaner_render::outline_text(&svg).unwrap();
+    assert!(!out.contains("<text"));
+    assert!(out.contains(r#"width="85.00mm""#), "{}", &out[..200]);
+    let a = parse_svg(&svg).unwrap().size();
+    let b = parse_svg(&out).unwrap().size();
+    assert!((a.width() - b.width()).abs() < 0.01 && (a.height() - b.height()).abs() < 0.01);
+    assert!(matches!(
+        gleaner_render::outline_text("<svg"),
+        Err(RenderError::Svg(_))
+    ));
+}
+
+#[test]
 fn output_is_deterministic() {
     let (field, mission) = (example::field(), example::mission());
     let opts = FigureOptions::default();
