@@ -471,7 +471,7 @@ fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
 }
 
 fn parse_time(s: &str) -> Result<i64, String> {
-    gleaner_ingest::time::parse_timestamp(s).ok_or_else(|| {
+    gleaner_app::parse_timestamp(s).ok_or_else(|| {
         format!("expected RFC 3339 (2014-03-01T12:00:00Z) or a date (2014-03-01), got {s:?}")
     })
 }

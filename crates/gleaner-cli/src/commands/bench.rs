@@ -32,6 +32,8 @@ pub struct BenchOpArgs {
     /// Stop each instance after this many search iterations (machine-independent results);
     /// the time limit still applies.
     pub iterations: Option<u64>,
+    /// Also write every route here (node ids as in the instance files).
+    pub routes: Option<PathBuf>,
 }
 
 /// Parses a solver name.
