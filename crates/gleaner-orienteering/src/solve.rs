@@ -120,6 +120,17 @@ pub enum SolverKind {
     Exact,
 }
 
+impl SolverKind {
+    /// The solver's name as written in outputs: `greedy`, `default`, `exact`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverKind::Greedy => "greedy",
+            SolverKind::Default => "default",
+            SolverKind::Exact => "exact",
+        }
+    }
+}
+
 /// Runs the chosen solver.
 pub fn solve(
     problem: &Problem,
