@@ -3,7 +3,6 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use gleaner_energy::{CellService, MissionEnergy, MissionEnergyModel};
 use gleaner_field::{LocalPoint, UnixSeconds};
@@ -285,10 +284,12 @@ pub fn plan<S: Store>(
         .collect();
     let options = PlanOptions {
         planner,
-        time_limit: Duration::from_secs_f64(time_limit_s),
         seed,
         max_iterations: request.max_iterations,
-    };
+        ..PlanOptions::default()
+    }
+    .with_time_limit_secs(time_limit_s)
+    .map_err(|e| AppError::core("planner", e))?;
     let base = LocalPoint::new(0.0, 0.0);
     let plan = plan_mission(&model, base, &candidates, &options)
         .map_err(|e| AppError::core("planner", e))?;

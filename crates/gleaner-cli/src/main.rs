@@ -805,7 +805,10 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 None => {
                     let all = app::missions(&p)?;
-                    let docs: Vec<_> = all.iter().map(gleaner_wire::convert::stored_mission).collect();
+                    let docs: Vec<_> = all
+                        .iter()
+                        .map(gleaner_wire::convert::stored_mission)
+                        .collect();
                     emit(json, &docs, "serialising missions", || missions_table(&all))?;
                 }
             }
@@ -865,7 +868,10 @@ fn run(cli: Cli) -> Result<()> {
                 sensors,
                 farm.reading_count(),
                 farm.events().len(),
-                files.sensors.parent().map_or(String::new(), |p| p.display().to_string())
+                files
+                    .sensors
+                    .parent()
+                    .map_or(String::new(), |p| p.display().to_string())
             );
         }
         Command::Demo {
