@@ -278,3 +278,22 @@ pub fn relative_to(path: &Path, dir: &Path) -> String {
     }
     rel.display().to_string()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sensors_path_is_kept_relative_to_the_project() {
+        let tmp = tempfile::tempdir().unwrap();
+        let data = tmp.path().join("data");
+        let project = tmp.path().join("farms").join("north");
+        std::fs::create_dir_all(&data).unwrap();
+        std::fs::create_dir_all(&project).unwrap();
+        let sensors = data.join("sensors.csv");
+        std::fs::write(&sensors, "id,lat,lon\n").unwrap();
+        let rel = relative_to(&sensors, &project);
+        assert_eq!(rel, "../../data/sensors.csv");
+        assert!(project.join(&rel).exists());
+    }
+}
