@@ -75,6 +75,7 @@ fn long_csv(c: &mut Criterion) {
 fn caf_into_fresh_db(files: &[PathBuf], db: &std::path::Path) -> u64 {
     use gleaner_store::{
         ConflictPolicy, ModalityRecord, Reading, ReadingBatch, SensorRecord, SqliteStore, Store,
+        StoreWrite,
     };
     let mut all = gleaner_ingest::Readings::default();
     for f in files {
@@ -95,7 +96,6 @@ fn caf_into_fresh_db(files: &[PathBuf], db: &std::path::Path) -> u64 {
             source: "bench".into(),
         })
         .collect();
-    store.upsert_sensors(&sensors).expect("sensors");
     let modalities: Vec<ModalityRecord> = all
         .modalities
         .iter()
@@ -119,7 +119,11 @@ fn caf_into_fresh_db(files: &[PathBuf], db: &std::path::Path) -> u64 {
             .collect(),
     };
     store
-        .ingest(&modalities, &batch, ConflictPolicy::Fail, &[])
+        .write(|tx| {
+            tx.upsert_sensors(&sensors)?;
+            tx.upsert_modalities(&modalities)?;
+            tx.insert_readings(&batch, ConflictPolicy::Fail)
+        })
         .expect("insert")
         .inserted
 }
