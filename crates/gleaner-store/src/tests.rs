@@ -2,7 +2,7 @@
 //! SQLite has (files, migrations, locking, crash safety).
 
 use std::path::Path;
-use std::time::{Duration, Instant};
+
 
 use gleaner_field::{CellIndex, LatLon, Modality, SensorId, UnixSeconds};
 
@@ -471,24 +471,27 @@ fn replace_cells_leaves_no_orphan_rows() {
 }
 
 /// A second writer on the same file waits for the first (IMMEDIATE transactions and the busy
-/// timeout) instead of failing with "database is locked".
+/// timeout) instead of failing with "database is locked". Explicit synchronisation, no sleeps:
+/// the first writer holds its transaction until the second has been started, and the second
+/// must see the first's commit.
 #[test]
 fn a_second_writer_waits_for_the_first() {
+    use std::sync::mpsc::channel;
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("g.db");
     let mut first = SqliteStore::open(&path).unwrap();
     store_with_network(&mut first);
     let mut second = SqliteStore::open(&path).unwrap();
-    let (started_tx, started_rx) = std::sync::mpsc::channel();
-    let hold = Duration::from_millis(400);
+    let (in_tx, in_rx) = channel();
+    let (go_tx, go_rx) = channel::<()>();
     let writer = std::thread::spawn(move || {
         first
             .write(|tx| {
                 // Read first, as a use case does; a deferred transaction would then fail to
                 // upgrade to a write while the other connection writes.
                 let n = tx.reading_count()?;
-                started_tx.send(()).unwrap();
-                std::thread::sleep(hold);
+                in_tx.send(()).unwrap();
+                go_rx.recv().unwrap();
                 tx.insert_readings(
                     &batch(&[("a", "vw@30cm", T0 + n as i64, 1.0)]),
                     ConflictPolicy::Fail,
@@ -496,17 +499,23 @@ fn a_second_writer_waits_for_the_first() {
             })
             .unwrap();
     });
+    in_rx.recv().unwrap();
+    let (started_tx, started_rx) = channel();
+    let other = std::thread::spawn(move || {
+        started_tx.send(()).unwrap();
+        second
+            .write(|tx| {
+                let n = tx.reading_count()?;
+                assert_eq!(n, 1, "the second writer must see the first's commit");
+                tx.insert_readings(&batch(&[("b", "vw@30cm", T0, 2.0)]), ConflictPolicy::Fail)
+            })
+            .unwrap();
+        second
+    });
     started_rx.recv().unwrap();
-    let t = Instant::now();
-    second
-        .write(|tx| {
-            let n = tx.reading_count()?;
-            assert_eq!(n, 1, "the second writer must see the first's commit");
-            tx.insert_readings(&batch(&[("b", "vw@30cm", T0, 2.0)]), ConflictPolicy::Fail)
-        })
-        .unwrap();
-    assert!(t.elapsed() >= hold / 2, "the second writer did not wait");
+    go_tx.send(()).unwrap();
     writer.join().unwrap();
+    let second = other.join().unwrap();
     assert_eq!(second.reading_count().unwrap(), 2);
 }
 
@@ -527,6 +536,8 @@ fn killed_writer_child() {
         store
             .write(|tx| tx.insert_readings(&b, ConflictPolicy::Fail))
             .unwrap();
+        // Tell the parent what has been committed.
+        println!("committed {round}");
     }
 }
 
@@ -544,12 +555,22 @@ fn a_killed_writer_leaves_whole_transactions_only() {
     let mut child = std::process::Command::new(exe)
         .args(["--exact", "tests::killed_writer_child", "--test-threads=1"])
         .env("GLEANER_STORE_KILL_TEST_DB", &path)
-        .stdout(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
-    // Kill at some point while it writes (after at least one commit most of the time).
-    std::thread::sleep(Duration::from_millis(1500));
+    // Kill it in the middle of a write, driven by what it has committed (no sleeps): right
+    // after it reports its third commit it is inside the fourth transaction.
+    let mut lines = std::io::BufRead::lines(std::io::BufReader::new(
+        child.stdout.take().unwrap(),
+    ));
+    let mut commits = 0;
+    while commits < 3 {
+        let line = lines.next().expect("the writer stopped early").unwrap();
+        if line.starts_with("committed ") {
+            commits += 1;
+        }
+    }
     child.kill().unwrap();
     child.wait().unwrap();
     let store = SqliteStore::open(&path).unwrap();
