@@ -3,7 +3,6 @@
 
 use std::path::Path;
 
-
 use gleaner_field::{CellIndex, LatLon, Modality, SensorId, UnixSeconds};
 
 use crate::schema::{self, Migration};
@@ -553,7 +552,12 @@ fn a_killed_writer_leaves_whole_transactions_only() {
     }
     let exe = std::env::current_exe().unwrap();
     let mut child = std::process::Command::new(exe)
-        .args(["--exact", "tests::killed_writer_child", "--test-threads=1"])
+        .args([
+            "--exact",
+            "tests::killed_writer_child",
+            "--test-threads=1",
+            "--nocapture",
+        ])
         .env("GLEANER_STORE_KILL_TEST_DB", &path)
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::null())
@@ -561,9 +565,7 @@ fn a_killed_writer_leaves_whole_transactions_only() {
         .unwrap();
     // Kill it in the middle of a write, driven by what it has committed (no sleeps): right
     // after it reports its third commit it is inside the fourth transaction.
-    let mut lines = std::io::BufRead::lines(std::io::BufReader::new(
-        child.stdout.take().unwrap(),
-    ));
+    let mut lines = std::io::BufRead::lines(std::io::BufReader::new(child.stdout.take().unwrap()));
     let mut commits = 0;
     while commits < 3 {
         let line = lines.next().expect("the writer stopped early").unwrap();
