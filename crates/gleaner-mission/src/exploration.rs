@@ -31,7 +31,7 @@
 //! use gleaner_field::LocalPoint;
 //! use gleaner_mission::exploration::{ExplorationOptions, plan_exploration};
 //!
-//! let model = paper();
+//! let model = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
 //! // 30 cells of 40 m in a row; each hover costs 30 s at P(0) + P_rx.
 //! let cells: Vec<LocalPoint> = (0..30).map(|i| LocalPoint::new(20.0 + 40.0 * i as f64, 20.0)).collect();
 //! let service = vec![model.service_energy_j(30.0); cells.len()];
