@@ -81,9 +81,8 @@ enum Command {
         /// Files to ingest.
         #[arg(required = true)]
         files: Vec<PathBuf>,
-        /// Project directory.
-        #[arg(long, default_value = ".")]
-        project: PathBuf,
+        #[command(flatten)]
+        project: ProjectArg,
         /// File format.
         #[arg(long, value_enum, default_value_t = FormatArg::Auto)]
         format: FormatArg,
@@ -109,12 +108,10 @@ enum Command {
         after_help = "Examples:\n  gleaner cells --project farm\n  gleaner cells --project farm --sort score --json"
     )]
     Cells {
-        /// Project directory.
-        #[arg(long, default_value = ".")]
-        project: PathBuf,
-        /// Print JSON instead of a table.
-        #[arg(long)]
-        json: bool,
+        #[command(flatten)]
+        project: ProjectArg,
+        #[command(flatten)]
+        json: JsonArg,
         /// Order of the rows.
         #[arg(long, value_enum, default_value_t = SortArg::Label)]
         sort: SortArg,
@@ -125,17 +122,15 @@ enum Command {
         after_help = "S = alpha·F + beta·A + gamma·U − delta·R with the weights of [utility] in gleaner.toml.\nU comes from the built-in condition model (dry/adequate/wet from soil moisture) or from\n--probabilities (CSV: cell_id,p_1,...,p_K with a header).\n\nExamples:\n  gleaner score --project caf --at 2014-03-01 --history-from 2011-01-01 --history-until 2013-12-31\n  gleaner score --project farm --json --limit 20"
     )]
     Score {
-        /// Project directory.
-        #[arg(long, default_value = ".")]
-        project: PathBuf,
+        #[command(flatten)]
+        project: ProjectArg,
         #[command(flatten)]
         when: WhenArgs,
         /// Per-cell class probabilities from your own model, instead of the built-in one.
         #[arg(long)]
         probabilities: Option<PathBuf>,
-        /// Print JSON instead of a table.
-        #[arg(long)]
-        json: bool,
+        #[command(flatten)]
+        json: JsonArg,
         /// Rows of the table.
         #[arg(long, default_value_t = 20)]
         limit: usize,
@@ -150,9 +145,8 @@ enum Command {
         after_help = "Energy settings come from [energy] in gleaner.toml (preset `paper`: 66.5 kJ usable,\nmax-endurance cruise, 30 s hover overhead).\n\nExamples:\n  gleaner plan --project farm\n  gleaner plan --project caf --at 2014-03-01 --history-until 2013-12-31 --solver greedy\n  gleaner plan --project farm --scores my_scores.csv --json"
     )]
     Plan {
-        /// Project directory.
-        #[arg(long, default_value = ".")]
-        project: PathBuf,
+        #[command(flatten)]
+        project: ProjectArg,
         #[command(flatten)]
         when: WhenArgs,
         /// Per-cell scores (CSV `cell_id,score` with a header) instead of the utility engine;
@@ -172,9 +166,8 @@ enum Command {
         /// machine's speed (the time limit still applies).
         #[arg(long)]
         iterations: Option<u64>,
-        /// Print JSON instead of a table.
-        #[arg(long)]
-        json: bool,
+        #[command(flatten)]
+        json: JsonArg,
         /// Do not store the mission.
         #[arg(long)]
         dry_run: bool,
@@ -185,15 +178,13 @@ enum Command {
         after_help = "Examples:\n  gleaner explore --project farm\n  gleaner explore --project caf --json --dry-run"
     )]
     Explore {
-        /// Project directory.
-        #[arg(long, default_value = ".")]
-        project: PathBuf,
+        #[command(flatten)]
+        project: ProjectArg,
         /// Planning time (RFC 3339 or date) [default: the latest reading].
         #[arg(long, value_parser = parse_time)]
         at: Option<i64>,
-        /// Print JSON instead of a table.
-        #[arg(long)]
-        json: bool,
+        #[command(flatten)]
+        json: JsonArg,
         /// Do not store the sorties.
         #[arg(long)]
         dry_run: bool,
@@ -204,9 +195,8 @@ enum Command {
         after_help = "Waypoints: take-off, one NAV_WAYPOINT (16) per cell at the cell centre holding for the\nplanned hover time (param 1), return-to-launch (20); altitude from [energy] altitude_m.\n\nExamples:\n  gleaner export --project farm --mission 1\n  gleaner export --project farm --mission 1 --out flight1"
     )]
     Export {
-        /// Project directory.
-        #[arg(long, default_value = ".")]
-        project: PathBuf,
+        #[command(flatten)]
+        project: ProjectArg,
         /// The mission's id (printed by `gleaner plan`).
         #[arg(long)]
         mission: i64,
@@ -218,9 +208,8 @@ enum Command {
     /// (SVG and PNG).
     #[command(after_help = "Example:\n  gleaner map-exploration --project farm")]
     MapExploration {
-        /// Project directory.
-        #[arg(long, default_value = ".")]
-        project: PathBuf,
+        #[command(flatten)]
+        project: ProjectArg,
         /// Output directory [default: <project>/missions].
         #[arg(long)]
         out: Option<PathBuf>,
@@ -231,9 +220,8 @@ enum Command {
         after_help = "Examples:\n  gleaner record --project farm --mission 1\n  gleaner record --project farm --mission 1 --at 2014-06-30T10:00:00Z --cells x1y2,x3y0 flight1.csv"
     )]
     Record {
-        /// Project directory.
-        #[arg(long, default_value = ".")]
-        project: PathBuf,
+        #[command(flatten)]
+        project: ProjectArg,
         /// The planned mission's id (printed by `gleaner plan`).
         #[arg(long)]
         mission: i64,
@@ -256,9 +244,8 @@ enum Command {
         after_help = "Examples:\n  gleaner missions --project farm\n  gleaner missions --project farm --mission 3 --json"
     )]
     Missions {
-        /// Project directory.
-        #[arg(long, default_value = ".")]
-        project: PathBuf,
+        #[command(flatten)]
+        project: ProjectArg,
         /// Show this mission with its stops and energy breakdown.
         #[arg(long)]
         mission: Option<i64>,
@@ -273,41 +260,7 @@ enum Command {
     #[command(
         after_help = "Defaults are calibrated to the CAF network (VW range, day-to-day change, spatial correlation).\n\nExamples:\n  gleaner synth --out farm-data --sensors 60 --days 120 --seed 1\n  gleaner synth --out big --sensors 10000 --days 365 --scale-extent --vw-depths 30 --t-depths 30"
     )]
-    Synth {
-        /// Output directory (sensors.csv, readings.csv, ground_truth.csv, faults.csv).
-        #[arg(long)]
-        out: PathBuf,
-        /// Seed: the same seed gives byte-identical files.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Number of sensor stations.
-        #[arg(long, default_value_t = 42)]
-        sensors: usize,
-        /// Days of record.
-        #[arg(long, default_value_t = 365)]
-        days: u32,
-        /// Sampling interval, seconds (a divisor of 86400).
-        #[arg(long, default_value_t = 86_400)]
-        interval_s: i64,
-        /// Number of localised ground-truth events (leak, drying patch, failing sensor).
-        #[arg(long, default_value_t = 3)]
-        events: usize,
-        /// Correlation length of the spatial fields, metres.
-        #[arg(long, default_value_t = 500.0)]
-        correlation_length: f64,
-        /// No sensor faults (dropouts, spikes, stuck values).
-        #[arg(long)]
-        no_faults: bool,
-        /// Grow the field with the sensor count to keep CAF's sensor density.
-        #[arg(long)]
-        scale_extent: bool,
-        /// Soil-moisture depths, cm (modalities vw@<d>cm); empty for none.
-        #[arg(long, value_delimiter = ',', default_value = "30,60,90")]
-        vw_depths: Vec<u32>,
-        /// Soil-temperature depths, cm (modalities t@<d>cm); empty for none.
-        #[arg(long, value_delimiter = ',', default_value = "30")]
-        t_depths: Vec<u32>,
-    },
+    Synth(SynthCmd),
     /// The main job on built-in data: synthetic farm -> project -> ingest -> scores -> mission
     /// (against the paper's greedy) -> mission files -> recorded flight -> rescoring.
     #[command(after_help = "Example:\n  gleaner demo --dir gleaner-demo --seed 1")]
@@ -329,6 +282,102 @@ enum Command {
         #[arg(long)]
         data: Option<PathBuf>,
     },
+}
+
+// The arguments of `gleaner synth` (no doc comment: the variant's is the command's help).
+#[derive(Args)]
+struct SynthCmd {
+    /// Output directory (sensors.csv, readings.csv, ground_truth.csv, faults.csv).
+    #[arg(long)]
+    out: PathBuf,
+    /// Seed: the same seed gives byte-identical files.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Number of sensor stations.
+    #[arg(long, default_value_t = 42)]
+    sensors: usize,
+    /// Days of record.
+    #[arg(long, default_value_t = 365)]
+    days: u32,
+    /// Sampling interval, seconds (a divisor of 86400).
+    #[arg(long, default_value_t = 86_400)]
+    interval_s: i64,
+    /// Number of localised ground-truth events (leak, drying patch, failing sensor).
+    #[arg(long, default_value_t = 3)]
+    events: usize,
+    /// Correlation length of the spatial fields, metres.
+    #[arg(long, default_value_t = 500.0)]
+    correlation_length: f64,
+    /// No sensor faults (dropouts, spikes, stuck values).
+    #[arg(long)]
+    no_faults: bool,
+    /// Grow the field with the sensor count to keep CAF's sensor density.
+    #[arg(long)]
+    scale_extent: bool,
+    /// Soil-moisture depths, cm (modalities vw@<d>cm); empty for none.
+    #[arg(long, value_delimiter = ',', default_value = "30,60,90")]
+    vw_depths: Vec<u32>,
+    /// Soil-temperature depths, cm (modalities t@<d>cm); empty for none.
+    #[arg(long, value_delimiter = ',', default_value = "30")]
+    t_depths: Vec<u32>,
+}
+
+impl SynthCmd {
+    /// The plain settings of `synth`.
+    fn settings(self) -> synth::SynthArgs {
+        synth::SynthArgs {
+            out: self.out,
+            seed: self.seed,
+            sensors: self.sensors,
+            days: self.days,
+            interval_s: self.interval_s,
+            events: self.events,
+            correlation_length_m: self.correlation_length,
+            no_faults: self.no_faults,
+            scale_extent: self.scale_extent,
+            vw_depths_cm: self.vw_depths,
+            t_depths_cm: self.t_depths,
+        }
+    }
+}
+
+/// `--project`: the project directory.
+#[derive(Args)]
+struct ProjectArg {
+    /// Project directory.
+    #[arg(
+        long = "project",
+        id = "project",
+        value_name = "PROJECT",
+        default_value = "."
+    )]
+    dir: PathBuf,
+}
+
+impl ProjectArg {
+    fn open(&self) -> Result<Project<app::SqliteStore>> {
+        Ok(Project::open(&self.dir)?)
+    }
+}
+
+/// `--json`: JSON on standard output instead of a table.
+#[derive(Args)]
+struct JsonArg {
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+impl JsonArg {
+    /// Prints `value` as pretty JSON when `--json`, else the text `table` renders.
+    fn emit<T: serde::Serialize>(
+        &self,
+        value: &T,
+        what: &str,
+        table: impl FnOnce() -> String,
+    ) -> Result<()> {
+        emit(self.json, value, what, table)
+    }
 }
 
 /// The mission time and which stored readings count as collected by then.
@@ -435,6 +484,13 @@ enum SortArg {
     Sensors,
     Score,
     Stale,
+}
+
+/// Prints the scoring's warnings on standard error.
+fn warn(scoring: &app::Scoring) {
+    for w in &scoring.warnings {
+        eprintln!("warning: {w}");
+    }
 }
 
 /// Prints `value` as pretty JSON when `json`, else the text `table` renders.
@@ -615,7 +671,7 @@ fn run(cli: Cli) -> Result<()> {
             on_error,
             metadata,
         } => {
-            let mut p = Project::open(&project)?;
+            let mut p = project.open()?;
             let outcome = app::ingest(
                 &mut p,
                 &app::IngestRequest {
@@ -641,7 +697,7 @@ fn run(cli: Cli) -> Result<()> {
             json,
             sort,
         } => {
-            let p = Project::open(&project)?;
+            let p = project.open()?;
             let view = app::field_view(&p)?;
             let mut rows: Vec<_> = view
                 .cells
@@ -657,7 +713,7 @@ fn run(cli: Cli) -> Result<()> {
                     SortArg::Stale => cells::SortKey::Stale,
                 },
             );
-            emit(json, &rows, "serialising cells", || cells::table(&rows))?;
+            json.emit(&rows, "serialising cells", || cells::table(&rows))?;
         }
         Command::Score {
             project,
@@ -667,7 +723,7 @@ fn run(cli: Cli) -> Result<()> {
             limit,
             sort,
         } => {
-            let mut p = Project::open(&project)?;
+            let mut p = project.open()?;
             let scoring = app::score(
                 &mut p,
                 &app::ScoreRequest {
@@ -677,9 +733,7 @@ fn run(cli: Cli) -> Result<()> {
                     dry_run: false,
                 },
             )?;
-            for w in &scoring.warnings {
-                eprintln!("warning: {w}");
-            }
+            warn(&scoring);
             let mut doc = gleaner_wire::convert::scoring(&scoring);
             score::sort(
                 &mut doc,
@@ -692,9 +746,7 @@ fn run(cli: Cli) -> Result<()> {
                     ScoreSortArg::Cell => score::ScoreSort::Cell,
                 },
             );
-            emit(json, &doc, "serialising scores", || {
-                score::table(&doc, limit)
-            })?;
+            json.emit(&doc, "serialising scores", || score::table(&doc, limit))?;
         }
         Command::Plan {
             project,
@@ -707,7 +759,7 @@ fn run(cli: Cli) -> Result<()> {
             json,
             dry_run,
         } => {
-            let mut p = Project::open(&project)?;
+            let mut p = project.open()?;
             let planned = app::plan(
                 &mut p,
                 &app::PlanRequest {
@@ -723,12 +775,10 @@ fn run(cli: Cli) -> Result<()> {
                 clock_now(),
             )?;
             if let Some(s) = &planned.scoring {
-                for w in &s.warnings {
-                    eprintln!("warning: {w}");
-                }
+                warn(s);
             }
             let doc = gleaner_wire::convert::planned_mission(&planned);
-            emit(json, &doc, "serialising the mission", || plan::table(&doc))?;
+            json.emit(&doc, "serialising the mission", || plan::table(&doc))?;
         }
         Command::Explore {
             project,
@@ -736,10 +786,10 @@ fn run(cli: Cli) -> Result<()> {
             json,
             dry_run,
         } => {
-            let mut p = Project::open(&project)?;
+            let mut p = project.open()?;
             let e = app::explore(&mut p, &app::ExploreRequest { at, dry_run }, clock_now())?;
             let doc = gleaner_wire::convert::exploration(&e);
-            emit(json, &doc, "serialising the plan", || {
+            json.emit(&doc, "serialising the plan", || {
                 plan::exploration_table(&doc)
             })?;
         }
@@ -748,9 +798,9 @@ fn run(cli: Cli) -> Result<()> {
             mission,
             out,
         } => {
-            let p = Project::open(&project)?;
+            let p = project.open()?;
             let export = app::export(&p, MissionId(mission))?;
-            let dir = out.unwrap_or_else(|| project.join("missions").join(mission.to_string()));
+            let dir = out.unwrap_or_else(|| project.dir.join("missions").join(mission.to_string()));
             let written = export::write_files(&export, &dir)?;
             let names: Vec<String> = written
                 .files
@@ -760,8 +810,8 @@ fn run(cli: Cli) -> Result<()> {
             println!("wrote {}", names.join(", "));
         }
         Command::MapExploration { project, out } => {
-            let p = Project::open(&project)?;
-            let dir = out.unwrap_or_else(|| project.join("missions"));
+            let p = project.open()?;
+            let dir = out.unwrap_or_else(|| project.dir.join("missions"));
             let files = export::write_exploration_map(&p, &dir)?;
             println!("wrote {}", files.join(", "));
         }
@@ -773,7 +823,7 @@ fn run(cli: Cli) -> Result<()> {
             amend,
             files,
         } => {
-            let mut p = Project::open(&project)?;
+            let mut p = project.open()?;
             let outcome = app::record_flight(
                 &mut p,
                 &app::RecordRequest {
@@ -796,7 +846,7 @@ fn run(cli: Cli) -> Result<()> {
             mission,
             json,
         } => {
-            let p = Project::open(&project)?;
+            let p = project.open()?;
             match mission {
                 Some(id) => {
                     let m = app::mission(&p, MissionId(id))?;
@@ -837,32 +887,9 @@ fn run(cli: Cli) -> Result<()> {
             })?;
             print!("{table}");
         }
-        Command::Synth {
-            out,
-            seed,
-            sensors,
-            days,
-            interval_s,
-            events,
-            correlation_length,
-            no_faults,
-            scale_extent,
-            vw_depths,
-            t_depths,
-        } => {
-            let (farm, files) = synth::run(&synth::SynthArgs {
-                out,
-                seed,
-                sensors,
-                days,
-                interval_s,
-                events,
-                correlation_length_m: correlation_length,
-                no_faults,
-                scale_extent,
-                vw_depths_cm: vw_depths,
-                t_depths_cm: t_depths,
-            })?;
+        Command::Synth(args) => {
+            let sensors = args.sensors;
+            let (farm, files) = synth::run(&args.settings())?;
             println!(
                 "wrote {} sensors, {} readings, {} events to {}",
                 sensors,

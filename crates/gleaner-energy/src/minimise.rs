@@ -36,9 +36,7 @@ pub fn brent_minimise<F: FnMut(f64) -> f64>(
     hi: f64,
     x_tol: f64,
 ) -> Result<Minimum, EnergyError> {
-    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        return Err(EnergyError::InvalidInterval { lo, hi });
-    }
+    interval(lo, hi)?;
     crate::error::positive("x tolerance", x_tol)?;
     let mut eval = |x: f64| {
         let y = f(x);
@@ -132,6 +130,15 @@ pub fn brent_minimise<F: FnMut(f64) -> f64>(
     })
 }
 
+/// Checks that `lo`, `hi` are finite with `lo < hi`.
+fn interval(lo: f64, hi: f64) -> Result<(), EnergyError> {
+    if lo.is_finite() && hi.is_finite() && lo < hi {
+        Ok(())
+    } else {
+        Err(EnergyError::InvalidInterval { lo, hi })
+    }
+}
+
 /// Minimises `f` over `[lo, hi]` robustly: scans `samples` evenly spaced points (at least 3),
 /// then runs [`brent_minimise`] on the two grid intervals around the best sample. This finds
 /// the global minimum of any function whose minimum basin is wider than the grid spacing.
@@ -145,9 +152,7 @@ pub fn scan_then_brent<F: FnMut(f64) -> f64>(
     samples: usize,
     x_tol: f64,
 ) -> Result<Minimum, EnergyError> {
-    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        return Err(EnergyError::InvalidInterval { lo, hi });
-    }
+    interval(lo, hi)?;
     let n = samples.max(3);
     let step = (hi - lo) / (n - 1) as f64;
     let at = |i: usize| if i + 1 == n { hi } else { lo + step * i as f64 };

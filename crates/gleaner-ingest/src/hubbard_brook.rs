@@ -15,8 +15,8 @@ use std::path::Path;
 
 use gleaner_field::{LatLon, Modality, Sensor, SensorId};
 
-use crate::readers::{Policy, Table, finish, push_value, read_file};
-use crate::readings::{Interner, Row};
+use crate::readers::{Policy, Table, finish, read_file};
+use crate::readings::Interner;
 use crate::time::{parse_clock, parse_date};
 use crate::{IngestError, IngestOptions, IngestReport, Problem, Readings, SensorInput};
 
@@ -146,10 +146,7 @@ pub fn read_hubbard_brook_logger(
     let mut table = Table::open(path, &bytes, b',')?;
     let c_time = table.require(&["timestamp"])?;
     let names = table.header.clone();
-    let policy = Policy {
-        path,
-        on_error: options.on_error,
-    };
+    let policy = Policy::new(path, options.on_error);
     let mut report = IngestReport::default();
     let mut interner = Interner::default();
     let mut columns: Vec<(usize, u32, u32)> = Vec::new();
@@ -208,18 +205,10 @@ pub fn read_hubbard_brook_logger(
             )?;
             continue;
         };
-        for &(c, sensor, modality) in &columns {
-            let v = table.field(c).unwrap_or("");
-            let row = Row {
-                sensor,
-                modality,
-                t,
-                value: 0.0,
-                line: line as u32,
-            };
-            push_value(&mut interner, &mut report, &policy, row, &names[c], v)?;
-        }
+        let cells = columns
+            .iter()
+            .map(|&(c, sensor, modality)| (c, sensor, modality, Ok(table.field(c).unwrap_or(""))));
+        policy.push_values(&mut interner, &mut report, &names, (line, t), cells)?;
     }
-    let readings = finish(interner, &policy, &mut report, "value")?;
-    Ok((readings, report))
+    finish(interner, &policy, report, "value")
 }

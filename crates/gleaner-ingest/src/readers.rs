@@ -3,7 +3,9 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use gleaner_field::{LatLon, LocalPoint, Modality, Sensor, SensorId, TransverseMercator};
+use gleaner_field::{
+    LatLon, LocalPoint, Modality, Sensor, SensorId, TransverseMercator, UnixSeconds,
+};
 
 use crate::readings::{Interner, Row, known};
 use crate::time::{parse_clock, parse_date, parse_timestamp, parse_us_date};
@@ -187,7 +189,11 @@ pub(crate) struct Policy<'p> {
     pub(crate) on_error: OnError,
 }
 
-impl Policy<'_> {
+impl<'p> Policy<'p> {
+    pub(crate) fn new(path: &'p Path, on_error: OnError) -> Self {
+        Self { path, on_error }
+    }
+
     pub(crate) fn bad(
         &self,
         report: &mut IngestReport,
@@ -211,6 +217,43 @@ impl Policy<'_> {
             }
         }
     }
+
+    /// Pushes the values of one row of a file with a column per (sensor, modality): `cells` gives
+    /// each value column's index, sensor, modality and text (or why it cannot be read). A missing
+    /// value is counted; an unreadable one goes to the bad-row policy.
+    pub(crate) fn push_values<'a>(
+        &self,
+        interner: &mut Interner,
+        report: &mut IngestReport,
+        names: &[String],
+        (line, t): (u64, UnixSeconds),
+        cells: impl IntoIterator<Item = (usize, u32, u32, Result<&'a str, Problem>)>,
+    ) -> Result<(), IngestError> {
+        for (c, sensor, modality, text) in cells {
+            let text = match text {
+                Ok(text) => text,
+                Err(p) => {
+                    self.bad(report, line, &names[c], "<bytes>", p)?;
+                    continue;
+                }
+            };
+            if is_missing(text) {
+                report.missing += 1;
+                continue;
+            }
+            match parse_value(text) {
+                Ok(value) => interner.out.rows.push(Row {
+                    sensor,
+                    modality,
+                    t,
+                    value,
+                    line: line as u32,
+                }),
+                Err(p) => self.bad(report, line, &names[c], text, p)?,
+            }
+        }
+        Ok(())
+    }
 }
 
 fn is_missing(s: &str) -> bool {
@@ -226,37 +269,16 @@ fn parse_value(s: &str) -> Result<f64, Problem> {
     }
 }
 
-/// Adds `row` with the value parsed from `text` (missing: counted, no row; bad: the policy).
-pub(crate) fn push_value(
-    interner: &mut Interner,
-    report: &mut IngestReport,
-    policy: &Policy<'_>,
-    row: Row,
-    column: &str,
-    text: &str,
-) -> Result<(), IngestError> {
-    if is_missing(text) {
-        report.missing += 1;
-        return Ok(());
-    }
-    match parse_value(text) {
-        Ok(value) => {
-            interner.out.rows.push(Row { value, ..row });
-            Ok(())
-        }
-        Err(p) => policy.bad(report, u64::from(row.line), column, text, p),
-    }
-}
-
-/// Sorts, removes duplicates, and turns a conflicting duplicate into an error.
+/// Sorts, removes duplicates, and turns a conflicting duplicate into an error; the readings
+/// with the finished report.
 pub(crate) fn finish(
     mut interner: Interner,
     policy: &Policy<'_>,
-    report: &mut IngestReport,
+    mut report: IngestReport,
     value_column: &str,
-) -> Result<Readings, IngestError> {
+) -> Result<(Readings, IngestReport), IngestError> {
     let mut out = std::mem::take(&mut interner.out);
-    if let Err((first, second)) = out.dedup(policy.on_error, report) {
+    if let Err((first, second)) = out.dedup(policy.on_error, &mut report) {
         return Err(IngestError::Field {
             path: policy.path.to_path_buf(),
             line: u64::from(second.line),
@@ -269,7 +291,7 @@ pub(crate) fn finish(
         });
     }
     report.readings = out.rows.len() as u64;
-    Ok(out)
+    Ok((out, report))
 }
 
 /// Reads gleaner's generic long readings CSV: a header with `sensor_id`, `timestamp`,
@@ -289,10 +311,7 @@ pub fn read_long_csv(
     let c_value = table.require(&["value"])?;
     let c_unit = table.find(&["unit"]);
     let names = table.header.clone();
-    let policy = Policy {
-        path,
-        on_error: options.on_error,
-    };
+    let policy = Policy::new(path, options.on_error);
     let mut report = IngestReport::default();
     let mut interner = Interner::default();
     // Rows are usually grouped by sensor and modality: cache the last lookups.
@@ -386,8 +405,7 @@ pub fn read_long_csv(
             line: line as u32,
         });
     }
-    let readings = finish(interner, &policy, &mut report, &names[c_value])?;
-    Ok((readings, report))
+    finish(interner, &policy, report, &names[c_value])
 }
 
 /// Settings for [`read_wide_csv`].
@@ -436,10 +454,7 @@ pub fn read_wide_csv(
         ),
     };
     let names = table.header.clone();
-    let policy = Policy {
-        path,
-        on_error: options.on_error,
-    };
+    let policy = Policy::new(path, options.on_error);
     let mut report = IngestReport::default();
     let mut interner = Interner::default();
     let unit = wide
@@ -499,26 +514,12 @@ pub fn read_wide_csv(
             };
             day + secs - wide.utc_offset_s
         };
-        for &(c, sensor) in &columns {
-            let v = match table.field(c) {
-                Ok(v) => v,
-                Err(p) => {
-                    policy.bad(&mut report, line, &names[c], "<bytes>", p)?;
-                    continue;
-                }
-            };
-            let row = Row {
-                sensor,
-                modality,
-                t,
-                value: 0.0,
-                line: line as u32,
-            };
-            push_value(&mut interner, &mut report, &policy, row, &names[c], v)?;
-        }
+        let cells = columns
+            .iter()
+            .map(|&(c, sensor)| (c, sensor, modality, table.field(c)));
+        policy.push_values(&mut interner, &mut report, &names, (line, t), cells)?;
     }
-    let readings = finish(interner, &policy, &mut report, wide.modality.as_str())?;
-    Ok((readings, report))
+    finish(interner, &policy, report, wide.modality.as_str())
 }
 
 /// Parses a CAF-style quantity column header `VW_30cm` / `T_150cm` to a modality.
@@ -541,10 +542,7 @@ pub fn read_caf_daily(
     let c_loc = table.require(&["Location"])?;
     let c_date = table.require(&["Date"])?;
     let names = table.header.clone();
-    let policy = Policy {
-        path,
-        on_error: options.on_error,
-    };
+    let policy = Policy::new(path, options.on_error);
     let mut report = IngestReport::default();
     let mut interner = Interner::default();
     let mut columns: Vec<(usize, u32)> = Vec::new();
@@ -584,20 +582,12 @@ pub fn read_caf_daily(
             policy.bad(&mut report, line, &names[c_date], ds, Problem::BadTimestamp)?;
             continue;
         };
-        for &(c, modality) in &columns {
-            let v = table.field(c).unwrap_or("");
-            let row = Row {
-                sensor,
-                modality,
-                t,
-                value: 0.0,
-                line: line as u32,
-            };
-            push_value(&mut interner, &mut report, &policy, row, &names[c], v)?;
-        }
+        let cells = columns
+            .iter()
+            .map(|&(c, modality)| (c, sensor, modality, Ok(table.field(c).unwrap_or(""))));
+        policy.push_values(&mut interner, &mut report, &names, (line, t), cells)?;
     }
-    let readings = finish(interner, &policy, &mut report, "value")?;
-    Ok((readings, report))
+    finish(interner, &policy, report, "value")
 }
 
 /// Settings for [`read_sensors_csv`].
@@ -659,10 +649,7 @@ pub fn read_sensors_csv(
     };
     let c_elev = table.find(&["elevation_m", "elevation", "elev"]);
     let names = table.header.clone();
-    let policy = Policy {
-        path,
-        on_error: options.on_error,
-    };
+    let policy = Policy::new(path, options.on_error);
     let mut report = IngestReport::default();
     let mut out: Vec<SensorInput> = Vec::new();
     let mut seen: HashMap<String, u64> = HashMap::new();

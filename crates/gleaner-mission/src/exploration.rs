@@ -634,6 +634,11 @@ mod tests {
     use gleaner_energy::{EnergyConfig, VerticalConfig};
     use proptest::prelude::*;
 
+    /// The energy model of the paper preset.
+    fn paper() -> MissionEnergyModel {
+        MissionEnergyModel::new(&EnergyConfig::paper()).unwrap()
+    }
+
     fn grid(nx: usize, ny: usize) -> Vec<LocalPoint> {
         (0..nx * ny)
             .map(|i| LocalPoint::new(20.0 + 40.0 * (i % nx) as f64, 20.0 + 40.0 * (i / nx) as f64))
@@ -694,14 +699,14 @@ mod tests {
 
     #[test]
     fn empty_field_needs_no_sortie() {
-        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let m = paper();
         let p = plan(&m, LocalPoint::new(0.0, 0.0), &[], &[]);
         assert!(p.sorties.is_empty() && p.lower_bound_sorties == 0 && p.total_energy_j == 0.0);
     }
 
     #[test]
     fn small_field_fits_one_sortie() {
-        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let m = paper();
         let cells = grid(3, 3);
         let hover = vec![30.0; 9];
         let p = plan(&m, LocalPoint::new(0.0, 0.0), &cells, &hover);
@@ -720,7 +725,7 @@ mod tests {
     #[test]
     fn paper_field_meets_lower_bound_closely() {
         // 10 x 10 cells of 40 m, 30 s hovers: each sortie serves about 12 cells.
-        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let m = paper();
         let cells = grid(10, 10);
         let hover = vec![30.0; 100];
         let base = LocalPoint::new(-20.0, -20.0);
@@ -736,7 +741,7 @@ mod tests {
 
     #[test]
     fn unreachable_cell_is_reported() {
-        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let m = paper();
         let cells = [LocalPoint::new(10.0, 0.0), LocalPoint::new(5_000.0, 0.0)];
         let service = [m.service_energy_j(30.0); 2];
         let err = plan_exploration(
@@ -755,7 +760,7 @@ mod tests {
 
     #[test]
     fn bad_inputs_are_rejected() {
-        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let m = paper();
         let base = LocalPoint::new(0.0, 0.0);
         let o = ExplorationOptions::default();
         assert!(plan_exploration(&m, base, &[base], &[], &o).is_err());
@@ -765,7 +770,7 @@ mod tests {
 
     #[test]
     fn hostile_numbers_are_errors_not_panics() {
-        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let m = paper();
         let base = LocalPoint::new(0.0, 0.0);
         let o = ExplorationOptions::default();
         let far = [LocalPoint::new(1e300, -1e300), LocalPoint::new(10.0, 0.0)];
@@ -849,7 +854,7 @@ mod tests {
 
     #[test]
     fn elimination_merges_sorties_that_fit_together() {
-        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let m = paper();
         let cells = [
             LocalPoint::new(100.0, 0.0),
             LocalPoint::new(140.0, 0.0),
@@ -877,7 +882,7 @@ mod tests {
 
     #[test]
     fn deterministic() {
-        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let m = paper();
         let cells = grid(7, 5);
         let hover = vec![45.0; 35];
         let a = plan(&m, LocalPoint::new(0.0, 0.0), &cells, &hover);

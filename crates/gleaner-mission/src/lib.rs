@@ -271,6 +271,20 @@ mod tests {
         MissionEnergyModel::new(&EnergyConfig::paper()).expect("paper preset is valid")
     }
 
+    /// A candidate at (`e`, `n`) m with a 30 s hover.
+    fn cell(e: f64, n: f64, score: f64) -> Candidate {
+        Candidate {
+            centre: LocalPoint::new(e, n),
+            score,
+            hover_s: 30.0,
+        }
+    }
+
+    /// [`plan_mission`] from the origin with the paper model and [`opts`].
+    fn plan(cells: &[Candidate], planner: Planner) -> Result<MissionPlan, PlanError> {
+        plan_mission(&model(), LocalPoint::default(), cells, &opts(planner))
+    }
+
     fn opts(planner: Planner) -> PlanOptions {
         PlanOptions {
             planner,
@@ -283,29 +297,11 @@ mod tests {
     #[test]
     fn nonpositive_scores_are_never_planned() {
         let cells = [
-            Candidate {
-                centre: LocalPoint::new(20.0, 20.0),
-                score: 0.0,
-                hover_s: 30.0,
-            },
-            Candidate {
-                centre: LocalPoint::new(60.0, 20.0),
-                score: -1.0,
-                hover_s: 30.0,
-            },
-            Candidate {
-                centre: LocalPoint::new(100.0, 20.0),
-                score: 0.5,
-                hover_s: 30.0,
-            },
+            cell(20.0, 20.0, 0.0),
+            cell(60.0, 20.0, -1.0),
+            cell(100.0, 20.0, 0.5),
         ];
-        let plan = plan_mission(
-            &model(),
-            LocalPoint::default(),
-            &cells,
-            &opts(Planner::Default),
-        )
-        .unwrap();
+        let plan = plan(&cells, Planner::Default).unwrap();
         assert_eq!(plan.order, vec![2]);
         assert_eq!(plan.considered, 1);
     }
@@ -314,22 +310,15 @@ mod tests {
     fn the_paper_budget_fits_eleven_to_thirteen_30_s_hovers() {
         // 30 s hovers at 168.5 W cost 5,055 J each: 66,500 J allows at most 13 with no travel.
         let cells: Vec<Candidate> = (0..40)
-            .map(|k| Candidate {
-                centre: LocalPoint::new(
+            .map(|k| {
+                cell(
                     40.0 * f64::from(k % 8) + 20.0,
                     40.0 * f64::from(k / 8) + 20.0,
-                ),
-                score: 1.0,
-                hover_s: 30.0,
+                    1.0,
+                )
             })
             .collect();
-        let plan = plan_mission(
-            &model(),
-            LocalPoint::default(),
-            &cells,
-            &opts(Planner::Default),
-        )
-        .unwrap();
+        let plan = plan(&cells, Planner::Default).unwrap();
         assert!(
             (11..=13).contains(&plan.order.len()),
             "{}",
@@ -340,18 +329,8 @@ mod tests {
 
     #[test]
     fn invalid_candidates_are_errors() {
-        let cells = [Candidate {
-            centre: LocalPoint::new(1.0, 1.0),
-            score: f64::NAN,
-            hover_s: 30.0,
-        }];
-        let e = plan_mission(
-            &model(),
-            LocalPoint::default(),
-            &cells,
-            &opts(Planner::Greedy),
-        )
-        .unwrap_err();
+        let cells = [cell(1.0, 1.0, f64::NAN)];
+        let e = plan(&cells, Planner::Greedy).unwrap_err();
         assert!(e.to_string().contains("cell 0: invalid score NaN"), "{e}");
     }
 
@@ -364,11 +343,7 @@ mod tests {
             assert!(e.to_string().contains("invalid time limit"), "{e}");
         }
         let cells: Vec<Candidate> = (0..15)
-            .map(|k| Candidate {
-                centre: LocalPoint::new(40.0 * f64::from(k) + 20.0, 20.0),
-                score: 1.0,
-                hover_s: 30.0,
-            })
+            .map(|k| cell(40.0 * f64::from(k) + 20.0, 20.0, 1.0))
             .collect();
         for huge in [f64::INFINITY, 1e20, f64::MAX] {
             let o = opts(Planner::Default).with_time_limit_secs(huge).unwrap();

@@ -11,69 +11,66 @@ use crate::error::{FormatError, parse_err};
 use crate::instance::{OpFormat, OpInstance};
 use crate::parse::{parse_classic, parse_oplib};
 
-/// Target scores of the classic sets, from `targets.csv` (`set,n,budget,...,target`).
-/// Returns `(set, budget, target)` triples.
-pub fn parse_classic_targets(text: &str) -> Result<Vec<(String, f64, f64)>, FormatError> {
-    let mut out = Vec::new();
+/// The non-blank lines of a small comma-separated file with a header, each with its 1-based
+/// line number and its trimmed fields in `columns` (looked up by name; a missing column is an
+/// error naming `file`; a missing field is empty).
+fn csv_columns<const N: usize>(
+    file: &str,
+    text: &str,
+    columns: [&str; N],
+) -> Result<Vec<(usize, [String; N])>, FormatError> {
     let mut lines = text.lines().enumerate();
     let header: Vec<&str> = lines
         .next()
         .map(|(_, l)| l.split(',').map(str::trim).collect())
         .unwrap_or_default();
-    let col = |name: &str| {
-        header
+    let mut at = [0; N];
+    for (k, name) in columns.iter().enumerate() {
+        at[k] = header
             .iter()
-            .position(|h| *h == name)
-            .ok_or_else(|| parse_err("targets.csv", 1, name, "missing column"))
-    };
-    let (cs, cb, ct) = (col("set")?, col("budget")?, col("target")?);
-    for (i, line) in lines {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let f: Vec<&str> = line.split(',').collect();
-        let get = |c: usize, field: &str| -> Result<f64, FormatError> {
-            let tok = f.get(c).map(|s| s.trim()).unwrap_or("");
-            tok.parse::<f64>()
-                .map_err(|_| parse_err("targets.csv", i + 1, field, format!("`{tok}`")))
-        };
-        let set = f.get(cs).map(|s| s.trim().to_string()).unwrap_or_default();
-        out.push((set, get(cb, "budget")?, get(ct, "target")?));
+            .position(|h| h == name)
+            .ok_or_else(|| parse_err(file, 1, name, "missing column"))?;
     }
-    Ok(out)
+    Ok(lines
+        .filter(|(_, line)| !line.trim().is_empty())
+        .map(|(i, line)| {
+            let f: Vec<&str> = line.split(',').collect();
+            let field = |c: usize| f.get(c).map(|s| s.trim().to_string()).unwrap_or_default();
+            (i + 1, at.map(field))
+        })
+        .collect())
+}
+
+/// `tok` as a number, or an error naming `file`, `line` and `field`.
+fn number(file: &str, line: usize, field: &str, tok: &str) -> Result<f64, FormatError> {
+    tok.parse::<f64>()
+        .map_err(|_| parse_err(file, line, field, format!("`{tok}`")))
+}
+
+/// Target scores of the classic sets, from `targets.csv` (`set,n,budget,...,target`).
+/// Returns `(set, budget, target)` triples.
+pub fn parse_classic_targets(text: &str) -> Result<Vec<(String, f64, f64)>, FormatError> {
+    const FILE: &str = "targets.csv";
+    csv_columns(FILE, text, ["set", "budget", "target"])?
+        .into_iter()
+        .map(|(line, [set, budget, target])| {
+            Ok((
+                set,
+                number(FILE, line, "budget", &budget)?,
+                number(FILE, line, "target", &target)?,
+            ))
+        })
+        .collect()
 }
 
 /// Best known scores of OPLib, from `ea4op_best.csv` (`instance,...,ea4op_score,...`).
 /// Returns `(instance, score)` pairs.
 pub fn parse_oplib_best(text: &str) -> Result<Vec<(String, f64)>, FormatError> {
-    let mut out = Vec::new();
-    let mut lines = text.lines().enumerate();
-    let header: Vec<&str> = lines
-        .next()
-        .map(|(_, l)| l.split(',').map(str::trim).collect())
-        .unwrap_or_default();
-    let col = |name: &str| {
-        header
-            .iter()
-            .position(|h| *h == name)
-            .ok_or_else(|| parse_err("ea4op_best.csv", 1, name, "missing column"))
-    };
-    let (ci, cs) = (col("instance")?, col("ea4op_score")?);
-    for (i, line) in lines {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let f: Vec<&str> = line.split(',').collect();
-        let tok = f.get(cs).map(|s| s.trim()).unwrap_or("");
-        let score = tok
-            .parse::<f64>()
-            .map_err(|_| parse_err("ea4op_best.csv", i + 1, "ea4op_score", format!("`{tok}`")))?;
-        out.push((
-            f.get(ci).map(|s| s.trim().to_string()).unwrap_or_default(),
-            score,
-        ));
-    }
-    Ok(out)
+    const FILE: &str = "ea4op_best.csv";
+    csv_columns(FILE, text, ["instance", "ea4op_score"])?
+        .into_iter()
+        .map(|(line, [instance, score])| Ok((instance, number(FILE, line, "ea4op_score", &score)?)))
+        .collect()
 }
 
 fn read(path: &Path) -> Result<String, FormatError> {

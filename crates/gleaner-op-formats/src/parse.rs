@@ -9,17 +9,19 @@ use crate::instance::{DistanceRule, OpFormat, OpInstance};
 /// (10,000 nodes: 800 MB).
 pub const MAX_NODES: usize = 10_000;
 
+/// `return Err(parse_err(file, line, field, format!(message...)))`.
+macro_rules! fail {
+    ($file:expr, $line:expr, $field:expr, $($message:tt)+) => {
+        return Err(parse_err($file, $line, $field, format!($($message)+)))
+    };
+}
+
 fn number(file: &str, line: usize, field: &str, tok: &str) -> Result<f64, FormatError> {
     let v: f64 = tok
         .parse()
         .map_err(|_| parse_err(file, line, field, format!("`{tok}` is not a number")))?;
     if !v.is_finite() {
-        return Err(parse_err(
-            file,
-            line,
-            field,
-            format!("`{tok}` is not finite"),
-        ));
+        fail!(file, line, field, "`{tok}` is not finite");
     }
     Ok(v)
 }
@@ -74,12 +76,7 @@ pub fn parse_classic(name: &str, set: &str, text: &str) -> Result<OpInstance, Fo
         .ok_or_else(|| parse_err(name, 1, "header", "empty file"))?;
     let toks: Vec<&str> = header.split_whitespace().collect();
     if toks.len() < 2 {
-        return Err(parse_err(
-            name,
-            hl,
-            "header",
-            format!("expected `Tmax P`, got `{header}`"),
-        ));
+        fail!(name, hl, "header", "expected `Tmax P`, got `{header}`");
     }
     let budget = number(name, hl, "Tmax", toks[0])?;
     let paths = number(name, hl, "P", toks[1])?;
@@ -87,32 +84,17 @@ pub fn parse_classic(name: &str, set: &str, text: &str) -> Result<OpInstance, Fo
     // sizing allocations.
     let points = text.lines().filter(|l| !l.trim().is_empty()).count() - 1;
     if paths > points.max(1) as f64 {
-        return Err(parse_err(
-            name,
-            hl,
-            "P",
-            format!("`{}` paths for {points} points", toks[1]),
-        ));
+        fail!(name, hl, "P", "`{}` paths for {points} points", toks[1]);
     }
     if paths < 1.0 || paths.fract() != 0.0 {
-        return Err(parse_err(
-            name,
-            hl,
-            "P",
-            format!("`{}` is not a positive integer", toks[1]),
-        ));
+        fail!(name, hl, "P", "`{}` is not a positive integer", toks[1]);
     }
     let mut coords = Vec::new();
     let mut scores = Vec::new();
     for (ln, line) in lines {
         let t: Vec<&str> = line.split_whitespace().collect();
         if t.len() < 3 {
-            return Err(parse_err(
-                name,
-                ln,
-                "point",
-                format!("expected `x y S`, got `{line}`"),
-            ));
+            fail!(name, ln, "point", "expected `x y S`, got `{line}`");
         }
         let x = number(name, ln, "x", t[0])?;
         let y = number(name, ln, "y", t[1])?;
@@ -121,23 +103,22 @@ pub fn parse_classic(name: &str, set: &str, text: &str) -> Result<OpInstance, Fo
         scores.push(s);
     }
     if coords.len() > MAX_NODES {
-        return Err(parse_err(
+        fail!(
             name,
             0,
             "points",
-            format!(
-                "{} points, more than the {MAX_NODES} supported",
-                coords.len()
-            ),
-        ));
+            "{} points, more than the {MAX_NODES} supported",
+            coords.len()
+        );
     }
     if coords.len() < 2 {
-        return Err(parse_err(
+        fail!(
             name,
             0,
             "points",
-            format!("need at least 2 points, got {}", coords.len()),
-        ));
+            "need at least 2 points, got {}",
+            coords.len()
+        );
     }
     let problem = build_problem(
         name,
@@ -209,15 +190,13 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                 // Every node needs a score line, so a larger DIMENSION is a broken (or hostile)
                 // file; checked before anything is sized by it.
                 if d > lines.len() || d > MAX_NODES {
-                    return Err(parse_err(
+                    fail!(
                         name,
                         ln,
                         "DIMENSION",
-                        format!(
-                            "{d} nodes: more than the file's {} lines or the {MAX_NODES} supported",
-                            lines.len()
-                        ),
-                    ));
+                        "{d} nodes: more than the file's {} lines or the {MAX_NODES} supported",
+                        lines.len()
+                    );
                 }
                 dim = Some(d);
                 coords = vec![None; d];
@@ -232,12 +211,7 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                     "GEO" => DistanceRule::Geo,
                     "EXPLICIT" => DistanceRule::Explicit,
                     other => {
-                        return Err(parse_err(
-                            name,
-                            ln,
-                            "EDGE_WEIGHT_TYPE",
-                            format!("unsupported `{other}`"),
-                        ));
+                        fail!(name, ln, "EDGE_WEIGHT_TYPE", "unsupported `{other}`");
                     }
                 })
             }
@@ -253,21 +227,17 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                     let t: Vec<&str> = raw.split_whitespace().collect();
                     let width = if key == "NODE_SCORE_SECTION" { 2 } else { 3 };
                     if t.len() < width {
-                        return Err(parse_err(
+                        fail!(
                             name,
                             row,
                             key,
-                            format!("expected {width} fields, got `{}`", raw.trim()),
-                        ));
+                            "expected {width} fields, got `{}`",
+                            raw.trim()
+                        );
                     }
                     let id = number(name, row, "node id", t[0])?;
                     if id < 1.0 || id > d as f64 || id.fract() != 0.0 {
-                        return Err(parse_err(
-                            name,
-                            row,
-                            "node id",
-                            format!("`{}` not in 1..={d}", t[0]),
-                        ));
+                        fail!(name, row, "node id", "`{}` not in 1..={d}", t[0]);
                     }
                     let k = id as usize - 1;
                     match key {
@@ -289,23 +259,13 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                     "UPPER_ROW" | "LOWER_ROW" => d * (d - 1) / 2,
                     "UPPER_DIAG_ROW" | "LOWER_DIAG_ROW" => d * (d + 1) / 2,
                     other => {
-                        return Err(parse_err(
-                            name,
-                            ln,
-                            "EDGE_WEIGHT_FORMAT",
-                            format!("unsupported `{other}`"),
-                        ));
+                        fail!(name, ln, "EDGE_WEIGHT_FORMAT", "unsupported `{other}`");
                     }
                 };
                 let mut vals = Vec::with_capacity(count);
                 while vals.len() < count {
                     let Some(raw) = lines.get(i) else {
-                        return Err(parse_err(
-                            name,
-                            i + 1,
-                            key,
-                            format!("only {} of {count} weights", vals.len()),
-                        ));
+                        fail!(name, i + 1, key, "only {} of {count} weights", vals.len());
                     };
                     let row = i + 1;
                     i += 1;
@@ -314,12 +274,7 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                     }
                 }
                 if vals.len() != count {
-                    return Err(parse_err(
-                        name,
-                        i,
-                        key,
-                        format!("{} weights, expected {count}", vals.len()),
-                    ));
+                    fail!(name, i, key, "{} weights, expected {count}", vals.len());
                 }
                 let mut m = vec![0.0; d * d];
                 let mut it = vals.into_iter();
@@ -368,12 +323,7 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                     if depot.is_none() {
                         let d = need_dim(dim, row, key)?;
                         if v < 1.0 || v > d as f64 || v.fract() != 0.0 {
-                            return Err(parse_err(
-                                name,
-                                row,
-                                "depot",
-                                format!("`{t}` not in 1..={d}"),
-                            ));
+                            fail!(name, row, "depot", "`{t}` not in 1..={d}");
                         }
                         depot = Some(v as usize - 1);
                     }
@@ -381,7 +331,7 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
             }
             "EOF" => break,
             _ if line.contains(':') => {}
-            other => return Err(parse_err(name, ln, "keyword", format!("unknown `{other}`"))),
+            other => fail!(name, ln, "keyword", "unknown `{other}`"),
         }
     }
     let n = dim.ok_or_else(|| parse_err(name, 0, "DIMENSION", "missing"))?;

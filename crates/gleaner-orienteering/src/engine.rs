@@ -594,16 +594,21 @@ impl State {
         any
     }
 
-    /// Tour improvement of every route: 2-opt and Or-opt until neither improves.
+    /// Tour improvement of route `r`: 2-opt and Or-opt until neither improves.
+    pub fn improve_tour(&mut self, ctx: &Ctx, r: usize) {
+        loop {
+            let a = self.two_opt(ctx, r);
+            let b = self.or_opt(ctx, r);
+            if !a && !b {
+                break;
+            }
+        }
+    }
+
+    /// [`Self::improve_tour`] of every route.
     pub fn improve_tours(&mut self, ctx: &Ctx) {
         for r in 0..self.routes.len() {
-            loop {
-                let a = self.two_opt(ctx, r);
-                let b = self.or_opt(ctx, r);
-                if !a && !b {
-                    break;
-                }
-            }
+            self.improve_tour(ctx, r);
         }
     }
 
@@ -755,13 +760,7 @@ impl State {
             self.routes[r][a..c].rotate_left(b - a);
             self.refresh(r, 1);
             self.cost[r] = route_cost(ctx.p, &self.routes[r]);
-            loop {
-                let x = self.two_opt(ctx, r);
-                let y = self.or_opt(ctx, r);
-                if !x && !y {
-                    break;
-                }
-            }
+            self.improve_tour(ctx, r);
             if self.cost[r] < saved_cost - ctx.eps {
                 any = true;
             } else {
@@ -890,13 +889,7 @@ impl State {
             let idx = self.edge_index(r, slot.a, slot.b).map_or(1, |i| i + 1);
             self.insert(ctx, r, idx, v);
         }
-        loop {
-            let a = self.two_opt(ctx, r);
-            let b = self.or_opt(ctx, r);
-            if !a && !b {
-                break;
-            }
-        }
+        self.improve_tour(ctx, r);
         while !self.fits(ctx, r, 0.0) && self.routes[r].len() > 2 {
             let route = &self.routes[r];
             let mut pick: Option<(bool, f64, usize)> = None;

@@ -6,9 +6,9 @@ use gleaner_wire::{FieldDoc, MissionDoc};
 
 use crate::colour::{self, Rgb};
 use crate::figure::display_time;
-use crate::font::{CAP_HEIGHT_EM, text_width};
-use crate::frame::{self, Axes, Entry, INK, MapView, PT_PER_MM, Scene, Symbol, TICK, base_r};
-use crate::svg::{Anchor, Svg, fit};
+use crate::font::text_width;
+use crate::frame::{self, Entry, PT_PER_MM, Scene, Symbol, base_r};
+use crate::svg::Svg;
 use crate::{FigureOptions, RenderError};
 
 /// Fill of cells no sortie visits.
@@ -46,7 +46,6 @@ pub fn exploration_map_svg(
     let scene = Scene::new(field, &extra)?;
 
     let font = opts.font_pt;
-    let cap = CAP_HEIGHT_EM * font;
     let width = opts.width_mm * PT_PER_MM;
     let margin = 0.6 * font;
     let inner = width - 2.0 * margin;
@@ -99,48 +98,11 @@ pub fn exploration_map_svg(
     let na_h = frame::north_arrow_height(font);
     let sb_h = frame::scale_bar_height(font);
 
-    let mut y = margin;
-    let mut title_lines: Vec<(String, f64, bool)> = Vec::new();
-    if !title.is_empty() {
-        title_lines.push((fit(&title, font + 1.0, true, inner), font + 1.0, true));
-    }
-    title_lines.push((fit(&subtitle, font, false, inner), font, false));
-    let mut baselines = Vec::new();
-    for (_, size, _) in &title_lines {
-        baselines.push(y + 0.93 * size);
-        y += 1.25 * size;
-    }
-    let map_top = y + 0.35 * font;
-
+    let titles = frame::Titles::new(&title, &subtitle, font, inner, margin);
+    let map_top = titles.map_top;
     let pad = 0.6 * font + 1.5;
-    let gap = 0.9 * font;
-    let mut ylab_w = text_width("\u{2212}000", font, false);
-    let mut view;
-    let mut axes;
-    let mut passes = 0;
-    loop {
-        let left = margin + 1.25 * font + ylab_w + 1.2 + TICK;
-        let avail_w = (rc_x - gap - left).max(4.0 * font);
-        view = MapView::fit(
-            scene.extent,
-            left,
-            map_top,
-            avail_w,
-            opts.max_map_aspect * width,
-            pad,
-        );
-        view.x = left + 0.5 * (avail_w - view.w);
-        axes = Axes::new(&view, &scene.projection, opts.coordinates, font);
-        let measured = axes.y_label_width(font);
-        passes += 1;
-        if measured <= ylab_w + 0.01 || passes >= 3 {
-            break;
-        }
-        ylab_w = measured;
-    }
+    let (view, axes, x_title_baseline) = frame::fit_map(&scene, opts, margin, rc_x, map_top, pad);
     let row_h = view.h.max(na_h + 0.8 * font + sb_h);
-    let map_bottom = view.y + view.h;
-    let x_title_baseline = map_bottom + TICK + 1.0 + cap + 1.2 * font + 0.1 * font;
     let below_map = (x_title_baseline + 0.45 * font).max(map_top + row_h);
 
     // Legend: one entry per sortie, then the shared symbols.
@@ -193,30 +155,14 @@ pub fn exploration_map_svg(
     let height = shared_top + shared_h + margin;
 
     let mut svg = Svg::new(width, height, font, &title);
-    for ((t, size, bold), baseline) in title_lines.iter().zip(&baselines) {
-        svg.text_attrs(
-            margin,
-            *baseline,
-            *size,
-            Anchor::Start,
-            *bold,
-            &format!(r#"fill="{INK}""#),
-            t,
-        );
-    }
+    titles.draw(&mut svg, margin);
     frame::draw_cells(&mut svg, &view, &scene.cells, &fills);
     frame::draw_sensors(&mut svg, &view, &scene.sensors);
     let br = base_r(font);
     let dot_r = 0.28 * font;
     for (k, (base, stops)) in routes.iter().enumerate() {
         let (c, dash) = colour::qualitative(k);
-        let base_pt = view.pt(*base);
-        let mut pts = vec![base_pt];
-        pts.extend(stops.iter().map(|&p| view.pt(p)));
-        pts.push(base_pt);
-        let mut radii = vec![br];
-        radii.extend(stops.iter().map(|_| dot_r));
-        radii.push(br);
+        let (pts, radii) = frame::route_points(&view, *base, stops, br, dot_r);
         svg.line(format_args!(r#"<g id="sortie-{}" class="sortie">"#, k + 1));
         if !stops.is_empty() {
             frame::draw_route(

@@ -4,9 +4,7 @@ use gleaner_wire::{FieldDoc, MissionDoc};
 
 use crate::colour::{self, NO_SCORE, Rgb};
 use crate::font::{CAP_HEIGHT_EM, text_width};
-use crate::frame::{
-    self, Axes, Entry, INK, MapView, PT_PER_MM, Scene, Symbol, TICK, base_r, finite,
-};
+use crate::frame::{self, Entry, INK, PT_PER_MM, Scene, Symbol, TICK, base_r, finite};
 use crate::svg::{Anchor, N, Svg, fit, subscripted};
 use crate::ticks;
 use crate::{FigureOptions, RenderError};
@@ -309,51 +307,15 @@ pub fn mission_figure_svg(
         + sb_h;
 
     // Vertical layout above the map.
-    let mut y = margin;
-    let mut title_lines: Vec<(String, f64, bool)> = Vec::new();
-    if !title.is_empty() {
-        title_lines.push((fit(&title, font + 1.0, true, inner), font + 1.0, true));
-    }
-    title_lines.push((fit(&subtitle, font, false, inner), font, false));
-    let mut title_baselines = Vec::new();
-    for (_, size, _) in &title_lines {
-        title_baselines.push(y + 0.93 * size);
-        y += 1.25 * size;
-    }
-    let map_top = y + 0.35 * font;
+    let titles = frame::Titles::new(&title, &subtitle, font, inner, margin);
+    let map_top = titles.map_top;
 
     // The map: fit, then refit with the measured y labels.
     let last = mission.stops.iter().map(|s| s.order).max().unwrap_or(1);
     let stop_r = frame::stop_radius(font, last);
     let pad = stop_r + 1.5;
-    let gap = 0.9 * font;
-    let mut ylab_w = text_width("\u{2212}000", font, false);
-    let mut view;
-    let mut axes;
-    let mut passes = 0;
-    loop {
-        let left = margin + 1.25 * font + ylab_w + 1.2 + TICK;
-        let avail_w = (rc_x - gap - left).max(4.0 * font);
-        view = MapView::fit(
-            scene.extent,
-            left,
-            map_top,
-            avail_w,
-            opts.max_map_aspect * width,
-            pad,
-        );
-        view.x = left + 0.5 * (avail_w - view.w);
-        axes = Axes::new(&view, &scene.projection, opts.coordinates, font);
-        let measured = axes.y_label_width(font);
-        passes += 1;
-        if measured <= ylab_w + 0.01 || passes >= 3 {
-            break;
-        }
-        ylab_w = measured;
-    }
+    let (view, axes, x_title_baseline) = frame::fit_map(&scene, opts, margin, rc_x, map_top, pad);
     let row_h = view.h.max(rc_min_h);
-    let map_bottom = view.y + view.h;
-    let x_title_baseline = map_bottom + TICK + 1.0 + cap + 1.2 * font + 0.1 * font;
     let below_map = (x_title_baseline + 0.45 * font).max(map_top + row_h);
 
     // Below: formula, legend, energy table.
@@ -394,29 +356,14 @@ pub fn mission_figure_svg(
 
     // Draw.
     let mut svg = Svg::new(width, height, font, &title);
-    for ((t, size, bold), baseline) in title_lines.iter().zip(&title_baselines) {
-        svg.text_attrs(
-            margin,
-            *baseline,
-            *size,
-            Anchor::Start,
-            *bold,
-            &format!(r#"fill="{INK}""#),
-            t,
-        );
-    }
+    titles.draw(&mut svg, margin);
     frame::draw_cells(&mut svg, &view, &scene.cells, &fills);
     frame::draw_sensors(&mut svg, &view, &scene.sensors);
 
     // Route.
-    let base_pt = view.pt(base);
-    let mut pts = vec![base_pt];
-    pts.extend(stops.iter().map(|&p| view.pt(p)));
-    pts.push(base_pt);
     let br = base_r(font);
-    let mut radii = vec![br];
-    radii.extend(stops.iter().map(|_| stop_r));
-    radii.push(br);
+    let (pts, radii) = frame::route_points(&view, base, &stops, br, stop_r);
+    let base_pt = pts[0];
     svg.line(format_args!(r#"<g id="route">"#));
     if !stops.is_empty() {
         frame::draw_route(&mut svg, &pts, &radii, &ROUTE.hex(), "", 0.85 * font, 0.0);

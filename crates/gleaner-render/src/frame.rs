@@ -5,7 +5,7 @@ use gleaner_wire::{FieldDoc, MissionDoc};
 
 use crate::colour::Rgb;
 use crate::font::{CAP_HEIGHT_EM, text_width};
-use crate::svg::{Anchor, N, Svg, esc};
+use crate::svg::{Anchor, N, Svg, esc, fit};
 use crate::ticks;
 use crate::{Coordinates, FigureOptions, RenderError};
 
@@ -301,6 +301,110 @@ impl MapView {
     fn n0(&self) -> f64 {
         self.n1 - self.h / self.k
     }
+}
+
+/// The title (when not empty, one size up and bold) and subtitle lines above the map, each
+/// fitted to `inner` pt, with their baselines from `top`.
+pub(crate) struct Titles {
+    lines: Vec<(String, f64, bool)>,
+    baselines: Vec<f64>,
+    /// Where the map may start, pt.
+    pub(crate) map_top: f64,
+}
+
+impl Titles {
+    pub(crate) fn new(title: &str, subtitle: &str, font: f64, inner: f64, top: f64) -> Self {
+        let mut lines: Vec<(String, f64, bool)> = Vec::new();
+        if !title.is_empty() {
+            lines.push((fit(title, font + 1.0, true, inner), font + 1.0, true));
+        }
+        lines.push((fit(subtitle, font, false, inner), font, false));
+        let mut y = top;
+        let mut baselines = Vec::new();
+        for (_, size, _) in &lines {
+            baselines.push(y + 0.93 * size);
+            y += 1.25 * size;
+        }
+        Self {
+            lines,
+            baselines,
+            map_top: y + 0.35 * font,
+        }
+    }
+
+    /// Draws the lines from `x`.
+    pub(crate) fn draw(&self, svg: &mut Svg, x: f64) {
+        for ((t, size, bold), baseline) in self.lines.iter().zip(&self.baselines) {
+            svg.text_attrs(
+                x,
+                *baseline,
+                *size,
+                Anchor::Start,
+                *bold,
+                &format!(r#"fill="{INK}""#),
+                t,
+            );
+        }
+    }
+}
+
+/// The map placed between the y-axis labels (right of `margin`) and the right column at
+/// `right` (less a gap), from `top`: fitted, then refitted with the measured y labels (at most
+/// three passes). Returns the view, its axes and the baseline of the x-axis title below it.
+pub(crate) fn fit_map(
+    scene: &Scene,
+    opts: &FigureOptions,
+    margin: f64,
+    right: f64,
+    top: f64,
+    pad: f64,
+) -> (MapView, Axes, f64) {
+    let font = opts.font_pt;
+    let width = opts.width_mm * PT_PER_MM;
+    let gap = 0.9 * font;
+    let mut ylab_w = text_width("\u{2212}000", font, false);
+    let mut passes = 0;
+    loop {
+        let left = margin + 1.25 * font + ylab_w + 1.2 + TICK;
+        let avail_w = (right - gap - left).max(4.0 * font);
+        let mut view = MapView::fit(
+            scene.extent,
+            left,
+            top,
+            avail_w,
+            opts.max_map_aspect * width,
+            pad,
+        );
+        view.x = left + 0.5 * (avail_w - view.w);
+        let axes = Axes::new(&view, &scene.projection, opts.coordinates, font);
+        let measured = axes.y_label_width(font);
+        passes += 1;
+        if measured <= ylab_w + 0.01 || passes >= 3 {
+            let cap = CAP_HEIGHT_EM * font;
+            let x_title_baseline = view.y + view.h + TICK + 1.0 + cap + 1.2 * font + 0.1 * font;
+            return (view, axes, x_title_baseline);
+        }
+        ylab_w = measured;
+    }
+}
+
+/// The page points of a route from `base` through `stops` and back, with the marker radius
+/// at each (`base_r` at the base, `stop_r` at the stops), for [`draw_route`].
+pub(crate) fn route_points(
+    view: &MapView,
+    base: (f64, f64),
+    stops: &[(f64, f64)],
+    base_r: f64,
+    stop_r: f64,
+) -> (Vec<(f64, f64)>, Vec<f64>) {
+    let base_pt = view.pt(base);
+    let mut pts = vec![base_pt];
+    pts.extend(stops.iter().map(|&p| view.pt(p)));
+    pts.push(base_pt);
+    let mut radii = vec![base_r];
+    radii.extend(stops.iter().map(|_| stop_r));
+    radii.push(base_r);
+    (pts, radii)
 }
 
 /// One tick: its position along the axis (m in the local frame) and its label.

@@ -132,23 +132,11 @@ pub fn panel_stats(panel: &DailyPanel, options: &StatsOptions) -> PanelStats {
     }
     let (mean, std) = mean_std(&all);
     all.sort_by(f64::total_cmp);
-    let quantile = |p: f64| {
-        if all.is_empty() {
-            f64::NAN
-        } else {
-            all[((all.len() - 1) as f64 * p).round() as usize]
-        }
-    };
+    let quantile = |p: f64| nearest_rank(&all, p);
     let (_, change_std) = mean_std(&changes);
     let mut abs_changes: Vec<f64> = changes.iter().map(|c| c.abs()).collect();
     abs_changes.sort_by(f64::total_cmp);
-    let abs_q = |p: f64| {
-        if abs_changes.is_empty() {
-            f64::NAN
-        } else {
-            abs_changes[((abs_changes.len() - 1) as f64 * p).round() as usize]
-        }
-    };
+    let abs_q = |p: f64| nearest_rank(&abs_changes, p);
     let big = changes
         .iter()
         .filter(|c| c.abs() > options.big_jump)
@@ -258,6 +246,15 @@ impl SynthFarm {
             positions: self.local.clone(),
             series,
         })
+    }
+}
+
+/// The `p` quantile of `sorted` (ascending) by the nearest rank; NaN when empty.
+fn nearest_rank(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        f64::NAN
+    } else {
+        sorted[((sorted.len() - 1) as f64 * p).round() as usize]
     }
 }
 

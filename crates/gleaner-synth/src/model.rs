@@ -209,23 +209,20 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
     let n = config.sensor_count;
 
     let mut modalities = Vec::new();
-    for &d in &config.vw_depths_cm {
-        modalities.push(ModalitySpec {
-            modality: Modality::at_depth("vw", Some(d))?,
-            unit: "m3/m3",
-            decimals: 4,
-            depth_cm: d,
-            is_water: true,
-        });
-    }
-    for &d in &config.t_depths_cm {
-        modalities.push(ModalitySpec {
-            modality: Modality::at_depth("t", Some(d))?,
-            unit: "degC",
-            decimals: 4,
-            depth_cm: d,
-            is_water: false,
-        });
+    // Soil moisture (water) first, then soil temperature.
+    for (depths, quantity, unit, is_water) in [
+        (&config.vw_depths_cm, "vw", "m3/m3", true),
+        (&config.t_depths_cm, "t", "degC", false),
+    ] {
+        for &d in depths {
+            modalities.push(ModalitySpec {
+                modality: Modality::at_depth(quantity, Some(d))?,
+                unit,
+                decimals: 4,
+                depth_cm: d,
+                is_water,
+            });
+        }
     }
     let times: Vec<i64> = (0..steps as i64)
         .map(|i| config.start + i * config.interval_s)

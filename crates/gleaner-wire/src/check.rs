@@ -37,16 +37,23 @@ pub(crate) fn position(
     }
 }
 
+/// Checks that a document's `format` and `version` are `expected` at this build's [`VERSION`].
+fn supported(format: &str, version: u32, expected: &'static str) -> Result<(), ExportError> {
+    if format == expected && version == VERSION {
+        Ok(())
+    } else {
+        Err(ExportError::UnsupportedDocument {
+            format: format.to_string(),
+            version,
+            expected,
+            expected_version: VERSION,
+        })
+    }
+}
+
 /// Checks that `m` is a `gleaner.mission` this build writes, with valid positions.
 pub(crate) fn mission_doc(m: &MissionDoc) -> Result<(), ExportError> {
-    if m.format != MISSION_FORMAT || m.version != VERSION {
-        return Err(ExportError::UnsupportedDocument {
-            format: m.format.clone(),
-            version: m.version,
-            expected: MISSION_FORMAT,
-            expected_version: VERSION,
-        });
-    }
+    supported(&m.format, m.version, MISSION_FORMAT)?;
     position(|| "base".to_string(), m.profile.base_lon_lat)?;
     for s in &m.stops {
         position(
@@ -59,14 +66,7 @@ pub(crate) fn mission_doc(m: &MissionDoc) -> Result<(), ExportError> {
 
 /// Checks that `f` is a `gleaner.field` this build writes, with valid positions.
 pub(crate) fn field_doc(f: &FieldDoc) -> Result<(), ExportError> {
-    if f.format != FIELD_FORMAT || f.version != VERSION {
-        return Err(ExportError::UnsupportedDocument {
-            format: f.format.clone(),
-            version: f.version,
-            expected: FIELD_FORMAT,
-            expected_version: VERSION,
-        });
-    }
+    supported(&f.format, f.version, FIELD_FORMAT)?;
     position(|| "field base".to_string(), f.base_lon_lat)?;
     for c in &f.cells {
         position(|| format!("cell {} centre", c.cell), c.centre_lon_lat)?;

@@ -255,37 +255,59 @@ fn synthetic(
         args.dir.join("data").display()
     )?;
     let base = farm.base();
-    let (project, init) = app::init(&app::InitRequest {
-        dir: args.dir.clone(),
-        sensors: files.sensors.clone(),
-        base: Some(base),
-        cell_size_m: Some(app::DEFAULT_CELL_SIZE_M),
-        name: Some("demo".into()),
-        force: true,
-        ..Default::default()
-    })?;
-    let truth = app::Truth::from_files(
-        &project,
-        &app::IngestRequest {
-            files: vec![files.readings.clone()],
-            format: app::Format::Long,
+    let (project, init, truth) = project_and_truth(
+        &app::InitRequest {
+            dir: args.dir.clone(),
+            sensors: files.sensors.clone(),
+            base: Some(base),
+            cell_size_m: Some(app::DEFAULT_CELL_SIZE_M),
+            name: Some("demo".into()),
+            force: true,
             ..Default::default()
         },
-        DAY,
+        vec![files.readings.clone()],
+        app::Format::Long,
         progress,
     )?;
     writeln!(
         out,
-        "2. project {}: {} sensors in {} cells of {} m; the sensors log {} readings, none collected yet",
-        init.settings.project.name,
-        init.sensors,
-        init.n_cells,
-        init.settings.field.cell_size_m,
+        "2. {}; the sensors log {} readings, none collected yet",
+        project_line(&init),
         truth.len()
     )?;
     let end = farm.times().last().copied().unwrap_or_default();
     let t0 = end - MISSIONS * DAY;
     Ok((project, truth, t0))
+}
+
+/// A new project from `init`, and the ground truth its sensors log: every reading of `files`
+/// (in `format`), none collected yet.
+fn project_and_truth(
+    init: &app::InitRequest,
+    files: Vec<PathBuf>,
+    format: app::Format,
+    progress: &Terminal,
+) -> Result<(Project<SqliteStore>, app::InitOutcome, app::Truth)> {
+    let (project, outcome) = app::init(init)?;
+    let truth = app::Truth::from_files(
+        &project,
+        &app::IngestRequest {
+            files,
+            format,
+            ..Default::default()
+        },
+        DAY,
+        progress,
+    )?;
+    Ok((project, outcome, truth))
+}
+
+/// "project NAME: N sensors in C cells of S m".
+fn project_line(init: &app::InitOutcome) -> String {
+    format!(
+        "project {}: {} sensors in {} cells of {} m",
+        init.settings.project.name, init.sensors, init.n_cells, init.settings.field.cell_size_m
+    )
 }
 
 /// The CAF network (Gasch & Brown 2017): sensors in UTM 11N, daily files as ground truth;
@@ -304,22 +326,17 @@ fn caf(
         .filter(|p| p.extension().is_some_and(|x| x == "txt"))
         .collect();
     daily.sort();
-    let (project, init) = app::init(&app::InitRequest {
-        dir: args.dir.clone(),
-        sensors,
-        utm_zone: Some("11N".into()),
-        name: Some("caf-demo".into()),
-        force: true,
-        ..Default::default()
-    })?;
-    let truth = app::Truth::from_files(
-        &project,
-        &app::IngestRequest {
-            files: daily.clone(),
-            format: app::Format::CafDaily,
+    let (project, init, truth) = project_and_truth(
+        &app::InitRequest {
+            dir: args.dir.clone(),
+            sensors,
+            utm_zone: Some("11N".into()),
+            name: Some("caf-demo".into()),
+            force: true,
             ..Default::default()
         },
-        DAY,
+        daily.clone(),
+        app::Format::CafDaily,
         progress,
     )?;
     writeln!(
@@ -330,11 +347,8 @@ fn caf(
     )?;
     writeln!(
         out,
-        "2. project {}: {} sensors in {} cells of {} m, energy preset {}",
-        init.settings.project.name,
-        init.sensors,
-        init.n_cells,
-        init.settings.field.cell_size_m,
+        "2. {}, energy preset {}",
+        project_line(&init),
         init.settings.energy.preset
     )?;
     let t0 = app::parse_timestamp("2014-03-01").context("demo date")?;

@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use std::ops::RangeInclusive;
 
 use gleaner_field::{CellIndex, LatLon, Modality, SensorId, UnixSeconds};
-use rusqlite::{Connection, OptionalExtension, Row, params};
+use rusqlite::{Connection, OptionalExtension, Params, Row, params};
 
 use super::Db;
 use crate::{
@@ -51,25 +51,39 @@ fn count(table: &'static str, n: i64) -> Result<u64> {
     })
 }
 
+/// Every row the (cached) statement `sql` returns for `params`, each read as a tuple of its
+/// columns in select order (`(String, Option<f64>)` for `SELECT name, elevation_m ...`),
+/// collected into `C`.
+fn select<T, C>(c: &Connection, sql: &str, params: impl Params) -> Result<C>
+where
+    T: for<'a> TryFrom<&'a Row<'a>, Error = rusqlite::Error>,
+    C: FromIterator<T>,
+{
+    let mut stmt = c.prepare_cached(sql).db()?;
+    stmt.query_map(params, |r| T::try_from(r))
+        .db()?
+        .collect::<rusqlite::Result<C>>()
+        .db()
+}
+
+/// `key -> id` for every row of a `SELECT key, id` statement.
+fn ids(c: &Connection, sql: &str) -> Result<HashMap<String, i64>> {
+    select(c, sql, [])
+}
+
 /// `name -> id` for every stored sensor.
 pub(super) fn sensor_ids(c: &Connection) -> Result<HashMap<String, i64>> {
-    let mut stmt = c.prepare_cached("SELECT name, id FROM sensors").db()?;
-    let rows = stmt.query_map([], |r| Ok((r.get(0)?, r.get(1)?))).db()?;
-    rows.collect::<rusqlite::Result<_>>().db()
+    ids(c, "SELECT name, id FROM sensors")
 }
 
 /// `name -> id` for every stored modality.
 pub(super) fn modality_ids(c: &Connection) -> Result<HashMap<String, i64>> {
-    let mut stmt = c.prepare_cached("SELECT name, id FROM modalities").db()?;
-    let rows = stmt.query_map([], |r| Ok((r.get(0)?, r.get(1)?))).db()?;
-    rows.collect::<rusqlite::Result<_>>().db()
+    ids(c, "SELECT name, id FROM modalities")
 }
 
 /// `label -> id` for every stored cell.
 pub(super) fn cell_ids(c: &Connection) -> Result<HashMap<String, i64>> {
-    let mut stmt = c.prepare_cached("SELECT label, id FROM cells").db()?;
-    let rows = stmt.query_map([], |r| Ok((r.get(0)?, r.get(1)?))).db()?;
-    rows.collect::<rusqlite::Result<_>>().db()
+    ids(c, "SELECT label, id FROM cells")
 }
 
 pub(super) fn schema_version(c: &Connection) -> Result<i64> {
@@ -83,23 +97,13 @@ pub(super) fn schema_version(c: &Connection) -> Result<i64> {
 }
 
 pub(super) fn sensors(c: &Connection) -> Result<Vec<SensorRecord>> {
-    let mut stmt = c
-        .prepare_cached("SELECT name, lat, lon, elevation_m, source FROM sensors ORDER BY name")
-        .db()?;
-    let rows = stmt
-        .query_map([], |r| {
-            Ok((
-                r.get::<_, String>(0)?,
-                r.get::<_, f64>(1)?,
-                r.get::<_, f64>(2)?,
-                r.get::<_, Option<f64>>(3)?,
-                r.get::<_, String>(4)?,
-            ))
-        })
-        .db()?;
-    let mut out = Vec::new();
-    for row in rows {
-        let (name, lat, lon, elevation_m, source) = row.db()?;
+    let rows: Vec<(String, f64, f64, Option<f64>, String)> = select(
+        c,
+        "SELECT name, lat, lon, elevation_m, source FROM sensors ORDER BY name",
+        [],
+    )?;
+    let mut out = Vec::with_capacity(rows.len());
+    for (name, lat, lon, elevation_m, source) in rows {
         out.push(SensorRecord {
             id: parse_sensor("sensors", name)?,
             position: parse_latlon("sensors", lat, lon)?,
@@ -111,15 +115,10 @@ pub(super) fn sensors(c: &Connection) -> Result<Vec<SensorRecord>> {
 }
 
 pub(super) fn modalities(c: &Connection) -> Result<Vec<ModalityRecord>> {
-    let mut stmt = c
-        .prepare_cached("SELECT name, unit FROM modalities ORDER BY name")
-        .db()?;
-    let rows = stmt
-        .query_map([], |r| Ok((r.get::<_, String>(0)?, r.get(1)?)))
-        .db()?;
-    let mut out = Vec::new();
-    for row in rows {
-        let (name, unit) = row.db()?;
+    let rows: Vec<(String, Option<String>)> =
+        select(c, "SELECT name, unit FROM modalities ORDER BY name", [])?;
+    let mut out = Vec::with_capacity(rows.len());
+    for (name, unit) in rows {
         out.push(ModalityRecord {
             modality: parse_modality("modalities", &name)?,
             unit,
@@ -228,30 +227,14 @@ pub(super) fn reading_count(c: &Connection) -> Result<u64> {
 }
 
 pub(super) fn ingests(c: &Connection) -> Result<Vec<IngestRecord>> {
-    let mut stmt = c
-        .prepare_cached(
-            "SELECT file_name, format, rows_read, rows_inserted, rows_unchanged, rows_skipped, at
+    let rows: Vec<(String, String, i64, i64, i64, i64, i64)> = select(
+        c,
+        "SELECT file_name, format, rows_read, rows_inserted, rows_unchanged, rows_skipped, at
              FROM ingests ORDER BY id",
-        )
-        .db()?;
-    let rows = stmt
-        .query_map([], |r| {
-            Ok((
-                r.get::<_, String>(0)?,
-                r.get::<_, String>(1)?,
-                [
-                    r.get::<_, i64>(2)?,
-                    r.get::<_, i64>(3)?,
-                    r.get::<_, i64>(4)?,
-                    r.get::<_, i64>(5)?,
-                ],
-                r.get::<_, i64>(6)?,
-            ))
-        })
-        .db()?;
-    let mut out = Vec::new();
-    for row in rows {
-        let (file_name, format, [read, inserted, unchanged, skipped], at) = row.db()?;
+        [],
+    )?;
+    let mut out = Vec::with_capacity(rows.len());
+    for (file_name, format, read, inserted, unchanged, skipped, at) in rows {
         out.push(IngestRecord {
             file_name,
             format,
@@ -266,34 +249,23 @@ pub(super) fn ingests(c: &Connection) -> Result<Vec<IngestRecord>> {
 }
 
 pub(super) fn cells(c: &Connection) -> Result<Vec<CellRecord>> {
-    let mut stmt = c
-        .prepare_cached("SELECT id, label, lat, lon, cell_size_m FROM cells ORDER BY i, j")
-        .db()?;
-    let mut members = c
-        .prepare_cached(
+    let rows: Vec<(i64, String, f64, f64, f64)> = select(
+        c,
+        "SELECT id, label, lat, lon, cell_size_m FROM cells ORDER BY i, j",
+        [],
+    )?;
+    let mut out = Vec::with_capacity(rows.len());
+    for (id, label, lat, lon, cell_size_m) in rows {
+        let names: Vec<(String,)> = select(
+            c,
             "SELECT s.name FROM cell_sensors cs JOIN sensors s ON s.id = cs.sensor
              WHERE cs.cell = ?1 ORDER BY s.name",
-        )
-        .db()?;
-    let rows = stmt
-        .query_map([], |r| {
-            Ok((
-                r.get::<_, i64>(0)?,
-                r.get::<_, String>(1)?,
-                r.get::<_, f64>(2)?,
-                r.get::<_, f64>(3)?,
-                r.get::<_, f64>(4)?,
-            ))
-        })
-        .db()?;
-    let mut out = Vec::new();
-    for row in rows {
-        let (id, label, lat, lon, cell_size_m) = row.db()?;
-        let names = members.query_map([id], |r| r.get::<_, String>(0)).db()?;
-        let mut sensors = Vec::new();
-        for n in names {
-            sensors.push(parse_sensor("cell_sensors", n.db()?)?);
-        }
+            [id],
+        )?;
+        let sensors = names
+            .into_iter()
+            .map(|(n,)| parse_sensor("cell_sensors", n))
+            .collect::<Result<_>>()?;
         out.push(CellRecord {
             index: parse_cell("cells", &label)?,
             centre: parse_latlon("cells", lat, lon)?,
@@ -305,72 +277,34 @@ pub(super) fn cells(c: &Connection) -> Result<Vec<CellRecord>> {
 }
 
 pub(super) fn cell_metadata(c: &Connection) -> Result<Vec<CellMetadata>> {
-    let mut stmt = c
-        .prepare_cached(
-            "SELECT c.id, c.label, md.last_collected, md.pending_bytes, md.expected_energy_j,
-                    md.freshness, md.redundancy, md.anomaly, md.uncertainty, md.score,
-                    md.computed_at
-             FROM cells c LEFT JOIN cell_metadata md ON md.cell = c.id ORDER BY c.i, c.j",
-        )
-        .db()?;
-    let mut probs = c
-        .prepare_cached(
-            "SELECT class, probability FROM cell_class_probabilities WHERE cell = ?1 ORDER BY k",
-        )
-        .db()?;
-    let mut summaries = c
-        .prepare_cached(
-            "SELECT m.name, cs.count, cs.mean, cs.std, cs.min, cs.max, cs.latest_t, cs.latest_value
-             FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
-             WHERE cs.cell = ?1 ORDER BY m.name",
-        )
-        .db()?;
-    let mut correlations = c
-        .prepare_cached(
-            "SELECT n.label, m.name, cc.correlation, cc.overlap
-             FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
-                  JOIN modalities m ON m.id = cc.modality
-             WHERE cc.cell = ?1 ORDER BY n.i, n.j, m.name",
-        )
-        .db()?;
-    let mut anomalies = c
-        .prepare_cached(
-            "SELECT m.name, ca.t, ca.anomaly, ca.flagged
-             FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
-             WHERE ca.cell = ?1 ORDER BY m.name, ca.t",
-        )
-        .db()?;
     type MetaRow = (
         i64,
         String,
         Option<i64>,
         Option<f64>,
         Option<f64>,
-        [Option<f64>; 5],
+        Option<f64>,
+        Option<f64>,
+        Option<f64>,
+        Option<f64>,
+        Option<f64>,
         Option<i64>,
     );
-    let rows: Vec<MetaRow> = stmt
-        .query_map([], |r| {
-            Ok((
-                r.get(0)?,
-                r.get(1)?,
-                r.get(2)?,
-                r.get(3)?,
-                r.get(4)?,
-                [r.get(5)?, r.get(6)?, r.get(7)?, r.get(8)?, r.get(9)?],
-                r.get(10)?,
-            ))
-        })
-        .db()?
-        .collect::<rusqlite::Result<_>>()
-        .db()?;
+    let rows: Vec<MetaRow> = select(
+        c,
+        "SELECT c.id, c.label, md.last_collected, md.pending_bytes, md.expected_energy_j,
+                    md.freshness, md.redundancy, md.anomaly, md.uncertainty, md.score,
+                    md.computed_at
+             FROM cells c LEFT JOIN cell_metadata md ON md.cell = c.id ORDER BY c.i, c.j",
+        [],
+    )?;
     let mut out = Vec::with_capacity(rows.len());
-    for (id, label, last_collected, pending_bytes, expected_energy_j, terms, computed_at) in rows {
+    for (id, label, last_collected, pending_bytes, expected_energy_j, f, r, a, u, s, at) in rows {
         let mut md = CellMetadata::new(parse_cell("cells", &label)?);
         md.last_collected = last_collected;
         md.pending_bytes = pending_bytes;
         md.expected_energy_j = expected_energy_j;
-        if let ([Some(f), Some(r), Some(a), Some(u), Some(s)], Some(at)) = (terms, computed_at) {
+        if let (Some(f), Some(r), Some(a), Some(u), Some(s), Some(at)) = (f, r, a, u, s, at) {
             md.scores = Some(CellScores {
                 freshness: f,
                 redundancy: r,
@@ -380,33 +314,24 @@ pub(super) fn cell_metadata(c: &Connection) -> Result<Vec<CellMetadata>> {
                 computed_at: at,
             });
         }
-        for p in probs
-            .query_map([id], |r| {
-                Ok(ClassProbability {
-                    class: r.get(0)?,
-                    probability: r.get(1)?,
-                })
-            })
-            .db()?
-        {
-            md.class_probabilities.push(p.db()?);
+        let prows: Vec<(String, f64)> = select(
+            c,
+            "SELECT class, probability FROM cell_class_probabilities WHERE cell = ?1 ORDER BY k",
+            [id],
+        )?;
+        for (class, probability) in prows {
+            md.class_probabilities
+                .push(ClassProbability { class, probability });
         }
-        let srows = summaries
-            .query_map([id], |r| {
-                Ok((
-                    r.get::<_, String>(0)?,
-                    r.get::<_, i64>(1)?,
-                    r.get::<_, f64>(2)?,
-                    r.get::<_, Option<f64>>(3)?,
-                    r.get::<_, f64>(4)?,
-                    r.get::<_, f64>(5)?,
-                    r.get::<_, i64>(6)?,
-                    r.get::<_, f64>(7)?,
-                ))
-            })
-            .db()?;
-        for s in srows {
-            let (m, n, mean, std, min, max, latest_t, latest_value) = s.db()?;
+        type SummaryRow = (String, i64, f64, Option<f64>, f64, f64, i64, f64);
+        let srows: Vec<SummaryRow> = select(
+            c,
+            "SELECT m.name, cs.count, cs.mean, cs.std, cs.min, cs.max, cs.latest_t, cs.latest_value
+             FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
+             WHERE cs.cell = ?1 ORDER BY m.name",
+            [id],
+        )?;
+        for (m, n, mean, std, min, max, latest_t, latest_value) in srows {
             md.summaries.push(ModalitySummary {
                 modality: parse_modality("cell_summaries", &m)?,
                 stats: SeriesStats {
@@ -420,18 +345,15 @@ pub(super) fn cell_metadata(c: &Connection) -> Result<Vec<CellMetadata>> {
                 },
             });
         }
-        let crows = correlations
-            .query_map([id], |r| {
-                Ok((
-                    r.get::<_, String>(0)?,
-                    r.get::<_, String>(1)?,
-                    r.get::<_, f64>(2)?,
-                    r.get::<_, i64>(3)?,
-                ))
-            })
-            .db()?;
-        for co in crows {
-            let (n, m, correlation, overlap) = co.db()?;
+        let crows: Vec<(String, String, f64, i64)> = select(
+            c,
+            "SELECT n.label, m.name, cc.correlation, cc.overlap
+             FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
+                  JOIN modalities m ON m.id = cc.modality
+             WHERE cc.cell = ?1 ORDER BY n.i, n.j, m.name",
+            [id],
+        )?;
+        for (n, m, correlation, overlap) in crows {
             md.correlations.push(Correlation {
                 neighbour: parse_cell("cell_correlations", &n)?,
                 modality: parse_modality("cell_correlations", &m)?,
@@ -439,18 +361,14 @@ pub(super) fn cell_metadata(c: &Connection) -> Result<Vec<CellMetadata>> {
                 overlap: count("cell_correlations", overlap)?,
             });
         }
-        let arows = anomalies
-            .query_map([id], |r| {
-                Ok((
-                    r.get::<_, String>(0)?,
-                    r.get::<_, i64>(1)?,
-                    r.get::<_, f64>(2)?,
-                    r.get::<_, bool>(3)?,
-                ))
-            })
-            .db()?;
-        for a in arows {
-            let (m, t, anomaly, flagged) = a.db()?;
+        let arows: Vec<(String, i64, f64, bool)> = select(
+            c,
+            "SELECT m.name, ca.t, ca.anomaly, ca.flagged
+             FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
+             WHERE ca.cell = ?1 ORDER BY m.name, ca.t",
+            [id],
+        )?;
+        for (m, t, anomaly, flagged) in arows {
             md.anomalies.push(AnomalyRecord {
                 modality: parse_modality("cell_anomalies", &m)?,
                 t,
@@ -464,21 +382,15 @@ pub(super) fn cell_metadata(c: &Connection) -> Result<Vec<CellMetadata>> {
 }
 
 pub(super) fn sensor_last_collected(c: &Connection) -> Result<Vec<(SensorId, UnixSeconds)>> {
-    let mut stmt = c
-        .prepare_cached(
-            "SELECT s.name, sc.last_collected FROM sensor_collection sc
+    let rows: Vec<(String, UnixSeconds)> = select(
+        c,
+        "SELECT s.name, sc.last_collected FROM sensor_collection sc
              JOIN sensors s ON s.id = sc.sensor ORDER BY s.name",
-        )
-        .db()?;
-    let rows = stmt
-        .query_map([], |r| Ok((r.get::<_, String>(0)?, r.get(1)?)))
-        .db()?;
-    let mut out = Vec::new();
-    for row in rows {
-        let (name, t) = row.db()?;
-        out.push((parse_sensor("sensor_collection", name)?, t));
-    }
-    Ok(out)
+        [],
+    )?;
+    rows.into_iter()
+        .map(|(name, t)| Ok((parse_sensor("sensor_collection", name)?, t)))
+        .collect()
 }
 
 /// A `missions` row as read, before its stops and visits.
@@ -502,8 +414,10 @@ struct MissionRow {
     flown_at: Option<i64>,
 }
 
-impl MissionRow {
-    fn from_row(r: &Row<'_>) -> rusqlite::Result<Self> {
+impl TryFrom<&Row<'_>> for MissionRow {
+    type Error = rusqlite::Error;
+
+    fn try_from(r: &Row<'_>) -> rusqlite::Result<Self> {
         Ok(Self {
             id: r.get(0)?,
             created_at: r.get(1)?,
@@ -537,34 +451,16 @@ impl MissionRow {
 
 /// All missions (`id` = `None`) or one, oldest first, with their stops and visits.
 pub(super) fn missions(c: &Connection, id: Option<MissionId>) -> Result<Vec<MissionRecord>> {
-    let mut stmt = c
-        .prepare_cached(
-            "SELECT id, created_at, kind, planned_at, solver, seed,
+    let rows: Vec<MissionRow> = select(
+        c,
+        "SELECT id, created_at, kind, planned_at, solver, seed,
                     weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form,
                     total_score, base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
                     travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m,
                     flight_time_s, return_distance_m, status, flown_at
              FROM missions WHERE ?1 IS NULL OR id = ?1 ORDER BY id",
-        )
-        .db()?;
-    let mut stops = c
-        .prepare_cached(
-            "SELECT position, cell, lat, lon, score, freshness, redundancy, anomaly, uncertainty,
-                    leg_distance_m, leg_energy_j, collection_s, hover_s, hover_j, comm_j
-             FROM mission_stops WHERE mission = ?1 ORDER BY position",
-        )
-        .db()?;
-    let mut visits = c
-        .prepare_cached(
-            "SELECT position, cell, arrived_at, energy_j FROM visits WHERE mission = ?1
-             ORDER BY position",
-        )
-        .db()?;
-    let rows: Vec<MissionRow> = stmt
-        .query_map([id.map(|m| m.0)], MissionRow::from_row)
-        .db()?
-        .collect::<rusqlite::Result<_>>()
-        .db()?;
+        [id.map(|m| m.0)],
+    )?;
     let mut out = Vec::with_capacity(rows.len());
     for m in rows {
         let corrupt = |detail: String| StoreError::Corrupt {
@@ -576,71 +472,57 @@ pub(super) fn missions(c: &Connection, id: Option<MissionId>) -> Result<Vec<Miss
         let status = MissionStatus::parse(&m.status)
             .ok_or_else(|| corrupt(format!("mission {}: unknown status {:?}", m.id, m.status)))?;
         let mut stop_list = Vec::new();
-        let srows = stops
-            .query_map([m.id], |r| {
-                Ok((
-                    r.get::<_, u32>(0)?,
-                    r.get::<_, String>(1)?,
-                    (r.get::<_, f64>(2)?, r.get::<_, f64>(3)?),
-                    r.get::<_, f64>(4)?,
-                    [
-                        r.get::<_, Option<f64>>(5)?,
-                        r.get::<_, Option<f64>>(6)?,
-                        r.get::<_, Option<f64>>(7)?,
-                        r.get::<_, Option<f64>>(8)?,
-                    ],
-                    [
-                        r.get::<_, f64>(9)?,
-                        r.get::<_, f64>(10)?,
-                        r.get::<_, f64>(11)?,
-                        r.get::<_, f64>(12)?,
-                        r.get::<_, f64>(13)?,
-                        r.get::<_, f64>(14)?,
-                    ],
-                ))
-            })
-            .db()?;
+        type StopRow = (
+            u32,
+            String,
+            f64,
+            f64,
+            f64,
+            Option<f64>,
+            Option<f64>,
+            Option<f64>,
+            Option<f64>,
+            f64,
+            f64,
+            f64,
+            f64,
+            f64,
+            f64,
+        );
+        let srows: Vec<StopRow> = select(
+            c,
+            "SELECT position, cell, lat, lon, score, freshness, redundancy, anomaly, uncertainty,
+                    leg_distance_m, leg_energy_j, collection_s, hover_s, hover_j, comm_j
+             FROM mission_stops WHERE mission = ?1 ORDER BY position",
+            [m.id],
+        )?;
         for s in srows {
-            let (order, cell, (lat, lon), score, terms, nums) = s.db()?;
-            let [
-                leg_distance_m,
-                leg_energy_j,
-                collection_s,
-                hover_s,
-                hover_j,
-                comm_j,
-            ] = nums;
-            let terms = match terms {
-                [Some(f), Some(r), Some(a), Some(u)] => Some([f, r, a, u]),
+            let terms = match (s.5, s.6, s.7, s.8) {
+                (Some(f), Some(r), Some(a), Some(u)) => Some([f, r, a, u]),
                 _ => None,
             };
             stop_list.push(StopRecord {
-                order,
-                cell: parse_cell("mission_stops", &cell)?,
-                centre: parse_latlon("mission_stops", lat, lon)?,
-                score,
+                order: s.0,
+                cell: parse_cell("mission_stops", &s.1)?,
+                centre: parse_latlon("mission_stops", s.2, s.3)?,
+                score: s.4,
                 terms,
-                leg_distance_m,
-                leg_energy_j,
-                collection_s,
-                hover_s,
-                hover_j,
-                comm_j,
+                leg_distance_m: s.9,
+                leg_energy_j: s.10,
+                collection_s: s.11,
+                hover_s: s.12,
+                hover_j: s.13,
+                comm_j: s.14,
             });
         }
         let mut visit_list = Vec::new();
-        let vrows = visits
-            .query_map([m.id], |r| {
-                Ok((
-                    r.get::<_, u32>(0)?,
-                    r.get::<_, String>(1)?,
-                    r.get::<_, Option<i64>>(2)?,
-                    r.get::<_, Option<f64>>(3)?,
-                ))
-            })
-            .db()?;
-        for v in vrows {
-            let (order, cell, arrived_at, energy_j) = v.db()?;
+        let vrows: Vec<(u32, String, Option<i64>, Option<f64>)> = select(
+            c,
+            "SELECT position, cell, arrived_at, energy_j FROM visits WHERE mission = ?1
+             ORDER BY position",
+            [m.id],
+        )?;
+        for (order, cell, arrived_at, energy_j) in vrows {
             visit_list.push(VisitRecord {
                 order,
                 cell: parse_cell("visits", &cell)?,

@@ -24,14 +24,16 @@ fn same_value(a: f64, b: f64) -> bool {
     a == b || (a - b).abs() <= SAME_VALUE_RTOL * a.abs().max(b.abs())
 }
 
+/// [`StoreError::Invalid`].
+fn invalid(what: &'static str, detail: String) -> StoreError {
+    StoreError::Invalid { what, detail }
+}
+
 fn finite(what: &'static str, name: &str, v: f64) -> Result<()> {
     if v.is_finite() {
         Ok(())
     } else {
-        Err(StoreError::Invalid {
-            what,
-            detail: format!("{name} = {v} is not finite"),
-        })
+        Err(invalid(what, format!("{name} = {v} is not finite")))
     }
 }
 
@@ -49,13 +51,13 @@ pub(super) fn upsert_sensors(c: &Connection, sensors: &[SensorRecord]) -> Result
         if let Some(prev) = seen.insert(s.id.as_str(), s)
             && prev != s
         {
-            return Err(StoreError::Invalid {
-                what: "sensor list",
-                detail: format!(
+            return Err(invalid(
+                "sensor list",
+                format!(
                     "sensor {:?} listed twice with different content",
                     s.id.as_str()
                 ),
-            });
+            ));
         }
     }
     let mut stats = UpsertStats::default();
@@ -121,15 +123,15 @@ pub(super) fn upsert_modalities(
         if let Some(prev) = seen.insert(m.modality.as_str(), m)
             && prev != m
         {
-            return Err(StoreError::Invalid {
-                what: "modality list",
-                detail: format!(
+            return Err(invalid(
+                "modality list",
+                format!(
                     "modality {:?} listed twice with units {:?} and {:?}",
                     m.modality.as_str(),
                     prev.unit,
                     m.unit
                 ),
-            });
+            ));
         }
     }
     let mut stats = UpsertStats::default();
@@ -173,6 +175,19 @@ pub(super) fn upsert_modalities(
     Ok(stats)
 }
 
+/// The stored key of each of `names`, or `unknown` of the first one not stored.
+fn keys<T>(
+    names: &[T],
+    known: &HashMap<String, i64>,
+    name: impl Fn(&T) -> &str,
+    unknown: impl Fn(&T) -> StoreError,
+) -> Result<Vec<i64>> {
+    names
+        .iter()
+        .map(|n| known.get(name(n)).copied().ok_or_else(|| unknown(n)))
+        .collect()
+}
+
 pub(super) fn insert_readings(
     c: &Connection,
     batch: &ReadingBatch,
@@ -181,26 +196,15 @@ pub(super) fn insert_readings(
     // Resolve names to integer keys and validate every row before touching the database.
     let known_sensors = sensor_ids(c)?;
     let known_modalities = modality_ids(c)?;
-    let sensor_keys = batch
-        .sensors
-        .iter()
-        .map(|s| {
-            known_sensors
-                .get(s.as_str())
-                .copied()
-                .ok_or_else(|| StoreError::UnknownSensor(s.clone()))
-        })
-        .collect::<Result<Vec<i64>>>()?;
-    let modality_keys = batch
-        .modalities
-        .iter()
-        .map(|m| {
-            known_modalities
-                .get(m.as_str())
-                .copied()
-                .ok_or_else(|| StoreError::UnknownModality(m.clone()))
-        })
-        .collect::<Result<Vec<i64>>>()?;
+    let sensor_keys = keys(&batch.sensors, &known_sensors, SensorId::as_str, |s| {
+        StoreError::UnknownSensor(s.clone())
+    })?;
+    let modality_keys = keys(
+        &batch.modalities,
+        &known_modalities,
+        Modality::as_str,
+        |m| StoreError::UnknownModality(m.clone()),
+    )?;
     for (row, r) in batch.rows.iter().enumerate() {
         let bad = |what, index, len| StoreError::BadIndex {
             row,
@@ -364,28 +368,28 @@ pub(super) fn replace_cells(c: &Connection, cells: &[CellRecord]) -> Result<Repl
     let mut owner: HashMap<&str, CellIndex> = HashMap::new();
     for cell in cells {
         if !labels.insert(cell.index) {
-            return Err(StoreError::Invalid {
-                what: "cell list",
-                detail: format!("cell {} listed twice", cell.index),
-            });
+            return Err(invalid(
+                "cell list",
+                format!("cell {} listed twice", cell.index),
+            ));
         }
         if !(cell.cell_size_m.is_finite() && cell.cell_size_m > 0.0) {
-            return Err(StoreError::Invalid {
-                what: "cell size",
-                detail: format!(
+            return Err(invalid(
+                "cell size",
+                format!(
                     "cell {}: {} m must be positive",
                     cell.index, cell.cell_size_m
                 ),
-            });
+            ));
         }
         for s in &cell.sensors {
             if let Some(other) = owner.insert(s.as_str(), cell.index)
                 && other != cell.index
             {
-                return Err(StoreError::Invalid {
-                    what: "cell list",
-                    detail: format!("sensor {s} is in cells {other} and {}", cell.index),
-                });
+                return Err(invalid(
+                    "cell list",
+                    format!("sensor {s} is in cells {other} and {}", cell.index),
+                ));
             }
         }
     }
@@ -502,10 +506,10 @@ fn validate_mission(m: &NewMission) -> Result<()> {
     let mut orders = HashSet::new();
     for s in &m.stops {
         if !orders.insert(s.order) {
-            return Err(StoreError::Invalid {
-                what: "mission stops",
-                detail: format!("stop order {} used twice", s.order),
-            });
+            return Err(invalid(
+                "mission stops",
+                format!("stop order {} used twice", s.order),
+            ));
         }
         let cell = s.cell.to_string();
         for (name, v) in [
@@ -613,10 +617,10 @@ pub(super) fn record_visits(
     let mut orders = HashSet::new();
     for v in visits {
         if !orders.insert(v.order) {
-            return Err(StoreError::Invalid {
-                what: "visit list",
-                detail: format!("visit order {} used twice in mission {mission}", v.order),
-            });
+            return Err(invalid(
+                "visit list",
+                format!("visit order {} used twice in mission {mission}", v.order),
+            ));
         }
         if let Some(e) = v.energy_j {
             finite("visit energy", &v.cell.to_string(), e)?;
@@ -699,10 +703,10 @@ fn validate_metadata(metadata: &[CellMetadata]) -> Result<()> {
     for md in metadata {
         let cell = md.cell.to_string();
         if !cells.insert(md.cell) {
-            return Err(StoreError::Invalid {
-                what: "cell metadata",
-                detail: format!("cell {cell} listed twice"),
-            });
+            return Err(invalid(
+                "cell metadata",
+                format!("cell {cell} listed twice"),
+            ));
         }
         for (name, v) in [
             ("pending_bytes", md.pending_bytes),
@@ -725,24 +729,24 @@ fn validate_metadata(metadata: &[CellMetadata]) -> Result<()> {
         }
         for p in &md.class_probabilities {
             if !(0.0..=1.0).contains(&p.probability) {
-                return Err(StoreError::Invalid {
-                    what: "class probability",
-                    detail: format!(
+                return Err(invalid(
+                    "class probability",
+                    format!(
                         "cell {cell} class {:?}: {} not in [0, 1]",
                         p.class, p.probability
                     ),
-                });
+                ));
             }
         }
         for c in &md.correlations {
             if !(-1.0..=1.0).contains(&c.correlation) {
-                return Err(StoreError::Invalid {
-                    what: "correlation",
-                    detail: format!(
+                return Err(invalid(
+                    "correlation",
+                    format!(
                         "cell {cell} neighbour {} {}: {} not in [-1, 1]",
                         c.neighbour, c.modality, c.correlation
                     ),
-                });
+                ));
             }
         }
         for a in &md.anomalies {
@@ -844,7 +848,7 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
                 .execute(params![
                     ck,
                     modality_key(&su.modality)?,
-                    i64::try_from(st.count).unwrap_or(i64::MAX),
+                    as_i64(st.count),
                     st.mean,
                     st.std,
                     st.min,
@@ -861,7 +865,7 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
                     cell_key(&co.neighbour)?,
                     modality_key(&co.modality)?,
                     co.correlation,
-                    i64::try_from(co.overlap).unwrap_or(i64::MAX)
+                    as_i64(co.overlap)
                 ])
                 .db()?;
         }
