@@ -470,13 +470,13 @@ fn demo_runs_end_to_end() {
     ]);
     for step in [
         "1. synthetic farm",
-        "3. ingested",
-        "5. scores",
-        "6. mission #1",
-        "mission.plan",
-        "mission.svg",
-        "7. mission #1 recorded",
-        "8. a day later",
+        "3. exploration",
+        "sortie #1: selected",
+        "overview map",
+        "4. 5 adaptive missions",
+        "J of 66,500.0 J",
+        "brought back",
+        "5. mission #",
     ] {
         assert!(out.contains(step), "demo output lacks {step:?}:\n{out}");
     }
@@ -521,13 +521,14 @@ fn exploration_visits_every_cell_once_within_budget() {
     let budget = e["budget_j"].as_f64().expect("budget");
     let mut seen: Vec<String> = Vec::new();
     for sortie in e["sorties"].as_array().expect("sorties") {
-        assert!(sortie["energy_j"].as_f64().expect("energy") <= budget);
+        assert!(sortie["energy"]["total_j"].as_f64().expect("energy") <= budget);
+        assert_eq!(sortie["kind"], "exploration");
         seen.extend(
-            sortie["cells"]
+            sortie["stops"]
                 .as_array()
-                .expect("cells")
+                .expect("stops")
                 .iter()
-                .map(|c| c.as_str().expect("id").to_string()),
+                .map(|c| c["cell"].as_str().expect("id").to_string()),
         );
     }
     let cells: Vec<serde_json::Value> =
@@ -666,4 +667,104 @@ fn hubbard_brook_project_from_real_data() {
         m["energy"]["total_j"].as_f64().expect("total")
             <= m["energy"]["budget_j"].as_f64().expect("budget")
     );
+}
+
+#[test]
+fn record_refuses_a_second_record_and_foreign_readings_unless_asked() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    ok(&["plan", "--project", p, "--at", "2014-01-25", "--solver", "exact"]);
+    let m: serde_json::Value =
+        serde_json::from_str(&ok(&["missions", "--project", p, "--mission", "1", "--json"]))
+            .expect("json");
+    let visited: Vec<String> = m["stops"]
+        .as_array()
+        .expect("stops")
+        .iter()
+        .map(|s| s["cell"].as_str().expect("cell").to_string())
+        .collect();
+    assert!(!visited.is_empty());
+    let cells: Vec<serde_json::Value> =
+        serde_json::from_str(&ok(&["cells", "--project", p, "--json"])).expect("json");
+    // A reading from a sensor of a cell the flight did not visit is refused, naming it.
+    let outside = cells
+        .iter()
+        .find(|c| !visited.contains(&c["cell"].as_str().expect("cell").to_string()));
+    if let Some(outside) = outside {
+        let sensor = outside["sensors"][0].as_str().expect("sensor");
+        let file = dir.path().join("foreign.csv");
+        std::fs::write(
+            &file,
+            format!("sensor_id,timestamp,modality,value\n{sensor},2014-01-24,vw@30cm,0.3\n"),
+        )
+        .expect("write");
+        let err = fail(&["record", "--project", p, "--mission", "1", s(&file)]);
+        assert!(err.contains(sensor) && err.contains("did not visit"), "{err}");
+    }
+    let before = ok(&["missions", "--project", p]);
+    assert!(before.contains("planned"), "{before}");
+    ok(&["record", "--project", p, "--mission", "1"]);
+    let err = fail(&["record", "--project", p, "--mission", "1", "--at", "2014-01-26"]);
+    assert!(err.contains("already recorded") && err.contains("--amend"), "{err}");
+    let amended = ok(&[
+        "record", "--project", p, "--mission", "1", "--at", "2014-01-26", "--amend",
+    ]);
+    assert!(amended.contains("(amended)"), "{amended}");
+    let m: serde_json::Value =
+        serde_json::from_str(&ok(&["missions", "--project", p, "--mission", "1", "--json"]))
+            .expect("json");
+    assert_eq!(m["status"], "flown");
+    assert_eq!(m["flown_at"], "2014-01-26T00:00:00Z");
+}
+
+#[test]
+fn a_unit_other_than_the_stored_one_is_refused() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    let cells: Vec<serde_json::Value> =
+        serde_json::from_str(&ok(&["cells", "--project", p, "--json"])).expect("json");
+    let sensor = cells[0]["sensors"][0].as_str().expect("sensor");
+    let file = dir.path().join("percent.csv");
+    std::fs::write(
+        &file,
+        format!("sensor_id,timestamp,modality,value,unit\n{sensor},2014-02-01,vw@30cm,31,%\n"),
+    )
+    .expect("write");
+    let err = fail(&["ingest", "--project", p, s(&file)]);
+    assert!(err.contains("m3/m3") && err.contains('%'), "{err}");
+    // Each cause is said once.
+    assert_eq!(err.matches("m3/m3").count(), 1, "{err}");
+}
+
+#[test]
+fn dry_runs_write_nothing() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    let db = dir.path().join("gleaner.db");
+    let before = std::fs::read(&db).expect("db");
+    ok(&["plan", "--project", p, "--at", "2014-01-25", "--solver", "exact", "--dry-run"]);
+    ok(&["explore", "--project", p, "--dry-run"]);
+    let missions = ok(&["missions", "--project", p, "--json"]);
+    assert_eq!(missions.trim(), "[]");
+    assert_eq!(std::fs::read(&db).expect("db"), before);
+}
+
+#[test]
+fn exploration_sorties_export_like_any_mission() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    ok(&["explore", "--project", p]);
+    let out = dir.path().join("sortie");
+    ok(&["export", "--project", p, "--mission", "1", "--out", s(&out)]);
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("mission.plan")).expect("plan"))
+            .expect("json");
+    let items = plan["mission"]["items"].as_array().expect("items");
+    assert_eq!(items[1]["command"], 178, "the cruise speed is commanded first");
+    ok(&["map-exploration", "--project", p]);
+    assert!(dir.path().join("missions/exploration.png").exists());
 }

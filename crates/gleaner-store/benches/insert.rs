@@ -5,10 +5,10 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
-use gleaner_field::{CellIndex, LatLon, Modality, SensorId};
+use gleaner_field::{LatLon, Modality, SensorId};
 use gleaner_store::{
-    CellRecord, ConflictPolicy, ModalityRecord, ReadingBatch, ReadingBatchBuilder, RefreshParams,
-    SensorRecord, SqliteStore, Store,
+    ConflictPolicy, ModalityRecord, ReadingBatch, ReadingBatchBuilder, SensorRecord, SqliteStore,
+    Store, StoreWrite,
 };
 
 const SENSORS: usize = 100;
@@ -58,8 +58,12 @@ fn fresh_store(
         let _ = std::fs::remove_file(format!("{}{suffix}", path.display()));
     }
     let mut store = SqliteStore::open(&path).unwrap();
-    store.upsert_sensors(sensors).unwrap();
-    store.upsert_modalities(modalities).unwrap();
+    store
+        .write(|tx| {
+            tx.upsert_sensors(sensors)?;
+            tx.upsert_modalities(modalities)
+        })
+        .unwrap();
     store
 }
 
@@ -76,7 +80,9 @@ fn bench(c: &mut Criterion) {
         b.iter_batched(
             || fresh_store(&dir, &sensors, &modalities),
             |mut store| {
-                let stats = store.insert_readings(&batch, ConflictPolicy::Fail).unwrap();
+                let stats = store
+                    .write(|tx| tx.insert_readings(&batch, ConflictPolicy::Fail))
+                    .unwrap();
                 assert_eq!(stats.inserted, 1_000_000);
                 black_box(store)
             },
@@ -84,42 +90,16 @@ fn bench(c: &mut Criterion) {
         )
     });
     let mut store = fresh_store(&dir, &sensors, &modalities);
-    store.insert_readings(&batch, ConflictPolicy::Fail).unwrap();
+    store
+        .write(|tx| tx.insert_readings(&batch, ConflictPolicy::Fail))
+        .unwrap();
     group.bench_function("reinsert_unchanged_1M", |b| {
         b.iter(|| {
-            let stats = store.insert_readings(&batch, ConflictPolicy::Fail).unwrap();
+            let stats = store
+                .write(|tx| tx.insert_readings(&batch, ConflictPolicy::Fail))
+                .unwrap();
             assert_eq!(stats.unchanged, 1_000_000);
         })
-    });
-    group.finish();
-
-    // 100 sensors in 25 cells of 4; summaries of the 1 M readings above.
-    let cells: Vec<CellRecord> = (0..25)
-        .map(|k| CellRecord {
-            index: CellIndex { i: k % 5, j: k / 5 },
-            centre: LatLon::new(46.78 + f64::from(k) * 1e-3, -117.08).unwrap(),
-            cell_size_m: 40.0,
-            sensors: sensors[4 * k as usize..4 * k as usize + 4]
-                .iter()
-                .map(|s| s.id.clone())
-                .collect(),
-        })
-        .collect();
-    store.replace_cells(&cells).unwrap();
-    let params = RefreshParams {
-        now: T0 + STEPS as i64 * 3600,
-        bytes_per_reading: 8.0,
-        default_interval_s: 3600.0,
-        changed_sensors: None,
-    };
-    let mut group = c.benchmark_group("summaries");
-    group.sample_size(10);
-    group.measurement_time(Duration::from_secs(20));
-    group.bench_function("refresh_cell_summaries_1M", |b| {
-        b.iter(|| assert_eq!(store.refresh_cell_summaries(&params).unwrap(), 125))
-    });
-    group.bench_function("sensor_summaries_1M", |b| {
-        b.iter(|| assert_eq!(store.sensor_summaries().unwrap().len(), 500))
     });
     group.finish();
 }

@@ -27,7 +27,9 @@ pub enum StoreError {
         reason: String,
     },
     /// A modality arrived with a unit other than the one its stored readings are in.
-    #[error("modality {modality}: readings are stored in {stored:?}, refusing {incoming:?} (convert the file, or ingest it as another modality)")]
+    #[error(
+        "modality {modality}: readings are stored in {stored:?}, refusing {incoming:?} (convert the file, or ingest it as another modality)"
+    )]
     UnitMismatch {
         /// The modality.
         modality: Modality,
@@ -37,7 +39,9 @@ pub enum StoreError {
         incoming: String,
     },
     /// A mission already recorded as flown was recorded again without asking to amend it.
-    #[error("mission #{mission} was already recorded as flown at t = {flown_at} s; pass amend to replace that record")]
+    #[error(
+        "mission #{mission} was already recorded as flown at t = {flown_at} s; pass amend to replace that record"
+    )]
     AlreadyFlown {
         /// The mission id.
         mission: i64,

@@ -1,62 +1,84 @@
 //! Persistence for gleaner: the only crate that knows SQL.
 //!
-//! - [`Store`] is the backend-neutral interface the rest of gleaner programs against; a
-//!   PostgreSQL implementation can be added beside [`SqliteStore`] without touching callers.
+//! - [`StoreRead`] (queries), [`StoreWrite`] (the writes a use case makes) and [`Store`] (a
+//!   database that runs a use case's writes as one transaction, [`Store::write`]) are the
+//!   backend-neutral interface the rest of gleaner programs against; a PostgreSQL
+//!   implementation can be added beside [`SqliteStore`] without touching callers, and checked
+//!   with the same `conformance` suite (cargo feature `conformance`).
 //! - [`SqliteStore`] keeps a project in one SQLite file (WAL journal, `synchronous=NORMAL`,
-//!   foreign keys on, versioned migrations).
+//!   foreign keys on, versioned migrations); its write transaction is [`SqliteTx`].
 //! - Values in and out are plain Rust types: [`SensorRecord`], [`ModalityRecord`], the columnar
 //!   [`ReadingBatch`] (built with [`ReadingBatchBuilder`]), [`CellRecord`], [`CellMetadata`]
 //!   (the SPEC §5 cell metadata table with [`ModalitySummary`], [`Correlation`],
-//!   [`AnomalyRecord`], [`ClassProbability`] and [`CellScores`]), [`MissionRecord`] and
-//!   [`VisitRecord`].
+//!   [`AnomalyRecord`], [`ClassProbability`] and [`CellScores`]), [`NewMission`] (with its
+//!   [`FlightProfile`], [`EnergyBreakdown`] and [`StopRecord`]s), [`MissionRecord`] and
+//!   [`VisitRecord`]. No backend type appears in the interface: engine errors arrive as
+//!   [`StoreError::Backend`] text.
+//! - The database computes no statistics: summaries, scores and pending volumes are computed in
+//!   Rust by the caller and stored as given ([`StoreWrite::upsert_cell_metadata`]).
 //!
-//! Every write is one transaction: when a method returns an error, the database is exactly as
-//! before the call. Re-inserting readings already stored changes nothing
-//! ([`InsertStats::unchanged`]); a reading that contradicts a stored one is a [`Conflict`],
-//! handled by [`ConflictPolicy`].
+//! All writes happen inside [`Store::write`]: the closure's writes are kept together when it
+//! returns `Ok` and all discarded when it returns `Err`. Within it, a write method that fails
+//! leaves nothing of its own writes behind. Re-inserting readings already stored changes
+//! nothing ([`InsertStats::unchanged`]); a reading that contradicts a stored one is a
+//! [`Conflict`], handled by [`ConflictPolicy`].
 //!
 //! ```
 //! use gleaner_field::{LatLon, Modality, SensorId};
 //! use gleaner_store::{
-//!     ConflictPolicy, ModalityRecord, ReadingBatchBuilder, SensorRecord, SqliteStore, Store,
+//!     ConflictPolicy, IngestRecord, ModalityRecord, ReadingBatchBuilder, SensorRecord,
+//!     SqliteStore, Store, StoreRead, StoreWrite,
 //! };
 //!
 //! let mut store = SqliteStore::open_in_memory()?;
 //! let id = SensorId::new("CAF003").unwrap();
 //! let vw = Modality::new("vw@30cm").unwrap();
-//! store.upsert_sensors(&[SensorRecord {
-//!     id: id.clone(),
-//!     position: LatLon::new(46.7788, -117.0867).unwrap(),
-//!     elevation_m: Some(790.0),
-//!     source: "example".into(),
-//! }])?;
-//! store.upsert_modalities(&[ModalityRecord { modality: vw.clone(), unit: Some("m3/m3".into()) }])?;
-//!
 //! let mut batch = ReadingBatchBuilder::new();
-//! batch.push(&id, &vw, 1_262_304_000, 0.31); // 2010-01-01T00:00:00Z
+//! batch.push(&id, &vw, 1_262_304_000, 0.31); // 2010-01-01T00:00:00Z, m3/m3
 //! batch.push(&id, &vw, 1_262_390_400, 0.29);
 //! let batch = batch.finish();
-//! let first = store.insert_readings(&batch, ConflictPolicy::Fail)?;
-//! let again = store.insert_readings(&batch, ConflictPolicy::Fail)?;
-//! assert_eq!((first.inserted, again.inserted, again.unchanged), (2, 0, 2));
 //!
-//! let summary = &store.sensor_summaries()?[0];
-//! assert!((summary.stats.mean - 0.30).abs() < 1e-12);
+//! // One use case, one transaction: the sensor, its modality, the readings and their
+//! // provenance are stored together or not at all.
+//! let stats = store.write(|tx| {
+//!     tx.upsert_sensors(&[SensorRecord {
+//!         id: id.clone(),
+//!         position: LatLon::new(46.7788, -117.0867).unwrap(),
+//!         elevation_m: Some(790.0),
+//!         source: "example".into(),
+//!     }])?;
+//!     tx.upsert_modalities(&[ModalityRecord { modality: vw.clone(), unit: Some("m3/m3".into()) }])?;
+//!     let stats = tx.insert_readings(&batch, ConflictPolicy::Fail)?;
+//!     tx.record_ingest(&IngestRecord {
+//!         file_name: "example.csv".into(),
+//!         format: "long-csv".into(),
+//!         rows_read: 2,
+//!         rows_inserted: stats.inserted,
+//!         rows_unchanged: stats.unchanged,
+//!         rows_skipped: 0,
+//!         at: 1_262_400_000,
+//!     })?;
+//!     Ok::<_, gleaner_store::StoreError>(stats)
+//! })?;
+//! assert_eq!(stats.inserted, 2);
+//! let again = store.write(|tx| tx.insert_readings(&batch, ConflictPolicy::Fail))?;
+//! assert_eq!((again.inserted, again.unchanged), (0, 2));
+//! assert_eq!(store.readings_of_sensors(&[id], i64::MIN..=i64::MAX)?.len(), 2);
 //! # Ok::<(), gleaner_store::StoreError>(())
 //! ```
 //!
 //! # Schema (SQLite)
 //!
 //! Units everywhere: times are INTEGER seconds since 1970-01-01T00:00:00Z (UTC); positions
-//! WGS84 degrees; lengths metres; energies joules (J); data volumes bytes. Sensors, modalities
-//! and cells have an INTEGER surrogate key (`id`) used by the other tables; their names
-//! (`name`, `label`) are unique.
+//! WGS84 degrees; lengths and altitudes metres; speeds m/s; energies joules (J); data volumes
+//! bytes. Sensors, modalities and cells have an INTEGER surrogate key (`id`) used by the other
+//! tables; their names (`name`, `label`) are unique.
 //!
 //! | table | columns | notes |
 //! |---|---|---|
 //! | `schema_migrations` | `version`, `applied_at` (s), `description` | one row per applied migration; `PRAGMA user_version` mirrors the latest |
 //! | `sensors` | `id`, `name` (unique), `lat`, `lon` (deg), `elevation_m` (m, nullable), `source` | |
-//! | `modalities` | `id`, `name` (unique, e.g. `vw@30cm`), `unit` (nullable) | |
+//! | `modalities` | `id`, `name` (unique, e.g. `vw@30cm`), `unit` (nullable; once set, never changed) | |
 //! | `readings` | `sensor`, `modality`, `t` (s), `value` (modality unit) | primary key (`sensor`, `modality`, `t`), `WITHOUT ROWID`; keys not declared as foreign keys (see below) |
 //! | `ingests` | `id`, `file_name`, `format`, `rows_read`, `rows_inserted`, `rows_unchanged`, `rows_skipped`, `at` (s) | ingest provenance |
 //! | `sensor_collection` | `sensor`, `last_collected` (s) | last time a UAV collected each sensor |
@@ -64,22 +86,26 @@
 //! | `cell_sensors` | `cell`, `sensor` (unique) | each sensor in at most one cell |
 //! | `cell_metadata` | `cell`, `last_collected` (s), `pending_bytes` (bytes), `expected_energy_j` (J), `freshness`, `redundancy`, `anomaly`, `uncertainty`, `score`, `computed_at` (s) | one row per cell (SPEC §5) |
 //! | `cell_class_probabilities` | `cell`, `k`, `class`, `probability` | the distribution behind U |
-//! | `cell_summaries` | `cell`, `modality`, `count`, `mean`, `std` (sample), `min`, `max`, `latest_t` (s), `latest_value` | of the cell series |
+//! | `cell_summaries` | `cell`, `modality`, `count`, `mean`, `std` (sample), `min`, `max`, `latest_t` (s), `latest_value` | of the cell series, as computed by the caller |
 //! | `cell_correlations` | `cell`, `neighbour`, `modality`, `correlation`, `overlap` (points) | Pearson, per neighbour |
 //! | `cell_anomalies` | `cell`, `modality`, `t` (s), `anomaly`, `flagged` (0/1) | anomaly history |
-//! | `missions` | `id`, `created_at` (s), `kind` (`exploration`/`adaptive`), `planned_at` (s), `solver`, `budget_j` (J), `energy_j` (J), `status` (`planned`/`flown`), `summary_json` | |
+//! | `missions` | `id`, `created_at` (s), `kind` (`exploration`/`adaptive`), `planned_at` (s), `solver`, `seed` (the u64's bits as i64), `weight_alpha`..`weight_delta`, `anomaly_form`, `total_score`, `base_lat`, `base_lon` (deg), `base_alt_m` (m AMSL), `altitude_m` (m above base), `cruise_speed_mps` (m/s), `travel_j`, `hover_j`, `comm_j`, `return_j`, `total_j`, `budget_j` (J), `distance_m` (m), `flight_time_s` (s), `return_distance_m` (m), `status` (`planned`/`flown`), `flown_at` (s, set iff flown), `summary_json` (legacy, nullable) | |
+//! | `mission_stops` | `mission`, `position`, `cell` (label), `lat`, `lon` (deg), `score`, `freshness`, `redundancy`, `anomaly`, `uncertainty` (nullable together), `leg_distance_m` (m), `leg_energy_j` (J), `collection_s` (s), `hover_s` (s), `hover_j` (J), `comm_j` (J) | the planned route; primary key (`mission`, `position`); cascades on mission deletion |
 //! | `visits` | `mission`, `position`, `cell` (label), `arrived_at` (s), `energy_j` (J) | by label, so history survives a new grid |
 //! | `config` | `key`, `value` | project settings as text |
+//! | `blobs` | `key`, `value` (bytes) | opaque values, e.g. the serialised incremental utility state |
 //!
-//! Every `cell_*` table cascades on deletion of its cell, so [`Store::replace_cells`] drops the
-//! metadata of cells that no longer exist.
+//! Every `cell_*` table cascades on deletion of its cell, so [`StoreWrite::replace_cells`]
+//! drops the metadata of cells that no longer exist.
 //!
 //! `readings.sensor` and `readings.modality` hold `sensors.id` and `modalities.id` but are not
-//! declared `REFERENCES`: [`Store::insert_readings`] resolves every name to an existing key
-//! before inserting and the store never deletes sensors or modalities, while the per-row
+//! declared `REFERENCES`: [`StoreWrite::insert_readings`] resolves every name to an existing
+//! key before inserting and the store never deletes sensors or modalities, while the per-row
 //! foreign-key lookups cost about 40% of bulk-insert CPU time.
 #![deny(missing_docs)]
 
+#[cfg(any(test, feature = "conformance"))]
+pub mod conformance;
 mod error;
 mod schema;
 mod sqlite;
@@ -90,7 +116,7 @@ mod types;
 mod tests;
 
 pub use error::{Result, StoreError};
-pub use sqlite::SqliteStore;
+pub use sqlite::{SqliteStore, SqliteTx};
 pub use store::{Store, StoreRead, StoreWrite};
 pub use types::{
     AnomalyRecord, CellMetadata, CellRecord, CellScores, ClassProbability, Conflict,

@@ -4,8 +4,9 @@
 //! transaction together with its row in `schema_migrations` and `PRAGMA user_version`, so a
 //! crash leaves the database at a whole version. Never edit a released migration: append one.
 
-use rusqlite::{Connection, OptionalExtension};
+use rusqlite::{Connection, OptionalExtension, TransactionBehavior};
 
+use crate::sqlite::Db;
 use crate::{Result, StoreError};
 
 /// One schema step.
@@ -17,9 +18,10 @@ pub(crate) struct Migration {
 }
 
 /// All migrations, oldest first. The schema version is the number applied.
-pub(crate) const MIGRATIONS: &[Migration] = &[Migration {
-    description: "initial schema: sensors, modalities, readings, ingests, cells, cell metadata, missions, config",
-    sql: r#"
+pub(crate) const MIGRATIONS: &[Migration] = &[
+    Migration {
+        description: "initial schema: sensors, modalities, readings, ingests, cells, cell metadata, missions, config",
+        sql: r#"
 CREATE TABLE sensors (
     id          INTEGER PRIMARY KEY,
     name        TEXT    NOT NULL UNIQUE,
@@ -155,7 +157,157 @@ CREATE TABLE config (
     value TEXT NOT NULL
 ) WITHOUT ROWID;
 "#,
-}];
+    },
+    Migration {
+        description: "typed missions (profile, energy breakdown, flown_at) with their stops; blobs",
+        sql: MIGRATION_2,
+    },
+];
+
+/// Version 2: typed missions with their stops, and blobs.
+///
+/// SQLite cannot add NOT NULL columns or relax NOT NULL in place, so `missions` is recreated
+/// and its rows copied (and `visits` with it: its foreign key must point at the new table, and
+/// dropping the old `missions` with `visits` still attached would cascade-delete the visits).
+/// A legacy row's fields are taken from its `summary_json` where the old planner wrote them
+/// (adaptive missions: seed, weights, anomaly form, base, speed, energy breakdown, stops),
+/// otherwise defaulted: zero energies, distances and speed, the sensors' mean position as base,
+/// altitudes 0 m, anomaly form `n/a`; exploration stops take their cell's centre when the cell
+/// still exists. A legacy flown mission gets its latest visit arrival, else its planned time,
+/// as `flown_at`. New rows leave `summary_json` NULL.
+const MIGRATION_2: &str = r#"
+CREATE TABLE missions_v2 (
+    id                INTEGER PRIMARY KEY,
+    created_at        INTEGER NOT NULL,
+    kind              TEXT    NOT NULL CHECK (kind IN ('exploration', 'adaptive')),
+    planned_at        INTEGER NOT NULL,
+    solver            TEXT    NOT NULL,
+    seed              INTEGER NOT NULL,
+    weight_alpha      REAL    NOT NULL,
+    weight_beta       REAL    NOT NULL,
+    weight_gamma      REAL    NOT NULL,
+    weight_delta      REAL    NOT NULL,
+    anomaly_form      TEXT    NOT NULL,
+    total_score       REAL    NOT NULL,
+    base_lat          REAL    NOT NULL CHECK (base_lat BETWEEN -90 AND 90),
+    base_lon          REAL    NOT NULL CHECK (base_lon BETWEEN -180 AND 180),
+    base_alt_m        REAL    NOT NULL,
+    altitude_m        REAL    NOT NULL,
+    cruise_speed_mps  REAL    NOT NULL,
+    travel_j          REAL    NOT NULL,
+    hover_j           REAL    NOT NULL,
+    comm_j            REAL    NOT NULL,
+    return_j          REAL    NOT NULL,
+    total_j           REAL    NOT NULL,
+    budget_j          REAL    NOT NULL,
+    distance_m        REAL    NOT NULL,
+    flight_time_s     REAL    NOT NULL,
+    return_distance_m REAL    NOT NULL,
+    status            TEXT    NOT NULL CHECK (status IN ('planned', 'flown')),
+    flown_at          INTEGER,
+    summary_json      TEXT,
+    CHECK ((status = 'flown') = (flown_at IS NOT NULL))
+);
+
+INSERT INTO missions_v2
+SELECT m.id, m.created_at, m.kind, m.planned_at, m.solver,
+       COALESCE(CAST(json_extract(m.js, '$.seed') AS INTEGER), 0),
+       COALESCE(json_extract(m.js, '$.weights[0]'), 0.0),
+       COALESCE(json_extract(m.js, '$.weights[1]'), 0.0),
+       COALESCE(json_extract(m.js, '$.weights[2]'), 0.0),
+       COALESCE(json_extract(m.js, '$.weights[3]'), 0.0),
+       COALESCE(json_extract(m.js, '$.anomaly_form'), 'n/a'),
+       COALESCE(json_extract(m.js, '$.total_score'), 0.0),
+       COALESCE(json_extract(m.js, '$.base_lon_lat[1]'), (SELECT AVG(lat) FROM sensors), 0.0),
+       COALESCE(json_extract(m.js, '$.base_lon_lat[0]'), (SELECT AVG(lon) FROM sensors), 0.0),
+       0.0,
+       0.0,
+       COALESCE(json_extract(m.js, '$.cruise_speed_mps'), 0.0),
+       COALESCE(json_extract(m.js, '$.energy.travel_j'), 0.0),
+       COALESCE(json_extract(m.js, '$.energy.hover_j'), 0.0),
+       COALESCE(json_extract(m.js, '$.energy.comm_j'), 0.0),
+       COALESCE(json_extract(m.js, '$.energy.return_j'), 0.0),
+       m.energy_j,
+       m.budget_j,
+       COALESCE(json_extract(m.js, '$.energy.distance_m'), 0.0),
+       COALESCE(json_extract(m.js, '$.energy.flight_time_s'), 0.0),
+       COALESCE(json_extract(m.js, '$.return_distance_m'), 0.0),
+       m.status,
+       CASE WHEN m.status = 'flown'
+            THEN COALESCE((SELECT MAX(v.arrived_at) FROM visits v WHERE v.mission = m.id),
+                          m.planned_at)
+       END,
+       m.summary_json
+FROM (SELECT *, CASE WHEN json_valid(summary_json) THEN summary_json ELSE '{}' END AS js
+      FROM missions) m
+ORDER BY m.id;
+
+CREATE TABLE visits_v2 (
+    mission    INTEGER NOT NULL REFERENCES missions_v2 (id) ON DELETE CASCADE,
+    position   INTEGER NOT NULL,
+    cell       TEXT    NOT NULL,
+    arrived_at INTEGER,
+    energy_j   REAL,
+    PRIMARY KEY (mission, position)
+) WITHOUT ROWID;
+INSERT INTO visits_v2 SELECT mission, position, cell, arrived_at, energy_j FROM visits;
+
+CREATE TABLE mission_stops (
+    mission        INTEGER NOT NULL REFERENCES missions_v2 (id) ON DELETE CASCADE,
+    position       INTEGER NOT NULL,
+    cell           TEXT    NOT NULL,
+    lat            REAL    NOT NULL CHECK (lat BETWEEN -90 AND 90),
+    lon            REAL    NOT NULL CHECK (lon BETWEEN -180 AND 180),
+    score          REAL    NOT NULL,
+    freshness      REAL,
+    redundancy     REAL,
+    anomaly        REAL,
+    uncertainty    REAL,
+    leg_distance_m REAL    NOT NULL,
+    leg_energy_j   REAL    NOT NULL,
+    collection_s   REAL    NOT NULL,
+    hover_s        REAL    NOT NULL,
+    hover_j        REAL    NOT NULL,
+    comm_j         REAL    NOT NULL,
+    PRIMARY KEY (mission, position)
+) WITHOUT ROWID;
+
+INSERT INTO mission_stops
+SELECT st.id, st.position, st.label,
+       COALESCE(json_extract(st.v, '$.centre_lon_lat[1]'),
+                (SELECT c.lat FROM cells c WHERE c.label = st.label), st.base_lat),
+       COALESCE(json_extract(st.v, '$.centre_lon_lat[0]'),
+                (SELECT c.lon FROM cells c WHERE c.label = st.label), st.base_lon),
+       COALESCE(json_extract(st.v, '$.s'), 0.0),
+       json_extract(st.v, '$.terms[0]'),
+       json_extract(st.v, '$.terms[1]'),
+       json_extract(st.v, '$.terms[2]'),
+       json_extract(st.v, '$.terms[3]'),
+       COALESCE(json_extract(st.v, '$.leg_distance_m'), 0.0),
+       COALESCE(json_extract(st.v, '$.leg_energy_j'), 0.0),
+       COALESCE(json_extract(st.v, '$.collection_s'), 0.0),
+       COALESCE(json_extract(st.v, '$.hover_s'), 0.0),
+       COALESCE(json_extract(st.v, '$.hover_j'), 0.0),
+       COALESCE(json_extract(st.v, '$.comm_j'), 0.0)
+FROM (SELECT m.id AS id, m.base_lat AS base_lat, m.base_lon AS base_lon,
+             CAST(s.key AS INTEGER) AS position, json_extract(s.value, '$.cell') AS label,
+             s.value AS v
+      FROM missions_v2 m,
+           json_each(CASE WHEN json_valid(m.summary_json) THEN m.summary_json ELSE '{}' END,
+                     '$.stops') s) st
+WHERE st.label IS NOT NULL
+ORDER BY st.id, st.position;
+
+DROP TABLE visits;
+DROP TABLE missions;
+ALTER TABLE missions_v2 RENAME TO missions;
+ALTER TABLE visits_v2 RENAME TO visits;
+
+CREATE TABLE blobs (
+    key   TEXT PRIMARY KEY,
+    value BLOB NOT NULL
+) WITHOUT ROWID;
+"#;
 
 /// The schema version this build writes.
 pub(crate) fn latest_version() -> i64 {
@@ -169,6 +321,9 @@ pub(crate) fn migrate(conn: &mut Connection) -> Result<i64> {
 }
 
 /// [`migrate`] with an explicit list (tests use longer lists).
+///
+/// Each step runs in an IMMEDIATE transaction that re-reads the version first, so two
+/// processes opening the same new database at once apply every step exactly once.
 pub(crate) fn migrate_with(conn: &mut Connection, migrations: &[Migration]) -> Result<i64> {
     conn.execute_batch(
         "CREATE TABLE IF NOT EXISTS schema_migrations (
@@ -176,31 +331,54 @@ pub(crate) fn migrate_with(conn: &mut Connection, migrations: &[Migration]) -> R
              applied_at  INTEGER NOT NULL,
              description TEXT    NOT NULL
          );",
-    )?;
+    )
+    .db()?;
     let supported = migrations.len() as i64;
+    let found = current_version(conn)?;
+    loop {
+        let tx = conn
+            .transaction_with_behavior(TransactionBehavior::Immediate)
+            .db()?;
+        let version = current_version(&tx)?;
+        if version > supported {
+            return Err(StoreError::SchemaTooNew {
+                found: version,
+                supported,
+            });
+        }
+        let Some(m) = usize::try_from(version)
+            .ok()
+            .and_then(|k| migrations.get(k))
+        else {
+            break;
+        };
+        let next = version + 1;
+        tx.execute_batch(m.sql).db()?;
+        tx.execute(
+            "INSERT INTO schema_migrations (version, applied_at, description)
+             VALUES (?1, CAST(strftime('%s', 'now') AS INTEGER), ?2)",
+            rusqlite::params![next, m.description],
+        )
+        .db()?;
+        tx.pragma_update(None, "user_version", next).db()?;
+        tx.commit().db()?;
+    }
+    Ok(found)
+}
+
+/// The schema version recorded in `conn`: the later of `schema_migrations` and
+/// `PRAGMA user_version`.
+fn current_version(conn: &Connection) -> Result<i64> {
     let recorded: i64 = conn
         .query_row("SELECT MAX(version) FROM schema_migrations", [], |r| {
             r.get::<_, Option<i64>>(0)
         })
-        .optional()?
+        .optional()
+        .db()?
         .flatten()
         .unwrap_or(0);
-    let user_version: i64 = conn.query_row("PRAGMA user_version", [], |r| r.get(0))?;
-    let found = recorded.max(user_version);
-    if found > supported {
-        return Err(StoreError::SchemaTooNew { found, supported });
-    }
-    for (k, m) in migrations.iter().enumerate().skip(found as usize) {
-        let version = k as i64 + 1;
-        let tx = conn.transaction()?;
-        tx.execute_batch(m.sql)?;
-        tx.execute(
-            "INSERT INTO schema_migrations (version, applied_at, description)
-             VALUES (?1, CAST(strftime('%s', 'now') AS INTEGER), ?2)",
-            rusqlite::params![version, m.description],
-        )?;
-        tx.pragma_update(None, "user_version", version)?;
-        tx.commit()?;
-    }
-    Ok(found)
+    let user_version: i64 = conn
+        .query_row("PRAGMA user_version", [], |r| r.get(0))
+        .db()?;
+    Ok(recorded.max(user_version))
 }

@@ -54,7 +54,7 @@ pub struct Reading {
 }
 
 /// A columnar set of readings: the sensors and modalities once, and compact rows that index
-/// them. Built by ingest, returned by [`crate::Store::readings_for`].
+/// them. Built by ingest, returned by [`crate::StoreRead::readings_for`].
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ReadingBatch {
     /// The sensors the rows refer to.
@@ -305,7 +305,7 @@ pub struct CellScores {
 
 /// One row of the cell metadata table (SPEC §5) with its child records.
 ///
-/// On [`crate::Store::upsert_cell_metadata`] the scalar fields, `scores` and
+/// On [`crate::StoreWrite::upsert_cell_metadata`] the scalar fields, `scores` and
 /// `class_probabilities` replace what is stored for the cell; `summaries`, `correlations` and
 /// `anomalies` are upserted by key (modality; neighbour + modality; modality + t) and never
 /// deleted, so an empty list leaves them as they are.
@@ -533,7 +533,7 @@ pub struct VisitRecord {
     pub energy_j: Option<f64>,
 }
 
-/// What [`crate::Store::replace_cells`] did.
+/// What [`crate::StoreWrite::replace_cells`] did.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct ReplaceCellsStats {
     /// Cells kept with their metadata (same label, side and sensors).

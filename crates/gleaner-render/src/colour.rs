@@ -1,0 +1,118 @@
+//! Colours: the sequential map for S (viridis: perceptually uniform, readable in grey and by
+//! colour-blind readers) and the qualitative palette for sorties (Okabe & Ito).
+
+/// An sRGB colour.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Rgb(pub u8, pub u8, pub u8);
+
+impl Rgb {
+    /// `#rrggbb`.
+    pub(crate) fn hex(self) -> String {
+        format!("#{:02x}{:02x}{:02x}", self.0, self.1, self.2)
+    }
+
+    /// This colour laid over white at opacity `alpha` (0..=1), as an opaque colour.
+    pub(crate) fn tint(self, alpha: f64) -> Rgb {
+        let a = alpha.clamp(0.0, 1.0);
+        let mix = |c: u8| {
+            (f64::from(c) * a + 255.0 * (1.0 - a))
+                .round()
+                .clamp(0.0, 255.0) as u8
+        };
+        Rgb(mix(self.0), mix(self.1), mix(self.2))
+    }
+}
+
+/// Viridis sampled at 0, 0.1, ..., 1.
+const VIRIDIS: [Rgb; 11] = [
+    Rgb(0x44, 0x01, 0x54),
+    Rgb(0x48, 0x24, 0x75),
+    Rgb(0x41, 0x44, 0x87),
+    Rgb(0x35, 0x5f, 0x8d),
+    Rgb(0x2a, 0x78, 0x8e),
+    Rgb(0x21, 0x91, 0x8c),
+    Rgb(0x22, 0xa8, 0x84),
+    Rgb(0x44, 0xbf, 0x70),
+    Rgb(0x7a, 0xd1, 0x51),
+    Rgb(0xbd, 0xdf, 0x26),
+    Rgb(0xfd, 0xe7, 0x25),
+];
+
+/// The sequential colour of `t` in [0, 1] (clamped; NaN maps to 0).
+pub(crate) fn sequential(t: f64) -> Rgb {
+    let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
+    let x = t * (VIRIDIS.len() - 1) as f64;
+    let k = (x.floor() as usize).min(VIRIDIS.len() - 2);
+    let u = x - k as f64;
+    let (a, b) = (VIRIDIS[k], VIRIDIS[k + 1]);
+    let mix = |p: u8, q: u8| {
+        (f64::from(p) + (f64::from(q) - f64::from(p)) * u)
+            .round()
+            .clamp(0.0, 255.0) as u8
+    };
+    Rgb(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// The `<stop>`s of an SVG gradient equal to [`sequential`] over [0, 1].
+pub(crate) fn ramp_stops() -> String {
+    VIRIDIS
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            format!(
+                r#"<stop offset="{}" stop-color="{}"/>"#,
+                k as f64 / (VIRIDIS.len() - 1) as f64,
+                c.hex()
+            )
+        })
+        .collect()
+}
+
+/// Okabe & Ito's colour-blind-safe qualitative palette, without its yellow (too light for
+/// lines on white) and black (the base and sensors are black).
+const QUALITATIVE: [Rgb; 6] = [
+    Rgb(0x00, 0x72, 0xb2), // blue
+    Rgb(0xd5, 0x5e, 0x00), // vermillion
+    Rgb(0x00, 0x9e, 0x73), // bluish green
+    Rgb(0xcc, 0x79, 0xa7), // reddish purple
+    Rgb(0xe6, 0x9f, 0x00), // orange
+    Rgb(0x56, 0xb4, 0xe9), // sky blue
+];
+
+/// The colour of sortie `k` (from 0) and whether its route is drawn dashed-dotted to tell it
+/// from the sortie with the same colour `QUALITATIVE.len()` earlier.
+pub(crate) fn qualitative(k: usize) -> (Rgb, u32) {
+    let n = QUALITATIVE.len();
+    (QUALITATIVE[k % n], (k / n) as u32)
+}
+
+/// Fill of a cell without a score.
+pub(crate) const NO_SCORE: Rgb = Rgb(0xd9, 0xd9, 0xd9);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sequential_hits_the_anchors_and_clamps() {
+        assert_eq!(sequential(0.0), VIRIDIS[0]);
+        assert_eq!(sequential(1.0), VIRIDIS[10]);
+        assert_eq!(sequential(0.5), VIRIDIS[5]);
+        assert_eq!(sequential(-3.0), VIRIDIS[0]);
+        assert_eq!(sequential(f64::NAN), VIRIDIS[0]);
+        assert_eq!(sequential(7.0).hex(), "#fde725");
+    }
+
+    #[test]
+    fn tint_blends_with_white() {
+        assert_eq!(Rgb(0, 0, 0).tint(0.0), Rgb(255, 255, 255));
+        assert_eq!(Rgb(0, 0, 0).tint(1.0), Rgb(0, 0, 0));
+        assert_eq!(Rgb(0, 100, 200).tint(0.5), Rgb(128, 178, 228));
+    }
+
+    #[test]
+    fn palette_cycles_with_a_new_dash() {
+        assert_eq!(qualitative(0), (QUALITATIVE[0], 0));
+        assert_eq!(qualitative(6), (QUALITATIVE[0], 1));
+    }
+}

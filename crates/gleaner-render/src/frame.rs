@@ -1,0 +1,991 @@
+//! What both maps share: input checks, the local metric frame, the map's placement on the
+//! page, cells, coordinate ticks, the north arrow, the scale bar, markers and the legend grid.
+
+use gleaner_wire::{FieldDoc, MissionDoc};
+
+use crate::colour::Rgb;
+use crate::font::{CAP_HEIGHT_EM, text_width};
+use crate::svg::{Anchor, N, Svg, esc};
+use crate::ticks;
+use crate::{Coordinates, FigureOptions, RenderError};
+
+/// Mean Earth radius, m (IUGG).
+const EARTH_RADIUS_M: f64 = 6_371_008.8;
+
+/// Points per millimetre.
+pub(crate) const PT_PER_MM: f64 = 72.0 / 25.4;
+
+/// Colour of text, frames and the base.
+pub(crate) const INK: &str = "#1a1a1a";
+
+/// Fails unless `v` is finite.
+pub(crate) fn finite(what: impl FnOnce() -> String, v: f64) -> Result<f64, RenderError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(RenderError::NonFinite {
+            what: what(),
+            value: v,
+        })
+    }
+}
+
+/// Fails unless `p` is a finite WGS84 `[lon, lat]` in degrees.
+pub(crate) fn lon_lat(what: impl Fn() -> String, p: [f64; 2]) -> Result<[f64; 2], RenderError> {
+    let lon = finite(|| format!("{} longitude", what()), p[0])?;
+    let lat = finite(|| format!("{} latitude", what()), p[1])?;
+    if !(-180.0..=180.0).contains(&lon) {
+        return Err(RenderError::OutOfRange {
+            what: format!("{} longitude", what()),
+            value: lon,
+            expected: "[-180, 180] degrees",
+        });
+    }
+    if !(-90.0..=90.0).contains(&lat) {
+        return Err(RenderError::OutOfRange {
+            what: format!("{} latitude", what()),
+            value: lat,
+            expected: "[-90, 90] degrees",
+        });
+    }
+    Ok([lon, lat])
+}
+
+/// Checks the options every figure uses.
+pub(crate) fn check_options(opts: &FigureOptions) -> Result<(), RenderError> {
+    if !(opts.width_mm.is_finite() && (20.0..=1000.0).contains(&opts.width_mm)) {
+        return Err(RenderError::InvalidOption {
+            name: "width_mm",
+            value: opts.width_mm,
+            expected: "between 20 and 1000 mm",
+        });
+    }
+    if !(opts.font_pt.is_finite() && (4.0..=24.0).contains(&opts.font_pt)) {
+        return Err(RenderError::InvalidOption {
+            name: "font_pt",
+            value: opts.font_pt,
+            expected: "between 4 and 24 pt",
+        });
+    }
+    if !(opts.max_map_aspect.is_finite() && (0.2..=5.0).contains(&opts.max_map_aspect)) {
+        return Err(RenderError::InvalidOption {
+            name: "max_map_aspect",
+            value: opts.max_map_aspect,
+            expected: "between 0.2 and 5",
+        });
+    }
+    if opts.width_mm * PT_PER_MM < 20.0 * opts.font_pt {
+        return Err(RenderError::InvalidOption {
+            name: "font_pt",
+            value: opts.font_pt,
+            expected: "at most width_mm * 72 / 25.4 / 20 (at least 20 characters across)",
+        });
+    }
+    Ok(())
+}
+
+/// The local equirectangular frame: metres east and north of the origin (the field's base).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Projection {
+    lon0: f64,
+    lat0: f64,
+    /// m per degree of longitude at the origin.
+    kx: f64,
+    /// m per degree of latitude.
+    ky: f64,
+}
+
+impl Projection {
+    pub(crate) fn new(origin: [f64; 2]) -> Result<Self, RenderError> {
+        let [lon0, lat0] = lon_lat(|| "field base".into(), origin)?;
+        if lat0.abs() > 85.0 {
+            return Err(RenderError::OutOfRange {
+                what: "field base latitude".into(),
+                value: lat0,
+                expected: "[-85, 85] degrees for a local map",
+            });
+        }
+        let ky = EARTH_RADIUS_M * std::f64::consts::PI / 180.0;
+        Ok(Self {
+            lon0,
+            lat0,
+            kx: ky * lat0.to_radians().cos(),
+            ky,
+        })
+    }
+
+    /// `[lon, lat]` degrees to (east, north) m.
+    pub(crate) fn local(&self, p: [f64; 2]) -> (f64, f64) {
+        let mut dlon = p[0] - self.lon0;
+        if dlon > 180.0 {
+            dlon -= 360.0;
+        } else if dlon < -180.0 {
+            dlon += 360.0;
+        }
+        (dlon * self.kx, (p[1] - self.lat0) * self.ky)
+    }
+}
+
+/// A cell projected, with its score.
+pub(crate) struct CellShape {
+    pub(crate) id: String,
+    pub(crate) ring: Vec<(f64, f64)>,
+    pub(crate) s: Option<f64>,
+}
+
+/// The field and missions in the local frame, m.
+pub(crate) struct Scene {
+    pub(crate) projection: Projection,
+    pub(crate) cells: Vec<CellShape>,
+    pub(crate) sensors: Vec<(f64, f64)>,
+    /// Extent of everything drawn: (min east, max east, min north, max north), m.
+    pub(crate) extent: (f64, f64, f64, f64),
+}
+
+impl Scene {
+    /// Checks and projects the field; `extra` are further points to keep on the map.
+    pub(crate) fn new(field: &FieldDoc, extra: &[(f64, f64)]) -> Result<Self, RenderError> {
+        let projection = Projection::new(field.base_lon_lat)?;
+        let cell_size_m = finite(|| "field cell_size_m".into(), field.cell_size_m)?;
+        if cell_size_m <= 0.0 {
+            return Err(RenderError::OutOfRange {
+                what: "field cell_size_m".into(),
+                value: cell_size_m,
+                expected: "> 0 m",
+            });
+        }
+        let mut cells = Vec::with_capacity(field.cells.len());
+        for c in &field.cells {
+            let mut ring = Vec::with_capacity(c.ring_lon_lat.len());
+            for (k, p) in c.ring_lon_lat.iter().enumerate() {
+                let p = lon_lat(|| format!("cell {} ring point {k}", c.cell), *p)?;
+                ring.push(projection.local(p));
+            }
+            lon_lat(|| format!("cell {} centre", c.cell), c.centre_lon_lat)?;
+            let s = match &c.scores {
+                Some(sc) => {
+                    for (name, v) in [("F", sc.f), ("R", sc.r), ("A", sc.a), ("U", sc.u)] {
+                        finite(|| format!("cell {} {name}", c.cell), v)?;
+                    }
+                    Some(finite(|| format!("cell {} S", c.cell), sc.s)?)
+                }
+                None => None,
+            };
+            cells.push(CellShape {
+                id: c.cell.clone(),
+                ring,
+                s,
+            });
+        }
+        let mut sensors = Vec::with_capacity(field.sensors.len());
+        for s in &field.sensors {
+            sensors.push(projection.local(lon_lat(|| format!("sensor {}", s.id), s.lon_lat)?));
+        }
+        let mut ext = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        let mut grow = |(e, n): (f64, f64)| {
+            ext = (ext.0.min(e), ext.1.max(e), ext.2.min(n), ext.3.max(n));
+        };
+        cells
+            .iter()
+            .flat_map(|c| c.ring.iter())
+            .for_each(|&p| grow(p));
+        sensors.iter().for_each(|&p| grow(p));
+        extra.iter().for_each(|&p| grow(p));
+        // A point or a line still gets an area: at least one cell side, at least 20 m.
+        let min_span = cell_size_m.max(20.0);
+        let widen = |lo: f64, hi: f64| {
+            if hi - lo < min_span {
+                let mid = 0.5 * (lo + hi);
+                (mid - 0.5 * min_span, mid + 0.5 * min_span)
+            } else {
+                (lo, hi)
+            }
+        };
+        let (e0, e1) = widen(ext.0, ext.1);
+        let (n0, n1) = widen(ext.2, ext.3);
+        Ok(Self {
+            projection,
+            cells,
+            sensors,
+            extent: (e0, e1, n0, n1),
+        })
+    }
+}
+
+/// A mission's base and stops in the local frame, m.
+pub(crate) type Route = ((f64, f64), Vec<(f64, f64)>);
+
+/// Checks a mission's numbers and returns its base and stops in the local frame.
+pub(crate) fn mission_points(
+    projection: &Projection,
+    m: &MissionDoc,
+    label: &str,
+) -> Result<Route, RenderError> {
+    let base = projection.local(lon_lat(|| format!("{label} base"), m.profile.base_lon_lat)?);
+    let mut stops = Vec::with_capacity(m.stops.len());
+    for s in &m.stops {
+        stops.push(projection.local(lon_lat(
+            || format!("{label} stop {} ({})", s.order, s.cell),
+            s.centre_lon_lat,
+        )?));
+        finite(|| format!("{label} stop {} S", s.order), s.s)?;
+    }
+    let e = &m.energy;
+    for (name, v) in [
+        ("travel_j", e.travel_j),
+        ("hover_j", e.hover_j),
+        ("comm_j", e.comm_j),
+        ("return_j", e.return_j),
+        ("total_j", e.total_j),
+        ("budget_j", e.budget_j),
+        ("utilisation", e.utilisation),
+    ] {
+        finite(|| format!("{label} energy {name}"), v)?;
+    }
+    finite(|| format!("{label} total_score"), m.total_score)?;
+    Ok((base, stops))
+}
+
+/// Where the map sits on the page: `x`, `y` top-left, pt; `k` pt per m; the extent in m.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct MapView {
+    pub(crate) x: f64,
+    pub(crate) y: f64,
+    pub(crate) w: f64,
+    pub(crate) h: f64,
+    pub(crate) k: f64,
+    pub(crate) e0: f64,
+    pub(crate) n1: f64,
+}
+
+impl MapView {
+    /// Places the extent (padded by `pad_pt` on every side) in a box of at most
+    /// `max_w` x `max_h` pt at (`x`, `y`), north up, same scale on both axes.
+    pub(crate) fn fit(
+        extent: (f64, f64, f64, f64),
+        x: f64,
+        y: f64,
+        max_w: f64,
+        max_h: f64,
+        pad_pt: f64,
+    ) -> Self {
+        let (e0, e1, n0, n1) = extent;
+        let (sw, sh) = ((e1 - e0).max(1e-6), (n1 - n0).max(1e-6));
+        let inner_w = (max_w - 2.0 * pad_pt).max(1.0);
+        let inner_h = (max_h - 2.0 * pad_pt).max(1.0);
+        let k = (inner_w / sw).min(inner_h / sh);
+        let pad_m = pad_pt / k;
+        Self {
+            x,
+            y,
+            w: sw * k + 2.0 * pad_pt,
+            h: sh * k + 2.0 * pad_pt,
+            k,
+            e0: e0 - pad_m,
+            n1: n1 + pad_m,
+        }
+    }
+
+    /// (east, north) m to page pt.
+    pub(crate) fn pt(&self, (e, n): (f64, f64)) -> (f64, f64) {
+        (
+            self.x + (e - self.e0) * self.k,
+            self.y + (self.n1 - n) * self.k,
+        )
+    }
+
+    fn e1(&self) -> f64 {
+        self.e0 + self.w / self.k
+    }
+
+    fn n0(&self) -> f64 {
+        self.n1 - self.h / self.k
+    }
+}
+
+/// One tick: its position along the axis (m in the local frame) and its label.
+pub(crate) struct Tick {
+    pub(crate) at_m: f64,
+    pub(crate) label: String,
+}
+
+/// Ticks of one axis over [`lo_m`, `hi_m`] m: round metres, or round degrees converted.
+/// `pt_per_m` is the map scale; labels are at least `min_gap` pt apart (measured along the
+/// axis: their width for x, `font` for y).
+fn axis_ticks(
+    lo_m: f64,
+    hi_m: f64,
+    pt_per_m: f64,
+    coords: Coordinates,
+    deg: (f64, f64),
+    font: f64,
+    horizontal: bool,
+) -> Vec<Tick> {
+    // deg = (origin in degrees, m per degree) along this axis.
+    let (unit_lo, unit_hi, m_per_unit, offset) = match coords {
+        Coordinates::LocalMetres => (lo_m, hi_m, 1.0, 0.0),
+        Coordinates::Degrees => (deg.0 + lo_m / deg.1, deg.0 + hi_m / deg.1, deg.1, deg.0),
+    };
+    let span = unit_hi - unit_lo;
+    if !(span.is_finite() && span > 0.0) {
+        return Vec::new();
+    }
+    let mut step = ticks::nice_step(span / 12.0);
+    for _ in 0..40 {
+        let values = ticks::multiples(unit_lo, unit_hi, step);
+        let d = ticks::decimals(step);
+        let labels: Vec<String> = values.iter().map(|&v| ticks::label(v, d)).collect();
+        let spacing = step * m_per_unit * pt_per_m;
+        let needed = if horizontal {
+            labels
+                .iter()
+                .map(|l| text_width(l, font, false))
+                .fold(0.0, f64::max)
+                + 1.2 * font
+        } else {
+            2.0 * font
+        };
+        if spacing >= needed && values.len() <= 8 {
+            return values
+                .iter()
+                .zip(labels)
+                .map(|(&v, label)| Tick {
+                    at_m: (v - offset) * m_per_unit,
+                    label,
+                })
+                .collect();
+        }
+        step = ticks::nice_step(step * 1.5);
+    }
+    Vec::new()
+}
+
+/// The two axes' ticks for a map view.
+pub(crate) struct Axes {
+    pub(crate) x: Vec<Tick>,
+    pub(crate) y: Vec<Tick>,
+    pub(crate) x_title: String,
+    pub(crate) y_title: String,
+}
+
+impl Axes {
+    pub(crate) fn new(view: &MapView, p: &Projection, coords: Coordinates, font: f64) -> Self {
+        let x = axis_ticks(
+            view.e0,
+            view.e1(),
+            view.k,
+            coords,
+            (p.lon0, p.kx),
+            font,
+            true,
+        );
+        let y = axis_ticks(
+            view.n0(),
+            view.n1,
+            view.k,
+            coords,
+            (p.lat0, p.ky),
+            font,
+            false,
+        );
+        let (x_long, y_long, x_short, y_short) = match coords {
+            Coordinates::LocalMetres => (
+                "metres east of base",
+                "metres north of base",
+                "east (m)",
+                "north (m)",
+            ),
+            Coordinates::Degrees => ("longitude (°E)", "latitude (°N)", "lon (°)", "lat (°)"),
+        };
+        // The long title when it fits along the axis, else the short one (cut if need be).
+        let pick = |long: &'static str, short: &'static str, len: f64| -> String {
+            if text_width(long, font, false) <= len {
+                long.to_string()
+            } else {
+                crate::svg::fit(short, font, false, len)
+            }
+        };
+        let x_title = pick(x_long, x_short, view.w);
+        let y_title = pick(y_long, y_short, view.h);
+        Self {
+            x,
+            y,
+            x_title,
+            y_title,
+        }
+    }
+
+    /// Widest y label, pt.
+    pub(crate) fn y_label_width(&self, font: f64) -> f64 {
+        self.y
+            .iter()
+            .map(|t| text_width(&t.label, font, false))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Tick length, pt.
+pub(crate) const TICK: f64 = 2.5;
+
+/// Draws the frame, ticks, tick labels and axis titles. The y title goes at `y_title_x`
+/// (the left edge of its rotated line), the x title's baseline at `x_title_y`.
+pub(crate) fn draw_axes(
+    svg: &mut Svg,
+    view: &MapView,
+    axes: &Axes,
+    font: f64,
+    y_title_x: f64,
+    x_title_y: f64,
+) {
+    svg.line(format_args!(
+        r#"<g id="axes" stroke="{INK}" stroke-width="0.5">"#
+    ));
+    svg.line(format_args!(
+        r#"<rect x="{}" y="{}" width="{}" height="{}" fill="none"/>"#,
+        N(view.x),
+        N(view.y),
+        N(view.w),
+        N(view.h)
+    ));
+    let bottom = view.y + view.h;
+    for t in &axes.x {
+        let (x, _) = view.pt((t.at_m, 0.0));
+        svg.line(format_args!(
+            r#"<line x1="{}" y1="{}" x2="{}" y2="{}"/>"#,
+            N(x),
+            N(bottom),
+            N(x),
+            N(bottom + TICK)
+        ));
+    }
+    for t in &axes.y {
+        let (_, y) = view.pt((0.0, t.at_m));
+        svg.line(format_args!(
+            r#"<line x1="{}" y1="{}" x2="{}" y2="{}"/>"#,
+            N(view.x - TICK),
+            N(y),
+            N(view.x),
+            N(y)
+        ));
+    }
+    svg.line(format_args!("</g>"));
+    svg.line(format_args!(r#"<g id="tick-labels" fill="{INK}">"#));
+    let cap = CAP_HEIGHT_EM * font;
+    for t in &axes.x {
+        let (x, _) = view.pt((t.at_m, 0.0));
+        svg.text(
+            x,
+            bottom + TICK + 1.0 + cap,
+            font,
+            Anchor::Middle,
+            false,
+            &t.label,
+        );
+    }
+    for t in &axes.y {
+        let (_, y) = view.pt((0.0, t.at_m));
+        svg.text(
+            view.x - TICK - 1.2,
+            y + 0.5 * cap,
+            font,
+            Anchor::End,
+            false,
+            &t.label,
+        );
+    }
+    svg.text(
+        view.x + 0.5 * view.w,
+        x_title_y,
+        font,
+        Anchor::Middle,
+        false,
+        &axes.x_title,
+    );
+    let (cx, cy) = (y_title_x + 0.93 * font, view.y + 0.5 * view.h);
+    svg.text_attrs(
+        cx,
+        cy,
+        font,
+        Anchor::Middle,
+        false,
+        &format!(r#"transform="rotate(-90 {} {})""#, N(cx), N(cy)),
+        &axes.y_title,
+    );
+    svg.line(format_args!("</g>"));
+}
+
+/// Draws the cells, filled, with hairline white borders; each `<path id="cell-N">` with a
+/// `<title>` naming the cell.
+pub(crate) fn draw_cells(svg: &mut Svg, view: &MapView, cells: &[CellShape], fills: &[Rgb]) {
+    svg.line(format_args!(
+        r##"<g id="cells" stroke="#ffffff" stroke-width="0.35" stroke-linejoin="round">"##
+    ));
+    for (k, (c, fill)) in cells.iter().zip(fills).enumerate() {
+        if c.ring.len() < 3 {
+            continue;
+        }
+        let mut d = String::new();
+        for (j, &p) in c.ring.iter().enumerate() {
+            let (x, y) = view.pt(p);
+            d.push_str(&format!(
+                "{}{} {}",
+                if j == 0 { "M" } else { "L" },
+                N(x),
+                N(y)
+            ));
+        }
+        d.push('Z');
+        let s =
+            c.s.map_or_else(|| "not scored".to_string(), |s| format!("S = {s:.3}"));
+        svg.line(format_args!(
+            r#"<path id="cell-{k}" d="{d}" fill="{}"><title>{} {}</title></path>"#,
+            fill.hex(),
+            esc(&c.id),
+            esc(&s)
+        ));
+    }
+    svg.line(format_args!("</g>"));
+}
+
+/// Sensor dot radius, pt.
+pub(crate) const SENSOR_R: f64 = 0.85;
+
+/// One sensor marker at (`x`, `y`) pt.
+pub(crate) fn sensor_marker(svg: &mut Svg, x: f64, y: f64) {
+    svg.line(format_args!(
+        r##"<circle cx="{}" cy="{}" r="{}" fill="{INK}" stroke="#ffffff" stroke-width="0.4"/>"##,
+        N(x),
+        N(y),
+        N(SENSOR_R)
+    ));
+}
+
+/// Draws the sensors.
+pub(crate) fn draw_sensors(svg: &mut Svg, view: &MapView, sensors: &[(f64, f64)]) {
+    svg.line(format_args!(r#"<g id="sensors">"#));
+    for &p in sensors {
+        let (x, y) = view.pt(p);
+        sensor_marker(svg, x, y);
+    }
+    svg.line(format_args!("</g>"));
+}
+
+/// Half the size of the base marker, pt: a triangle 2·`BASE_R` wide.
+pub(crate) fn base_r(font: f64) -> f64 {
+    0.55 * font
+}
+
+/// The base station: a black triangle, point up, centred at (`x`, `y`).
+pub(crate) fn base_marker(svg: &mut Svg, x: f64, y: f64, r: f64) {
+    svg.line(format_args!(
+        r##"<path d="M{} {}L{} {}L{} {}Z" fill="{INK}" stroke="#ffffff" stroke-width="0.6" stroke-linejoin="round"/>"##,
+        N(x),
+        N(y - r),
+        N(x + r),
+        N(y + 0.8 * r),
+        N(x - r),
+        N(y + 0.8 * r)
+    ));
+}
+
+/// A north arrow (split arrowhead, "N" above) centred on `cx` from `top` down, `height` pt.
+pub(crate) fn north_arrow(svg: &mut Svg, cx: f64, top: f64, height: f64, font: f64) {
+    let cap = CAP_HEIGHT_EM * font;
+    let tip = top + cap + 1.5;
+    let (bottom, half) = (top + height, 0.3 * (height - cap));
+    let notch = bottom - 0.3 * (bottom - tip);
+    svg.line(format_args!(r#"<g id="north-arrow">"#));
+    svg.text(cx, top + cap, font, Anchor::Middle, true, "N");
+    svg.line(format_args!(
+        r#"<path d="M{cx} {tip}L{r} {bottom}L{cx} {notch}Z" fill="{INK}" stroke="{INK}" stroke-width="0.4" stroke-linejoin="round"/>"#,
+        cx = N(cx),
+        tip = N(tip),
+        r = N(cx - half),
+        bottom = N(bottom),
+        notch = N(notch)
+    ));
+    svg.line(format_args!(
+        r##"<path d="M{cx} {tip}L{r} {bottom}L{cx} {notch}Z" fill="#ffffff" stroke="{INK}" stroke-width="0.4" stroke-linejoin="round"/>"##,
+        cx = N(cx),
+        tip = N(tip),
+        r = N(cx + half),
+        bottom = N(bottom),
+        notch = N(notch)
+    ));
+    svg.line(format_args!("</g>"));
+}
+
+/// Height of [`north_arrow`] for a text size, pt.
+pub(crate) fn north_arrow_height(font: f64) -> f64 {
+    CAP_HEIGHT_EM * font + 1.5 + 1.7 * font
+}
+
+/// The scale bar's length: a round distance, m, at most `max_pt` long at `k` pt/m.
+pub(crate) fn scale_length_m(k: f64, max_pt: f64) -> f64 {
+    let max_m = max_pt / k;
+    if !(max_m.is_finite() && max_m > 0.0) {
+        return 1.0;
+    }
+    let mag = 10f64.powf(max_m.log10().floor());
+    [5.0, 2.0, 1.0]
+        .into_iter()
+        .map(|m| m * mag)
+        .find(|&v| v <= max_m)
+        .unwrap_or(mag)
+}
+
+/// Label of a distance, m or km.
+pub(crate) fn distance_label(m: f64) -> String {
+    if m >= 1000.0 {
+        format!(
+            "{} km",
+            ticks::label(m / 1000.0, ticks::decimals(m / 1000.0))
+        )
+    } else {
+        format!("{} m", ticks::label(m, ticks::decimals(m)))
+    }
+}
+
+/// A scale bar of `len_m` (two halves, black and white) centred on `cx`, its top at `top`;
+/// the label below it. Returns the height used, pt.
+pub(crate) fn scale_bar(svg: &mut Svg, cx: f64, top: f64, len_m: f64, k: f64, font: f64) -> f64 {
+    let len = len_m * k;
+    let (x0, h) = (cx - 0.5 * len, 0.32 * font);
+    svg.line(format_args!(r#"<g id="scale-bar">"#));
+    svg.line(format_args!(
+        r#"<rect x="{}" y="{}" width="{}" height="{}" fill="{INK}" stroke="{INK}" stroke-width="0.4"/>"#,
+        N(x0),
+        N(top),
+        N(0.5 * len),
+        N(h)
+    ));
+    svg.line(format_args!(
+        r##"<rect x="{}" y="{}" width="{}" height="{}" fill="#ffffff" stroke="{INK}" stroke-width="0.4"/>"##,
+        N(x0 + 0.5 * len),
+        N(top),
+        N(0.5 * len),
+        N(h)
+    ));
+    let cap = CAP_HEIGHT_EM * font;
+    svg.text(
+        cx,
+        top + h + 1.5 + cap,
+        font,
+        Anchor::Middle,
+        false,
+        &distance_label(len_m),
+    );
+    svg.line(format_args!("</g>"));
+    h + 1.5 + cap + 0.3 * font
+}
+
+/// Height of [`scale_bar`], pt.
+pub(crate) fn scale_bar_height(font: f64) -> f64 {
+    0.32 * font + 1.5 + CAP_HEIGHT_EM * font + 0.3 * font
+}
+
+/// A legend symbol.
+#[derive(Clone)]
+pub(crate) enum Symbol {
+    Sensor,
+    /// A stop marker with a number, radius pt.
+    Stop(f64),
+    /// A route line with an arrowhead, colour, dash (0 = solid).
+    Route(Rgb, u32),
+    /// The return leg: dashed.
+    Return(Rgb),
+    /// The base, half-size pt.
+    Base(f64),
+    /// A filled square.
+    Swatch(Rgb),
+    /// A filled square and a route line over it (a sortie).
+    Sortie(Rgb, Rgb, u32),
+}
+
+/// One legend entry.
+pub(crate) struct Entry {
+    pub(crate) symbol: Symbol,
+    pub(crate) text: String,
+}
+
+/// Stroke dash pattern number `dash` (0 solid; the return leg has its own).
+pub(crate) fn dash_attr(dash: u32) -> &'static str {
+    match dash {
+        0 => "",
+        1 => r#" stroke-dasharray="4 1 1 1""#,
+        _ => r#" stroke-dasharray="1 1""#,
+    }
+}
+
+/// Dash pattern of return legs.
+pub(crate) const RETURN_DASH: &str = "2.4 1.4";
+
+/// An arrowhead pointing from (`x0`,`y0`) to (`x1`,`y1`), centred at `t` of the way along,
+/// `len` pt long.
+pub(crate) fn arrowhead(
+    svg: &mut Svg,
+    (x0, y0): (f64, f64),
+    (x1, y1): (f64, f64),
+    t: f64,
+    len: f64,
+    fill: &str,
+) {
+    let (dx, dy) = (x1 - x0, y1 - y0);
+    let l = (dx * dx + dy * dy).sqrt();
+    if !(l.is_finite() && l > 0.0) {
+        return;
+    }
+    let (ux, uy) = (dx / l, dy / l);
+    let (mx, my) = (x0 + dx * t, y0 + dy * t);
+    let (hw, hl) = (0.42 * len, 0.5 * len);
+    let tip = (mx + ux * hl, my + uy * hl);
+    let back = (mx - ux * hl, my - uy * hl);
+    let l1 = (back.0 - uy * hw, back.1 + ux * hw);
+    let l2 = (back.0 + uy * hw, back.1 - ux * hw);
+    let notch = (mx - ux * 0.25 * hl, my - uy * 0.25 * hl);
+    svg.line(format_args!(
+        r##"<path class="arrow" d="M{} {}L{} {}L{} {}L{} {}Z" fill="{fill}" stroke="#ffffff" stroke-width="0.35" stroke-linejoin="round"/>"##,
+        N(tip.0),
+        N(tip.1),
+        N(l1.0),
+        N(l1.1),
+        N(notch.0),
+        N(notch.1),
+        N(l2.0),
+        N(l2.1)
+    ));
+}
+
+/// Width of a legend symbol's box, pt.
+pub(crate) fn symbol_width(font: f64) -> f64 {
+    2.3 * font
+}
+
+fn draw_symbol(svg: &mut Svg, s: &Symbol, x: f64, cy: f64, font: f64) {
+    let w = symbol_width(font);
+    let cx = x + 0.5 * w;
+    match s {
+        Symbol::Sensor => sensor_marker(svg, cx, cy),
+        Symbol::Stop(r) => {
+            stop_marker(svg, cx, cy, *r, "1", font, "#d62728");
+        }
+        Symbol::Route(c, dash) => {
+            route_line(svg, &[(x, cy), (x + w, cy)], &c.hex(), dash_attr(*dash));
+            arrowhead(svg, (x, cy), (x + w, cy), 0.55, 0.75 * font, &c.hex());
+        }
+        Symbol::Return(c) => {
+            let dash = format!(r#" stroke-dasharray="{RETURN_DASH}""#);
+            route_line(svg, &[(x, cy), (x + w, cy)], &c.hex(), &dash);
+        }
+        Symbol::Base(r) => base_marker(svg, cx, cy, *r),
+        Symbol::Swatch(c) => {
+            let h = 0.85 * font;
+            svg.line(format_args!(
+                r##"<rect x="{}" y="{}" width="{}" height="{}" fill="{}" stroke="#8c8c8c" stroke-width="0.3"/>"##,
+                N(cx - 0.5 * h),
+                N(cy - 0.5 * h),
+                N(h),
+                N(h),
+                c.hex()
+            ));
+        }
+        Symbol::Sortie(fill, line, dash) => {
+            let h = 0.95 * font;
+            svg.line(format_args!(
+                r#"<rect x="{}" y="{}" width="{}" height="{}" fill="{}"/>"#,
+                N(x + 0.15 * w),
+                N(cy - 0.5 * h),
+                N(0.7 * w),
+                N(h),
+                fill.hex()
+            ));
+            route_line(svg, &[(x, cy), (x + w, cy)], &line.hex(), dash_attr(*dash));
+        }
+    }
+}
+
+/// A polyline with a white casing under it so it reads on any fill.
+pub(crate) fn route_line(svg: &mut Svg, pts: &[(f64, f64)], colour: &str, dash: &str) {
+    if pts.len() < 2 {
+        return;
+    }
+    let points: Vec<String> = pts
+        .iter()
+        .map(|&(x, y)| format!("{},{}", N(x), N(y)))
+        .collect();
+    let points = points.join(" ");
+    svg.line(format_args!(
+        r##"<polyline points="{points}" fill="none" stroke="#ffffff" stroke-width="2.3" stroke-linejoin="round" stroke-linecap="round"{dash}/>"##
+    ));
+    svg.line(format_args!(
+        r#"<polyline points="{points}" fill="none" stroke="{colour}" stroke-width="1.1" stroke-linejoin="round"{dash}/>"#
+    ));
+}
+
+/// A numbered stop: white disc, coloured ring, bold number.
+pub(crate) fn stop_marker(
+    svg: &mut Svg,
+    x: f64,
+    y: f64,
+    r: f64,
+    label: &str,
+    font: f64,
+    ring: &str,
+) {
+    svg.line(format_args!(
+        r##"<circle cx="{}" cy="{}" r="{}" fill="#ffffff" stroke="{ring}" stroke-width="0.8"/>"##,
+        N(x),
+        N(y),
+        N(r)
+    ));
+    let size = stop_font(font, label);
+    svg.text_attrs(
+        x,
+        y + 0.5 * CAP_HEIGHT_EM * size,
+        size,
+        Anchor::Middle,
+        true,
+        &format!(r#"fill="{INK}""#),
+        label,
+    );
+}
+
+/// Text size of a stop number: the body size, smaller for three digits.
+pub(crate) fn stop_font(font: f64, label: &str) -> f64 {
+    if label.chars().count() >= 3 {
+        0.8 * font
+    } else {
+        font
+    }
+}
+
+/// Radius of the stop markers for stops numbered up to `last`, pt: room for the widest
+/// number and for the digits' height.
+pub(crate) fn stop_radius(font: f64, last: u32) -> f64 {
+    let widest = "8".repeat(last.max(1).to_string().len());
+    let size = stop_font(font, &widest);
+    (0.5 * text_width(&widest, size, true) + 1.0).max(0.5 * CAP_HEIGHT_EM * size + 1.4)
+}
+
+/// Space between legend columns, em.
+const LEGEND_COL_GAP: f64 = 0.9;
+
+/// Height of one legend row, pt.
+pub(crate) fn legend_row_height(font: f64) -> f64 {
+    1.3 * font
+}
+
+/// The legend's columns: entries are listed down the columns in order (so related entries
+/// stay together); as many columns as fit in `width` pt. Returns the rows and each column's
+/// width, pt.
+fn legend_columns(entries: &[Entry], width: f64, font: f64) -> (usize, Vec<f64>) {
+    let item = |e: &Entry| symbol_width(font) + 0.4 * font + text_width(&e.text, font, false);
+    let gap = LEGEND_COL_GAP * font;
+    for cols in (1..=entries.len()).rev() {
+        let rows = entries.len().div_ceil(cols);
+        let widths: Vec<f64> = entries
+            .chunks(rows)
+            .map(|col| col.iter().map(item).fold(0.0, f64::max))
+            .collect();
+        let total = widths.iter().sum::<f64>() + gap * (widths.len() as f64 - 1.0);
+        if total <= width || cols == 1 {
+            return (rows, widths);
+        }
+    }
+    (0, Vec::new())
+}
+
+/// Draws the legend from `top` at `x`, at most `width` pt wide, columns spread over the
+/// width. Returns the height used, pt.
+pub(crate) fn draw_legend(
+    svg: &mut Svg,
+    id: &str,
+    entries: &[Entry],
+    x: f64,
+    top: f64,
+    width: f64,
+    font: f64,
+) -> f64 {
+    if entries.is_empty() {
+        return 0.0;
+    }
+    let (rows, widths) = legend_columns(entries, width, font);
+    let used: f64 = widths.iter().sum();
+    // Spread the spare width between the columns.
+    let gap = if widths.len() > 1 {
+        ((width - used) / (widths.len() as f64 - 1.0)).min(3.0 * font)
+    } else {
+        0.0
+    };
+    let sw = symbol_width(font);
+    let lh = legend_row_height(font);
+    svg.line(format_args!(r#"<g id="{id}">"#));
+    let mut col_x = x;
+    for (c, col) in entries.chunks(rows.max(1)).enumerate() {
+        let col_w = widths.get(c).copied().unwrap_or(width);
+        for (row, e) in col.iter().enumerate() {
+            let cy = top + (row as f64 + 0.5) * lh;
+            svg.line(format_args!(r#"<g class="legend-entry">"#));
+            draw_symbol(svg, &e.symbol, col_x, cy, font);
+            let max_text = (x + width - col_x) - sw - 0.4 * font;
+            let text = crate::svg::fit(&e.text, font, false, max_text);
+            svg.text_attrs(
+                col_x + sw + 0.4 * font,
+                cy + 0.5 * CAP_HEIGHT_EM * font,
+                font,
+                Anchor::Start,
+                false,
+                &format!(r#"fill="{INK}""#),
+                &text,
+            );
+            svg.line(format_args!("</g>"));
+        }
+        col_x += col_w + gap;
+    }
+    svg.line(format_args!("</g>"));
+    rows as f64 * lh
+}
+
+/// Height [`draw_legend`] will use, pt.
+pub(crate) fn legend_height(entries: &[Entry], width: f64, font: f64) -> f64 {
+    if entries.is_empty() {
+        return 0.0;
+    }
+    legend_columns(entries, width, font).0 as f64 * legend_row_height(font)
+}
+
+/// Draws a route: the outbound legs solid, the return leg dashed, each leg with an arrowhead
+/// in the free stretch between its end markers when there is room (and, but for the first
+/// and the return leg, at least `min_free` pt of it). `radii` are the marker radii at each
+/// point (pt) so arrows are never hidden under a marker.
+pub(crate) fn draw_route(
+    svg: &mut Svg,
+    pts: &[(f64, f64)],
+    radii: &[f64],
+    colour: &str,
+    dash: &str,
+    arrow_len: f64,
+    min_free: f64,
+) {
+    if pts.len() < 2 {
+        return;
+    }
+    let n = pts.len();
+    let ret = format!(r#" stroke-dasharray="{RETURN_DASH}""#);
+    route_line(svg, &pts[..n - 1], colour, dash);
+    route_line(svg, &pts[n - 2..], colour, &ret);
+    for k in 0..n - 1 {
+        let (a, b) = (pts[k], pts[k + 1]);
+        let l = ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
+        let (ra, rb) = (
+            radii.get(k).copied().unwrap_or(0.0),
+            radii.get(k + 1).copied().unwrap_or(0.0),
+        );
+        let free = l - ra - rb;
+        let first_or_last = k == 0 || k + 2 == n;
+        if l > 0.0 && free >= arrow_len + 1.0 && (first_or_last || free >= min_free) {
+            let t = (ra + 0.5 * free) / l;
+            arrowhead(svg, a, b, t, arrow_len, colour);
+        }
+    }
+}

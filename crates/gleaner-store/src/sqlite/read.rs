@@ -1,0 +1,695 @@
+//! The queries, written once over a `&Connection` and shared by [`super::SqliteStore`] (in a
+//! read snapshot) and [`super::SqliteTx`] (inside the transaction).
+
+use std::collections::HashMap;
+use std::ops::RangeInclusive;
+
+use gleaner_field::{CellIndex, LatLon, Modality, SensorId, UnixSeconds};
+use rusqlite::{Connection, OptionalExtension, Row, params};
+
+use super::Db;
+use crate::{
+    AnomalyRecord, CellMetadata, CellRecord, CellScores, ClassProbability, Correlation,
+    EnergyBreakdown, FlightProfile, IngestRecord, MissionId, MissionKind, MissionRecord,
+    MissionStatus, ModalityRecord, ModalitySummary, NewMission, Reading, ReadingBatch, Result,
+    SensorRecord, SeriesStats, StopRecord, StoreError, VisitRecord,
+};
+
+pub(super) fn parse_sensor(table: &'static str, name: String) -> Result<SensorId> {
+    SensorId::new(name).map_err(|e| StoreError::Corrupt {
+        table,
+        detail: e.to_string(),
+    })
+}
+
+pub(super) fn parse_modality(table: &'static str, name: &str) -> Result<Modality> {
+    Modality::new(name).map_err(|e| StoreError::Corrupt {
+        table,
+        detail: e.to_string(),
+    })
+}
+
+fn parse_latlon(table: &'static str, lat: f64, lon: f64) -> Result<LatLon> {
+    LatLon::new(lat, lon).map_err(|e| StoreError::Corrupt {
+        table,
+        detail: e.to_string(),
+    })
+}
+
+fn parse_cell(table: &'static str, label: &str) -> Result<CellIndex> {
+    CellIndex::parse(label).ok_or_else(|| StoreError::Corrupt {
+        table,
+        detail: format!("cell label {label:?} is not of the form x<i>y<j>"),
+    })
+}
+
+/// A count read back as `u64` (SQLite stores it as a signed integer).
+fn count(table: &'static str, n: i64) -> Result<u64> {
+    u64::try_from(n).map_err(|_| StoreError::Corrupt {
+        table,
+        detail: format!("negative count {n}"),
+    })
+}
+
+/// `name -> id` for every stored sensor.
+pub(super) fn sensor_ids(c: &Connection) -> Result<HashMap<String, i64>> {
+    let mut stmt = c.prepare_cached("SELECT name, id FROM sensors").db()?;
+    let rows = stmt.query_map([], |r| Ok((r.get(0)?, r.get(1)?))).db()?;
+    rows.collect::<rusqlite::Result<_>>().db()
+}
+
+/// `name -> id` for every stored modality.
+pub(super) fn modality_ids(c: &Connection) -> Result<HashMap<String, i64>> {
+    let mut stmt = c.prepare_cached("SELECT name, id FROM modalities").db()?;
+    let rows = stmt.query_map([], |r| Ok((r.get(0)?, r.get(1)?))).db()?;
+    rows.collect::<rusqlite::Result<_>>().db()
+}
+
+/// `label -> id` for every stored cell.
+pub(super) fn cell_ids(c: &Connection) -> Result<HashMap<String, i64>> {
+    let mut stmt = c.prepare_cached("SELECT label, id FROM cells").db()?;
+    let rows = stmt.query_map([], |r| Ok((r.get(0)?, r.get(1)?))).db()?;
+    rows.collect::<rusqlite::Result<_>>().db()
+}
+
+pub(super) fn schema_version(c: &Connection) -> Result<i64> {
+    Ok(
+        c.query_row("SELECT MAX(version) FROM schema_migrations", [], |r| {
+            r.get::<_, Option<i64>>(0)
+        })
+        .db()?
+        .unwrap_or(0),
+    )
+}
+
+pub(super) fn sensors(c: &Connection) -> Result<Vec<SensorRecord>> {
+    let mut stmt = c
+        .prepare_cached("SELECT name, lat, lon, elevation_m, source FROM sensors ORDER BY name")
+        .db()?;
+    let rows = stmt
+        .query_map([], |r| {
+            Ok((
+                r.get::<_, String>(0)?,
+                r.get::<_, f64>(1)?,
+                r.get::<_, f64>(2)?,
+                r.get::<_, Option<f64>>(3)?,
+                r.get::<_, String>(4)?,
+            ))
+        })
+        .db()?;
+    let mut out = Vec::new();
+    for row in rows {
+        let (name, lat, lon, elevation_m, source) = row.db()?;
+        out.push(SensorRecord {
+            id: parse_sensor("sensors", name)?,
+            position: parse_latlon("sensors", lat, lon)?,
+            elevation_m,
+            source,
+        });
+    }
+    Ok(out)
+}
+
+pub(super) fn modalities(c: &Connection) -> Result<Vec<ModalityRecord>> {
+    let mut stmt = c
+        .prepare_cached("SELECT name, unit FROM modalities ORDER BY name")
+        .db()?;
+    let rows = stmt
+        .query_map([], |r| Ok((r.get::<_, String>(0)?, r.get(1)?)))
+        .db()?;
+    let mut out = Vec::new();
+    for row in rows {
+        let (name, unit) = row.db()?;
+        out.push(ModalityRecord {
+            modality: parse_modality("modalities", &name)?,
+            unit,
+        });
+    }
+    Ok(out)
+}
+
+/// `(name, key)` pairs sorted by name.
+fn sorted(map: HashMap<String, i64>) -> Vec<(String, i64)> {
+    let mut v: Vec<(String, i64)> = map.into_iter().collect();
+    v.sort();
+    v
+}
+
+pub(super) fn readings_for(
+    c: &Connection,
+    modality: Option<&Modality>,
+    range: RangeInclusive<UnixSeconds>,
+) -> Result<ReadingBatch> {
+    let sensors = sorted(sensor_ids(c)?);
+    let mut modalities = sorted(modality_ids(c)?);
+    modalities.retain(|(name, _)| modality.is_none_or(|m| m.as_str() == name));
+    collect_readings(c, &sensors, &modalities, range)
+}
+
+pub(super) fn readings_of_sensors(
+    c: &Connection,
+    sensors: &[SensorId],
+    range: RangeInclusive<UnixSeconds>,
+) -> Result<ReadingBatch> {
+    let ids = sensor_ids(c)?;
+    let mut wanted = sensors
+        .iter()
+        .map(|s| {
+            ids.get(s.as_str())
+                .map(|&k| (s.to_string(), k))
+                .ok_or_else(|| StoreError::UnknownSensor(s.clone()))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    wanted.sort();
+    wanted.dedup();
+    let modalities = sorted(modality_ids(c)?);
+    collect_readings(c, &wanted, &modalities, range)
+}
+
+/// The readings of `sensors` x `modalities` (both sorted by name) in `range`, in that order
+/// and by time: one primary-key range seek per (sensor, modality), so the cost is the rows
+/// returned plus one B-tree descent per pair.
+fn collect_readings(
+    c: &Connection,
+    sensors: &[(String, i64)],
+    modalities: &[(String, i64)],
+    range: RangeInclusive<UnixSeconds>,
+) -> Result<ReadingBatch> {
+    let mut stmt = c
+        .prepare_cached(
+            "SELECT t, value FROM readings
+             WHERE sensor = ?1 AND modality = ?2 AND t BETWEEN ?3 AND ?4 ORDER BY t",
+        )
+        .db()?;
+    let mut batch = ReadingBatch::new();
+    let mut modality_index: HashMap<i64, u32> = HashMap::new();
+    for (sname, skey) in sensors {
+        let mut sensor_index = None;
+        for (mname, mkey) in modalities {
+            let mut rows = stmt
+                .query(params![skey, mkey, range.start(), range.end()])
+                .db()?;
+            while let Some(row) = rows.next().db()? {
+                let s = match sensor_index {
+                    Some(s) => s,
+                    None => {
+                        batch.sensors.push(parse_sensor("sensors", sname.clone())?);
+                        let s = batch.sensors.len() as u32 - 1;
+                        sensor_index = Some(s);
+                        s
+                    }
+                };
+                let m = match modality_index.get(mkey) {
+                    Some(&m) => m,
+                    None => {
+                        batch.modalities.push(parse_modality("modalities", mname)?);
+                        let m = batch.modalities.len() as u32 - 1;
+                        modality_index.insert(*mkey, m);
+                        m
+                    }
+                };
+                batch.rows.push(Reading {
+                    sensor: s,
+                    modality: m,
+                    t: row.get(0).db()?,
+                    value: row.get(1).db()?,
+                });
+            }
+        }
+    }
+    Ok(batch)
+}
+
+pub(super) fn reading_count(c: &Connection) -> Result<u64> {
+    let n: i64 = c
+        .query_row("SELECT COUNT(*) FROM readings", [], |r| r.get(0))
+        .db()?;
+    count("readings", n)
+}
+
+pub(super) fn ingests(c: &Connection) -> Result<Vec<IngestRecord>> {
+    let mut stmt = c
+        .prepare_cached(
+            "SELECT file_name, format, rows_read, rows_inserted, rows_unchanged, rows_skipped, at
+             FROM ingests ORDER BY id",
+        )
+        .db()?;
+    let rows = stmt
+        .query_map([], |r| {
+            Ok((
+                r.get::<_, String>(0)?,
+                r.get::<_, String>(1)?,
+                [
+                    r.get::<_, i64>(2)?,
+                    r.get::<_, i64>(3)?,
+                    r.get::<_, i64>(4)?,
+                    r.get::<_, i64>(5)?,
+                ],
+                r.get::<_, i64>(6)?,
+            ))
+        })
+        .db()?;
+    let mut out = Vec::new();
+    for row in rows {
+        let (file_name, format, [read, inserted, unchanged, skipped], at) = row.db()?;
+        out.push(IngestRecord {
+            file_name,
+            format,
+            rows_read: count("ingests", read)?,
+            rows_inserted: count("ingests", inserted)?,
+            rows_unchanged: count("ingests", unchanged)?,
+            rows_skipped: count("ingests", skipped)?,
+            at,
+        });
+    }
+    Ok(out)
+}
+
+pub(super) fn cells(c: &Connection) -> Result<Vec<CellRecord>> {
+    let mut stmt = c
+        .prepare_cached("SELECT id, label, lat, lon, cell_size_m FROM cells ORDER BY i, j")
+        .db()?;
+    let mut members = c
+        .prepare_cached(
+            "SELECT s.name FROM cell_sensors cs JOIN sensors s ON s.id = cs.sensor
+             WHERE cs.cell = ?1 ORDER BY s.name",
+        )
+        .db()?;
+    let rows = stmt
+        .query_map([], |r| {
+            Ok((
+                r.get::<_, i64>(0)?,
+                r.get::<_, String>(1)?,
+                r.get::<_, f64>(2)?,
+                r.get::<_, f64>(3)?,
+                r.get::<_, f64>(4)?,
+            ))
+        })
+        .db()?;
+    let mut out = Vec::new();
+    for row in rows {
+        let (id, label, lat, lon, cell_size_m) = row.db()?;
+        let names = members.query_map([id], |r| r.get::<_, String>(0)).db()?;
+        let mut sensors = Vec::new();
+        for n in names {
+            sensors.push(parse_sensor("cell_sensors", n.db()?)?);
+        }
+        out.push(CellRecord {
+            index: parse_cell("cells", &label)?,
+            centre: parse_latlon("cells", lat, lon)?,
+            cell_size_m,
+            sensors,
+        });
+    }
+    Ok(out)
+}
+
+pub(super) fn cell_metadata(c: &Connection) -> Result<Vec<CellMetadata>> {
+    let mut stmt = c
+        .prepare_cached(
+            "SELECT c.id, c.label, md.last_collected, md.pending_bytes, md.expected_energy_j,
+                    md.freshness, md.redundancy, md.anomaly, md.uncertainty, md.score,
+                    md.computed_at
+             FROM cells c LEFT JOIN cell_metadata md ON md.cell = c.id ORDER BY c.i, c.j",
+        )
+        .db()?;
+    let mut probs = c
+        .prepare_cached(
+            "SELECT class, probability FROM cell_class_probabilities WHERE cell = ?1 ORDER BY k",
+        )
+        .db()?;
+    let mut summaries = c
+        .prepare_cached(
+            "SELECT m.name, cs.count, cs.mean, cs.std, cs.min, cs.max, cs.latest_t, cs.latest_value
+             FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
+             WHERE cs.cell = ?1 ORDER BY m.name",
+        )
+        .db()?;
+    let mut correlations = c
+        .prepare_cached(
+            "SELECT n.label, m.name, cc.correlation, cc.overlap
+             FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
+                  JOIN modalities m ON m.id = cc.modality
+             WHERE cc.cell = ?1 ORDER BY n.i, n.j, m.name",
+        )
+        .db()?;
+    let mut anomalies = c
+        .prepare_cached(
+            "SELECT m.name, ca.t, ca.anomaly, ca.flagged
+             FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
+             WHERE ca.cell = ?1 ORDER BY m.name, ca.t",
+        )
+        .db()?;
+    type MetaRow = (
+        i64,
+        String,
+        Option<i64>,
+        Option<f64>,
+        Option<f64>,
+        [Option<f64>; 5],
+        Option<i64>,
+    );
+    let rows: Vec<MetaRow> = stmt
+        .query_map([], |r| {
+            Ok((
+                r.get(0)?,
+                r.get(1)?,
+                r.get(2)?,
+                r.get(3)?,
+                r.get(4)?,
+                [r.get(5)?, r.get(6)?, r.get(7)?, r.get(8)?, r.get(9)?],
+                r.get(10)?,
+            ))
+        })
+        .db()?
+        .collect::<rusqlite::Result<_>>()
+        .db()?;
+    let mut out = Vec::with_capacity(rows.len());
+    for (id, label, last_collected, pending_bytes, expected_energy_j, terms, computed_at) in rows {
+        let mut md = CellMetadata::new(parse_cell("cells", &label)?);
+        md.last_collected = last_collected;
+        md.pending_bytes = pending_bytes;
+        md.expected_energy_j = expected_energy_j;
+        if let ([Some(f), Some(r), Some(a), Some(u), Some(s)], Some(at)) = (terms, computed_at) {
+            md.scores = Some(CellScores {
+                freshness: f,
+                redundancy: r,
+                anomaly: a,
+                uncertainty: u,
+                score: s,
+                computed_at: at,
+            });
+        }
+        for p in probs
+            .query_map([id], |r| {
+                Ok(ClassProbability {
+                    class: r.get(0)?,
+                    probability: r.get(1)?,
+                })
+            })
+            .db()?
+        {
+            md.class_probabilities.push(p.db()?);
+        }
+        let srows = summaries
+            .query_map([id], |r| {
+                Ok((
+                    r.get::<_, String>(0)?,
+                    r.get::<_, i64>(1)?,
+                    r.get::<_, f64>(2)?,
+                    r.get::<_, Option<f64>>(3)?,
+                    r.get::<_, f64>(4)?,
+                    r.get::<_, f64>(5)?,
+                    r.get::<_, i64>(6)?,
+                    r.get::<_, f64>(7)?,
+                ))
+            })
+            .db()?;
+        for s in srows {
+            let (m, n, mean, std, min, max, latest_t, latest_value) = s.db()?;
+            md.summaries.push(ModalitySummary {
+                modality: parse_modality("cell_summaries", &m)?,
+                stats: SeriesStats {
+                    count: count("cell_summaries", n)?,
+                    mean,
+                    std,
+                    min,
+                    max,
+                    latest_t,
+                    latest_value,
+                },
+            });
+        }
+        let crows = correlations
+            .query_map([id], |r| {
+                Ok((
+                    r.get::<_, String>(0)?,
+                    r.get::<_, String>(1)?,
+                    r.get::<_, f64>(2)?,
+                    r.get::<_, i64>(3)?,
+                ))
+            })
+            .db()?;
+        for co in crows {
+            let (n, m, correlation, overlap) = co.db()?;
+            md.correlations.push(Correlation {
+                neighbour: parse_cell("cell_correlations", &n)?,
+                modality: parse_modality("cell_correlations", &m)?,
+                correlation,
+                overlap: count("cell_correlations", overlap)?,
+            });
+        }
+        let arows = anomalies
+            .query_map([id], |r| {
+                Ok((
+                    r.get::<_, String>(0)?,
+                    r.get::<_, i64>(1)?,
+                    r.get::<_, f64>(2)?,
+                    r.get::<_, bool>(3)?,
+                ))
+            })
+            .db()?;
+        for a in arows {
+            let (m, t, anomaly, flagged) = a.db()?;
+            md.anomalies.push(AnomalyRecord {
+                modality: parse_modality("cell_anomalies", &m)?,
+                t,
+                anomaly,
+                flagged,
+            });
+        }
+        out.push(md);
+    }
+    Ok(out)
+}
+
+pub(super) fn sensor_last_collected(c: &Connection) -> Result<Vec<(SensorId, UnixSeconds)>> {
+    let mut stmt = c
+        .prepare_cached(
+            "SELECT s.name, sc.last_collected FROM sensor_collection sc
+             JOIN sensors s ON s.id = sc.sensor ORDER BY s.name",
+        )
+        .db()?;
+    let rows = stmt
+        .query_map([], |r| Ok((r.get::<_, String>(0)?, r.get(1)?)))
+        .db()?;
+    let mut out = Vec::new();
+    for row in rows {
+        let (name, t) = row.db()?;
+        out.push((parse_sensor("sensor_collection", name)?, t));
+    }
+    Ok(out)
+}
+
+/// A `missions` row as read, before its stops and visits.
+struct MissionRow {
+    id: i64,
+    created_at: i64,
+    kind: String,
+    planned_at: i64,
+    solver: String,
+    seed: i64,
+    weights: [f64; 4],
+    anomaly_form: String,
+    total_score: f64,
+    base: (f64, f64),
+    base_alt_m: f64,
+    altitude_m: f64,
+    cruise_speed_mps: f64,
+    energy: EnergyBreakdown,
+    return_distance_m: f64,
+    status: String,
+    flown_at: Option<i64>,
+}
+
+impl MissionRow {
+    fn from_row(r: &Row<'_>) -> rusqlite::Result<Self> {
+        Ok(Self {
+            id: r.get(0)?,
+            created_at: r.get(1)?,
+            kind: r.get(2)?,
+            planned_at: r.get(3)?,
+            solver: r.get(4)?,
+            seed: r.get(5)?,
+            weights: [r.get(6)?, r.get(7)?, r.get(8)?, r.get(9)?],
+            anomaly_form: r.get(10)?,
+            total_score: r.get(11)?,
+            base: (r.get(12)?, r.get(13)?),
+            base_alt_m: r.get(14)?,
+            altitude_m: r.get(15)?,
+            cruise_speed_mps: r.get(16)?,
+            energy: EnergyBreakdown {
+                travel_j: r.get(17)?,
+                hover_j: r.get(18)?,
+                comm_j: r.get(19)?,
+                return_j: r.get(20)?,
+                total_j: r.get(21)?,
+                budget_j: r.get(22)?,
+                distance_m: r.get(23)?,
+                flight_time_s: r.get(24)?,
+            },
+            return_distance_m: r.get(25)?,
+            status: r.get(26)?,
+            flown_at: r.get(27)?,
+        })
+    }
+}
+
+/// All missions (`id` = `None`) or one, oldest first, with their stops and visits.
+pub(super) fn missions(c: &Connection, id: Option<MissionId>) -> Result<Vec<MissionRecord>> {
+    let mut stmt = c
+        .prepare_cached(
+            "SELECT id, created_at, kind, planned_at, solver, seed,
+                    weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form,
+                    total_score, base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
+                    travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m,
+                    flight_time_s, return_distance_m, status, flown_at
+             FROM missions WHERE ?1 IS NULL OR id = ?1 ORDER BY id",
+        )
+        .db()?;
+    let mut stops = c
+        .prepare_cached(
+            "SELECT position, cell, lat, lon, score, freshness, redundancy, anomaly, uncertainty,
+                    leg_distance_m, leg_energy_j, collection_s, hover_s, hover_j, comm_j
+             FROM mission_stops WHERE mission = ?1 ORDER BY position",
+        )
+        .db()?;
+    let mut visits = c
+        .prepare_cached(
+            "SELECT position, cell, arrived_at, energy_j FROM visits WHERE mission = ?1
+             ORDER BY position",
+        )
+        .db()?;
+    let rows: Vec<MissionRow> = stmt
+        .query_map([id.map(|m| m.0)], MissionRow::from_row)
+        .db()?
+        .collect::<rusqlite::Result<_>>()
+        .db()?;
+    let mut out = Vec::with_capacity(rows.len());
+    for m in rows {
+        let corrupt = |detail: String| StoreError::Corrupt {
+            table: "missions",
+            detail,
+        };
+        let kind = MissionKind::parse(&m.kind)
+            .ok_or_else(|| corrupt(format!("mission {}: unknown kind {:?}", m.id, m.kind)))?;
+        let status = MissionStatus::parse(&m.status)
+            .ok_or_else(|| corrupt(format!("mission {}: unknown status {:?}", m.id, m.status)))?;
+        let mut stop_list = Vec::new();
+        let srows = stops
+            .query_map([m.id], |r| {
+                Ok((
+                    r.get::<_, u32>(0)?,
+                    r.get::<_, String>(1)?,
+                    (r.get::<_, f64>(2)?, r.get::<_, f64>(3)?),
+                    r.get::<_, f64>(4)?,
+                    [
+                        r.get::<_, Option<f64>>(5)?,
+                        r.get::<_, Option<f64>>(6)?,
+                        r.get::<_, Option<f64>>(7)?,
+                        r.get::<_, Option<f64>>(8)?,
+                    ],
+                    [
+                        r.get::<_, f64>(9)?,
+                        r.get::<_, f64>(10)?,
+                        r.get::<_, f64>(11)?,
+                        r.get::<_, f64>(12)?,
+                        r.get::<_, f64>(13)?,
+                        r.get::<_, f64>(14)?,
+                    ],
+                ))
+            })
+            .db()?;
+        for s in srows {
+            let (order, cell, (lat, lon), score, terms, nums) = s.db()?;
+            let [
+                leg_distance_m,
+                leg_energy_j,
+                collection_s,
+                hover_s,
+                hover_j,
+                comm_j,
+            ] = nums;
+            let terms = match terms {
+                [Some(f), Some(r), Some(a), Some(u)] => Some([f, r, a, u]),
+                _ => None,
+            };
+            stop_list.push(StopRecord {
+                order,
+                cell: parse_cell("mission_stops", &cell)?,
+                centre: parse_latlon("mission_stops", lat, lon)?,
+                score,
+                terms,
+                leg_distance_m,
+                leg_energy_j,
+                collection_s,
+                hover_s,
+                hover_j,
+                comm_j,
+            });
+        }
+        let mut visit_list = Vec::new();
+        let vrows = visits
+            .query_map([m.id], |r| {
+                Ok((
+                    r.get::<_, u32>(0)?,
+                    r.get::<_, String>(1)?,
+                    r.get::<_, Option<i64>>(2)?,
+                    r.get::<_, Option<f64>>(3)?,
+                ))
+            })
+            .db()?;
+        for v in vrows {
+            let (order, cell, arrived_at, energy_j) = v.db()?;
+            visit_list.push(VisitRecord {
+                order,
+                cell: parse_cell("visits", &cell)?,
+                arrived_at,
+                energy_j,
+            });
+        }
+        out.push(MissionRecord {
+            id: MissionId(m.id),
+            mission: NewMission {
+                created_at: m.created_at,
+                kind,
+                planned_at: m.planned_at,
+                solver: m.solver,
+                // Stored as the two's-complement i64 of the same 64 bits.
+                seed: m.seed as u64,
+                weights: m.weights,
+                anomaly_form: m.anomaly_form,
+                total_score: m.total_score,
+                profile: FlightProfile {
+                    base: parse_latlon("missions", m.base.0, m.base.1)?,
+                    base_alt_m: m.base_alt_m,
+                    altitude_m: m.altitude_m,
+                    cruise_speed_mps: m.cruise_speed_mps,
+                },
+                energy: m.energy,
+                return_distance_m: m.return_distance_m,
+                stops: stop_list,
+            },
+            status,
+            flown_at: m.flown_at,
+            visits: visit_list,
+        });
+    }
+    Ok(out)
+}
+
+pub(super) fn config_get(c: &Connection, key: &str) -> Result<Option<String>> {
+    c.query_row("SELECT value FROM config WHERE key = ?1", [key], |r| {
+        r.get(0)
+    })
+    .optional()
+    .db()
+}
+
+pub(super) fn blob_get(c: &Connection, key: &str) -> Result<Option<Vec<u8>>> {
+    c.query_row("SELECT value FROM blobs WHERE key = ?1", [key], |r| {
+        r.get(0)
+    })
+    .optional()
+    .db()
+}

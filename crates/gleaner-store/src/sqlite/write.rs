@@ -1,0 +1,842 @@
+//! The writes of [`super::SqliteTx`], each over the connection of a savepoint: a function that
+//! returns an error leaves the database as it found it (the savepoint is rolled back).
+
+use std::collections::{HashMap, HashSet};
+
+use gleaner_field::{CellIndex, Modality, SensorId, UnixSeconds};
+use rusqlite::{Connection, OptionalExtension, params};
+
+use super::Db;
+use super::read::{cell_ids, modality_ids, sensor_ids};
+use crate::{
+    CellMetadata, CellRecord, Conflict, ConflictPolicy, IngestRecord, InsertStats, MissionId,
+    MissionStatus, ModalityRecord, NewMission, Reading, ReadingBatch, ReplaceCellsStats, Result,
+    SensorRecord, StoreError, UpsertStats, VisitRecord,
+};
+
+/// Rows per multi-row `INSERT` statement in [`insert_readings`] (4 parameters each).
+const CHUNK: usize = 128;
+
+/// Relative tolerance under which two reading values are the same reading.
+const SAME_VALUE_RTOL: f64 = 1e-12;
+
+fn same_value(a: f64, b: f64) -> bool {
+    a == b || (a - b).abs() <= SAME_VALUE_RTOL * a.abs().max(b.abs())
+}
+
+fn finite(what: &'static str, name: &str, v: f64) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(StoreError::Invalid {
+            what,
+            detail: format!("{name} = {v} is not finite"),
+        })
+    }
+}
+
+/// A count stored as SQLite's signed integer (saturating; no real count reaches 2^63).
+fn as_i64(v: u64) -> i64 {
+    i64::try_from(v).unwrap_or(i64::MAX)
+}
+
+pub(super) fn upsert_sensors(c: &Connection, sensors: &[SensorRecord]) -> Result<UpsertStats> {
+    let mut seen: HashMap<&str, &SensorRecord> = HashMap::new();
+    for s in sensors {
+        if let Some(e) = s.elevation_m {
+            finite("sensor elevation", s.id.as_str(), e)?;
+        }
+        if let Some(prev) = seen.insert(s.id.as_str(), s)
+            && prev != s
+        {
+            return Err(StoreError::Invalid {
+                what: "sensor list",
+                detail: format!(
+                    "sensor {:?} listed twice with different content",
+                    s.id.as_str()
+                ),
+            });
+        }
+    }
+    let mut stats = UpsertStats::default();
+    let mut get = c
+        .prepare_cached("SELECT lat, lon, elevation_m, source FROM sensors WHERE name = ?1")
+        .db()?;
+    let mut insert = c
+        .prepare_cached(
+            "INSERT INTO sensors (name, lat, lon, elevation_m, source) VALUES (?1, ?2, ?3, ?4, ?5)",
+        )
+        .db()?;
+    let mut update = c
+        .prepare_cached(
+            "UPDATE sensors SET lat = ?2, lon = ?3, elevation_m = ?4, source = ?5 WHERE name = ?1",
+        )
+        .db()?;
+    let mut done = HashSet::new();
+    for s in sensors {
+        if !done.insert(s.id.as_str()) {
+            continue;
+        }
+        let p = params![
+            s.id.as_str(),
+            s.position.lat(),
+            s.position.lon(),
+            s.elevation_m,
+            s.source
+        ];
+        let stored: Option<(f64, f64, Option<f64>, String)> = get
+            .query_row([s.id.as_str()], |r| {
+                Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?))
+            })
+            .optional()
+            .db()?;
+        match stored {
+            None => {
+                insert.execute(p).db()?;
+                stats.added.push(s.id.to_string());
+            }
+            Some((lat, lon, elev, source))
+                if lat == s.position.lat()
+                    && lon == s.position.lon()
+                    && elev == s.elevation_m
+                    && source == s.source =>
+            {
+                stats.unchanged += 1;
+            }
+            Some(_) => {
+                update.execute(p).db()?;
+                stats.updated.push(s.id.to_string());
+            }
+        }
+    }
+    Ok(stats)
+}
+
+pub(super) fn upsert_modalities(
+    c: &Connection,
+    modalities: &[ModalityRecord],
+) -> Result<UpsertStats> {
+    let mut seen: HashMap<&str, &ModalityRecord> = HashMap::new();
+    for m in modalities {
+        if let Some(prev) = seen.insert(m.modality.as_str(), m)
+            && prev != m
+        {
+            return Err(StoreError::Invalid {
+                what: "modality list",
+                detail: format!(
+                    "modality {:?} listed twice with units {:?} and {:?}",
+                    m.modality.as_str(),
+                    prev.unit,
+                    m.unit
+                ),
+            });
+        }
+    }
+    let mut stats = UpsertStats::default();
+    let mut get = c
+        .prepare_cached("SELECT unit FROM modalities WHERE name = ?1")
+        .db()?;
+    let mut insert = c
+        .prepare_cached("INSERT INTO modalities (name, unit) VALUES (?1, ?2)")
+        .db()?;
+    let mut update = c
+        .prepare_cached("UPDATE modalities SET unit = ?2 WHERE name = ?1")
+        .db()?;
+    let mut done = HashSet::new();
+    for m in modalities {
+        let name = m.modality.as_str();
+        if !done.insert(name) {
+            continue;
+        }
+        let stored: Option<Option<String>> = get.query_row([name], |r| r.get(0)).optional().db()?;
+        match (stored, &m.unit) {
+            (None, _) => {
+                insert.execute(params![name, m.unit]).db()?;
+                stats.added.push(name.to_string());
+            }
+            // A unit for a modality stored without one is recorded.
+            (Some(None), Some(unit)) => {
+                update.execute(params![name, unit]).db()?;
+                stats.updated.push(name.to_string());
+            }
+            (Some(Some(stored)), Some(incoming)) if stored != *incoming => {
+                return Err(StoreError::UnitMismatch {
+                    modality: m.modality.clone(),
+                    stored,
+                    incoming: incoming.clone(),
+                });
+            }
+            // Same unit, or no unit offered: the stored one stays.
+            (Some(_), _) => stats.unchanged += 1,
+        }
+    }
+    Ok(stats)
+}
+
+pub(super) fn insert_readings(
+    c: &Connection,
+    batch: &ReadingBatch,
+    policy: ConflictPolicy,
+) -> Result<InsertStats> {
+    // Resolve names to integer keys and validate every row before touching the database.
+    let known_sensors = sensor_ids(c)?;
+    let known_modalities = modality_ids(c)?;
+    let sensor_keys = batch
+        .sensors
+        .iter()
+        .map(|s| {
+            known_sensors
+                .get(s.as_str())
+                .copied()
+                .ok_or_else(|| StoreError::UnknownSensor(s.clone()))
+        })
+        .collect::<Result<Vec<i64>>>()?;
+    let modality_keys = batch
+        .modalities
+        .iter()
+        .map(|m| {
+            known_modalities
+                .get(m.as_str())
+                .copied()
+                .ok_or_else(|| StoreError::UnknownModality(m.clone()))
+        })
+        .collect::<Result<Vec<i64>>>()?;
+    for (row, r) in batch.rows.iter().enumerate() {
+        let bad = |what, index, len| StoreError::BadIndex {
+            row,
+            what,
+            index,
+            len,
+        };
+        let s = batch
+            .sensors
+            .get(r.sensor as usize)
+            .ok_or_else(|| bad("sensor", r.sensor, batch.sensors.len()))?;
+        let m = batch
+            .modalities
+            .get(r.modality as usize)
+            .ok_or_else(|| bad("modality", r.modality, batch.modalities.len()))?;
+        if !r.value.is_finite() {
+            return Err(StoreError::NonFiniteValue {
+                sensor: s.clone(),
+                modality: m.clone(),
+                t: r.t,
+                value: r.value,
+            });
+        }
+    }
+    // Key order makes the B-tree inserts sequential; the sort is stable, so within-batch
+    // duplicates keep their order and the first one wins.
+    let key = |r: &Reading| {
+        (
+            sensor_keys[r.sensor as usize],
+            modality_keys[r.modality as usize],
+            r.t,
+        )
+    };
+    let mut rows: Vec<Reading> = batch.rows.clone();
+    rows.sort_by_key(key);
+
+    let mut stats = InsertStats::default();
+    let many_sql = format!(
+        "INSERT INTO readings (sensor, modality, t, value) VALUES {} ON CONFLICT DO NOTHING",
+        vec!["(?, ?, ?, ?)"; CHUNK].join(", ")
+    );
+    let mut many = c.prepare_cached(&many_sql).db()?;
+    let mut one = c
+        .prepare_cached(
+            "INSERT INTO readings (sensor, modality, t, value) VALUES (?1, ?2, ?3, ?4)
+             ON CONFLICT DO NOTHING",
+        )
+        .db()?;
+    let mut stored = c
+        .prepare_cached("SELECT value FROM readings WHERE sensor = ?1 AND modality = ?2 AND t = ?3")
+        .db()?;
+    for chunk in rows.chunks(CHUNK) {
+        let changed = if chunk.len() == CHUNK {
+            for (k, r) in chunk.iter().enumerate() {
+                let (s, m, t) = key(r);
+                many.raw_bind_parameter(4 * k + 1, s).db()?;
+                many.raw_bind_parameter(4 * k + 2, m).db()?;
+                many.raw_bind_parameter(4 * k + 3, t).db()?;
+                many.raw_bind_parameter(4 * k + 4, r.value).db()?;
+            }
+            many.raw_execute().db()?
+        } else {
+            let mut n = 0;
+            for r in chunk {
+                let (s, m, t) = key(r);
+                n += one.execute(params![s, m, t, r.value]).db()?;
+            }
+            n
+        };
+        stats.inserted += changed as u64;
+        if changed == chunk.len() {
+            continue;
+        }
+        // Some rows were already there: every row whose stored value differs from its own is a
+        // conflict; the rest of the non-inserted rows are unchanged.
+        let mut chunk_conflicts = 0;
+        for r in chunk {
+            let (s, m, t) = key(r);
+            let v: f64 = stored.query_row(params![s, m, t], |row| row.get(0)).db()?;
+            if !same_value(v, r.value) {
+                chunk_conflicts += 1;
+                stats.conflicts.push(Conflict {
+                    sensor: batch.sensors[r.sensor as usize].clone(),
+                    modality: batch.modalities[r.modality as usize].clone(),
+                    t: r.t,
+                    stored: v,
+                    incoming: r.value,
+                });
+            }
+        }
+        stats.unchanged += (chunk.len() - changed - chunk_conflicts) as u64;
+        if policy == ConflictPolicy::Fail && !stats.conflicts.is_empty() {
+            // The caller's savepoint rolls the rows inserted so far back.
+            return Err(StoreError::Conflicts(stats.conflicts));
+        }
+    }
+    Ok(stats)
+}
+
+pub(super) fn record_ingest(c: &Connection, ingest: &IngestRecord) -> Result<i64> {
+    c.execute(
+        "INSERT INTO ingests (file_name, format, rows_read, rows_inserted, rows_unchanged,
+                              rows_skipped, at)
+         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)",
+        params![
+            ingest.file_name,
+            ingest.format,
+            as_i64(ingest.rows_read),
+            as_i64(ingest.rows_inserted),
+            as_i64(ingest.rows_unchanged),
+            as_i64(ingest.rows_skipped),
+            ingest.at
+        ],
+    )
+    .db()?;
+    Ok(c.last_insert_rowid())
+}
+
+pub(super) fn replace_cells(c: &Connection, cells: &[CellRecord]) -> Result<ReplaceCellsStats> {
+    // Validate: unique labels, positive sides, known sensors, each sensor in one cell.
+    let mut labels = HashSet::new();
+    let mut owner: HashMap<&str, CellIndex> = HashMap::new();
+    for cell in cells {
+        if !labels.insert(cell.index) {
+            return Err(StoreError::Invalid {
+                what: "cell list",
+                detail: format!("cell {} listed twice", cell.index),
+            });
+        }
+        if !(cell.cell_size_m.is_finite() && cell.cell_size_m > 0.0) {
+            return Err(StoreError::Invalid {
+                what: "cell size",
+                detail: format!(
+                    "cell {}: {} m must be positive",
+                    cell.index, cell.cell_size_m
+                ),
+            });
+        }
+        for s in &cell.sensors {
+            if let Some(other) = owner.insert(s.as_str(), cell.index)
+                && other != cell.index
+            {
+                return Err(StoreError::Invalid {
+                    what: "cell list",
+                    detail: format!("sensor {s} is in cells {other} and {}", cell.index),
+                });
+            }
+        }
+    }
+    let stored = super::read::cells(c)?;
+    let sensor_keys = sensor_ids(c)?;
+    let mut stats = ReplaceCellsStats::default();
+    let normalised = |cell: &CellRecord| {
+        let mut cell = cell.clone();
+        cell.sensors.sort();
+        cell.sensors.dedup();
+        cell
+    };
+    let new_by_label: HashMap<CellIndex, CellRecord> =
+        cells.iter().map(|x| (x.index, normalised(x))).collect();
+    let mut delete = c
+        .prepare_cached("DELETE FROM cells WHERE label = ?1")
+        .db()?;
+    let mut kept = HashSet::new();
+    for old in &stored {
+        if new_by_label.get(&old.index) == Some(old) {
+            kept.insert(old.index);
+        } else {
+            delete.execute([old.index.to_string()]).db()?;
+            stats.removed += 1;
+        }
+    }
+    let mut insert_cell = c
+        .prepare_cached(
+            "INSERT INTO cells (label, i, j, lat, lon, cell_size_m) VALUES (?1, ?2, ?3, ?4, ?5, ?6)",
+        )
+        .db()?;
+    let mut insert_member = c
+        .prepare_cached("INSERT INTO cell_sensors (cell, sensor) VALUES (?1, ?2)")
+        .db()?;
+    let mut order: Vec<&CellRecord> = new_by_label.values().collect();
+    order.sort_by_key(|x| x.index);
+    for cell in order {
+        if kept.contains(&cell.index) {
+            continue;
+        }
+        insert_cell
+            .execute(params![
+                cell.index.to_string(),
+                cell.index.i,
+                cell.index.j,
+                cell.centre.lat(),
+                cell.centre.lon(),
+                cell.cell_size_m
+            ])
+            .db()?;
+        let cell_key = c.last_insert_rowid();
+        for s in &cell.sensors {
+            let sensor_key = sensor_keys
+                .get(s.as_str())
+                .ok_or_else(|| StoreError::Unknown {
+                    what: "sensor",
+                    name: s.to_string(),
+                })?;
+            insert_member.execute(params![cell_key, sensor_key]).db()?;
+        }
+        stats.added += 1;
+    }
+    stats.kept = kept.len();
+    Ok(stats)
+}
+
+pub(super) fn set_sensors_collected(
+    c: &Connection,
+    collected: &[(SensorId, UnixSeconds)],
+) -> Result<()> {
+    let keys = sensor_ids(c)?;
+    let mut stmt = c
+        .prepare_cached(
+            "INSERT INTO sensor_collection (sensor, last_collected) VALUES (?1, ?2)
+             ON CONFLICT (sensor) DO UPDATE
+             SET last_collected = MAX(last_collected, excluded.last_collected)",
+        )
+        .db()?;
+    for (s, t) in collected {
+        let key = keys
+            .get(s.as_str())
+            .ok_or_else(|| StoreError::UnknownSensor(s.clone()))?;
+        stmt.execute(params![key, t]).db()?;
+    }
+    Ok(())
+}
+
+/// Checks every number and the stop order of a mission before anything is written.
+fn validate_mission(m: &NewMission) -> Result<()> {
+    let e = &m.energy;
+    let p = &m.profile;
+    let w = m.weights;
+    for (name, v) in [
+        ("weight alpha", w[0]),
+        ("weight beta", w[1]),
+        ("weight gamma", w[2]),
+        ("weight delta", w[3]),
+        ("total_score", m.total_score),
+        ("base_alt_m", p.base_alt_m),
+        ("altitude_m", p.altitude_m),
+        ("cruise_speed_mps", p.cruise_speed_mps),
+        ("travel_j", e.travel_j),
+        ("hover_j", e.hover_j),
+        ("comm_j", e.comm_j),
+        ("return_j", e.return_j),
+        ("total_j", e.total_j),
+        ("budget_j", e.budget_j),
+        ("distance_m", e.distance_m),
+        ("flight_time_s", e.flight_time_s),
+        ("return_distance_m", m.return_distance_m),
+    ] {
+        finite("mission", name, v)?;
+    }
+    let mut orders = HashSet::new();
+    for s in &m.stops {
+        if !orders.insert(s.order) {
+            return Err(StoreError::Invalid {
+                what: "mission stops",
+                detail: format!("stop order {} used twice", s.order),
+            });
+        }
+        let cell = s.cell.to_string();
+        for (name, v) in [
+            ("score", s.score),
+            ("leg_distance_m", s.leg_distance_m),
+            ("leg_energy_j", s.leg_energy_j),
+            ("collection_s", s.collection_s),
+            ("hover_s", s.hover_s),
+            ("hover_j", s.hover_j),
+            ("comm_j", s.comm_j),
+        ] {
+            finite("mission stop", &format!("{cell} {name}"), v)?;
+        }
+        for (name, v) in ["F", "R", "A", "U"].iter().zip(s.terms.unwrap_or([0.0; 4])) {
+            finite("mission stop", &format!("{cell} {name}"), v)?;
+        }
+    }
+    Ok(())
+}
+
+pub(super) fn create_mission(c: &Connection, m: &NewMission) -> Result<MissionId> {
+    validate_mission(m)?;
+    let e = &m.energy;
+    let p = &m.profile;
+    c.execute(
+        "INSERT INTO missions (created_at, kind, planned_at, solver, seed,
+             weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form, total_score,
+             base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
+             travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m, flight_time_s,
+             return_distance_m, status, flown_at, summary_json)
+         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18,
+                 ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, NULL, NULL)",
+        params![
+            m.created_at,
+            m.kind.as_str(),
+            m.planned_at,
+            m.solver,
+            // The same 64 bits as a signed integer (SQLite has no unsigned 64-bit type).
+            m.seed as i64,
+            m.weights[0],
+            m.weights[1],
+            m.weights[2],
+            m.weights[3],
+            m.anomaly_form,
+            m.total_score,
+            p.base.lat(),
+            p.base.lon(),
+            p.base_alt_m,
+            p.altitude_m,
+            p.cruise_speed_mps,
+            e.travel_j,
+            e.hover_j,
+            e.comm_j,
+            e.return_j,
+            e.total_j,
+            e.budget_j,
+            e.distance_m,
+            e.flight_time_s,
+            m.return_distance_m,
+            MissionStatus::Planned.as_str(),
+        ],
+    )
+    .db()?;
+    let id = c.last_insert_rowid();
+    let mut stop = c
+        .prepare_cached(
+            "INSERT INTO mission_stops (mission, position, cell, lat, lon, score, freshness,
+                 redundancy, anomaly, uncertainty, leg_distance_m, leg_energy_j, collection_s,
+                 hover_s, hover_j, comm_j)
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)",
+        )
+        .db()?;
+    for s in &m.stops {
+        let t = s.terms;
+        stop.execute(params![
+            id,
+            s.order,
+            s.cell.to_string(),
+            s.centre.lat(),
+            s.centre.lon(),
+            s.score,
+            t.map(|t| t[0]),
+            t.map(|t| t[1]),
+            t.map(|t| t[2]),
+            t.map(|t| t[3]),
+            s.leg_distance_m,
+            s.leg_energy_j,
+            s.collection_s,
+            s.hover_s,
+            s.hover_j,
+            s.comm_j
+        ])
+        .db()?;
+    }
+    Ok(MissionId(id))
+}
+
+pub(super) fn record_visits(
+    c: &Connection,
+    mission: MissionId,
+    visits: &[VisitRecord],
+    flown_at: UnixSeconds,
+    amend: bool,
+) -> Result<()> {
+    let mut orders = HashSet::new();
+    for v in visits {
+        if !orders.insert(v.order) {
+            return Err(StoreError::Invalid {
+                what: "visit list",
+                detail: format!("visit order {} used twice in mission {mission}", v.order),
+            });
+        }
+        if let Some(e) = v.energy_j {
+            finite("visit energy", &v.cell.to_string(), e)?;
+        }
+    }
+    let stored: Option<(String, Option<i64>)> = c
+        .query_row(
+            "SELECT status, flown_at FROM missions WHERE id = ?1",
+            [mission.0],
+            |r| Ok((r.get(0)?, r.get(1)?)),
+        )
+        .optional()
+        .db()?;
+    let Some((status, stored_flown_at)) = stored else {
+        return Err(StoreError::Unknown {
+            what: "mission",
+            name: mission.to_string(),
+        });
+    };
+    if status == MissionStatus::Flown.as_str() && !amend {
+        return Err(StoreError::AlreadyFlown {
+            mission: mission.0,
+            // Migration 2 gives every flown mission a time; the fallback is for hand edits.
+            flown_at: stored_flown_at.unwrap_or(flown_at),
+        });
+    }
+    c.execute(
+        "UPDATE missions SET status = ?2, flown_at = ?3 WHERE id = ?1",
+        params![mission.0, MissionStatus::Flown.as_str(), flown_at],
+    )
+    .db()?;
+    c.execute("DELETE FROM visits WHERE mission = ?1", [mission.0])
+        .db()?;
+    let mut stmt = c
+        .prepare_cached(
+            "INSERT INTO visits (mission, position, cell, arrived_at, energy_j)
+             VALUES (?1, ?2, ?3, ?4, ?5)",
+        )
+        .db()?;
+    for v in visits {
+        stmt.execute(params![
+            mission.0,
+            v.order,
+            v.cell.to_string(),
+            v.arrived_at,
+            v.energy_j
+        ])
+        .db()?;
+    }
+    Ok(())
+}
+
+pub(super) fn config_set(c: &Connection, key: &str, value: &str) -> Result<()> {
+    c.execute(
+        "INSERT INTO config (key, value) VALUES (?1, ?2)
+         ON CONFLICT (key) DO UPDATE SET value = excluded.value",
+        [key, value],
+    )
+    .db()?;
+    Ok(())
+}
+
+pub(super) fn blob_put(c: &Connection, key: &str, value: &[u8]) -> Result<()> {
+    c.execute(
+        "INSERT INTO blobs (key, value) VALUES (?1, ?2)
+         ON CONFLICT (key) DO UPDATE SET value = excluded.value",
+        params![key, value],
+    )
+    .db()?;
+    Ok(())
+}
+
+pub(super) fn upsert_cell_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
+    validate_metadata(metadata)?;
+    write_metadata(c, metadata)
+}
+/// Checks every number in `metadata` before anything is written.
+fn validate_metadata(metadata: &[CellMetadata]) -> Result<()> {
+    let mut cells = HashSet::new();
+    for md in metadata {
+        let cell = md.cell.to_string();
+        if !cells.insert(md.cell) {
+            return Err(StoreError::Invalid {
+                what: "cell metadata",
+                detail: format!("cell {cell} listed twice"),
+            });
+        }
+        for (name, v) in [
+            ("pending_bytes", md.pending_bytes),
+            ("expected_energy_j", md.expected_energy_j),
+        ] {
+            if let Some(v) = v {
+                finite("cell metadata", &format!("{cell} {name}"), v)?;
+            }
+        }
+        if let Some(s) = &md.scores {
+            for (name, v) in [
+                ("F", s.freshness),
+                ("R", s.redundancy),
+                ("A", s.anomaly),
+                ("U", s.uncertainty),
+                ("S", s.score),
+            ] {
+                finite("cell scores", &format!("{cell} {name}"), v)?;
+            }
+        }
+        for p in &md.class_probabilities {
+            if !(0.0..=1.0).contains(&p.probability) {
+                return Err(StoreError::Invalid {
+                    what: "class probability",
+                    detail: format!(
+                        "cell {cell} class {:?}: {} not in [0, 1]",
+                        p.class, p.probability
+                    ),
+                });
+            }
+        }
+        for c in &md.correlations {
+            if !(-1.0..=1.0).contains(&c.correlation) {
+                return Err(StoreError::Invalid {
+                    what: "correlation",
+                    detail: format!(
+                        "cell {cell} neighbour {} {}: {} not in [-1, 1]",
+                        c.neighbour, c.modality, c.correlation
+                    ),
+                });
+            }
+        }
+        for a in &md.anomalies {
+            finite(
+                "anomaly",
+                &format!("{cell} {} t={}", a.modality, a.t),
+                a.anomaly,
+            )?;
+        }
+        for s in &md.summaries {
+            let st = &s.stats;
+            for (name, v) in [
+                ("mean", st.mean),
+                ("min", st.min),
+                ("max", st.max),
+                ("latest", st.latest_value),
+                ("std", st.std.unwrap_or(0.0)),
+            ] {
+                finite("summary", &format!("{cell} {} {name}", s.modality), v)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Writes validated metadata.
+fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
+    let cell_keys = cell_ids(c)?;
+    let modality_keys = modality_ids(c)?;
+    let cell_key = |c: &CellIndex| {
+        cell_keys
+            .get(&c.to_string())
+            .copied()
+            .ok_or_else(|| StoreError::Unknown {
+                what: "cell",
+                name: c.to_string(),
+            })
+    };
+    let modality_key = |m: &Modality| {
+        modality_keys
+            .get(m.as_str())
+            .copied()
+            .ok_or_else(|| StoreError::UnknownModality(m.clone()))
+    };
+    let mut row = c
+        .prepare_cached(
+            "INSERT OR REPLACE INTO cell_metadata (cell, last_collected, pending_bytes,
+             expected_energy_j, freshness, redundancy, anomaly, uncertainty, score, computed_at)
+         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)",
+        )
+        .db()?;
+    let mut clear_probs = c
+        .prepare_cached("DELETE FROM cell_class_probabilities WHERE cell = ?1")
+        .db()?;
+    let mut prob = c.prepare_cached(
+        "INSERT INTO cell_class_probabilities (cell, k, class, probability) VALUES (?1, ?2, ?3, ?4)",
+    ).db()?;
+    let mut summary = c
+        .prepare_cached(
+            "INSERT OR REPLACE INTO cell_summaries (cell, modality, count, mean, std, min, max,
+             latest_t, latest_value)
+         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+        )
+        .db()?;
+    let mut correlation = c.prepare_cached(
+        "INSERT OR REPLACE INTO cell_correlations (cell, neighbour, modality, correlation, overlap)
+         VALUES (?1, ?2, ?3, ?4, ?5)",
+    ).db()?;
+    let mut anomaly = c
+        .prepare_cached(
+            "INSERT OR REPLACE INTO cell_anomalies (cell, modality, t, anomaly, flagged)
+         VALUES (?1, ?2, ?3, ?4, ?5)",
+        )
+        .db()?;
+    for md in metadata {
+        let ck = cell_key(&md.cell)?;
+        let s = md.scores.as_ref();
+        row.execute(params![
+            ck,
+            md.last_collected,
+            md.pending_bytes,
+            md.expected_energy_j,
+            s.map(|s| s.freshness),
+            s.map(|s| s.redundancy),
+            s.map(|s| s.anomaly),
+            s.map(|s| s.uncertainty),
+            s.map(|s| s.score),
+            s.map(|s| s.computed_at)
+        ])
+        .db()?;
+        clear_probs.execute([ck]).db()?;
+        for (k, p) in md.class_probabilities.iter().enumerate() {
+            prob.execute(params![ck, k as i64, p.class, p.probability])
+                .db()?;
+        }
+        for su in &md.summaries {
+            let st = &su.stats;
+            summary
+                .execute(params![
+                    ck,
+                    modality_key(&su.modality)?,
+                    i64::try_from(st.count).unwrap_or(i64::MAX),
+                    st.mean,
+                    st.std,
+                    st.min,
+                    st.max,
+                    st.latest_t,
+                    st.latest_value
+                ])
+                .db()?;
+        }
+        for co in &md.correlations {
+            correlation
+                .execute(params![
+                    ck,
+                    cell_key(&co.neighbour)?,
+                    modality_key(&co.modality)?,
+                    co.correlation,
+                    i64::try_from(co.overlap).unwrap_or(i64::MAX)
+                ])
+                .db()?;
+        }
+        for a in &md.anomalies {
+            anomaly
+                .execute(params![
+                    ck,
+                    modality_key(&a.modality)?,
+                    a.t,
+                    a.anomaly,
+                    a.flagged
+                ])
+                .db()?;
+        }
+    }
+    Ok(())
+}
