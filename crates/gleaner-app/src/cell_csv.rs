@@ -24,7 +24,10 @@ pub fn read(path: &Path) -> Result<Vec<CellRow>> {
         .next()
         .map(|(_, h)| h.split(',').map(|c| c.trim().to_string()).collect())
         .ok_or_else(|| {
-            AppError::Invalid(format!("{}: empty file: expected a header line", path.display()))
+            AppError::Invalid(format!(
+                "{}: empty file: expected a header line",
+                path.display()
+            ))
         })?;
     let mut rows = Vec::new();
     for (k, line) in lines {

@@ -3,8 +3,8 @@
 //! its energy breakdown, all stored in one transaction.
 
 use gleaner_energy::CellVisit;
-use gleaner_energy::exploration::{ExplorationOptions, plan_exploration};
 use gleaner_field::{LocalPoint, UnixSeconds};
+use gleaner_mission::exploration::{ExplorationOptions, plan_exploration};
 use gleaner_store::{MissionId, MissionKind, NewMission, Store, StoreWrite};
 
 use crate::error::{AppError, Result};

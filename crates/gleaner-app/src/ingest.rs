@@ -10,7 +10,7 @@ use gleaner_ingest::{
 };
 use gleaner_store::{
     ConflictPolicy, IngestRecord, InsertStats, ModalityRecord, Reading, ReadingBatch, Store,
-    StoreRead, StoreWrite,
+    StoreWrite,
 };
 
 use crate::error::{AppError, Result};
@@ -100,7 +100,10 @@ impl Parsed {
     }
     /// The latest reading's time, seconds.
     pub fn latest(&self) -> Option<UnixSeconds> {
-        self.files.iter().flat_map(|f| f.2.rows.iter().map(|r| r.t)).max()
+        self.files
+            .iter()
+            .flat_map(|f| f.2.rows.iter().map(|r| r.t))
+            .max()
     }
     /// Every sensor with a reading, sorted, without duplicates.
     pub fn sensors(&self) -> Vec<SensorId> {
@@ -327,10 +330,7 @@ pub fn ingest<S: Store>(
     let latest = parsed.latest();
     let now = request.now.or(latest).unwrap_or(clock_now);
     let settings = project.settings().clone();
-    progress.start(
-        &format!("storing {} readings", parsed.len()),
-        None,
-    );
+    progress.start(&format!("storing {} readings", parsed.len()), None);
     let (stats, refreshed) = project
         .store_mut()
         .write(|tx| store_parsed(tx, &parsed, policy, clock_now, now, &settings))?;

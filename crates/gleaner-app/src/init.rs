@@ -161,7 +161,11 @@ fn check_grid_size(sensors: &[Sensor], base: LatLon, settings: &Settings) -> Res
 }
 
 fn read_sensors(request: &InitRequest) -> Result<Vec<Sensor>> {
-    let utm = request.utm_zone.as_deref().map(parse_utm_zone).transpose()?;
+    let utm = request
+        .utm_zone
+        .as_deref()
+        .map(parse_utm_zone)
+        .transpose()?;
     let (inputs, _) = if request.hubbard_brook {
         read_hubbard_brook_sensors(&request.sensors)?
     } else {
@@ -183,7 +187,10 @@ fn read_sensors(request: &InitRequest) -> Result<Vec<Sensor>> {
 }
 
 /// Writes the sensors and the grid into the project's store, in one transaction.
-pub fn init_store<S: Store>(project: &mut Project<S>, request: &InitRequest) -> Result<InitOutcome> {
+pub fn init_store<S: Store>(
+    project: &mut Project<S>,
+    request: &InitRequest,
+) -> Result<InitOutcome> {
     let sensors = read_sensors(request)?;
     let settings = project.settings().clone();
     let field = Field::build(&sensors, settings.base()?, &settings.field_config())
@@ -270,4 +277,23 @@ pub fn relative_to(path: &Path, dir: &Path) -> String {
         rel.push(c.as_os_str());
     }
     rel.display().to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sensors_path_is_kept_relative_to_the_project() {
+        let tmp = tempfile::tempdir().unwrap();
+        let data = tmp.path().join("data");
+        let project = tmp.path().join("farms").join("north");
+        std::fs::create_dir_all(&data).unwrap();
+        std::fs::create_dir_all(&project).unwrap();
+        let sensors = data.join("sensors.csv");
+        std::fs::write(&sensors, "id,lat,lon\n").unwrap();
+        let rel = relative_to(&sensors, &project);
+        assert_eq!(rel, "../../data/sensors.csv");
+        assert!(project.join(&rel).exists());
+    }
 }

@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 
 use gleaner_field::{Field, Sensor, UnixSeconds};
-use gleaner_store::{Store, StoreRead};
+use gleaner_store::Store;
 use gleaner_utility::{OwnedSeries, Series, TimeGrid, cell_series};
 
 use crate::error::Result;

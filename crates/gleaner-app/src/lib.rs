@@ -68,7 +68,7 @@ pub use gleaner_ingest::OnError;
 pub use gleaner_ingest::time::{format_rfc3339, parse_timestamp};
 pub use gleaner_mission::Planner;
 pub use gleaner_store::{
-    SqliteStore, Store, StoreRead, StoreWrite,
     CellMetadata, CellScores, EnergyBreakdown, FlightProfile, MissionId, MissionKind,
-    MissionRecord, MissionStatus, NewMission, StopRecord, VisitRecord,
+    MissionRecord, MissionStatus, NewMission, SqliteStore, StopRecord, Store, StoreRead,
+    StoreWrite, VisitRecord,
 };

@@ -3,13 +3,13 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use gleaner_energy::{CellService, MissionEnergy, MissionEnergyModel};
 use gleaner_field::{LocalPoint, UnixSeconds};
 use gleaner_mission::{Candidate, MissionPlan, PlanOptions, Planner, plan_mission};
 use gleaner_store::{
     EnergyBreakdown, FlightProfile, MissionId, MissionKind, NewMission, StopRecord, Store,
+    StoreWrite,
 };
 
 use crate::cell_csv;
@@ -222,7 +222,9 @@ pub fn plan<S: Store>(
         Some(p) => p,
         None => parse_planner(&settings.planner.solver)?,
     };
-    let time_limit_s = request.time_limit_s.unwrap_or(settings.planner.time_limit_s);
+    let time_limit_s = request
+        .time_limit_s
+        .unwrap_or(settings.planner.time_limit_s);
     if !(time_limit_s.is_finite() && (0.0..=86_400.0).contains(&time_limit_s)) {
         return Err(AppError::Invalid(format!(
             "time limit {time_limit_s} s: expected a number of seconds in [0, 86400]"
@@ -236,7 +238,14 @@ pub fn plan<S: Store>(
                 AppError::Invalid("no readings and no mission time: cannot tell the time".into())
             })?;
             let s = read_scores(path, &k)?;
-            (Some(k), None, s, t, "n/a (scores from file)".to_string(), [0.0; 4])
+            (
+                Some(k),
+                None,
+                s,
+                t,
+                "n/a (scores from file)".to_string(),
+                [0.0; 4],
+            )
         }
         None => {
             let scoring = score::compute(
@@ -275,10 +284,12 @@ pub fn plan<S: Store>(
         .collect();
     let options = PlanOptions {
         planner,
-        time_limit: Duration::from_secs_f64(time_limit_s),
         seed,
         max_iterations: request.max_iterations,
-    };
+        ..PlanOptions::default()
+    }
+    .with_time_limit_secs(time_limit_s)
+    .map_err(|e| AppError::core("planner", e))?;
     let base = LocalPoint::new(0.0, 0.0);
     let plan = plan_mission(&model, base, &candidates, &options)
         .map_err(|e| AppError::core("planner", e))?;

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use gleaner_field::{Field, Sensor};
-use gleaner_store::{SqliteStore, Store, StoreRead};
+use gleaner_store::{SqliteStore, Store};
 
 use crate::error::{AppError, Result};
 use crate::settings::Settings;
@@ -87,8 +87,12 @@ impl<S: Store> Project<S> {
                 "the project has no sensors (run `gleaner init`)".into(),
             ));
         }
-        let field = Field::build(&sensors, self.settings.base()?, &self.settings.field_config())
-            .map_err(|e| AppError::core("cell grid", e))?;
+        let field = Field::build(
+            &sensors,
+            self.settings.base()?,
+            &self.settings.field_config(),
+        )
+        .map_err(|e| AppError::core("cell grid", e))?;
         Ok((sensors, field))
     }
 }

@@ -5,7 +5,7 @@ use std::collections::{HashMap, HashSet};
 
 use gleaner_field::{CellIndex, SensorId, UnixSeconds};
 use gleaner_ingest::time::format_rfc3339;
-use gleaner_store::{ConflictPolicy, MissionId, MissionStatus, Store, StoreRead, StoreWrite, VisitRecord};
+use gleaner_store::{ConflictPolicy, MissionId, MissionStatus, Store, StoreWrite, VisitRecord};
 
 use crate::error::{AppError, Result};
 use crate::ingest::{IngestRequest, Parsed, parse_files, store_parsed};
@@ -99,7 +99,12 @@ pub(crate) fn record_parsed<S: Store>(
     let at = request.at.unwrap_or(mission.mission.planned_at);
     let labels: Vec<String> = match &request.cells {
         Some(c) => c.clone(),
-        None => mission.mission.stops.iter().map(|s| s.cell.to_string()).collect(),
+        None => mission
+            .mission
+            .stops
+            .iter()
+            .map(|s| s.cell.to_string())
+            .collect(),
     };
     let cells = project.store().cells()?;
     let mut visits = Vec::new();
@@ -112,8 +117,11 @@ pub(crate) fn record_parsed<S: Store>(
     }
     let mut seen = HashSet::new();
     for (order, label) in labels.iter().enumerate() {
-        let index = CellIndex::parse(label.trim())
-            .map_err(|e| AppError::Invalid(format!("cell {label:?}: {e}")))?;
+        let index = CellIndex::parse(label.trim()).ok_or_else(|| {
+            AppError::Invalid(format!(
+                "cell {label:?}: expected a cell id like x3y-1 (see `gleaner cells`)"
+            ))
+        })?;
         let cell = cells
             .iter()
             .find(|c| c.index == index)
@@ -134,31 +142,31 @@ pub(crate) fn record_parsed<S: Store>(
     }
     let visited: HashSet<&SensorId> = collected.iter().map(|(s, _)| s).collect();
     if let Some(parsed) = &parsed {
-            for (path, _, readings, _) in &parsed.files {
-                for row in &readings.rows {
-                    let Some(sensor) = readings.sensors.get(row.sensor as usize) else {
-                        continue;
-                    };
-                    if !visited.contains(sensor) {
-                        return Err(AppError::Invalid(format!(
-                            "{}: sensor {sensor} is in cell {}, which this flight did not visit \
+        for (path, _, readings, _) in &parsed.files {
+            for row in &readings.rows {
+                let Some(sensor) = readings.sensors.get(row.sensor as usize) else {
+                    continue;
+                };
+                if !visited.contains(sensor) {
+                    return Err(AppError::Invalid(format!(
+                        "{}: sensor {sensor} is in cell {}, which this flight did not visit \
                              (visited: {}); nothing was recorded",
-                            path.display(),
-                            cell_of.get(sensor).map_or("?".into(), ToString::to_string),
-                            labels.join(",")
-                        )));
-                    }
-                    if row.t > at {
-                        return Err(AppError::Invalid(format!(
-                            "{}: reading of {sensor} at {} is after the collection time {}; \
+                        path.display(),
+                        cell_of.get(sensor).map_or("?".into(), ToString::to_string),
+                        labels.join(",")
+                    )));
+                }
+                if row.t > at {
+                    return Err(AppError::Invalid(format!(
+                        "{}: reading of {sensor} at {} is after the collection time {}; \
                              nothing was recorded",
-                            path.display(),
-                            format_rfc3339(row.t),
-                            format_rfc3339(at)
-                        )));
-                    }
+                        path.display(),
+                        format_rfc3339(row.t),
+                        format_rfc3339(at)
+                    )));
                 }
             }
+        }
     }
     let settings = project.settings().clone();
     let id = request.mission;
@@ -185,4 +193,3 @@ pub(crate) fn record_parsed<S: Store>(
         amended: mission.status == MissionStatus::Flown,
     })
 }
-

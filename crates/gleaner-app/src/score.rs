@@ -6,8 +6,7 @@ use std::path::PathBuf;
 
 use gleaner_field::{CellId, Field, Modality, UnixSeconds};
 use gleaner_store::{
-    AnomalyRecord, CellMetadata, CellScores, ClassProbability, Correlation, Store, StoreRead,
-    StoreWrite,
+    AnomalyRecord, CellMetadata, CellScores, ClassProbability, Correlation, Store, StoreWrite,
 };
 use gleaner_utility::{
     CellInputs, CellTerms, ClassThresholds, ConditionConfig, ConditionModel, OwnedSeries, Series,
@@ -170,7 +169,12 @@ pub fn compute<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result
                 .into_iter()
                 .map(|r| (r.cell, r.values))
                 .collect();
-            let labels: Vec<String> = k.field.cells().iter().map(|c| c.index.to_string()).collect();
+            let labels: Vec<String> = k
+                .field
+                .cells()
+                .iter()
+                .map(|c| c.index.to_string())
+                .collect();
             let p = validate_probabilities(&labels, &rows)
                 .map_err(|e| AppError::Invalid(format!("{}: {e}", path.display())))?;
             let kk = p.first().map_or(0, Vec::len);
@@ -220,9 +224,7 @@ pub fn score<S: Store>(project: &mut Project<S>, request: &ScoreRequest) -> Resu
     let scoring = compute(project, request)?;
     if !request.dry_run {
         let rows = metadata_rows(project, &scoring, &HashMap::new());
-        project
-            .store_mut()
-            .write(|tx| write_scoring(tx, rows))?;
+        project.store_mut().write(|tx| write_scoring(tx, rows))?;
     }
     Ok(scoring)
 }

@@ -184,144 +184,6 @@ impl Default for UtilitySection {
     }
 }
 
-/// `[energy]`
-    #[serde(default)]
-    pub energy: EnergySection,
-    /// `[planner]`
-    #[serde(default)]
-    pub planner: PlannerSection,
-}
-
-/// `[project]`: name and database.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct ProjectSection {
-    /// A display name.
-    pub name: String,
-    /// SQLite database file, relative to the project directory.
-    pub database: PathBuf,
-}
-
-/// `[field]`: base station and grid.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct FieldSection {
-    /// Base station latitude, WGS84 degrees.
-    pub base_lat: f64,
-    /// Base station longitude, WGS84 degrees.
-    pub base_lon: f64,
-    /// Base station altitude, metres.
-    #[serde(default)]
-    pub base_alt_m: f64,
-    /// Cell side, metres (the UAV's ground coverage).
-    pub cell_size_m: f64,
-    /// Neighbour fallback: k nearest non-empty cells for a cell with no 8-neighbour.
-    #[serde(default = "default_k")]
-    pub neighbour_k: usize,
-    /// Neighbour fallback radius, metres.
-    #[serde(default = "default_radius")]
-    pub neighbour_radius_m: f64,
-}
-
-fn default_k() -> usize {
-    FieldConfig::default().fallback_k
-}
-fn default_radius() -> f64 {
-    FieldConfig::default().fallback_radius_m
-}
-
-/// `[sensors]`: where the sensor table came from.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct SensorsSection {
-    /// The sensors file given to `init`, relative to the project directory (or absolute when
-    /// it is on another volume).
-    pub file: String,
-    /// Its UTM zone when positions were read as easting/northing (e.g. `11N`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub utm_zone: Option<String>,
-}
-
-/// `[ingest]`: how pending data volume is estimated.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct IngestSection {
-    /// Bytes one reading of one modality takes in a sensor's log (default 16).
-    pub bytes_per_reading: f64,
-    /// Logging interval, seconds, assumed when a series has fewer than 2 readings (default 86 400).
-    pub default_interval_s: f64,
-}
-
-impl Default for IngestSection {
-    fn default() -> Self {
-        Self {
-            bytes_per_reading: 16.0,
-            default_interval_s: 86_400.0,
-        }
-    }
-}
-
-/// `[utility]`: the score S = alpha·F + beta·A + gamma·U − delta·R (SPEC §2).
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct UtilitySection {
-    /// Weight of freshness F (default 1).
-    pub alpha: f64,
-    /// Weight of anomaly A (default 1).
-    pub beta: f64,
-    /// Weight of model uncertainty U (default 1).
-    pub gamma: f64,
-    /// Weight of redundancy R (default 1).
-    pub delta: f64,
-    /// Freshness half-life, seconds (default 259 200 = 3 days); lambda = ln 2 / half-life.
-    pub freshness_half_life_s: f64,
-    /// History window for R and A, days (default: all history).
-    pub history_window_days: Option<f64>,
-    /// Fewest common timestamps for a correlation to count (default 10).
-    pub min_overlap: usize,
-    /// Added to sigma in A, in the modality's unit (default 1e-6).
-    pub epsilon: f64,
-    /// `raw` (default, the paper's) or `bounded` (1 − exp(−A/kappa)).
-    pub anomaly_form: String,
-    /// kappa of the bounded anomaly, standard deviations (default 3).
-    pub anomaly_kappa: f64,
-    /// A collection with A^m at or above this is flagged in the anomaly history (default 3).
-    pub anomaly_flag: f64,
-    /// omega: redundancy weight per modality name (default equal; missing names weigh 0).
-    pub redundancy_weights: Option<std::collections::BTreeMap<String, f64>>,
-    /// phi: anomaly weight per modality name (default equal; missing names weigh 0).
-    pub anomaly_weights: Option<std::collections::BTreeMap<String, f64>>,
-    /// Modality the condition classes come from (default `vw@30cm`, else the first `vw@...`).
-    pub condition_modality: Option<String>,
-    /// Number of condition classes K (default 3: dry / adequate / wet).
-    pub condition_classes: usize,
-    /// K − 1 class thresholds in the modality's unit (default: quantiles of the history).
-    pub condition_thresholds: Option<Vec<f64>>,
-}
-
-impl Default for UtilitySection {
-    fn default() -> Self {
-        Self {
-            alpha: 1.0,
-            beta: 1.0,
-            gamma: 1.0,
-            delta: 1.0,
-            freshness_half_life_s: 259_200.0,
-            history_window_days: None,
-            min_overlap: 10,
-            epsilon: 1e-6,
-            anomaly_form: "raw".into(),
-            anomaly_kappa: 3.0,
-            anomaly_flag: 3.0,
-            redundancy_weights: None,
-            anomaly_weights: None,
-            condition_modality: None,
-            condition_classes: 3,
-            condition_thresholds: None,
-        }
-    }
-}
-
 /// `[energy]`: the UAV energy model (SPEC §3). Every field left out takes the preset's value.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -527,7 +389,10 @@ impl Settings {
     pub fn validate(&self) -> Result<()> {
         self.base()?;
         if !self.field.base_alt_m.is_finite() {
-            bail!("field.base_alt_m = {} must be a finite number of metres", self.field.base_alt_m);
+            bail!(
+                "field.base_alt_m = {} must be a finite number of metres",
+                self.field.base_alt_m
+            );
         }
         if !(self.field.cell_size_m.is_finite() && self.field.cell_size_m >= 0.5) {
             bail!(
@@ -545,14 +410,19 @@ impl Settings {
             );
         }
         if self.field.neighbour_k > 64 {
-            bail!("field.neighbour_k = {} must be at most 64", self.field.neighbour_k);
+            bail!(
+                "field.neighbour_k = {} must be at most 64",
+                self.field.neighbour_k
+            );
         }
         if !(self.ingest.bytes_per_reading.is_finite()
             && self.ingest.bytes_per_reading > 0.0
             && self.ingest.default_interval_s.is_finite()
             && self.ingest.default_interval_s > 0.0)
         {
-            bail!("ingest.bytes_per_reading and ingest.default_interval_s must be positive numbers");
+            bail!(
+                "ingest.bytes_per_reading and ingest.default_interval_s must be positive numbers"
+            );
         }
         if !(2..=20).contains(&self.utility.condition_classes) {
             bail!(
@@ -582,9 +452,8 @@ impl Settings {
 
     /// The base station position.
     pub fn base(&self) -> Result<LatLon> {
-        LatLon::new(self.field.base_lat, self.field.base_lon).map_err(|e| {
-            AppError::Invalid(format!("field.base_lat / field.base_lon: {e}"))
-        })
+        LatLon::new(self.field.base_lat, self.field.base_lon)
+            .map_err(|e| AppError::Invalid(format!("field.base_lat / field.base_lon: {e}")))
     }
 
     /// The core grid configuration.

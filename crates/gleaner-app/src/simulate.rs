@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use gleaner_field::{SensorId, UnixSeconds};
 use gleaner_ingest::{IngestReport, Readings, Row};
-use gleaner_store::{MissionId, Store, StoreRead};
+use gleaner_store::{MissionId, Store};
 
 use crate::error::{AppError, Result};
 use crate::ingest::{Format, IngestRequest, Parsed, parse_files};
@@ -129,8 +129,11 @@ pub fn fly<S: Store>(
         .collect();
     // The last collection, or the latest reading already stored for a sensor never flown to
     // (its history came from an earlier ingest).
-    let last: HashMap<SensorId, UnixSeconds> =
-        project.store().sensor_last_collected()?.into_iter().collect();
+    let last: HashMap<SensorId, UnixSeconds> = project
+        .store()
+        .sensor_last_collected()?
+        .into_iter()
+        .collect();
     let readings = truth.brought_back(&sensors, &last, at);
     let report = IngestReport {
         rows_read: readings.rows.len() as u64,

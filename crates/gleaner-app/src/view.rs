@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 
 use gleaner_field::{CellId, CellIndex, LatLon, SensorId};
-use gleaner_store::{CellMetadata, MissionId, MissionRecord, Store, StoreRead};
+use gleaner_store::{CellMetadata, MissionId, MissionRecord, Store};
 
 use crate::error::{AppError, Result};
 use crate::project::Project;
@@ -55,7 +55,9 @@ pub fn field_view<S: Store>(project: &Project<S>) -> Result<FieldView> {
         .iter()
         .enumerate()
         .map(|(k, c)| {
-            let corners = field.cell_corners(CellId(k as u32)).map(|p| frame.inverse(p));
+            let corners = field
+                .cell_corners(CellId(k as u32))
+                .map(|p| frame.inverse(p));
             let mut ids: Vec<SensorId> = c.sensors.iter().map(|&s| sensors[s].id.clone()).collect();
             ids.sort();
             CellView {

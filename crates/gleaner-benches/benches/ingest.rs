@@ -75,6 +75,7 @@ fn long_csv(c: &mut Criterion) {
 fn caf_into_fresh_db(files: &[PathBuf], db: &std::path::Path) -> u64 {
     use gleaner_store::{
         ConflictPolicy, ModalityRecord, Reading, ReadingBatch, SensorRecord, SqliteStore, Store,
+        StoreError, StoreWrite,
     };
     let mut all = gleaner_ingest::Readings::default();
     for f in files {
@@ -95,7 +96,9 @@ fn caf_into_fresh_db(files: &[PathBuf], db: &std::path::Path) -> u64 {
             source: "bench".into(),
         })
         .collect();
-    store.upsert_sensors(&sensors).expect("sensors");
+    store
+        .write(|tx| tx.upsert_sensors(&sensors))
+        .expect("sensors");
     let modalities: Vec<ModalityRecord> = all
         .modalities
         .iter()
@@ -119,7 +122,11 @@ fn caf_into_fresh_db(files: &[PathBuf], db: &std::path::Path) -> u64 {
             .collect(),
     };
     store
-        .ingest(&modalities, &batch, ConflictPolicy::Fail, &[])
+        .write(|tx| {
+            tx.upsert_modalities(&modalities)?;
+            tx.insert_readings(&batch, ConflictPolicy::Fail)
+        })
+        .map_err(|e: StoreError| e)
         .expect("insert")
         .inserted
 }

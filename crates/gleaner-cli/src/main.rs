@@ -471,7 +471,7 @@ fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
 }
 
 fn parse_time(s: &str) -> Result<i64, String> {
-    gleaner_ingest::time::parse_timestamp(s).ok_or_else(|| {
+    gleaner_app::parse_timestamp(s).ok_or_else(|| {
         format!("expected RFC 3339 (2014-03-01T12:00:00Z) or a date (2014-03-01), got {s:?}")
     })
 }
@@ -805,7 +805,10 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 None => {
                     let all = app::missions(&p)?;
-                    let docs: Vec<_> = all.iter().map(gleaner_wire::convert::stored_mission).collect();
+                    let docs: Vec<_> = all
+                        .iter()
+                        .map(gleaner_wire::convert::stored_mission)
+                        .collect();
                     emit(json, &docs, "serialising missions", || missions_table(&all))?;
                 }
             }
@@ -865,7 +868,10 @@ fn run(cli: Cli) -> Result<()> {
                 sensors,
                 farm.reading_count(),
                 farm.events().len(),
-                files.sensors.parent().map_or(String::new(), |p| p.display().to_string())
+                files
+                    .sensors
+                    .parent()
+                    .map_or(String::new(), |p| p.display().to_string())
             );
         }
         Command::Demo {

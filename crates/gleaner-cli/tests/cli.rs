@@ -674,10 +674,24 @@ fn record_refuses_a_second_record_and_foreign_readings_unless_asked() {
     let dir = small_project();
     let p = s(dir.path());
     ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
-    ok(&["plan", "--project", p, "--at", "2014-01-25", "--solver", "exact"]);
-    let m: serde_json::Value =
-        serde_json::from_str(&ok(&["missions", "--project", p, "--mission", "1", "--json"]))
-            .expect("json");
+    ok(&[
+        "plan",
+        "--project",
+        p,
+        "--at",
+        "2014-01-25",
+        "--solver",
+        "exact",
+    ]);
+    let m: serde_json::Value = serde_json::from_str(&ok(&[
+        "missions",
+        "--project",
+        p,
+        "--mission",
+        "1",
+        "--json",
+    ]))
+    .expect("json");
     let visited: Vec<String> = m["stops"]
         .as_array()
         .expect("stops")
@@ -700,20 +714,47 @@ fn record_refuses_a_second_record_and_foreign_readings_unless_asked() {
         )
         .expect("write");
         let err = fail(&["record", "--project", p, "--mission", "1", s(&file)]);
-        assert!(err.contains(sensor) && err.contains("did not visit"), "{err}");
+        assert!(
+            err.contains(sensor) && err.contains("did not visit"),
+            "{err}"
+        );
     }
     let before = ok(&["missions", "--project", p]);
     assert!(before.contains("planned"), "{before}");
     ok(&["record", "--project", p, "--mission", "1"]);
-    let err = fail(&["record", "--project", p, "--mission", "1", "--at", "2014-01-26"]);
-    assert!(err.contains("already recorded") && err.contains("--amend"), "{err}");
+    let err = fail(&[
+        "record",
+        "--project",
+        p,
+        "--mission",
+        "1",
+        "--at",
+        "2014-01-26",
+    ]);
+    assert!(
+        err.contains("already recorded") && err.contains("--amend"),
+        "{err}"
+    );
     let amended = ok(&[
-        "record", "--project", p, "--mission", "1", "--at", "2014-01-26", "--amend",
+        "record",
+        "--project",
+        p,
+        "--mission",
+        "1",
+        "--at",
+        "2014-01-26",
+        "--amend",
     ]);
     assert!(amended.contains("(amended)"), "{amended}");
-    let m: serde_json::Value =
-        serde_json::from_str(&ok(&["missions", "--project", p, "--mission", "1", "--json"]))
-            .expect("json");
+    let m: serde_json::Value = serde_json::from_str(&ok(&[
+        "missions",
+        "--project",
+        p,
+        "--mission",
+        "1",
+        "--json",
+    ]))
+    .expect("json");
     assert_eq!(m["status"], "flown");
     assert_eq!(m["flown_at"], "2014-01-26T00:00:00Z");
 }
@@ -745,7 +786,16 @@ fn dry_runs_write_nothing() {
     ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
     let db = dir.path().join("gleaner.db");
     let before = std::fs::read(&db).expect("db");
-    ok(&["plan", "--project", p, "--at", "2014-01-25", "--solver", "exact", "--dry-run"]);
+    ok(&[
+        "plan",
+        "--project",
+        p,
+        "--at",
+        "2014-01-25",
+        "--solver",
+        "exact",
+        "--dry-run",
+    ]);
     ok(&["explore", "--project", p, "--dry-run"]);
     let missions = ok(&["missions", "--project", p, "--json"]);
     assert_eq!(missions.trim(), "[]");
@@ -764,7 +814,10 @@ fn exploration_sorties_export_like_any_mission() {
         serde_json::from_str(&std::fs::read_to_string(out.join("mission.plan")).expect("plan"))
             .expect("json");
     let items = plan["mission"]["items"].as_array().expect("items");
-    assert_eq!(items[1]["command"], 178, "the cruise speed is commanded first");
+    assert_eq!(
+        items[1]["command"], 178,
+        "the cruise speed is commanded first"
+    );
     ok(&["map-exploration", "--project", p]);
     assert!(dir.path().join("missions/exploration.png").exists());
 }

@@ -1,8 +1,7 @@
-//! Benchmarks: breakdown of a 1,000-cell route, a 1,000 x 1,000 travel-cost matrix and the
-//! exploration plan of 1,000 cells.
+//! Benchmarks: breakdown of a 1,000-cell route and a 1,000 x 1,000 travel-cost matrix (the
+//! exploration plan's benchmark lives in `gleaner-mission`).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use gleaner_energy::exploration::{ExplorationOptions, plan_exploration};
 use gleaner_energy::{CellVisit, EnergyConfig, MissionEnergyModel};
 use gleaner_field::LocalPoint;
 use std::hint::black_box;
@@ -35,17 +34,6 @@ fn bench(c: &mut Criterion) {
     c.bench_function("travel_cost_matrix_1000", |b| {
         b.iter(|| model.travel_cost_matrix(black_box(&pts)))
     });
-    let service = vec![model.service_energy_j(30.0); pts.len()];
-    let options = ExplorationOptions::default();
-    let mut group = c.benchmark_group("exploration");
-    group.sample_size(10);
-    group.bench_function("plan_exploration_1000_cells", |b| {
-        b.iter(|| {
-            plan_exploration(&model, black_box(base), black_box(&pts), &service, &options)
-                .expect("reachable")
-        })
-    });
-    group.finish();
 }
 
 criterion_group!(benches, bench);

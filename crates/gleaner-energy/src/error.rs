@@ -32,18 +32,6 @@ pub enum EnergyError {
         /// Length of the second input.
         right: usize,
     },
-    /// A cell that cannot be served even by a sortie that visits it alone.
-    #[error(
-        "cell {cell} cannot be visited within the budget: a sortie to it alone needs {energy_j} J, usable budget is {budget_j} J"
-    )]
-    CellUnreachable {
-        /// Position of the cell in the input slice.
-        cell: usize,
-        /// Energy of the single-cell sortie B -> cell -> B, J.
-        energy_j: f64,
-        /// Usable budget, J.
-        budget_j: f64,
-    },
 }
 
 /// Checks that `value` is finite and > 0.

@@ -13,7 +13,8 @@
 //!   [`MissionEnergy`] breakdown (E_t, E_h, E_c, E_r, per leg and per cell, budget,
 //!   utilisation, feasibility) of a route, and the additive travel / service costs an
 //!   orienteering planner needs.
-//! - [`exploration`]: the fewest budget-feasible sorties that together visit every cell.
+//!
+//! Planning (which cells, in which order, in how many sorties) lives in `gleaner-mission`.
 //!
 //! ```
 //! use gleaner_energy::{CellVisit, EnergyConfig, MissionEnergyModel};
@@ -35,7 +36,6 @@
 
 mod config;
 mod error;
-pub mod exploration;
 mod link;
 pub mod minimise;
 mod mission;

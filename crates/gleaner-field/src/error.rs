@@ -24,7 +24,7 @@ pub enum FieldError {
     InvalidSensorId(String),
     /// A malformed modality name.
     #[error(
-        "invalid modality {0:?}: expected a quantity such as `vw` or `t`, optionally `@<depth>cm`, e.g. `vw@30cm`"
+        "invalid modality {0:?}: expected `<quantity>` or `<quantity>@<depth><unit>`: the quantity is 1 to 64 ASCII letters, digits, `-` or `_`, starting with a letter; the depth a decimal number (digits, optionally `.` and more digits, no sign or exponent); the unit `cm` or `m` (e.g. `vw@30cm`, `vwc-a@15cm`, `vw@15.5cm`, `vwc@0.15m`)"
     )]
     InvalidModality(String),
     /// Two sensors share an id.

@@ -22,11 +22,60 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, IngestError> {
 }
 
 /// A CSV/TSV table: header and a record iterator with 1-based line numbers.
+///
+/// Line numbers are counted here from the record's byte offset, with `\r\n`, `\n` and a lone
+/// `\r` each ending one line: the `csv` crate's own count falls one short per CRLF line.
 pub(crate) struct Table<'a> {
     path: PathBuf,
     pub(crate) header: Vec<String>,
     reader: csv::Reader<&'a [u8]>,
     pub(crate) record: csv::ByteRecord,
+    lines: LineCounter<'a>,
+}
+
+/// Counts physical lines up to a byte offset, incrementally (offsets must not decrease).
+struct LineCounter<'a> {
+    bytes: &'a [u8],
+    /// Bytes before this offset have been counted.
+    scanned: usize,
+    /// Line breaks before `scanned`.
+    breaks: u64,
+    /// The byte before `scanned` is `\r` (so a `\n` there completes a CRLF already counted).
+    after_cr: bool,
+}
+
+impl<'a> LineCounter<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        Self {
+            bytes,
+            scanned: 0,
+            breaks: 0,
+            after_cr: false,
+        }
+    }
+
+    /// The 1-based line on which a record starting at byte `offset` begins (line terminators
+    /// at `offset` itself, which the record reader may not have consumed yet, are skipped).
+    fn line_at(&mut self, offset: usize) -> u64 {
+        let mut start = offset.min(self.bytes.len());
+        while start < self.bytes.len() && matches!(self.bytes[start], b'\r' | b'\n') {
+            start += 1;
+        }
+        if start < self.scanned {
+            // Offsets never go back; tolerate it by recounting from the beginning.
+            *self = Self::new(self.bytes);
+        }
+        for &b in &self.bytes[self.scanned..start] {
+            match b {
+                b'\r' => self.breaks += 1,
+                b'\n' if !self.after_cr => self.breaks += 1,
+                _ => {}
+            }
+            self.after_cr = b == b'\r';
+        }
+        self.scanned = start;
+        self.breaks + 1
+    }
 }
 
 impl<'a> Table<'a> {
@@ -54,6 +103,7 @@ impl<'a> Table<'a> {
             header,
             reader,
             record,
+            lines: LineCounter::new(bytes),
         })
     }
 
@@ -85,7 +135,11 @@ impl<'a> Table<'a> {
             if self.record.len() == 1 && self.record[0].iter().all(u8::is_ascii_whitespace) {
                 continue;
             }
-            return Ok(Some(self.record.position().map_or(0, |p| p.line())));
+            let offset = self.record.position().map_or(0, |p| p.byte());
+            return Ok(Some(
+                self.lines
+                    .line_at(usize::try_from(offset).unwrap_or(usize::MAX)),
+            ));
         }
     }
 
@@ -684,4 +738,44 @@ pub fn read_sensors_csv(
     }
     report.readings = out.len() as u64;
     Ok((out, report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn line_counter_hand_checked() {
+        let text = b"h\r\na\nb\rc\r\n\r\nd";
+        let mut c = LineCounter::new(text);
+        assert_eq!(c.line_at(0), 1);
+        assert_eq!(c.line_at(3), 2); // a
+        assert_eq!(c.line_at(5), 3); // b
+        assert_eq!(c.line_at(7), 4); // c
+        // A reader may report the offset of the "\n" of a CRLF: still the next line.
+        assert_eq!(c.line_at(12), 6); // d, after an empty line
+        let mut c = LineCounter::new(text);
+        assert_eq!(c.line_at(9), 6); // "\n\r\nd": skips to d
+        assert_eq!(c.line_at(2), 2); // going back recounts
+    }
+
+    proptest! {
+        #[test]
+        fn lines_start_where_expected(
+            lines in prop::collection::vec(("[a-z,]{1,6}", 0usize..3), 1..30)
+        ) {
+            let mut text = Vec::new();
+            let mut starts = Vec::new();
+            for (body, eol) in &lines {
+                starts.push(text.len());
+                text.extend_from_slice(body.as_bytes());
+                text.extend_from_slice([&b"\n"[..], b"\r\n", b"\r"][*eol]);
+            }
+            let mut c = LineCounter::new(&text);
+            for (k, &s) in starts.iter().enumerate() {
+                prop_assert_eq!(c.line_at(s), k as u64 + 1);
+            }
+        }
+    }
 }

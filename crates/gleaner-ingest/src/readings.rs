@@ -52,7 +52,7 @@ pub struct Row {
 }
 
 /// A batch of readings. Invariant: every row's indices are in range; after
-/// [`Readings::dedup`] no two rows share (sensor, modality, t).
+/// `dedup` no two rows share (sensor, modality, t).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Readings {
     /// Sensor table.

@@ -345,3 +345,35 @@ fn hubbard_brook_network_ingests() {
             .all(|x| (0.0..=0.8).contains(&x.value))
     );
 }
+
+/// Line numbers count physical lines whatever the line ending: a bad value on line 4 of a file
+/// with CRLF (or bare CR) line endings is reported at line 4, as with LF.
+#[test]
+fn crlf_files_report_the_right_line() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, eol) in [("lf.csv", "\n"), ("crlf.csv", "\r\n"), ("cr.csv", "\r")] {
+        let text = [
+            "sensor_id,timestamp,modality,value,unit",
+            "s1,2014-01-01T00:00:00Z,vw@30cm,0.31,m3/m3",
+            "s1,2014-01-02T00:00:00Z,vw@30cm,0.32,m3/m3",
+            "s1,2014-01-03T00:00:00Z,vw@30cm,oops,m3/m3",
+            "s1,2014-01-04T00:00:00Z,vw@30cm,0.33,m3/m3",
+        ]
+        .join(eol)
+            + eol;
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        let err = read_long_csv(&path, &known(&["s1"])).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains(&format!("{name}:4:")), "{name}: {msg}");
+        assert!(msg.contains("oops"), "{name}: {msg}");
+        let mut skip = known(&["s1"]);
+        skip.on_error = OnError::Skip;
+        let (readings, report) = read_long_csv(&path, &skip).unwrap();
+        assert_eq!(readings.rows.len(), 3, "{name}");
+        assert_eq!(report.skipped_rows[0].line, 4, "{name}");
+        let mut lines: Vec<u32> = readings.rows.iter().map(|r| r.line).collect();
+        lines.sort_unstable();
+        assert_eq!(lines, vec![2, 3, 5], "{name}");
+    }
+}

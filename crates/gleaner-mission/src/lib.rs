@@ -9,6 +9,12 @@
 //!
 //! Cells with S <= 0 are never worth a detour (SPEC §2) and are left out of the instance.
 //!
+//! [`exploration::plan_exploration`] plans the exploration phase (SPEC §5 step 3): the fewest
+//! budget-feasible sorties that together visit every cell.
+//!
+//! [`PlanOptions::with_time_limit_secs`] turns a user's time limit in seconds into the
+//! options without panicking on NaN, negative, huge or infinite values.
+//!
 //! ```
 //! use gleaner_energy::{EnergyConfig, MissionEnergyModel};
 //! use gleaner_field::LocalPoint;
@@ -27,11 +33,15 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod exploration;
+
 use std::time::{Duration, Instant};
 
 use gleaner_energy::{CellVisit, EnergyError, MissionEnergy, MissionEnergyModel};
 use gleaner_field::LocalPoint;
-use gleaner_orienteering::{Problem, ProblemError, SolveError, SolveOptions, SolverKind, solve};
+use gleaner_orienteering::{
+    Problem, ProblemError, SolveError, SolveOptions, SolverKind, solve, time_limit_from_secs,
+};
 use thiserror::Error;
 
 /// A cell that may be visited.
@@ -90,6 +100,27 @@ impl Default for PlanOptions {
             seed: 0,
             max_iterations: None,
         }
+    }
+}
+
+impl PlanOptions {
+    /// Sets the wall-clock limit from a number of seconds as a user writes it, without
+    /// panicking on hostile values: values too large for a [`Duration`], `+inf` included,
+    /// mean "no limit" (the search then ends on its iteration or stall limit).
+    ///
+    /// # Errors
+    /// [`PlanError::Solve`] with [`SolveError::InvalidTimeLimit`] for NaN or a negative value.
+    ///
+    /// ```
+    /// use gleaner_mission::PlanOptions;
+    /// let o = PlanOptions::default().with_time_limit_secs(1.5).unwrap();
+    /// assert_eq!(o.time_limit.as_millis(), 1500);
+    /// assert!(PlanOptions::default().with_time_limit_secs(f64::INFINITY).is_ok());
+    /// assert!(PlanOptions::default().with_time_limit_secs(-2.0).is_err());
+    /// ```
+    pub fn with_time_limit_secs(mut self, seconds: f64) -> Result<Self, PlanError> {
+        self.time_limit = time_limit_from_secs(seconds)?;
+        Ok(self)
     }
 }
 
@@ -322,6 +353,29 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("cell 0: invalid score NaN"), "{e}");
+    }
+
+    #[test]
+    fn hostile_time_limits_are_errors_or_no_limit() {
+        for bad in [f64::NAN, -1.0, f64::NEG_INFINITY] {
+            let e = PlanOptions::default()
+                .with_time_limit_secs(bad)
+                .unwrap_err();
+            assert!(e.to_string().contains("invalid time limit"), "{e}");
+        }
+        let cells: Vec<Candidate> = (0..15)
+            .map(|k| Candidate {
+                centre: LocalPoint::new(40.0 * f64::from(k) + 20.0, 20.0),
+                score: 1.0,
+                hover_s: 30.0,
+            })
+            .collect();
+        for huge in [f64::INFINITY, 1e20, f64::MAX] {
+            let o = opts(Planner::Default).with_time_limit_secs(huge).unwrap();
+            assert_eq!(o.time_limit, Duration::MAX);
+            let plan = plan_mission(&model(), LocalPoint::default(), &cells, &o).unwrap();
+            assert!(plan.energy.feasible);
+        }
     }
 
     proptest! {

@@ -1,12 +1,10 @@
 //! Runs the benchmark over files or directories given on the command line.
 //!
-//! `cargo run --release -p gleaner-op-formats --example run_bench -- [--secs S] [--greedy] [--max-n N] [--stall K] [--csv FILE] PATH...`
+//! `cargo run --release -p gleaner-op-formats --example run_bench -- [--secs S] [--greedy] [--max-n N] [--stall K] [--csv FILE] [--routes FILE] PATH...`
 
+use gleaner_op_formats::{find_instances, format_csv, format_table, run_benchmark, write_routes};
+use gleaner_orienteering::{SolveOptions, SolverKind, time_limit_from_secs};
 use std::path::PathBuf;
-use std::time::Duration;
-
-use gleaner_op_formats::{find_instances, format_csv, format_table, run_benchmark};
-use gleaner_orienteering::{SolveOptions, SolverKind};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut secs = 1.0;
@@ -14,6 +12,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut max_n = usize::MAX;
     let mut stall: Option<u64> = None;
     let mut csv: Option<PathBuf> = None;
+    let mut routes: Option<PathBuf> = None;
     let mut seed = 0u64;
     let mut k: Option<usize> = None;
     let mut kicks: Option<usize> = None;
@@ -29,6 +28,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--max-n" => max_n = args.next().ok_or("--max-n needs a value")?.parse()?,
             "--stall" => stall = Some(args.next().ok_or("--stall needs a value")?.parse()?),
             "--csv" => csv = Some(PathBuf::from(args.next().ok_or("--csv needs a value")?)),
+            "--routes" => {
+                routes = Some(PathBuf::from(args.next().ok_or("--routes needs a value")?))
+            }
             p => {
                 let p = PathBuf::from(p);
                 if p.is_dir() {
@@ -58,7 +60,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let mut options = SolveOptions {
-        time_limit: Duration::from_secs_f64(secs),
+        time_limit: time_limit_from_secs(secs)?,
         max_stall: stall,
         seed,
         ..SolveOptions::default()
@@ -78,6 +80,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     print!("{}", format_table(&rows));
     if let Some(c) = csv {
         std::fs::write(c, format_csv(&rows))?;
+    }
+    if let Some(r) = routes {
+        let mut out = std::io::BufWriter::new(std::fs::File::create(r)?);
+        write_routes(&rows, &mut out)?;
     }
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! Loading benchmark files with their targets, and the benchmark runner.
 
 use std::fmt::Write as _;
+use std::io;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -167,7 +168,8 @@ pub struct BenchRow {
     pub budget: f64,
     /// Target / best-known score, when known.
     pub target: Option<f64>,
-    /// Score found.
+    /// Score found, re-checked with the instance's own distance rule (0 when the routes fail
+    /// that re-check).
     pub ours: f64,
     /// `(target - ours) / target · 100` (negative: better than the target).
     pub gap_pct: Option<f64>,
@@ -175,6 +177,12 @@ pub struct BenchRow {
     pub seconds: f64,
     /// The routes passed re-validation with the instance's own distance rule.
     pub feasible: bool,
+    /// The solver's name (`greedy`, `default`, `exact`).
+    pub solver: &'static str,
+    /// The solver's routes, one per vehicle, each from the start node to the end node, with
+    /// node ids as numbered in the instance file (1-based; see [`OpInstance::node_id`]).
+    /// Empty when the solver failed.
+    pub routes: Vec<Vec<usize>>,
 }
 
 /// Aggregate over [`BenchRow`]s.
@@ -222,35 +230,19 @@ pub fn run_instance(inst: &OpInstance, solver: SolverKind, options: &SolveOption
     let t0 = Instant::now();
     let result = solve(&inst.problem, solver, options);
     let seconds = t0.elapsed().as_secs_f64();
-    let (ours, feasible) = match result {
+    let (ours, feasible, routes) = match result {
         Ok(sol) => {
-            let mut score = 0.0;
-            let mut ok = true;
-            let mut seen = vec![false; inst.n];
-            for (r, route) in sol.routes.iter().enumerate() {
-                match inst.validate_route(route) {
-                    Ok(c) => {
-                        for &v in &route[1..route.len() - 1] {
-                            ok &= !std::mem::replace(&mut seen[v], true);
-                        }
-                        score += if r == 0 {
-                            c.score
-                        } else {
-                            c.score
-                                - inst.scores[inst.start]
-                                - if inst.end != inst.start {
-                                    inst.scores[inst.end]
-                                } else {
-                                    0.0
-                                }
-                        };
-                    }
-                    Err(_) => ok = false,
-                }
+            let ids = sol
+                .routes
+                .iter()
+                .map(|r| r.iter().map(|&v| inst.node_id(v)).collect())
+                .collect();
+            match inst.score_routes(&sol.routes) {
+                Ok(score) => (score, true, ids),
+                Err(_) => (0.0, false, ids),
             }
-            (score, ok)
         }
-        Err(_) => (0.0, false),
+        Err(_) => (0.0, false, Vec::new()),
     };
     let gap_pct = inst
         .target
@@ -266,6 +258,8 @@ pub fn run_instance(inst: &OpInstance, solver: SolverKind, options: &SolveOption
         gap_pct,
         seconds,
         feasible,
+        solver: solver.name(),
+        routes,
     }
 }
 
@@ -364,4 +358,106 @@ pub fn format_csv(rows: &[BenchRow]) -> String {
         );
     }
     s
+}
+
+/// Writes every row's routes, one line per instance, so that anyone can re-check a claimed
+/// score with their own tools:
+///
+/// `instance<TAB>solver<TAB>score<TAB>route`
+///
+/// where `route` is the node ids, as numbered in the instance file (1-based), separated by
+/// single spaces, from the start node to the end node (classic: `1 ... 2`; OPLib: a closed
+/// tour `1 ... 1` from the depot). With several vehicles each further route follows in its
+/// own TAB-separated column. `score` is the score the runner re-checked (0 when the routes
+/// failed re-validation, see [`BenchRow::feasible`]), printed exactly (shortest round-trip
+/// form). Tabs and line breaks in instance names are written as spaces. [`parse_routes`]
+/// reads the lines back.
+///
+/// # Errors
+/// The writer's IO errors.
+pub fn write_routes(rows: &[BenchRow], out: &mut impl io::Write) -> io::Result<()> {
+    for r in rows {
+        let name: String = r
+            .instance
+            .chars()
+            .map(|c| {
+                if matches!(c, '\t' | '\n' | '\r') {
+                    ' '
+                } else {
+                    c
+                }
+            })
+            .collect();
+        write!(out, "{name}\t{}\t{}", r.solver, r.ours)?;
+        for route in &r.routes {
+            out.write_all(b"\t")?;
+            for (k, id) in route.iter().enumerate() {
+                if k > 0 {
+                    out.write_all(b" ")?;
+                }
+                write!(out, "{id}")?;
+            }
+        }
+        out.write_all(b"\n")?;
+    }
+    Ok(())
+}
+
+/// One line of a routes file (see [`write_routes`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RouteRecord {
+    /// Instance name.
+    pub instance: String,
+    /// Solver name.
+    pub solver: String,
+    /// Claimed score.
+    pub score: f64,
+    /// Routes, node ids as numbered in the instance file (convert with
+    /// [`OpInstance::route_from_node_ids`], re-check with [`OpInstance::score_routes`]).
+    pub routes: Vec<Vec<usize>>,
+}
+
+/// Reads a routes file written by [`write_routes`] (blank lines are ignored).
+///
+/// # Errors
+/// [`FormatError::Parse`] naming the line and field (`routes` as the file name).
+pub fn parse_routes(text: &str) -> Result<Vec<RouteRecord>, FormatError> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let ln = i + 1;
+        let f: Vec<&str> = line.split('\t').collect();
+        if f.len() < 3 {
+            return Err(parse_err(
+                "routes",
+                ln,
+                "line",
+                format!("expected `instance<TAB>solver<TAB>score<TAB>route`, got `{line}`"),
+            ));
+        }
+        let score = f[2]
+            .trim()
+            .parse::<f64>()
+            .map_err(|_| parse_err("routes", ln, "score", format!("`{}`", f[2])))?;
+        let routes = f[3..]
+            .iter()
+            .map(|r| {
+                r.split_whitespace()
+                    .map(|t| {
+                        t.parse::<usize>()
+                            .map_err(|_| parse_err("routes", ln, "node id", format!("`{t}`")))
+                    })
+                    .collect::<Result<Vec<usize>, _>>()
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        out.push(RouteRecord {
+            instance: f[0].to_string(),
+            solver: f[1].to_string(),
+            score,
+            routes,
+        });
+    }
+    Ok(out)
 }

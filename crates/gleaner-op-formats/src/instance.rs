@@ -136,6 +136,62 @@ impl OpInstance {
         }
     }
 
+    /// The node id of 0-based index `v` as numbered in the instance file: `v + 1` (classic
+    /// files number points 1, 2, ... in file order; OPLib/TSPLIB ids are 1-based).
+    pub fn node_id(&self, v: usize) -> usize {
+        v + 1
+    }
+
+    /// Converts a route written with node ids as numbered in the instance file (1-based)
+    /// into 0-based indices.
+    ///
+    /// # Errors
+    /// [`FormatError::Route`] for an id outside 1..=n.
+    pub fn route_from_node_ids(&self, ids: &[usize]) -> Result<Vec<usize>, FormatError> {
+        ids.iter()
+            .map(|&id| {
+                if (1..=self.n).contains(&id) {
+                    Ok(id - 1)
+                } else {
+                    Err(FormatError::Route {
+                        file: self.name.clone(),
+                        message: format!("node id {id} not in 1..={}", self.n),
+                    })
+                }
+            })
+            .collect()
+    }
+
+    /// Re-checks a whole solution (0-based routes) with the instance's own distance rule —
+    /// each route as [`OpInstance::validate_route`], and no node on two routes — and returns
+    /// its score (start and end counted once).
+    ///
+    /// # Errors
+    /// [`FormatError::Route`] naming the first violation.
+    pub fn score_routes(&self, routes: &[Vec<usize>]) -> Result<f64, FormatError> {
+        let mut seen = vec![false; self.n];
+        let mut score = 0.0;
+        for (r, route) in routes.iter().enumerate() {
+            let c = self.validate_route(route)?;
+            for &v in &route[1..route.len() - 1] {
+                if std::mem::replace(&mut seen[v], true) {
+                    return Err(FormatError::Route {
+                        file: self.name.clone(),
+                        message: format!("node {v} (0-based) on two routes"),
+                    });
+                }
+            }
+            score += c.score;
+            if r > 0 {
+                score -= self.scores[self.start];
+                if self.end != self.start {
+                    score -= self.scores[self.end];
+                }
+            }
+        }
+        Ok(score)
+    }
+
     /// Re-validates one route (0-based nodes, starting at `start`, ending at `end`) with the
     /// instance's own distance rule: endpoints, range, no repeated node, length within the
     /// budget (exact for integer TSPLIB distances, 1e-9 relative for float ones).

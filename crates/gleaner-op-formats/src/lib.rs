@@ -13,6 +13,13 @@
 //! - [`run_benchmark`] solves a list of files and returns [`BenchRow`]s; [`summarize`],
 //!   [`format_table`] and [`format_csv`] turn them into a [`BenchSummary`], an aligned text
 //!   table and CSV. The library never prints; progress goes through a callback.
+//! - Each [`BenchRow`] carries the solver's routes with node ids as numbered in the instance
+//!   file (1-based); [`write_routes`] writes them one line per instance
+//!   (`instance<TAB>solver<TAB>score<TAB>1 5 3 ... 2`) and [`parse_routes`] reads them back, so
+//!   a claimed score can be re-checked ([`OpInstance::route_from_node_ids`],
+//!   [`OpInstance::score_routes`]) or with anyone's own tools.
+//! - Files larger than [`MAX_NODES`] nodes, and `DIMENSION`s or path counts the file cannot
+//!   back, are refused before anything is sized by them.
 //!
 //! Errors ([`FormatError`]) name the file, the line and the field.
 //!
@@ -41,9 +48,10 @@ mod instance;
 mod parse;
 
 pub use bench::{
-    BenchRow, BenchSummary, find_instances, format_csv, format_table, load_instance,
-    parse_classic_targets, parse_oplib_best, run_benchmark, run_instance, summarize,
+    BenchRow, BenchSummary, RouteRecord, find_instances, format_csv, format_table, load_instance,
+    parse_classic_targets, parse_oplib_best, parse_routes, run_benchmark, run_instance, summarize,
+    write_routes,
 };
 pub use error::FormatError;
 pub use instance::{DistanceRule, OpFormat, OpInstance, RouteCheck};
-pub use parse::{parse_classic, parse_oplib};
+pub use parse::{MAX_NODES, parse_classic, parse_oplib};

@@ -5,6 +5,10 @@ use gleaner_orienteering::Problem;
 use crate::error::{FormatError, parse_err};
 use crate::instance::{DistanceRule, OpFormat, OpInstance};
 
+/// Most nodes an instance may have: the generic problem stores a dense n x n cost matrix
+/// (10,000 nodes: 800 MB).
+pub const MAX_NODES: usize = 10_000;
+
 fn number(file: &str, line: usize, field: &str, tok: &str) -> Result<f64, FormatError> {
     let v: f64 = tok
         .parse()
@@ -79,6 +83,17 @@ pub fn parse_classic(name: &str, set: &str, text: &str) -> Result<OpInstance, Fo
     }
     let budget = number(name, hl, "Tmax", toks[0])?;
     let paths = number(name, hl, "P", toks[1])?;
+    // One path per point at most (more could never be used); also keeps hostile values from
+    // sizing allocations.
+    let points = text.lines().filter(|l| !l.trim().is_empty()).count() - 1;
+    if paths > points.max(1) as f64 {
+        return Err(parse_err(
+            name,
+            hl,
+            "P",
+            format!("`{}` paths for {points} points", toks[1]),
+        ));
+    }
     if paths < 1.0 || paths.fract() != 0.0 {
         return Err(parse_err(
             name,
@@ -104,6 +119,17 @@ pub fn parse_classic(name: &str, set: &str, text: &str) -> Result<OpInstance, Fo
         let s = number(name, ln, "score", t[2])?;
         coords.push([x, y]);
         scores.push(s);
+    }
+    if coords.len() > MAX_NODES {
+        return Err(parse_err(
+            name,
+            0,
+            "points",
+            format!(
+                "{} points, more than the {MAX_NODES} supported",
+                coords.len()
+            ),
+        ));
     }
     if coords.len() < 2 {
         return Err(parse_err(
@@ -179,6 +205,19 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
                     .map_err(|_| parse_err(name, ln, "DIMENSION", format!("`{value}`")))?;
                 if d < 1 {
                     return Err(parse_err(name, ln, "DIMENSION", "must be at least 1"));
+                }
+                // Every node needs a score line, so a larger DIMENSION is a broken (or hostile)
+                // file; checked before anything is sized by it.
+                if d > lines.len() || d > MAX_NODES {
+                    return Err(parse_err(
+                        name,
+                        ln,
+                        "DIMENSION",
+                        format!(
+                            "{d} nodes: more than the file's {} lines or the {MAX_NODES} supported",
+                            lines.len()
+                        ),
+                    ));
                 }
                 dim = Some(d);
                 coords = vec![None; d];
@@ -432,6 +471,42 @@ mod tests {
     }
 
     const EXPLICIT: &str = "NAME: t\nTYPE: OP\nDIMENSION: 3\nCOST_LIMIT : 7\nEDGE_WEIGHT_TYPE: EXPLICIT\nEDGE_WEIGHT_FORMAT: LOWER_DIAG_ROW\nEDGE_WEIGHT_SECTION\n 0 2 0\n 3 4 0\nNODE_SCORE_SECTION\n1 0\n2 5\n3 7\nDEPOT_SECTION\n 2\n-1\nEOF\n";
+
+    #[test]
+    fn hostile_sizes_are_errors_before_any_allocation() {
+        for dim in ["1000000000000", "18446744073709551615", "10001"] {
+            let text = format!(
+                "NAME : h\nDIMENSION : {dim}\nCOST_LIMIT : 10\nEDGE_WEIGHT_TYPE : EUC_2D\nEOF\n"
+            );
+            let e = parse_oplib("h", "x", &text).unwrap_err().to_string();
+            assert!(e.contains("DIMENSION"), "{e}");
+        }
+        let e = parse_oplib(
+            "h",
+            "x",
+            "DIMENSION : 99999999999999999999999\nCOST_LIMIT : 1\nEOF\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("DIMENSION"), "{e}");
+        for paths in [
+            "1e300",
+            "18446744073709551616",
+            "4",
+            "inf",
+            "-1",
+            "0",
+            "1.5",
+        ] {
+            let text = format!("10 {paths}\n0 0 0\n1 1 0\n2 2 5\n");
+            assert!(parse_classic("c", "x", &text).is_err(), "P = {paths}");
+        }
+        assert!(parse_classic("c", "x", "10 3\n0 0 0\n1 1 0\n2 2 5\n").is_ok());
+        for budget in ["inf", "NaN", "1e400"] {
+            let text = format!("{budget} 1\n0 0 0\n1 1 0\n");
+            assert!(parse_classic("c", "x", &text).is_err(), "Tmax = {budget}");
+        }
+    }
 
     #[test]
     fn oplib() {

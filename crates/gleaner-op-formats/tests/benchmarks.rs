@@ -4,7 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use gleaner_op_formats::{
-    DistanceRule, find_instances, format_csv, format_table, load_instance, run_benchmark, summarize,
+    DistanceRule, find_instances, format_csv, format_table, load_instance, parse_routes,
+    run_benchmark, summarize, write_routes,
 };
 use gleaner_orienteering::{SolveOptions, SolverKind, solve_default};
 
@@ -187,4 +188,122 @@ fn runner_rows_summary_and_tables() {
     let csv = format_csv(&rows);
     assert_eq!(csv.lines().count(), 4);
     assert!(csv.starts_with("instance,set,n,budget,target,ours,gap_pct,seconds,feasible\n"));
+}
+
+/// Re-scores routes given with file node ids from the instance's raw data and its own
+/// distance rule, without the crate's validation: (score, length of each route).
+fn rescore_independently(inst: &gleaner_op_formats::OpInstance, ids: &[usize]) -> (f64, f64) {
+    let idx: Vec<usize> = ids.iter().map(|&id| id - 1).collect();
+    let mut nodes = idx.clone();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let score = nodes.iter().map(|&v| inst.scores[v]).sum();
+    let length = idx
+        .windows(2)
+        .map(|w| match &inst.explicit {
+            Some(m) => m[w[0] * inst.n + w[1]],
+            None => inst.rule.distance(inst.coords[w[0]], inst.coords[w[1]]),
+        })
+        .sum();
+    (score, length)
+}
+
+#[test]
+fn written_routes_re_read_and_re_score_with_the_instance_rule() {
+    let dir = data_dir();
+    let files = [
+        dir.join("classic/Tsiligirides_1/tsiligirides_problem_1_budget_30.txt"),
+        dir.join("classic/ChaoSet_66/set_66_1_050.txt"),
+        dir.join("oplib/gen1/eil51-gen1-50.oplib"),
+        dir.join("oplib/gen2/gr48-gen2-50.oplib"),
+        dir.join("oplib/gen1/gr137-gen1-50.oplib"),
+    ];
+    for solver in [SolverKind::Greedy, SolverKind::Default] {
+        let rows = run_benchmark(&files, solver, &options(200), &mut |_, _, _| {}).unwrap();
+        let mut out = Vec::new();
+        write_routes(&rows, &mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert_eq!(text.lines().count(), files.len());
+        let records = parse_routes(&text).unwrap();
+        for (file, (row, rec)) in files.iter().zip(rows.iter().zip(&records)) {
+            let inst = load_instance(file).unwrap();
+            assert!(row.feasible, "{}", row.instance);
+            assert_eq!(rec.instance, inst.name);
+            assert_eq!(rec.solver, solver.name());
+            assert_eq!(rec.score, row.ours);
+            assert_eq!(rec.routes, row.routes);
+            assert_eq!(rec.routes.len(), 1);
+            let ids = &rec.routes[0];
+            // Ids as in the file: classic paths run from point 1 to point 2, OPLib tours
+            // from depot 1 back to it.
+            let ends = if file.extension().is_some_and(|e| e == "oplib") {
+                (1, 1)
+            } else {
+                (1, 2)
+            };
+            assert_eq!((ids[0], ids[ids.len() - 1]), ends, "{}", inst.name);
+            let (score, length) = rescore_independently(&inst, ids);
+            assert_eq!(score, rec.score, "{}", inst.name);
+            assert!(
+                length <= inst.budget * (1.0 + 1e-9),
+                "{}: {length} > {}",
+                inst.name,
+                inst.budget
+            );
+            // And the crate's own re-check agrees.
+            let route = inst.route_from_node_ids(ids).unwrap();
+            assert_eq!(inst.score_routes(&[route]).unwrap(), rec.score);
+        }
+    }
+}
+
+#[test]
+fn classic_routes_re_score_from_the_raw_file() {
+    // Independent of the parser: read `x y S` lines and use float Euclidean distances.
+    let file = data_dir().join("classic/ChaoSet_64/set_64_1_50.txt");
+    let rows = run_benchmark(
+        std::slice::from_ref(&file),
+        SolverKind::Default,
+        &options(200),
+        &mut |_, _, _| {},
+    )
+    .unwrap();
+    let mut out = Vec::new();
+    write_routes(&rows, &mut out).unwrap();
+    let rec = &parse_routes(std::str::from_utf8(&out).unwrap()).unwrap()[0];
+    let text = std::fs::read_to_string(&file).unwrap();
+    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+    let budget: f64 = lines
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let pts: Vec<[f64; 3]> = lines
+        .map(|l| {
+            let v: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    let ids = &rec.routes[0];
+    let p = |id: usize| pts[id - 1];
+    let length: f64 = ids
+        .windows(2)
+        .map(|w| (p(w[0])[0] - p(w[1])[0]).hypot(p(w[0])[1] - p(w[1])[1]))
+        .sum();
+    let score: f64 = ids.iter().map(|&id| p(id)[2]).sum();
+    assert!(length <= budget * (1.0 + 1e-9), "{length} > {budget}");
+    assert_eq!(score, rec.score);
+    assert!(rec.score > 0.0);
+}
+
+#[test]
+fn routes_files_reject_garbage() {
+    assert!(parse_routes("a\tdefault\n").is_err());
+    assert!(parse_routes("a\tdefault\tx\t1 2\n").is_err());
+    assert!(parse_routes("a\tdefault\t3\t1 -2\n").is_err());
+    let ok = parse_routes("\na\tgreedy\t3.5\t1 4 2\t1 3 2\n").unwrap();
+    assert_eq!(ok[0].routes, vec![vec![1, 4, 2], vec![1, 3, 2]]);
 }

@@ -167,4 +167,10 @@ pub enum SolveError {
         /// Maximum supported.
         max: usize,
     },
+    /// A time limit that is not a number of seconds >= 0 (NaN or negative).
+    #[error("invalid time limit {seconds} s: expected a number of seconds >= 0")]
+    InvalidTimeLimit {
+        /// The offending value, seconds.
+        seconds: f64,
+    },
 }

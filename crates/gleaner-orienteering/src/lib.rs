@@ -12,6 +12,11 @@
 //! - [`solve_default`] — iterated local search seeded with greedy; never worse than greedy.
 //! - [`exact`] — subset dynamic programming, proves optimality for small instances.
 //! - [`solve`] with [`SolverKind`] and [`SolveOptions`] — one entry point for all three.
+//! - [`improve_routes`] with [`ImproveOptions`] — the same 2-opt / Or-opt / relocation /
+//!   exchange moves applied to routes whose node set is already chosen (e.g. a tour through
+//!   every node, or routes split from one), making them shorter without changing what they
+//!   visit.
+//! - [`time_limit_from_secs`] — a checked conversion of a user's time limit in seconds.
 //!
 //! ```
 //! use gleaner_orienteering::{Metric, Problem, SolveOptions, evaluate, greedy, solve_default};
@@ -95,12 +100,14 @@
 mod engine;
 mod error;
 mod exact;
+mod improve;
 mod problem;
 mod solution;
 mod solve;
 
 pub use error::{ProblemError, SolutionError, SolveError};
 pub use exact::{EXACT_MAX_NODES, EXACT_MAX_NODES_TEAM, exact};
+pub use improve::{ImproveOptions, improve_routes};
 pub use problem::{Metric, Problem};
 pub use solution::{Solution, evaluate, route_cost};
-pub use solve::{SolveOptions, SolverKind, greedy, solve, solve_default};
+pub use solve::{SolveOptions, SolverKind, greedy, solve, solve_default, time_limit_from_secs};

@@ -85,6 +85,30 @@ impl SolveOptions {
     }
 }
 
+/// Converts a time limit in seconds, as a user writes it, into a [`Duration`] without
+/// panicking on hostile values (unlike [`Duration::from_secs_f64`]): a finite value >= 0 is
+/// converted (rounded to the nanosecond), and anything too large for a [`Duration`],
+/// `+inf` included, means "no limit" and gives [`Duration::MAX`] (the search then ends on its
+/// iteration or stall limit). `-0.0` counts as 0.
+///
+/// # Errors
+/// [`SolveError::InvalidTimeLimit`] for NaN or a negative value.
+///
+/// ```
+/// use std::time::Duration;
+/// use gleaner_orienteering::time_limit_from_secs;
+/// assert_eq!(time_limit_from_secs(2.5).unwrap(), Duration::from_millis(2500));
+/// assert_eq!(time_limit_from_secs(f64::INFINITY).unwrap(), Duration::MAX);
+/// assert_eq!(time_limit_from_secs(1e20).unwrap(), Duration::MAX);
+/// assert!(time_limit_from_secs(-1.0).is_err() && time_limit_from_secs(f64::NAN).is_err());
+/// ```
+pub fn time_limit_from_secs(seconds: f64) -> Result<Duration, SolveError> {
+    if seconds.is_nan() || seconds < 0.0 {
+        return Err(SolveError::InvalidTimeLimit { seconds });
+    }
+    Ok(Duration::try_from_secs_f64(seconds).unwrap_or(Duration::MAX))
+}
+
 /// Which solver to run through [`solve`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SolverKind {
@@ -94,6 +118,17 @@ pub enum SolverKind {
     Default,
     /// [`exact`]: subset dynamic programming (small instances only).
     Exact,
+}
+
+impl SolverKind {
+    /// The solver's name as written in outputs: `greedy`, `default`, `exact`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverKind::Greedy => "greedy",
+            SolverKind::Default => "default",
+            SolverKind::Exact => "exact",
+        }
+    }
 }
 
 /// Runs the chosen solver.
@@ -376,6 +411,31 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
 mod tests {
     use super::*;
     use crate::problem::Metric;
+
+    #[test]
+    fn hostile_time_limits_never_panic() {
+        for bad in [f64::NAN, -1.0, -1e-300, f64::NEG_INFINITY] {
+            assert!(
+                matches!(
+                    time_limit_from_secs(bad),
+                    Err(SolveError::InvalidTimeLimit { .. })
+                ),
+                "{bad}"
+            );
+        }
+        assert_eq!(time_limit_from_secs(-0.0).unwrap(), Duration::ZERO);
+        assert_eq!(time_limit_from_secs(0.0).unwrap(), Duration::ZERO);
+        for huge in [f64::INFINITY, 1e20, f64::MAX, 2f64.powi(64)] {
+            assert_eq!(time_limit_from_secs(huge).unwrap(), Duration::MAX, "{huge}");
+        }
+        // A solve with "no limit" ends on its iteration cap.
+        let p = line(vec![0.0, 1.0, 1.0, 5.0], 25.0);
+        let o = SolveOptions::default()
+            .with_time_limit(time_limit_from_secs(f64::INFINITY).unwrap())
+            .with_iterations(20);
+        let s = solve_default(&p, &o);
+        assert!(evaluate(&p, &s.routes).is_ok());
+    }
 
     /// Points on a line at x = 0 (depot), 1, 2, 10 with rewards; closed tour.
     fn line(rewards: Vec<f64>, budget: f64) -> Problem {

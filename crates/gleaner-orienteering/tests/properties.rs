@@ -5,7 +5,8 @@
 //! within 1,000 iterations, which is why the default solves such small teams exactly.)
 
 use gleaner_orienteering::{
-    Metric, Problem, SolveOptions, evaluate, exact, greedy, route_cost, solve_default,
+    ImproveOptions, Metric, Problem, SolveOptions, evaluate, exact, greedy, improve_routes,
+    route_cost, solve_default,
 };
 use proptest::prelude::*;
 
@@ -116,5 +117,32 @@ proptest! {
         }
         let auto = solve_default(&p, &SolveOptions::default().with_iterations(10));
         prop_assert!((auto.reward - x.reward).abs() < 1e-9);
+    }
+
+    #[test]
+    fn improvement_keeps_the_nodes_and_never_costs_more(p in instance(), kicks in 0usize..3, seed in 0u64..4) {
+        // Greedy's routes, each interior reversed and rotated so there is work to do.
+        let mut routes = greedy(&p).routes;
+        for (k, r) in routes.iter_mut().enumerate() {
+            let m = r.len();
+            if m > 3 {
+                r[1..m - 1].reverse();
+                r[1..m - 1].rotate_left(k % (m - 2));
+            }
+        }
+        let Ok(before) = evaluate(&p, &routes) else { return Ok(()); };
+        let o = ImproveOptions { kicks, seed, ..ImproveOptions::default() };
+        let after = improve_routes(&p, &routes, &o).unwrap();
+        let checked = evaluate(&p, &after.routes);
+        prop_assert!(checked.is_ok(), "{:?}", checked);
+        prop_assert!(after.total_cost() <= before.total_cost() + 1e-9);
+        let nodes = |rs: &[Vec<usize>]| {
+            let mut v: Vec<usize> = rs.iter().flat_map(|r| r[1..r.len() - 1].to_vec()).collect();
+            v.sort_unstable();
+            v
+        };
+        prop_assert_eq!(nodes(&after.routes), nodes(&routes));
+        prop_assert_eq!(after.routes.len(), routes.len());
+        prop_assert_eq!(&improve_routes(&p, &routes, &o).unwrap(), &after);
     }
 }

@@ -123,7 +123,14 @@ pub fn exploration(e: &Exploration) -> ExplorationDoc {
         sorties: e
             .sorties
             .iter()
-            .map(|(id, m)| mission_doc(*id, m, if id.is_some() { "planned" } else { "dry-run" }, None))
+            .map(|(id, m)| {
+                mission_doc(
+                    *id,
+                    m,
+                    if id.is_some() { "planned" } else { "dry-run" },
+                    None,
+                )
+            })
             .collect(),
     }
 }

@@ -2,7 +2,6 @@
 //! tabulates the scores against the known targets.
 
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use gleaner_op_formats::{
@@ -32,6 +31,8 @@ pub struct BenchOpArgs {
     /// Stop each instance after this many search iterations (machine-independent results);
     /// the time limit still applies.
     pub iterations: Option<u64>,
+    /// Also write every route here (node ids as in the instance files).
+    pub routes: Option<PathBuf>,
 }
 
 /// Parses a solver name.
@@ -69,7 +70,10 @@ pub fn run(args: &BenchOpArgs) -> Result<(Vec<BenchRow>, String)> {
         bail!("{}: no benchmark instances found", args.path.display());
     }
     let mut options = SolveOptions::default()
-        .with_time_limit(Duration::from_secs_f64(args.time_limit_s.max(0.0)))
+        .with_time_limit(
+            gleaner_orienteering::time_limit_from_secs(args.time_limit_s)
+                .context("--time-limit")?,
+        )
         .with_seed(args.seed);
     options.max_stall = args.max_stall;
     options.max_iterations = args.iterations;
@@ -82,6 +86,14 @@ pub fn run(args: &BenchOpArgs) -> Result<(Vec<BenchRow>, String)> {
     if let Some(csv) = &args.csv {
         std::fs::write(csv, format_csv(&rows))
             .with_context(|| format!("{}: cannot write", csv.display()))?;
+    }
+    if let Some(path) = &args.routes {
+        let file = std::fs::File::create(path)
+            .with_context(|| format!("{}: cannot create", path.display()))?;
+        let mut w = std::io::BufWriter::new(file);
+        gleaner_op_formats::write_routes(&rows, &mut w)
+            .and_then(|()| std::io::Write::flush(&mut w))
+            .with_context(|| format!("{}: cannot write", path.display()))?;
     }
     let table = format_table(&rows);
     Ok((rows, table))

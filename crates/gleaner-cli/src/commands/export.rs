@@ -31,8 +31,18 @@ pub fn write_files(export: &MissionExport, dir: &Path) -> Result<Exported> {
         gleaner_wire::geojson(&field, &doc)?.as_bytes(),
         &mut files,
     )?;
-    write(dir, "mission.plan", gleaner_wire::qgc_plan(&doc)?.as_bytes(), &mut files)?;
-    write(dir, "mission.waypoints", gleaner_wire::wpl(&doc)?.as_bytes(), &mut files)?;
+    write(
+        dir,
+        "mission.plan",
+        gleaner_wire::qgc_plan(&doc)?.as_bytes(),
+        &mut files,
+    )?;
+    write(
+        dir,
+        "mission.waypoints",
+        gleaner_wire::wpl(&doc)?.as_bytes(),
+        &mut files,
+    )?;
     write(
         dir,
         "mission.json",
@@ -63,9 +73,14 @@ pub fn write_exploration_map<S: gleaner_app::Store>(
     );
     let field = gleaner_wire::convert::field(&gleaner_app::field_view(project)?);
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
-    let svg = gleaner_render::exploration_map_svg(&field, &sorties)?;
+    let svg = gleaner_render::exploration_map_svg(&field, &sorties, &Default::default())?;
     let mut files = Vec::new();
     write(dir, "exploration.svg", svg.as_bytes(), &mut files)?;
-    write(dir, "exploration.png", &gleaner_render::svg_to_png(&svg, 1600)?, &mut files)?;
+    write(
+        dir,
+        "exploration.png",
+        &gleaner_render::svg_to_png(&svg, 1600)?,
+        &mut files,
+    )?;
     Ok(files.iter().map(|f| f.display().to_string()).collect())
 }

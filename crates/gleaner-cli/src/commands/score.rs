@@ -39,19 +39,20 @@ pub fn sort(doc: &mut ScoringDoc, key: ScoreSort) {
 
 /// The table: header lines with the weights, then one line per cell.
 pub fn table(doc: &ScoringDoc, limit: usize) -> String {
-    let mut out = format!(
-        "scored at {}  S = {}·F + {}·A + {}·U − {}·R  (anomaly: {}{})\n",
-        doc.t,
-        doc.weights[0],
-        doc.weights[1],
-        doc.weights[2],
-        doc.weights[3],
-        doc.anomaly_form,
-        doc.condition.as_ref().map_or(
-            String::from(", no condition model: U = 0"),
-            |c| format!(", U from {}: {}", c.modality, c.classes.join("/"))
-        )
-    );
+    let mut out =
+        format!(
+            "scored at {}  S = {}·F + {}·A + {}·U − {}·R  (anomaly: {}{})\n",
+            doc.t,
+            doc.weights[0],
+            doc.weights[1],
+            doc.weights[2],
+            doc.weights[3],
+            doc.anomaly_form,
+            doc.condition.as_ref().map_or(
+                String::from(", no condition model: U = 0"),
+                |c| format!(", U from {}: {}", c.modality, c.classes.join("/"))
+            )
+        );
     out.push_str(&format!(
         "{:<10} {:>7} {:>6} {:>6} {:>8} {:>6} {:>8}  {}\n",
         "cell", "sensors", "F", "R", "A", "U", "S", "driver"

@@ -1,28 +1,35 @@
 //! Exploration phase (SPEC §5 step 3): visit every cell in as few budget-feasible sorties as
 //! possible.
 //!
-//! Route-first, cluster-second: a short closed tour through all cells (nearest neighbour,
-//! then 2-opt over each cell's nearest neighbours), then the optimal split of that giant tour
-//! into consecutive sorties B -> ... -> B (Beasley 1983's split, solved by dynamic
-//! programming on the tour positions), minimising first the number of sorties, then their total
-//! energy. Every rotation, in both directions, of that tour and of a polar sweep around the base
-//! is split and the best kept. Each sortie's order is then improved by 2-opt (which only lowers
-//! its energy), and sorties are emptied where all their cells fit into the others (cheapest
-//! feasible insertion). Then, for a few rounds, cells are moved or swapped between sorties
-//! while that lowers the total energy, and emptying sorties is tried again. (Tried and dropped
-//! as not better on grid fields: a cheapest-insertion construction seeded by the farthest
-//! cell, and pricing split segments by cheapest insertion instead of tour order.)
+//! Route-first, cluster-second:
 //!
-//! On a 32 x 32 grid of 40 m cells with 30 s hovers (paper preset) this gives 147 sorties from
-//! a corner base (lower bound 129) and 108 from the centre (lower bound 97).
+//! 1. A short closed tour through all cells (the "giant tour"): nearest neighbour from cell 0,
+//!    then the generic solver's tour improvement ([`gleaner_orienteering::improve_routes`]:
+//!    2-opt and Or-opt on candidate-neighbour lists, then seeded double-bridge kicks).
+//! 2. The optimal split of that tour into consecutive sorties B -> ... -> B (Beasley 1983's
+//!    split, dynamic programming on the tour positions), minimising first the number of
+//!    sorties, then their total energy. Every rotation, in both directions, of the giant tour
+//!    and of a polar sweep around the base is split and the best kept.
+//! 3. The sorties are improved as routes of a team orienteering instance (node 0 = base,
+//!    travel costs = cruise energy, service costs = the cells' service energies, budget =
+//!    usable budget less the fixed climb/descent energy) by the same generic moves: 2-opt and
+//!    Or-opt within each sortie, relocation and exchange of cells between sorties while that
+//!    lowers the total energy and every sortie stays within budget.
+//! 4. Sorties are emptied where all their cells fit into the others (cheapest feasible
+//!    insertion, farthest cell first); steps 3-4 repeat while that removes sorties.
 //!
-//! Sortie energy = fixed (climb/descent) + cruise energy of its legs + the cells' service
-//! energies, exactly as [`MissionEnergyModel::breakdown`] computes it.
+//! Every sortie is finally re-checked with [`MissionEnergyModel::breakdown`] and its figures
+//! ([`Sortie::distance_m`], [`Sortie::energy_j`]...) are the model's own. Deterministic for a
+//! given [`ExplorationOptions::seed`].
+//!
+//! Measured on the paper preset (30 s hovers, 40 m cells): a 32 x 32 grid (1,000 cells) needs
+//! 142 sorties from a corner base (lower bound 125) and 106 from the centre (lower bound 94);
+//! see `examples/exploration_quality.rs` and `BENCHMARKS.md`.
 //!
 //! ```
-//! use gleaner_energy::exploration::{ExplorationOptions, plan_exploration};
 //! use gleaner_energy::{EnergyConfig, MissionEnergyModel};
 //! use gleaner_field::LocalPoint;
+//! use gleaner_mission::exploration::{ExplorationOptions, plan_exploration};
 //!
 //! let model = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
 //! // 30 cells of 40 m in a row; each hover costs 30 s at P(0) + P_rx.
@@ -31,29 +38,38 @@
 //! let plan = plan_exploration(&model, LocalPoint::new(0.0, 0.0), &cells, &service, &ExplorationOptions::default()).unwrap();
 //! assert!(plan.sorties.len() >= plan.lower_bound_sorties);
 //! assert!(plan.sorties.iter().all(|s| s.energy_j <= model.usable_budget_j()));
+//! let mut visited: Vec<usize> = plan.sorties.iter().flat_map(|s| s.cells.clone()).collect();
+//! visited.sort_unstable();
+//! assert_eq!(visited, (0..30).collect::<Vec<_>>());
 //! ```
 
+use gleaner_energy::{CellVisit, EnergyError, MissionEnergyModel};
 use gleaner_field::LocalPoint;
-
-use crate::error::{EnergyError, non_negative};
-use crate::mission::{MissionEnergyModel, distance_m};
+use gleaner_orienteering::{
+    ImproveOptions, Metric, Problem, ProblemError, SolutionError, improve_routes,
+};
+use thiserror::Error;
 
 /// Tuning of the exploration planner.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ExplorationOptions {
-    /// Candidate neighbours per cell in the 2-opt of the giant tour (default 12).
+    /// Candidate neighbours per cell in 2-opt and Or-opt (default 12).
     pub neighbours: usize,
-    /// Maximum 2-opt passes over the giant tour (default 200).
-    pub max_two_opt_passes: usize,
+    /// Double-bridge kicks on the giant tour, each kept only when it shortens the tour
+    /// (default 200; 0 disables them).
+    pub tour_kicks: usize,
+    /// Seed of the kicks' random choices (default 0).
+    pub seed: u64,
     /// Relative safety margin on the budget, so that float rounding never makes a planned
-    /// sortie infeasible when re-checked (default 1e-9: sorties use at most
-    /// budget·(1 − 1e-9)).
+    /// sortie infeasible when re-checked: sorties use at most usable budget·(1 − margin)
+    /// (default 1e-9; must lie in [0, 1)).
     pub budget_margin: f64,
     /// After the split, try to empty whole sorties by moving their cells into the others at
     /// the cheapest feasible position (default true).
     pub eliminate_sorties: bool,
-    /// Rounds of inter-sortie improvement (move or swap single cells between sorties while
-    /// that lowers the energy, then try to empty sorties again); 0 disables it (default 50).
+    /// Moving cells between sorties: 0 disables relocation and exchange of cells between
+    /// sorties; otherwise the maximum number of further (empty sorties, re-optimise) rounds
+    /// after the first (default 50).
     pub max_improvement_rounds: usize,
 }
 
@@ -61,7 +77,8 @@ impl Default for ExplorationOptions {
     fn default() -> Self {
         Self {
             neighbours: 12,
-            max_two_opt_passes: 200,
+            tour_kicks: 200,
+            seed: 0,
             budget_margin: 1e-9,
             eliminate_sorties: true,
             max_improvement_rounds: 50,
@@ -69,7 +86,7 @@ impl Default for ExplorationOptions {
     }
 }
 
-/// One sortie of the exploration phase.
+/// One sortie of the exploration phase, with the energy model's own figures.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sortie {
     /// Cells in visiting order, as indices into the input slices.
@@ -82,7 +99,7 @@ pub struct Sortie {
     pub service_j: f64,
     /// Climb and descent energy ([`MissionEnergyModel::sortie_fixed_j`]), J.
     pub fixed_j: f64,
-    /// fixed_j + travel_j + service_j, J.
+    /// fixed_j + travel_j + service_j: the total of [`MissionEnergyModel::breakdown`], J.
     pub energy_j: f64,
 }
 
@@ -103,52 +120,123 @@ pub struct ExplorationPlan {
     pub giant_tour_m: f64,
 }
 
+/// Why an exploration could not be planned.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ExplorationError {
+    /// An input the energy model rejects: slices of different lengths, a non-finite
+    /// position, a negative or non-finite service energy, or an invalid option.
+    #[error("{0}")]
+    Energy(#[from] EnergyError),
+    /// A cell that cannot be served even by a sortie that visits it alone.
+    #[error(
+        "cell {cell} cannot be visited within the budget: a sortie to it alone needs {energy_j} J, usable budget is {budget_j} J"
+    )]
+    CellUnreachable {
+        /// Position of the cell in the input slice.
+        cell: usize,
+        /// Energy of the single-cell sortie B -> cell -> B, J.
+        energy_j: f64,
+        /// Usable budget, J.
+        budget_j: f64,
+    },
+    /// The tour-improvement instance could not be built (a bug; reported, never hidden).
+    #[error("tour improvement: {0}")]
+    Problem(#[from] ProblemError),
+    /// The tour improvement rejected its routes (a bug; reported, never hidden).
+    #[error("tour improvement: {0}")]
+    Routes(#[from] SolutionError),
+    /// A planned sortie that the energy model finds over budget (a bug; reported, never
+    /// handed to an operator).
+    #[error("sortie {sortie} needs {total_j} J but only {budget_j} J are usable")]
+    Infeasible {
+        /// Position of the sortie in the plan.
+        sortie: usize,
+        /// Its energy according to [`MissionEnergyModel::breakdown`], J.
+        total_j: f64,
+        /// Usable budget, J.
+        budget_j: f64,
+    },
+}
+
+fn invalid(name: &'static str, value: f64, expected: &'static str) -> ExplorationError {
+    ExplorationError::Energy(EnergyError::InvalidParameter {
+        name,
+        value,
+        expected,
+    })
+}
+
+/// Straight-line distance, metres: the same formula as the energy model's.
+fn distance_m(a: &LocalPoint, b: &LocalPoint) -> f64 {
+    let (de, dn) = (a.e - b.e, a.n - b.n);
+    (de * de + dn * dn).sqrt()
+}
+
 /// Plans the fewest budget-feasible sorties from `base` that together visit every cell of
-/// `cells` (centres, local metres) with service energies `service_j` (J), then the least total
-/// energy for that number of sorties (for the tour found; the split is optimal for it).
+/// `centres` (cell centres, local frame, metres) with service energies `service_j` (hover +
+/// receiver energy per cell, J, e.g. [`MissionEnergyModel::service_energy_j`]), then the least
+/// total energy for that number of sorties. See the module docs for the method.
 ///
 /// # Errors
-/// [`EnergyError::LengthMismatch`] if the slices differ in length;
-/// [`EnergyError::InvalidParameter`] for a non-finite position or a negative / non-finite
-/// service energy or invalid options; [`EnergyError::CellUnreachable`] if some cell cannot be
-/// served even alone.
+/// [`ExplorationError::Energy`] with [`EnergyError::LengthMismatch`] if the slices differ in
+/// length, or [`EnergyError::InvalidParameter`] for a non-finite position, a negative /
+/// non-finite service energy or an invalid option; [`ExplorationError::CellUnreachable`] if
+/// some cell cannot be served even alone. The other variants report bugs.
 pub fn plan_exploration(
     model: &MissionEnergyModel,
     base: LocalPoint,
-    cells: &[LocalPoint],
+    centres: &[LocalPoint],
     service_j: &[f64],
     options: &ExplorationOptions,
-) -> Result<ExplorationPlan, EnergyError> {
+) -> Result<ExplorationPlan, ExplorationError> {
+    let cells = centres;
     if cells.len() != service_j.len() {
         return Err(EnergyError::LengthMismatch {
             what: "cell centres vs service energies",
             left: cells.len(),
             right: service_j.len(),
-        });
+        }
+        .into());
     }
     for p in cells.iter().chain(std::iter::once(&base)) {
-        crate::error::finite("cell or base easting (m)", p.e)?;
-        crate::error::finite("cell or base northing (m)", p.n)?;
+        if !(p.e.is_finite() && p.n.is_finite()) {
+            let bad = if p.e.is_finite() { p.n } else { p.e };
+            return Err(invalid(
+                "cell or base coordinate (m)",
+                bad,
+                "a finite number",
+            ));
+        }
     }
     for &s in service_j {
-        non_negative("cell service energy (J)", s)?;
+        if !(s.is_finite() && s >= 0.0) {
+            return Err(invalid(
+                "cell service energy (J)",
+                s,
+                "a finite number >= 0",
+            ));
+        }
     }
     if !(options.budget_margin >= 0.0 && options.budget_margin < 1.0) {
-        return Err(EnergyError::InvalidParameter {
-            name: "budget margin",
-            value: options.budget_margin,
-            expected: "a number in [0, 1)",
-        });
+        return Err(invalid(
+            "budget margin",
+            options.budget_margin,
+            "a number in [0, 1)",
+        ));
     }
     let n = cells.len();
     let fixed_j = model.sortie_fixed_j();
-    let budget = model.usable_budget_j() * (1.0 - options.budget_margin);
     let epm = model.energy_per_metre_j();
+    // Travel + service capacity of a sortie, J. The orienteering routes may exceed their
+    // budget by its tolerance (1e-9 relative), so they get a budget that much lower.
+    let capacity = model.usable_budget_j() * (1.0 - options.budget_margin) - fixed_j;
+    let route_budget = (capacity - 1e-9 * capacity.max(1.0)).max(0.0);
+    let budget = fixed_j + route_budget;
     let to_base: Vec<f64> = cells.iter().map(|c| epm * distance_m(c, &base)).collect();
     for i in 0..n {
         let alone = fixed_j + 2.0 * to_base[i] + service_j[i];
-        if alone > budget {
-            return Err(EnergyError::CellUnreachable {
+        if alone.is_nan() || alone > budget {
+            return Err(ExplorationError::CellUnreachable {
                 cell: i,
                 energy_j: alone,
                 budget_j: model.usable_budget_j(),
@@ -156,7 +244,7 @@ pub fn plan_exploration(
         }
     }
     let lower_bound_sorties = sortie_lower_bound(&to_base, service_j, budget - fixed_j);
-    let tour = giant_tour(cells, options);
+    let tour = giant_tour(cells, options)?;
     let giant_tour_m = cycle_length(cells, &tour);
     let sweep = sweep_order(cells, base);
 
@@ -194,40 +282,94 @@ pub fn plan_exploration(
         }
     }
     let mut groups = best.map(|b| b.2).unwrap_or_default();
-    for g in &mut groups {
-        improve_sortie(cells, base, g);
-    }
+    // The sorties as a team orienteering instance in J: node 0 = base, node c + 1 = cell c.
+    let sorties_problem = if n > 0 {
+        let points: Vec<[f64; 2]> = std::iter::once(base)
+            .chain(cells.iter().copied())
+            .map(|p| [epm * p.e, epm * p.n])
+            .collect();
+        let mut service = Vec::with_capacity(n + 1);
+        service.push(0.0);
+        service.extend_from_slice(service_j);
+        Some(
+            Problem::from_points(&points, Metric::Euclidean, vec![0.0; n + 1], route_budget)?
+                .with_service_costs(service)?
+                .with_vehicles(groups.len().max(1))?,
+        )
+    } else {
+        None
+    };
+    let improve = ImproveOptions {
+        neighbours: options.neighbours,
+        between_routes: options.max_improvement_rounds > 0,
+        ..ImproveOptions::default()
+    };
+    let improve_sorties = |groups: Vec<Vec<usize>>| -> Result<Vec<Vec<usize>>, ExplorationError> {
+        let Some(problem) = &sorties_problem else {
+            return Ok(groups);
+        };
+        let routes: Vec<Vec<usize>> = groups
+            .iter()
+            .map(|g| {
+                std::iter::once(0)
+                    .chain(g.iter().map(|&c| c + 1))
+                    .chain(std::iter::once(0))
+                    .collect()
+            })
+            .collect();
+        let improved = improve_routes(problem, &routes, &improve)?;
+        Ok(improved
+            .routes
+            .iter()
+            .map(|r| {
+                r[1..r.len() - 1]
+                    .iter()
+                    .map(|&v| v - 1)
+                    .collect::<Vec<usize>>()
+            })
+            .filter(|g| !g.is_empty())
+            .collect())
+    };
+    groups = improve_sorties(groups)?;
     if options.eliminate_sorties {
-        groups = eliminate_sorties(&cost, base, groups);
-    }
-    for _ in 0..options.max_improvement_rounds {
-        let moved = relocate_cells(&cost, base, &mut groups, options.max_two_opt_passes);
-        let before = groups.len();
-        if options.eliminate_sorties {
+        for _ in 0..=options.max_improvement_rounds {
+            let before = groups.len();
             groups = eliminate_sorties(&cost, base, groups);
-        }
-        if !moved && groups.len() == before {
-            break;
+            if groups.len() == before {
+                break;
+            }
+            // Re-optimise the sorties that received cells.
+            groups = improve_sorties(groups)?;
         }
     }
-    let sorties: Vec<Sortie> = groups
-        .into_iter()
-        .filter(|g| !g.is_empty())
-        .map(|mut g| {
-            improve_sortie(cells, base, &mut g);
-            let distance_m = path_length(cells, base, &g);
-            let travel_j = epm * distance_m;
-            let service: f64 = g.iter().map(|&c| service_j[c]).sum();
-            Sortie {
-                cells: g,
-                distance_m,
-                travel_j,
-                service_j: service,
-                fixed_j,
-                energy_j: fixed_j + travel_j + service,
-            }
-        })
-        .collect();
+    let per_joule_of_service = model.hover_power_w() + model.rx_power_w();
+    let mut sorties = Vec::with_capacity(groups.len());
+    for (k, g) in groups.into_iter().filter(|g| !g.is_empty()).enumerate() {
+        // The energy model's own re-check, with the hover times behind the service energies.
+        let visits: Vec<CellVisit> = g
+            .iter()
+            .map(|&c| CellVisit {
+                centre: cells[c],
+                hover_s: service_j[c] / per_joule_of_service,
+            })
+            .collect();
+        let e = model.breakdown(base, &visits)?;
+        if !e.feasible {
+            return Err(ExplorationError::Infeasible {
+                sortie: k,
+                total_j: e.total_j,
+                budget_j: e.budget_j,
+            });
+        }
+        sorties.push(Sortie {
+            cells: g,
+            distance_m: e.distance_m,
+            travel_j: e.travel_j - e.vertical_j + e.return_j,
+            service_j: e.hover_j + e.comm_j,
+            fixed_j: e.vertical_j,
+            energy_j: e.total_j,
+        });
+    }
     let total_energy_j = sorties.iter().map(|s| s.energy_j).sum();
     Ok(ExplorationPlan {
         sorties,
@@ -235,6 +377,55 @@ pub fn plan_exploration(
         total_energy_j,
         giant_tour_m,
     })
+}
+
+/// A closed tour through all cells: nearest neighbour from cell 0, then the generic tour
+/// improvement (2-opt, Or-opt, double-bridge kicks) with cell `tour[0]` held in place.
+fn giant_tour(
+    cells: &[LocalPoint],
+    options: &ExplorationOptions,
+) -> Result<Vec<usize>, ExplorationError> {
+    let n = cells.len();
+    if n < 4 {
+        return Ok((0..n).collect());
+    }
+    let d = |a: usize, b: usize| distance_m(&cells[a], &cells[b]);
+    let mut tour = Vec::with_capacity(n + 1);
+    let mut used = vec![false; n];
+    let mut current = 0;
+    used[0] = true;
+    tour.push(0);
+    for _ in 1..n {
+        let mut next = usize::MAX;
+        let mut best = f64::INFINITY;
+        for (c, &u) in used.iter().enumerate() {
+            if !u && d(current, c) < best {
+                best = d(current, c);
+                next = c;
+            }
+        }
+        used[next] = true;
+        tour.push(next);
+        current = next;
+    }
+    tour.push(0);
+    let points: Vec<[f64; 2]> = cells.iter().map(|c| [c.e, c.n]).collect();
+    // Any budget at least the tour's length will do; it only sets the improvement threshold
+    // (1e-9 relative).
+    let length = cycle_length(cells, &tour[..n]);
+    let problem = Problem::from_points(&points, Metric::Euclidean, vec![0.0; n], 0.0)?
+        .with_budget(length * (1.0 + 1e-6) + 1.0)?;
+    let improve = ImproveOptions {
+        neighbours: options.neighbours,
+        between_routes: false,
+        kicks: options.tour_kicks,
+        seed: options.seed,
+        ..ImproveOptions::default()
+    };
+    let improved = improve_routes(&problem, &[tour], &improve)?;
+    let mut tour = improved.routes[0].clone();
+    tour.pop();
+    Ok(tour)
 }
 
 /// A lower bound on the number of sorties, the larger of two valid bounds (`capacity_j` is
@@ -285,164 +476,6 @@ fn sweep_order(cells: &[LocalPoint], base: LocalPoint) -> Vec<usize> {
             .then(a.cmp(&b))
     });
     order
-}
-
-/// Moves single cells to the cheapest feasible position in another sortie, or else swaps them
-/// with a cell of another sortie, while that lowers the total energy (best move per cell, at
-/// most `max_passes` passes over all cells); a sortie left empty is dropped. Returns whether
-/// anything moved.
-fn relocate_cells(
-    cost: &SplitCost<'_>,
-    base: LocalPoint,
-    groups: &mut Vec<Vec<usize>>,
-    max_passes: usize,
-) -> bool {
-    let at = |g: &[usize], pos: usize| -> LocalPoint {
-        // Path position pos in 0..=len+1, with 0 and len+1 the base.
-        if pos == 0 || pos > g.len() {
-            base
-        } else {
-            cost.cells[g[pos - 1]]
-        }
-    };
-    let mut energies: Vec<f64> = groups
-        .iter()
-        .map(|g| sortie_energy(cost, base, g))
-        .collect();
-    let mut any = false;
-    for _ in 0..max_passes {
-        let mut moved = false;
-        let mut a = 0;
-        while a < groups.len() {
-            let mut i = 0;
-            while i < groups[a].len() {
-                let c = groups[a][i];
-                let p = cost.cells[c];
-                let (prev, next) = (at(&groups[a], i), at(&groups[a], i + 2));
-                let gain = cost.epm
-                    * (distance_m(&prev, &p) + distance_m(&p, &next) - distance_m(&prev, &next));
-                let mut best: Option<(f64, usize, usize)> = None;
-                for (b, g) in groups.iter().enumerate() {
-                    if b == a {
-                        continue;
-                    }
-                    for pos in 0..=g.len() {
-                        let (u, v) = (at(g, pos), at(g, pos + 1));
-                        let ins = cost.epm
-                            * (distance_m(&u, &p) + distance_m(&p, &v) - distance_m(&u, &v));
-                        if ins < gain - 1e-9 * (1.0 + gain)
-                            && energies[b] + ins + cost.service_j[c] <= cost.budget
-                            && best.is_none_or(|x| ins < x.0)
-                        {
-                            best = Some((ins, b, pos));
-                        }
-                    }
-                }
-                let Some((_, b, pos)) = best else {
-                    if swap_best(cost, base, groups, &mut energies, a, i) {
-                        moved = true;
-                    }
-                    i += 1;
-                    continue;
-                };
-                groups[b].insert(pos, c);
-                let exact = sortie_energy(cost, base, &groups[b]);
-                if exact > cost.budget {
-                    // Float rounding: undo.
-                    groups[b].remove(pos);
-                    i += 1;
-                    continue;
-                }
-                energies[b] = exact;
-                groups[a].remove(i);
-                energies[a] = sortie_energy(cost, base, &groups[a]);
-                moved = true;
-            }
-            if groups[a].is_empty() {
-                groups.remove(a);
-                energies.remove(a);
-            } else {
-                a += 1;
-            }
-        }
-        any |= moved;
-        if !moved {
-            break;
-        }
-    }
-    if any {
-        for g in groups.iter_mut() {
-            improve_sortie(cost.cells, base, g);
-        }
-    }
-    any
-}
-
-/// Exchanges cell `groups[a][i]` with the cell of another sortie (each taking the other's
-/// position) that lowers the total energy most while both sorties stay within budget.
-/// Returns whether a swap was made.
-fn swap_best(
-    cost: &SplitCost<'_>,
-    base: LocalPoint,
-    groups: &mut [Vec<usize>],
-    energies: &mut [f64],
-    a: usize,
-    i: usize,
-) -> bool {
-    let at = |g: &[usize], pos: usize| -> LocalPoint {
-        if pos == 0 || pos > g.len() {
-            base
-        } else {
-            cost.cells[g[pos - 1]]
-        }
-    };
-    // Energy change of sortie g when the cell at index k is replaced by cell `by`.
-    let replace = |g: &[usize], k: usize, by: usize| -> f64 {
-        let (u, v) = (at(g, k), at(g, k + 2));
-        let (old, new) = (cost.cells[g[k]], cost.cells[by]);
-        cost.epm
-            * (distance_m(&u, &new) + distance_m(&new, &v)
-                - distance_m(&u, &old)
-                - distance_m(&old, &v))
-            + cost.service_j[by]
-            - cost.service_j[g[k]]
-    };
-    let c = groups[a][i];
-    let mut best: Option<(f64, usize, usize)> = None;
-    for (b, g) in groups.iter().enumerate() {
-        if b == a {
-            continue;
-        }
-        for (k, &d) in g.iter().enumerate() {
-            let da = replace(&groups[a], i, d);
-            let db = replace(g, k, c);
-            let total = da + db;
-            if total < -1e-9 * (1.0 + energies[a] + energies[b])
-                && energies[a] + da <= cost.budget
-                && energies[b] + db <= cost.budget
-                && best.is_none_or(|x| total < x.0)
-            {
-                best = Some((total, b, k));
-            }
-        }
-    }
-    let Some((_, b, k)) = best else { return false };
-    let d = groups[b][k];
-    groups[a][i] = d;
-    groups[b][k] = c;
-    let (ea, eb) = (
-        sortie_energy(cost, base, &groups[a]),
-        sortie_energy(cost, base, &groups[b]),
-    );
-    if ea > cost.budget || eb > cost.budget {
-        // Float rounding: undo.
-        groups[a][i] = c;
-        groups[b][k] = d;
-        return false;
-    }
-    energies[a] = ea;
-    energies[b] = eb;
-    true
 }
 
 /// Energy of the sortie base -> order -> base, J.
@@ -516,12 +549,7 @@ fn eliminate_sorties(
             break;
         }
         match done {
-            Some(mut g) => {
-                for order in &mut g {
-                    improve_sortie(cost.cells, base, order);
-                }
-                groups = g;
-            }
+            Some(g) => groups = g,
             None => return groups,
         }
     }
@@ -600,126 +628,10 @@ fn path_length(cells: &[LocalPoint], base: LocalPoint, order: &[usize]) -> f64 {
     total + distance_m(&previous, &base)
 }
 
-/// A closed tour through all cells: nearest neighbour from cell 0, then neighbour-list 2-opt.
-fn giant_tour(cells: &[LocalPoint], options: &ExplorationOptions) -> Vec<usize> {
-    let n = cells.len();
-    if n < 4 {
-        return (0..n).collect();
-    }
-    let d = |a: usize, b: usize| distance_m(&cells[a], &cells[b]);
-    // Nearest neighbour construction.
-    let mut tour = Vec::with_capacity(n);
-    let mut used = vec![false; n];
-    let mut current = 0;
-    used[0] = true;
-    tour.push(0);
-    for _ in 1..n {
-        let mut next = usize::MAX;
-        let mut best = f64::INFINITY;
-        for (c, &u) in used.iter().enumerate() {
-            if !u && d(current, c) < best {
-                best = d(current, c);
-                next = c;
-            }
-        }
-        used[next] = true;
-        tour.push(next);
-        current = next;
-    }
-    // Candidate lists: the k nearest other cells of each cell.
-    let k = options.neighbours.clamp(1, n - 1);
-    let near: Vec<Vec<usize>> = (0..n)
-        .map(|a| {
-            let mut others: Vec<usize> = (0..n).filter(|&b| b != a).collect();
-            others.select_nth_unstable_by(k - 1, |&x, &y| {
-                d(a, x).total_cmp(&d(a, y)).then(x.cmp(&y))
-            });
-            others.truncate(k);
-            others.sort_by(|&x, &y| d(a, x).total_cmp(&d(a, y)).then(x.cmp(&y)));
-            others
-        })
-        .collect();
-    let mut pos = vec![0usize; n];
-    for (p, &c) in tour.iter().enumerate() {
-        pos[c] = p;
-    }
-    for _ in 0..options.max_two_opt_passes {
-        let mut improved = false;
-        for p in 0..n {
-            let a = tour[p];
-            let b = tour[(p + 1) % n];
-            let dab = d(a, b);
-            for &c in &near[a] {
-                let dac = d(a, c);
-                if dac >= dab {
-                    break;
-                }
-                let q = pos[c];
-                let dd = tour[(q + 1) % n];
-                if c == b || dd == a {
-                    continue;
-                }
-                let gain = dab + d(c, dd) - dac - d(b, dd);
-                if gain > 1e-10 * (1.0 + dab) {
-                    // Edges (a,b) at p and (c,dd) at q become (a,c) and (b,dd): reverse the
-                    // tour between them.
-                    let (lo, hi) = if p < q { (p, q) } else { (q, p) };
-                    tour[lo + 1..=hi].reverse();
-                    for (r, &city) in tour.iter().enumerate().take(hi + 1).skip(lo + 1) {
-                        pos[city] = r;
-                    }
-                    improved = true;
-                    break;
-                }
-            }
-        }
-        if !improved {
-            break;
-        }
-    }
-    tour
-}
-
-/// 2-opt on one sortie's path with both ends fixed at the base, to a local optimum.
-fn improve_sortie(cells: &[LocalPoint], base: LocalPoint, order: &mut [usize]) {
-    let m = order.len();
-    if m < 2 {
-        return;
-    }
-    let at = |order: &[usize], k: usize| -> LocalPoint {
-        if k == 0 || k == m + 1 {
-            base
-        } else {
-            cells[order[k - 1]]
-        }
-    };
-    // Path positions 0..=m+1 with 0 and m+1 the base; reverse positions i+1..=j.
-    for _ in 0..100 {
-        let mut improved = false;
-        for i in 0..m {
-            for j in (i + 2)..=m {
-                let (a, b) = (at(order, i), at(order, i + 1));
-                let (c, dd) = (at(order, j), at(order, j + 1));
-                let gain = distance_m(&a, &b) + distance_m(&c, &dd)
-                    - distance_m(&a, &c)
-                    - distance_m(&b, &dd);
-                if gain > 1e-10 * (1.0 + distance_m(&a, &b)) {
-                    order[i..j].reverse();
-                    improved = true;
-                }
-            }
-        }
-        if !improved {
-            break;
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::{EnergyConfig, VerticalConfig};
-    use crate::mission::CellVisit;
+    use gleaner_energy::{EnergyConfig, VerticalConfig};
     use proptest::prelude::*;
 
     fn grid(nx: usize, ny: usize) -> Vec<LocalPoint> {
@@ -836,7 +748,7 @@ mod tests {
         )
         .unwrap_err();
         assert!(
-            matches!(err, EnergyError::CellUnreachable { cell: 1, .. }),
+            matches!(err, ExplorationError::CellUnreachable { cell: 1, .. }),
             "{err}"
         );
     }
@@ -849,6 +761,44 @@ mod tests {
         assert!(plan_exploration(&m, base, &[base], &[], &o).is_err());
         assert!(plan_exploration(&m, base, &[base], &[-1.0], &o).is_err());
         assert!(plan_exploration(&m, base, &[LocalPoint::new(f64::NAN, 0.0)], &[1.0], &o).is_err());
+    }
+
+    #[test]
+    fn hostile_numbers_are_errors_not_panics() {
+        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let base = LocalPoint::new(0.0, 0.0);
+        let o = ExplorationOptions::default();
+        let far = [LocalPoint::new(1e300, -1e300), LocalPoint::new(10.0, 0.0)];
+        assert!(matches!(
+            plan_exploration(&m, base, &far, &[1.0, 1.0], &o),
+            Err(ExplorationError::CellUnreachable { cell: 0, .. })
+        ));
+        let near = [LocalPoint::new(10.0, 0.0)];
+        for s in [f64::INFINITY, f64::NAN, -0.5] {
+            assert!(matches!(
+                plan_exploration(&m, base, &near, &[s], &o),
+                Err(ExplorationError::Energy(_))
+            ));
+        }
+        assert!(matches!(
+            plan_exploration(&m, base, &near, &[f64::MAX], &o),
+            Err(ExplorationError::CellUnreachable { .. })
+        ));
+        // Everything 1,000 km from the origin, base included: a normal plan.
+        let shifted: Vec<LocalPoint> = grid(3, 3)
+            .iter()
+            .map(|p| LocalPoint::new(p.e + 1e6, p.n - 1e6))
+            .collect();
+        let b = LocalPoint::new(1e6, -1e6);
+        let p = plan_exploration(&m, b, &shifted, &[m.service_energy_j(30.0); 9], &o).unwrap();
+        check_plan(&m, b, &shifted, &[30.0; 9], &p);
+        for margin in [f64::NAN, -1e-3, 1.0, f64::INFINITY] {
+            let o = ExplorationOptions {
+                budget_margin: margin,
+                ..ExplorationOptions::default()
+            };
+            assert!(plan_exploration(&m, base, &near, &[1.0], &o).is_err());
+        }
     }
 
     #[test]
@@ -874,9 +824,10 @@ mod tests {
     }
 
     #[test]
-    fn two_opt_untangles_points_on_a_circle() {
+    fn giant_tour_untangles_points_on_a_circle() {
         // 40 points on a circle of radius 500 m in scrambled order: the optimal tour is the
-        // polygon, and 2-opt reaches it from any tour without crossings.
+        // polygon, and 2-opt reaches it from any tour (a tour with a crossing is not 2-opt
+        // optimal).
         let n = 40;
         let cells: Vec<LocalPoint> = (0..n)
             .map(|i| {
@@ -884,7 +835,7 @@ mod tests {
                 LocalPoint::new(500.0 * a.cos(), 500.0 * a.sin())
             })
             .collect();
-        let tour = giant_tour(&cells, &ExplorationOptions::default());
+        let tour = giant_tour(&cells, &ExplorationOptions::default()).unwrap();
         let mut sorted = tour.clone();
         sorted.sort_unstable();
         assert_eq!(sorted, (0..n).collect::<Vec<_>>());
@@ -922,59 +873,6 @@ mod tests {
         assert_eq!(cells_visited, vec![0, 1, 2]);
         // Collinear cells: any out-and-back order flies 2 x 180 m.
         assert!((path_length(&cells, base, &merged[0]) - 360.0).abs() < 1e-9);
-    }
-
-    #[test]
-    fn relocation_regroups_crossed_sorties() {
-        // Two cells east and two west, assigned crosswise: moving cells between the sorties
-        // must end with one sortie per side.
-        let m = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
-        let cells = [
-            LocalPoint::new(500.0, 0.0),
-            LocalPoint::new(-500.0, 0.0),
-            LocalPoint::new(540.0, 0.0),
-            LocalPoint::new(-540.0, 0.0),
-        ];
-        let to_base: Vec<f64> = cells
-            .iter()
-            .map(|c| m.energy_per_metre_j() * c.e.abs())
-            .collect();
-        let service = [m.service_energy_j(30.0); 4];
-        let cost = SplitCost {
-            cells: &cells,
-            epm: m.energy_per_metre_j(),
-            to_base: &to_base,
-            service_j: &service,
-            fixed_j: 0.0,
-            // Crossed sorties fit (34.8 kJ, 36.8 kJ), three cells never do (>= 41.8 kJ).
-            budget: 37_000.0,
-        };
-        let base = LocalPoint::new(0.0, 0.0);
-        let mut groups = vec![vec![0, 1], vec![2, 3]];
-        assert!(
-            groups
-                .iter()
-                .all(|g| sortie_energy(&cost, base, g) <= cost.budget)
-        );
-        let before: f64 = groups.iter().map(|g| sortie_energy(&cost, base, g)).sum();
-        assert!(relocate_cells(&cost, base, &mut groups, 10));
-        let after: f64 = groups.iter().map(|g| sortie_energy(&cost, base, g)).sum();
-        assert!(after < before);
-        let mut sides: Vec<Vec<usize>> = groups
-            .iter()
-            .map(|g| {
-                let mut g = g.clone();
-                g.sort_unstable();
-                g
-            })
-            .collect();
-        sides.sort();
-        assert_eq!(sides, vec![vec![0, 2], vec![1, 3]]);
-        assert!(
-            groups
-                .iter()
-                .all(|g| sortie_energy(&cost, base, g) <= cost.budget)
-        );
     }
 
     #[test]
