@@ -41,6 +41,7 @@ mod record;
 mod score;
 pub mod settings;
 mod simulate;
+mod state;
 mod summaries;
 mod view;
 
@@ -55,7 +56,7 @@ pub use plan::{
 pub use progress::{Progress, Silent};
 pub use project::Project;
 pub use record::{RecordOutcome, RecordRequest, record_flight};
-pub use score::{Condition, ScoreRequest, Scoring, compute, driver, score};
+pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};
 pub use settings::Settings;
 pub use simulate::{Truth, fly};
 pub use summaries::{pending_bytes, series_summary};
