@@ -285,7 +285,19 @@ pub fn score<S: Store>(project: &mut Project<S>, request: &ScoreRequest) -> Resu
     let scoring = compute(project, request)?;
     if !request.dry_run {
         let rows = metadata_rows(project, &scoring, &HashMap::new());
-        project.store_mut().write(|tx| write_scoring(tx, rows))?;
+        // A common request that could not use the persisted state (e.g. a database from
+        // before it existed, or changed grid settings) rebuilds it for the next scoring.
+        let refresh = scoring.incremental.is_none()
+            && request.probabilities.is_none()
+            && request.history == History::default();
+        let settings = project.settings().clone();
+        project.store_mut().write(|tx| {
+            write_scoring(tx, rows)?;
+            if refresh {
+                state::refresh_if_stale(tx, &settings)?;
+            }
+            Ok::<_, AppError>(())
+        })?;
     }
     Ok(scoring)
 }

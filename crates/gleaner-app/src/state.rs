@@ -642,7 +642,12 @@ pub(crate) fn before_insert<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Pla
 pub(crate) fn after_insert<W: StoreWrite>(tx: &mut W, plan: Plan, settings: &Settings) -> Result<()> {
     let updated = match plan {
         Plan::Rebuild => None,
-        Plan::Update(p, rows) => update(tx, *p, &rows, settings)?,
+        Plan::Update(p, rows) => {
+            if rows.is_empty() && is_current(&*tx, &p, settings)? {
+                return Ok(());
+            }
+            update(tx, *p, &rows, settings)?
+        }
     };
     match updated {
         Some(p) => write_blob(tx, Some(&p)),
@@ -651,6 +656,32 @@ pub(crate) fn after_insert<W: StoreWrite>(tx: &mut W, plan: Plan, settings: &Set
             write_blob(tx, p.as_ref())
         }
     }
+}
+
+/// Whether `p` describes the store as it is: same field, same settings, same reading count.
+fn is_current<R: StoreRead>(store: &R, p: &Persisted, settings: &Settings) -> Result<bool> {
+    let Some((sensors, field)) = field_of(store, settings)? else {
+        return Ok(false);
+    };
+    Ok(p.field_fp == field_fingerprint(&sensors, &field)
+        && p.settings_fp == settings_fingerprint(settings)
+        && p.first_reading.len() == sensors.len()
+        && store.reading_count()? == p.reading_count)
+}
+
+/// Inside a write transaction: rebuilds the persisted state when it is missing or does not
+/// describe the store (e.g. after the grid settings changed, or a database written before the
+/// state existed). O(history) then; a few queries otherwise.
+pub(crate) fn refresh_if_stale<W: StoreWrite>(tx: &mut W, settings: &Settings) -> Result<()> {
+    let current = match tx.blob_get(BLOB_KEY)?.and_then(|b| Persisted::from_bytes(&b)) {
+        Some(p) => is_current(&*tx, &p, settings)?,
+        None => false,
+    };
+    if !current {
+        let p = rebuild(&*tx, settings)?;
+        write_blob(tx, p.as_ref())?;
+    }
+    Ok(())
 }
 
 /// The incremental update; `None` when a rebuild is needed.
@@ -667,11 +698,9 @@ fn update<W: StoreWrite>(
         || p.settings_fp != settings_fingerprint(settings)
         || p.first_reading.len() != sensors.len()
         || tx.reading_count()? != p.reading_count + rows.len() as u64
+        || rows.is_empty()
     {
         return Ok(None);
-    }
-    if rows.is_empty() {
-        return Ok(Some(p));
     }
     let nm = p.modalities.len();
     let index: HashMap<&str, usize> = sensors
@@ -756,7 +785,10 @@ fn update<W: StoreWrite>(
                         UnixSeconds::MAX,
                         Some(grid),
                     );
-                    cell_series_of(&field, &c, None)
+                    let Some(m) = c.modalities.iter().position(|x| *x == p.modalities[m]) else {
+                        return vec![OwnedSeries::default(); field.cells().len()];
+                    };
+                    cell_series_of(&field, &c, Some(m))
                         .into_iter()
                         .map(|mut v| v.pop().unwrap_or_default())
                         .collect()
