@@ -10,8 +10,7 @@ use gleaner_store::{
 };
 use gleaner_utility::{
     CellInputs, CellTerms, ClassThresholds, ConditionConfig, ConditionModel, IncrementalState,
-    OwnedSeries, Series,
-    score_cells_parallel, series_correlation, validate_probabilities,
+    OwnedSeries, Series, score_cells_parallel, series_correlation, validate_probabilities,
 };
 
 use crate::cell_csv;

@@ -34,12 +34,11 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 use gleaner_field::{Field, Modality, Sensor, SensorId, UnixSeconds};
 use gleaner_store::{
-    AnomalyRecord, CellMetadata, Correlation, ModalitySummary, SeriesStats,
-    StoreRead, StoreWrite,
+    AnomalyRecord, CellMetadata, Correlation, ModalitySummary, SeriesStats, StoreRead, StoreWrite,
 };
 use gleaner_utility::{
-    ConditionConfig, ConditionModel, HistoryWindow, IncrementalState, OwnedSeries, Reading,
-    Series, TimeGrid,
+    ConditionConfig, ConditionModel, HistoryWindow, IncrementalState, OwnedSeries, Reading, Series,
+    TimeGrid,
 };
 
 use crate::error::{AppError, Result};
@@ -65,8 +64,9 @@ const RETENTION_STEPS: i64 = 32;
 /// A trained condition model, or the warning its training gave (U = 0).
 type Fit = std::result::Result<ConditionModel, String>;
 
-/// The condition model part of the state.
+/// The condition model part of the state (one per state: its size does not matter).
 #[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)]
 enum ConditionState {
     /// No soil-moisture modality: U = 0 with [`NO_MODALITY`].
     NoModality,
@@ -426,13 +426,7 @@ fn median_gap(gaps: &BTreeMap<i64, u64>) -> i64 {
 }
 
 fn grid_of(p: &Persisted) -> TimeGrid {
-    let origin = p
-        .span
-        .iter()
-        .flatten()
-        .map(|s| s.0)
-        .min()
-        .unwrap_or(0);
+    let origin = p.span.iter().flatten().map(|s| s.0).min().unwrap_or(0);
     TimeGrid {
         origin,
         step_s: median_gap(&p.gaps).max(1),
@@ -639,7 +633,11 @@ pub(crate) fn before_insert<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Pla
 
 /// After inserting: brings the persisted state up to date (see the module docs), in the
 /// caller's transaction.
-pub(crate) fn after_insert<W: StoreWrite>(tx: &mut W, plan: Plan, settings: &Settings) -> Result<()> {
+pub(crate) fn after_insert<W: StoreWrite>(
+    tx: &mut W,
+    plan: Plan,
+    settings: &Settings,
+) -> Result<()> {
     let updated = match plan {
         Plan::Rebuild => None,
         Plan::Update(p, rows) => {
@@ -673,7 +671,10 @@ fn is_current<R: StoreRead>(store: &R, p: &Persisted, settings: &Settings) -> Re
 /// describe the store (e.g. after the grid settings changed, or a database written before the
 /// state existed). O(history) then; a few queries otherwise.
 pub(crate) fn refresh_if_stale<W: StoreWrite>(tx: &mut W, settings: &Settings) -> Result<()> {
-    let current = match tx.blob_get(BLOB_KEY)?.and_then(|b| Persisted::from_bytes(&b)) {
+    let current = match tx
+        .blob_get(BLOB_KEY)?
+        .and_then(|b| Persisted::from_bytes(&b))
+    {
         Some(p) => is_current(&*tx, &p, settings)?,
         None => false,
     };

@@ -316,9 +316,12 @@ fn fast_scoring_equals_full_scoring_on_a_synthetic_farm() {
     let at = farm.times()[79] + 86_400;
     record_first_sortie(&mut project, at, |sensors| {
         let rows: Vec<&str> = std::iter::once(header)
-            .chain(third[1..].iter().copied().filter(|l| {
-                sensors.iter().any(|s| l.starts_with(&format!("{s},")))
-            }))
+            .chain(
+                third[1..]
+                    .iter()
+                    .copied()
+                    .filter(|l| sensors.iter().any(|s| l.starts_with(&format!("{s},")))),
+            )
             .collect();
         Some(file("flight.csv", &rows))
     });

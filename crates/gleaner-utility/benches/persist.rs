@@ -35,9 +35,11 @@ struct Fixture {
     history: Vec<Reading>,
     mission: Vec<Reading>,
     class_modality: usize,
+    /// Days of history the fixture's condition model is trained on (keeps set-up quick).
+    train_days: i64,
 }
 
-fn fixture(name: &'static str, config: SynthConfig) -> Fixture {
+fn fixture(name: &'static str, config: SynthConfig, train_days: i64) -> Fixture {
     let farm: SynthFarm = generate(&config).expect("valid synthetic configuration");
     let field = Field::build(farm.sensors(), farm.base(), &FieldConfig::default())
         .expect("synthetic sensors grid");
@@ -56,7 +58,9 @@ fn fixture(name: &'static str, config: SynthConfig) -> Fixture {
     }
     let last_day = *farm.times().last().expect("at least one day");
     let mission_from = last_day - 13 * DAY;
-    let mission_cells: Vec<usize> = (0..field.cells().len()).step_by(field.cells().len().div_ceil(10)).collect();
+    let mission_cells: Vec<usize> = (0..field.cells().len())
+        .step_by(field.cells().len().div_ceil(10))
+        .collect();
     let (mut history, mut mission) = (Vec::new(), Vec::new());
     for r in farm.readings() {
         let (cell, sensor) = place[r.sensor];
@@ -81,6 +85,7 @@ fn fixture(name: &'static str, config: SynthConfig) -> Fixture {
         history,
         mission,
         class_modality: farm.modality_index("vw@30cm").unwrap_or(0),
+        train_days,
     }
 }
 
@@ -126,11 +131,21 @@ fn bench_farm(c: &mut Criterion, f: &Fixture) {
             .collect();
         full.add_readings(&class).expect("valid readings");
         let series = full.recent_series(f.class_modality);
-        let from = series.iter().filter_map(|s| s.times.first()).min().copied().unwrap_or(0);
-        // Train on the last two years at most (keeps the fixture quick to build).
-        let from = from.max(newest - 730 * DAY);
-        ConditionModel::fit(&views(&series), &f.neighbours, from, newest, &ConditionConfig::default())
-            .expect("model fits")
+        let from = series
+            .iter()
+            .filter_map(|s| s.times.first())
+            .min()
+            .copied()
+            .unwrap_or(0);
+        let from = from.max(newest - f.train_days * DAY);
+        ConditionModel::fit(
+            &views(&series),
+            &f.neighbours,
+            from,
+            newest,
+            &ConditionConfig::default(),
+        )
+        .expect("model fits")
     };
     let model_bytes = model.to_bytes();
     eprintln!(
@@ -192,6 +207,7 @@ fn persist(c: &mut Criterion) {
             t_depths_cm: vec![30, 60, 90, 120, 150],
             ..SynthConfig::default()
         },
+        730,
     );
     bench_farm(c, &caf);
     drop(caf);
@@ -205,6 +221,7 @@ fn persist(c: &mut Criterion) {
             t_depths_cm: vec![30],
             ..SynthConfig::default()
         },
+        10,
     );
     bench_farm(c, &large);
 }

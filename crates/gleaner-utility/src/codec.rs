@@ -181,9 +181,7 @@ impl<'a> Reader<'a> {
         let n = self.u64()?;
         let left = (self.bytes.len() - self.pos) as u64;
         if n.saturating_mul(min_element_bytes.max(1) as u64) > left {
-            return Err(self.error(format!(
-                "length {n} exceeds the {left} bytes left"
-            )));
+            return Err(self.error(format!("length {n} exceeds the {left} bytes left")));
         }
         usize::try_from(n).map_err(|_| self.error(format!("length {n} too large")))
     }
@@ -208,10 +206,7 @@ impl<'a> Reader<'a> {
         if self.pos == self.bytes.len() {
             Ok(())
         } else {
-            Err(self.error(format!(
-                "{} trailing bytes",
-                self.bytes.len() - self.pos
-            )))
+            Err(self.error(format!("{} trailing bytes", self.bytes.len() - self.pos)))
         }
     }
 }

@@ -1036,7 +1036,10 @@ mod tests {
                 model.predict_proba(&cells, &neighbours, 500 * 86_400)
             );
             for n in 0..bytes.len() {
-                assert!(ConditionModel::from_bytes(&bytes[..n]).is_err(), "prefix {n}");
+                assert!(
+                    ConditionModel::from_bytes(&bytes[..n]).is_err(),
+                    "prefix {n}"
+                );
             }
             let mut rng = ChaCha8Rng::seed_from_u64(9);
             for _ in 0..2000 {

@@ -947,7 +947,11 @@ impl IncrementalState {
         let need = n_cells
             .saturating_mul(n_modalities)
             .saturating_mul(64)
-            .saturating_add((entries / 2).saturating_mul(n_modalities).saturating_mul(48));
+            .saturating_add(
+                (entries / 2)
+                    .saturating_mul(n_modalities)
+                    .saturating_mul(48),
+            );
         if need > r.remaining() {
             return Err(r.error(format!(
                 "{n_cells} cells × {n_modalities} modalities with {entries} neighbour entries \
@@ -1382,7 +1386,10 @@ mod tests {
             );
             // Every truncation is an error, never a panic.
             for n in (0..bytes.len()).step_by(7).chain([bytes.len() - 1]) {
-                assert!(IncrementalState::from_bytes(&bytes[..n]).is_err(), "prefix {n}");
+                assert!(
+                    IncrementalState::from_bytes(&bytes[..n]).is_err(),
+                    "prefix {n}"
+                );
             }
             let mut longer = bytes.clone();
             longer.push(0);
@@ -1487,7 +1494,10 @@ mod tests {
             let recent = IncrementalState::from_bytes(&recent.to_bytes()).unwrap();
             let all = full.recent_series(0);
             let kept = recent.recent_series(0);
-            assert!(kept.iter().map(OwnedSeries::len).sum::<usize>() * 3 < all.iter().map(OwnedSeries::len).sum::<usize>());
+            assert!(
+                kept.iter().map(OwnedSeries::len).sum::<usize>() * 3
+                    < all.iter().map(OwnedSeries::len).sum::<usize>()
+            );
             fn views(s: &[OwnedSeries]) -> Vec<Series<'_>> {
                 s.iter().map(OwnedSeries::as_series).collect()
             }

@@ -119,7 +119,8 @@ impl TimeGrid {
         }
         // Saturating: a time or origin near the ends of i64 must not overflow.
         let slots = t.saturating_sub(self.origin).div_euclid(self.step_s);
-        self.origin.saturating_add(slots.saturating_mul(self.step_s))
+        self.origin
+            .saturating_add(slots.saturating_mul(self.step_s))
     }
 }
 
