@@ -1006,3 +1006,98 @@ pub(crate) fn metadata_from_state(
         })
         .collect();
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn sample() -> Persisted {
+        let grid = TimeGrid {
+            origin: 86_400,
+            step_s: 86_400,
+        };
+        let mut state =
+            IncrementalState::new(&[1, 2], &[vec![1], vec![0]], 2, grid).expect("valid state");
+        state.set_retention(Some(RETENTION_STEPS * 86_400));
+        for d in 1..40i64 {
+            for (cell, sensor) in [(0, 0), (1, 0), (1, 1)] {
+                for modality in 0..2 {
+                    let value =
+                        0.2 + 0.01 * ((d * 7 + cell as i64 * 3 + modality as i64) % 11) as f64;
+                    state
+                        .add_reading(Reading {
+                            cell,
+                            sensor,
+                            modality,
+                            time: d * 86_400,
+                            value,
+                        })
+                        .expect("valid reading");
+                }
+            }
+        }
+        state.trim();
+        Persisted {
+            field_fp: 1,
+            settings_fp: 2,
+            reading_count: 234,
+            modalities: vec!["t@30cm".into(), "vw@30cm".into()],
+            first_reading: vec![Some(86_400); 3],
+            last_reading: vec![Some(39 * 86_400); 3],
+            span: vec![Some((86_400, 39 * 86_400)); 6],
+            gaps: BTreeMap::from([(86_400, 228)]),
+            latest: Some(39 * 86_400),
+            condition: ConditionState::Fitted {
+                modality: "vw@30cm".into(),
+                fitted_to: 39 * 86_400,
+                at_latest: Err("no condition model (too little data); U = 0".into()),
+                after_latest: None,
+            },
+            state,
+        }
+    }
+
+    #[test]
+    fn blob_round_trip_and_corruption() {
+        let p = sample();
+        let bytes = p.to_bytes();
+        let back = Persisted::from_bytes(&bytes).expect("decodes");
+        assert_eq!(back.to_bytes(), bytes, "deterministic round trip");
+        assert_eq!(back.state, p.state);
+        assert_eq!(median_gap(&back.gaps), 86_400);
+        assert_eq!(grid_of(&back), p.state.grid());
+        for n in 0..bytes.len() {
+            assert!(Persisted::from_bytes(&bytes[..n]).is_none(), "prefix {n}");
+        }
+        assert!(
+            Persisted::from_bytes(&[]).is_none(),
+            "the empty 'no state' blob"
+        );
+        for k in 0..bytes.len() {
+            let mut b = bytes.clone();
+            b[k] ^= 0x5a;
+            let _ = Persisted::from_bytes(&b);
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn arbitrary_blobs_never_panic(body in proptest::collection::vec(any::<u8>(), 0..400)) {
+            let mut bytes = MAGIC.to_vec();
+            bytes.extend_from_slice(&VERSION.to_le_bytes());
+            bytes.extend_from_slice(&body);
+            let _ = Persisted::from_bytes(&bytes);
+            let _ = Persisted::from_bytes(&body);
+        }
+    }
+
+    #[test]
+    fn median_gap_is_the_upper_median() {
+        // As `knowledge`: the element at index len/2 of the sorted gaps.
+        let gaps = BTreeMap::from([(10, 1), (20, 1), (30, 1), (40, 1)]);
+        assert_eq!(median_gap(&gaps), 30);
+        assert_eq!(median_gap(&BTreeMap::from([(5, 3), (7, 1)])), 5);
+        assert_eq!(median_gap(&BTreeMap::new()), 86_400);
+    }
+}

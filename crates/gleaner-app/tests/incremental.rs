@@ -328,4 +328,29 @@ fn fast_scoring_equals_full_scoring_on_a_synthetic_farm() {
     for at in [None, Some(at)] {
         assert!(same_scores(&project, at), "fast path taken at {at:?}");
     }
+    // A corrupt state: scoring takes the full path, and `score` rebuilds the state.
+    {
+        use app::{Store as _, StoreWrite as _};
+        let mut store = app::SqliteStore::open(&tmp.path().join("farm/gleaner.db")).unwrap();
+        store
+            .write(|tx| {
+                tx.blob_put("utility.incremental", b"not a state")?;
+                Ok::<_, app::AppError>(())
+            })
+            .unwrap();
+    }
+    let request = app::ScoreRequest::default();
+    assert!(
+        app::compute(&project, &request)
+            .unwrap()
+            .incremental
+            .is_none()
+    );
+    assert!(
+        app::score(&mut project, &request)
+            .unwrap()
+            .incremental
+            .is_none()
+    );
+    assert!(same_scores(&project, None), "rebuilt by score");
 }
