@@ -75,7 +75,7 @@ fn long_csv(c: &mut Criterion) {
 fn caf_into_fresh_db(files: &[PathBuf], db: &std::path::Path) -> u64 {
     use gleaner_store::{
         ConflictPolicy, ModalityRecord, Reading, ReadingBatch, SensorRecord, SqliteStore, Store,
-        StoreError, StoreWrite,
+        StoreWrite,
     };
     let mut all = gleaner_ingest::Readings::default();
     for f in files {
@@ -96,9 +96,6 @@ fn caf_into_fresh_db(files: &[PathBuf], db: &std::path::Path) -> u64 {
             source: "bench".into(),
         })
         .collect();
-    store
-        .write(|tx| tx.upsert_sensors(&sensors))
-        .expect("sensors");
     let modalities: Vec<ModalityRecord> = all
         .modalities
         .iter()
@@ -123,10 +120,10 @@ fn caf_into_fresh_db(files: &[PathBuf], db: &std::path::Path) -> u64 {
     };
     store
         .write(|tx| {
+            tx.upsert_sensors(&sensors)?;
             tx.upsert_modalities(&modalities)?;
             tx.insert_readings(&batch, ConflictPolicy::Fail)
         })
-        .map_err(|e: StoreError| e)
         .expect("insert")
         .inserted
 }

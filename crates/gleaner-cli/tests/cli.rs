@@ -109,7 +109,7 @@ fn failed_ingest_stores_nothing() {
     )
     .expect("write");
     let err = fail(&["ingest", "--project", p, s(&conflict)]);
-    assert!(err.contains("nothing was stored"), "{err}");
+    assert!(err.contains("nothing written"), "{err}");
     let skipped = ok(&["ingest", "--project", p, "--on-error", "skip", s(&conflict)]);
     assert!(
         skipped.contains("(1 new, 0 already stored)")

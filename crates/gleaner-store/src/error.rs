@@ -9,8 +9,9 @@ use crate::Conflict;
 
 /// Everything that can go wrong in the store. Each message carries the offending values.
 ///
-/// Whenever a write operation returns an error, its transaction has been rolled back and the
-/// database is exactly as it was before the call.
+/// A write method that returns an error other than [`StoreError::Backend`] has written nothing;
+/// a use case whose closure returns an error leaves the database exactly as it was (see
+/// [`crate::Store::write`]).
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum StoreError {

@@ -2,8 +2,12 @@
 //!
 //! Queries are written once, in [`read`], over a `&Connection`; the store runs each in its own
 //! read snapshot, the transaction runs them inside itself (a use case reads its own writes).
-//! The writes live in [`write`]; each write method runs in a savepoint of the transaction, so
-//! a method that fails leaves the transaction as it was before the call.
+//! The writes live in [`write`]; each write method but `insert_readings` runs in a savepoint of
+//! the transaction, so a method that fails leaves the transaction as it was before the call.
+//! `insert_readings` checks everything (names, values, conflicts) before its first write
+//! instead: a savepoint around a bulk insert into a large table made SQLite copy every touched
+//! page to the sub-journal and walk that journal at the end of every statement, which made a
+//! second year of readings 76 times slower than the first (see `BENCHMARKS.md`).
 
 mod read;
 mod write;
@@ -44,7 +48,10 @@ impl<T> Db<T> for rusqlite::Result<T> {
 /// A [`Store`] in an SQLite database (a file, or memory for tests).
 ///
 /// The connection runs with `journal_mode=WAL` (files only), `synchronous=NORMAL`,
-/// `foreign_keys=ON`, a 64 MiB page cache and a 10 s busy timeout. Opening migrates the schema
+/// `foreign_keys=ON`, a 64 MiB page cache and a 10 s busy timeout. Temporary files (statement
+/// journals beyond 64 KiB) stay on disk (`temp_store` is left at its default): an in-memory
+/// statement journal is truncated by walking it from the start, which is quadratic when a
+/// savepoint holds many pages. Opening migrates the schema
 /// to the latest version; a database written by a newer gleaner is refused with
 /// [`StoreError::SchemaTooNew`], a database of another application with
 /// [`StoreError::NotAGleanerDatabase`].
@@ -59,8 +66,12 @@ pub struct SqliteStore {
 
 /// An open write transaction of a [`SqliteStore`] (see [`Store::write`]).
 ///
-/// Reads see the transaction's own writes. Every write method runs in a savepoint: when it
-/// returns an error, its own writes are undone and the transaction's earlier writes stay.
+/// Reads see the transaction's own writes. A write method that returns an error the store
+/// detected itself (invalid values, unknown names, conflicts under [`ConflictPolicy::Fail`],
+/// [`StoreError::UnitMismatch`], [`StoreError::AlreadyFlown`], ...) has written nothing, and the
+/// transaction's earlier writes stay: the closure may handle the error and go on. A
+/// [`StoreError::Backend`] error (I/O, disk full) may leave the transaction partly written, or
+/// rolled back by SQLite itself: return it from the closure, which discards the whole use case.
 #[derive(Debug)]
 pub struct SqliteTx<'a> {
     tx: Transaction<'a>,
@@ -113,7 +124,6 @@ impl SqliteStore {
         conn.execute_batch(&format!(
             "PRAGMA synchronous = NORMAL;
              PRAGMA foreign_keys = ON;
-             PRAGMA temp_store = MEMORY;
              PRAGMA cache_size = -{CACHE_KIB};"
         ))
         .db()?;
@@ -231,7 +241,8 @@ impl StoreWrite for SqliteTx<'_> {
         batch: &ReadingBatch,
         policy: ConflictPolicy,
     ) -> Result<InsertStats> {
-        self.atomically(|c| write::insert_readings(c, batch, policy))
+        // No savepoint: the insert refuses a batch before its first write (see the module doc).
+        write::insert_readings(&self.tx, batch, policy)
     }
 
     fn record_ingest(&mut self, ingest: &IngestRecord) -> Result<i64> {

@@ -10,7 +10,7 @@ use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
 use crate::{
     CellMetadata, CellRecord, Conflict, ConflictPolicy, IngestRecord, InsertStats, MissionId,
-    MissionStatus, ModalityRecord, NewMission, Reading, ReadingBatch, ReplaceCellsStats, Result,
+    MissionStatus, ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result,
     SensorRecord, StoreError, UpsertStats, VisitRecord,
 };
 
@@ -225,76 +225,115 @@ pub(super) fn insert_readings(
             });
         }
     }
-    // Key order makes the B-tree inserts sequential; the sort is stable, so within-batch
-    // duplicates keep their order and the first one wins.
-    let key = |r: &Reading| {
-        (
-            sensor_keys[r.sensor as usize],
-            modality_keys[r.modality as usize],
-            r.t,
-        )
-    };
-    let mut rows: Vec<Reading> = batch.rows.clone();
-    rows.sort_by_key(key);
+    // Key order: the stored readings of a (sensor, modality) are one primary-key range, and
+    // the new rows go into the B-tree in order. The row's position breaks ties, so duplicates
+    // within the batch keep their order and the first one wins.
+    let mut order: Vec<(i64, i64, i64, usize)> = batch
+        .rows
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            (
+                sensor_keys[r.sensor as usize],
+                modality_keys[r.modality as usize],
+                r.t,
+                k,
+            )
+        })
+        .collect();
+    order.sort_unstable();
 
+    // Classify every row before writing anything: new, unchanged, or conflicting (with a
+    // stored reading, or with an earlier row of the batch). One primary-key range scan per
+    // (sensor, modality) run of the batch, over the run's time span only. Nothing is written
+    // before the classification is complete, so a refused batch leaves no trace without the
+    // cost of a savepoint (see `SqliteTx::insert_readings`).
     let mut stats = InsertStats::default();
+    let mut fresh = vec![false; order.len()];
+    let mut stored_in_range = c
+        .prepare_cached(
+            "SELECT t, value FROM readings
+             WHERE sensor = ?1 AND modality = ?2 AND t BETWEEN ?3 AND ?4 ORDER BY t",
+        )
+        .db()?;
+    let mut stored: Vec<(i64, f64)> = Vec::new();
+    let mut start = 0;
+    while let Some(&(s, m, t_first, _)) = order.get(start) {
+        let run = order[start..]
+            .iter()
+            .take_while(|o| o.0 == s && o.1 == m)
+            .count();
+        let t_last = order[start + run - 1].2;
+        stored.clear();
+        let mut q = stored_in_range.query(params![s, m, t_first, t_last]).db()?;
+        while let Some(row) = q.next().db()? {
+            stored.push((row.get(0).db()?, row.get(1).db()?));
+        }
+        let mut k = 0; // into `stored`
+        let mut first_of_t: Option<(i64, f64)> = None; // the first batch row at its t
+        for (offset, &(_, _, t, row)) in order[start..start + run].iter().enumerate() {
+            let value = batch.rows[row].value;
+            while k < stored.len() && stored[k].0 < t {
+                k += 1;
+            }
+            let existing = match (stored.get(k), first_of_t) {
+                (Some(&(ts, v)), _) if ts == t => Some(v),
+                (_, Some((tb, v))) if tb == t => Some(v),
+                _ => None,
+            };
+            match existing {
+                None => {
+                    fresh[start + offset] = true;
+                    stats.inserted += 1;
+                    first_of_t = Some((t, value));
+                }
+                Some(v) if same_value(v, value) => stats.unchanged += 1,
+                Some(v) => {
+                    let r = &batch.rows[row];
+                    stats.conflicts.push(Conflict {
+                        sensor: batch.sensors[r.sensor as usize].clone(),
+                        modality: batch.modalities[r.modality as usize].clone(),
+                        t,
+                        stored: v,
+                        incoming: value,
+                    });
+                }
+            }
+        }
+        start += run;
+    }
+    if policy == ConflictPolicy::Fail && !stats.conflicts.is_empty() {
+        return Err(StoreError::Conflicts(stats.conflicts));
+    }
+
+    // Insert the new rows in key order, many per statement.
     let many_sql = format!(
-        "INSERT INTO readings (sensor, modality, t, value) VALUES {} ON CONFLICT DO NOTHING",
+        "INSERT INTO readings (sensor, modality, t, value) VALUES {}",
         vec!["(?, ?, ?, ?)"; CHUNK].join(", ")
     );
     let mut many = c.prepare_cached(&many_sql).db()?;
     let mut one = c
-        .prepare_cached(
-            "INSERT INTO readings (sensor, modality, t, value) VALUES (?1, ?2, ?3, ?4)
-             ON CONFLICT DO NOTHING",
-        )
+        .prepare_cached("INSERT INTO readings (sensor, modality, t, value) VALUES (?1, ?2, ?3, ?4)")
         .db()?;
-    let mut stored = c
-        .prepare_cached("SELECT value FROM readings WHERE sensor = ?1 AND modality = ?2 AND t = ?3")
-        .db()?;
-    for chunk in rows.chunks(CHUNK) {
-        let changed = if chunk.len() == CHUNK {
-            for (k, r) in chunk.iter().enumerate() {
-                let (s, m, t) = key(r);
+    let new_rows: Vec<&(i64, i64, i64, usize)> = order
+        .iter()
+        .zip(&fresh)
+        .filter_map(|(o, &f)| f.then_some(o))
+        .collect();
+    for chunk in new_rows.chunks(CHUNK) {
+        if chunk.len() == CHUNK {
+            for (k, &&(s, m, t, row)) in chunk.iter().enumerate() {
                 many.raw_bind_parameter(4 * k + 1, s).db()?;
                 many.raw_bind_parameter(4 * k + 2, m).db()?;
                 many.raw_bind_parameter(4 * k + 3, t).db()?;
-                many.raw_bind_parameter(4 * k + 4, r.value).db()?;
+                many.raw_bind_parameter(4 * k + 4, batch.rows[row].value)
+                    .db()?;
             }
-            many.raw_execute().db()?
+            many.raw_execute().db()?;
         } else {
-            let mut n = 0;
-            for r in chunk {
-                let (s, m, t) = key(r);
-                n += one.execute(params![s, m, t, r.value]).db()?;
+            for &&(s, m, t, row) in chunk {
+                one.execute(params![s, m, t, batch.rows[row].value]).db()?;
             }
-            n
-        };
-        stats.inserted += changed as u64;
-        if changed == chunk.len() {
-            continue;
-        }
-        // Some rows were already there: every row whose stored value differs from its own is a
-        // conflict; the rest of the non-inserted rows are unchanged.
-        let mut chunk_conflicts = 0;
-        for r in chunk {
-            let (s, m, t) = key(r);
-            let v: f64 = stored.query_row(params![s, m, t], |row| row.get(0)).db()?;
-            if !same_value(v, r.value) {
-                chunk_conflicts += 1;
-                stats.conflicts.push(Conflict {
-                    sensor: batch.sensors[r.sensor as usize].clone(),
-                    modality: batch.modalities[r.modality as usize].clone(),
-                    t: r.t,
-                    stored: v,
-                    incoming: r.value,
-                });
-            }
-        }
-        stats.unchanged += (chunk.len() - changed - chunk_conflicts) as u64;
-        if policy == ConflictPolicy::Fail && !stats.conflicts.is_empty() {
-            // The caller's savepoint rolls the rows inserted so far back.
-            return Err(StoreError::Conflicts(stats.conflicts));
         }
     }
     Ok(stats)
