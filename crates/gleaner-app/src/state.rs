@@ -363,7 +363,7 @@ impl Persisted {
         };
         let state = IncrementalState::from_bytes(i.bytes()?).ok()?;
         let consistent = i.0.is_empty()
-            && span.len() == ns * nm
+            && Some(span.len()) == ns.checked_mul(nm)
             && state.n_modalities() == nm
             && last_reading.len() == ns;
         consistent.then_some(Self {
@@ -836,8 +836,14 @@ pub(crate) fn fast_scoring<S: Store>(
         return Ok(None);
     }
     let (sensors, field) = project.field()?;
+    let per_cell_ok = field.cells().iter().enumerate().all(|(c, cell)| {
+        c < p.state.n_cells() && p.state.last_collected(c).len() == cell.sensors.len()
+    });
     if p.field_fp != field_fingerprint(&sensors, &field)
         || p.first_reading.len() != sensors.len()
+        || p.state.n_cells() != field.cells().len()
+        || !per_cell_ok
+        || p.state.neighbours() != neighbour_lists(&field).as_slice()
         || store.reading_count()? != p.reading_count
     {
         return Ok(None);
