@@ -10,7 +10,8 @@ Needs target/release/gleaner (cargo build --release -p gleaner-cli) and the CAF 
 Scenario, per farm: init; ingest the history; `gleaner explore` stores the exploration
 sorties; sortie #1 is recorded as flown with the readings its sensors logged since the end of
 the history (CAF: vw@30cm of Jan-Feb 2014; synthetic: every modality of the last 14 days);
-then `gleaner score` (whole command, wall clock, median of N runs; each run also writes the
+then `gleaner score` (whole command, wall clock, median of N runs (default 9; full path 3);
+each run also writes the
 cell metadata table, as the command does).
 """
 
@@ -130,7 +131,7 @@ def synth(work, runs, sensors=10_000, days=365):
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("--work", type=Path, default=Path("/tmp/gleaner-bench-score"))
-    p.add_argument("--runs", type=int, default=5)
+    p.add_argument("--runs", type=int, default=9)
     p.add_argument("--full-runs", type=int, default=3, help="runs of the full-history path")
     p.add_argument("--only", choices=["caf", "synth"])
     a = p.parse_args()
