@@ -16,6 +16,7 @@ use gleaner_store::{
 use crate::error::{AppError, Result};
 use crate::progress::Progress;
 use crate::project::Project;
+use crate::state;
 use crate::summaries;
 
 /// A readings file format.
@@ -281,6 +282,7 @@ pub(crate) fn store_parsed<W: StoreWrite>(
     settings: &crate::settings::Settings,
 ) -> std::result::Result<(InsertStats, usize), AppError> {
     let mut stats = InsertStats::default();
+    let plan = state::before_insert(&*tx, parsed)?;
     for (path, format, readings, report) in &parsed.files {
         let (modalities, batch) = batch_of(readings);
         tx.upsert_modalities(&modalities)?;
@@ -304,6 +306,7 @@ pub(crate) fn store_parsed<W: StoreWrite>(
         Vec::new()
     };
     let refreshed = summaries::refresh_cells(tx, &changed, now, settings)?;
+    state::after_insert(tx, plan, settings)?;
     Ok((stats, refreshed))
 }
 

@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 
 use gleaner_field::{Field, Sensor, UnixSeconds};
-use gleaner_store::Store;
+use gleaner_store::{ReadingBatch, Store};
 use gleaner_utility::{OwnedSeries, Series, TimeGrid, cell_series};
 
 use crate::error::Result;
@@ -50,7 +50,7 @@ pub struct Knowledge {
 }
 
 /// The median spacing of consecutive readings, seconds (the dataset's sampling interval).
-fn sampling_step(times: &[Vec<UnixSeconds>]) -> i64 {
+pub(crate) fn sampling_step(times: &[Vec<UnixSeconds>]) -> i64 {
     let mut gaps: Vec<i64> = times
         .iter()
         .flat_map(|t| t.windows(2).map(|w| w[1] - w[0]))
@@ -97,6 +97,54 @@ pub fn knowledge<S: Store>(
         return Ok(empty(sensors, field, collected));
     }
     let batch = project.store().readings_for(None, history.from..=until)?;
+    let c = columns(&sensors, &batch, &collected, t_max, history.until, None);
+    let series = cell_series_of(&field, &c, None);
+    Ok(Knowledge {
+        sensors,
+        field,
+        modalities: c.modalities,
+        series,
+        last_collected: c.last_collected,
+        first_reading: c.first_reading,
+        latest: c.latest,
+    })
+}
+
+/// Readings sorted into per (sensor, modality) columns: what [`knowledge`] and the persisted
+/// utility state (`state.rs`) are built from, so both see exactly the same series.
+pub(crate) struct Columns {
+    /// Modality names, sorted.
+    pub modalities: Vec<String>,
+    /// Per sensor × modality (sensor-major): times, seconds, ascending.
+    pub times: Vec<Vec<UnixSeconds>>,
+    /// Per sensor × modality: values, the modality's unit.
+    pub values: Vec<Vec<f64>>,
+    /// Per sensor: the later of `collected` and its latest reading kept, seconds.
+    pub last_collected: Vec<Option<UnixSeconds>>,
+    /// Per sensor: its earliest reading kept, seconds.
+    pub first_reading: Vec<Option<UnixSeconds>>,
+    /// The latest reading kept, seconds.
+    pub latest: Option<UnixSeconds>,
+    /// The sampling grid (origin: the earliest reading; step: the median spacing).
+    pub grid: TimeGrid,
+}
+
+/// Sorts `batch` into [`Columns`] for `sensors` (sorted by id). A reading is kept when its
+/// time is at or before `t_max` and at or before the later of `until` and its sensor's
+/// recorded collection (`collected`, seconds). `grid`: use this grid instead of deriving it.
+pub(crate) fn columns(
+    sensors: &[Sensor],
+    batch: &ReadingBatch,
+    collected: &[Option<UnixSeconds>],
+    t_max: UnixSeconds,
+    until: UnixSeconds,
+    grid: Option<TimeGrid>,
+) -> Columns {
+    let index: HashMap<&str, usize> = sensors
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (s.id.as_str(), k))
+        .collect();
     let mut modalities: Vec<String> = batch.modalities.iter().map(ToString::to_string).collect();
     modalities.sort();
     modalities.dedup();
@@ -109,7 +157,8 @@ pub fn knowledge<S: Store>(
     // Per (sensor, modality): times and values, in time order (the store returns them so).
     let mut times: Vec<Vec<UnixSeconds>> = vec![Vec::new(); sensors.len() * nm];
     let mut values: Vec<Vec<f64>> = vec![Vec::new(); sensors.len() * nm];
-    let mut last_collected = collected.clone();
+    let mut last_collected = collected.to_vec();
+    last_collected.resize(sensors.len(), None);
     let mut first_reading: Vec<Option<UnixSeconds>> = vec![None; sensors.len()];
     let mut latest = None;
     for r in &batch.rows {
@@ -120,7 +169,8 @@ pub fn knowledge<S: Store>(
         else {
             continue;
         };
-        if r.t > t_max.min(history.until.max(collected[s].unwrap_or(UnixSeconds::MIN))) {
+        let own = collected.get(s).copied().flatten();
+        if r.t > t_max.min(until.max(own.unwrap_or(UnixSeconds::MIN))) {
             continue;
         }
         let Some(&m) = mpos.get(r.modality as usize) else {
@@ -133,42 +183,54 @@ pub fn knowledge<S: Store>(
         first_reading[s] = Some(first_reading[s].map_or(r.t, |f: i64| f.min(r.t)));
         latest = latest.max(Some(r.t));
     }
-    let step = sampling_step(&times);
-    let origin = times
-        .iter()
-        .filter_map(|t| t.first())
-        .min()
-        .copied()
-        .unwrap_or(0);
-    let grid = TimeGrid {
-        origin,
-        step_s: step.max(1),
-    };
-    let series = field
+    let grid = grid.unwrap_or_else(|| {
+        let step = sampling_step(&times);
+        let origin = times
+            .iter()
+            .filter_map(|t| t.first())
+            .min()
+            .copied()
+            .unwrap_or(0);
+        TimeGrid {
+            origin,
+            step_s: step.max(1),
+        }
+    });
+    Columns {
+        modalities,
+        times,
+        values,
+        last_collected,
+        first_reading,
+        latest,
+        grid,
+    }
+}
+
+/// The cell series x̂ of every cell: all modalities of `c`, or only modality `only`.
+pub(crate) fn cell_series_of(
+    field: &Field,
+    c: &Columns,
+    only: Option<usize>,
+) -> Vec<Vec<OwnedSeries>> {
+    let nm = c.modalities.len();
+    field
         .cells()
         .iter()
         .map(|cell| {
             (0..nm)
+                .filter(|m| only.is_none_or(|o| o == *m))
                 .map(|m| {
                     let members: Vec<Series<'_>> = cell
                         .sensors
                         .iter()
-                        .map(|&s| Series::new(&times[s * nm + m], &values[s * nm + m]))
+                        .map(|&s| Series::new(&c.times[s * nm + m], &c.values[s * nm + m]))
                         .collect();
-                    cell_series(&members, grid)
+                    cell_series(&members, c.grid)
                 })
                 .collect()
         })
-        .collect();
-    Ok(Knowledge {
-        sensors,
-        field,
-        modalities,
-        series,
-        last_collected,
-        first_reading,
-        latest,
-    })
+        .collect()
 }
 
 fn empty(sensors: Vec<Sensor>, field: Field, collected: Vec<Option<UnixSeconds>>) -> Knowledge {

@@ -9,14 +9,16 @@ use gleaner_store::{
     AnomalyRecord, CellMetadata, CellScores, ClassProbability, Correlation, Store, StoreWrite,
 };
 use gleaner_utility::{
-    CellInputs, CellTerms, ClassThresholds, ConditionConfig, ConditionModel, OwnedSeries, Series,
-    score_cells_parallel, series_correlation, validate_probabilities,
+    CellInputs, CellTerms, ClassThresholds, ConditionConfig, ConditionModel, IncrementalState,
+    OwnedSeries, Series, score_cells_parallel, series_correlation, validate_probabilities,
 };
 
 use crate::cell_csv;
 use crate::error::{AppError, Result};
 use crate::knowledge::{History, Knowledge, knowledge};
 use crate::project::Project;
+use crate::settings::Settings;
+use crate::state;
 use crate::summaries;
 
 /// What to score.
@@ -62,6 +64,10 @@ pub struct Scoring {
     pub anomaly_form: String,
     /// Things the user should know (e.g. no condition model could be fitted: U = 0).
     pub warnings: Vec<String>,
+    /// The persisted statistics the scoring came from (the fast path of [`compute`]); then
+    /// `knowledge.series` holds only their retained recent points, and counts, means,
+    /// correlations and latest points come from these statistics.
+    pub incremental: Option<IncrementalState>,
 }
 
 /// Which weighted term contributes most to S: `freshness`, `anomaly`, `uncertainty` or `none`.
@@ -94,35 +100,39 @@ pub(crate) fn neighbour_lists(field: &Field) -> Vec<Vec<usize>> {
         .collect()
 }
 
-/// Trains the built-in condition model on the collected history and predicts every cell at
-/// `t`; `Ok(None)` with a warning when there is no suitable modality or too little data.
-fn condition<S: Store>(
-    project: &Project<S>,
-    k: &Knowledge,
-    t: UnixSeconds,
-    warnings: &mut Vec<String>,
-) -> Result<Option<Condition>> {
-    let u = &project.settings().utility;
-    let name = match &u.condition_modality {
+/// The modality the condition classes come from: `utility.condition_modality`, else
+/// `vw@30cm`, else the first `vw@...` of `modalities` (sorted names); `None` without one.
+pub(crate) fn condition_modality(settings: &Settings, modalities: &[String]) -> Option<String> {
+    match &settings.utility.condition_modality {
         Some(m) => Some(m.clone()),
-        None => k
-            .modalities
+        None => modalities
             .iter()
             .find(|m| *m == "vw@30cm")
-            .or_else(|| k.modalities.iter().find(|m| m.starts_with("vw@")))
+            .or_else(|| modalities.iter().find(|m| m.starts_with("vw@")))
             .cloned(),
-    };
-    let Some(name) = name else {
-        warnings.push("no soil-moisture modality: U = 0 for every cell".into());
-        return Ok(None);
-    };
-    let Some(m) = k.modalities.iter().position(|x| *x == name) else {
-        return Err(AppError::Invalid(format!(
-            "utility.condition_modality = {name:?} has no readings"
-        )));
-    };
-    let cells: Vec<Series<'_>> = k.series.iter().map(|s| s[m].as_series()).collect();
-    let neighbours = neighbour_lists(&k.field);
+    }
+}
+
+/// The warning given when there is no soil-moisture modality.
+pub(crate) const NO_MODALITY: &str = "no soil-moisture modality: U = 0 for every cell";
+
+/// The error for a configured condition modality without readings.
+pub(crate) fn modality_without_readings(name: &str) -> AppError {
+    AppError::Invalid(format!(
+        "utility.condition_modality = {name:?} has no readings"
+    ))
+}
+
+/// Fits the built-in condition model on the cells' class-modality series (`cells`, field
+/// order) with label times before `t` (s), from the earliest point on; the error becomes the
+/// scoring's warning.
+pub(crate) fn fit_condition(
+    settings: &Settings,
+    cells: &[Series<'_>],
+    neighbours: &[Vec<usize>],
+    t: UnixSeconds,
+) -> std::result::Result<ConditionModel, String> {
+    let u = &settings.utility;
     let config = ConditionConfig {
         n_classes: u.condition_classes,
         thresholds: match &u.condition_thresholds {
@@ -137,15 +147,48 @@ fn condition<S: Store>(
         .min()
         .copied()
         .unwrap_or(t);
-    match ConditionModel::fit(&cells, &neighbours, from, t, &config) {
-        Ok(model) => Ok(Some(Condition {
-            modality: name,
-            thresholds: model.thresholds().to_vec(),
-            classes: class_names(model.n_classes()),
-            probabilities: model.predict_proba(&cells, &neighbours, t),
-        })),
-        Err(e) => {
-            warnings.push(format!("no condition model ({e}); U = 0 for every cell"));
+    ConditionModel::fit(cells, neighbours, from, t, &config)
+        .map_err(|e| format!("no condition model ({e}); U = 0 for every cell"))
+}
+
+/// The scoring's condition output from a fitted model.
+pub(crate) fn condition_output(
+    name: String,
+    model: &ConditionModel,
+    probabilities: Vec<Vec<f64>>,
+) -> Condition {
+    Condition {
+        modality: name,
+        thresholds: model.thresholds().to_vec(),
+        classes: class_names(model.n_classes()),
+        probabilities,
+    }
+}
+
+/// Trains the built-in condition model on the collected history and predicts every cell at
+/// `t`; `Ok(None)` with a warning when there is no suitable modality or too little data.
+fn condition<S: Store>(
+    project: &Project<S>,
+    k: &Knowledge,
+    t: UnixSeconds,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Condition>> {
+    let Some(name) = condition_modality(project.settings(), &k.modalities) else {
+        warnings.push(NO_MODALITY.into());
+        return Ok(None);
+    };
+    let Some(m) = k.modalities.iter().position(|x| *x == name) else {
+        return Err(modality_without_readings(&name));
+    };
+    let cells: Vec<Series<'_>> = k.series.iter().map(|s| s[m].as_series()).collect();
+    let neighbours = neighbour_lists(&k.field);
+    match fit_condition(project.settings(), &cells, &neighbours, t) {
+        Ok(model) => {
+            let p = model.predict_proba(&cells, &neighbours, t);
+            Ok(Some(condition_output(name, &model, p)))
+        }
+        Err(warning) => {
+            warnings.push(warning);
             Ok(None)
         }
     }
@@ -153,7 +196,23 @@ fn condition<S: Store>(
 
 /// Scores every cell at the requested time from what is known then. Writes nothing: see
 /// [`score`] for the use case that also keeps the result.
+///
+/// The common case — all history, no user probabilities, the all-history window, and `at`
+/// (if given) at or after the newest stored reading — is answered from the persisted utility
+/// state (the statistics behind A and R and the condition model kept up to date by ingest and
+/// record, see `state.rs`) in O(cells × neighbours × modalities) without reading the history;
+/// the result equals [`compute_full`]'s within 1e-9 relative. Anything else, or a missing or
+/// stale state, takes the full path.
 pub fn compute<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
+    if let Some(scoring) = state::fast_scoring(project, request)? {
+        return Ok(scoring);
+    }
+    compute_full(project, request)
+}
+
+/// [`compute`] from the stored history, never from the persisted state: loads every reading
+/// known at t and refits the condition model. O(history).
+pub fn compute_full<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
     let k = knowledge(project, request.at, request.history)?;
     let Some(t) = request.at.or(k.latest) else {
         return Err(AppError::Invalid(
@@ -214,6 +273,7 @@ pub fn compute<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result
         weights: [u.alpha, u.beta, u.gamma, u.delta],
         anomaly_form: config.anomaly_form.label(),
         warnings,
+        incremental: None,
     })
 }
 
@@ -224,7 +284,19 @@ pub fn score<S: Store>(project: &mut Project<S>, request: &ScoreRequest) -> Resu
     let scoring = compute(project, request)?;
     if !request.dry_run {
         let rows = metadata_rows(project, &scoring, &HashMap::new());
-        project.store_mut().write(|tx| write_scoring(tx, rows))?;
+        // A common request that could not use the persisted state (e.g. a database from
+        // before it existed, or changed grid settings) rebuilds it for the next scoring.
+        let refresh = scoring.incremental.is_none()
+            && request.probabilities.is_none()
+            && request.history == History::default();
+        let settings = project.settings().clone();
+        project.store_mut().write(|tx| {
+            write_scoring(tx, rows)?;
+            if refresh {
+                state::refresh_if_stale(tx, &settings)?;
+            }
+            Ok::<_, AppError>(())
+        })?;
     }
     Ok(scoring)
 }
@@ -297,6 +369,10 @@ pub(crate) fn metadata_rows<S: Store>(
                         probability: p,
                     })
                     .collect();
+            }
+            if let Some(state) = &s.incremental {
+                state::metadata_from_state(s, state, &modalities, c, min_overlap, flag, &mut m);
+                return m;
             }
             for &nb in k.field.neighbours(CellId(c as u32)) {
                 for (mi, modality) in modalities.iter().enumerate() {

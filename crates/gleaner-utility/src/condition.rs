@@ -35,6 +35,7 @@
 //! value's class is right 0.91 of the time (it gives no probabilities). Mean U is about 0.20
 //! for values at most 2 days old and 0.42 for values 10–30 days old.
 
+use crate::codec::{Reader, Writer};
 use crate::{DAY_S, Series, UtilityError};
 use gleaner_field::UnixSeconds;
 
@@ -679,6 +680,131 @@ impl ConditionModel {
     }
 }
 
+/// Longest lag a decoded model may carry, days (100 years; keeps the lag arithmetic in range).
+const MAX_LAG_DAYS: i64 = 36_525;
+
+/// Magic of a serialised [`ConditionModel`] (8 bytes).
+const MODEL_MAGIC: &[u8; 8] = b"GLNCONDM";
+
+impl ConditionModel {
+    /// Version of the format written by [`to_bytes`](Self::to_bytes).
+    pub const FORMAT_VERSION: u32 = 1;
+
+    /// The trained model as bytes (deterministic, little-endian), so scoring need not refit
+    /// it: the 8-byte magic `GLNCONDM`, the `u32` [`FORMAT_VERSION`](Self::FORMAT_VERSION),
+    /// then the configuration (classes u64; thresholds kind u8 (0 quantiles, 1 fixed) and
+    /// fixed thresholds as f64 list; lags as i64 list, days; trend points u64; season u8; L2,
+    /// tolerance f64; max iterations u64), the thresholds used (f64 list, unit), the
+    /// standardisation (mean and scale per feature, f64 lists), the weights (f64 list,
+    /// class-major, bias first) and the training class frequencies (f64 list). Lists are a u64
+    /// length then the elements.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut w = Writer::with_header(MODEL_MAGIC, Self::FORMAT_VERSION);
+        let c = &self.config;
+        w.len(c.n_classes);
+        match &c.thresholds {
+            ClassThresholds::Quantiles => w.u8(0),
+            ClassThresholds::Fixed(th) => {
+                w.u8(1);
+                w.f64s(th);
+            }
+        }
+        w.i64s(&c.lags_days);
+        w.len(c.trend_points);
+        w.bool(c.season);
+        w.f64(c.l2);
+        w.f64(c.tolerance);
+        w.len(c.max_iterations);
+        w.f64s(&self.thresholds);
+        w.f64s(&self.mean);
+        w.f64s(&self.scale);
+        w.f64s(&self.weights);
+        w.f64s(&self.prior);
+        w.buf
+    }
+
+    /// Decodes [`to_bytes`](Self::to_bytes)'s output. Wrong magic or version, truncated or
+    /// trailing bytes, an invalid configuration, non-finite parameters or lengths that do not
+    /// fit K classes and the feature count are errors ([`UtilityError::Decode`] or
+    /// [`UtilityError::Model`]); never a panic.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, UtilityError> {
+        let (mut r, _) = Reader::with_header(
+            bytes,
+            MODEL_MAGIC,
+            Self::FORMAT_VERSION..=Self::FORMAT_VERSION,
+            "condition model",
+        )?;
+        let n_classes = r.len(0)?;
+        let thresholds = match r.u8()? {
+            0 => ClassThresholds::Quantiles,
+            1 => ClassThresholds::Fixed(r.f64s()?),
+            b => return Err(r.error(format!("invalid thresholds kind {b}"))),
+        };
+        let config = ConditionConfig {
+            n_classes,
+            thresholds,
+            lags_days: r.i64s()?,
+            trend_points: r.len(0)?,
+            season: r.bool()?,
+            l2: r.f64()?,
+            tolerance: r.f64()?,
+            max_iterations: r.len(0)?,
+        };
+        config.validate()?;
+        let thresholds = r.finite_f64s()?;
+        let mean = r.finite_f64s()?;
+        let scale = r.finite_f64s()?;
+        let weights = r.finite_f64s()?;
+        let prior = r.finite_f64s()?;
+        r.finish()?;
+        let k = n_classes;
+        let bad = |what: &str, got: usize, want: usize| {
+            Err(UtilityError::Model(format!(
+                "serialised model: {got} {what}, expected {want} for {k} classes"
+            )))
+        };
+        // k >= 2 (validated); checked against a list read from the input before any
+        // arithmetic on it.
+        if thresholds.len() != k - 1 {
+            return bad("thresholds", thresholds.len(), k - 1);
+        }
+        if let Some(lag) = config.lags_days.iter().find(|&&l| l > MAX_LAG_DAYS) {
+            return Err(UtilityError::Model(format!(
+                "serialised model: lag {lag} days exceeds {MAX_LAG_DAYS}"
+            )));
+        }
+        let d = BASE + k - 1;
+        if mean.len() != d || scale.len() != d {
+            return bad("standardisation entries", mean.len().min(scale.len()), d);
+        }
+        if Some(weights.len()) != k.checked_mul(d + 1) {
+            return bad("weights", weights.len(), k.saturating_mul(d + 1));
+        }
+        if prior.len() != k {
+            return bad("class frequencies", prior.len(), k);
+        }
+        if scale.iter().any(|&s| s <= 0.0) {
+            return Err(UtilityError::Model(format!(
+                "serialised model: non-positive feature scale in {scale:?}"
+            )));
+        }
+        Ok(Self {
+            thresholds,
+            n_classes: k,
+            config,
+            mean,
+            scale,
+            weights,
+            prior,
+        })
+    }
+
+    /// The configuration the model was trained with.
+    pub fn config(&self) -> &ConditionConfig {
+        &self.config
+    }
+}
+
 /// Solves the symmetric positive definite system A x = b (n × n, row-major) by Cholesky;
 /// `None` if A is not positive definite.
 fn cholesky_solve(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
@@ -877,5 +1003,67 @@ mod tests {
         assert!(
             ConditionModel::fit(&cells, &[vec![]], 0, 10, &ConditionConfig::default()).is_err()
         );
+    }
+
+    #[test]
+    fn model_bytes_round_trip_and_reject_corruption() {
+        let (times, values) = synthetic(5);
+        let cells: Vec<Series> = times
+            .iter()
+            .zip(&values)
+            .map(|(t, v)| Series::new(t, v))
+            .collect();
+        let neighbours: Vec<Vec<usize>> = (0..6).map(|i| vec![(i + 1) % 6]).collect();
+        for config in [
+            ConditionConfig::default(),
+            ConditionConfig {
+                n_classes: 2,
+                thresholds: ClassThresholds::Fixed(vec![0.3]),
+                lags_days: vec![1, 3],
+                season: false,
+                ..ConditionConfig::default()
+            },
+        ] {
+            let model = ConditionModel::fit(&cells, &neighbours, 0, 400 * 86_400, &config).unwrap();
+            let bytes = model.to_bytes();
+            assert_eq!(&bytes[..8], b"GLNCONDM");
+            let back = ConditionModel::from_bytes(&bytes).unwrap();
+            assert_eq!(back, model);
+            assert_eq!(back.to_bytes(), bytes);
+            assert_eq!(back.config(), &config);
+            assert_eq!(
+                back.predict_proba(&cells, &neighbours, 500 * 86_400),
+                model.predict_proba(&cells, &neighbours, 500 * 86_400)
+            );
+            for n in 0..bytes.len() {
+                assert!(
+                    ConditionModel::from_bytes(&bytes[..n]).is_err(),
+                    "prefix {n}"
+                );
+            }
+            let mut rng = ChaCha8Rng::seed_from_u64(9);
+            for _ in 0..2000 {
+                let mut b = bytes.clone();
+                let k = rng.random_range(0..b.len());
+                b[k] = rng.random();
+                if let Ok(m) = ConditionModel::from_bytes(&b) {
+                    let _ = m.predict_proba(&cells, &neighbours, 500 * 86_400);
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::test_runner::Config::with_cases(256))]
+        #[test]
+        fn arbitrary_model_bytes_never_panic(
+            body in proptest::collection::vec(proptest::num::u8::ANY, 0..400),
+        ) {
+            let mut bytes = b"GLNCONDM".to_vec();
+            bytes.extend_from_slice(&1u32.to_le_bytes());
+            bytes.extend_from_slice(&body);
+            let _ = ConditionModel::from_bytes(&bytes);
+            let _ = ConditionModel::from_bytes(&body);
+        }
     }
 }

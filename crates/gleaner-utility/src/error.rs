@@ -95,6 +95,17 @@ pub enum UtilityError {
     /// The incremental statistics only support the all-history window.
     #[error("incremental scoring supports only the all-history window, got a window of {0} s")]
     WindowNotIncremental(i64),
+    /// Serialised state could not be decoded: wrong magic or version, truncated, or
+    /// inconsistent (e.g. [`IncrementalState::from_bytes`](crate::IncrementalState::from_bytes)).
+    #[error("cannot decode {what} at byte {offset}: {reason}")]
+    Decode {
+        /// What was being decoded.
+        what: &'static str,
+        /// Byte offset where decoding stopped.
+        offset: usize,
+        /// What is wrong, with the values.
+        reason: String,
+    },
     /// The condition model could not be built or used.
     #[error("condition model: {0}")]
     Model(String),

@@ -21,14 +21,18 @@
 //!   (newest time seen − retention) are forgotten and readings older than that are rejected
 //!   ([`UtilityError::BeyondRetention`]); the statistics stay exact. Without one (the default)
 //!   every slot is kept (24 bytes per cell, modality and grid slot).
-//! - the state lives in memory: a process rebuilds it from the stored readings once
-//!   ([`IncrementalState::add_readings`], O(history)), then keeps it up to date; the summaries
-//!   and pair statistics can be stored and restored through their `from_parts` / `parts`.
+//! - the state is persisted with [`IncrementalState::to_bytes`] /
+//!   [`IncrementalState::from_bytes`] (a versioned little-endian format, see `STATE_MAGIC`
+//!   below): a process builds it from the stored readings once
+//!   ([`IncrementalState::add_readings`], O(history)), then keeps it up to date. With a
+//!   retention horizon and [`IncrementalState::trim`] its size is O(cells × modalities ×
+//!   retained slots + pairs × modalities).
 //! - each (sensor, modality, grid slot) reading must be added once (the store deduplicates);
 //!   several readings falling in one slot are averaged, as in [`cell_series`](crate::cell_series).
 
 use rayon::prelude::*;
 
+use crate::codec::{Reader, Writer};
 use crate::engine::{CellTerms, finish_terms};
 use crate::probabilities::check_distribution;
 use crate::terms::{anomaly_from_stats, finish_pearson, freshness};
@@ -219,8 +223,8 @@ pub struct SeriesStats {
     pub before_latest: RunningStats,
     /// The latest point (s, value).
     pub latest: Option<(UnixSeconds, f64)>,
-    /// Smallest value (+inf when empty). Exact without a retention horizon; with one, a slot
-    /// update that removes the extreme rescans the retained slots only.
+    /// Smallest value (+inf when empty). Exact, also with a retention horizon (the extremes of
+    /// the forgotten slots are kept).
     pub min: f64,
     /// Largest value (−inf when empty).
     pub max: f64,
@@ -300,7 +304,7 @@ impl Slot {
 /// assert!((terms[0].r - 1.0).abs() < 1e-9);
 /// assert_eq!(terms[1].f, 1.0); // cell 1 never collected
 /// ```
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct IncrementalState {
     grid: TimeGrid,
     n_modalities: usize,
@@ -317,6 +321,11 @@ pub struct IncrementalState {
     /// Per cell: (pair id, other cell, this cell is the pair's x).
     incident: Vec<Vec<(usize, usize, bool)>>,
     retention_s: Option<i64>,
+    /// Slots kept per series whatever their age (see [`IncrementalState::set_min_points`]).
+    min_points: usize,
+    /// Per cell × modality: (min, max) of the slots already forgotten (retention), so the
+    /// extremes stay exact after a rescan.
+    frozen: Vec<(f64, f64)>,
     newest: UnixSeconds,
 }
 
@@ -380,6 +389,8 @@ impl IncrementalState {
             neighbour_pair,
             incident,
             retention_s: None,
+            min_points: 0,
+            frozen: vec![(f64::INFINITY, f64::NEG_INFINITY); n * n_modalities],
             newest: UnixSeconds::MIN,
         })
     }
@@ -393,6 +404,110 @@ impl IncrementalState {
     /// all, the default). See the module docs.
     pub fn set_retention(&mut self, retention_s: Option<i64>) {
         self.retention_s = retention_s.map(|r| r.max(0));
+    }
+
+    /// Keep at least the last `points` grid slots of every series even when they are older
+    /// than the retention horizon (default 0), so that e.g. a trend over the last points or
+    /// the latest value of a sparse series can be read back with
+    /// [`cell_series`](Self::cell_series). Readings older than the horizon are still rejected.
+    pub fn set_min_points(&mut self, points: usize) {
+        self.min_points = points;
+    }
+
+    /// The retention horizon length, s (`None`: every slot is kept).
+    pub fn retention(&self) -> Option<i64> {
+        self.retention_s
+    }
+
+    /// Slots kept per series whatever their age ([`set_min_points`](Self::set_min_points)).
+    pub fn min_points(&self) -> usize {
+        self.min_points
+    }
+
+    /// The newest grid time (s) of any reading added; `None` before the first.
+    pub fn newest(&self) -> Option<UnixSeconds> {
+        (self.newest != UnixSeconds::MIN).then_some(self.newest)
+    }
+
+    /// The sampling grid readings are snapped to.
+    pub fn grid(&self) -> TimeGrid {
+        self.grid
+    }
+
+    /// Number of modalities.
+    pub fn n_modalities(&self) -> usize {
+        self.n_modalities
+    }
+
+    /// Forgets, in every series, the slots older than the retention horizon (keeping the
+    /// last [`min_points`](Self::min_points)). [`add_readings`](Self::add_readings) only trims
+    /// the series it touches; call this before persisting to keep the state small. Statistics
+    /// are unchanged. No-op without a retention horizon.
+    pub fn trim(&mut self) {
+        if self.retention_s.is_none() {
+            return;
+        }
+        for key in 0..self.slots.len() {
+            self.trim_key(key);
+        }
+    }
+
+    fn trim_key(&mut self, key: usize) {
+        let horizon = self.horizon();
+        let slots = &mut self.slots[key];
+        let stale = slots
+            .partition_point(|s| s.time < horizon)
+            .min(slots.len().saturating_sub(self.min_points));
+        if stale > 0 {
+            let frozen = &mut self.frozen[key];
+            for s in slots.drain(..stale) {
+                let v = s.value();
+                frozen.0 = frozen.0.min(v);
+                frozen.1 = frozen.1.max(v);
+            }
+        }
+    }
+
+    /// Replaces the last collection times of cell `cell`'s sensors (s, one per sensor,
+    /// `None` = never collected); unlike [`record_collection`](Self::record_collection) a time
+    /// may move back (e.g. to score at a time before a recorded collection).
+    pub fn set_last_collected(
+        &mut self,
+        cell: usize,
+        last: &[Option<UnixSeconds>],
+    ) -> Result<(), UtilityError> {
+        let n_cells = self.n_cells();
+        let sensors = self
+            .last_collected
+            .get_mut(cell)
+            .ok_or(UtilityError::ReadingIndex {
+                what: "cell",
+                index: cell,
+                count: n_cells,
+            })?;
+        if last.len() != sensors.len() {
+            return Err(UtilityError::ReadingIndex {
+                what: "sensor",
+                index: last.len(),
+                count: sensors.len(),
+            });
+        }
+        sensors.copy_from_slice(last);
+        Ok(())
+    }
+
+    /// The retained series of modality `modality` for every cell, in cell order (empty series
+    /// for an out-of-range modality). With [`set_min_points`](Self::set_min_points) >= the
+    /// condition model's `trend_points`, these give the same
+    /// [`ConditionModel::predict_proba`](crate::ConditionModel::predict_proba) at any time at or
+    /// after [`newest`](Self::newest) as the full history.
+    pub fn recent_series(&self, modality: usize) -> Vec<OwnedSeries> {
+        if modality >= self.n_modalities {
+            return vec![OwnedSeries::default(); self.n_cells()];
+        }
+        (0..self.n_cells())
+            .map(|cell| self.cell_series(cell, modality))
+            .collect()
     }
 
     /// The oldest reading time (s) still accepted.
@@ -486,13 +601,8 @@ impl IncrementalState {
             self.apply(r);
         }
         if self.retention_s.is_some() {
-            let horizon = self.horizon();
             for r in readings {
-                let slots = &mut self.slots[r.cell * self.n_modalities + r.modality];
-                let stale = slots.partition_point(|s| s.time < horizon);
-                if stale > 0 {
-                    slots.drain(..stale);
-                }
+                self.trim_key(r.cell * self.n_modalities + r.modality);
             }
         }
         Ok(())
@@ -566,9 +676,7 @@ impl IncrementalState {
             let (lo, hi) = self.slots[key]
                 .iter()
                 .map(Slot::value)
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                    (lo.min(v), hi.max(v))
-                });
+                .fold(self.frozen[key], |(lo, hi), v| (lo.min(v), hi.max(v)));
             st.min = lo;
             st.max = hi;
         } else {
@@ -713,6 +821,218 @@ impl IncrementalState {
     /// The neighbour lists the state was built with.
     pub fn neighbours(&self) -> &[Vec<usize>] {
         &self.neighbours
+    }
+}
+
+/// Magic of a serialised [`IncrementalState`] (8 bytes).
+const STATE_MAGIC: &[u8; 8] = b"GLNINCST";
+
+impl IncrementalState {
+    /// Version of the format written by [`to_bytes`](Self::to_bytes).
+    pub const FORMAT_VERSION: u32 = 1;
+
+    /// The state as bytes: deterministic (equal states give equal bytes), little-endian,
+    /// starting with the 8-byte magic `GLNINCST` and the `u32`
+    /// [`FORMAT_VERSION`](Self::FORMAT_VERSION). Size O(cells × modalities × retained slots
+    /// (20 bytes each) + pairs × modalities (48 bytes each)); call [`trim`](Self::trim) first to
+    /// drop slots beyond the retention horizon.
+    ///
+    /// Layout (version 1): grid origin (i64, s), grid step (i64, s), modalities (u64),
+    /// retention (option of i64, s), min points (u64), newest (i64, s); cells (u64), then per
+    /// cell its last collection times (u64 count, then option of i64 each, s) and its neighbour
+    /// list (u64 count, u64 each); per cell × modality: slots (u64 count, then time i64, sum
+    /// f64, count u32 each), statistics (count u64, mean f64, M2 f64 for all points and for
+    /// the points before the latest; latest as option of (i64, f64); min, max f64), forgotten
+    /// extremes (min, max f64); pairs (u64), then per pair × modality n (u64), mean x, mean y,
+    /// M2x, M2y, Cxy (f64).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut w = Writer::with_header(STATE_MAGIC, Self::FORMAT_VERSION);
+        w.i64(self.grid.origin);
+        w.i64(self.grid.step_s);
+        w.len(self.n_modalities);
+        w.opt_i64(self.retention_s);
+        w.len(self.min_points);
+        w.i64(self.newest);
+        w.len(self.n_cells());
+        for (last, nbs) in self.last_collected.iter().zip(&self.neighbours) {
+            w.len(last.len());
+            for &l in last {
+                w.opt_i64(l);
+            }
+            w.len(nbs.len());
+            for &j in nbs {
+                w.len(j);
+            }
+        }
+        for ((slots, st), frozen) in self.slots.iter().zip(&self.stats).zip(&self.frozen) {
+            w.len(slots.len());
+            for s in slots {
+                w.i64(s.time);
+                w.f64(s.sum);
+                w.u32(s.count);
+            }
+            for r in [st.all, st.before_latest] {
+                w.u64(r.n);
+                w.f64(r.mean);
+                w.f64(r.m2);
+            }
+            match st.latest {
+                Some((t, v)) => {
+                    w.u8(1);
+                    w.i64(t);
+                    w.f64(v);
+                }
+                None => w.u8(0),
+            }
+            w.f64(st.min);
+            w.f64(st.max);
+            w.f64(frozen.0);
+            w.f64(frozen.1);
+        }
+        w.len(self.pairs.len() / self.n_modalities.max(1));
+        for p in &self.pairs {
+            w.u64(p.n);
+            for x in [p.mean_x, p.mean_y, p.m2x, p.m2y, p.cxy] {
+                w.f64(x);
+            }
+        }
+        w.buf
+    }
+
+    /// Decodes [`to_bytes`](Self::to_bytes)'s output. Wrong magic or version, truncated or
+    /// trailing bytes, and inconsistent content (bad neighbour lists, slots out of order,
+    /// non-finite values, counts that do not match) are [`UtilityError::Decode`] (or the error
+    /// [`new`](Self::new) gives); never a panic, whatever the input.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, UtilityError> {
+        let (mut r, _) = Reader::with_header(
+            bytes,
+            STATE_MAGIC,
+            Self::FORMAT_VERSION..=Self::FORMAT_VERSION,
+            "incremental state",
+        )?;
+        let grid = TimeGrid {
+            origin: r.i64()?,
+            step_s: r.i64()?,
+        };
+        // Each modality takes at least 4 × 8 bytes per cell below.
+        let n_modalities = r.len(1)?;
+        let retention = r.opt_i64()?;
+        if retention.is_some_and(|x| x < 0) {
+            return Err(r.error(format!("negative retention {retention:?} s")));
+        }
+        let min_points = r.len(0)?;
+        let newest = r.i64()?;
+        let n_cells = r.len(2 * 8)?;
+        let mut sensors = Vec::with_capacity(n_cells);
+        let mut last = Vec::with_capacity(n_cells);
+        let mut neighbours = Vec::with_capacity(n_cells);
+        for _ in 0..n_cells {
+            let k = r.len(1)?;
+            let l: Vec<Option<UnixSeconds>> =
+                (0..k).map(|_| r.opt_i64()).collect::<Result<_, _>>()?;
+            sensors.push(k);
+            last.push(l);
+            let m = r.len(8)?;
+            let nb: Vec<usize> = (0..m)
+                .map(|_| {
+                    let j = r.u64()?;
+                    usize::try_from(j).map_err(|_| r.error(format!("neighbour {j} too large")))
+                })
+                .collect::<Result<_, _>>()?;
+            neighbours.push(nb);
+        }
+        // Every cell × modality takes at least 64 bytes below and every pair × modality 48:
+        // refuse sizes the input cannot hold before allocating for them.
+        let entries: usize = neighbours.iter().map(Vec::len).sum();
+        let need = n_cells
+            .saturating_mul(n_modalities)
+            .saturating_mul(64)
+            .saturating_add(
+                (entries / 2)
+                    .saturating_mul(n_modalities)
+                    .saturating_mul(48),
+            );
+        if need > r.remaining() {
+            return Err(r.error(format!(
+                "{n_cells} cells × {n_modalities} modalities with {entries} neighbour entries \
+                 exceed the {} bytes left",
+                r.remaining()
+            )));
+        }
+        let mut state = Self::new(&sensors, &neighbours, n_modalities, grid)?;
+        state.last_collected = last;
+        state.retention_s = retention;
+        state.min_points = min_points;
+        state.newest = newest;
+        for key in 0..n_cells * n_modalities {
+            let k = r.len(20)?;
+            let mut slots = Vec::with_capacity(k);
+            for _ in 0..k {
+                let slot = Slot {
+                    time: r.i64()?,
+                    sum: r.finite()?,
+                    count: r.u32()?,
+                };
+                if slot.count == 0 {
+                    return Err(r.error(format!("empty slot at {} s", slot.time)));
+                }
+                if slots.last().is_some_and(|p: &Slot| p.time >= slot.time) {
+                    return Err(r.error(format!("slot at {} s out of order", slot.time)));
+                }
+                slots.push(slot);
+            }
+            let mut running = [RunningStats::default(); 2];
+            for x in &mut running {
+                let (n, mean, m2) = (r.u64()?, r.finite()?, r.finite()?);
+                *x = RunningStats { n, mean, m2 };
+            }
+            let latest = match r.u8()? {
+                0 => None,
+                1 => Some((r.i64()?, r.finite()?)),
+                b => return Err(r.error(format!("invalid option tag {b}"))),
+            };
+            let (min, max) = (r.f64()?, r.f64()?);
+            let frozen = (r.f64()?, r.f64()?);
+            if [min, max, frozen.0, frozen.1].iter().any(|v| v.is_nan()) {
+                return Err(r.error("NaN extreme".to_string()));
+            }
+            state.slots[key] = slots;
+            state.stats[key] = SeriesStats {
+                all: running[0],
+                before_latest: running[1],
+                latest,
+                min,
+                max,
+            };
+            state.frozen[key] = frozen;
+        }
+        let n_pairs = r.len(0)?;
+        if n_pairs.checked_mul(n_modalities) != Some(state.pairs.len()) {
+            return Err(r.error(format!(
+                "{n_pairs} pairs, but the neighbour lists give {}",
+                state.pairs.len() / n_modalities.max(1)
+            )));
+        }
+        for p in &mut state.pairs {
+            let n = r.u64()?;
+            let mut v = [0.0; 5];
+            for x in &mut v {
+                *x = r.finite()?;
+            }
+            let [mean_x, mean_y, m2x, m2y, cxy] = v;
+            *p = PairStats {
+                n,
+                mean_x,
+                mean_y,
+                m2x,
+                m2y,
+                cxy,
+                corr: 0.0,
+            };
+            p.refresh();
+        }
+        r.finish()?;
+        Ok(state)
     }
 }
 
@@ -1007,5 +1327,191 @@ mod tests {
         assert!(IncrementalState::new(&[1], &[vec![0]], 1, TimeGrid::DAILY).is_err());
         assert!(IncrementalState::new(&[0], &[vec![]], 1, TimeGrid::DAILY).is_err());
         assert!(s.record_collection(0, 1, 5).is_err());
+    }
+
+    fn built(seed: u64, retention: Option<i64>, min_points: usize) -> (World, IncrementalState) {
+        let w = world(seed);
+        let mut readings = w.readings.clone();
+        readings.sort_by_key(|r| r.time);
+        let mut state =
+            IncrementalState::new(&w.sensors, &w.neighbours, 3, TimeGrid::DAILY).unwrap();
+        state.set_retention(retention);
+        state.set_min_points(min_points);
+        for (cell, ls) in w.last.iter().enumerate() {
+            for (s, l) in ls.iter().enumerate() {
+                if let Some(l) = l {
+                    state.record_collection(cell, s, *l).unwrap();
+                }
+            }
+        }
+        for chunk in readings.chunks(61) {
+            state.add_readings(chunk).unwrap();
+        }
+        (w, state)
+    }
+
+    #[test]
+    fn retention_keeps_extremes_exact() {
+        let (_, mut kept) = built(11, Some(4 * DAY), 0);
+        kept.trim();
+        let (w, full) = built(11, None, 0);
+        for i in 0..w.sensors.len() {
+            for m in 0..3 {
+                let (a, b) = (kept.series_stats(i, m), full.series_stats(i, m));
+                assert_eq!((a.min, a.max), (b.min, b.max), "cell {i} modality {m}");
+                assert_eq!(a.all.count(), b.all.count());
+            }
+        }
+    }
+
+    #[test]
+    fn bytes_round_trip_and_reject_corruption() {
+        let config = UtilityConfig {
+            min_overlap: 5,
+            ..UtilityConfig::default()
+        };
+        for (seed, retention, min_points) in [(1, None, 0), (2, Some(6 * DAY), 5), (3, Some(0), 2)]
+        {
+            let (_, mut state) = built(seed, retention, min_points);
+            state.trim();
+            let bytes = state.to_bytes();
+            assert_eq!(bytes, state.clone().to_bytes(), "deterministic");
+            assert_eq!(&bytes[..8], b"GLNINCST");
+            let back = IncrementalState::from_bytes(&bytes).unwrap();
+            assert_eq!(back, state);
+            assert_eq!(back.to_bytes(), bytes);
+            assert_eq!(
+                back.score(41 * DAY, &config, &[]).unwrap(),
+                state.score(41 * DAY, &config, &[]).unwrap()
+            );
+            // Every truncation is an error, never a panic.
+            for n in (0..bytes.len()).step_by(7).chain([bytes.len() - 1]) {
+                assert!(
+                    IncrementalState::from_bytes(&bytes[..n]).is_err(),
+                    "prefix {n}"
+                );
+            }
+            let mut longer = bytes.clone();
+            longer.push(0);
+            assert!(IncrementalState::from_bytes(&longer).is_err());
+            let mut version = bytes.clone();
+            version[8] = 9;
+            let e = IncrementalState::from_bytes(&version).unwrap_err();
+            assert!(e.to_string().contains("version 9"), "{e}");
+            // Flipped bytes give an error or a state, never a panic; a decoded state scores.
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            for _ in 0..300 {
+                let mut b = bytes.clone();
+                let k = rng.random_range(12..b.len());
+                b[k] ^= 1 << rng.random_range(0..8);
+                if let Ok(s) = IncrementalState::from_bytes(&b) {
+                    let _ = s.score(41 * DAY, &config, &[]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn more_readings_after_a_round_trip_equal_more_readings_before() {
+        let w = world(5);
+        let mut readings = w.readings.clone();
+        readings.sort_by_key(|r| r.time);
+        let (old, new) = readings.split_at(readings.len() * 3 / 4);
+        let mut a = IncrementalState::new(&w.sensors, &w.neighbours, 3, TimeGrid::DAILY).unwrap();
+        a.set_retention(Some(10 * DAY));
+        a.set_min_points(5);
+        a.add_readings(old).unwrap();
+        a.trim();
+        let mut b = IncrementalState::from_bytes(&a.to_bytes()).unwrap();
+        a.add_readings(new).unwrap();
+        b.add_readings(new).unwrap();
+        assert_eq!(a, b);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::test_runner::Config::with_cases(64))]
+        /// Arbitrary bytes, with or without a valid header, never make decoding panic.
+        #[test]
+        fn arbitrary_bytes_never_panic(
+            body in proptest::collection::vec(proptest::num::u8::ANY, 0..600),
+            header in proptest::bool::ANY,
+        ) {
+            let mut bytes = Vec::new();
+            if header {
+                bytes.extend_from_slice(b"GLNINCST");
+                bytes.extend_from_slice(&1u32.to_le_bytes());
+            }
+            bytes.extend_from_slice(&body);
+            let _ = IncrementalState::from_bytes(&bytes);
+        }
+
+        /// Small valid-looking prefixes (a real state's first bytes) followed by noise.
+        #[test]
+        fn real_prefix_then_noise_never_panics(
+            cut in 12usize..400,
+            noise in proptest::collection::vec(proptest::num::u8::ANY, 0..200),
+        ) {
+            let (_, state) = built(4, Some(3 * DAY), 1);
+            let mut bytes = state.to_bytes();
+            bytes.truncate(cut.min(bytes.len()));
+            bytes.extend_from_slice(&noise);
+            let _ = IncrementalState::from_bytes(&bytes);
+        }
+
+        /// Round trip equality and scoring equality on random worlds.
+        #[test]
+        fn round_trip_scores_equal(seed in 0u64..1000, retention in proptest::option::of(0i64..20), points in 0usize..6) {
+            let (_, mut state) = built(seed, retention.map(|d| d * DAY), points);
+            if seed % 2 == 0 {
+                state.trim();
+            }
+            let back = IncrementalState::from_bytes(&state.to_bytes()).unwrap();
+            proptest::prop_assert_eq!(&back, &state);
+            let config = UtilityConfig { min_overlap: 3, ..UtilityConfig::default() };
+            proptest::prop_assert_eq!(
+                back.score(45 * DAY, &config, &[]).unwrap(),
+                state.score(45 * DAY, &config, &[]).unwrap()
+            );
+        }
+    }
+
+    #[test]
+    fn recent_series_predict_like_the_full_history() {
+        use crate::{ConditionConfig, ConditionModel};
+        for seed in [21, 22] {
+            // Sparse: drop most readings of some cells so their last points are old.
+            let mut w = world(seed);
+            w.readings
+                .retain(|r| r.cell % 4 != 0 || r.time < 12 * DAY || r.time % (7 * DAY) < DAY);
+            let mut full =
+                IncrementalState::new(&w.sensors, &w.neighbours, 3, TimeGrid::DAILY).unwrap();
+            full.add_readings(&w.readings).unwrap();
+            let config = ConditionConfig::default();
+            let mut recent = full.clone();
+            recent.set_retention(Some(3 * DAY));
+            recent.set_min_points(config.trend_points);
+            recent.trim();
+            let recent = IncrementalState::from_bytes(&recent.to_bytes()).unwrap();
+            let all = full.recent_series(0);
+            let kept = recent.recent_series(0);
+            assert!(
+                kept.iter().map(OwnedSeries::len).sum::<usize>() * 3
+                    < all.iter().map(OwnedSeries::len).sum::<usize>()
+            );
+            fn views(s: &[OwnedSeries]) -> Vec<Series<'_>> {
+                s.iter().map(OwnedSeries::as_series).collect()
+            }
+            let model =
+                ConditionModel::fit(&views(&all), &w.neighbours, 0, 30 * DAY, &config).unwrap();
+            let model = ConditionModel::from_bytes(&model.to_bytes()).unwrap();
+            let newest = full.newest().unwrap();
+            for t in [newest, newest + DAY / 2, newest + 9 * DAY] {
+                assert_eq!(
+                    model.predict_proba(&views(&kept), &w.neighbours, t),
+                    model.predict_proba(&views(&all), &w.neighbours, t),
+                    "seed {seed} t {t}"
+                );
+            }
+        }
     }
 }

@@ -61,6 +61,7 @@
 //! once, over contiguous slices when the two series share their timestamps.
 #![deny(missing_docs)]
 
+mod codec;
 mod condition;
 mod config;
 mod engine;

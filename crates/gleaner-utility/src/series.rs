@@ -117,7 +117,10 @@ impl TimeGrid {
         if self.step_s <= 0 {
             return t;
         }
-        self.origin + (t - self.origin).div_euclid(self.step_s) * self.step_s
+        // Saturating: a time or origin near the ends of i64 must not overflow.
+        let slots = t.saturating_sub(self.origin).div_euclid(self.step_s);
+        self.origin
+            .saturating_add(slots.saturating_mul(self.step_s))
     }
 }
 

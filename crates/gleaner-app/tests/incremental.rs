@@ -1,0 +1,356 @@
+//! The persisted utility state: scoring from it (the fast path of `compute`) equals scoring
+//! from the whole history (`compute_full`) within 1e-9 relative, after ingests and a recorded
+//! flight, on the real CAF network and on a synthetic farm.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use gleaner_app::{self as app, Silent};
+
+fn shared_data() -> PathBuf {
+    std::env::var_os("GLEANER_DATA_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"))
+}
+
+fn close(a: f64, b: f64, what: &str) {
+    assert!(
+        (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1e-12),
+        "{what}: fast {a} vs full {b}"
+    );
+}
+
+/// Scores with the fast path and the full path and checks they agree; returns whether the
+/// fast path was taken.
+fn same_scores<S: app::Store>(project: &app::Project<S>, at: Option<i64>) -> bool {
+    let request = app::ScoreRequest {
+        at,
+        dry_run: true,
+        ..Default::default()
+    };
+    let fast = app::compute(project, &request).unwrap();
+    let full = app::compute_full(project, &request).unwrap();
+    assert!(full.incremental.is_none());
+    assert_eq!(fast.t, full.t);
+    assert_eq!(fast.warnings, full.warnings);
+    assert_eq!(fast.knowledge.modalities, full.knowledge.modalities);
+    assert_eq!(fast.knowledge.last_collected, full.knowledge.last_collected);
+    assert_eq!(fast.knowledge.first_reading, full.knowledge.first_reading);
+    assert_eq!(fast.knowledge.latest, full.knowledge.latest);
+    assert_eq!(fast.terms.len(), full.terms.len());
+    match (&fast.condition, &full.condition) {
+        (Some(a), Some(b)) => {
+            assert_eq!(a.modality, b.modality);
+            assert_eq!(a.thresholds, b.thresholds, "the same model");
+            for (p, q) in a.probabilities.iter().zip(&b.probabilities) {
+                for (x, y) in p.iter().zip(q) {
+                    close(*x, *y, "class probability");
+                }
+            }
+        }
+        (None, None) => {}
+        (a, b) => panic!("condition {:?} vs {:?}", a.is_some(), b.is_some()),
+    }
+    for (c, (a, b)) in fast.terms.iter().zip(&full.terms).enumerate() {
+        let what = format!("at {at:?} cell {c}");
+        for (name, x, y) in [
+            ("F", a.f, b.f),
+            ("R", a.r, b.r),
+            ("A", a.a, b.a),
+            ("U", a.u, b.u),
+            ("S", a.s, b.s),
+        ] {
+            close(x, y, &format!("{what} {name}"));
+        }
+        for (x, y) in a.a_by_modality.iter().zip(&b.a_by_modality) {
+            assert_eq!(x.is_some(), y.is_some(), "{what}");
+            if let (Some(x), Some(y)) = (x, y) {
+                close(*x, *y, &format!("{what} A^m"));
+            }
+        }
+        for (x, y) in a.r_by_modality.iter().zip(&b.r_by_modality) {
+            assert_eq!(x.is_some(), y.is_some(), "{what}");
+            if let (Some(x), Some(y)) = (x, y) {
+                close(*x, *y, &format!("{what} R^m"));
+            }
+        }
+    }
+    fast.incremental.is_some()
+}
+
+/// CAF's `MM/DD/YYYY` as (year, month, day).
+fn ymd(date: &str) -> Option<(i32, u32, u32)> {
+    let mut p = date.split('/');
+    let m = p.next()?.parse().ok()?;
+    let d = p.next()?.parse().ok()?;
+    let y = p.next()?.parse().ok()?;
+    Some((y, m, d))
+}
+
+/// Copies of the CAF daily files holding the rows of the given years only.
+fn caf_files(daily: &Path, out: &Path, years: std::ops::RangeInclusive<i32>) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    let mut names: Vec<_> = std::fs::read_dir(daily)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    names.sort();
+    std::fs::create_dir_all(out).unwrap();
+    for path in names {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let mut lines = text.lines();
+        let mut kept = vec![lines.next().unwrap().to_string()];
+        kept.extend(
+            lines
+                .filter(|l| {
+                    l.split('\t')
+                        .nth(1)
+                        .and_then(ymd)
+                        .is_some_and(|(y, _, _)| years.contains(&y))
+                })
+                .map(str::to_string),
+        );
+        let target = out.join(path.file_name().unwrap());
+        std::fs::write(&target, kept.join("\n") + "\n").unwrap();
+        files.push(target);
+    }
+    files
+}
+
+/// The first exploration sortie's sensors' real VW_30cm readings of Jan-Feb 2014.
+fn flight_file(daily: &Path, sensors: &[String], out: &Path) -> PathBuf {
+    let path = out.join("flight.csv");
+    let mut f = std::fs::File::create(&path).unwrap();
+    writeln!(f, "sensor_id,timestamp,modality,value,unit").unwrap();
+    for sensor in sensors {
+        let text = std::fs::read_to_string(daily.join(format!("{sensor}.txt"))).unwrap();
+        for line in text.lines().skip(1) {
+            let cols: Vec<&str> = line.split('\t').collect();
+            let Some((y, m, d)) = ymd(cols[1]) else {
+                continue;
+            };
+            if y == 2014 && m <= 2 && cols[2] != "NA" {
+                writeln!(f, "{sensor},{y:04}-{m:02}-{d:02},vw@30cm,{},m3/m3", cols[2]).unwrap();
+            }
+        }
+    }
+    path
+}
+
+/// Stores an exploration of the field and records its first sortie as flown at `at` with
+/// the readings of `readings` (a function of the visited sensors).
+fn record_first_sortie<S: app::Store>(
+    project: &mut app::Project<S>,
+    at: i64,
+    readings: impl FnOnce(&[String]) -> Option<PathBuf>,
+) {
+    let exploration = app::explore(
+        project,
+        &app::ExploreRequest {
+            at: Some(at),
+            dry_run: false,
+        },
+        0,
+    )
+    .unwrap();
+    let (id, sortie) = &exploration.sorties[0];
+    let id = id.unwrap();
+    let view = app::field_view(project).unwrap();
+    let cells: std::collections::HashSet<_> = sortie.stops.iter().map(|s| s.cell).collect();
+    let sensors: Vec<String> = view
+        .cells
+        .iter()
+        .filter(|c| cells.contains(&c.index))
+        .flat_map(|c| c.sensors.iter().map(ToString::to_string))
+        .collect();
+    let files = readings(&sensors);
+    app::record_flight(
+        project,
+        &app::RecordRequest {
+            mission: id,
+            at: Some(at),
+            cells: None,
+            readings: files.map(|f| app::IngestRequest {
+                files: vec![f],
+                ..Default::default()
+            }),
+            amend: false,
+        },
+        0,
+        &Silent,
+    )
+    .unwrap();
+}
+
+#[test]
+fn fast_scoring_equals_full_scoring_on_caf() {
+    let data = shared_data();
+    let daily = data.join("caf/Daily");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("caf");
+    let (mut project, _) = app::init(&app::InitRequest {
+        dir,
+        sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
+        utm_zone: Some("11N".into()),
+        name: Some("caf".into()),
+        ..Default::default()
+    })
+    .unwrap();
+    // 2011-2012, then 2013 as a second ingest (an incremental update of the state).
+    for (k, years) in [(0, 2011..=2012), (1, 2013..=2013)] {
+        let files = caf_files(&daily, &tmp.path().join(format!("in{k}")), years);
+        app::ingest(
+            &mut project,
+            &app::IngestRequest {
+                files,
+                ..Default::default()
+            },
+            0,
+            &Silent,
+        )
+        .unwrap();
+    }
+    assert!(same_scores(&project, None));
+    let t = app::parse_timestamp("2014-03-01").unwrap();
+    record_first_sortie(&mut project, t, |sensors| {
+        Some(flight_file(&daily, sensors, tmp.path()))
+    });
+    let latest = app::compute(&project, &app::ScoreRequest::default())
+        .unwrap()
+        .knowledge
+        .latest
+        .unwrap();
+    for at in [None, Some(latest), Some(latest + 3_600), Some(t)] {
+        assert!(same_scores(&project, at), "fast path taken at {at:?}");
+    }
+    // Before the newest reading, or with a history window: the full path.
+    let early = app::compute(
+        &project,
+        &app::ScoreRequest {
+            at: Some(latest - 86_400),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(early.incremental.is_none());
+    let windowed = app::compute(
+        &project,
+        &app::ScoreRequest {
+            history: app::History {
+                until: t - 86_400 * 90,
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(windowed.incremental.is_none());
+    // score() keeps what the fast path computed.
+    let scored = app::score(&mut project, &app::ScoreRequest::default()).unwrap();
+    assert!(scored.incremental.is_some());
+}
+
+#[test]
+fn fast_scoring_equals_full_scoring_on_a_synthetic_farm() {
+    use gleaner_synth::{SynthConfig, generate, write_readings_csv, write_sensors_csv};
+    let farm = generate(&SynthConfig {
+        seed: 7,
+        sensor_count: 120,
+        days: 80,
+        scale_extent_with_sensors: true,
+        vw_depths_cm: vec![30],
+        t_depths_cm: vec![30],
+        ..SynthConfig::default()
+    })
+    .unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let sensors = tmp.path().join("sensors.csv");
+    write_sensors_csv(&farm, &mut std::fs::File::create(&sensors).unwrap()).unwrap();
+    let mut all = Vec::new();
+    write_readings_csv(&farm, &mut all).unwrap();
+    let text = String::from_utf8(all).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let split = app::format_rfc3339(farm.times()[50]);
+    let end = app::format_rfc3339(farm.times()[70]);
+    // Days 0-49, then 50-69; days 70-79 come back with a flight.
+    let (mut first, mut second, mut third) = (vec![header], vec![header], vec![header]);
+    for l in lines {
+        let ts = l.split(',').nth(1).unwrap();
+        if ts < split.as_str() {
+            first.push(l);
+        } else if ts < end.as_str() {
+            second.push(l);
+        } else {
+            third.push(l);
+        }
+    }
+    let file = |name: &str, rows: &[&str]| {
+        let p = tmp.path().join(name);
+        std::fs::write(&p, rows.join("\n") + "\n").unwrap();
+        p
+    };
+    let (f1, f2) = (file("a.csv", &first), file("b.csv", &second));
+    let (mut project, _) = app::init(&app::InitRequest {
+        dir: tmp.path().join("farm"),
+        sensors,
+        base: Some(farm.base()),
+        cell_size_m: Some(app::DEFAULT_CELL_SIZE_M),
+        name: Some("synthetic".into()),
+        ..Default::default()
+    })
+    .unwrap();
+    for f in [f1, f2] {
+        app::ingest(
+            &mut project,
+            &app::IngestRequest {
+                files: vec![f],
+                ..Default::default()
+            },
+            0,
+            &Silent,
+        )
+        .unwrap();
+        assert!(same_scores(&project, None));
+    }
+    let at = farm.times()[79] + 86_400;
+    record_first_sortie(&mut project, at, |sensors| {
+        let rows: Vec<&str> = std::iter::once(header)
+            .chain(
+                third[1..]
+                    .iter()
+                    .copied()
+                    .filter(|l| sensors.iter().any(|s| l.starts_with(&format!("{s},")))),
+            )
+            .collect();
+        Some(file("flight.csv", &rows))
+    });
+    for at in [None, Some(at)] {
+        assert!(same_scores(&project, at), "fast path taken at {at:?}");
+    }
+    // A corrupt state: scoring takes the full path, and `score` rebuilds the state.
+    {
+        use app::{Store as _, StoreWrite as _};
+        let mut store = app::SqliteStore::open(&tmp.path().join("farm/gleaner.db")).unwrap();
+        store
+            .write(|tx| {
+                tx.blob_put("utility.incremental", b"not a state")?;
+                Ok::<_, app::AppError>(())
+            })
+            .unwrap();
+    }
+    let request = app::ScoreRequest::default();
+    assert!(
+        app::compute(&project, &request)
+            .unwrap()
+            .incremental
+            .is_none()
+    );
+    assert!(
+        app::score(&mut project, &request)
+            .unwrap()
+            .incremental
+            .is_none()
+    );
+    assert!(same_scores(&project, None), "rebuilt by score");
+}
