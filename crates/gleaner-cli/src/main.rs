@@ -113,8 +113,8 @@ enum Command {
         #[command(flatten)]
         json: JsonArg,
         /// Order of the rows.
-        #[arg(long, value_enum, default_value_t = SortArg::Label)]
-        sort: SortArg,
+        #[arg(long, value_enum, default_value_t = cells::SortKey::Label)]
+        sort: cells::SortKey,
     },
     /// Score every cell at a mission time: F, R, A, U and S, printed and kept in the cell
     /// metadata table.
@@ -135,8 +135,8 @@ enum Command {
         #[arg(long, default_value_t = 20)]
         limit: usize,
         /// Order of the rows (largest first; `cell` by id).
-        #[arg(long, value_enum, default_value_t = ScoreSortArg::S)]
-        sort: ScoreSortArg,
+        #[arg(long, value_enum, default_value_t = score::ScoreSort::Score)]
+        sort: score::ScoreSort,
     },
     /// Plan a mission: score the cells (or read --scores), then choose and order the cells that
     /// fit the battery, and print the mission summary (table or JSON). The mission is stored as
@@ -260,85 +260,12 @@ enum Command {
     #[command(
         after_help = "Defaults are calibrated to the CAF network (VW range, day-to-day change, spatial correlation).\n\nExamples:\n  gleaner synth --out farm-data --sensors 60 --days 120 --seed 1\n  gleaner synth --out big --sensors 10000 --days 365 --scale-extent --vw-depths 30 --t-depths 30"
     )]
-    Synth(SynthCmd),
-    /// The main job on built-in data: synthetic farm -> project -> ingest -> scores -> mission
-    /// (against the paper's greedy) -> mission files -> recorded flight -> rescoring.
+    Synth(synth::SynthArgs),
+    /// The main job on built-in data: synthetic farm -> project -> exploration sorties -> five
+    /// daily missions, each planned (against the paper's greedy), exported, flown in simulation
+    /// and recorded -> rescoring. `--data` runs it on the real CAF network.
     #[command(after_help = "Example:\n  gleaner demo --dir gleaner-demo --seed 1")]
-    Demo {
-        /// Working directory; the files the demo writes there are replaced.
-        #[arg(long, default_value = "gleaner-demo")]
-        dir: PathBuf,
-        /// Seed of the synthetic farm.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Number of sensors.
-        #[arg(long, default_value_t = 60)]
-        sensors: usize,
-        /// Days of history.
-        #[arg(long, default_value_t = 180)]
-        days: u32,
-        /// Run on the real CAF network instead (the shared data directory, e.g.
-        /// ../shared/data), with the paper's energy preset.
-        #[arg(long)]
-        data: Option<PathBuf>,
-    },
-}
-
-// The arguments of `gleaner synth` (no doc comment: the variant's is the command's help).
-#[derive(Args)]
-struct SynthCmd {
-    /// Output directory (sensors.csv, readings.csv, ground_truth.csv, faults.csv).
-    #[arg(long)]
-    out: PathBuf,
-    /// Seed: the same seed gives byte-identical files.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// Number of sensor stations.
-    #[arg(long, default_value_t = 42)]
-    sensors: usize,
-    /// Days of record.
-    #[arg(long, default_value_t = 365)]
-    days: u32,
-    /// Sampling interval, seconds (a divisor of 86400).
-    #[arg(long, default_value_t = 86_400)]
-    interval_s: i64,
-    /// Number of localised ground-truth events (leak, drying patch, failing sensor).
-    #[arg(long, default_value_t = 3)]
-    events: usize,
-    /// Correlation length of the spatial fields, metres.
-    #[arg(long, default_value_t = 500.0)]
-    correlation_length: f64,
-    /// No sensor faults (dropouts, spikes, stuck values).
-    #[arg(long)]
-    no_faults: bool,
-    /// Grow the field with the sensor count to keep CAF's sensor density.
-    #[arg(long)]
-    scale_extent: bool,
-    /// Soil-moisture depths, cm (modalities vw@<d>cm); empty for none.
-    #[arg(long, value_delimiter = ',', default_value = "30,60,90")]
-    vw_depths: Vec<u32>,
-    /// Soil-temperature depths, cm (modalities t@<d>cm); empty for none.
-    #[arg(long, value_delimiter = ',', default_value = "30")]
-    t_depths: Vec<u32>,
-}
-
-impl SynthCmd {
-    /// The plain settings of `synth`.
-    fn settings(self) -> synth::SynthArgs {
-        synth::SynthArgs {
-            out: self.out,
-            seed: self.seed,
-            sensors: self.sensors,
-            days: self.days,
-            interval_s: self.interval_s,
-            events: self.events,
-            correlation_length_m: self.correlation_length,
-            no_faults: self.no_faults,
-            scale_extent: self.scale_extent,
-            vw_depths_cm: self.vw_depths,
-            t_depths_cm: self.t_depths,
-        }
-    }
+    Demo(demo::DemoArgs),
 }
 
 /// `--project`: the project directory.
@@ -414,37 +341,7 @@ enum BenchCommand {
     #[command(
         after_help = "Examples:\n  gleaner bench op ../shared/data/op/classic --time-limit 1\n  gleaner bench op ../shared/data/op/oplib --max-n 400 --time-limit 10 --csv oplib.csv\n  gleaner bench op ../shared/data/op/classic/Tsiligirides_1 --solver greedy"
     )]
-    Op {
-        /// A benchmark file, or a directory searched recursively.
-        path: PathBuf,
-        /// Solver: default, greedy (the paper's heuristic) or exact (small instances).
-        #[arg(long, default_value = "default")]
-        solver: String,
-        /// Time limit per instance, seconds.
-        #[arg(long, default_value_t = 1.0)]
-        time_limit: f64,
-        /// Seed.
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
-        /// Skip instances with more nodes than this.
-        #[arg(long)]
-        max_n: Option<usize>,
-        /// Also write the rows as CSV to this file.
-        #[arg(long)]
-        csv: Option<PathBuf>,
-        /// Stop an instance after this many iterations without a new best; 0 (the default)
-        /// searches for the whole time limit.
-        #[arg(long, default_value_t = 0)]
-        max_stall: u64,
-        /// Stop each instance after this many search iterations, so that results do not depend
-        /// on the machine's speed (the time limit still applies).
-        #[arg(long)]
-        iterations: Option<u64>,
-        /// Also write every route (node ids as numbered in the instance file) to this file, so
-        /// anyone can re-check a score with their own tools.
-        #[arg(long)]
-        routes: Option<PathBuf>,
-    },
+    Op(bench::BenchOpArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -466,24 +363,6 @@ enum SensorsFormatArg {
 enum OnErrorArg {
     Fail,
     Skip,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum ScoreSortArg {
-    S,
-    F,
-    R,
-    A,
-    U,
-    Cell,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum SortArg {
-    Label,
-    Sensors,
-    Score,
-    Stale,
 }
 
 /// Prints the scoring's warnings on standard error.
@@ -533,7 +412,7 @@ fn parse_time(s: &str) -> Result<i64, String> {
 }
 
 /// The wall clock, seconds since the epoch: provenance only (creation times), never results.
-fn clock_now() -> i64 {
+pub(crate) fn clock_now() -> i64 {
     std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs() as i64)
@@ -704,15 +583,7 @@ fn run(cli: Cli) -> Result<()> {
                 .iter()
                 .map(|c| gleaner_wire::convert::cell_row(c, view.cell_size_m))
                 .collect();
-            cells::sort(
-                &mut rows,
-                match sort {
-                    SortArg::Label => cells::SortKey::Label,
-                    SortArg::Sensors => cells::SortKey::Sensors,
-                    SortArg::Score => cells::SortKey::Score,
-                    SortArg::Stale => cells::SortKey::Stale,
-                },
-            );
+            cells::sort(&mut rows, sort);
             json.emit(&rows, "serialising cells", || cells::table(&rows))?;
         }
         Command::Score {
@@ -735,17 +606,7 @@ fn run(cli: Cli) -> Result<()> {
             )?;
             warn(&scoring);
             let mut doc = gleaner_wire::convert::scoring(&scoring);
-            score::sort(
-                &mut doc,
-                match sort {
-                    ScoreSortArg::S => score::ScoreSort::Score,
-                    ScoreSortArg::F => score::ScoreSort::Freshness,
-                    ScoreSortArg::R => score::ScoreSort::Redundancy,
-                    ScoreSortArg::A => score::ScoreSort::Anomaly,
-                    ScoreSortArg::U => score::ScoreSort::Uncertainty,
-                    ScoreSortArg::Cell => score::ScoreSort::Cell,
-                },
-            );
+            score::sort(&mut doc, sort);
             json.emit(&doc, "serialising scores", || score::table(&doc, limit))?;
         }
         Command::Plan {
@@ -863,33 +724,13 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
         }
-        Command::Bench(BenchCommand::Op {
-            path,
-            solver,
-            time_limit,
-            seed,
-            max_n,
-            csv,
-            max_stall,
-            iterations,
-            routes,
-        }) => {
-            let (_, table) = bench::run(&bench::BenchOpArgs {
-                path,
-                solver: bench::parse_solver(&solver)?,
-                time_limit_s: time_limit,
-                seed,
-                max_n,
-                csv,
-                max_stall: (max_stall > 0).then_some(max_stall),
-                iterations,
-                routes,
-            })?;
+        Command::Bench(BenchCommand::Op(args)) => {
+            let (_, table) = bench::run(&args)?;
             print!("{table}");
         }
         Command::Synth(args) => {
             let sensors = args.sensors;
-            let (farm, files) = synth::run(&args.settings())?;
+            let (farm, files) = synth::run(&args)?;
             println!(
                 "wrote {} sensors, {} readings, {} events to {}",
                 sensors,
@@ -901,24 +742,7 @@ fn run(cli: Cli) -> Result<()> {
                     .map_or(String::new(), |p| p.display().to_string())
             );
         }
-        Command::Demo {
-            dir,
-            seed,
-            sensors,
-            days,
-            data,
-        } => {
-            print!(
-                "{}",
-                demo::run(&demo::DemoArgs {
-                    dir,
-                    seed,
-                    sensors,
-                    days,
-                    data,
-                })?
-            );
-        }
+        Command::Demo(args) => print!("{}", demo::run(&args)?),
     }
     Ok(())
 }

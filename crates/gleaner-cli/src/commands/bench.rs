@@ -11,27 +11,37 @@ use gleaner_orienteering::{SolveOptions, SolverKind};
 
 use crate::progress;
 
-/// Settings from the command line.
+// The arguments of `gleaner bench op` (no doc comment: the variant's is the help).
+#[derive(clap::Args)]
 pub struct BenchOpArgs {
-    /// A benchmark file or a directory searched recursively.
+    /// A benchmark file, or a directory searched recursively.
     pub path: PathBuf,
-    /// Solver.
-    pub solver: SolverKind,
+    /// Solver: default, greedy (the paper's heuristic) or exact (small instances).
+    #[arg(long, default_value = "default")]
+    pub solver: String,
     /// Time limit per instance, seconds.
-    pub time_limit_s: f64,
+    #[arg(long, default_value_t = 1.0)]
+    pub time_limit: f64,
     /// Seed.
+    #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Skip instances with more nodes than this.
+    #[arg(long)]
     pub max_n: Option<usize>,
-    /// Also write the rows as CSV here.
+    /// Also write the rows as CSV to this file.
+    #[arg(long)]
     pub csv: Option<PathBuf>,
-    /// Stop an instance after this many iterations without improvement (`None`: use the
-    /// whole time limit).
-    pub max_stall: Option<u64>,
-    /// Stop each instance after this many search iterations (machine-independent results);
-    /// the time limit still applies.
+    /// Stop an instance after this many iterations without a new best; 0 (the default)
+    /// searches for the whole time limit.
+    #[arg(long, default_value_t = 0)]
+    pub max_stall: u64,
+    /// Stop each instance after this many search iterations, so that results do not depend
+    /// on the machine's speed (the time limit still applies).
+    #[arg(long)]
     pub iterations: Option<u64>,
-    /// Also write every route here (node ids as in the instance files).
+    /// Also write every route (node ids as numbered in the instance file) to this file, so
+    /// anyone can re-check a score with their own tools.
+    #[arg(long)]
     pub routes: Option<PathBuf>,
 }
 
@@ -69,16 +79,16 @@ pub fn run(args: &BenchOpArgs) -> Result<(Vec<BenchRow>, String)> {
     if files.is_empty() {
         bail!("{}: no benchmark instances found", args.path.display());
     }
+    let solver = parse_solver(&args.solver)?;
     let mut options = SolveOptions::default()
         .with_time_limit(
-            gleaner_orienteering::time_limit_from_secs(args.time_limit_s)
-                .context("--time-limit")?,
+            gleaner_orienteering::time_limit_from_secs(args.time_limit).context("--time-limit")?,
         )
         .with_seed(args.seed);
-    options.max_stall = args.max_stall;
+    options.max_stall = (args.max_stall > 0).then_some(args.max_stall);
     options.max_iterations = args.iterations;
     let pb = progress::bar(files.len() as u64, "solving");
-    let rows = run_benchmark(&files, args.solver, &options, &mut |done, _, row| {
+    let rows = run_benchmark(&files, solver, &options, &mut |done, _, row| {
         pb.set_position(done as u64);
         pb.set_message(row.instance.clone());
     })?;

@@ -3,7 +3,7 @@
 use gleaner_wire::docs::CellRowDoc;
 
 /// How to order the table.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum SortKey {
     /// By grid index (column, then row).
     Label,

@@ -10,20 +10,28 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use gleaner_app::{self as app, MissionId, Project, SqliteStore};
 
+use crate::clock_now;
 use crate::commands::{export, plan, synth};
 use crate::progress::Terminal;
 
-/// Settings from the command line.
+// The arguments of `gleaner demo` (no doc comment: the variant's is the help).
+#[derive(clap::Args)]
 pub struct DemoArgs {
-    /// Working directory (created; the files the demo writes there are replaced).
+    /// Working directory; the files the demo writes there are replaced.
+    #[arg(long, default_value = "gleaner-demo")]
     pub dir: PathBuf,
-    /// Seed of the synthetic farm and of the planner.
+    /// Seed of the synthetic farm.
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Number of sensors (synthetic farm).
+    /// Number of sensors.
+    #[arg(long, default_value_t = 60)]
     pub sensors: usize,
-    /// Number of days of record (synthetic farm).
+    /// Days of history.
+    #[arg(long, default_value_t = 180)]
     pub days: u32,
-    /// The shared data directory: run on the CAF network instead.
+    /// Run on the real CAF network instead (the shared data directory, e.g.
+    /// ../shared/data), with the paper's energy preset.
+    #[arg(long)]
     pub data: Option<PathBuf>,
 }
 
@@ -50,12 +58,6 @@ fn clean(dir: &Path) -> Result<()> {
             .with_context(|| format!("{}: cannot remove", missions.display()))?;
     }
     Ok(())
-}
-
-fn clock_now() -> i64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs() as i64)
 }
 
 /// The paper's line: "selected 8 cells; 55,309.8 J of 66,500 J, 83.2%".

@@ -3,18 +3,23 @@
 use gleaner_wire::docs::{ScoreRowDoc, ScoringDoc};
 
 /// How to order scored cells.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum ScoreSort {
     /// Highest S first (the default).
     #[default]
+    #[value(name = "s")]
     Score,
     /// Highest F first.
+    #[value(name = "f")]
     Freshness,
     /// Highest R first.
+    #[value(name = "r")]
     Redundancy,
     /// Highest A first.
+    #[value(name = "a")]
     Anomaly,
     /// Highest U first.
+    #[value(name = "u")]
     Uncertainty,
     /// By cell id.
     Cell,

@@ -34,30 +34,42 @@ impl SynthFiles {
     }
 }
 
-/// Settings from the command line (everything else takes [`SynthConfig`]'s defaults, which are
-/// calibrated to the CAF network).
+// The arguments of `gleaner synth` (no doc comment: the variant's is the help). Everything
+// else takes `SynthConfig`'s defaults, which are calibrated to the CAF network.
+#[derive(clap::Args)]
 pub struct SynthArgs {
-    /// Output directory.
+    /// Output directory (sensors.csv, readings.csv, ground_truth.csv, faults.csv).
+    #[arg(long)]
     pub out: PathBuf,
-    /// Seed.
+    /// Seed: the same seed gives byte-identical files.
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Number of sensors.
+    /// Number of sensor stations.
+    #[arg(long, default_value_t = 42)]
     pub sensors: usize,
-    /// Number of days.
+    /// Days of record.
+    #[arg(long, default_value_t = 365)]
     pub days: u32,
-    /// Sampling interval, seconds.
+    /// Sampling interval, seconds (a divisor of 86400).
+    #[arg(long, default_value_t = 86_400)]
     pub interval_s: i64,
-    /// Number of ground-truth events.
+    /// Number of localised ground-truth events (leak, drying patch, failing sensor).
+    #[arg(long, default_value_t = 3)]
     pub events: usize,
-    /// Spatial correlation length, metres.
+    /// Correlation length of the spatial fields, metres.
+    #[arg(long = "correlation-length", default_value_t = 500.0)]
     pub correlation_length_m: f64,
-    /// Turn off sensor faults.
+    /// No sensor faults (dropouts, spikes, stuck values).
+    #[arg(long)]
     pub no_faults: bool,
-    /// Keep CAF's sensor density by growing the field with the sensor count.
+    /// Grow the field with the sensor count to keep CAF's sensor density.
+    #[arg(long)]
     pub scale_extent: bool,
-    /// Depths of the soil-moisture modalities `vw@<d>cm`, centimetres.
+    /// Soil-moisture depths, cm (modalities vw@<d>cm); empty for none.
+    #[arg(long = "vw-depths", value_delimiter = ',', default_value = "30,60,90")]
     pub vw_depths_cm: Vec<u32>,
-    /// Depths of the soil-temperature modalities `t@<d>cm`, centimetres.
+    /// Soil-temperature depths, cm (modalities t@<d>cm); empty for none.
+    #[arg(long = "t-depths", value_delimiter = ',', default_value = "30")]
     pub t_depths_cm: Vec<u32>,
 }
 
