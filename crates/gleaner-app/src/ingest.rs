@@ -163,6 +163,15 @@ pub fn detect(path: &Path) -> Result<Format> {
     }
 }
 
+/// The ids of the project's sensors: readings of any other sensor are refused.
+pub(crate) fn known_sensors<R: gleaner_store::StoreRead>(store: &R) -> Result<HashSet<String>> {
+    Ok(store
+        .sensors()?
+        .into_iter()
+        .map(|s| s.id.to_string())
+        .collect())
+}
+
 /// Reads and checks every file; stores nothing.
 pub(crate) fn parse_files(
     request: &IngestRequest,
@@ -319,13 +328,7 @@ pub fn ingest<S: Store>(
     clock_now: UnixSeconds,
     progress: &dyn Progress,
 ) -> Result<IngestOutcome> {
-    let known: HashSet<String> = project
-        .store()
-        .sensors()?
-        .into_iter()
-        .map(|s| s.id.to_string())
-        .collect();
-    let parsed = parse_files(request, known, progress)?;
+    let parsed = parse_files(request, known_sensors(project.store())?, progress)?;
     let policy = match request.on_error {
         OnError::Fail => ConflictPolicy::Fail,
         OnError::Skip => ConflictPolicy::Skip,

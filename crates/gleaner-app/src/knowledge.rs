@@ -246,3 +246,14 @@ fn empty(sensors: Vec<Sensor>, field: Field, collected: Vec<Option<UnixSeconds>>
         latest: None,
     }
 }
+
+impl Knowledge {
+    /// The cells' ids (`x3y-1`), in field order.
+    pub fn cell_labels(&self) -> Vec<String> {
+        self.field
+            .cells()
+            .iter()
+            .map(|c| c.index.to_string())
+            .collect()
+    }
+}

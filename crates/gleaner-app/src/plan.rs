@@ -85,12 +85,7 @@ pub struct PlannedMission {
 }
 
 fn read_scores(path: &Path, k: &Knowledge) -> Result<Vec<f64>> {
-    let labels: Vec<String> = k
-        .field
-        .cells()
-        .iter()
-        .map(|c| c.index.to_string())
-        .collect();
+    let labels = k.cell_labels();
     let mut scores: Vec<Option<f64>> = vec![None; labels.len()];
     for row in cell_csv::read(path)? {
         let at = |what: &str| AppError::Invalid(format!("{}:{}: {what}", path.display(), row.line));

@@ -67,16 +67,7 @@ impl<S: Store> Project<S> {
 
     /// The sensors, sorted by id, as core values.
     pub fn sensors(&self) -> Result<Vec<Sensor>> {
-        Ok(self
-            .store
-            .sensors()?
-            .into_iter()
-            .map(|r| Sensor {
-                id: r.id,
-                position: r.position,
-                elevation_m: r.elevation_m,
-            })
-            .collect())
+        sensors_of(&self.store)
     }
 
     /// The field (grid and neighbours) built from the stored sensors and the settings.
@@ -95,4 +86,17 @@ impl<S: Store> Project<S> {
         .map_err(|e| AppError::core("cell grid", e))?;
         Ok((sensors, field))
     }
+}
+
+/// A store's sensors, sorted by id, as core values.
+pub(crate) fn sensors_of<R: gleaner_store::StoreRead>(store: &R) -> Result<Vec<Sensor>> {
+    Ok(store
+        .sensors()?
+        .into_iter()
+        .map(|r| Sensor {
+            id: r.id,
+            position: r.position,
+            elevation_m: r.elevation_m,
+        })
+        .collect())
 }

@@ -8,7 +8,7 @@ use gleaner_ingest::time::format_rfc3339;
 use gleaner_store::{ConflictPolicy, MissionId, MissionStatus, Store, StoreWrite, VisitRecord};
 
 use crate::error::{AppError, Result};
-use crate::ingest::{IngestRequest, Parsed, parse_files, store_parsed};
+use crate::ingest::{IngestRequest, Parsed, known_sensors, parse_files, store_parsed};
 use crate::progress::Progress;
 use crate::project::Project;
 use crate::summaries;
@@ -60,13 +60,7 @@ pub fn record_flight<S: Store>(
 ) -> Result<RecordOutcome> {
     let parsed = match &request.readings {
         Some(r) if !r.files.is_empty() => {
-            let known = project
-                .store()
-                .sensors()?
-                .into_iter()
-                .map(|s| s.id.to_string())
-                .collect();
-            Some(parse_files(r, known, progress)?)
+            Some(parse_files(r, known_sensors(project.store())?, progress)?)
         }
         _ => None,
     };

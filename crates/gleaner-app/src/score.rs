@@ -228,12 +228,7 @@ pub fn compute_full<S: Store>(project: &Project<S>, request: &ScoreRequest) -> R
                 .into_iter()
                 .map(|r| (r.cell, r.values))
                 .collect();
-            let labels: Vec<String> = k
-                .field
-                .cells()
-                .iter()
-                .map(|c| c.index.to_string())
-                .collect();
+            let labels = k.cell_labels();
             let p = validate_probabilities(&labels, &rows)
                 .map_err(|e| AppError::Invalid(format!("{}: {e}", path.display())))?;
             let kk = p.first().map_or(0, Vec::len);

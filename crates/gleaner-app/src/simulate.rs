@@ -10,7 +10,7 @@ use gleaner_ingest::{IngestReport, Readings, Row};
 use gleaner_store::{MissionId, Store};
 
 use crate::error::{AppError, Result};
-use crate::ingest::{Format, IngestRequest, Parsed, parse_files};
+use crate::ingest::{Format, IngestRequest, Parsed, known_sensors, parse_files};
 use crate::progress::Progress;
 use crate::project::Project;
 use crate::record::{RecordOutcome, RecordRequest, record_parsed};
@@ -37,13 +37,7 @@ impl Truth {
                 "logging period {period_s} s must be >= 0"
             )));
         }
-        let known = project
-            .store()
-            .sensors()?
-            .into_iter()
-            .map(|s| s.id.to_string())
-            .collect();
-        let parsed = parse_files(request, known, progress)?;
+        let parsed = parse_files(request, known_sensors(project.store())?, progress)?;
         let mut readings = Readings::default();
         for (_, _, r, _) in parsed.files {
             readings.append(r);

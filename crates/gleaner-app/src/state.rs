@@ -388,15 +388,7 @@ impl Persisted {
 /// The sensors (sorted by id) and the field from a store and the settings; `None` when there
 /// are no sensors or the grid cannot be built (the state is then not kept).
 fn field_of<R: StoreRead>(store: &R, settings: &Settings) -> Result<Option<(Vec<Sensor>, Field)>> {
-    let sensors: Vec<Sensor> = store
-        .sensors()?
-        .into_iter()
-        .map(|r| Sensor {
-            id: r.id,
-            position: r.position,
-            elevation_m: r.elevation_m,
-        })
-        .collect();
+    let sensors: Vec<Sensor> = crate::project::sensors_of(store)?;
     if sensors.is_empty() {
         return Ok(None);
     }
