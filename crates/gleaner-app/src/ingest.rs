@@ -280,6 +280,17 @@ pub(crate) fn batch_of(all: &Readings) -> (Vec<ModalityRecord>, ReadingBatch) {
     (modalities, batch)
 }
 
+/// How an insert treats the persisted utility state (see `state.rs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum StatePolicy {
+    /// Bring it up to date in the same transaction (a flight's readings: the next scoring is
+    /// fast). Refits the condition model.
+    Maintain,
+    /// Mark it stale when readings were added (a bulk ingest stays as fast as the store
+    /// allows; the next `score` rebuilds the state once, O(history)).
+    Invalidate,
+}
+
 /// Stores parsed readings inside a transaction: modalities, readings, provenance, and the
 /// refreshed summaries of the cells whose sensors got readings.
 pub(crate) fn store_parsed<W: StoreWrite>(
@@ -289,9 +300,13 @@ pub(crate) fn store_parsed<W: StoreWrite>(
     at: UnixSeconds,
     now: UnixSeconds,
     settings: &crate::settings::Settings,
+    state_policy: StatePolicy,
 ) -> std::result::Result<(InsertStats, usize), AppError> {
     let mut stats = InsertStats::default();
-    let plan = state::before_insert(&*tx, parsed)?;
+    let plan = match state_policy {
+        StatePolicy::Maintain => Some(state::before_insert(&*tx, parsed)?),
+        StatePolicy::Invalidate => None,
+    };
     for (path, format, readings, report) in &parsed.files {
         let (modalities, batch) = batch_of(readings);
         tx.upsert_modalities(&modalities)?;
@@ -315,7 +330,11 @@ pub(crate) fn store_parsed<W: StoreWrite>(
         Vec::new()
     };
     let refreshed = summaries::refresh_cells(tx, &changed, now, settings)?;
-    state::after_insert(tx, plan, settings)?;
+    match plan {
+        Some(plan) => state::after_insert(tx, plan, settings)?,
+        None if stats.inserted > 0 => state::invalidate(tx)?,
+        None => {}
+    }
     Ok((stats, refreshed))
 }
 
@@ -337,9 +356,17 @@ pub fn ingest<S: Store>(
     let now = request.now.or(latest).unwrap_or(clock_now);
     let settings = project.settings().clone();
     progress.start(&format!("storing {} readings", parsed.len()), None);
-    let (stats, refreshed) = project
-        .store_mut()
-        .write(|tx| store_parsed(tx, &parsed, policy, clock_now, now, &settings))?;
+    let (stats, refreshed) = project.store_mut().write(|tx| {
+        store_parsed(
+            tx,
+            &parsed,
+            policy,
+            clock_now,
+            now,
+            &settings,
+            StatePolicy::Invalidate,
+        )
+    })?;
     progress.finish();
     Ok(IngestOutcome {
         files: request.files.len(),

@@ -8,7 +8,7 @@ use gleaner_ingest::time::format_rfc3339;
 use gleaner_store::{ConflictPolicy, MissionId, MissionStatus, Store, StoreWrite, VisitRecord};
 
 use crate::error::{AppError, Result};
-use crate::ingest::{IngestRequest, Parsed, known_sensors, parse_files, store_parsed};
+use crate::ingest::{IngestRequest, Parsed, StatePolicy, known_sensors, parse_files, store_parsed};
 use crate::progress::Progress;
 use crate::project::Project;
 use crate::summaries;
@@ -168,7 +168,15 @@ pub(crate) fn record_parsed<S: Store>(
     let (inserted, unchanged) = project.store_mut().write(|tx| {
         let mut stats = (0, 0);
         if let Some(parsed) = &parsed {
-            let (s, _) = store_parsed(tx, parsed, ConflictPolicy::Fail, clock_now, at, &settings)?;
+            let (s, _) = store_parsed(
+                tx,
+                parsed,
+                ConflictPolicy::Fail,
+                clock_now,
+                at,
+                &settings,
+                StatePolicy::Maintain,
+            )?;
             stats = (s.inserted, s.unchanged);
         }
         tx.set_sensors_collected(&collected)?;

@@ -556,6 +556,11 @@ fn rebuild<R: StoreRead>(store: &R, settings: &Settings) -> Result<Option<Persis
     }))
 }
 
+/// Marks the persisted state stale (an empty blob): the next `score` rebuilds it.
+pub(crate) fn invalidate<W: StoreWrite>(tx: &mut W) -> Result<()> {
+    write_blob(tx, None)
+}
+
 fn write_blob<W: StoreWrite>(tx: &mut W, p: Option<&Persisted>) -> Result<()> {
     let bytes = p.map(Persisted::to_bytes).unwrap_or_default();
     tx.blob_put(BLOB_KEY, &bytes)?;

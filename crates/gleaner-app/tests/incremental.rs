@@ -210,6 +210,10 @@ fn fast_scoring_equals_full_scoring_on_caf() {
         )
         .unwrap();
     }
+    // A bulk ingest leaves the state stale (the ingest stays as fast as the store); the first
+    // scoring that writes rebuilds it, and from then on scoring takes the fast path.
+    assert!(!same_scores(&project, None));
+    app::score(&mut project, &app::ScoreRequest::default()).unwrap();
     assert!(same_scores(&project, None));
     let t = app::parse_timestamp("2014-03-01").unwrap();
     record_first_sortie(&mut project, t, |sensors| {
@@ -311,6 +315,8 @@ fn fast_scoring_equals_full_scoring_on_a_synthetic_farm() {
             &Silent,
         )
         .unwrap();
+        assert!(!same_scores(&project, None), "a bulk ingest marks the state stale");
+        app::score(&mut project, &app::ScoreRequest::default()).unwrap();
         assert!(same_scores(&project, None));
     }
     let at = farm.times()[79] + 86_400;
