@@ -275,23 +275,24 @@ pub fn compute_full<S: Store>(project: &Project<S>, request: &ScoreRequest) -> R
 /// The use case: scores every cell at t and, unless a dry run, keeps the terms, class
 /// probabilities, neighbour correlations, anomaly history and series summaries in the cell
 /// metadata table, in one transaction.
+///
+/// A common request (all history, no user probabilities) whose persisted utility state is
+/// stale — after a bulk ingest, a change of grid settings, or a database from before the state
+/// existed — first rebuilds the state (its own transaction: a cache of the stored readings,
+/// idempotent), then scores from it: the condition model is fitted once, not once for this
+/// scoring and again for the state.
 pub fn score<S: Store>(project: &mut Project<S>, request: &ScoreRequest) -> Result<Scoring> {
+    let common = request.probabilities.is_none() && request.history == History::default();
+    if !request.dry_run && common {
+        let settings = project.settings().clone();
+        project
+            .store_mut()
+            .write(|tx| state::refresh_if_stale(tx, &settings))?;
+    }
     let scoring = compute(project, request)?;
     if !request.dry_run {
         let rows = metadata_rows(project, &scoring, &HashMap::new());
-        // A common request that could not use the persisted state (e.g. a database from
-        // before it existed, or changed grid settings) rebuilds it for the next scoring.
-        let refresh = scoring.incremental.is_none()
-            && request.probabilities.is_none()
-            && request.history == History::default();
-        let settings = project.settings().clone();
-        project.store_mut().write(|tx| {
-            write_scoring(tx, rows)?;
-            if refresh {
-                state::refresh_if_stale(tx, &settings)?;
-            }
-            Ok::<_, AppError>(())
-        })?;
+        project.store_mut().write(|tx| write_scoring(tx, rows))?;
     }
     Ok(scoring)
 }
