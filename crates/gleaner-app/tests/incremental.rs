@@ -315,7 +315,10 @@ fn fast_scoring_equals_full_scoring_on_a_synthetic_farm() {
             &Silent,
         )
         .unwrap();
-        assert!(!same_scores(&project, None), "a bulk ingest marks the state stale");
+        assert!(
+            !same_scores(&project, None),
+            "a bulk ingest marks the state stale"
+        );
         app::score(&mut project, &app::ScoreRequest::default()).unwrap();
         assert!(same_scores(&project, None));
     }
