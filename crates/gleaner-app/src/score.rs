@@ -389,16 +389,8 @@ pub(crate) fn metadata_rows<S: Store>(
                 }
             }
             for (mi, a) in terms.a_by_modality.iter().enumerate() {
-                if let (Some(a), Some((t_star, _)), Some(Some(modality))) =
-                    (a, k.series[c][mi].as_series().last(), modalities.get(mi))
-                {
-                    m.anomalies.push(AnomalyRecord {
-                        modality: modality.clone(),
-                        t: t_star,
-                        anomaly: *a,
-                        flagged: *a >= flag,
-                    });
-                }
+                let latest = k.series[c][mi].as_series().last().map(|p| p.0);
+                push_anomaly(&mut m, modalities.get(mi), latest, *a, flag);
             }
             m.summaries = modalities
                 .iter()
@@ -410,6 +402,25 @@ pub(crate) fn metadata_rows<S: Store>(
             m
         })
         .collect()
+}
+
+/// Adds the anomaly of one modality at its latest point (time in seconds) to a cell's anomaly
+/// history, flagged when at or above `flag`; nothing when any part is missing.
+pub(crate) fn push_anomaly(
+    m: &mut CellMetadata,
+    modality: Option<&Option<Modality>>,
+    latest: Option<UnixSeconds>,
+    anomaly: Option<f64>,
+    flag: f64,
+) {
+    if let (Some(Some(modality)), Some(t), Some(a)) = (modality, latest, anomaly) {
+        m.anomalies.push(AnomalyRecord {
+            modality: modality.clone(),
+            t,
+            anomaly: a,
+            flagged: a >= flag,
+        });
+    }
 }
 
 fn common_points(a: Series<'_>, b: Series<'_>) -> u64 {

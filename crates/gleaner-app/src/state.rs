@@ -34,7 +34,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 use gleaner_field::{Field, Modality, Sensor, SensorId, UnixSeconds};
 use gleaner_store::{
-    AnomalyRecord, CellMetadata, Correlation, ModalitySummary, SeriesStats, StoreRead, StoreWrite,
+    CellMetadata, Correlation, ModalitySummary, ReadingBatch, SeriesStats, StoreRead, StoreWrite,
 };
 use gleaner_utility::{
     ConditionConfig, ConditionModel, HistoryWindow, IncrementalState, OwnedSeries, Reading, Series,
@@ -43,7 +43,7 @@ use gleaner_utility::{
 
 use crate::error::{AppError, Result};
 use crate::ingest::Parsed;
-use crate::knowledge::{Knowledge, cell_series_of, columns};
+use crate::knowledge::{Columns, Knowledge, cell_series_of, columns};
 use crate::project::Project;
 use crate::score::{
     NO_MODALITY, ScoreRequest, Scoring, condition_modality, condition_output, fit_condition,
@@ -475,21 +475,26 @@ fn places(field: &Field, n_sensors: usize) -> Vec<(usize, usize)> {
     place
 }
 
+/// Every reading of `batch` as columns, none held back by a collection time or window.
+fn all_columns(sensors: &[Sensor], batch: &ReadingBatch, grid: Option<TimeGrid>) -> Columns {
+    let none = vec![None; sensors.len()];
+    columns(
+        sensors,
+        batch,
+        &none,
+        UnixSeconds::MAX,
+        UnixSeconds::MAX,
+        grid,
+    )
+}
+
 /// Builds the state from every stored reading. O(history).
 fn rebuild<R: StoreRead>(store: &R, settings: &Settings) -> Result<Option<Persisted>> {
     let Some((sensors, field)) = field_of(store, settings)? else {
         return Ok(None);
     };
     let batch = store.readings_for(None, UnixSeconds::MIN..=UnixSeconds::MAX)?;
-    let none = vec![None; sensors.len()];
-    let c = columns(
-        &sensors,
-        &batch,
-        &none,
-        UnixSeconds::MAX,
-        UnixSeconds::MAX,
-        None,
-    );
+    let c = all_columns(&sensors, &batch, None);
     drop(batch);
     let Some(latest) = c.latest else {
         return Ok(None);
@@ -774,15 +779,7 @@ fn update<W: StoreWrite>(
             };
             match tx.readings_for(Some(&modality), UnixSeconds::MIN..=UnixSeconds::MAX) {
                 Ok(batch) => {
-                    let none = vec![None; sensors.len()];
-                    let c = columns(
-                        &sensors,
-                        &batch,
-                        &none,
-                        UnixSeconds::MAX,
-                        UnixSeconds::MAX,
-                        Some(grid),
-                    );
+                    let c = all_columns(&sensors, &batch, Some(grid));
                     let Some(m) = c.modalities.iter().position(|x| *x == p.modalities[m]) else {
                         return vec![OwnedSeries::default(); field.cells().len()];
                     };
@@ -975,16 +972,8 @@ pub(crate) fn metadata_from_state(
     }
     if let Some(terms) = s.terms.get(c) {
         for (mi, a) in terms.a_by_modality.iter().enumerate() {
-            if let (Some(a), Some((t_star, _)), Some(Some(modality))) =
-                (a, state.series_stats(c, mi).latest, modalities.get(mi))
-            {
-                m.anomalies.push(AnomalyRecord {
-                    modality: modality.clone(),
-                    t: t_star,
-                    anomaly: *a,
-                    flagged: *a >= flag,
-                });
-            }
+            let latest = state.series_stats(c, mi).latest.map(|p| p.0);
+            crate::score::push_anomaly(m, modalities.get(mi), latest, *a, flag);
         }
     }
     m.summaries = modalities
