@@ -49,7 +49,7 @@ pub fn explore<S: Store>(
     let t = request.at.or(k.latest).unwrap_or(clock_now);
     let model = energy_model(project)?;
     let profile = flight_profile(project, &model)?;
-    let (svc, _) = services(&model, &k, t)?;
+    let svc = services(&model, &k, t)?;
     let centres: Vec<LocalPoint> = k.field.cells().iter().map(|c| c.centre).collect();
     let service_j: Vec<f64> = svc.iter().map(|s| s.energy_j).collect();
     let base = LocalPoint::new(0.0, 0.0);

@@ -1,7 +1,6 @@
 //! Planning: scores (from the utility engine, or a file) + the energy model -> a route and the
 //! mission of SPEC §6, stored with its stops and energy breakdown in one transaction.
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use gleaner_energy::{CellService, MissionEnergy, MissionEnergyModel};
@@ -126,13 +125,13 @@ pub fn flight_profile<S: Store>(
     })
 }
 
-/// Per-cell collection service at time `t` and pending volume (bytes), from the sensors'
-/// backlog: the data logged since each sensor's last collection, or since its first reading.
+/// Per-cell collection service at time `t` from the sensors' backlog: the data logged since
+/// each sensor's last collection, or since its first reading.
 pub(crate) fn services(
     model: &MissionEnergyModel,
     k: &Knowledge,
     t: UnixSeconds,
-) -> Result<(Vec<CellService>, Vec<f64>)> {
+) -> Result<Vec<CellService>> {
     let elapsed: Vec<f64> = (0..k.sensors.len())
         .map(|s| {
             let since = k.last_collected[s]
@@ -141,20 +140,9 @@ pub(crate) fn services(
             (t - since).max(0) as f64
         })
         .collect();
-    let mut services = Vec::with_capacity(k.field.cells().len());
-    let mut pending = Vec::with_capacity(k.field.cells().len());
-    for c in 0..k.field.cells().len() {
-        let backlog = model
-            .cell_backlog(&k.field, gleaner_field::CellId(c as u32), &elapsed)
-            .map_err(|e| AppError::core("collection times", e))?;
-        pending.push(backlog.iter().map(|b| b.pending_bytes).sum());
-        services.push(
-            model
-                .cell_service(&backlog)
-                .map_err(|e| AppError::core("collection times", e))?,
-        );
-    }
-    Ok((services, pending))
+    model
+        .field_services(&k.field, &elapsed)
+        .map_err(|e| AppError::core("collection times", e))
 }
 
 /// The stops of a route with the energy model's breakdown.
@@ -203,7 +191,7 @@ pub(crate) fn breakdown(e: &MissionEnergy) -> EnergyBreakdown {
 }
 
 /// The use case: scores the cells (or reads scores), plans the route, and unless a dry run
-/// stores the scoring, each cell's expected collection energy and pending volume, and the
+/// stores the scoring, each cell's expected collection energy, and the
 /// mission with its stops — one transaction. The planned route is re-checked by the energy
 /// model; a route the budget cannot carry is never returned. `clock_now` (seconds) is
 /// recorded as the mission's creation time.
@@ -264,7 +252,7 @@ pub fn plan<S: Store>(
         .ok_or_else(|| AppError::Invalid("nothing known at the mission time".into()))?;
     let model = energy_model(project)?;
     let profile = flight_profile(project, &model)?;
-    let (services, pending) = services(&model, k, t)?;
+    let services = services(&model, k, t)?;
     let candidates: Vec<Candidate> = k
         .field
         .cells()
@@ -335,12 +323,8 @@ pub fn plan<S: Store>(
     if !request.dry_run {
         let rows = match &planned.scoring {
             Some(s) => {
-                let extra: HashMap<usize, (f64, f64)> = services
-                    .iter()
-                    .enumerate()
-                    .map(|(c, svc)| (c, (svc.energy_j, pending[c])))
-                    .collect();
-                score::metadata_rows(project, s, &extra)
+                let energy: Vec<f64> = services.iter().map(|svc| svc.energy_j).collect();
+                score::metadata_rows(project, s, Some(&energy))
             }
             None => Vec::new(),
         };

@@ -291,14 +291,14 @@ pub fn score<S: Store>(project: &mut Project<S>, request: &ScoreRequest) -> Resu
     }
     let scoring = compute(project, request)?;
     if !request.dry_run {
-        let rows = metadata_rows(project, &scoring, &HashMap::new());
+        let rows = metadata_rows(project, &scoring, None);
         project.store_mut().write(|tx| write_scoring(tx, rows))?;
     }
     Ok(scoring)
 }
 
-/// Writes scoring rows, carrying over what scoring does not compute (expected energy, and a
-/// pending volume the caller did not set) from the stored rows.
+/// Writes scoring rows, carrying over what scoring does not compute (the pending volume, and an
+/// expected energy the caller did not set) from the stored rows.
 pub(crate) fn write_scoring<W: StoreWrite>(
     tx: &mut W,
     mut rows: Vec<CellMetadata>,
@@ -320,12 +320,12 @@ pub(crate) fn write_scoring<W: StoreWrite>(
 }
 
 /// The cell metadata rows of a scoring: terms, class probabilities, correlations with every
-/// neighbour, the latest anomaly per modality, and the series summaries. `extra` sets expected
-/// energy (J) and pending volume (bytes) per cell position.
+/// neighbour, the latest anomaly per modality, and the series summaries; with
+/// `expected_energy_j` (J, one per cell in field order), each cell's expected collection energy.
 pub(crate) fn metadata_rows<S: Store>(
     project: &Project<S>,
     s: &Scoring,
-    extra: &HashMap<usize, (f64, f64)>,
+    expected_energy_j: Option<&[f64]>,
 ) -> Vec<CellMetadata> {
     let k = &s.knowledge;
     let min_overlap = project.settings().utility.min_overlap;
@@ -338,10 +338,7 @@ pub(crate) fn metadata_rows<S: Store>(
         .map(|(c, terms)| {
             let cell = &k.field.cells()[c];
             let mut m = CellMetadata::new(cell.index);
-            if let Some(&(energy, pending)) = extra.get(&c) {
-                m.expected_energy_j = Some(energy);
-                m.pending_bytes = Some(pending);
-            }
+            m.expected_energy_j = expected_energy_j.and_then(|e| e.get(c).copied());
             m.last_collected = cell
                 .sensors
                 .iter()
