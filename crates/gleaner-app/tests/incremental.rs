@@ -2,16 +2,12 @@
 //! from the whole history (`compute_full`) within 1e-9 relative, after ingests and a recorded
 //! flight, on the real CAF network and on a synthetic farm.
 
-use std::io::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use gleaner_app::{self as app, Silent};
 
-fn shared_data() -> PathBuf {
-    std::env::var_os("GLEANER_DATA_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"))
-}
+mod common;
+use common::{caf_files, flight_file, shared_data};
 
 fn close(a: f64, b: f64, what: &str) {
     assert!(
@@ -76,65 +72,6 @@ fn same_scores<S: app::Store>(project: &app::Project<S>, at: Option<i64>) -> boo
         }
     }
     fast.incremental.is_some()
-}
-
-/// CAF's `MM/DD/YYYY` as (year, month, day).
-fn ymd(date: &str) -> Option<(i32, u32, u32)> {
-    let mut p = date.split('/');
-    let m = p.next()?.parse().ok()?;
-    let d = p.next()?.parse().ok()?;
-    let y = p.next()?.parse().ok()?;
-    Some((y, m, d))
-}
-
-/// Copies of the CAF daily files holding the rows of the given years only.
-fn caf_files(daily: &Path, out: &Path, years: std::ops::RangeInclusive<i32>) -> Vec<PathBuf> {
-    let mut files = Vec::new();
-    let mut names: Vec<_> = std::fs::read_dir(daily)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
-    names.sort();
-    std::fs::create_dir_all(out).unwrap();
-    for path in names {
-        let text = std::fs::read_to_string(&path).unwrap();
-        let mut lines = text.lines();
-        let mut kept = vec![lines.next().unwrap().to_string()];
-        kept.extend(
-            lines
-                .filter(|l| {
-                    l.split('\t')
-                        .nth(1)
-                        .and_then(ymd)
-                        .is_some_and(|(y, _, _)| years.contains(&y))
-                })
-                .map(str::to_string),
-        );
-        let target = out.join(path.file_name().unwrap());
-        std::fs::write(&target, kept.join("\n") + "\n").unwrap();
-        files.push(target);
-    }
-    files
-}
-
-/// The first exploration sortie's sensors' real VW_30cm readings of Jan-Feb 2014.
-fn flight_file(daily: &Path, sensors: &[String], out: &Path) -> PathBuf {
-    let path = out.join("flight.csv");
-    let mut f = std::fs::File::create(&path).unwrap();
-    writeln!(f, "sensor_id,timestamp,modality,value,unit").unwrap();
-    for sensor in sensors {
-        let text = std::fs::read_to_string(daily.join(format!("{sensor}.txt"))).unwrap();
-        for line in text.lines().skip(1) {
-            let cols: Vec<&str> = line.split('\t').collect();
-            let Some((y, m, d)) = ymd(cols[1]) else {
-                continue;
-            };
-            if y == 2014 && m <= 2 && cols[2] != "NA" {
-                writeln!(f, "{sensor},{y:04}-{m:02}-{d:02},vw@30cm,{},m3/m3", cols[2]).unwrap();
-            }
-        }
-    }
-    path
 }
 
 /// Stores an exploration of the field and records its first sortie as flown at `at` with
@@ -217,7 +154,7 @@ fn fast_scoring_equals_full_scoring_on_caf() {
     assert!(same_scores(&project, None));
     let t = app::parse_timestamp("2014-03-01").unwrap();
     record_first_sortie(&mut project, t, |sensors| {
-        Some(flight_file(&daily, sensors, tmp.path()))
+        Some(flight_file(&daily, sensors, tmp.path()).0)
     });
     let latest = app::compute(&project, &app::ScoreRequest::default())
         .unwrap()
