@@ -73,15 +73,15 @@ pub fn run_all<S: Store>(mut fresh: impl FnMut() -> S) {
 
 // ---- fixtures -------------------------------------------------------------------------------
 
-fn sid(s: &str) -> SensorId {
+pub(crate) fn sid(s: &str) -> SensorId {
     SensorId::new(s).unwrap()
 }
 
-fn md(s: &str) -> Modality {
+pub(crate) fn md(s: &str) -> Modality {
     Modality::new(s).unwrap()
 }
 
-fn sensor(id: &str, lat: f64, lon: f64) -> SensorRecord {
+pub(crate) fn sensor(id: &str, lat: f64, lon: f64) -> SensorRecord {
     SensorRecord {
         id: sid(id),
         position: LatLon::new(lat, lon).unwrap(),
@@ -118,7 +118,7 @@ fn network<S: Store>(store: &mut S) {
     .unwrap();
 }
 
-fn batch(rows: &[(&str, &str, UnixSeconds, f64)]) -> ReadingBatch {
+pub(crate) fn batch(rows: &[(&str, &str, UnixSeconds, f64)]) -> ReadingBatch {
     let mut b = ReadingBatchBuilder::new();
     for (s, m, t, v) in rows {
         b.push(&sid(s), &md(m), *t, *v);

@@ -3,29 +3,13 @@
 
 use std::path::Path;
 
-use gleaner_field::{CellIndex, LatLon, Modality, SensorId, UnixSeconds};
+use gleaner_field::{CellIndex, LatLon, UnixSeconds};
 
+use crate::conformance::{batch, md, sensor, sid};
 use crate::schema::{self, Migration};
 use crate::*;
 
 const T0: UnixSeconds = 1_262_304_000; // 2010-01-01T00:00:00Z
-
-fn sid(s: &str) -> SensorId {
-    SensorId::new(s).unwrap()
-}
-
-fn md(s: &str) -> Modality {
-    Modality::new(s).unwrap()
-}
-
-fn sensor(id: &str, lat: f64, lon: f64) -> SensorRecord {
-    SensorRecord {
-        id: sid(id),
-        position: LatLon::new(lat, lon).unwrap(),
-        elevation_m: Some(790.0),
-        source: "test".into(),
-    }
-}
 
 /// Sensors `a`, `b`, `c` and modalities `vw@30cm`, `t@30cm`.
 fn store_with_network(store: &mut SqliteStore) {
@@ -48,14 +32,6 @@ fn store_with_network(store: &mut SqliteStore) {
             ])
         })
         .unwrap();
-}
-
-fn batch(rows: &[(&str, &str, UnixSeconds, f64)]) -> ReadingBatch {
-    let mut b = ReadingBatchBuilder::new();
-    for (s, m, t, v) in rows {
-        b.push(&sid(s), &md(m), *t, *v);
-    }
-    b.finish()
 }
 
 fn count(store: &SqliteStore, sql: &str) -> i64 {
