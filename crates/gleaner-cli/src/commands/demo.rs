@@ -121,15 +121,12 @@ pub fn run(args: &DemoArgs) -> Result<String> {
     for (id, _) in &exploration.sorties {
         let id = id.context("the sortie was stored")?;
         let rec = app::fly(&mut project, &truth, id, t0, clock_now())?;
-        let m = app::mission(&project, id)?;
-        let files = export::write_files(
-            &app::export(&project, id)?,
-            &dir.join("missions").join(id.to_string()),
-        )?;
+        let flown = app::export(&project, id)?;
+        let files = export::write_files(&flown, &dir.join("missions").join(id.to_string()))?;
         writeln!(
             out,
             "   sortie #{id}: {}; brought back {} readings from {} sensors ({} files)",
-            paper_line(&gleaner_wire::convert::stored_mission(&m)),
+            paper_line(&gleaner_wire::convert::stored_mission(&flown.mission)),
             rec.readings_inserted,
             rec.sensors_collected,
             files.files.len()
