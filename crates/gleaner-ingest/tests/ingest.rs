@@ -25,6 +25,7 @@ fn known(ids: &[&str]) -> IngestOptions {
     IngestOptions {
         on_error: OnError::Fail,
         known_sensors: Some(ids.iter().map(|s| s.to_string()).collect::<HashSet<_>>()),
+        ..IngestOptions::default()
     }
 }
 
@@ -242,6 +243,7 @@ fn all_caf_daily_files_ingest() {
     let opts = IngestOptions {
         on_error: OnError::Fail,
         known_sensors: Some(sensors.iter().map(|s| s.sensor.id.to_string()).collect()),
+        ..IngestOptions::default()
     };
     let mut files: Vec<_> = std::fs::read_dir(shared_data().join("caf/Daily"))
         .unwrap()
@@ -283,6 +285,7 @@ fn caf_hourly_wide_file_ingests() {
     let opts = IngestOptions {
         on_error: OnError::Fail,
         known_sensors: Some(sensors.iter().map(|s| s.sensor.id.to_string()).collect()),
+        ..IngestOptions::default()
     };
     let path = shared_data().join("caf/derived/water_content_2015_Jan_April_32_sensors.csv");
     let wide = WideOptions::new(Modality::new("vw@30cm").unwrap());
@@ -314,6 +317,7 @@ fn hubbard_brook_network_ingests() {
     let opts = IngestOptions {
         on_error: OnError::Fail,
         known_sensors: Some(sensors.iter().map(|s| s.sensor.id.to_string()).collect()),
+        ..IngestOptions::default()
     };
     let (r, report) =
         read_hubbard_brook_logger(&dir.join("z6-19506.csv"), &metadata, &opts).unwrap();

@@ -9,6 +9,7 @@
 //! page to the sub-journal and walk that journal at the end of every statement, which made a
 //! second year of readings 76 times slower than the first (see `BENCHMARKS.md`).
 
+mod dump;
 mod read;
 mod write;
 
