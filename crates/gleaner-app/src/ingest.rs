@@ -408,7 +408,8 @@ fn conflict_in_file(e: StoreError, path: &Path, readings: &Readings) -> AppError
 
 /// The use case: reads every file, then stores all readings, their provenance and the
 /// refreshed cell summaries in one transaction: a failure anywhere stores nothing.
-/// `clock_now` is the wall-clock time recorded as provenance (seconds).
+/// `clock_now` is the wall-clock time (seconds since the epoch): recorded as provenance, and
+/// readings dated more than [`FUTURE_TOLERANCE_S`] after it are refused.
 pub fn ingest<S: Store>(
     project: &mut Project<S>,
     request: &IngestRequest,
