@@ -7,7 +7,7 @@ use gleaner_field::{
 };
 use gleaner_ingest::{SensorsOptions, read_hubbard_brook_sensors, read_sensors_csv};
 use gleaner_store::{
-    CellRecord, ReplaceCellsStats, SensorRecord, SqliteStore, Store, StoreWrite, UpsertStats,
+    AnyStore, CellRecord, ReplaceCellsStats, SensorRecord, Store, StoreWrite, UpsertStats,
 };
 
 use crate::error::{AppError, Result};
@@ -43,6 +43,9 @@ pub struct InitRequest {
     pub name: Option<String>,
     /// Overwrite an existing project file (its database is kept and updated).
     pub force: bool,
+    /// Where to keep the data: an SQLite file relative to the project directory, or a
+    /// `postgres://...[#project]` URL [default: `gleaner.db`].
+    pub database: Option<String>,
 }
 
 /// What `init` did.
@@ -60,8 +63,9 @@ pub struct InitOutcome {
     pub n_cells: usize,
 }
 
-/// The use case, on the default backend (an SQLite file in the project directory).
-pub fn init(request: &InitRequest) -> Result<(Project<SqliteStore>, InitOutcome)> {
+/// The use case, on the backend `request.database` names (an SQLite file in the project
+/// directory by default).
+pub fn init(request: &InitRequest) -> Result<(Project<AnyStore>, InitOutcome)> {
     let config_path = request.dir.join(CONFIG_FILE);
     if config_path.exists() && !request.force {
         return Err(AppError::Invalid(format!(
@@ -71,7 +75,7 @@ pub fn init(request: &InitRequest) -> Result<(Project<SqliteStore>, InitOutcome)
     }
     std::fs::create_dir_all(&request.dir).map_err(|e| AppError::io(&request.dir, e))?;
     let settings = settings_for(request)?;
-    let store = SqliteStore::open(&request.dir.join(&settings.project.database))?;
+    let store = crate::project::database(&request.dir, &settings, None)?.open()?;
     let mut project = Project::new(&request.dir, settings, store);
     let outcome = init_store(&mut project, request)?;
     outcome.settings.save(&request.dir)?;
@@ -109,7 +113,7 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
     let settings = Settings {
         project: ProjectSection {
             name,
-            database: PathBuf::from("gleaner.db"),
+            database: PathBuf::from(request.database.as_deref().unwrap_or("gleaner.db")),
         },
         field: FieldSection {
             base_lat: base.lat(),

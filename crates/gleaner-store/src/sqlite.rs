@@ -131,6 +131,55 @@ impl SqliteStore {
         Ok(Self { conn })
     }
 
+    /// SQLite's own checks of the file: `PRAGMA integrity_check` (b-trees, indexes, pages)
+    /// and `PRAGMA foreign_key_check` (every declared reference). Returns the problems found
+    /// (empty: consistent). For the crash-safety harness and `gleaner check`.
+    pub fn integrity_check(&self) -> Result<Vec<String>> {
+        let mut problems: Vec<String> = self
+            .conn
+            .prepare("PRAGMA integrity_check")
+            .db()?
+            .query_map([], |r| r.get::<_, String>(0))
+            .db()?
+            .collect::<rusqlite::Result<Vec<_>>>()
+            .db()?
+            .into_iter()
+            .filter(|m| m != "ok")
+            .collect();
+        let dangling: Vec<String> = self
+            .conn
+            .prepare("PRAGMA foreign_key_check")
+            .db()?
+            .query_map([], |r| {
+                Ok(format!(
+                    "{} row {} references a missing {} row",
+                    r.get::<_, String>(0)?,
+                    r.get::<_, Option<i64>>(1)?.unwrap_or(-1),
+                    r.get::<_, String>(2)?
+                ))
+            })
+            .db()?
+            .collect::<rusqlite::Result<_>>()
+            .db()?;
+        problems.extend(dangling);
+        for (what, sql) in [
+            (
+                "readings of unknown sensors",
+                "SELECT COUNT(*) FROM readings r WHERE NOT EXISTS (SELECT 1 FROM sensors s WHERE s.id = r.sensor)",
+            ),
+            (
+                "readings of unknown modalities",
+                "SELECT COUNT(*) FROM readings r WHERE NOT EXISTS (SELECT 1 FROM modalities m WHERE m.id = r.modality)",
+            ),
+        ] {
+            let n: i64 = self.conn.query_row(sql, [], |r| r.get(0)).db()?;
+            if n != 0 {
+                problems.push(format!("{n} {what}"));
+            }
+        }
+        Ok(problems)
+    }
+
     /// The connection, for SQLite-specific tests.
     #[cfg(test)]
     pub(crate) fn raw(&self) -> &Connection {
@@ -217,6 +266,12 @@ macro_rules! store_read_methods {
         fn blob_get(&self, key: &str) -> Result<Option<Vec<u8>>> {
             self.read(|c| read::blob_get(c, key))
         }
+        fn config_entries(&self) -> Result<Vec<(String, String)>> {
+            self.read(read::config_entries)
+        }
+        fn blob_keys(&self) -> Result<Vec<String>> {
+            self.read(read::blob_keys)
+        }
     };
 }
 
@@ -274,6 +329,10 @@ impl StoreWrite for SqliteTx<'_> {
         amend: bool,
     ) -> Result<()> {
         self.atomically(|c| write::record_visits(c, mission, visits, flown_at, amend))
+    }
+
+    fn import_mission(&mut self, record: &MissionRecord) -> Result<()> {
+        self.atomically(|c| write::import_mission(c, record))
     }
 
     fn config_set(&mut self, key: &str, value: &str) -> Result<()> {
