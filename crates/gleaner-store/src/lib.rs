@@ -127,7 +127,7 @@ pub use postgres::{
     LOCK_TIMEOUT as PG_LOCK_TIMEOUT, PgStore, PgTx, is_postgres_url, redact, split_project,
     valid_project_name,
 };
-pub use sqlite::{SqliteStore, SqliteTx};
+pub use sqlite::{BUSY_TIMEOUT as SQLITE_BUSY_TIMEOUT, SqliteStore, SqliteTx};
 pub use store::{Store, StoreRead, StoreWrite};
 pub use types::{
     AnomalyRecord, CellMetadata, CellRecord, CellScores, ClassProbability, Conflict,

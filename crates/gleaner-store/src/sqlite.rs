@@ -26,8 +26,9 @@ use crate::{
     StoreError, StoreRead, StoreWrite, UpsertStats, VisitRecord,
 };
 
-/// How long a writer waits for another connection's write lock before failing.
-const BUSY_TIMEOUT: Duration = Duration::from_secs(10);
+/// How long a writer waits for another connection's write lock before failing (the same as
+/// PostgreSQL's [`crate::PG_LOCK_TIMEOUT`]).
+pub const BUSY_TIMEOUT: Duration = Duration::from_secs(60);
 
 /// Page cache of a connection, KiB (negative `cache_size` in SQLite's terms).
 const CACHE_KIB: i64 = 64 * 1024;
@@ -48,7 +49,7 @@ impl<T> Db<T> for rusqlite::Result<T> {
 /// A [`Store`] in an SQLite database (a file, or memory for tests).
 ///
 /// The connection runs with `journal_mode=WAL` (files only), `synchronous=NORMAL`,
-/// `foreign_keys=ON`, a 64 MiB page cache and a 10 s busy timeout. Temporary files (statement
+/// `foreign_keys=ON`, a 64 MiB page cache and a 60 s busy timeout ([`BUSY_TIMEOUT`]). Temporary files (statement
 /// journals beyond 64 KiB) stay on disk (`temp_store` is left at its default): an in-memory
 /// statement journal is truncated by walking it from the start, which is quadratic when a
 /// savepoint holds many pages. Opening migrates the schema
@@ -354,10 +355,22 @@ impl Store for SqliteStore {
     where
         E: From<StoreError>,
     {
+        let path = self.conn.path().unwrap_or(":memory:").to_string();
         let tx = self
             .conn
             .transaction_with_behavior(TransactionBehavior::Immediate)
-            .db()?;
+            .map_err(|e| {
+                if e.sqlite_error_code() == Some(rusqlite::ErrorCode::DatabaseBusy) {
+                    StoreError::Backend(format!(
+                        "another gleaner process has been writing to {} for more than {} s; \
+                         try again when it has finished",
+                        path,
+                        BUSY_TIMEOUT.as_secs()
+                    ))
+                } else {
+                    StoreError::Backend(e.to_string())
+                }
+            })?;
         let mut tx = SqliteTx { tx };
         // On an error (or a panic) `tx` is dropped unfinished, which rolls it back.
         let out = f(&mut tx)?;
