@@ -6,7 +6,7 @@
 //! No sleeps: the threads meet at a barrier, the stores serialise them.
 
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Barrier};
+use std::sync::Barrier;
 
 use gleaner_app::{self as app, AnyStore, Project, Silent, StoreRead as _};
 
@@ -64,31 +64,26 @@ fn ingest(p: &mut Project<AnyStore>, files: &[PathBuf]) -> app::Result<app::Inge
 }
 
 /// Runs `a` and `b` at once on their own connections to the project.
-fn race<A, B>(
+fn race<A: Send, B: Send>(
     dir: &Path,
     database: &Option<String>,
-    a: impl FnOnce(&mut Project<AnyStore>) -> A + Send + 'static,
-    b: impl FnOnce(&mut Project<AnyStore>) -> B + Send + 'static,
-) -> (A, B)
-where
-    A: Send + 'static,
-    B: Send + 'static,
-{
-    let barrier = Arc::new(Barrier::new(2));
-    let spawn =
-        |f: Box<dyn FnOnce(&mut Project<AnyStore>) -> Box<dyn std::any::Any + Send> + Send>| {
-            let (dir, database, barrier) = (dir.to_path_buf(), database.clone(), barrier.clone());
-            std::thread::spawn(move || {
-                let mut p = open(&dir, &database);
-                barrier.wait();
-                f(&mut p)
-            })
-        };
-    let ha = spawn(Box::new(move |p| Box::new(a(p))));
-    let hb = spawn(Box::new(move |p| Box::new(b(p))));
-    let ra = ha.join().unwrap().downcast::<A>().unwrap();
-    let rb = hb.join().unwrap().downcast::<B>().unwrap();
-    (*ra, *rb)
+    a: impl FnOnce(&mut Project<AnyStore>) -> A + Send,
+    b: impl FnOnce(&mut Project<AnyStore>) -> B + Send,
+) -> (A, B) {
+    let barrier = Barrier::new(2);
+    std::thread::scope(|s| {
+        let ha = s.spawn(|| {
+            let mut p = open(dir, database);
+            barrier.wait();
+            a(&mut p)
+        });
+        let hb = s.spawn(|| {
+            let mut p = open(dir, database);
+            barrier.wait();
+            b(&mut p)
+        });
+        (ha.join().unwrap(), hb.join().unwrap())
+    })
 }
 
 fn drop_pg(database: &Option<String>) {
