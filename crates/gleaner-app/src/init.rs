@@ -7,7 +7,7 @@ use gleaner_field::{
 };
 use gleaner_ingest::{SensorsOptions, read_hubbard_brook_sensors, read_sensors_csv};
 use gleaner_store::{
-    CellRecord, ReplaceCellsStats, SensorRecord, SqliteStore, Store, StoreWrite, UpsertStats,
+    AnyStore, CellRecord, ReplaceCellsStats, SensorRecord, Store, StoreWrite, UpsertStats,
 };
 
 use crate::error::{AppError, Result};
@@ -43,6 +43,9 @@ pub struct InitRequest {
     pub name: Option<String>,
     /// Overwrite an existing project file (its database is kept and updated).
     pub force: bool,
+    /// Where to keep the data: an SQLite file relative to the project directory, or a
+    /// `postgres://...[#project]` URL [default: `gleaner.db`].
+    pub database: Option<String>,
 }
 
 /// What `init` did.
@@ -60,8 +63,9 @@ pub struct InitOutcome {
     pub n_cells: usize,
 }
 
-/// The use case, on the default backend (an SQLite file in the project directory).
-pub fn init(request: &InitRequest) -> Result<(Project<SqliteStore>, InitOutcome)> {
+/// The use case, on the backend `request.database` names (an SQLite file in the project
+/// directory by default).
+pub fn init(request: &InitRequest) -> Result<(Project<AnyStore>, InitOutcome)> {
     let config_path = request.dir.join(CONFIG_FILE);
     if config_path.exists() && !request.force {
         return Err(AppError::Invalid(format!(
@@ -72,21 +76,26 @@ pub fn init(request: &InitRequest) -> Result<(Project<SqliteStore>, InitOutcome)
     // Read and check everything before creating anything: a refused init leaves no trace.
     let settings = settings_for(request)?;
     let created_dir = !request.dir.exists();
-    let db_path = request.dir.join(&settings.project.database);
-    let created_db = !db_path.exists();
+    let database = crate::project::database(&request.dir, &settings, None)?;
+    let db_path = match &database {
+        gleaner_store::Database::Sqlite(path) => Some(path.clone()),
+        gleaner_store::Database::Postgres { .. } => None,
+    };
+    let created_db = db_path.as_ref().is_some_and(|p| !p.exists());
     let result = (|| {
         std::fs::create_dir_all(&request.dir).map_err(|e| AppError::io(&request.dir, e))?;
-        let store = SqliteStore::open(&db_path)?;
+        let store = database.open()?;
         let mut project = Project::new(&request.dir, settings, store);
         let outcome = init_store(&mut project, request)?;
         outcome.settings.save(&request.dir)?;
         Ok((project, outcome))
     })();
     if result.is_err() {
-        // Best effort: remove only what this call created (the error is what matters).
+        // Best effort: remove only what this call created (the error is what matters). A
+        // PostgreSQL schema is kept: it holds at most empty tables, which a rerun reuses.
         if created_dir {
             let _ = std::fs::remove_dir_all(&request.dir);
-        } else if created_db {
+        } else if let (true, Some(db_path)) = (created_db, &db_path) {
             for suffix in ["", "-wal", "-shm"] {
                 let mut p = db_path.clone().into_os_string();
                 p.push(suffix);
@@ -129,7 +138,7 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
     let settings = Settings {
         project: ProjectSection {
             name,
-            database: PathBuf::from("gleaner.db"),
+            database: PathBuf::from(request.database.as_deref().unwrap_or("gleaner.db")),
         },
         field: FieldSection {
             base_lat: base.lat(),

@@ -19,6 +19,7 @@
 //! | [`explore()`] | the grid, the energy model | one exploration mission per sortie |
 //! | [`export()`] | a mission | nothing (checks it is safe to fly) |
 //! | [`record_flight`] | a mission, visited cells, readings files | readings, collections, visits, summaries, the persisted utility state |
+//! | [`migrate()`] | every table of one store | every table of another, empty one (SQLite <-> PostgreSQL) |
 //!
 //! The persisted utility state (the statistics behind A and R and the condition model behind
 //! U, one store blob kept up to date inside the ingest and record transactions) lets
@@ -40,6 +41,7 @@ mod explore;
 mod ingest;
 mod init;
 mod knowledge;
+mod migrate;
 mod plan;
 mod progress;
 mod project;
@@ -56,11 +58,12 @@ pub use explore::{Exploration, ExploreRequest, explore};
 pub use ingest::{Format, IngestOutcome, IngestRequest, detect, ingest};
 pub use init::{DEFAULT_CELL_SIZE_M, InitOutcome, InitRequest, init, init_store, relative_to};
 pub use knowledge::{History, Knowledge, knowledge};
+pub use migrate::{MigrateOutcome, migrate};
 pub use plan::{
     Baseline, PlanRequest, PlannedMission, energy_model, flight_profile, parse_planner, plan,
 };
 pub use progress::{Progress, Silent};
-pub use project::Project;
+pub use project::{Project, database};
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};
 pub use settings::Settings;
@@ -75,7 +78,7 @@ pub use gleaner_ingest::OnError;
 pub use gleaner_ingest::time::{format_rfc3339, parse_timestamp};
 pub use gleaner_mission::Planner;
 pub use gleaner_store::{
-    CellMetadata, CellScores, EnergyBreakdown, FlightProfile, MissionId, MissionKind,
-    MissionRecord, MissionStatus, NewMission, SqliteStore, StopRecord, Store, StoreRead,
-    StoreWrite, VisitRecord,
+    AnyStore, CellMetadata, CellScores, Database, EnergyBreakdown, FlightProfile, MissionId,
+    MissionKind, MissionRecord, MissionStatus, NewMission, PgStore, SqliteStore, StopRecord, Store,
+    StoreRead, StoreWrite, VisitRecord,
 };

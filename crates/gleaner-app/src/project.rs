@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use gleaner_field::{Field, Sensor};
-use gleaner_store::{SqliteStore, Store};
+use gleaner_store::{AnyStore, Database, Store};
 
 use crate::error::{AppError, Result};
 use crate::settings::Settings;
@@ -18,20 +18,39 @@ pub struct Project<S> {
     store: S,
 }
 
-impl Project<SqliteStore> {
-    /// Opens the project in `dir`: reads `gleaner.toml` and opens its SQLite database.
+impl Project<AnyStore> {
+    /// Opens the project in `dir`: reads `gleaner.toml` and opens the database its
+    /// `database` setting names (an SQLite file, or a PostgreSQL project; see [`database`]).
     pub fn open(dir: &Path) -> Result<Self> {
+        Self::open_with(dir, None)
+    }
+
+    /// [`Project::open`] with the database given explicitly (the CLI's `--database`) instead
+    /// of the `database` setting, when `database` is `Some`.
+    pub fn open_with(dir: &Path, database: Option<&str>) -> Result<Self> {
         let settings = Settings::load(dir)?;
-        let db = dir.join(&settings.project.database);
-        if !db.exists() {
+        let db = self::database(dir, &settings, database)?;
+        if !db.exists()? {
             return Err(AppError::Io {
-                path: db.display().to_string(),
-                message: "database missing (run `gleaner init`)".into(),
+                path: db.to_string(),
+                message: "database missing (run `gleaner init`, or `gleaner migrate` to copy \
+                          a project there)"
+                    .into(),
             });
         }
-        let store = SqliteStore::open(&db)?;
+        let store = db.open()?;
         Ok(Self::new(dir, settings, store))
     }
+}
+
+/// Where the project in `dir` keeps its data: `database` when given, else the `database`
+/// setting. A path is an SQLite file relative to `dir`; a `postgres://` (or
+/// `postgresql://`) URL a PostgreSQL database, the project's schema named after `#` or, by
+/// default, after the project's name (`gleaner_store::schema_for_name`).
+pub fn database(dir: &Path, settings: &Settings, database: Option<&str>) -> Result<Database> {
+    let setting = settings.project.database.to_string_lossy();
+    let chosen = database.unwrap_or(&setting);
+    Ok(Database::parse(chosen, dir, &settings.project.name)?)
 }
 
 impl<S: Store> Project<S> {

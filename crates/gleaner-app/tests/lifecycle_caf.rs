@@ -11,6 +11,85 @@ use common::{caf_files, flight_file, shared_data};
 
 #[test]
 fn caf_lifecycle_through_the_app_layer() {
+    lifecycle(None);
+}
+
+/// The same lifecycle on PostgreSQL, in a project (schema) of its own; then the finished
+/// project (readings, ingests, cells with metadata, a flown mission, settings, the persisted
+/// utility state) is migrated to an SQLite file and from that into a second PostgreSQL
+/// project, and every table of each copy is compared with the original.
+#[test]
+fn caf_lifecycle_on_postgres_and_migrations_both_ways() {
+    use app::{Store as _, StoreRead as _, StoreWrite as _};
+    let url = gleaner_store::conformance::pg_test_url();
+    let first = gleaner_store::conformance::pg_fresh_project("lifecycle");
+    let second = gleaner_store::conformance::pg_fresh_project("lifecycle");
+    let (tmp, project) = lifecycle(Some(format!("{url}#{first}")));
+    assert_eq!(project.store().backend(), "postgres");
+
+    let file = tmp.path().join("copy.db");
+    let mut sqlite = app::Database::Sqlite(file.clone()).open().unwrap();
+    let out = app::migrate(project.store(), &mut sqlite, &Silent).unwrap();
+    assert_eq!(out.readings, project_reading_count(&project));
+    assert_eq!(out.missions, 1);
+    same_tables(project.store(), &sqlite);
+    assert!(sqlite.integrity_check().unwrap().is_empty());
+
+    let mut back = app::Database::Postgres {
+        url: url.clone(),
+        project: second.clone(),
+    }
+    .open()
+    .unwrap();
+    app::migrate(&sqlite, &mut back, &Silent).unwrap();
+    same_tables(project.store(), &back);
+    assert!(back.integrity_check().unwrap().is_empty());
+    // A non-empty target is refused and left as it was.
+    let err = app::migrate(&sqlite, &mut back, &Silent).unwrap_err();
+    assert!(err.to_string().contains("empty"), "{err}");
+    same_tables(project.store(), &back);
+    // New missions continue after the copied ids on both backends.
+    for store in [&mut sqlite, &mut back] {
+        let m = store.missions().unwrap()[0].mission.clone();
+        let id = store.write(|tx| tx.create_mission(&m)).unwrap();
+        assert_eq!(id, MissionId(2));
+    }
+    drop(project);
+    for p in [&first, &second] {
+        app::PgStore::drop_project(&url, p).unwrap();
+    }
+}
+
+/// Every table, through the store interface: equal in both stores.
+fn same_tables(a: &impl app::StoreRead, b: &impl app::StoreRead) {
+    let all = i64::MIN..=i64::MAX;
+    assert_eq!(a.schema_version().unwrap(), b.schema_version().unwrap());
+    assert_eq!(a.sensors().unwrap(), b.sensors().unwrap());
+    assert_eq!(a.modalities().unwrap(), b.modalities().unwrap());
+    assert!(
+        a.readings_for(None, all.clone()).unwrap() == b.readings_for(None, all).unwrap(),
+        "readings differ"
+    );
+    assert_eq!(a.ingests().unwrap(), b.ingests().unwrap());
+    assert_eq!(a.cells().unwrap(), b.cells().unwrap());
+    assert_eq!(a.cell_metadata().unwrap(), b.cell_metadata().unwrap());
+    assert_eq!(
+        a.sensor_last_collected().unwrap(),
+        b.sensor_last_collected().unwrap()
+    );
+    assert_eq!(a.missions().unwrap(), b.missions().unwrap());
+    assert_eq!(a.config_entries().unwrap(), b.config_entries().unwrap());
+    let keys = a.blob_keys().unwrap();
+    assert_eq!(keys, b.blob_keys().unwrap());
+    assert!(!keys.is_empty(), "the persisted utility state is a blob");
+    for k in &keys {
+        assert!(a.blob_get(k).unwrap() == b.blob_get(k).unwrap(), "blob {k}");
+    }
+}
+
+/// The lifecycle on the database `database` (default: the SQLite file).
+/// Returns the finished project, for more checks.
+fn lifecycle(database: Option<String>) -> (tempfile::TempDir, app::Project<app::AnyStore>) {
     let data = shared_data();
     let daily = data.join("caf/Daily");
     let tmp = tempfile::tempdir().unwrap();
@@ -25,6 +104,7 @@ fn caf_lifecycle_through_the_app_layer() {
         sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
         utm_zone: Some("11N".into()),
         name: Some("caf".into()),
+        database,
         ..Default::default()
     })
     .unwrap();
@@ -214,9 +294,10 @@ fn caf_lifecycle_through_the_app_layer() {
     assert_eq!(missions[0].status, app::MissionStatus::Flown);
     assert_eq!(missions[0].visits.len(), stored.mission.stops.len());
     let _ = MissionId(0);
+    (tmp, project)
 }
 
-fn project_reading_count(p: &app::Project<app::SqliteStore>) -> u64 {
+fn project_reading_count(p: &app::Project<app::AnyStore>) -> u64 {
     use app::StoreRead as _;
     p.store().reading_count().unwrap()
 }

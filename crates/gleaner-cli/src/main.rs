@@ -15,7 +15,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use gleaner_app as app;
 use gleaner_app::{MissionId, Project};
 
-use commands::{bench, cells, demo, export, plan, score, synth};
+use commands::{bench, cells, demo, export, migrate, plan, score, synth};
 
 /// Utility-driven UAV data collection for farm sensor networks.
 ///
@@ -72,6 +72,11 @@ enum Command {
         /// Overwrite the settings of an existing project (its database is kept).
         #[arg(long)]
         force: bool,
+        /// Where to keep the data: an SQLite file relative to the project directory, or a
+        /// PostgreSQL database `postgres://user:password@host:port/db[#schema]` (one schema
+        /// per project, named after `#` or after the project name) [default: gleaner.db].
+        #[arg(long, value_name = "FILE_OR_URL")]
+        database: Option<String>,
     },
     /// Ingest readings files into the project, all or nothing; re-ingesting changes nothing.
     #[command(
@@ -261,6 +266,12 @@ enum Command {
         after_help = "Defaults are calibrated to the CAF network (VW range, day-to-day change, spatial correlation).\n\nExamples:\n  gleaner synth --out farm-data --sensors 60 --days 120 --seed 1\n  gleaner synth --out big --sensors 10000 --days 365 --scale-extent --vw-depths 30 --t-depths 30"
     )]
     Synth(synth::SynthArgs),
+    /// Copy the project's data into another database, losslessly and all or nothing: an
+    /// SQLite project into PostgreSQL, or back.
+    #[command(
+        after_help = "Examples:\n  gleaner migrate --project farm --to postgres://gleaner@localhost/farms\n  gleaner migrate --project farm --to 'postgres://gleaner@localhost/farms#farm_a' --switch\n  gleaner migrate --project farm --database postgres://gleaner@localhost/farms --to farm-copy.db"
+    )]
+    Migrate(migrate::MigrateArgs),
     /// The main job on built-in data: synthetic farm -> project -> exploration sorties -> five
     /// daily missions, each planned (against the paper's greedy), exported, flown in simulation
     /// and recorded -> rescoring. `--data` runs it on the real CAF network.
@@ -279,11 +290,15 @@ struct ProjectArg {
         default_value = "."
     )]
     dir: PathBuf,
+    /// The project's database instead of its `database` setting: an SQLite file (relative to
+    /// the project directory) or `postgres://user:password@host:port/db[#schema]`.
+    #[arg(long, value_name = "FILE_OR_URL", env = "GLEANER_DATABASE")]
+    database: Option<String>,
 }
 
 impl ProjectArg {
-    fn open(&self) -> Result<Project<app::SqliteStore>> {
-        Ok(Project::open(&self.dir)?)
+    fn open(&self) -> Result<Project<app::AnyStore>> {
+        Ok(Project::open_with(&self.dir, self.database.as_deref())?)
     }
 }
 
@@ -522,6 +537,7 @@ fn run(cli: Cli) -> Result<()> {
             half_angle,
             name,
             force,
+            database,
         } => {
             let base = base
                 .map(|(lat, lon)| gleaner_field::LatLon::new(lat, lon).context("--base"))
@@ -537,6 +553,7 @@ fn run(cli: Cli) -> Result<()> {
                 coverage: altitude.zip(half_angle),
                 name,
                 force,
+                database,
             })?;
             println!("{}", init_line(&outcome, &dir));
         }
@@ -743,6 +760,7 @@ fn run(cli: Cli) -> Result<()> {
             );
         }
         Command::Demo(args) => print!("{}", demo::run(&args)?),
+        Command::Migrate(args) => println!("{}", migrate::run(&args, &progress)?),
     }
     Ok(())
 }

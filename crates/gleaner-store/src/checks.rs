@@ -388,3 +388,25 @@ pub(crate) fn check_visits(mission: MissionId, visits: &[VisitRecord]) -> Result
     }
     Ok(())
 }
+
+/// The flight part of [`crate::StoreWrite::import_mission`]: records the visits of a flown
+/// mission with `record(flown_at)`; a planned one has none to record.
+pub(crate) fn import_flight(
+    record: &crate::MissionRecord,
+    record_visits: impl FnOnce(i64) -> Result<()>,
+) -> Result<()> {
+    match (record.status, record.flown_at) {
+        (crate::MissionStatus::Planned, None) if record.visits.is_empty() => Ok(()),
+        (crate::MissionStatus::Flown, Some(flown_at)) => record_visits(flown_at),
+        _ => Err(invalid(
+            "mission record",
+            format!(
+                "mission {}: status {:?} with flown_at {:?} and {} visit(s)",
+                record.id,
+                record.status,
+                record.flown_at,
+                record.visits.len()
+            ),
+        )),
+    }
+}

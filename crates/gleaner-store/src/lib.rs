@@ -104,6 +104,7 @@
 //! foreign-key lookups cost about 40% of bulk-insert CPU time.
 #![deny(missing_docs)]
 
+mod any;
 mod checks;
 #[cfg(any(test, feature = "conformance"))]
 pub mod conformance;
@@ -120,12 +121,13 @@ mod pg_tests;
 #[cfg(test)]
 mod tests;
 
+pub use any::{AnyStore, AnyTx, Database, schema_for_name};
 pub use error::{Result, StoreError};
 pub use postgres::{
     LOCK_TIMEOUT as PG_LOCK_TIMEOUT, PgStore, PgTx, is_postgres_url, redact, split_project,
     valid_project_name,
 };
-pub use sqlite::{SqliteStore, SqliteTx};
+pub use sqlite::{BUSY_TIMEOUT as SQLITE_BUSY_TIMEOUT, SqliteStore, SqliteTx};
 pub use store::{Store, StoreRead, StoreWrite};
 pub use types::{
     AnomalyRecord, CellMetadata, CellRecord, CellScores, ClassProbability, Conflict,

@@ -175,3 +175,32 @@ fn writers_of_one_project_are_serialised() {
     let ts: Vec<i64> = all.rows.iter().map(|r| r.t).collect();
     assert_eq!(ts, vec![1000, 1001]);
 }
+
+/// [`AnyStore`] forwards every method faithfully, on both backends.
+#[test]
+fn conformance_through_any_store() {
+    let mut fresh = Fresh::new();
+    conformance::run_all(|| AnyStore::Sqlite(SqliteStore::open_in_memory().unwrap()));
+    conformance::run_all(|| AnyStore::Postgres(Box::new(fresh.open("any"))));
+}
+
+#[test]
+fn database_settings_name_a_backend_and_a_schema() {
+    let dir = std::path::Path::new("/farm");
+    assert_eq!(
+        Database::parse("gleaner.db", dir, "x").unwrap(),
+        Database::Sqlite(dir.join("gleaner.db"))
+    );
+    assert_eq!(
+        Database::parse("postgres://u:secret@h/db", dir, "Farm A-1").unwrap(),
+        Database::Postgres {
+            url: "postgres://u:secret@h/db".into(),
+            project: "farm_a_1".into()
+        }
+    );
+    let db = Database::parse("postgresql://u:secret@h/db#north", dir, "x").unwrap();
+    assert_eq!(db.to_string(), "postgresql://u:***@h/db#north");
+    assert!(Database::parse("postgres://h/db#No", dir, "x").is_err());
+    assert_eq!(schema_for_name("2024 trial"), "p_2024_trial");
+    assert_eq!(schema_for_name("pg_farm"), "p_pg_farm");
+}

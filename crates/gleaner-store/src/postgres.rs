@@ -186,6 +186,18 @@ impl PgStore {
         &self.project
     }
 
+    /// Whether the database at `url` has a project (schema) `project`.
+    pub fn project_exists(url: &str, project: &str) -> Result<bool> {
+        let mut client = Client::connect(url, NoTls).map_err(|e| StoreError::Open {
+            path: format!("{}#{project}", redact(url)),
+            reason: describe(&e),
+        })?;
+        Ok(client
+            .query_opt("SELECT 1 FROM pg_namespace WHERE nspname = $1", &[&project])
+            .db()?
+            .is_some())
+    }
+
     /// Drops the project `project` (its schema with every table) from the database at `url`;
     /// `Ok(false)` when there was none. For tests and for `gleaner migrate`'s clean-up.
     pub fn drop_project(url: &str, project: &str) -> Result<bool> {
@@ -389,6 +401,12 @@ macro_rules! store_read_methods {
         fn blob_get(&self, key: &str) -> Result<Option<Vec<u8>>> {
             self.read(|c| read::blob_get(c, key))
         }
+        fn config_entries(&self) -> Result<Vec<(String, String)>> {
+            self.read(read::config_entries)
+        }
+        fn blob_keys(&self) -> Result<Vec<String>> {
+            self.read(read::blob_keys)
+        }
     };
 }
 
@@ -445,6 +463,10 @@ impl StoreWrite for PgTx<'_> {
         amend: bool,
     ) -> Result<()> {
         self.atomically(|c| write::record_visits(c, mission, visits, flown_at, amend))
+    }
+
+    fn import_mission(&mut self, record: &MissionRecord) -> Result<()> {
+        self.atomically(|c| write::import_mission(c, record))
     }
 
     fn config_set(&mut self, key: &str, value: &str) -> Result<()> {

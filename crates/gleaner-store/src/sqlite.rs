@@ -27,8 +27,9 @@ use crate::{
     StoreError, StoreRead, StoreWrite, UpsertStats, VisitRecord,
 };
 
-/// How long a writer waits for another connection's write lock before failing.
-const BUSY_TIMEOUT: Duration = Duration::from_secs(10);
+/// How long a writer waits for another connection's write lock before failing (the same as
+/// PostgreSQL's [`crate::PG_LOCK_TIMEOUT`]).
+pub const BUSY_TIMEOUT: Duration = Duration::from_secs(60);
 
 /// Page cache of a connection, KiB (negative `cache_size` in SQLite's terms).
 const CACHE_KIB: i64 = 64 * 1024;
@@ -49,7 +50,7 @@ impl<T> Db<T> for rusqlite::Result<T> {
 /// A [`Store`] in an SQLite database (a file, or memory for tests).
 ///
 /// The connection runs with `journal_mode=WAL` (files only), `synchronous=NORMAL`,
-/// `foreign_keys=ON`, a 64 MiB page cache and a 10 s busy timeout. Temporary files (statement
+/// `foreign_keys=ON`, a 64 MiB page cache and a 60 s busy timeout ([`BUSY_TIMEOUT`]). Temporary files (statement
 /// journals beyond 64 KiB) stay on disk (`temp_store` is left at its default): an in-memory
 /// statement journal is truncated by walking it from the start, which is quadratic when a
 /// savepoint holds many pages. Opening migrates the schema
@@ -130,6 +131,55 @@ impl SqliteStore {
         .db()?;
         schema::migrate(&mut conn)?;
         Ok(Self { conn })
+    }
+
+    /// SQLite's own checks of the file: `PRAGMA integrity_check` (b-trees, indexes, pages)
+    /// and `PRAGMA foreign_key_check` (every declared reference). Returns the problems found
+    /// (empty: consistent). For the crash-safety harness and `gleaner check`.
+    pub fn integrity_check(&self) -> Result<Vec<String>> {
+        let mut problems: Vec<String> = self
+            .conn
+            .prepare("PRAGMA integrity_check")
+            .db()?
+            .query_map([], |r| r.get::<_, String>(0))
+            .db()?
+            .collect::<rusqlite::Result<Vec<_>>>()
+            .db()?
+            .into_iter()
+            .filter(|m| m != "ok")
+            .collect();
+        let dangling: Vec<String> = self
+            .conn
+            .prepare("PRAGMA foreign_key_check")
+            .db()?
+            .query_map([], |r| {
+                Ok(format!(
+                    "{} row {} references a missing {} row",
+                    r.get::<_, String>(0)?,
+                    r.get::<_, Option<i64>>(1)?.unwrap_or(-1),
+                    r.get::<_, String>(2)?
+                ))
+            })
+            .db()?
+            .collect::<rusqlite::Result<_>>()
+            .db()?;
+        problems.extend(dangling);
+        for (what, sql) in [
+            (
+                "readings of unknown sensors",
+                "SELECT COUNT(*) FROM readings r WHERE NOT EXISTS (SELECT 1 FROM sensors s WHERE s.id = r.sensor)",
+            ),
+            (
+                "readings of unknown modalities",
+                "SELECT COUNT(*) FROM readings r WHERE NOT EXISTS (SELECT 1 FROM modalities m WHERE m.id = r.modality)",
+            ),
+        ] {
+            let n: i64 = self.conn.query_row(sql, [], |r| r.get(0)).db()?;
+            if n != 0 {
+                problems.push(format!("{n} {what}"));
+            }
+        }
+        Ok(problems)
     }
 
     /// The connection, for SQLite-specific tests.
@@ -218,6 +268,12 @@ macro_rules! store_read_methods {
         fn blob_get(&self, key: &str) -> Result<Option<Vec<u8>>> {
             self.read(|c| read::blob_get(c, key))
         }
+        fn config_entries(&self) -> Result<Vec<(String, String)>> {
+            self.read(read::config_entries)
+        }
+        fn blob_keys(&self) -> Result<Vec<String>> {
+            self.read(read::blob_keys)
+        }
     };
 }
 
@@ -277,6 +333,10 @@ impl StoreWrite for SqliteTx<'_> {
         self.atomically(|c| write::record_visits(c, mission, visits, flown_at, amend))
     }
 
+    fn import_mission(&mut self, record: &MissionRecord) -> Result<()> {
+        self.atomically(|c| write::import_mission(c, record))
+    }
+
     fn config_set(&mut self, key: &str, value: &str) -> Result<()> {
         self.atomically(|c| write::config_set(c, key, value))
     }
@@ -296,10 +356,22 @@ impl Store for SqliteStore {
     where
         E: From<StoreError>,
     {
+        let path = self.conn.path().unwrap_or(":memory:").to_string();
         let tx = self
             .conn
             .transaction_with_behavior(TransactionBehavior::Immediate)
-            .db()?;
+            .map_err(|e| {
+                if e.sqlite_error_code() == Some(rusqlite::ErrorCode::DatabaseBusy) {
+                    StoreError::Backend(format!(
+                        "another gleaner process has been writing to {} for more than {} s; \
+                         try again when it has finished",
+                        path,
+                        BUSY_TIMEOUT.as_secs()
+                    ))
+                } else {
+                    StoreError::Backend(e.to_string())
+                }
+            })?;
         let mut tx = SqliteTx { tx };
         // On an error (or a panic) `tx` is dropped unfinished, which rolls it back.
         let out = f(&mut tx)?;

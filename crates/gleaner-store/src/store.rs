@@ -66,6 +66,10 @@ pub trait StoreRead {
     fn config_get(&self, key: &str) -> Result<Option<String>>;
     /// A stored opaque value (e.g. the serialised incremental utility state), if set.
     fn blob_get(&self, key: &str) -> Result<Option<Vec<u8>>>;
+    /// Every project setting as `(key, value)`, sorted by key (byte-wise).
+    fn config_entries(&self) -> Result<Vec<(String, String)>>;
+    /// The keys of every stored opaque value, sorted (byte-wise).
+    fn blob_keys(&self) -> Result<Vec<String>>;
 }
 
 /// The writes a use case makes, inside one transaction opened by [`Store::write`].
@@ -111,6 +115,11 @@ pub trait StoreWrite: StoreRead {
         flown_at: UnixSeconds,
         amend: bool,
     ) -> Result<()>;
+
+    /// Stores a mission exactly as read from another store (for copying a project between
+    /// backends): same id, status, `flown_at`, stops and visits. Fails when a mission with
+    /// that id exists; later [`StoreWrite::create_mission`] calls get ids above it.
+    fn import_mission(&mut self, record: &MissionRecord) -> Result<()>;
 
     /// Sets a project setting.
     fn config_set(&mut self, key: &str, value: &str) -> Result<()>;

@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use gleaner_app::{self as app, MissionId, Project, SqliteStore};
+use gleaner_app::{self as app, AnyStore, MissionId, Project};
 
 use crate::clock_now;
 use crate::commands::{export, plan, synth};
@@ -229,7 +229,7 @@ fn synthetic(
     args: &DemoArgs,
     out: &mut String,
     progress: &Terminal,
-) -> Result<(Project<SqliteStore>, app::Truth, i64)> {
+) -> Result<(Project<AnyStore>, app::Truth, i64)> {
     let (farm, files) = synth::run(&synth::SynthArgs {
         out: args.dir.join("data"),
         seed: args.seed,
@@ -286,7 +286,7 @@ fn project_and_truth(
     files: Vec<PathBuf>,
     format: app::Format,
     progress: &Terminal,
-) -> Result<(Project<SqliteStore>, app::InitOutcome, app::Truth)> {
+) -> Result<(Project<AnyStore>, app::InitOutcome, app::Truth)> {
     let (project, outcome) = app::init(init)?;
     let truth = app::Truth::from_files(
         &project,
@@ -316,7 +316,7 @@ fn caf(
     data: &Path,
     out: &mut String,
     progress: &Terminal,
-) -> Result<(Project<SqliteStore>, app::Truth, i64)> {
+) -> Result<(Project<AnyStore>, app::Truth, i64)> {
     let caf = data.join("caf");
     let sensors = caf.join("sensors").join("CAF_sensor_locations.csv");
     let mut daily: Vec<PathBuf> = std::fs::read_dir(caf.join("Daily"))

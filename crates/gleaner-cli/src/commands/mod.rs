@@ -5,6 +5,7 @@ pub mod bench;
 pub mod cells;
 pub mod demo;
 pub mod export;
+pub mod migrate;
 pub mod plan;
 pub mod score;
 pub mod synth;

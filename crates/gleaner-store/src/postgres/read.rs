@@ -621,3 +621,24 @@ pub(super) fn integrity_check(c: &mut Transaction<'_>) -> Result<Vec<String>> {
     }
     Ok(problems)
 }
+
+pub(super) fn config_entries(c: &mut Transaction<'_>) -> Result<Vec<(String, String)>> {
+    Ok(c.query(
+        "SELECT key, value FROM config ORDER BY key COLLATE \"C\"",
+        &[],
+    )
+    .db()?
+    .iter()
+    .map(|r| (r.get(0), r.get(1)))
+    .collect())
+}
+
+pub(super) fn blob_keys(c: &mut Transaction<'_>) -> Result<Vec<String>> {
+    Ok(
+        c.query("SELECT key FROM blobs ORDER BY key COLLATE \"C\"", &[])
+            .db()?
+            .iter()
+            .map(|r| r.get(0))
+            .collect(),
+    )
+}

@@ -11,13 +11,13 @@ use postgres::Transaction;
 use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
 use crate::checks::{
-    as_i64, check_cells, check_modality_list, check_sensor_list, check_visits, keys, plan_insert,
-    validate_metadata, validate_mission,
+    as_i64, check_cells, check_modality_list, check_sensor_list, check_visits, import_flight, keys,
+    plan_insert, validate_metadata, validate_mission,
 };
 use crate::{
-    CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionStatus,
-    ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result, SensorRecord, StoreError,
-    UpsertStats, VisitRecord,
+    CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionRecord,
+    MissionStatus, ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result,
+    SensorRecord, StoreError, UpsertStats, VisitRecord,
 };
 
 /// Rows per block of the binary `COPY` stream in [`insert_readings`] (one failpoint step
@@ -320,6 +320,11 @@ pub(super) fn set_sensors_collected(
 }
 
 pub(super) fn create_mission(c: &mut Transaction<'_>, m: &NewMission) -> Result<MissionId> {
+    insert_mission(c, m, None)
+}
+
+/// Inserts a mission and its stops, with the id `id` or (`None`) the next one.
+fn insert_mission(c: &mut Transaction<'_>, m: &NewMission, id: Option<i64>) -> Result<MissionId> {
     validate_mission(m)?;
     let e = &m.energy;
     let p = &m.profile;
@@ -331,9 +336,10 @@ pub(super) fn create_mission(c: &mut Transaction<'_>, m: &NewMission) -> Result<
                  weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form, total_score,
                  base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
                  travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m,
-                 flight_time_s, return_distance_m, status, flown_at, summary_json)
+                 flight_time_s, return_distance_m, status, flown_at, summary_json, id)
              VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17,
-                     $18, $19, $20, $21, $22, $23, $24, $25, $26, NULL, NULL)
+                     $18, $19, $20, $21, $22, $23, $24, $25, $26, NULL, NULL,
+                     COALESCE($27, nextval(pg_get_serial_sequence('missions', 'id'))))
              RETURNING id",
             &[
                 &m.created_at,
@@ -362,6 +368,7 @@ pub(super) fn create_mission(c: &mut Transaction<'_>, m: &NewMission) -> Result<
                 &e.flight_time_s,
                 &m.return_distance_m,
                 &MissionStatus::Planned.as_str(),
+                &id,
             ],
         )
         .db()?
@@ -623,4 +630,19 @@ pub(super) fn upsert_cell_metadata(
         }
     }
     Ok(())
+}
+
+/// [`crate::StoreWrite::import_mission`]: the mission with its own id (the id sequence moved
+/// past it), then its visits.
+pub(super) fn import_mission(c: &mut Transaction<'_>, record: &MissionRecord) -> Result<()> {
+    insert_mission(c, &record.mission, Some(record.id.0))?;
+    c.execute(
+        "SELECT setval(pg_get_serial_sequence('missions', 'id'),
+                       GREATEST((SELECT MAX(id) FROM missions), 1))",
+        &[],
+    )
+    .db()?;
+    import_flight(record, |flown_at| {
+        record_visits(c, record.id, &record.visits, flown_at, false)
+    })
 }

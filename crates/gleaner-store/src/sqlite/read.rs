@@ -575,3 +575,12 @@ pub(super) fn blob_get(c: &Connection, key: &str) -> Result<Option<Vec<u8>>> {
     .optional()
     .db()
 }
+
+pub(super) fn config_entries(c: &Connection) -> Result<Vec<(String, String)>> {
+    select(c, "SELECT key, value FROM config ORDER BY key", [])
+}
+
+pub(super) fn blob_keys(c: &Connection) -> Result<Vec<String>> {
+    let keys: Vec<(String,)> = select(c, "SELECT key FROM blobs ORDER BY key", [])?;
+    Ok(keys.into_iter().map(|(k,)| k).collect())
+}

@@ -9,13 +9,13 @@ use rusqlite::{Connection, OptionalExtension, params};
 use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
 use crate::checks::{
-    as_i64, check_cells, check_modality_list, check_sensor_list, check_visits, keys, plan_insert,
-    validate_metadata, validate_mission,
+    as_i64, check_cells, check_modality_list, check_sensor_list, check_visits, import_flight, keys,
+    plan_insert, validate_metadata, validate_mission,
 };
 use crate::{
-    CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionStatus,
-    ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result, SensorRecord, StoreError,
-    UpsertStats, VisitRecord,
+    CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionRecord,
+    MissionStatus, ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result,
+    SensorRecord, StoreError, UpsertStats, VisitRecord,
 };
 
 /// Rows per multi-row `INSERT` statement in [`insert_readings`] (4 parameters each).
@@ -300,6 +300,11 @@ pub(super) fn set_sensors_collected(
 }
 
 pub(super) fn create_mission(c: &Connection, m: &NewMission) -> Result<MissionId> {
+    insert_mission(c, m, None)
+}
+
+/// Inserts a mission and its stops, with the id `id` or (`None`) the next one.
+fn insert_mission(c: &Connection, m: &NewMission, id: Option<i64>) -> Result<MissionId> {
     validate_mission(m)?;
     let e = &m.energy;
     let p = &m.profile;
@@ -308,9 +313,9 @@ pub(super) fn create_mission(c: &Connection, m: &NewMission) -> Result<MissionId
              weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form, total_score,
              base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
              travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m, flight_time_s,
-             return_distance_m, status, flown_at, summary_json)
+             return_distance_m, status, flown_at, summary_json, id)
          VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18,
-                 ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, NULL, NULL)",
+                 ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, NULL, NULL, ?27)",
         params![
             m.created_at,
             m.kind.as_str(),
@@ -339,6 +344,7 @@ pub(super) fn create_mission(c: &Connection, m: &NewMission) -> Result<MissionId
             e.flight_time_s,
             m.return_distance_m,
             MissionStatus::Planned.as_str(),
+            id,
         ],
     )
     .db()?;
@@ -566,4 +572,12 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// [`crate::StoreWrite::import_mission`]: the mission with its own id, then its visits.
+pub(super) fn import_mission(c: &Connection, record: &MissionRecord) -> Result<()> {
+    insert_mission(c, &record.mission, Some(record.id.0))?;
+    import_flight(record, |flown_at| {
+        record_visits(c, record.id, &record.visits, flown_at, false)
+    })
 }
