@@ -9,4 +9,11 @@ bash scripts/python-env.sh
 # Property tests draw their cases from a fixed seed, so every run tests the same cases (set
 # PROPTEST_RNG_SEED to explore others; failures are kept in proptest-regressions/).
 export PROPTEST_RNG_SEED="${PROPTEST_RNG_SEED:-20261130}"
+# PostgreSQL backend tests: a throwaway local cluster unless GLEANER_TEST_PG_URL names a server
+# (the tests fail without one); stopped and deleted at exit.
+if [ -z "${GLEANER_TEST_PG_URL:-}" ]; then
+  pg_dir="$(bash scripts/pg-cluster.sh start)"
+  trap 'bash scripts/pg-cluster.sh stop "$pg_dir"' EXIT
+  eval "$(bash scripts/pg-cluster.sh env "$pg_dir")"
+fi
 cargo test --workspace "$@"

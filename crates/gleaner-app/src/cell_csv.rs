@@ -16,12 +16,38 @@ pub struct CellRow {
 }
 
 /// Reads the file; a field that is not a finite number is an error naming file, line and
-/// column (from the header). Blank lines are skipped; a UTF-8 BOM and CRLF are accepted.
+/// column (from the header), as is a row with another number of fields than the header, a
+/// header naming a column twice and bytes that are not UTF-8. Only regular files are read (a
+/// FIFO would block). Blank lines are skipped; a UTF-8 BOM and CRLF are accepted.
 pub fn read(path: &Path) -> Result<Vec<CellRow>> {
-    let text = std::fs::read_to_string(path).map_err(|e| AppError::io(path, e))?;
+    let meta = std::fs::metadata(path).map_err(|e| AppError::io(path, e))?;
+    if !meta.is_file() {
+        return Err(AppError::io(
+            path,
+            "not a regular file: give the data as a file (pipes, FIFOs and devices are not read)",
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|e| AppError::io(path, e))?;
+    let text = match std::str::from_utf8(&bytes) {
+        Ok(t) => t,
+        Err(e) => {
+            let line = bytes[..e.valid_up_to()]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count()
+                + 1;
+            return Err(AppError::Invalid(format!(
+                "{}:{line}: not valid UTF-8",
+                path.display()
+            )));
+        }
+    };
+    let bad =
+        |line: usize, what: String| AppError::Invalid(format!("{}:{line}: {what}", path.display()));
     let mut lines = text.trim_start_matches('\u{feff}').lines().enumerate();
     let header: Vec<String> = lines
         .next()
+        .filter(|(_, h)| !h.trim().is_empty())
         .map(|(_, h)| h.split(',').map(|c| c.trim().to_string()).collect())
         .ok_or_else(|| {
             AppError::Invalid(format!(
@@ -29,14 +55,41 @@ pub fn read(path: &Path) -> Result<Vec<CellRow>> {
                 path.display()
             ))
         })?;
+    for (k, name) in header.iter().enumerate() {
+        if let Some(first) = header[..k]
+            .iter()
+            .position(|h| h.eq_ignore_ascii_case(name))
+        {
+            return Err(bad(
+                1,
+                format!(
+                    "column {}: {:?} repeated (first as column {})",
+                    k + 1,
+                    gleaner_ingest::shorten(name),
+                    first + 1
+                ),
+            ));
+        }
+    }
     let mut rows = Vec::new();
     for (k, line) in lines {
         if line.trim().is_empty() {
             continue;
         }
-        let mut fields = line.split(',').map(str::trim);
-        let cell = fields.next().unwrap_or_default().to_string();
-        let values = fields
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if fields.len() != header.len() {
+            return Err(bad(
+                k + 1,
+                format!(
+                    "{} fields, but the header has {}",
+                    fields.len(),
+                    header.len()
+                ),
+            ));
+        }
+        let cell = fields[0].to_string();
+        let values = fields[1..]
+            .iter()
             .enumerate()
             .map(|(c, v)| {
                 let column = header.get(c + 1).map_or("?", String::as_str);
@@ -44,11 +97,14 @@ pub fn read(path: &Path) -> Result<Vec<CellRow>> {
                     .ok()
                     .filter(|x| x.is_finite())
                     .ok_or_else(|| {
-                        AppError::Invalid(format!(
-                            "{}:{}: column `{column}`: not a finite number: {v:?}",
-                            path.display(),
-                            k + 1
-                        ))
+                        bad(
+                            k + 1,
+                            format!(
+                                "column `{}`: not a finite number: {}",
+                                gleaner_ingest::shorten(column),
+                                gleaner_ingest::quoted(v)
+                            ),
+                        )
                     })
             })
             .collect::<Result<Vec<f64>>>()?;

@@ -3,6 +3,7 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
+use gleaner_field::time::format_rfc3339;
 use gleaner_field::{Modality, SensorId, UnixSeconds};
 use gleaner_ingest::{
     HubbardBrookMetadata, IngestError, IngestOptions, IngestReport, OnError, Readings, WideOptions,
@@ -10,7 +11,7 @@ use gleaner_ingest::{
 };
 use gleaner_store::{
     ConflictPolicy, IngestRecord, InsertStats, ModalityRecord, Reading, ReadingBatch, Store,
-    StoreWrite,
+    StoreError, StoreWrite,
 };
 
 use crate::error::{AppError, Result};
@@ -176,6 +177,7 @@ pub(crate) fn known_sensors<R: gleaner_store::StoreRead>(store: &R) -> Result<Ha
 pub(crate) fn parse_files(
     request: &IngestRequest,
     known: HashSet<String>,
+    value_limits: &gleaner_ingest::limits::ValueLimits,
     progress: &dyn Progress,
 ) -> Result<Parsed> {
     if request.files.is_empty() {
@@ -190,6 +192,7 @@ pub(crate) fn parse_files(
     let options = IngestOptions {
         on_error: request.on_error,
         known_sensors: Some(known),
+        value_limits: value_limits.clone(),
     };
     let mut files: Vec<(PathBuf, Format, Readings, IngestReport)> = Vec::new();
     let mut report = IngestReport::default();
@@ -310,7 +313,9 @@ pub(crate) fn store_parsed<W: StoreWrite>(
     for (path, format, readings, report) in &parsed.files {
         let (modalities, batch) = batch_of(readings);
         tx.upsert_modalities(&modalities)?;
-        let s = tx.insert_readings(&batch, policy)?;
+        let s = tx
+            .insert_readings(&batch, policy)
+            .map_err(|e| conflict_in_file(e, path, readings))?;
         tx.record_ingest(&IngestRecord {
             file_name: path.display().to_string(),
             format: format.name().to_string(),
@@ -338,16 +343,82 @@ pub(crate) fn store_parsed<W: StoreWrite>(
     Ok((stats, refreshed))
 }
 
+/// How far past the clock a reading may be dated, seconds (a day: a logger's clock running
+/// ahead, a local date read as UTC).
+pub const FUTURE_TOLERANCE_S: i64 = 86_400;
+
+/// Refuses readings dated more than [`FUTURE_TOLERANCE_S`] after `clock_now`: a sensor cannot
+/// have measured the future, and one such reading would move the default mission time there.
+pub(crate) fn refuse_future(parsed: &Parsed, clock_now: UnixSeconds) -> Result<()> {
+    let limit = clock_now.saturating_add(FUTURE_TOLERANCE_S);
+    for (path, _, readings, _) in &parsed.files {
+        if let Some(r) = readings
+            .rows
+            .iter()
+            .filter(|r| r.t > limit)
+            .min_by_key(|r| r.line)
+        {
+            return Err(AppError::Invalid(format!(
+                "{}:{}: reading of {} {} dated {}, after the clock ({}); nothing written",
+                path.display(),
+                r.line,
+                readings.sensors[r.sensor as usize],
+                readings.modalities[r.modality as usize].modality,
+                format_rfc3339(r.t),
+                format_rfc3339(clock_now),
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A store conflict, told with the file and line of the first conflicting reading and its time
+/// as RFC 3339; any other error unchanged.
+fn conflict_in_file(e: StoreError, path: &Path, readings: &Readings) -> AppError {
+    let StoreError::Conflicts(conflicts) = &e else {
+        return e.into();
+    };
+    let Some(c) = conflicts.first() else {
+        return e.into();
+    };
+    let line = readings
+        .rows
+        .iter()
+        .filter(|r| {
+            r.t == c.t
+                && readings.sensors[r.sensor as usize] == c.sensor
+                && readings.modalities[r.modality as usize].modality == c.modality
+        })
+        .map(|r| r.line)
+        .min();
+    let at = line.map_or_else(String::new, |l| format!(":{l}"));
+    AppError::Invalid(format!(
+        "{} conflicting reading(s), nothing written; first: {} {} at {} ({}{}): the file has \
+         {}, the store has {}",
+        conflicts.len(),
+        c.sensor,
+        c.modality,
+        format_rfc3339(c.t),
+        path.display(),
+        at,
+        c.incoming,
+        c.stored,
+    ))
+}
+
 /// The use case: reads every file, then stores all readings, their provenance and the
 /// refreshed cell summaries in one transaction: a failure anywhere stores nothing.
-/// `clock_now` is the wall-clock time recorded as provenance (seconds).
+/// `clock_now` is the wall-clock time (seconds since the epoch): recorded as provenance, and
+/// readings dated more than [`FUTURE_TOLERANCE_S`] after it are refused.
 pub fn ingest<S: Store>(
     project: &mut Project<S>,
     request: &IngestRequest,
     clock_now: UnixSeconds,
     progress: &dyn Progress,
 ) -> Result<IngestOutcome> {
-    let parsed = parse_files(request, known_sensors(project.store())?, progress)?;
+    let limits = project.settings().ingest.value_limits();
+    let parsed = parse_files(request, known_sensors(project.store())?, &limits, progress)?;
+    refuse_future(&parsed, clock_now)?;
     let policy = match request.on_error {
         OnError::Fail => ConflictPolicy::Fail,
         OnError::Skip => ConflictPolicy::Skip,

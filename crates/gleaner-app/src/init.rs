@@ -69,13 +69,32 @@ pub fn init(request: &InitRequest) -> Result<(Project<SqliteStore>, InitOutcome)
             config_path.display()
         )));
     }
-    std::fs::create_dir_all(&request.dir).map_err(|e| AppError::io(&request.dir, e))?;
+    // Read and check everything before creating anything: a refused init leaves no trace.
     let settings = settings_for(request)?;
-    let store = SqliteStore::open(&request.dir.join(&settings.project.database))?;
-    let mut project = Project::new(&request.dir, settings, store);
-    let outcome = init_store(&mut project, request)?;
-    outcome.settings.save(&request.dir)?;
-    Ok((project, outcome))
+    let created_dir = !request.dir.exists();
+    let db_path = request.dir.join(&settings.project.database);
+    let created_db = !db_path.exists();
+    let result = (|| {
+        std::fs::create_dir_all(&request.dir).map_err(|e| AppError::io(&request.dir, e))?;
+        let store = SqliteStore::open(&db_path)?;
+        let mut project = Project::new(&request.dir, settings, store);
+        let outcome = init_store(&mut project, request)?;
+        outcome.settings.save(&request.dir)?;
+        Ok((project, outcome))
+    })();
+    if result.is_err() {
+        // Best effort: remove only what this call created (the error is what matters).
+        if created_dir {
+            let _ = std::fs::remove_dir_all(&request.dir);
+        } else if created_db {
+            for suffix in ["", "-wal", "-shm"] {
+                let mut p = db_path.clone().into_os_string();
+                p.push(suffix);
+                let _ = std::fs::remove_file(p);
+            }
+        }
+    }
+    result
 }
 
 /// The settings for a new project (reads the sensors file to place the base).
@@ -102,6 +121,7 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
             .dir
             .canonicalize()
             .ok()
+            .or_else(|| std::path::absolute(&request.dir).ok())
             .and_then(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
             .unwrap_or_else(|| "gleaner".into())
     });

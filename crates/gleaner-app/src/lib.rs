@@ -34,7 +34,7 @@
 //! [`LatLon`]: gleaner_field::LatLon
 #![deny(missing_docs)]
 
-mod cell_csv;
+pub mod cell_csv;
 mod error;
 mod explore;
 mod ingest;

@@ -83,6 +83,9 @@ pub struct PlannedMission {
     pub time_limit_s: f64,
 }
 
+/// Largest magnitude of a user-given score (the utility engine's scores are a few units).
+pub const MAX_SCORE: f64 = 1e6;
+
 fn read_scores(path: &Path, k: &Knowledge) -> Result<Vec<f64>> {
     let labels = k.cell_labels();
     let mut scores: Vec<Option<f64>> = vec![None; labels.len()];
@@ -91,10 +94,18 @@ fn read_scores(path: &Path, k: &Knowledge) -> Result<Vec<f64>> {
         let [score] = row.values[..] else {
             return Err(at("expected `cell_id,score`"));
         };
-        let pos = labels
-            .iter()
-            .position(|l| *l == row.cell)
-            .ok_or_else(|| at(&format!("column `cell_id`: unknown cell: {:?}", row.cell)))?;
+        if score.abs() > MAX_SCORE {
+            return Err(at(&format!(
+                "column `score`: {} outside the allowed -{MAX_SCORE}..={MAX_SCORE}",
+                gleaner_ingest::number(score)
+            )));
+        }
+        let pos = labels.iter().position(|l| *l == row.cell).ok_or_else(|| {
+            at(&format!(
+                "column `cell_id`: unknown cell: {:?}",
+                gleaner_ingest::shorten(&row.cell)
+            ))
+        })?;
         if scores[pos].replace(score).is_some() {
             return Err(at(&format!(
                 "column `cell_id`: cell {:?} listed twice",

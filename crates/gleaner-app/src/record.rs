@@ -59,9 +59,12 @@ pub fn record_flight<S: Store>(
     progress: &dyn Progress,
 ) -> Result<RecordOutcome> {
     let parsed = match &request.readings {
-        Some(r) if !r.files.is_empty() => {
-            Some(parse_files(r, known_sensors(project.store())?, progress)?)
-        }
+        Some(r) if !r.files.is_empty() => Some(parse_files(
+            r,
+            known_sensors(project.store())?,
+            &project.settings().ingest.value_limits(),
+            progress,
+        )?),
         _ => None,
     };
     record_parsed(project, request, parsed, clock_now)

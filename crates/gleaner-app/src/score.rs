@@ -236,7 +236,7 @@ pub fn compute_full<S: Store>(project: &Project<S>, request: &ScoreRequest) -> R
         Some(path) => {
             let rows: Vec<(String, Vec<f64>)> = cell_csv::read(path)?
                 .into_iter()
-                .map(|r| (r.cell, r.values))
+                .map(|r| (gleaner_ingest::shorten(&r.cell).into_owned(), r.values))
                 .collect();
             let labels = k.cell_labels();
             let p = validate_probabilities(&labels, &rows)

@@ -100,6 +100,26 @@ pub struct IngestSection {
     pub bytes_per_reading: f64,
     /// Logging interval, seconds, assumed when a series has fewer than 2 readings (default 86 400).
     pub default_interval_s: f64,
+    /// Plausible value ranges overriding the built-in ones, `[min, max]` in the readings' unit,
+    /// keyed by quantity (`vw`) or unit (`degC`): e.g. `value_limits = { degC = [-80, 90] }`.
+    /// Built in: m3/m3 0..1, % 0..100, degC −60..80, K 213.15..353.15, kPa −1e6..1e4,
+    /// mS/cm and dS/m 0..1000, anything else ±1e9.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value_limits: Option<std::collections::BTreeMap<String, [f64; 2]>>,
+}
+
+impl IngestSection {
+    /// The readers' value limits: the built-in ranges with this section's overrides.
+    pub fn value_limits(&self) -> gleaner_ingest::limits::ValueLimits {
+        gleaner_ingest::limits::ValueLimits {
+            overrides: self
+                .value_limits
+                .iter()
+                .flatten()
+                .map(|(k, [lo, hi])| (k.clone(), (*lo, *hi)))
+                .collect(),
+        }
+    }
 }
 
 impl Default for IngestSection {
@@ -107,6 +127,7 @@ impl Default for IngestSection {
         Self {
             bytes_per_reading: 16.0,
             default_interval_s: 86_400.0,
+            value_limits: None,
         }
     }
 }
@@ -371,15 +392,24 @@ impl Settings {
     /// Reads and validates `dir/gleaner.toml`.
     pub fn load(dir: &Path) -> Result<Self> {
         let path = dir.join(CONFIG_FILE);
-        let text = std::fs::read_to_string(&path).map_err(|e| AppError::Settings {
+        let bytes = std::fs::read(&path).map_err(|e| AppError::Settings {
             path: path.display().to_string(),
             reason: format!(
                 "cannot read the project file ({e}); run `gleaner init` first, or pass --project"
             ),
         })?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let bytes = e.as_bytes();
+            let valid = e.utf8_error().valid_up_to();
+            let line = bytes[..valid].iter().filter(|&&b| b == b'\n').count() + 1;
+            AppError::Settings {
+                path: format!("{}:{line}", path.display()),
+                reason: "not valid UTF-8".into(),
+            }
+        })?;
         Self::parse(&text).map_err(|reason| AppError::Settings {
             path: path.display().to_string(),
-            reason,
+            reason: shorten_lines(&reason),
         })
     }
 
@@ -408,6 +438,7 @@ impl Settings {
     /// Checks every setting a use case relies on; the error names the setting and value.
     pub fn validate(&self) -> Result<()> {
         self.base()?;
+        self.check_ranges()?;
         if !self.field.base_alt_m.is_finite() {
             bail!(
                 "field.base_alt_m = {} must be a finite number of metres",
@@ -470,6 +501,106 @@ impl Settings {
         Ok(())
     }
 
+    /// Every numeric setting against its allowed range (see [`RANGES`]); the error names the
+    /// key, the value and the range.
+    fn check_ranges(&self) -> Result<()> {
+        let f = &self.field;
+        let i = &self.ingest;
+        let u = &self.utility;
+        let e = &self.energy;
+        let p = &self.planner;
+        let values: [(&str, Option<f64>); 31] = [
+            ("field.base_alt_m", Some(f.base_alt_m)),
+            ("field.cell_size_m", Some(f.cell_size_m)),
+            ("field.neighbour_k", Some(f.neighbour_k as f64)),
+            ("field.neighbour_radius_m", Some(f.neighbour_radius_m)),
+            ("ingest.bytes_per_reading", Some(i.bytes_per_reading)),
+            ("ingest.default_interval_s", Some(i.default_interval_s)),
+            ("utility.alpha", Some(u.alpha)),
+            ("utility.beta", Some(u.beta)),
+            ("utility.gamma", Some(u.gamma)),
+            ("utility.delta", Some(u.delta)),
+            (
+                "utility.freshness_half_life_s",
+                Some(u.freshness_half_life_s),
+            ),
+            ("utility.history_window_days", u.history_window_days),
+            ("utility.min_overlap", Some(u.min_overlap as f64)),
+            ("utility.epsilon", Some(u.epsilon)),
+            ("utility.anomaly_kappa", Some(u.anomaly_kappa)),
+            ("utility.anomaly_flag", Some(u.anomaly_flag)),
+            (
+                "utility.condition_classes",
+                Some(u.condition_classes as f64),
+            ),
+            ("energy.battery_j", e.battery_j),
+            ("energy.reserve_fraction", e.reserve_fraction),
+            ("energy.altitude_m", e.altitude_m),
+            ("energy.overhead_s", e.overhead_s),
+            ("energy.min_hover_s", e.min_hover_s),
+            ("energy.rx_power_w", e.rx_power_w),
+            ("energy.bandwidth_hz", e.bandwidth_hz),
+            ("energy.tx_power_dbm", e.tx_power_dbm),
+            ("energy.noise_power_dbm", e.noise_power_dbm),
+            ("energy.reading_interval_s", e.reading_interval_s),
+            ("energy.bytes_per_reading", e.bytes_per_reading),
+            ("planner.time_limit_s", Some(p.time_limit_s)),
+            (
+                "energy.cruise",
+                e.cruise
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|_| !matches!(e.cruise.as_str(), "max-endurance" | "max-range")),
+            ),
+            ("field.base_lat", Some(f.base_lat)),
+        ];
+        for (key, value) in values {
+            if let Some(v) = value {
+                check_range(key, v)?;
+            }
+        }
+        if f.neighbour_radius_m > 100.0 * f.cell_size_m.max(1.0) {
+            bail!(
+                "field.neighbour_radius_m = {}: allowed 0..=100 cell sides ({} m with cell_size_m = {})",
+                f.neighbour_radius_m,
+                100.0 * f.cell_size_m.max(1.0),
+                f.cell_size_m
+            );
+        }
+        for (name, map) in [
+            ("utility.redundancy_weights", &u.redundancy_weights),
+            ("utility.anomaly_weights", &u.anomaly_weights),
+        ] {
+            for (m, &w) in map.iter().flatten() {
+                if !(w.is_finite() && (0.0..=1e6).contains(&w)) {
+                    bail!("{name}.{m} = {w}: allowed 0..=1e6");
+                }
+            }
+        }
+        if let Some(t) = &u.condition_thresholds {
+            if t.len() + 1 != u.condition_classes {
+                bail!(
+                    "utility.condition_thresholds: {} threshold(s) for condition_classes = {} (need {})",
+                    t.len(),
+                    u.condition_classes,
+                    u.condition_classes.saturating_sub(1)
+                );
+            }
+            if t.iter().any(|x| !x.is_finite() || x.abs() > 1e9)
+                || t.windows(2).any(|w| w[0] >= w[1])
+            {
+                bail!(
+                    "utility.condition_thresholds = {t:?}: need finite numbers within ±1e9, strictly increasing"
+                );
+            }
+        }
+        self.ingest
+            .value_limits()
+            .validate()
+            .map_err(|m| AppError::Invalid(format!("ingest.{m}")))?;
+        Ok(())
+    }
+
     /// The base station position.
     pub fn base(&self) -> Result<LatLon> {
         LatLon::new(self.field.base_lat, self.field.base_lon)
@@ -484,6 +615,91 @@ impl Settings {
             fallback_radius_m: self.field.neighbour_radius_m,
         }
     }
+}
+
+/// The allowed range of every numeric setting of `gleaner.toml`, inclusive unless marked, with
+/// its unit: (key, min, max, min exclusive, unit). Values outside are refused with the key, the
+/// value and the range; NaN and infinities are always refused.
+pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
+    ("field.base_lat", -90.0, 90.0, false, "degrees"),
+    ("field.base_alt_m", -500.0, 9_000.0, false, "m"),
+    ("field.cell_size_m", 0.5, 10_000.0, false, "m"),
+    ("field.neighbour_k", 0.0, 64.0, false, "cells"),
+    ("field.neighbour_radius_m", 0.0, 100_000.0, false, "m"),
+    ("ingest.bytes_per_reading", 0.0, 1e6, true, "bytes"),
+    ("ingest.default_interval_s", 1.0, 31_622_400.0, false, "s"),
+    ("utility.alpha", 0.0, 1e6, false, ""),
+    ("utility.beta", 0.0, 1e6, false, ""),
+    ("utility.gamma", 0.0, 1e6, false, ""),
+    ("utility.delta", 0.0, 1e6, false, ""),
+    ("utility.freshness_half_life_s", 1.0, 3.2e9, false, "s"),
+    ("utility.history_window_days", 0.0, 36_525.0, true, "days"),
+    ("utility.min_overlap", 2.0, 1e6, false, "timestamps"),
+    ("utility.epsilon", 0.0, 1e6, true, "(unit of the modality)"),
+    (
+        "utility.anomaly_kappa",
+        0.0,
+        1e3,
+        true,
+        "standard deviations",
+    ),
+    (
+        "utility.anomaly_flag",
+        0.0,
+        1e6,
+        false,
+        "standard deviations",
+    ),
+    ("utility.condition_classes", 2.0, 20.0, false, "classes"),
+    ("energy.battery_j", 0.0, 1e9, true, "J"),
+    ("energy.reserve_fraction", 0.0, 0.99, false, ""),
+    ("energy.altitude_m", 0.0, 120.0, true, "m"),
+    ("energy.overhead_s", 0.0, 3_600.0, false, "s"),
+    ("energy.min_hover_s", 0.0, 3_600.0, false, "s"),
+    ("energy.rx_power_w", 0.0, 1_000.0, false, "W"),
+    ("energy.bandwidth_hz", 0.0, 1e10, true, "Hz"),
+    ("energy.tx_power_dbm", -50.0, 60.0, false, "dBm"),
+    ("energy.noise_power_dbm", -200.0, 0.0, false, "dBm"),
+    ("energy.reading_interval_s", 1.0, 31_622_400.0, false, "s"),
+    ("energy.bytes_per_reading", 0.0, 1e6, true, "bytes"),
+    ("energy.cruise", 0.0, 50.0, true, "m/s"),
+    ("planner.time_limit_s", 0.0, 86_400.0, false, "s"),
+];
+
+/// Checks `value` of setting `key` against [`RANGES`].
+fn check_range(key: &str, value: f64) -> Result<()> {
+    let Some(&(_, lo, hi, open, unit)) = RANGES.iter().find(|r| r.0 == key) else {
+        return Ok(());
+    };
+    let inside = value.is_finite() && (if open { value > lo } else { value >= lo }) && value <= hi;
+    if !inside {
+        let (bracket, unit) = (
+            if open { "(" } else { "[" },
+            if unit.is_empty() {
+                String::new()
+            } else {
+                format!(" {unit}")
+            },
+        );
+        let value = gleaner_ingest::number(value);
+        bail!("{key} = {value}: allowed {bracket}{lo}, {hi}]{unit}");
+    }
+    Ok(())
+}
+
+/// Longest line of a settings error, in characters.
+const MESSAGE_LINE_CHARS: usize = 160;
+
+/// Cuts every line of a message to [`MESSAGE_LINE_CHARS`] characters, noting the length (a
+/// TOML error quotes the offending line, which may be megabytes long).
+fn shorten_lines(text: &str) -> String {
+    text.lines()
+        .map(|l| match l.char_indices().nth(MESSAGE_LINE_CHARS) {
+            None => l.to_string(),
+            Some((end, _)) => format!("{}… ({} bytes in all)", &l[..end], l.len()),
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// Parses a UTM zone such as `11N` or `33s` into (zone, northern hemisphere).

@@ -37,7 +37,12 @@ impl Truth {
                 "logging period {period_s} s must be >= 0"
             )));
         }
-        let parsed = parse_files(request, known_sensors(project.store())?, progress)?;
+        let parsed = parse_files(
+            request,
+            known_sensors(project.store())?,
+            &project.settings().ingest.value_limits(),
+            progress,
+        )?;
         let mut readings = Readings::default();
         for (_, _, r, _) in parsed.files {
             readings.append(r);

@@ -142,7 +142,7 @@ fn fast_scoring_equals_full_scoring_on_caf() {
                 files,
                 ..Default::default()
             },
-            0,
+            common::INGEST_CLOCK,
             &Silent,
         )
         .unwrap();
@@ -248,7 +248,7 @@ fn fast_scoring_equals_full_scoring_on_a_synthetic_farm() {
                 files: vec![f],
                 ..Default::default()
             },
-            0,
+            common::INGEST_CLOCK,
             &Silent,
         )
         .unwrap();

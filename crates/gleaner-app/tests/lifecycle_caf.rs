@@ -40,7 +40,7 @@ fn caf_lifecycle_through_the_app_layer() {
             files: files.clone(),
             ..Default::default()
         },
-        0,
+        common::INGEST_CLOCK,
         &Silent,
     )
     .unwrap();
@@ -52,7 +52,7 @@ fn caf_lifecycle_through_the_app_layer() {
             files,
             ..Default::default()
         },
-        0,
+        common::INGEST_CLOCK,
         &Silent,
     )
     .unwrap();

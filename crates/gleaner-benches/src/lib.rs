@@ -1,8 +1,11 @@
 //! Fixtures shared by gleaner's cross-crate benchmarks (`cargo bench -p gleaner-benches`).
 //!
 //! The benchmarks themselves live in `benches/`; this library only builds their inputs, with a
-//! fixed seed so that every run measures the same work.
+//! fixed seed so that every run measures the same work. [`fuzz`] is the mutation fuzzer of every
+//! reader of untrusted input, run by the `gleaner-fuzz` binary.
 #![deny(missing_docs)]
+
+pub mod fuzz;
 
 use gleaner_field::{LatLon, LocalPoint, Sensor, SensorId, TransverseMercator};
 

@@ -3,7 +3,7 @@ use std::path::PathBuf;
 use thiserror::Error;
 
 /// What was wrong with one field of one row.
-#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[derive(Debug, Clone, PartialEq, Error)]
 pub enum Problem {
     /// Not a number.
     #[error("not a number")]
@@ -46,6 +46,40 @@ pub enum Problem {
         /// Line of the first occurrence.
         first_line: u64,
     },
+    /// A column name that appears twice in the header (the first would silently win).
+    #[error("column repeated (first as column {first_column})")]
+    DuplicateColumn {
+        /// 1-based position of the first column with this name.
+        first_column: usize,
+    },
+    /// A value outside the plausible physical range of its modality's unit.
+    #[error(
+        "outside the plausible range {min}..={max} {unit} (override with `[ingest] value_limits`)"
+    )]
+    OutOfRange {
+        /// The unit (or quantity) the range is for.
+        unit: String,
+        /// Lowest plausible value.
+        min: f64,
+        /// Highest plausible value.
+        max: f64,
+    },
+    /// A sensor elevation outside what is plausible on Earth's surface.
+    #[error("elevation outside {min}..={max} m")]
+    Elevation {
+        /// Lowest plausible elevation, metres.
+        min: f64,
+        /// Highest plausible elevation, metres.
+        max: f64,
+    },
+    /// A valid date outside the years readings can plausibly carry.
+    #[error("date outside {min_year}..={max_year}")]
+    ImplausibleTime {
+        /// Earliest accepted year.
+        min_year: i64,
+        /// Latest accepted year.
+        max_year: i64,
+    },
     /// A unit that differs from the one given earlier for the same modality.
     #[error("unit differs from `{expected}` given earlier for this modality")]
     UnitMismatch {
@@ -73,7 +107,7 @@ pub enum IngestError {
         path: PathBuf,
     },
     /// A required column is absent from the header.
-    #[error("{path}:1: missing column `{column}` (header has: {found})", path = path.display())]
+    #[error("{path}:1: missing column `{column}` (header has: {found})", path = path.display(), found = Shown(found))]
     MissingColumn {
         /// The file.
         path: PathBuf,
@@ -83,7 +117,7 @@ pub enum IngestError {
         found: String,
     },
     /// One field of one row is bad.
-    #[error("{path}:{line}: column `{column}`: {problem}: {value:?}", path = path.display())]
+    #[error("{path}:{line}: column `{column}`: {problem}: {value}", path = path.display(), column = Shown(column), value = Quoted(value))]
     Field {
         /// The file.
         path: PathBuf,
@@ -104,4 +138,55 @@ pub enum IngestError {
         /// What is wrong.
         message: String,
     },
+}
+
+/// Longest text an error message repeats from the input, in characters; longer values are cut
+/// with their full length noted, so a 10 MB field never floods a terminal or a log.
+pub const SHOWN_CHARS: usize = 80;
+
+/// Cuts `text` to [`SHOWN_CHARS`] characters, noting how long it was.
+pub fn shorten(text: &str) -> std::borrow::Cow<'_, str> {
+    match text.char_indices().nth(SHOWN_CHARS) {
+        None => std::borrow::Cow::Borrowed(text),
+        Some((end, _)) => {
+            std::borrow::Cow::Owned(format!("{}… ({} bytes in all)", &text[..end], text.len()))
+        }
+    }
+}
+
+/// Displays a text cut by [`shorten`].
+struct Shown<'a>(&'a str);
+
+impl std::fmt::Display for Shown<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&shorten(self.0))
+    }
+}
+
+/// A value quoted and escaped, cut by [`shorten`] (the note of the cut outside the quotes).
+pub fn quoted(text: &str) -> String {
+    Quoted(text).to_string()
+}
+
+/// A number for a message: as written by Rust when short, else in scientific notation (so
+/// 1e300 does not print as 301 digits).
+pub fn number(x: f64) -> String {
+    let plain = x.to_string();
+    if plain.len() <= 24 {
+        plain
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// Displays a value quoted and escaped (`"wet"`, `"s\u{fffd}1"`), cut by [`shorten`].
+struct Quoted<'a>(&'a str);
+
+impl std::fmt::Display for Quoted<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0.char_indices().nth(SHOWN_CHARS) {
+            None => write!(f, "{:?}", self.0),
+            Some((end, _)) => write!(f, "{:?}… ({} bytes in all)", &self.0[..end], self.0.len()),
+        }
+    }
 }

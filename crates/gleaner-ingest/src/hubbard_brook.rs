@@ -42,8 +42,10 @@ fn metadata_rows(path: &Path) -> Result<Vec<ProbeRow>, IngestError> {
     let c_depth = table.require(&["depth_cm"])?;
     let names = table.header.clone();
     let mut out = Vec::new();
-    while let Some(line) = table.next()? {
-        let field = |k: usize| table.field(k).unwrap_or("").to_string();
+    let mut report = IngestReport::default();
+    let policy = Policy::new(path, crate::OnError::Fail);
+    while let Some(line) = table.next_row(&policy, &mut report)? {
+        let field = |k: usize| table.text(k).map_or_else(|lossy| lossy, str::to_string);
         let bad = |k: usize, problem: Problem| IngestError::Field {
             path: path.to_path_buf(),
             line,
@@ -51,6 +53,11 @@ fn metadata_rows(path: &Path) -> Result<Vec<ProbeRow>, IngestError> {
             value: field(k),
             problem,
         };
+        for k in [c_logger, c_port, c_lat, c_lon, c_depth] {
+            if table.text(k).is_err() {
+                return Err(bad(k, Problem::NotUtf8));
+            }
+        }
         let id = format!("{}:p{}", field(c_logger), field(c_port));
         let lat: f64 = field(c_lat)
             .parse()
@@ -146,7 +153,7 @@ pub fn read_hubbard_brook_logger(
     let mut table = Table::open(path, &bytes, b',')?;
     let c_time = table.require(&["timestamp"])?;
     let names = table.header.clone();
-    let policy = Policy::new(path, options.on_error);
+    let policy = Policy::for_readings(path, options);
     let mut report = IngestReport::default();
     let mut interner = Interner::default();
     let mut columns: Vec<(usize, u32, u32)> = Vec::new();
@@ -190,7 +197,13 @@ pub fn read_hubbard_brook_logger(
         columns.push((k, sensor, m));
     }
     while let Some(line) = table.next_row(&policy, &mut report)? {
-        let stamp = table.field(c_time).unwrap_or("");
+        let stamp = match table.text(c_time) {
+            Ok(s) => s,
+            Err(lossy) => {
+                policy.bad(&mut report, line, &names[c_time], &lossy, Problem::NotUtf8)?;
+                continue;
+            }
+        };
         let t = stamp
             .split_once(' ')
             .and_then(|(d, c)| Some(parse_date(d)? + parse_clock(c)?))
@@ -205,9 +218,12 @@ pub fn read_hubbard_brook_logger(
             )?;
             continue;
         };
+        if !policy.check_time(&mut report, (line, &names[c_time]), t, stamp)? {
+            continue;
+        }
         let cells = columns
             .iter()
-            .map(|&(c, sensor, modality)| (c, sensor, modality, Ok(table.field(c).unwrap_or(""))));
+            .map(|&(c, sensor, modality)| (c, sensor, modality, table.text(c)));
         policy.push_values(&mut interner, &mut report, &names, (line, t), cells)?;
     }
     finish(interner, &policy, report, "value")

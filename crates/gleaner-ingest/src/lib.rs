@@ -35,11 +35,12 @@
 
 mod error;
 mod hubbard_brook;
+pub mod limits;
 mod readers;
 mod readings;
 pub mod time;
 
-pub use error::{IngestError, Problem};
+pub use error::{IngestError, Problem, SHOWN_CHARS, number, quoted, shorten};
 pub use hubbard_brook::{
     HUBBARD_BROOK_UTC_OFFSET_S, HubbardBrookMetadata, read_hubbard_brook_logger,
     read_hubbard_brook_sensors,

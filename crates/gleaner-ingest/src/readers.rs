@@ -7,12 +7,27 @@ use gleaner_field::{
     LatLon, LocalPoint, Modality, Sensor, SensorId, TransverseMercator, UnixSeconds,
 };
 
+use crate::limits::{MAX_YEAR, MIN_YEAR, ValueLimits, plausible_time};
 use crate::readings::{Interner, Row, known};
-use crate::time::{parse_clock, parse_date, parse_timestamp, parse_us_date};
+use crate::time::{format_rfc3339, parse_clock, parse_date, parse_timestamp, parse_us_date};
 use crate::{IngestError, IngestOptions, IngestReport, OnError, Problem, Readings, default_unit};
 
-/// Reads the whole file, strips a UTF-8 byte-order mark.
+/// Reads the whole file, strips a UTF-8 byte-order mark. Only regular files are read: a pipe,
+/// FIFO or device is refused before it is opened (opening a FIFO blocks until a writer comes,
+/// and a pipe can be read once only, while detection and parsing read a file twice).
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, IngestError> {
+    let meta = std::fs::metadata(path).map_err(|source| IngestError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    if !meta.is_file() {
+        return Err(IngestError::Options {
+            path: path.to_path_buf(),
+            message: "not a regular file: give the data as a file (pipes, FIFOs and devices \
+                      are not read)"
+                .into(),
+        });
+    }
     let mut bytes = std::fs::read(path).map_err(|source| IngestError::Io {
         path: path.to_path_buf(),
         source,
@@ -96,10 +111,29 @@ impl<'a> Table<'a> {
                 path: path.to_path_buf(),
             });
         }
-        let header = record
+        let header: Vec<String> = record
             .iter()
             .map(|f| String::from_utf8_lossy(f).trim().to_string())
             .collect();
+        for (k, name) in header.iter().enumerate() {
+            if name.is_empty() {
+                continue;
+            }
+            if let Some(first) = header[..k]
+                .iter()
+                .position(|h| h.eq_ignore_ascii_case(name))
+            {
+                return Err(IngestError::Field {
+                    path: path.to_path_buf(),
+                    line: 1,
+                    column: format!("#{}", k + 1),
+                    value: name.clone(),
+                    problem: Problem::DuplicateColumn {
+                        first_column: first + 1,
+                    },
+                });
+            }
+        }
         Ok(Self {
             path: path.to_path_buf(),
             header,
@@ -168,6 +202,14 @@ impl<'a> Table<'a> {
             .map(str::trim)
             .map_err(|_| Problem::NotUtf8)
     }
+
+    /// Field `k` as text, or (when it is not UTF-8) its bytes shown lossily for the error.
+    pub(crate) fn text(&self, k: usize) -> Result<&str, String> {
+        let raw = self.record.get(k).unwrap_or_default();
+        std::str::from_utf8(raw)
+            .map(str::trim)
+            .map_err(|_| String::from_utf8_lossy(raw).into_owned())
+    }
 }
 
 fn csv_error(path: &Path, e: csv::Error) -> IngestError {
@@ -187,11 +229,65 @@ fn csv_error(path: &Path, e: csv::Error) -> IngestError {
 pub(crate) struct Policy<'p> {
     pub(crate) path: &'p Path,
     pub(crate) on_error: OnError,
+    /// Plausible value ranges.
+    pub(crate) limits: &'p ValueLimits,
 }
+
+/// The built-in ranges, for readers without [`IngestOptions`].
+static DEFAULT_LIMITS: ValueLimits = ValueLimits {
+    overrides: std::collections::BTreeMap::new(),
+};
 
 impl<'p> Policy<'p> {
     pub(crate) fn new(path: &'p Path, on_error: OnError) -> Self {
-        Self { path, on_error }
+        Self {
+            path,
+            on_error,
+            limits: &DEFAULT_LIMITS,
+        }
+    }
+
+    /// The policy of a readings reader: its bad-row policy and value limits.
+    pub(crate) fn for_readings(path: &'p Path, options: &'p IngestOptions) -> Self {
+        Self {
+            path,
+            on_error: options.on_error,
+            limits: &options.value_limits,
+        }
+    }
+
+    /// Checks a reading's time and value: `Ok(false)` when the row was skipped.
+    pub(crate) fn check_reading(
+        &self,
+        interner: &mut Interner,
+        report: &mut IngestReport,
+        (line, column): (u64, &str),
+        modality: u32,
+        value: (f64, &str),
+    ) -> Result<bool, IngestError> {
+        match interner.check_value(modality, value.0, self.limits) {
+            Ok(()) => Ok(true),
+            Err(p) => self.bad(report, line, column, value.1, p).map(|()| false),
+        }
+    }
+
+    /// Checks a row's time is plausible: `Ok(false)` when the row was skipped.
+    pub(crate) fn check_time(
+        &self,
+        report: &mut IngestReport,
+        (line, column): (u64, &str),
+        t: UnixSeconds,
+        text: &str,
+    ) -> Result<bool, IngestError> {
+        if plausible_time(t) {
+            return Ok(true);
+        }
+        let problem = Problem::ImplausibleTime {
+            min_year: MIN_YEAR,
+            max_year: MAX_YEAR,
+        };
+        self.bad(report, line, column, text, problem)
+            .map(|()| false)
     }
 
     pub(crate) fn bad(
@@ -227,13 +323,13 @@ impl<'p> Policy<'p> {
         report: &mut IngestReport,
         names: &[String],
         (line, t): (u64, UnixSeconds),
-        cells: impl IntoIterator<Item = (usize, u32, u32, Result<&'a str, Problem>)>,
+        cells: impl IntoIterator<Item = (usize, u32, u32, Result<&'a str, String>)>,
     ) -> Result<(), IngestError> {
         for (c, sensor, modality, text) in cells {
             let text = match text {
                 Ok(text) => text,
-                Err(p) => {
-                    self.bad(report, line, &names[c], "<bytes>", p)?;
+                Err(lossy) => {
+                    self.bad(report, line, &names[c], &lossy, Problem::NotUtf8)?;
                     continue;
                 }
             };
@@ -242,6 +338,14 @@ impl<'p> Policy<'p> {
                 continue;
             }
             match parse_value(text) {
+                Ok(value)
+                    if !self.check_reading(
+                        interner,
+                        report,
+                        (line, &names[c]),
+                        modality,
+                        (value, text),
+                    )? => {}
                 Ok(value) => interner.out.rows.push(Row {
                     sensor,
                     modality,
@@ -311,7 +415,7 @@ pub fn read_long_csv(
     let c_value = table.require(&["value"])?;
     let c_unit = table.find(&["unit"]);
     let names = table.header.clone();
-    let policy = Policy::new(path, options.on_error);
+    let policy = Policy::for_readings(path, options);
     let mut report = IngestReport::default();
     let mut interner = Interner::default();
     // Rows are usually grouped by sensor and modality: cache the last lookups.
@@ -319,10 +423,10 @@ pub fn read_long_csv(
     while let Some(line) = table.next_row(&policy, &mut report)? {
         macro_rules! field {
             ($k:expr) => {
-                match table.field($k) {
+                match table.text($k) {
                     Ok(s) => s,
-                    Err(p) => {
-                        policy.bad(&mut report, line, &names[$k], "<bytes>", p)?;
+                    Err(lossy) => {
+                        policy.bad(&mut report, line, &names[$k], &lossy, Problem::NotUtf8)?;
                         continue;
                     }
                 }
@@ -352,6 +456,9 @@ pub fn read_long_csv(
             )?;
             continue;
         };
+        if !policy.check_time(&mut report, (line, &names[c_time]), t, time_s)? {
+            continue;
+        }
         let mod_s = field!(c_mod);
         let unit_s = match c_unit {
             Some(c) => field!(c),
@@ -397,6 +504,15 @@ pub fn read_long_csv(
                 continue;
             }
         };
+        if !policy.check_reading(
+            &mut interner,
+            &mut report,
+            (line, &names[c_value]),
+            modality,
+            (value, value_s),
+        )? {
+            continue;
+        }
         interner.out.rows.push(Row {
             sensor,
             modality,
@@ -454,7 +570,7 @@ pub fn read_wide_csv(
         ),
     };
     let names = table.header.clone();
-    let policy = Policy::new(path, options.on_error);
+    let policy = Policy::for_readings(path, options);
     let mut report = IngestReport::default();
     let mut interner = Interner::default();
     let unit = wide
@@ -484,7 +600,13 @@ pub fn read_wide_csv(
     }
     while let Some(line) = table.next_row(&policy, &mut report)? {
         let t = if let Some(c) = c_stamp {
-            let s = table.field(c).unwrap_or("");
+            let s = match table.text(c) {
+                Ok(s) => s,
+                Err(lossy) => {
+                    policy.bad(&mut report, line, &names[c], &lossy, Problem::NotUtf8)?;
+                    continue;
+                }
+            };
             match parse_timestamp(s) {
                 Some(t) => t,
                 None => {
@@ -494,14 +616,26 @@ pub fn read_wide_csv(
             }
         } else {
             let cd = c_date.unwrap_or(0);
-            let ds = table.field(cd).unwrap_or("");
+            let ds = match table.text(cd) {
+                Ok(s) => s,
+                Err(lossy) => {
+                    policy.bad(&mut report, line, &names[cd], &lossy, Problem::NotUtf8)?;
+                    continue;
+                }
+            };
             let Some(day) = parse_date(ds) else {
                 policy.bad(&mut report, line, &names[cd], ds, Problem::BadTimestamp)?;
                 continue;
             };
             let secs = match c_clock {
                 Some(cc) => {
-                    let cs = table.field(cc).unwrap_or("");
+                    let cs = match table.text(cc) {
+                        Ok(s) => s,
+                        Err(lossy) => {
+                            policy.bad(&mut report, line, &names[cc], &lossy, Problem::NotUtf8)?;
+                            continue;
+                        }
+                    };
                     match parse_clock(cs) {
                         Some(s) => s,
                         None => {
@@ -514,9 +648,13 @@ pub fn read_wide_csv(
             };
             day + secs - wide.utc_offset_s
         };
+        let time_column = &names[c_stamp.or(c_date).unwrap_or(0)];
+        if !policy.check_time(&mut report, (line, time_column), t, &format_rfc3339(t))? {
+            continue;
+        }
         let cells = columns
             .iter()
-            .map(|&(c, sensor)| (c, sensor, modality, table.field(c)));
+            .map(|&(c, sensor)| (c, sensor, modality, table.text(c)));
         policy.push_values(&mut interner, &mut report, &names, (line, t), cells)?;
     }
     finish(interner, &policy, report, wide.modality.as_str())
@@ -542,7 +680,7 @@ pub fn read_caf_daily(
     let c_loc = table.require(&["Location"])?;
     let c_date = table.require(&["Date"])?;
     let names = table.header.clone();
-    let policy = Policy::new(path, options.on_error);
+    let policy = Policy::for_readings(path, options);
     let mut report = IngestReport::default();
     let mut interner = Interner::default();
     let mut columns: Vec<(usize, u32)> = Vec::new();
@@ -569,7 +707,13 @@ pub fn read_caf_daily(
         columns.push((k, id));
     }
     while let Some(line) = table.next_row(&policy, &mut report)? {
-        let loc = table.field(c_loc).unwrap_or("");
+        let loc = match table.text(c_loc) {
+            Ok(s) => s,
+            Err(lossy) => {
+                policy.bad(&mut report, line, &names[c_loc], &lossy, Problem::NotUtf8)?;
+                continue;
+            }
+        };
         let sensor = match interner.known_sensor(loc, options) {
             Ok(k) => k,
             Err(p) => {
@@ -577,14 +721,23 @@ pub fn read_caf_daily(
                 continue;
             }
         };
-        let ds = table.field(c_date).unwrap_or("");
+        let ds = match table.text(c_date) {
+            Ok(s) => s,
+            Err(lossy) => {
+                policy.bad(&mut report, line, &names[c_date], &lossy, Problem::NotUtf8)?;
+                continue;
+            }
+        };
         let Some(t) = parse_us_date(ds) else {
             policy.bad(&mut report, line, &names[c_date], ds, Problem::BadTimestamp)?;
             continue;
         };
+        if !policy.check_time(&mut report, (line, &names[c_date]), t, ds)? {
+            continue;
+        }
         let cells = columns
             .iter()
-            .map(|&(c, modality)| (c, sensor, modality, Ok(table.field(c).unwrap_or(""))));
+            .map(|&(c, modality)| (c, sensor, modality, table.text(c)));
         policy.push_values(&mut interner, &mut report, &names, (line, t), cells)?;
     }
     finish(interner, &policy, report, "value")
@@ -654,7 +807,13 @@ pub fn read_sensors_csv(
     let mut out: Vec<SensorInput> = Vec::new();
     let mut seen: HashMap<String, u64> = HashMap::new();
     while let Some(line) = table.next_row(&policy, &mut report)? {
-        let id_s = table.field(c_id).unwrap_or("");
+        let id_s = match table.text(c_id) {
+            Ok(s) => s,
+            Err(lossy) => {
+                policy.bad(&mut report, line, &names[c_id], &lossy, Problem::NotUtf8)?;
+                continue;
+            }
+        };
         let Ok(id) = SensorId::new(id_s) else {
             policy.bad(&mut report, line, &names[c_id], id_s, Problem::BadSensorId)?;
             continue;
@@ -682,8 +841,8 @@ pub fn read_sensors_csv(
             continue;
         };
         let position = match &utm {
-            Some(tm) => Ok(tm.inverse(LocalPoint::new(x, y))),
-            None => LatLon::new(x, y),
+            Some(tm) => utm_position(tm, x, y),
+            None => LatLon::new(x, y).map_err(|_| ()),
         };
         let Ok(position) = position else {
             let v = format!("{x}, {y}");
@@ -703,7 +862,15 @@ pub fn read_sensors_csv(
                     None
                 } else {
                     match parse_value(s) {
-                        Ok(v) => Some(v),
+                        Ok(v) if (MIN_ELEVATION_M..=MAX_ELEVATION_M).contains(&v) => Some(v),
+                        Ok(_) => {
+                            let problem = Problem::Elevation {
+                                min: MIN_ELEVATION_M,
+                                max: MAX_ELEVATION_M,
+                            };
+                            policy.bad(&mut report, line, &names[c], s, problem)?;
+                            continue;
+                        }
                         Err(p) => {
                             policy.bad(&mut report, line, &names[c], s, p)?;
                             continue;
@@ -725,6 +892,28 @@ pub fn read_sensors_csv(
     }
     report.readings = out.len() as u64;
     Ok((out, report))
+}
+
+/// Lowest plausible sensor elevation, metres (the Dead Sea shore is at −430 m).
+const MIN_ELEVATION_M: f64 = -500.0;
+/// Highest plausible sensor elevation, metres.
+const MAX_ELEVATION_M: f64 = 9_000.0;
+
+/// A UTM easting/northing (metres) as WGS84, refused unless the easting is within 0..=1e6 m
+/// and the northing within 0..=1e7 m (the grid's own ranges, false origins included) and the
+/// position maps back to itself within 1 m: an easting of 1e12 m gives NaN degrees.
+fn utm_position(tm: &TransverseMercator, x: f64, y: f64) -> Result<LatLon, ()> {
+    if !((0.0..=1e6).contains(&x) && (0.0..=1e7).contains(&y)) {
+        return Err(());
+    }
+    let p = tm.inverse(LocalPoint::new(x, y));
+    let p = LatLon::new(p.lat(), p.lon()).map_err(|_| ())?;
+    let back = tm.forward(p);
+    if (back.e - x).hypot(back.n - y) <= 1.0 {
+        Ok(p)
+    } else {
+        Err(())
+    }
 }
 
 #[cfg(test)]

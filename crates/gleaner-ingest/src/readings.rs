@@ -24,6 +24,9 @@ pub struct IngestOptions {
     /// Sensors the project knows; a reading for any other sensor is a bad row. `None` accepts
     /// every sensor id.
     pub known_sensors: Option<HashSet<String>>,
+    /// Plausible value ranges (defaults by unit, see [`crate::limits::default_range`]); a
+    /// value outside its modality's range is a bad row.
+    pub value_limits: crate::limits::ValueLimits,
 }
 
 /// A modality with the unit the file gave for it, if any.
@@ -131,6 +134,9 @@ pub(crate) struct Interner {
     /// sensor, so this skips the hash lookup.
     last: Option<(Box<str>, u32)>,
     modalities: HashMap<Modality, u32>,
+    /// Per modality index: its plausible value range and what the range is for, computed on
+    /// first use (reset when the modality's unit becomes known).
+    ranges: Vec<Option<(f64, f64, String)>>,
     pub(crate) out: Readings,
 }
 
@@ -172,7 +178,12 @@ impl Interner {
             let info = &mut self.out.modalities[k as usize];
             match (&info.unit, unit) {
                 (Some(a), Some(b)) if a != b => return Err(a.clone()),
-                (None, Some(b)) => info.unit = Some(b.to_string()),
+                (None, Some(b)) => {
+                    info.unit = Some(b.to_string());
+                    if let Some(r) = self.ranges.get_mut(k as usize) {
+                        *r = None;
+                    }
+                }
                 _ => {}
             }
             return Ok(k);
@@ -184,6 +195,28 @@ impl Interner {
         });
         self.modalities.insert(m, k);
         Ok(k)
+    }
+
+    /// Checks a value of modality `k` against its plausible range.
+    pub(crate) fn check_value(
+        &mut self,
+        k: u32,
+        value: f64,
+        limits: &crate::limits::ValueLimits,
+    ) -> Result<(), Problem> {
+        let i = k as usize;
+        if self.ranges.len() <= i {
+            self.ranges.resize(i + 1, None);
+        }
+        let (lo, hi, _) = self.ranges[i].get_or_insert_with(|| {
+            let info = &self.out.modalities[i];
+            limits.range(info.modality.quantity(), info.unit.as_deref())
+        });
+        if (*lo..=*hi).contains(&value) {
+            return Ok(());
+        }
+        let (min, max, unit) = self.ranges[i].clone().unwrap_or_default();
+        Err(Problem::OutOfRange { unit, min, max })
     }
 }
 

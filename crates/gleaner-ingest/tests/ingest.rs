@@ -25,6 +25,7 @@ fn known(ids: &[&str]) -> IngestOptions {
     IngestOptions {
         on_error: OnError::Fail,
         known_sensors: Some(ids.iter().map(|s| s.to_string()).collect::<HashSet<_>>()),
+        ..IngestOptions::default()
     }
 }
 
@@ -242,6 +243,7 @@ fn all_caf_daily_files_ingest() {
     let opts = IngestOptions {
         on_error: OnError::Fail,
         known_sensors: Some(sensors.iter().map(|s| s.sensor.id.to_string()).collect()),
+        ..IngestOptions::default()
     };
     let mut files: Vec<_> = std::fs::read_dir(shared_data().join("caf/Daily"))
         .unwrap()
@@ -283,6 +285,7 @@ fn caf_hourly_wide_file_ingests() {
     let opts = IngestOptions {
         on_error: OnError::Fail,
         known_sensors: Some(sensors.iter().map(|s| s.sensor.id.to_string()).collect()),
+        ..IngestOptions::default()
     };
     let path = shared_data().join("caf/derived/water_content_2015_Jan_April_32_sensors.csv");
     let wide = WideOptions::new(Modality::new("vw@30cm").unwrap());
@@ -314,6 +317,7 @@ fn hubbard_brook_network_ingests() {
     let opts = IngestOptions {
         on_error: OnError::Fail,
         known_sensors: Some(sensors.iter().map(|s| s.sensor.id.to_string()).collect()),
+        ..IngestOptions::default()
     };
     let (r, report) =
         read_hubbard_brook_logger(&dir.join("z6-19506.csv"), &metadata, &opts).unwrap();
@@ -375,5 +379,73 @@ fn crlf_files_report_the_right_line() {
         let mut lines: Vec<u32> = readings.rows.iter().map(|r| r.line).collect();
         lines.sort_unstable();
         assert_eq!(lines, vec![2, 3, 5], "{name}");
+    }
+}
+
+mod arbitrary_bytes {
+    //! Every reader on arbitrary bytes, and on valid files with random bytes spliced in:
+    //! an error or a result, never a panic (the long runs are `gleaner-fuzz`).
+    use super::*;
+    use gleaner_field::Modality;
+    use gleaner_ingest::{
+        HubbardBrookMetadata, SensorsOptions, WideOptions, read_caf_daily,
+        read_hubbard_brook_logger, read_hubbard_brook_sensors, read_long_csv, read_sensors_csv,
+        read_wide_csv,
+    };
+    use proptest::prelude::*;
+
+    fn every_reader(bytes: &[u8]) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("z9-1.csv");
+        std::fs::write(&path, bytes).unwrap();
+        let meta = dir.path().join("meta.csv");
+        std::fs::write(
+            &meta,
+            "logger,port,lat,lon,depth_cm\nz9-1,1,43.9,-71.7,15\nz9-1,2,43.9,-71.7,50\n",
+        )
+        .unwrap();
+        let skip = IngestOptions {
+            on_error: OnError::Skip,
+            ..IngestOptions::default()
+        };
+        for options in [&IngestOptions::default(), &skip] {
+            let _ = read_long_csv(&path, options);
+            let _ = read_caf_daily(&path, options);
+            let wide = WideOptions::new(Modality::new("vw@30cm").unwrap());
+            let _ = read_wide_csv(&path, &wide, options);
+            let metadata = HubbardBrookMetadata::read(&meta).unwrap();
+            let _ = read_hubbard_brook_logger(&path, &metadata, options);
+        }
+        let _ = read_sensors_csv(&path, &SensorsOptions::default());
+        let utm = SensorsOptions {
+            utm: Some((11, true)),
+            on_error: OnError::Skip,
+        };
+        let _ = read_sensors_csv(&path, &utm);
+        let _ = HubbardBrookMetadata::read(&path);
+        let _ = read_hubbard_brook_sensors(&path);
+    }
+
+    const VALID: &[u8] = b"sensor_id,timestamp,modality,value,unit\n\
+        n1,2014-01-01,vw@30cm,0.25,m3/m3\nn1,2014-01-02T06:00:00+02:00,t@30cm,3.2,degC\n";
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        #[test]
+        fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..600)) {
+            every_reader(&bytes);
+        }
+
+        #[test]
+        fn spliced_bytes_never_panic(
+            at in 0..VALID.len(),
+            junk in prop::collection::vec(
+                prop::sample::select(b",\t\n\r\"\0\xff9e-.@:NaTZ+".to_vec()), 1..40),
+        ) {
+            let mut bytes = VALID.to_vec();
+            bytes.splice(at..at, junk);
+            every_reader(&bytes);
+        }
     }
 }

@@ -1291,3 +1291,27 @@ pub fn stored_readings_match_a_naive_model<S: Store>(store: &mut S) {
         .unwrap();
     assert_eq!(rows_of(&got), part);
 }
+
+/// The PostgreSQL server the tests use: `GLEANER_TEST_PG_URL` (`scripts/test.sh` starts a
+/// throwaway cluster and sets it; `scripts/pg-cluster.sh` does it by hand).
+///
+/// # Panics
+/// When the variable is not set: a PostgreSQL test fails rather than skips without a server.
+pub fn pg_test_url() -> String {
+    std::env::var("GLEANER_TEST_PG_URL").unwrap_or_else(|_| {
+        panic!(
+            "GLEANER_TEST_PG_URL is not set: the PostgreSQL tests need a server. Run \
+             scripts/test.sh (which starts one), or `d=$(scripts/pg-cluster.sh start) && \
+             eval \"$(scripts/pg-cluster.sh env $d)\"` first"
+        )
+    })
+}
+
+/// A project (schema) name no other test uses: `t_<tag>_<pid>_<n>`, for tests that run in
+/// parallel against one server. `tag` must be lower-case letters, digits or `_`.
+pub fn pg_fresh_project(tag: &str) -> String {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    let n = NEXT.fetch_add(1, Ordering::Relaxed);
+    format!("t_{tag}_{}_{n}", std::process::id())
+}

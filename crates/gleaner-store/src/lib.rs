@@ -104,18 +104,27 @@
 //! foreign-key lookups cost about 40% of bulk-insert CPU time.
 #![deny(missing_docs)]
 
+mod checks;
 #[cfg(any(test, feature = "conformance"))]
 pub mod conformance;
 mod error;
+pub mod failpoint;
+mod postgres;
 mod schema;
 mod sqlite;
 mod store;
 mod types;
 
 #[cfg(test)]
+mod pg_tests;
+#[cfg(test)]
 mod tests;
 
 pub use error::{Result, StoreError};
+pub use postgres::{
+    LOCK_TIMEOUT as PG_LOCK_TIMEOUT, PgStore, PgTx, is_postgres_url, redact, split_project,
+    valid_project_name,
+};
 pub use sqlite::{SqliteStore, SqliteTx};
 pub use store::{Store, StoreRead, StoreWrite};
 pub use types::{

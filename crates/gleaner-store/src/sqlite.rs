@@ -9,6 +9,7 @@
 //! page to the sub-journal and walk that journal at the end of every statement, which made a
 //! second year of readings 76 times slower than the first (see `BENCHMARKS.md`).
 
+mod dump;
 mod read;
 mod write;
 
@@ -155,6 +156,7 @@ impl SqliteTx<'_> {
 
     /// Runs the writes `f` in a savepoint: all of them or, on error, none.
     fn atomically<T>(&mut self, f: impl FnOnce(&Connection) -> Result<T>) -> Result<T> {
+        crate::failpoint::step();
         let sp = self.tx.savepoint().db()?;
         let out = f(&sp)?;
         sp.commit().db()?;
@@ -301,7 +303,9 @@ impl Store for SqliteStore {
         let mut tx = SqliteTx { tx };
         // On an error (or a panic) `tx` is dropped unfinished, which rolls it back.
         let out = f(&mut tx)?;
+        crate::failpoint::step();
         tx.tx.commit().db()?;
+        crate::failpoint::committed();
         Ok(out)
     }
 }

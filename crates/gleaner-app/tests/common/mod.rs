@@ -5,6 +5,10 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 /// The shared data directory (`GLEANER_DATA_DIR`, default `../shared/data`).
+/// The wall clock the tests' ingests run at (2020-01-01T00:00:00Z): after every reading they
+/// ingest, since an ingest refuses readings dated after its clock.
+pub const INGEST_CLOCK: i64 = 1_577_836_800;
+
 pub fn shared_data() -> PathBuf {
     std::env::var_os("GLEANER_DATA_DIR")
         .map(PathBuf::from)

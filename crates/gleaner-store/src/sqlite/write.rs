@@ -8,58 +8,21 @@ use rusqlite::{Connection, OptionalExtension, params};
 
 use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
+use crate::checks::{
+    as_i64, check_cells, check_modality_list, check_sensor_list, check_visits, keys, plan_insert,
+    validate_metadata, validate_mission,
+};
 use crate::{
-    CellMetadata, CellRecord, Conflict, ConflictPolicy, IngestRecord, InsertStats, MissionId,
-    MissionStatus, ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result,
-    SensorRecord, StoreError, UpsertStats, VisitRecord,
+    CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionStatus,
+    ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result, SensorRecord, StoreError,
+    UpsertStats, VisitRecord,
 };
 
 /// Rows per multi-row `INSERT` statement in [`insert_readings`] (4 parameters each).
 const CHUNK: usize = 128;
 
-/// Relative tolerance under which two reading values are the same reading.
-const SAME_VALUE_RTOL: f64 = 1e-12;
-
-fn same_value(a: f64, b: f64) -> bool {
-    a == b || (a - b).abs() <= SAME_VALUE_RTOL * a.abs().max(b.abs())
-}
-
-/// [`StoreError::Invalid`].
-fn invalid(what: &'static str, detail: String) -> StoreError {
-    StoreError::Invalid { what, detail }
-}
-
-fn finite(what: &'static str, name: &str, v: f64) -> Result<()> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(invalid(what, format!("{name} = {v} is not finite")))
-    }
-}
-
-/// A count stored as SQLite's signed integer (saturating; no real count reaches 2^63).
-fn as_i64(v: u64) -> i64 {
-    i64::try_from(v).unwrap_or(i64::MAX)
-}
-
 pub(super) fn upsert_sensors(c: &Connection, sensors: &[SensorRecord]) -> Result<UpsertStats> {
-    let mut seen: HashMap<&str, &SensorRecord> = HashMap::new();
-    for s in sensors {
-        if let Some(e) = s.elevation_m {
-            finite("sensor elevation", s.id.as_str(), e)?;
-        }
-        if let Some(prev) = seen.insert(s.id.as_str(), s)
-            && prev != s
-        {
-            return Err(invalid(
-                "sensor list",
-                format!(
-                    "sensor {:?} listed twice with different content",
-                    s.id.as_str()
-                ),
-            ));
-        }
-    }
+    check_sensor_list(sensors)?;
     let mut stats = UpsertStats::default();
     let mut get = c
         .prepare_cached("SELECT lat, lon, elevation_m, source FROM sensors WHERE name = ?1")
@@ -118,22 +81,7 @@ pub(super) fn upsert_modalities(
     c: &Connection,
     modalities: &[ModalityRecord],
 ) -> Result<UpsertStats> {
-    let mut seen: HashMap<&str, &ModalityRecord> = HashMap::new();
-    for m in modalities {
-        if let Some(prev) = seen.insert(m.modality.as_str(), m)
-            && prev != m
-        {
-            return Err(invalid(
-                "modality list",
-                format!(
-                    "modality {:?} listed twice with units {:?} and {:?}",
-                    m.modality.as_str(),
-                    prev.unit,
-                    m.unit
-                ),
-            ));
-        }
-    }
+    check_modality_list(modalities)?;
     let mut stats = UpsertStats::default();
     let mut get = c
         .prepare_cached("SELECT unit FROM modalities WHERE name = ?1")
@@ -175,19 +123,6 @@ pub(super) fn upsert_modalities(
     Ok(stats)
 }
 
-/// The stored key of each of `names`, or `unknown` of the first one not stored.
-fn keys<T>(
-    names: &[T],
-    known: &HashMap<String, i64>,
-    name: impl Fn(&T) -> &str,
-    unknown: impl Fn(&T) -> StoreError,
-) -> Result<Vec<i64>> {
-    names
-        .iter()
-        .map(|n| known.get(name(n)).copied().ok_or_else(|| unknown(n)))
-        .collect()
-}
-
 pub(super) fn insert_readings(
     c: &Connection,
     batch: &ReadingBatch,
@@ -205,110 +140,25 @@ pub(super) fn insert_readings(
         Modality::as_str,
         |m| StoreError::UnknownModality(m.clone()),
     )?;
-    for (row, r) in batch.rows.iter().enumerate() {
-        let bad = |what, index, len| StoreError::BadIndex {
-            row,
-            what,
-            index,
-            len,
-        };
-        let s = batch
-            .sensors
-            .get(r.sensor as usize)
-            .ok_or_else(|| bad("sensor", r.sensor, batch.sensors.len()))?;
-        let m = batch
-            .modalities
-            .get(r.modality as usize)
-            .ok_or_else(|| bad("modality", r.modality, batch.modalities.len()))?;
-        if !r.value.is_finite() {
-            return Err(StoreError::NonFiniteValue {
-                sensor: s.clone(),
-                modality: m.clone(),
-                t: r.t,
-                value: r.value,
-            });
-        }
-    }
-    // Key order: the stored readings of a (sensor, modality) are one primary-key range, and
-    // the new rows go into the B-tree in order. The row's position breaks ties, so duplicates
-    // within the batch keep their order and the first one wins.
-    let mut order: Vec<(i64, i64, i64, usize)> = batch
-        .rows
-        .iter()
-        .enumerate()
-        .map(|(k, r)| {
-            (
-                sensor_keys[r.sensor as usize],
-                modality_keys[r.modality as usize],
-                r.t,
-                k,
-            )
-        })
-        .collect();
-    order.sort_unstable();
-
-    // Classify every row before writing anything: new, unchanged, or conflicting (with a
-    // stored reading, or with an earlier row of the batch). One primary-key range scan per
-    // (sensor, modality) run of the batch, over the run's time span only. Nothing is written
-    // before the classification is complete, so a refused batch leaves no trace without the
-    // cost of a savepoint (see `SqliteTx::insert_readings`).
-    let mut stats = InsertStats::default();
-    let mut fresh = vec![false; order.len()];
     let mut stored_in_range = c
         .prepare_cached(
             "SELECT t, value FROM readings
              WHERE sensor = ?1 AND modality = ?2 AND t BETWEEN ?3 AND ?4 ORDER BY t",
         )
         .db()?;
-    let mut stored: Vec<(i64, f64)> = Vec::new();
-    let mut start = 0;
-    while let Some(&(s, m, t_first, _)) = order.get(start) {
-        let run = order[start..]
-            .iter()
-            .take_while(|o| o.0 == s && o.1 == m)
-            .count();
-        let t_last = order[start + run - 1].2;
-        stored.clear();
-        let mut q = stored_in_range.query(params![s, m, t_first, t_last]).db()?;
-        while let Some(row) = q.next().db()? {
-            stored.push((row.get(0).db()?, row.get(1).db()?));
-        }
-        let mut k = 0; // into `stored`
-        let mut first_of_t: Option<(i64, f64)> = None; // the first batch row at its t
-        for (offset, &(_, _, t, row)) in order[start..start + run].iter().enumerate() {
-            let value = batch.rows[row].value;
-            while k < stored.len() && stored[k].0 < t {
-                k += 1;
+    let (order, fresh, stats) = plan_insert(
+        batch,
+        &sensor_keys,
+        &modality_keys,
+        policy,
+        |s, m, t_first, t_last, stored| {
+            let mut q = stored_in_range.query(params![s, m, t_first, t_last]).db()?;
+            while let Some(row) = q.next().db()? {
+                stored.push((row.get(0).db()?, row.get(1).db()?));
             }
-            let existing = match (stored.get(k), first_of_t) {
-                (Some(&(ts, v)), _) if ts == t => Some(v),
-                (_, Some((tb, v))) if tb == t => Some(v),
-                _ => None,
-            };
-            match existing {
-                None => {
-                    fresh[start + offset] = true;
-                    stats.inserted += 1;
-                    first_of_t = Some((t, value));
-                }
-                Some(v) if same_value(v, value) => stats.unchanged += 1,
-                Some(v) => {
-                    let r = &batch.rows[row];
-                    stats.conflicts.push(Conflict {
-                        sensor: batch.sensors[r.sensor as usize].clone(),
-                        modality: batch.modalities[r.modality as usize].clone(),
-                        t,
-                        stored: v,
-                        incoming: value,
-                    });
-                }
-            }
-        }
-        start += run;
-    }
-    if policy == ConflictPolicy::Fail && !stats.conflicts.is_empty() {
-        return Err(StoreError::Conflicts(stats.conflicts));
-    }
+            Ok(())
+        },
+    )?;
 
     // Insert the new rows in key order, many per statement.
     let many_sql = format!(
@@ -334,6 +184,7 @@ pub(super) fn insert_readings(
                     .db()?;
             }
             many.raw_execute().db()?;
+            crate::failpoint::step();
         } else {
             for &&(s, m, t, row) in chunk {
                 one.execute(params![s, m, t, batch.rows[row].value]).db()?;
@@ -363,36 +214,7 @@ pub(super) fn record_ingest(c: &Connection, ingest: &IngestRecord) -> Result<i64
 }
 
 pub(super) fn replace_cells(c: &Connection, cells: &[CellRecord]) -> Result<ReplaceCellsStats> {
-    // Validate: unique labels, positive sides, known sensors, each sensor in one cell.
-    let mut labels = HashSet::new();
-    let mut owner: HashMap<&str, CellIndex> = HashMap::new();
-    for cell in cells {
-        if !labels.insert(cell.index) {
-            return Err(invalid(
-                "cell list",
-                format!("cell {} listed twice", cell.index),
-            ));
-        }
-        if !(cell.cell_size_m.is_finite() && cell.cell_size_m > 0.0) {
-            return Err(invalid(
-                "cell size",
-                format!(
-                    "cell {}: {} m must be positive",
-                    cell.index, cell.cell_size_m
-                ),
-            ));
-        }
-        for s in &cell.sensors {
-            if let Some(other) = owner.insert(s.as_str(), cell.index)
-                && other != cell.index
-            {
-                return Err(invalid(
-                    "cell list",
-                    format!("sensor {s} is in cells {other} and {}", cell.index),
-                ));
-            }
-        }
-    }
+    check_cells(cells)?;
     let stored = super::read::cells(c)?;
     let sensor_keys = sensor_ids(c)?;
     let mut stats = ReplaceCellsStats::default();
@@ -473,59 +295,6 @@ pub(super) fn set_sensors_collected(
             .get(s.as_str())
             .ok_or_else(|| StoreError::UnknownSensor(s.clone()))?;
         stmt.execute(params![key, t]).db()?;
-    }
-    Ok(())
-}
-
-/// Checks every number and the stop order of a mission before anything is written.
-fn validate_mission(m: &NewMission) -> Result<()> {
-    let e = &m.energy;
-    let p = &m.profile;
-    let w = m.weights;
-    for (name, v) in [
-        ("weight alpha", w[0]),
-        ("weight beta", w[1]),
-        ("weight gamma", w[2]),
-        ("weight delta", w[3]),
-        ("total_score", m.total_score),
-        ("base_alt_m", p.base_alt_m),
-        ("altitude_m", p.altitude_m),
-        ("cruise_speed_mps", p.cruise_speed_mps),
-        ("travel_j", e.travel_j),
-        ("hover_j", e.hover_j),
-        ("comm_j", e.comm_j),
-        ("return_j", e.return_j),
-        ("total_j", e.total_j),
-        ("budget_j", e.budget_j),
-        ("distance_m", e.distance_m),
-        ("flight_time_s", e.flight_time_s),
-        ("return_distance_m", m.return_distance_m),
-    ] {
-        finite("mission", name, v)?;
-    }
-    let mut orders = HashSet::new();
-    for s in &m.stops {
-        if !orders.insert(s.order) {
-            return Err(invalid(
-                "mission stops",
-                format!("stop order {} used twice", s.order),
-            ));
-        }
-        let cell = s.cell.to_string();
-        for (name, v) in [
-            ("score", s.score),
-            ("leg_distance_m", s.leg_distance_m),
-            ("leg_energy_j", s.leg_energy_j),
-            ("collection_s", s.collection_s),
-            ("hover_s", s.hover_s),
-            ("hover_j", s.hover_j),
-            ("comm_j", s.comm_j),
-        ] {
-            finite("mission stop", &format!("{cell} {name}"), v)?;
-        }
-        for (name, v) in ["F", "R", "A", "U"].iter().zip(s.terms.unwrap_or([0.0; 4])) {
-            finite("mission stop", &format!("{cell} {name}"), v)?;
-        }
     }
     Ok(())
 }
@@ -614,18 +383,7 @@ pub(super) fn record_visits(
     flown_at: UnixSeconds,
     amend: bool,
 ) -> Result<()> {
-    let mut orders = HashSet::new();
-    for v in visits {
-        if !orders.insert(v.order) {
-            return Err(invalid(
-                "visit list",
-                format!("visit order {} used twice in mission {mission}", v.order),
-            ));
-        }
-        if let Some(e) = v.energy_j {
-            finite("visit energy", &v.cell.to_string(), e)?;
-        }
-    }
+    check_visits(mission, visits)?;
     let stored: Option<(String, Option<i64>)> = c
         .query_row(
             "SELECT status, flown_at FROM missions WHERE id = ?1",
@@ -696,80 +454,6 @@ pub(super) fn blob_put(c: &Connection, key: &str, value: &[u8]) -> Result<()> {
 pub(super) fn upsert_cell_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
     validate_metadata(metadata)?;
     write_metadata(c, metadata)
-}
-/// Checks every number in `metadata` before anything is written.
-fn validate_metadata(metadata: &[CellMetadata]) -> Result<()> {
-    let mut cells = HashSet::new();
-    for md in metadata {
-        let cell = md.cell.to_string();
-        if !cells.insert(md.cell) {
-            return Err(invalid(
-                "cell metadata",
-                format!("cell {cell} listed twice"),
-            ));
-        }
-        for (name, v) in [
-            ("pending_bytes", md.pending_bytes),
-            ("expected_energy_j", md.expected_energy_j),
-        ] {
-            if let Some(v) = v {
-                finite("cell metadata", &format!("{cell} {name}"), v)?;
-            }
-        }
-        if let Some(s) = &md.scores {
-            for (name, v) in [
-                ("F", s.freshness),
-                ("R", s.redundancy),
-                ("A", s.anomaly),
-                ("U", s.uncertainty),
-                ("S", s.score),
-            ] {
-                finite("cell scores", &format!("{cell} {name}"), v)?;
-            }
-        }
-        for p in &md.class_probabilities {
-            if !(0.0..=1.0).contains(&p.probability) {
-                return Err(invalid(
-                    "class probability",
-                    format!(
-                        "cell {cell} class {:?}: {} not in [0, 1]",
-                        p.class, p.probability
-                    ),
-                ));
-            }
-        }
-        for c in &md.correlations {
-            if !(-1.0..=1.0).contains(&c.correlation) {
-                return Err(invalid(
-                    "correlation",
-                    format!(
-                        "cell {cell} neighbour {} {}: {} not in [-1, 1]",
-                        c.neighbour, c.modality, c.correlation
-                    ),
-                ));
-            }
-        }
-        for a in &md.anomalies {
-            finite(
-                "anomaly",
-                &format!("{cell} {} t={}", a.modality, a.t),
-                a.anomaly,
-            )?;
-        }
-        for s in &md.summaries {
-            let st = &s.stats;
-            for (name, v) in [
-                ("mean", st.mean),
-                ("min", st.min),
-                ("max", st.max),
-                ("latest", st.latest_value),
-                ("std", st.std.unwrap_or(0.0)),
-            ] {
-                finite("summary", &format!("{cell} {} {name}", s.modality), v)?;
-            }
-        }
-    }
-    Ok(())
 }
 
 /// Writes validated metadata.

@@ -1,0 +1,626 @@
+//! The writes of [`super::PgTx`], each run by it inside a savepoint: a function that returns
+//! an error leaves the transaction as it found it. Arguments are checked with the same
+//! functions as SQLite's (`crate::checks`) before the first statement.
+
+use std::collections::{HashMap, HashSet};
+use std::io::Write;
+
+use gleaner_field::{CellIndex, Modality, SensorId, UnixSeconds};
+use postgres::Transaction;
+
+use super::Db;
+use super::read::{cell_ids, modality_ids, sensor_ids};
+use crate::checks::{
+    as_i64, check_cells, check_modality_list, check_sensor_list, check_visits, keys, plan_insert,
+    validate_metadata, validate_mission,
+};
+use crate::{
+    CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionStatus,
+    ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result, SensorRecord, StoreError,
+    UpsertStats, VisitRecord,
+};
+
+/// Rows per block of the binary `COPY` stream in [`insert_readings`] (one failpoint step
+/// each).
+const COPY_BLOCK: usize = 8192;
+
+pub(super) fn upsert_sensors(
+    c: &mut Transaction<'_>,
+    sensors: &[SensorRecord],
+) -> Result<UpsertStats> {
+    check_sensor_list(sensors)?;
+    let mut stats = UpsertStats::default();
+    let stored: HashMap<String, (f64, f64, Option<f64>, String)> = c
+        .query(
+            "SELECT name, lat, lon, elevation_m, source FROM sensors",
+            &[],
+        )
+        .db()?
+        .iter()
+        .map(|r| (r.get(0), (r.get(1), r.get(2), r.get(3), r.get(4))))
+        .collect();
+    let insert = c
+        .prepare(
+            "INSERT INTO sensors (name, lat, lon, elevation_m, source) VALUES ($1, $2, $3, $4, $5)",
+        )
+        .db()?;
+    let update = c
+        .prepare(
+            "UPDATE sensors SET lat = $2, lon = $3, elevation_m = $4, source = $5 WHERE name = $1",
+        )
+        .db()?;
+    let mut done = HashSet::new();
+    for s in sensors {
+        if !done.insert(s.id.as_str()) {
+            continue;
+        }
+        let (lat, lon) = (s.position.lat(), s.position.lon());
+        let p: [&(dyn postgres::types::ToSql + Sync); 5] =
+            [&s.id.as_str(), &lat, &lon, &s.elevation_m, &s.source];
+        match stored.get(s.id.as_str()) {
+            None => {
+                c.execute(&insert, &p).db()?;
+                stats.added.push(s.id.to_string());
+            }
+            Some((slat, slon, elev, source))
+                if *slat == lat
+                    && *slon == lon
+                    && *elev == s.elevation_m
+                    && *source == s.source =>
+            {
+                stats.unchanged += 1;
+            }
+            Some(_) => {
+                c.execute(&update, &p).db()?;
+                stats.updated.push(s.id.to_string());
+            }
+        }
+    }
+    Ok(stats)
+}
+
+pub(super) fn upsert_modalities(
+    c: &mut Transaction<'_>,
+    modalities: &[ModalityRecord],
+) -> Result<UpsertStats> {
+    check_modality_list(modalities)?;
+    let mut stats = UpsertStats::default();
+    let stored: HashMap<String, Option<String>> = c
+        .query("SELECT name, unit FROM modalities", &[])
+        .db()?
+        .iter()
+        .map(|r| (r.get(0), r.get(1)))
+        .collect();
+    let mut done = HashSet::new();
+    for m in modalities {
+        let name = m.modality.as_str();
+        if !done.insert(name) {
+            continue;
+        }
+        match (stored.get(name), &m.unit) {
+            (None, _) => {
+                c.execute(
+                    "INSERT INTO modalities (name, unit) VALUES ($1, $2)",
+                    &[&name, &m.unit],
+                )
+                .db()?;
+                stats.added.push(name.to_string());
+            }
+            // A unit for a modality stored without one is recorded.
+            (Some(None), Some(unit)) => {
+                c.execute(
+                    "UPDATE modalities SET unit = $2 WHERE name = $1",
+                    &[&name, unit],
+                )
+                .db()?;
+                stats.updated.push(name.to_string());
+            }
+            (Some(Some(stored)), Some(incoming)) if stored != incoming => {
+                return Err(StoreError::UnitMismatch {
+                    modality: m.modality.clone(),
+                    stored: stored.clone(),
+                    incoming: incoming.clone(),
+                });
+            }
+            // Same unit, or no unit offered: the stored one stays.
+            (Some(_), _) => stats.unchanged += 1,
+        }
+    }
+    Ok(stats)
+}
+
+pub(super) fn insert_readings(
+    c: &mut Transaction<'_>,
+    batch: &ReadingBatch,
+    policy: ConflictPolicy,
+) -> Result<InsertStats> {
+    let known_sensors = sensor_ids(c)?;
+    let known_modalities = modality_ids(c)?;
+    let sensor_keys = keys(&batch.sensors, &known_sensors, SensorId::as_str, |s| {
+        StoreError::UnknownSensor(s.clone())
+    })?;
+    let modality_keys = keys(
+        &batch.modalities,
+        &known_modalities,
+        Modality::as_str,
+        |m| StoreError::UnknownModality(m.clone()),
+    )?;
+    if batch.rows.is_empty() {
+        return Ok(InsertStats::default());
+    }
+    // The stored readings the batch could meet: one index range per (sensor, modality) run,
+    // fetched in one query over the runs' bounds (new data usually meets none).
+    let stored_range = c
+        .prepare(
+            "SELECT t, value FROM readings
+             WHERE sensor = $1 AND modality = $2 AND t BETWEEN $3 AND $4 ORDER BY t",
+        )
+        .db()?;
+    let (order, fresh, stats) = plan_insert(
+        batch,
+        &sensor_keys,
+        &modality_keys,
+        policy,
+        |s, m, t_first, t_last, stored| {
+            for r in c.query(&stored_range, &[&s, &m, &t_first, &t_last]).db()? {
+                stored.push((r.get(0), r.get(1)));
+            }
+            Ok(())
+        },
+    )?;
+    if stats.inserted == 0 {
+        return Ok(stats);
+    }
+    // The new rows, in key order, as one binary COPY stream: a header, then per row a field
+    // count and each field as length + big-endian bytes, then the trailer.
+    let mut writer = c
+        .copy_in("COPY readings (sensor, modality, t, value) FROM STDIN (FORMAT binary)")
+        .db()?;
+    let io = |e: std::io::Error| StoreError::Backend(format!("COPY readings: {e}"));
+    let mut buf: Vec<u8> = Vec::with_capacity(COPY_BLOCK * 46 + 32);
+    buf.extend_from_slice(b"PGCOPY\n\xff\r\n\0");
+    buf.extend_from_slice(&0i32.to_be_bytes()); // flags
+    buf.extend_from_slice(&0i32.to_be_bytes()); // header extension length
+    let mut in_block = 0;
+    for (&(s, m, t, row), _) in order.iter().zip(&fresh).filter(|(_, f)| **f) {
+        buf.extend_from_slice(&4i16.to_be_bytes());
+        for v in [s, m, t] {
+            buf.extend_from_slice(&8i32.to_be_bytes());
+            buf.extend_from_slice(&v.to_be_bytes());
+        }
+        buf.extend_from_slice(&8i32.to_be_bytes());
+        buf.extend_from_slice(&batch.rows[row].value.to_be_bytes());
+        in_block += 1;
+        if in_block == COPY_BLOCK {
+            writer.write_all(&buf).map_err(io)?;
+            buf.clear();
+            in_block = 0;
+            crate::failpoint::step();
+        }
+    }
+    buf.extend_from_slice(&(-1i16).to_be_bytes());
+    writer.write_all(&buf).map_err(io)?;
+    writer.finish().db()?;
+    Ok(stats)
+}
+
+pub(super) fn record_ingest(c: &mut Transaction<'_>, ingest: &IngestRecord) -> Result<i64> {
+    Ok(c.query_one(
+        "INSERT INTO ingests (file_name, format, rows_read, rows_inserted, rows_unchanged,
+                              rows_skipped, at)
+         VALUES ($1, $2, $3, $4, $5, $6, $7) RETURNING id",
+        &[
+            &ingest.file_name,
+            &ingest.format,
+            &as_i64(ingest.rows_read),
+            &as_i64(ingest.rows_inserted),
+            &as_i64(ingest.rows_unchanged),
+            &as_i64(ingest.rows_skipped),
+            &ingest.at,
+        ],
+    )
+    .db()?
+    .get(0))
+}
+
+pub(super) fn replace_cells(
+    c: &mut Transaction<'_>,
+    cells: &[CellRecord],
+) -> Result<ReplaceCellsStats> {
+    check_cells(cells)?;
+    let stored = super::read::cells(c)?;
+    let sensor_keys = sensor_ids(c)?;
+    let mut stats = ReplaceCellsStats::default();
+    let normalised = |cell: &CellRecord| {
+        let mut cell = cell.clone();
+        cell.sensors.sort();
+        cell.sensors.dedup();
+        cell
+    };
+    let new_by_label: HashMap<CellIndex, CellRecord> =
+        cells.iter().map(|x| (x.index, normalised(x))).collect();
+    let mut kept = HashSet::new();
+    let mut gone: Vec<String> = Vec::new();
+    for old in &stored {
+        if new_by_label.get(&old.index) == Some(old) {
+            kept.insert(old.index);
+        } else {
+            gone.push(old.index.to_string());
+        }
+    }
+    if !gone.is_empty() {
+        c.execute("DELETE FROM cells WHERE label = ANY($1)", &[&gone])
+            .db()?;
+        stats.removed = gone.len();
+    }
+    let insert_cell = c
+        .prepare(
+            "INSERT INTO cells (label, i, j, lat, lon, cell_size_m) VALUES ($1, $2, $3, $4, $5, $6)
+             RETURNING id",
+        )
+        .db()?;
+    let insert_member = c
+        .prepare("INSERT INTO cell_sensors (cell, sensor) VALUES ($1, $2)")
+        .db()?;
+    let mut order: Vec<&CellRecord> = new_by_label.values().collect();
+    order.sort_by_key(|x| x.index);
+    for cell in order {
+        if kept.contains(&cell.index) {
+            continue;
+        }
+        let cell_key: i64 = c
+            .query_one(
+                &insert_cell,
+                &[
+                    &cell.index.to_string(),
+                    &i64::from(cell.index.i),
+                    &i64::from(cell.index.j),
+                    &cell.centre.lat(),
+                    &cell.centre.lon(),
+                    &cell.cell_size_m,
+                ],
+            )
+            .db()?
+            .get(0);
+        for s in &cell.sensors {
+            let sensor_key = sensor_keys
+                .get(s.as_str())
+                .ok_or_else(|| StoreError::Unknown {
+                    what: "sensor",
+                    name: s.to_string(),
+                })?;
+            c.execute(&insert_member, &[&cell_key, sensor_key]).db()?;
+        }
+        stats.added += 1;
+    }
+    stats.kept = kept.len();
+    Ok(stats)
+}
+
+pub(super) fn set_sensors_collected(
+    c: &mut Transaction<'_>,
+    collected: &[(SensorId, UnixSeconds)],
+) -> Result<()> {
+    let keys = sensor_ids(c)?;
+    let stmt = c
+        .prepare(
+            "INSERT INTO sensor_collection (sensor, last_collected) VALUES ($1, $2)
+             ON CONFLICT (sensor) DO UPDATE
+             SET last_collected = GREATEST(sensor_collection.last_collected,
+                                           excluded.last_collected)",
+        )
+        .db()?;
+    for (s, t) in collected {
+        let key = keys
+            .get(s.as_str())
+            .ok_or_else(|| StoreError::UnknownSensor(s.clone()))?;
+        c.execute(&stmt, &[key, t]).db()?;
+    }
+    Ok(())
+}
+
+pub(super) fn create_mission(c: &mut Transaction<'_>, m: &NewMission) -> Result<MissionId> {
+    validate_mission(m)?;
+    let e = &m.energy;
+    let p = &m.profile;
+    // The same 64 bits as a signed integer (BIGINT is signed).
+    let seed = m.seed as i64;
+    let id: i64 = c
+        .query_one(
+            "INSERT INTO missions (created_at, kind, planned_at, solver, seed,
+                 weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form, total_score,
+                 base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
+                 travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m,
+                 flight_time_s, return_distance_m, status, flown_at, summary_json)
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17,
+                     $18, $19, $20, $21, $22, $23, $24, $25, $26, NULL, NULL)
+             RETURNING id",
+            &[
+                &m.created_at,
+                &m.kind.as_str(),
+                &m.planned_at,
+                &m.solver,
+                &seed,
+                &m.weights[0],
+                &m.weights[1],
+                &m.weights[2],
+                &m.weights[3],
+                &m.anomaly_form,
+                &m.total_score,
+                &p.base.lat(),
+                &p.base.lon(),
+                &p.base_alt_m,
+                &p.altitude_m,
+                &p.cruise_speed_mps,
+                &e.travel_j,
+                &e.hover_j,
+                &e.comm_j,
+                &e.return_j,
+                &e.total_j,
+                &e.budget_j,
+                &e.distance_m,
+                &e.flight_time_s,
+                &m.return_distance_m,
+                &MissionStatus::Planned.as_str(),
+            ],
+        )
+        .db()?
+        .get(0);
+    let stop = c
+        .prepare(
+            "INSERT INTO mission_stops (mission, position, cell, lat, lon, score, freshness,
+                 redundancy, anomaly, uncertainty, leg_distance_m, leg_energy_j, collection_s,
+                 hover_s, hover_j, comm_j)
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16)",
+        )
+        .db()?;
+    for s in &m.stops {
+        let t = s.terms;
+        crate::failpoint::step();
+        c.execute(
+            &stop,
+            &[
+                &id,
+                &i64::from(s.order),
+                &s.cell.to_string(),
+                &s.centre.lat(),
+                &s.centre.lon(),
+                &s.score,
+                &t.map(|t| t[0]),
+                &t.map(|t| t[1]),
+                &t.map(|t| t[2]),
+                &t.map(|t| t[3]),
+                &s.leg_distance_m,
+                &s.leg_energy_j,
+                &s.collection_s,
+                &s.hover_s,
+                &s.hover_j,
+                &s.comm_j,
+            ],
+        )
+        .db()?;
+    }
+    Ok(MissionId(id))
+}
+
+pub(super) fn record_visits(
+    c: &mut Transaction<'_>,
+    mission: MissionId,
+    visits: &[VisitRecord],
+    flown_at: UnixSeconds,
+    amend: bool,
+) -> Result<()> {
+    check_visits(mission, visits)?;
+    // FOR UPDATE: the row stays locked to the end of the transaction.
+    let stored = c
+        .query_opt(
+            "SELECT status, flown_at FROM missions WHERE id = $1 FOR UPDATE",
+            &[&mission.0],
+        )
+        .db()?;
+    let Some(row) = stored else {
+        return Err(StoreError::Unknown {
+            what: "mission",
+            name: mission.to_string(),
+        });
+    };
+    let status: &str = row.get(0);
+    let stored_flown_at: Option<i64> = row.get(1);
+    if status == MissionStatus::Flown.as_str() && !amend {
+        return Err(StoreError::AlreadyFlown {
+            mission: mission.0,
+            flown_at: stored_flown_at.unwrap_or(flown_at),
+        });
+    }
+    c.execute(
+        "UPDATE missions SET status = $2, flown_at = $3 WHERE id = $1",
+        &[&mission.0, &MissionStatus::Flown.as_str(), &flown_at],
+    )
+    .db()?;
+    c.execute("DELETE FROM visits WHERE mission = $1", &[&mission.0])
+        .db()?;
+    let stmt = c
+        .prepare(
+            "INSERT INTO visits (mission, position, cell, arrived_at, energy_j)
+             VALUES ($1, $2, $3, $4, $5)",
+        )
+        .db()?;
+    for v in visits {
+        crate::failpoint::step();
+        c.execute(
+            &stmt,
+            &[
+                &mission.0,
+                &i64::from(v.order),
+                &v.cell.to_string(),
+                &v.arrived_at,
+                &v.energy_j,
+            ],
+        )
+        .db()?;
+    }
+    Ok(())
+}
+
+pub(super) fn config_set(c: &mut Transaction<'_>, key: &str, value: &str) -> Result<()> {
+    c.execute(
+        "INSERT INTO config (key, value) VALUES ($1, $2)
+         ON CONFLICT (key) DO UPDATE SET value = excluded.value",
+        &[&key, &value],
+    )
+    .db()?;
+    Ok(())
+}
+
+pub(super) fn blob_put(c: &mut Transaction<'_>, key: &str, value: &[u8]) -> Result<()> {
+    c.execute(
+        "INSERT INTO blobs (key, value) VALUES ($1, $2)
+         ON CONFLICT (key) DO UPDATE SET value = excluded.value",
+        &[&key, &value],
+    )
+    .db()?;
+    Ok(())
+}
+
+pub(super) fn upsert_cell_metadata(
+    c: &mut Transaction<'_>,
+    metadata: &[CellMetadata],
+) -> Result<()> {
+    validate_metadata(metadata)?;
+    let cell_keys = cell_ids(c)?;
+    let modality_keys = modality_ids(c)?;
+    let cell_key = |c: &CellIndex| {
+        cell_keys
+            .get(&c.to_string())
+            .copied()
+            .ok_or_else(|| StoreError::Unknown {
+                what: "cell",
+                name: c.to_string(),
+            })
+    };
+    let modality_key = |m: &Modality| {
+        modality_keys
+            .get(m.as_str())
+            .copied()
+            .ok_or_else(|| StoreError::UnknownModality(m.clone()))
+    };
+    let row = c
+        .prepare(
+            "INSERT INTO cell_metadata (cell, last_collected, pending_bytes, expected_energy_j,
+                 freshness, redundancy, anomaly, uncertainty, score, computed_at)
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10)
+             ON CONFLICT (cell) DO UPDATE SET last_collected = excluded.last_collected,
+                 pending_bytes = excluded.pending_bytes,
+                 expected_energy_j = excluded.expected_energy_j,
+                 freshness = excluded.freshness, redundancy = excluded.redundancy,
+                 anomaly = excluded.anomaly, uncertainty = excluded.uncertainty,
+                 score = excluded.score, computed_at = excluded.computed_at",
+        )
+        .db()?;
+    let clear_probs = c
+        .prepare("DELETE FROM cell_class_probabilities WHERE cell = $1")
+        .db()?;
+    let prob = c
+        .prepare(
+            "INSERT INTO cell_class_probabilities (cell, k, class, probability)
+             VALUES ($1, $2, $3, $4)",
+        )
+        .db()?;
+    let summary = c
+        .prepare(
+            "INSERT INTO cell_summaries (cell, modality, count, mean, std, min, max, latest_t,
+                 latest_value)
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9)
+             ON CONFLICT (cell, modality) DO UPDATE SET count = excluded.count,
+                 mean = excluded.mean, std = excluded.std, min = excluded.min,
+                 max = excluded.max, latest_t = excluded.latest_t,
+                 latest_value = excluded.latest_value",
+        )
+        .db()?;
+    let correlation = c
+        .prepare(
+            "INSERT INTO cell_correlations (cell, neighbour, modality, correlation, overlap)
+             VALUES ($1, $2, $3, $4, $5)
+             ON CONFLICT (cell, neighbour, modality) DO UPDATE
+             SET correlation = excluded.correlation, overlap = excluded.overlap",
+        )
+        .db()?;
+    let anomaly = c
+        .prepare(
+            "INSERT INTO cell_anomalies (cell, modality, t, anomaly, flagged)
+             VALUES ($1, $2, $3, $4, $5)
+             ON CONFLICT (cell, modality, t) DO UPDATE
+             SET anomaly = excluded.anomaly, flagged = excluded.flagged",
+        )
+        .db()?;
+    for md in metadata {
+        let ck = cell_key(&md.cell)?;
+        let s = md.scores.as_ref();
+        c.execute(
+            &row,
+            &[
+                &ck,
+                &md.last_collected,
+                &md.pending_bytes,
+                &md.expected_energy_j,
+                &s.map(|s| s.freshness),
+                &s.map(|s| s.redundancy),
+                &s.map(|s| s.anomaly),
+                &s.map(|s| s.uncertainty),
+                &s.map(|s| s.score),
+                &s.map(|s| s.computed_at),
+            ],
+        )
+        .db()?;
+        c.execute(&clear_probs, &[&ck]).db()?;
+        for (k, p) in md.class_probabilities.iter().enumerate() {
+            c.execute(&prob, &[&ck, &(k as i64), &p.class, &p.probability])
+                .db()?;
+        }
+        for su in &md.summaries {
+            let st = &su.stats;
+            c.execute(
+                &summary,
+                &[
+                    &ck,
+                    &modality_key(&su.modality)?,
+                    &as_i64(st.count),
+                    &st.mean,
+                    &st.std,
+                    &st.min,
+                    &st.max,
+                    &st.latest_t,
+                    &st.latest_value,
+                ],
+            )
+            .db()?;
+        }
+        for co in &md.correlations {
+            c.execute(
+                &correlation,
+                &[
+                    &ck,
+                    &cell_key(&co.neighbour)?,
+                    &modality_key(&co.modality)?,
+                    &co.correlation,
+                    &as_i64(co.overlap),
+                ],
+            )
+            .db()?;
+        }
+        for a in &md.anomalies {
+            c.execute(
+                &anomaly,
+                &[
+                    &ck,
+                    &modality_key(&a.modality)?,
+                    &a.t,
+                    &a.anomaly,
+                    &a.flagged,
+                ],
+            )
+            .db()?;
+        }
+    }
+    Ok(())
+}
