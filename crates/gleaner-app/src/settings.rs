@@ -509,7 +509,7 @@ impl Settings {
         let u = &self.utility;
         let e = &self.energy;
         let p = &self.planner;
-        let values: [(&str, Option<f64>); 31] = [
+        let values: [(&str, Option<f64>); 32] = [
             ("field.base_alt_m", Some(f.base_alt_m)),
             ("field.cell_size_m", Some(f.cell_size_m)),
             ("field.neighbour_k", Some(f.neighbour_k as f64)),
@@ -529,6 +529,10 @@ impl Settings {
             ("utility.epsilon", Some(u.epsilon)),
             ("utility.anomaly_kappa", Some(u.anomaly_kappa)),
             ("utility.anomaly_flag", Some(u.anomaly_flag)),
+            (
+                "utility.anomaly_min_neighbours",
+                Some(u.anomaly_min_neighbours as f64),
+            ),
             (
                 "utility.condition_classes",
                 Some(u.condition_classes as f64),
@@ -650,6 +654,7 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
         false,
         "standard deviations",
     ),
+    ("utility.anomaly_min_neighbours", 1.0, 64.0, false, "cells"),
     ("utility.condition_classes", 2.0, 20.0, false, "classes"),
     ("energy.battery_j", 0.0, 1e9, true, "J"),
     ("energy.reserve_fraction", 0.0, 0.99, false, ""),
