@@ -60,7 +60,8 @@ pub struct Scoring {
     pub condition: Option<Condition>,
     /// Weights alpha, beta, gamma, delta.
     pub weights: [f64; 4],
-    /// The anomaly form label (`raw` or `bounded(kappa=...)`).
+    /// The anomaly form label (`raw` or `bounded(kappa=...)`), followed by `,
+    /// neighbours(min=k)` when the neighbour-relative anomaly is in use.
     pub anomaly_form: String,
     /// Things the user should know (e.g. no condition model could be fitted: U = 0).
     pub warnings: Vec<String>,
@@ -68,6 +69,15 @@ pub struct Scoring {
     /// `knowledge.series` holds only their retained recent points, and counts, means,
     /// correlations and latest points come from these statistics.
     pub incremental: Option<IncrementalState>,
+}
+
+/// The anomaly label of every output: the form, and the reference when it is not the
+/// paper's own history (e.g. `raw, neighbours(min=2)`).
+pub(crate) fn anomaly_label(config: &gleaner_utility::UtilityConfig) -> String {
+    match config.anomaly_reference {
+        gleaner_utility::AnomalyReference::OwnHistory => config.anomaly_form.label(),
+        r => format!("{}, {}", config.anomaly_form.label(), r.label()),
+    }
 }
 
 /// Which weighted term contributes most to S: `freshness`, `anomaly`, `uncertainty` or `none`.
@@ -266,7 +276,7 @@ pub fn compute_full<S: Store>(project: &Project<S>, request: &ScoreRequest) -> R
         terms,
         condition,
         weights: [u.alpha, u.beta, u.gamma, u.delta],
-        anomaly_form: config.anomaly_form.label(),
+        anomaly_form: anomaly_label(&config),
         warnings,
         incremental: None,
     })

@@ -158,6 +158,13 @@ pub struct UtilitySection {
     pub anomaly_kappa: f64,
     /// A collection with A^m at or above this is flagged in the anomaly history (default 3).
     pub anomaly_flag: f64,
+    /// What A compares the latest value with: `own` (default, the paper's: the cell's own
+    /// history) or `neighbours` (the cell's residual against the median of its neighbour
+    /// cells, standardised by that residual's own history; see docs/synth-calibration.md).
+    pub anomaly_reference: String,
+    /// `neighbours` only: fewest neighbour cells with a value at a timestamp for the residual
+    /// to exist (default 2).
+    pub anomaly_min_neighbours: usize,
     /// omega: redundancy weight per modality name (default equal; missing names weigh 0).
     pub redundancy_weights: Option<std::collections::BTreeMap<String, f64>>,
     /// phi: anomaly weight per modality name (default equal; missing names weigh 0).
@@ -196,6 +203,8 @@ impl Default for UtilitySection {
             anomaly_form,
             anomaly_kappa,
             anomaly_flag: 3.0,
+            anomaly_reference: "own".to_string(),
+            anomaly_min_neighbours: 2,
             redundancy_weights: None,
             anomaly_weights: None,
             condition_modality: None,
@@ -284,7 +293,9 @@ impl Default for PlannerSection {
 impl UtilitySection {
     /// The core configuration, with modality weights laid out in `modalities` order.
     pub fn to_core(&self, modalities: &[String]) -> Result<gleaner_utility::UtilityConfig> {
-        use gleaner_utility::{AnomalyForm, HistoryWindow, ModalityWeights, UtilityConfig};
+        use gleaner_utility::{
+            AnomalyForm, AnomalyReference, HistoryWindow, ModalityWeights, UtilityConfig,
+        };
         let weights = |w: &Option<std::collections::BTreeMap<String, f64>>| match w {
             None => ModalityWeights::Equal,
             Some(map) => ModalityWeights::Given(
@@ -316,6 +327,15 @@ impl UtilitySection {
                     kappa: self.anomaly_kappa,
                 },
                 other => bail!("utility.anomaly_form = {other:?}: expected \"raw\" or \"bounded\""),
+            },
+            anomaly_reference: match self.anomaly_reference.as_str() {
+                "own" => AnomalyReference::OwnHistory,
+                "neighbours" => AnomalyReference::Neighbours {
+                    min_neighbours: self.anomaly_min_neighbours,
+                },
+                other => bail!(
+                    "utility.anomaly_reference = {other:?}: expected \"own\" or \"neighbours\""
+                ),
             },
         };
         config
@@ -489,7 +509,7 @@ impl Settings {
         let u = &self.utility;
         let e = &self.energy;
         let p = &self.planner;
-        let values: [(&str, Option<f64>); 31] = [
+        let values: [(&str, Option<f64>); 32] = [
             ("field.base_alt_m", Some(f.base_alt_m)),
             ("field.cell_size_m", Some(f.cell_size_m)),
             ("field.neighbour_k", Some(f.neighbour_k as f64)),
@@ -509,6 +529,10 @@ impl Settings {
             ("utility.epsilon", Some(u.epsilon)),
             ("utility.anomaly_kappa", Some(u.anomaly_kappa)),
             ("utility.anomaly_flag", Some(u.anomaly_flag)),
+            (
+                "utility.anomaly_min_neighbours",
+                Some(u.anomaly_min_neighbours as f64),
+            ),
             (
                 "utility.condition_classes",
                 Some(u.condition_classes as f64),
@@ -630,6 +654,7 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
         false,
         "standard deviations",
     ),
+    ("utility.anomaly_min_neighbours", 1.0, 64.0, false, "cells"),
     ("utility.condition_classes", 2.0, 20.0, false, "classes"),
     ("energy.battery_j", 0.0, 1e9, true, "J"),
     ("energy.reserve_fraction", 0.0, 0.99, false, ""),
@@ -709,5 +734,37 @@ mod tests {
         assert_eq!(parse_utm_zone("33s").unwrap(), (33, false));
         assert!(parse_utm_zone("61N").is_err());
         assert!(parse_utm_zone("11").is_err());
+    }
+
+    #[test]
+    fn anomaly_reference_setting() {
+        use gleaner_utility::AnomalyReference;
+        let modalities = ["vw@30cm".to_string()];
+        let default = UtilitySection::default();
+        assert_eq!(default.anomaly_reference, "own");
+        let core = default.to_core(&modalities).unwrap();
+        assert_eq!(core.anomaly_reference, AnomalyReference::OwnHistory);
+        assert_eq!(crate::score::anomaly_label(&core), "raw");
+        let section: UtilitySection =
+            toml::from_str("anomaly_reference = \"neighbours\"\nanomaly_min_neighbours = 3\n")
+                .unwrap();
+        let core = section.to_core(&modalities).unwrap();
+        assert_eq!(
+            core.anomaly_reference,
+            AnomalyReference::Neighbours { min_neighbours: 3 }
+        );
+        assert_eq!(crate::score::anomaly_label(&core), "raw, neighbours(min=3)");
+        let bad = UtilitySection {
+            anomaly_reference: "nearby".into(),
+            ..UtilitySection::default()
+        };
+        let err = bad.to_core(&modalities).unwrap_err().to_string();
+        assert!(err.contains("anomaly_reference"), "{err}");
+        let zero = UtilitySection {
+            anomaly_reference: "neighbours".into(),
+            anomaly_min_neighbours: 0,
+            ..UtilitySection::default()
+        };
+        assert!(zero.to_core(&modalities).is_err());
     }
 }

@@ -843,7 +843,10 @@ pub(crate) fn fast_scoring<S: Store>(
         return Ok(None);
     }
     let config = settings.utility.to_core(&p.modalities)?;
-    if config.window != HistoryWindow::All {
+    // The neighbour-relative anomaly needs the neighbours' history: the full path.
+    if config.window != HistoryWindow::All
+        || config.anomaly_reference != gleaner_utility::AnomalyReference::OwnHistory
+    {
         return Ok(None);
     }
     let mut warnings = Vec::new();

@@ -263,7 +263,7 @@ enum Command {
     Bench(BenchCommand),
     /// Write a seeded synthetic farm (sensors, long readings, ground truth, faults) as CSV.
     #[command(
-        after_help = "Defaults are calibrated to the CAF network (VW range, day-to-day change, spatial correlation).\n\nExamples:\n  gleaner synth --out farm-data --sensors 60 --days 120 --seed 1\n  gleaner synth --out big --sensors 10000 --days 365 --scale-extent --vw-depths 30 --t-depths 30"
+        after_help = "Defaults are calibrated to the CAF network, 2012-13 (seasons, rain, drainage, depth lag, synchrony, faults, value distributions, spatial correlation; see docs/synth-calibration.md). Each farm has ground-truth events (leaks, dry patches, failing sensors; 7-28 days).\n\nExamples:\n  gleaner synth --out farm-data --sensors 60 --days 120 --seed 1\n  gleaner synth --out big --sensors 10000 --days 365 --scale-extent --vw-depths 30 --t-depths 30"
     )]
     Synth(synth::SynthArgs),
     /// Copy the project's data into another database, losslessly and all or nothing: an

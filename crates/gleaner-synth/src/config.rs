@@ -65,11 +65,15 @@ pub struct SynthConfig {
     pub correlation_length_m: f64,
     /// Rates of sensor faults (dropouts, spikes, stuck values).
     pub faults: FaultRates,
-    /// Number of localised ground-truth events (default 3). Kinds cycle through irrigation
+    /// Number of localised ground-truth events (default 12). Kinds cycle through irrigation
     /// leak, drying patch and failing sensor (drift or stuck).
     pub event_count: usize,
+    /// Shortest and longest duration of an event, days (default `[7, 28]`; uniform between).
+    /// Both at least 1 and `[0] <= [1]`. Events start uniformly between 5 % of the record
+    /// and the latest start that lets them end by 95 % of it.
+    pub event_duration_days: [f64; 2],
     /// Radius of leak and drying patches, metres. `None` (default) chooses
-    /// `max(30 m, 1.5 x mean sensor spacing)`, so a patch covers a few stations.
+    /// `max(30 m, mean sensor spacing)`, so a patch covers one to a few stations.
     pub event_radius_m: Option<f64>,
     /// Weather and soil-temperature drivers.
     pub climate: Climate,
@@ -91,7 +95,8 @@ impl Default for SynthConfig {
             t_depths_cm: vec![30],
             correlation_length_m: 500.0,
             faults: FaultRates::default(),
-            event_count: 3,
+            event_count: 12,
+            event_duration_days: [7.0, 28.0],
             event_radius_m: None,
             climate: Climate::default(),
         }
@@ -103,9 +108,9 @@ impl Default for SynthConfig {
 #[derive(Debug, Clone, PartialEq)]
 pub struct FaultRates {
     /// Probability, per sensor and sampling step, that a dropout (the whole station silent:
-    /// every modality missing) starts (default 0.002 per step). In [0, 1).
+    /// every modality missing) starts (default 0.003 per step). In [0, 1).
     pub dropout_per_step: f64,
-    /// Mean length of a dropout, sampling steps (geometric; default 12). At least 1.
+    /// Mean length of a dropout, sampling steps (geometric; default 60). At least 1.
     pub dropout_mean_steps: f64,
     /// Probability that a single reading is a spike (default 0.0001): a jump of 0.05..0.15 m³/m³
     /// (VW) or 3..8 °C (T), up or down, clamped to the physical range. In [0, 1).
@@ -115,6 +120,13 @@ pub struct FaultRates {
     pub stuck_per_step: f64,
     /// Mean length of a stuck stretch, steps (geometric; default 10). At least 1.
     pub stuck_mean_steps: f64,
+    /// Probability, per sensor, modality and step, that one modality alone falls silent (a
+    /// dead probe at one depth while the station keeps reporting the others; default 0.0011
+    /// per step). Recorded as a [`crate::FaultKind::Dropout`] with `modality = Some(m)`. In
+    /// [0, 1).
+    pub probe_dropout_per_step: f64,
+    /// Mean length of a single-probe dropout, steps (geometric; default 90). At least 1.
+    pub probe_dropout_mean_steps: f64,
 }
 
 impl FaultRates {
@@ -126,6 +138,8 @@ impl FaultRates {
             spike_per_reading: 0.0,
             stuck_per_step: 0.0,
             stuck_mean_steps: 1.0,
+            probe_dropout_per_step: 0.0,
+            probe_dropout_mean_steps: 1.0,
         }
     }
 }
@@ -133,11 +147,13 @@ impl FaultRates {
 impl Default for FaultRates {
     fn default() -> Self {
         Self {
-            dropout_per_step: 0.002,
-            dropout_mean_steps: 12.0,
+            dropout_per_step: 0.003,
+            dropout_mean_steps: 60.0,
             spike_per_reading: 0.0001,
             stuck_per_step: 0.0005,
             stuck_mean_steps: 10.0,
+            probe_dropout_per_step: 0.0011,
+            probe_dropout_mean_steps: 90.0,
         }
     }
 }
@@ -167,6 +183,26 @@ pub struct Climate {
     /// Annual damping depth of the temperature wave, centimetres (default 165 cm): amplitude
     /// falls as `exp(-z / D)` and the phase lags by `z / D` radians.
     pub annual_damping_depth_cm: f64,
+    /// Day of year of peak evapotranspiration (crop water use) at 30 cm, days since 1
+    /// January (default 175, late June; deeper layers peak later). With `storm_peak_doy`
+    /// and `warmest_doy` it sets the seasonal phase: with the defaults the soil is wettest
+    /// in April and driest in September, as at CAF. [`Climate::shifted`] moves all three.
+    pub et_peak_doy: f64,
+}
+
+impl Climate {
+    /// The same climate with every seasonal phase (`storm_peak_doy`, `warmest_doy`,
+    /// `et_peak_doy`) moved by `days` (e.g. 182.6 for a southern-hemisphere farm), wrapped
+    /// into [0, 365.25).
+    pub fn shifted(&self, days: f64) -> Climate {
+        let wrap = |d: f64| (d + days).rem_euclid(365.25);
+        Climate {
+            storm_peak_doy: wrap(self.storm_peak_doy),
+            warmest_doy: wrap(self.warmest_doy),
+            et_peak_doy: wrap(self.et_peak_doy),
+            ..self.clone()
+        }
+    }
 }
 
 impl Default for Climate {
@@ -174,13 +210,14 @@ impl Default for Climate {
         Self {
             storms_per_year: 75.0,
             storm_seasonality: 0.7,
-            storm_peak_doy: 340.0,
+            storm_peak_doy: 30.0,
             storm_mean_mm: 7.0,
             mean_soil_temp_c: 10.2,
             surface_annual_amplitude_c: 11.2,
             surface_daily_amplitude_c: 8.0,
             warmest_doy: 200.0,
             annual_damping_depth_cm: 165.0,
+            et_peak_doy: 195.0,
         }
     }
 }
@@ -291,8 +328,22 @@ impl SynthConfig {
         check_probability("faults.stuck_per_step", f.stuck_per_step)?;
         check_at_least("faults.dropout_mean_steps", f.dropout_mean_steps, 1.0)?;
         check_at_least("faults.stuck_mean_steps", f.stuck_mean_steps, 1.0)?;
+        check_probability("faults.probe_dropout_per_step", f.probe_dropout_per_step)?;
+        check_at_least(
+            "faults.probe_dropout_mean_steps",
+            f.probe_dropout_mean_steps,
+            1.0,
+        )?;
         if self.event_count > 10_000 {
             return Err(invalid("event_count", self.event_count, "at most 10000"));
+        }
+        let [d0, d1] = self.event_duration_days;
+        if !(d0.is_finite() && d1.is_finite() && d0 >= 1.0 && d0 <= d1) {
+            return Err(invalid(
+                "event_duration_days",
+                format!("[{d0}, {d1}]"),
+                "must be finite, at least 1 day and ascending",
+            ));
         }
         if let Some(r) = self.event_radius_m.filter(|r| !(r.is_finite() && *r > 0.0)) {
             return Err(invalid("event_radius_m", r, "must be positive and finite"));
@@ -323,6 +374,7 @@ impl SynthConfig {
             ("climate.storm_peak_doy", c.storm_peak_doy),
             ("climate.mean_soil_temp_c", c.mean_soil_temp_c),
             ("climate.warmest_doy", c.warmest_doy),
+            ("climate.et_peak_doy", c.et_peak_doy),
         ] {
             if !v.is_finite() {
                 return Err(invalid(name, v, "must be finite"));

@@ -17,47 +17,65 @@ use gleaner_field::time::day_of_year;
 /// interpolate linearly and clamp at the ends.
 const TABLE_DEPTHS_CM: [f64; 5] = [30.0, 60.0, 90.0, 120.0, 150.0];
 /// Mean wilting baseline (dry end) of volumetric water, m³/m³.
-const WILT_MEAN: [f64; 5] = [0.14, 0.153, 0.17, 0.175, 0.18];
+const WILT_MEAN: [f64; 5] = [0.155, 0.16, 0.18, 0.185, 0.19];
 /// Between-sensor standard deviation of the wilting baseline, m³/m³.
-const WILT_SD: [f64; 5] = [0.04, 0.055, 0.06, 0.07, 0.07];
+const WILT_SD: [f64; 5] = [0.045, 0.055, 0.06, 0.07, 0.07];
 /// Mean range from wilting baseline to field capacity, m³/m³.
-const RANGE_MEAN: [f64; 5] = [0.19, 0.21, 0.2, 0.2, 0.2];
+const RANGE_MEAN: [f64; 5] = [0.19, 0.25, 0.25, 0.25, 0.25];
 /// Between-sensor coefficient of variation (log-normal) of the range, dimensionless.
 const RANGE_CV: [f64; 5] = [0.12, 0.14, 0.15, 0.16, 0.16];
-/// Drying rate at the peak of the growing season, 1/day.
-const DRYING_RATE: [f64; 5] = [0.07, 0.065, 0.06, 0.055, 0.045];
-/// Storage gained per millimetre of rain reaching the layer, 1/mm.
-const RAIN_GAIN: [f64; 5] = [0.03, 0.028, 0.026, 0.024, 0.022];
-/// Time constant of the rain pulse's arrival at the layer (lag and damping), days.
-const INFILTRATION_TAU_DAYS: [f64; 5] = [1.2, 2.0, 3.0, 5.0, 8.0];
+/// Drying rate of the slow store at the peak of the growing season, 1/day.
+const DRYING_RATE: [f64; 5] = [0.025, 0.022, 0.02, 0.018, 0.015];
+/// Slow-store filling per millimetre of rain reaching the layer (times the room left), 1/mm.
+const RAIN_GAIN: [f64; 5] = [0.0035, 0.0033, 0.003, 0.0028, 0.0028];
+/// Time constant of the rain's arrival at the layer's slow store (lag and damping), days.
+const INFILTRATION_TAU_DAYS: [f64; 5] = [1.2, 12.0, 30.0, 40.0, 50.0];
+/// Time constant of the rain's arrival as a fast pulse (wetting front), days.
+const PULSE_IN_TAU_DAYS: [f64; 5] = [0.7, 3.0, 10.0, 15.0, 20.0];
+/// Fast pulse per millimetre of rain, m³/m³ per mm.
+const PULSE_GAIN: [f64; 5] = [0.00125, 0.0008, 0.0003, 0.0002, 0.0001];
+/// Time constant of the fast pulse's drainage, days.
+const PULSE_TAU_DAYS: [f64; 5] = [3.0, 4.0, 5.0, 6.0, 6.0];
+/// Lag of the growing season's water uptake behind its peak at 30 cm, days.
+const ET_LAG_DAYS: [f64; 5] = [0.0, 15.0, 30.0, 40.0, 50.0];
+/// Time constant of a leak's or dry patch's arrival at the layer, days.
+const EVENT_TAU_DAYS: [f64; 5] = [1.0, 2.0, 4.0, 6.0, 8.0];
+/// White measurement noise of volumetric water, m³/m³.
+const VW_NOISE: [f64; 5] = [0.003, 0.0042, 0.004, 0.004, 0.004];
+/// Field-wide white measurement artefact of volumetric water (shared by every station on a
+/// given day, e.g. the probes' temperature sensitivity), m³/m³.
+const VW_COMMON_NOISE: [f64; 5] = [0.0015, 0.0025, 0.0028, 0.0028, 0.0028];
 /// Amplitude of the spatially correlated moving anomaly, m³/m³.
-const ANOMALY_SD: [f64; 5] = [0.008, 0.012, 0.016, 0.018, 0.018];
+const ANOMALY_SD: [f64; 5] = [0.02, 0.025, 0.03, 0.03, 0.03];
 /// Amplitude of each sensor's own slow anomaly, m³/m³.
-const LOCAL_SD: [f64; 5] = [0.02, 0.03, 0.04, 0.045, 0.045];
-/// White measurement noise, m³/m³.
-const VW_NOISE_SD: f64 = 0.0004;
+const LOCAL_SD: [f64; 5] = [0.025, 0.03, 0.04, 0.045, 0.045];
 /// Log-normal spread of each sensor's response to a storm (infiltration, interception).
 const STORM_RESPONSE_SD: f64 = 0.8;
-/// Soil temperatures below this are pulled towards it (latent heat of freezing and snow
-/// cover keep the soil near 0 °C), °C.
-const T_FREEZE_KNEE_C: f64 = 1.0;
-/// Fraction of the excursion below the knee that remains.
-const T_FREEZE_DAMPING: f64 = 0.3;
-/// Storage cap: wetness `1 - exp(-S)` tops out at 0.95 (drainage above field capacity).
-const STORAGE_CAP: f64 = 3.0;
+/// Soil temperatures below this knee approach 0 °C without reaching it: `T = knee x exp((T -
+/// knee) / knee)` (latent heat of freezing and snow cover keep the soil at 30 cm just above
+/// 0 °C, as at CAF), °C.
+const T_FREEZE_KNEE_C: f64 = 1.5;
+/// Share of rain lost to interception and evaporation at the peak of the growing season.
+const RAIN_INTERCEPTION: f64 = 0.8;
 /// Share of a sensor parameter's variance that is spatially structured (the rest is nugget).
 const SPATIAL_SHARE: f64 = 0.7;
 /// Time constant of the moving anomaly, days.
 const ANOMALY_TAU_DAYS: f64 = 60.0;
 /// Time constant of each sensor's own slow anomaly, days.
-const LOCAL_TAU_DAYS: f64 = 60.0;
+const LOCAL_TAU_DAYS: f64 = 20.0;
 /// Number of latent processes in the moving anomaly.
 const ANOMALY_FIELDS: usize = 4;
+/// A failed sensor stays silent this long after its event ends before it is replaced (it then
+/// reports the true values again), days.
+const REPLACEMENT_DAYS: f64 = 30.0;
 /// Spin-up before the first reading, days (daily steps).
-const SPIN_UP_DAYS: usize = 150;
-/// Seasonal evapotranspiration factor: `ET_FLOOR + (1 - ET_FLOOR) x (1 - cos(2 pi (doy - 15) /
-/// 365.25)) / 2`, peaking mid-July.
-const ET_FLOOR: f64 = 0.08;
+const SPIN_UP_DAYS: usize = 400;
+/// Seasonal evapotranspiration factor: `ET_FLOOR + (1 - ET_FLOOR) x exp(-((doy - peak) /
+/// ET_WIDTH_DAYS)² / 2)` (wrapped around the year), a growing season peaking at
+/// [`crate::Climate::et_peak_doy`].
+const ET_FLOOR: f64 = 0.05;
+/// Half-width (one standard deviation) of the growing season, days.
+const ET_WIDTH_DAYS: f64 = 45.0;
 
 /// Weather anomaly of soil temperature at the surface: AR(1) standard deviation, °C.
 const T_WEATHER_SD: f64 = 2.2;
@@ -66,7 +84,7 @@ const T_WEATHER_RHO: f64 = 0.8;
 /// Damping depth of the weather anomaly, cm.
 const T_WEATHER_DAMPING_CM: f64 = 70.0;
 /// Between-sensor standard deviation of the mean soil temperature, °C.
-const T_OFFSET_SD: f64 = 1.0;
+const T_OFFSET_SD: f64 = 0.8;
 /// Between-sensor coefficient of variation of the annual amplitude.
 const T_AMPLITUDE_CV: f64 = 0.04;
 /// White measurement noise of soil temperature, °C.
@@ -147,6 +165,8 @@ struct EventEffect {
     weight: f64,
     /// Drift of VW, m³/m³ per day, and of T, °C per day (SensorDrift only).
     drift_vw: f64,
+    /// Offset of a leak (up) or dry patch (down) at full strength, m³/m³.
+    amp_vw: f64,
     drift_t: f64,
 }
 
@@ -155,12 +175,18 @@ struct Context<'a> {
     config: &'a SynthConfig,
     steps: usize,
     dt_days: f64,
-    et: Vec<f64>,
+    /// Growing-season water uptake factor per VW depth and step (and per spin-up day), in
+    /// [ET_FLOOR, 1]; `et_surface` is the same at the surface (interception of rain).
+    et: Vec<Vec<f64>>,
+    et_surface: Vec<f64>,
+    spin_up_et: Vec<Vec<f64>>,
+    spin_up_et_surface: Vec<f64>,
     rain_mm: Vec<f64>,
-    spin_up_et: Vec<f64>,
     spin_up_rain_mm: Vec<f64>,
     /// ANOMALY_FIELDS x steps, unit variance.
     anomaly: Vec<f64>,
+    /// Field-wide white measurement artefact per step, unit variance.
+    common: Vec<f64>,
     /// Per temperature depth: deterministic part + shared weather anomaly, °C (without the
     /// sensor's offset and amplitude factor), split so each sensor can scale the annual wave.
     t_annual: Vec<Vec<f64>>,
@@ -175,9 +201,9 @@ struct Context<'a> {
     modalities: &'a [ModalitySpec],
 }
 
-fn et_factor(doy: f64) -> f64 {
-    ET_FLOOR
-        + (1.0 - ET_FLOOR) * 0.5 * (1.0 - (std::f64::consts::TAU * (doy - 15.0) / 365.25).cos())
+fn et_factor(config: &SynthConfig, doy: f64) -> f64 {
+    let d = (doy - config.climate.et_peak_doy + 182.625).rem_euclid(365.25) - 182.625;
+    ET_FLOOR + (1.0 - ET_FLOOR) * (-0.5 * (d / ET_WIDTH_DAYS).powi(2)).exp()
 }
 
 fn storm_rate_per_day(config: &SynthConfig, doy: f64) -> f64 {
@@ -283,8 +309,21 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
         .map(|k| (start_doy - (SPIN_UP_DAYS - k) as f64).rem_euclid(365.25))
         .collect();
     let spin_up_rain_mm = rain_series(config, &mut wrng, &spin_doys, 1.0);
-    let spin_up_et = spin_doys.iter().map(|&d| et_factor(d)).collect();
-    let et = doys.iter().map(|&d| et_factor(d)).collect();
+    let et_at = |doys: &[f64], lag: f64| -> Vec<f64> {
+        doys.iter().map(|&d| et_factor(config, d - lag)).collect()
+    };
+    let et: Vec<Vec<f64>> = config
+        .vw_depths_cm
+        .iter()
+        .map(|&d| et_at(&doys, interp(&ET_LAG_DAYS, f64::from(d))))
+        .collect();
+    let spin_up_et: Vec<Vec<f64>> = config
+        .vw_depths_cm
+        .iter()
+        .map(|&d| et_at(&spin_doys, interp(&ET_LAG_DAYS, f64::from(d))))
+        .collect();
+    let et_surface = et_at(&doys, 0.0);
+    let spin_up_et_surface = et_at(&spin_doys, 0.0);
     let mut anomaly = vec![0.0; ANOMALY_FIELDS * steps];
     for k in 0..ANOMALY_FIELDS {
         let mut z = SmoothProcess::new(dt_days, ANOMALY_TAU_DAYS, normal(&mut wrng));
@@ -297,6 +336,7 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
         }
     }
     let (t_annual, t_rest) = temperature_drivers(config, &mut wrng, &times, &doys, dt_days);
+    let common: Vec<f64> = (0..steps).map(|_| normal(&mut wrng)).collect();
 
     let (events, effects) = place_events(config, &sensors, &local, &frame, &times);
 
@@ -305,10 +345,13 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
         steps,
         dt_days,
         et,
-        rain_mm,
+        et_surface,
         spin_up_et,
+        spin_up_et_surface,
+        rain_mm,
         spin_up_rain_mm,
         anomaly,
+        common,
         t_annual,
         t_rest,
         wilt_field,
@@ -417,9 +460,9 @@ fn place_events(
     let mut rng = stream(config.seed, Domain::Events, 0);
     let [w, h] = config.effective_extent_m();
     let spacing = (w * h / n as f64).sqrt();
-    let radius = config
-        .event_radius_m
-        .unwrap_or_else(|| (1.5 * spacing).max(30.0));
+    let radius = config.event_radius_m.unwrap_or_else(|| spacing.max(30.0));
+    let per_day = 86_400.0 / config.interval_s as f64;
+    let [d_min, d_max] = config.event_duration_days;
     let step_time = |s: usize| {
         times
             .get(s)
@@ -427,8 +470,13 @@ fn place_events(
             .unwrap_or(config.start + s as i64 * config.interval_s)
     };
     for e in 0..config.event_count {
-        let start_step = ((0.1 + 0.5 * uniform(&mut rng)) * steps as f64) as usize;
-        let length = (((0.1 + 0.2 * uniform(&mut rng)) * steps as f64) as usize).max(2);
+        let days = d_min + (d_max - d_min) * uniform(&mut rng);
+        let length = ((days * per_day).round() as usize).max(1);
+        let first = (0.05 * steps as f64) as usize;
+        let last = ((0.95 * steps as f64) as usize)
+            .saturating_sub(length)
+            .max(first);
+        let start_step = (first + (uniform(&mut rng) * (last - first) as f64) as usize).min(steps);
         let end_step = (start_step + length).min(steps);
         let centre_sensor = rng.random_range(0..n);
         let kind = match e % 3 {
@@ -440,6 +488,7 @@ fn place_events(
         let sign = if uniform(&mut rng) < 0.5 { -1.0 } else { 1.0 };
         let drift_vw = sign * (0.002 + 0.002 * uniform(&mut rng));
         let drift_t = sign * (0.02 + 0.03 * uniform(&mut rng));
+        let amp_vw = 0.10 + 0.09 * uniform(&mut rng);
         let (centre, radius_m, affected) = match kind {
             EventKind::Leak | EventKind::DryPatch => {
                 let angle = uniform(&mut rng) * std::f64::consts::TAU;
@@ -468,6 +517,7 @@ fn place_events(
                 weight,
                 drift_vw,
                 drift_t,
+                amp_vw,
             });
         }
         let ll = frame.inverse(centre);
@@ -492,14 +542,39 @@ struct WaterLayer {
     gain: f64,
     alpha: f64,
     spin_alpha: f64,
+    pulse_alpha: f64,
+    spin_pulse_alpha: f64,
+    pulse_gain: f64,
+    pulse_decay: f64,
+    spin_pulse_decay: f64,
+    event_alpha: f64,
+    noise: f64,
+    common_noise: f64,
     anomaly_sd: f64,
     local_sd: f64,
-    storage: f64,
+    /// Slow store (seasonal wetness), in [0, 1].
+    store: f64,
     inflow: f64,
+    /// Fast pulse (wetting front draining within days), m³/m³, and its inflow, mm/day.
+    pulse: f64,
+    pulse_inflow: f64,
     local: SmoothProcess,
-    /// Leak / dry-patch intensities in [0, 1].
+    /// Leak / dry-patch offsets, m³/m³ (>= 0).
     leak: f64,
     dry: f64,
+}
+
+impl WaterLayer {
+    /// One step of `dt` days with `rain` mm reaching the surface (per step) and uptake factor
+    /// `et`; `alphas` are the layer's (slow, pulse) arrival rates and `decay` the pulse's
+    /// survival for this step length.
+    fn water_step(&mut self, rain: f64, et: f64, dt: f64, alphas: (f64, f64), decay: f64) {
+        self.inflow += alphas.0 * (rain / dt - self.inflow);
+        self.pulse_inflow += alphas.1 * (rain / dt - self.pulse_inflow);
+        let fill = (self.gain * self.inflow * dt).min(1.0);
+        self.store = (self.store * (-self.drying * et * dt).exp()) * (1.0 - fill) + fill;
+        self.pulse = self.pulse * decay + self.pulse_gain * self.pulse_inflow * dt;
+    }
 }
 
 fn mix(field: f64, rng: &mut ChaCha8Rng) -> f64 {
@@ -535,18 +610,31 @@ fn simulate_sensor(
         .map(|&d| {
             let d = f64::from(d);
             let tau = interp(&INFILTRATION_TAU_DAYS, d);
+            let pulse_in = interp(&PULSE_IN_TAU_DAYS, d);
+            let pulse_tau = interp(&PULSE_TAU_DAYS, d);
+            let gain = (0.3 * mix(f_gain, &mut rng)).exp();
             WaterLayer {
                 wilt: interp(&WILT_MEAN, d) + interp(&WILT_SD, d) * mix(f_wilt, &mut rng),
                 range: interp(&RANGE_MEAN, d)
                     * (interp(&RANGE_CV, d) * mix(f_range, &mut rng)).exp(),
                 drying: interp(&DRYING_RATE, d) * (0.5 * mix(f_dry, &mut rng)).exp(),
-                gain: interp(&RAIN_GAIN, d) * (0.3 * mix(f_gain, &mut rng)).exp(),
+                gain: interp(&RAIN_GAIN, d) * gain,
                 alpha: 1.0 - (-dt / tau).exp(),
                 spin_alpha: 1.0 - (-1.0 / tau).exp(),
+                pulse_alpha: 1.0 - (-dt / pulse_in).exp(),
+                spin_pulse_alpha: 1.0 - (-1.0 / pulse_in).exp(),
+                pulse_gain: interp(&PULSE_GAIN, d) * gain,
+                pulse_decay: (-dt / pulse_tau).exp(),
+                spin_pulse_decay: (-1.0 / pulse_tau).exp(),
+                event_alpha: 1.0 - (-dt / interp(&EVENT_TAU_DAYS, d)).exp(),
+                noise: interp(&VW_NOISE, d),
+                common_noise: interp(&VW_COMMON_NOISE, d),
                 anomaly_sd: interp(&ANOMALY_SD, d),
                 local_sd: interp(&LOCAL_SD, d),
-                storage: 1.0,
+                store: 0.5,
                 inflow: 0.0,
+                pulse: 0.0,
+                pulse_inflow: 0.0,
                 local: SmoothProcess::new(dt, LOCAL_TAU_DAYS, normal(&mut rng)),
                 leak: 0.0,
                 dry: 0.0,
@@ -556,27 +644,27 @@ fn simulate_sensor(
     let t_offset = T_OFFSET_SD * mix(f_t, &mut rng);
     let t_amp = 1.0 + T_AMPLITUDE_CV * normal(&mut rng);
 
-    // Spin-up, daily steps, no events.
+    // Spin-up, daily steps, no events, the field's mean storm response.
     for k in 0..ctx.spin_up_rain_mm.len() {
-        for layer in &mut layers {
-            layer.inflow += layer.spin_alpha * (ctx.spin_up_rain_mm[k] - layer.inflow);
-            layer.storage = (layer.storage * (-layer.drying * ctx.spin_up_et[k]).exp()
-                + layer.gain * layer.inflow)
-                .min(STORAGE_CAP);
+        let rain = ctx.spin_up_rain_mm[k] * (1.0 - RAIN_INTERCEPTION * ctx.spin_up_et_surface[k]);
+        for (j, layer) in layers.iter_mut().enumerate() {
+            let alphas = (layer.spin_alpha, layer.spin_pulse_alpha);
+            let decay = layer.spin_pulse_decay;
+            layer.water_step(rain, ctx.spin_up_et[j][k], 1.0, alphas, decay);
         }
     }
 
     let effects = &ctx.effects[index];
     let n_vw = layers.len();
     for t in 0..steps {
-        // Event intensities at this step.
+        // Event offsets at this step, m³/m³.
         let mut leak_target = 0.0f64;
         let mut dry_target = 0.0f64;
         for e in effects {
             let active = t >= e.start_step && t < e.end_step;
             match e.kind {
-                EventKind::Leak if active => leak_target = leak_target.max(e.weight),
-                EventKind::DryPatch if active => dry_target = dry_target.max(e.weight),
+                EventKind::Leak if active => leak_target = leak_target.max(e.weight * e.amp_vw),
+                EventKind::DryPatch if active => dry_target = dry_target.max(e.weight * e.amp_vw),
                 _ => {}
             }
         }
@@ -592,43 +680,41 @@ fn simulate_sensor(
         } else {
             1.0
         };
+        let rain = ctx.rain_mm[t] * storm_response * (1.0 - RAIN_INTERCEPTION * ctx.et_surface[t]);
+        // Leak water and drying patches arrive with the layer's own lag; they fade over
+        // about ten days after the event ends.
+        let fade = 1.0 - (-dt / 10.0).exp();
         for (j, layer) in layers.iter_mut().enumerate() {
-            let depth_lag = layer.alpha;
-            // Leak water and drying patches arrive with the layer's own lag; they fade over
-            // about ten days after the event ends.
-            let fade = 1.0 - (-dt / 10.0).exp();
-            let rate = |target: f64, state: f64| {
-                if target > state {
-                    depth_lag.max(fade)
-                } else {
-                    fade
-                }
-            };
+            let onset = layer.event_alpha;
+            let rate = |target: f64, state: f64| if target > state { onset } else { fade };
             layer.leak += rate(leak_target, layer.leak) * (leak_target - layer.leak);
             layer.dry += rate(dry_target, layer.dry) * (dry_target - layer.dry);
-            let rain = ctx.rain_mm[t] * storm_response * (1.0 - 0.8 * layer.dry);
-            layer.inflow += layer.alpha * (rain / dt - layer.inflow);
-            let drying = layer.drying * ctx.et[t] * (1.0 + 2.0 * layer.dry);
-            layer.storage = (layer.storage * (-drying * dt).exp() + layer.gain * layer.inflow * dt)
-                .min(STORAGE_CAP);
+            let alphas = (layer.alpha, layer.pulse_alpha);
+            let decay = layer.pulse_decay;
+            layer.water_step(rain, ctx.et[j][t], dt, alphas, decay);
             let local = layer.local.step(fast_normal(&mut rng));
-            let wet = 1.0 - (-layer.storage).exp();
+            let wet = layer.store;
             let mut v = layer.wilt
                 + layer.range * wet
+                + layer.pulse
                 + layer.anomaly_sd * anomaly * (0.3 + wet)
                 + layer.local_sd * local
-                + VW_NOISE_SD * fast_normal(&mut rng);
-            let saturated = layer.wilt + 1.2 * layer.range;
-            v += layer.leak * (saturated - v).max(0.0);
-            v -= 0.8 * layer.dry * (v - layer.wilt).max(0.0);
+                + layer.noise * fast_normal(&mut rng)
+                + layer.common_noise * ctx.common[t];
+            v += layer.leak;
+            if layer.dry > 0.0 {
+                v = (v - layer.dry).max((layer.wilt - 0.03).min(v));
+            }
             out[j * steps + t] = v.clamp(VW_RANGE.0, VW_RANGE.1) as f32;
         }
         for (k, _) in config.t_depths_cm.iter().enumerate() {
-            let mut v = t_offset + t_amp * ctx.t_annual[k][t] + ctx.t_rest[k][t];
+            let mut v = t_offset
+                + t_amp * ctx.t_annual[k][t]
+                + ctx.t_rest[k][t]
+                + T_NOISE_SD * fast_normal(&mut rng);
             if v < T_FREEZE_KNEE_C {
-                v = T_FREEZE_KNEE_C + T_FREEZE_DAMPING * (v - T_FREEZE_KNEE_C);
+                v = T_FREEZE_KNEE_C * ((v - T_FREEZE_KNEE_C) / T_FREEZE_KNEE_C).exp();
             }
-            v += T_NOISE_SD * fast_normal(&mut rng);
             out[(n_vw + k) * steps + t] = v.clamp(T_RANGE.0, T_RANGE.1) as f32;
         }
     }
@@ -641,8 +727,11 @@ fn simulate_sensor(
         for (m, spec) in ctx.modalities.iter().enumerate() {
             let series = &mut out[m * steps..(m + 1) * steps];
             let frozen = series.get(e.start_step).copied().unwrap_or(f32::NAN);
+            let replaced = e.end_step + (REPLACEMENT_DAYS / dt).round() as usize;
             for (t, v) in series.iter_mut().enumerate().skip(e.start_step) {
-                if t >= e.end_step {
+                if t >= replaced {
+                    break;
+                } else if t >= e.end_step {
                     *v = f32::NAN;
                 } else if e.kind == EventKind::SensorStuck {
                     *v = frozen;
@@ -685,6 +774,7 @@ fn apply_faults(
     let time_at = |s: usize| config.start + s as i64 * config.interval_s;
     let mods = modalities.len();
     let mut dropout_left = 0usize;
+    let mut probe_left = vec![0usize; mods];
     let mut stuck_left = vec![0usize; mods];
     // Last value each modality reported: what a stuck sensor repeats.
     let mut last_reported = vec![f32::NAN; mods];
@@ -702,6 +792,21 @@ fn apply_faults(
         }
         for (m, spec) in modalities.iter().enumerate() {
             let at = m * steps + t;
+            if f.probe_dropout_per_step > 0.0
+                && dropout_left == 0
+                && probe_left[m] == 0
+                && uniform(rng) < f.probe_dropout_per_step
+            {
+                let len = geometric_len(rng, f.probe_dropout_mean_steps).min(steps - t);
+                records.push(FaultRecord {
+                    sensor,
+                    kind: FaultKind::Dropout,
+                    modality: Some(m),
+                    start: time_at(t),
+                    end: time_at(t + len),
+                });
+                probe_left[m] = len;
+            }
             if stuck_left[m] == 0 && t > 0 && uniform(rng) < f.stuck_per_step {
                 let len = geometric_len(rng, f.stuck_mean_steps).min(steps - t);
                 records.push(FaultRecord {
@@ -721,12 +826,16 @@ fn apply_faults(
                     out[at] = last_reported[m];
                 }
             } else if spike && dropout_left == 0 && !out[at].is_nan() {
-                let up = uniform(rng) < 0.5;
+                let mut up = uniform(rng) < 0.5;
                 let (size, (lo, hi)) = if spec.is_water {
                     (0.05 + 0.10 * uniform(rng), VW_RANGE)
                 } else {
                     (3.0 + 5.0 * uniform(rng), T_RANGE)
                 };
+                // Soil temperature spikes do not cross 0 °C (the frost floor): they go up.
+                if !spec.is_water && f64::from(out[at]) - size < T_FREEZE_KNEE_C {
+                    up = true;
+                }
                 let v = f64::from(out[at]) + if up { size } else { -size };
                 out[at] = v.clamp(lo, hi) as f32;
                 records.push(FaultRecord {
@@ -737,11 +846,12 @@ fn apply_faults(
                     end: time_at(t + 1),
                 });
             }
-            if dropout_left > 0 {
+            if dropout_left > 0 || probe_left[m] > 0 {
                 out[at] = f32::NAN;
             } else if !out[at].is_nan() {
                 last_reported[m] = out[at];
             }
+            probe_left[m] = probe_left[m].saturating_sub(1);
         }
         dropout_left = dropout_left.saturating_sub(1);
     }
@@ -764,7 +874,16 @@ mod tests {
     #[test]
     fn storm_rate_peaks_in_winter() {
         let c = SynthConfig::default();
-        assert!(storm_rate_per_day(&c, 340.0) > 3.0 * storm_rate_per_day(&c, 160.0));
-        assert!(et_factor(197.0) > 0.99 && et_factor(15.0) < 0.1);
+        assert!(storm_rate_per_day(&c, 30.0) > 3.0 * storm_rate_per_day(&c, 210.0));
+        let peak = c.climate.et_peak_doy;
+        assert!(et_factor(&c, peak) > 0.99 && et_factor(&c, 15.0) < 0.1);
+        // Southern hemisphere: the same seasons half a year later.
+        let south = SynthConfig {
+            climate: c.climate.shifted(182.625),
+            ..c.clone()
+        };
+        let later = (peak + 182.625).rem_euclid(365.25);
+        assert!((et_factor(&south, later) - et_factor(&c, peak)).abs() < 1e-9);
+        assert!((storm_rate_per_day(&south, 210.625) - storm_rate_per_day(&c, 28.0)).abs() < 1e-9);
     }
 }

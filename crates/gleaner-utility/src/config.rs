@@ -122,6 +122,37 @@ impl AnomalyForm {
     }
 }
 
+/// What the anomaly A_i^m measures the latest value against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AnomalyReference {
+    /// The cell's own past: `|x̂(t*) − mu| / (sigma + epsilon)` over the cell series (SPEC §2,
+    /// the paper's form; the default).
+    #[default]
+    OwnHistory,
+    /// The cell's neighbours: the residual `r(t) = x̂_i(t) − median_j x̂_j(t)` over the
+    /// neighbour cells `j` that have a value at `t` (at least `min_neighbours` of them), then
+    /// the same z-score on the residual series: its latest point against the mean and sd of
+    /// its earlier points. Weather moves a cell and its neighbours together and cancels; a
+    /// local event (a leak, a dry patch) does not. Computed from the history (not from the
+    /// incremental state).
+    Neighbours {
+        /// Fewest neighbours with a value at a timestamp for the residual to exist (>= 1).
+        min_neighbours: usize,
+    },
+}
+
+impl AnomalyReference {
+    /// A short label for outputs: `own-history` or `neighbours(min=…)`.
+    pub fn label(self) -> String {
+        match self {
+            AnomalyReference::OwnHistory => "own-history".to_string(),
+            AnomalyReference::Neighbours { min_neighbours } => {
+                format!("neighbours(min={min_neighbours})")
+            }
+        }
+    }
+}
+
 /// Every parameter of S_i = alpha·F_i + beta·A_i + gamma·U_i − delta·R_i.
 ///
 /// Defaults (SPEC §2): all weights 1, freshness half-life 3 days (259,200 s), all history,
@@ -150,6 +181,8 @@ pub struct UtilityConfig {
     pub anomaly_weights: ModalityWeights,
     /// Raw or bounded anomaly in the score (default raw).
     pub anomaly_form: AnomalyForm,
+    /// What the anomaly compares the latest value with (default the cell's own history).
+    pub anomaly_reference: AnomalyReference,
 }
 
 impl Default for UtilityConfig {
@@ -166,6 +199,7 @@ impl Default for UtilityConfig {
             redundancy_weights: ModalityWeights::Equal,
             anomaly_weights: ModalityWeights::Equal,
             anomaly_form: AnomalyForm::Raw,
+            anomaly_reference: AnomalyReference::OwnHistory,
         }
     }
 }
@@ -219,6 +253,11 @@ impl UtilityConfig {
             return Err(UtilityError::Config(format!(
                 "kappa {kappa} must be positive"
             )));
+        }
+        if let AnomalyReference::Neighbours { min_neighbours: 0 } = self.anomaly_reference {
+            return Err(UtilityError::Config(
+                "anomaly reference: min_neighbours must be at least 1".to_string(),
+            ));
         }
         self.redundancy_weights.validate("omega", n_modalities)?;
         self.anomaly_weights.validate("phi", n_modalities)?;

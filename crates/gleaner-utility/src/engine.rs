@@ -4,9 +4,10 @@ use rayon::prelude::*;
 
 use crate::probabilities::check_distribution;
 use crate::terms::{
-    Moments, aligned_correlation, anomaly, freshness, merged_correlation, score, uncertainty,
+    Moments, aligned_correlation, anomaly, freshness, merged_correlation, neighbour_anomaly, score,
+    uncertainty,
 };
-use crate::{Series, UtilityConfig, UtilityError};
+use crate::{AnomalyReference, Series, UtilityConfig, UtilityError};
 use gleaner_field::UnixSeconds;
 
 /// Everything the score needs to know about one cell, borrowed from the caller.
@@ -289,7 +290,18 @@ fn cell_terms(
             (total / cell.neighbours.len() as f64).clamp(0.0, 1.0)
         };
         r_by.push(Some(r));
-        a_by.push(Some(anomaly(own, config.epsilon)));
+        let a = match config.anomaly_reference {
+            AnomalyReference::OwnHistory => anomaly(own, config.epsilon),
+            AnomalyReference::Neighbours { min_neighbours } => {
+                let nbs: Vec<Series<'_>> = cell
+                    .neighbours
+                    .iter()
+                    .map(|&j| cells[j].series[m].between(from, t))
+                    .collect();
+                neighbour_anomaly(own, &nbs, min_neighbours, config.epsilon)
+            }
+        };
+        a_by.push(Some(a));
     }
     finish_terms(f, r_by, a_by, cell.probabilities, config)
 }
@@ -497,5 +509,62 @@ mod tests {
             ..good.clone()
         };
         assert!(score_cells_parallel(&[good, bad], DAY, &UtilityConfig::default()).is_err());
+    }
+
+    #[test]
+    fn neighbour_reference_sees_a_local_jump_that_weather_hides() {
+        const DAY: i64 = 86_400;
+        let t: Vec<i64> = (0..40).map(|d| d * DAY).collect();
+        // A strong shared season (weather) plus small cell-specific wiggles.
+        let weather: Vec<f64> = (0..40).map(|d| 0.3 * (d as f64 / 6.0).sin()).collect();
+        let wiggle = |k: usize, d: usize| 0.004 * ((d * (k + 2)) % 5) as f64;
+        let mut series: Vec<Vec<f64>> = (0..4)
+            .map(|k| (0..40).map(|d| weather[d] + wiggle(k, d)).collect())
+            .collect();
+        // Cell 0 alone gets a 0.1 leak on the last day; cell 3 misses that day.
+        series[0][39] += 0.1;
+        let t3 = &t[..39];
+        let last = [Some(39 * DAY)];
+        let nb0 = [1, 2, 3];
+        let nb = [0];
+        let cells: Vec<CellInputs<'_>> = (0..4)
+            .map(|k| CellInputs {
+                last_collected: &last,
+                series: vec![if k == 3 {
+                    Series::new(t3, &series[3][..39])
+                } else {
+                    Series::new(&t, &series[k])
+                }],
+                neighbours: if k == 0 { &nb0 } else { &nb },
+                probabilities: &[],
+            })
+            .collect();
+        let own = score_cells(&cells, 39 * DAY, &UtilityConfig::default()).unwrap();
+        let config = UtilityConfig {
+            anomaly_reference: AnomalyReference::Neighbours { min_neighbours: 2 },
+            ..Default::default()
+        };
+        let nbr = score_cells(&cells, 39 * DAY, &config).unwrap();
+        let (a_own, a_nb) = (own[0].a_raw, nbr[0].a_raw);
+        assert!(a_own < 3.0, "own history hides the jump: {a_own}");
+        assert!(a_nb > 10.0, "neighbours reveal it: {a_nb}");
+        // By hand: residuals against the median of cells 1, 2 (and 3 before the last day).
+        let nbs: Vec<Series<'_>> = nb0.iter().map(|&j| cells[j].series[0]).collect();
+        let want = crate::neighbour_anomaly(cells[0].series[0], &nbs, 2, 1e-6);
+        assert_eq!(a_nb, want);
+        // Too few neighbours on every day: no residual series, A = 0.
+        let strict = UtilityConfig {
+            anomaly_reference: AnomalyReference::Neighbours { min_neighbours: 4 },
+            ..Default::default()
+        };
+        assert_eq!(
+            score_cells(&cells, 39 * DAY, &strict).unwrap()[0].a_raw,
+            0.0
+        );
+        let zero = UtilityConfig {
+            anomaly_reference: AnomalyReference::Neighbours { min_neighbours: 0 },
+            ..Default::default()
+        };
+        assert!(score_cells(&cells, 39 * DAY, &zero).is_err());
     }
 }

@@ -16,6 +16,9 @@
 //!   supported: a sliding window would need to remove points as they leave it, i.e. keep and
 //!   revisit the history. Scoring with another window returns
 //!   [`UtilityError::WindowNotIncremental`]; use [`score_cells`](crate::score_cells) instead.
+//!   The neighbour-relative anomaly ([`crate::AnomalyReference::Neighbours`]) is not
+//!   supported either (it needs the neighbours' history): scoring with it returns
+//!   [`UtilityError::Config`].
 //! - the statistics hold every reading added so far regardless of the scoring time.
 //! - with a retention horizon ([`IncrementalState::set_retention`]), grid slots older than
 //!   (newest time seen − retention) are forgotten and readings older than that are rejected
@@ -799,6 +802,12 @@ impl IncrementalState {
         if let HistoryWindow::Last { seconds } = config.window {
             return Err(UtilityError::WindowNotIncremental(seconds));
         }
+        if config.anomaly_reference != crate::AnomalyReference::OwnHistory {
+            return Err(UtilityError::Config(format!(
+                "the {} anomaly is computed from the history, not the incremental state",
+                config.anomaly_reference.label()
+            )));
+        }
         let n = self.n_cells();
         if !probabilities.is_empty() {
             if probabilities.len() != n {
@@ -1324,6 +1333,14 @@ mod tests {
             s.score(0, &windowed, &[]),
             Err(UtilityError::WindowNotIncremental(DAY))
         );
+        let neighbour_relative = UtilityConfig {
+            anomaly_reference: crate::AnomalyReference::Neighbours { min_neighbours: 1 },
+            ..Default::default()
+        };
+        assert!(matches!(
+            s.score(0, &neighbour_relative, &[]),
+            Err(UtilityError::Config(_))
+        ));
         assert!(IncrementalState::new(&[1], &[vec![0]], 1, TimeGrid::DAILY).is_err());
         assert!(IncrementalState::new(&[0], &[vec![]], 1, TimeGrid::DAILY).is_err());
         assert!(s.record_collection(0, 1, 5).is_err());

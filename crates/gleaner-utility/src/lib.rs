@@ -75,10 +75,15 @@ pub use condition::{
     ClassThresholds, ConditionConfig, ConditionModel, Evaluation, FEATURE_NAMES, TrainingSet,
     class_of, condition_features, quantile_thresholds,
 };
-pub use config::{AnomalyForm, DAY_S, HistoryWindow, ModalityWeights, UtilityConfig};
+pub use config::{
+    AnomalyForm, AnomalyReference, DAY_S, HistoryWindow, ModalityWeights, UtilityConfig,
+};
 pub use engine::{CellInputs, CellTerms, score_cells, score_cells_parallel};
 pub use error::UtilityError;
 pub use incremental::{IncrementalState, PairStats, Reading, RunningStats, SeriesStats};
 pub use probabilities::{PROBABILITY_SUM_TOLERANCE, validate_probabilities};
 pub use series::{OwnedSeries, Series, TimeGrid, cell_series};
-pub use terms::{anomaly, freshness, pearson, redundancy, score, series_correlation, uncertainty};
+pub use terms::{
+    anomaly, freshness, neighbour_anomaly, neighbour_residuals, pearson, redundancy, score,
+    series_correlation, uncertainty,
+};

@@ -253,6 +253,74 @@ pub fn anomaly(series: Series<'_>, epsilon: f64) -> f64 {
     anomaly_from_stats(latest, mu, m2 / (k - 1.0), epsilon)
 }
 
+/// The residual of a cell series against its neighbours: at every timestamp of `own` where at
+/// least `min_neighbours` of the `neighbours` series have a value (at that exact timestamp),
+/// `own − median(neighbour values)`, in the modality's unit. Returns (times, residuals),
+/// ascending. O(own × neighbours × log(neighbour length)).
+///
+/// ```
+/// use gleaner_utility::{neighbour_residuals, Series};
+/// let t = [0, 1, 2];
+/// let own = Series::new(&t, &[5.0, 6.0, 9.0]);
+/// let (a, b) = ([1.0, 2.0, 3.0], [3.0, 4.0, 5.0]);
+/// let nbs = [Series::new(&t, &a), Series::new(&t[..2], &b[..2])];
+/// let (times, r) = neighbour_residuals(own, &nbs, 1);
+/// assert_eq!(times, vec![0, 1, 2]);
+/// assert_eq!(r, vec![3.0, 3.0, 6.0]); // medians 2, 3, then 3 alone
+/// ```
+pub fn neighbour_residuals(
+    own: Series<'_>,
+    neighbours: &[Series<'_>],
+    min_neighbours: usize,
+) -> (Vec<UnixSeconds>, Vec<f64>) {
+    let mut times = Vec::new();
+    let mut residuals = Vec::new();
+    let mut buf = Vec::with_capacity(neighbours.len());
+    for (&t, &x) in own.times.iter().zip(own.values) {
+        buf.clear();
+        buf.extend(neighbours.iter().filter_map(|nb| nb.value_at(t)));
+        if buf.is_empty() || buf.len() < min_neighbours.max(1) {
+            continue;
+        }
+        buf.sort_by(f64::total_cmp);
+        let k = buf.len();
+        let median = if k % 2 == 1 {
+            buf[k / 2]
+        } else {
+            0.5 * (buf[k / 2 - 1] + buf[k / 2])
+        };
+        times.push(t);
+        residuals.push(x - median);
+    }
+    (times, residuals)
+}
+
+/// Neighbour-relative anomaly of one modality ([`crate::AnomalyReference::Neighbours`]), in
+/// standard deviations of the residual, >= 0: [`anomaly`] of the series of
+/// [`neighbour_residuals`], i.e. the latest residual against the mean and sample sd of the
+/// earlier ones. Fewer than 3 residual points gives 0. Window the series before calling.
+///
+/// ```
+/// use gleaner_utility::{neighbour_anomaly, Series};
+/// let t: Vec<i64> = (0..6).collect();
+/// // Weather moves both cells alike; on the last day the cell alone jumps by 0.1.
+/// let w = [0.20, 0.30, 0.25, 0.35, 0.22, 0.30];
+/// let own: Vec<f64> = w.iter().enumerate().map(|(k, x)| x + 0.01 * (k % 2) as f64).collect();
+/// let mut own = own;
+/// own[5] += 0.1;
+/// let a = neighbour_anomaly(Series::new(&t, &own), &[Series::new(&t, &w)], 1, 1e-6);
+/// assert!(a > 10.0);
+/// ```
+pub fn neighbour_anomaly(
+    own: Series<'_>,
+    neighbours: &[Series<'_>],
+    min_neighbours: usize,
+    epsilon: f64,
+) -> f64 {
+    let (times, residuals) = neighbour_residuals(own, neighbours, min_neighbours);
+    anomaly(Series::new(&times, &residuals), epsilon)
+}
+
 /// A_i^m from the latest value, the past mean and the past sample variance (unit²).
 pub(crate) fn anomaly_from_stats(latest: f64, mu: f64, variance: f64, epsilon: f64) -> f64 {
     (latest - mu).abs() / (variance.max(0.0).sqrt() + epsilon)

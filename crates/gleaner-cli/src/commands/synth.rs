@@ -53,8 +53,9 @@ pub struct SynthArgs {
     /// Sampling interval, seconds (a divisor of 86400).
     #[arg(long, default_value_t = 86_400)]
     pub interval_s: i64,
-    /// Number of localised ground-truth events (leak, drying patch, failing sensor).
-    #[arg(long, default_value_t = 3)]
+    /// Number of localised ground-truth events (leak, drying patch, failing sensor; each
+    /// lasts 7-28 days).
+    #[arg(long, default_value_t = SynthConfig::default().event_count)]
     pub events: usize,
     /// Correlation length of the spatial fields, metres.
     #[arg(long = "correlation-length", default_value_t = 500.0)]

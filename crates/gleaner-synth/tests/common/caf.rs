@@ -108,3 +108,68 @@ pub fn caf_panels(dir: &Path, columns: &[&str]) -> Result<Vec<DailyPanel>, Strin
     }
     Ok(panels)
 }
+
+/// The CAF daily network between two civil dates (inclusive), as a [`NetworkPanel`] with the
+/// default farm's modalities: VW at 30, 60 and 90 cm and soil temperature at 30 cm.
+#[allow(dead_code)]
+pub fn caf_network(
+    dir: &Path,
+    from: (i64, i64, i64),
+    to: (i64, i64, i64),
+) -> Result<gleaner_synth::NetworkPanel, String> {
+    let columns = ["VW_30cm", "VW_60cm", "VW_90cm", "T_30cm"];
+    let names = ["vw@30cm", "vw@60cm", "vw@90cm", "t@30cm"];
+    let panels = caf_panels(dir, &columns)?;
+    let first = first_day(dir)?;
+    let (a, b) = (days(from.0, from.1, from.2), days(to.0, to.1, to.2));
+    let (i, j) = ((a - first).max(0) as usize, (b - first + 1).max(0) as usize);
+    let modalities = panels
+        .iter()
+        .zip(names)
+        .map(|(p, name)| gleaner_synth::PanelModality {
+            name: name.to_string(),
+            is_water: name.starts_with("vw"),
+            depth_cm: name[name.find('@').unwrap_or(0) + 1..name.len() - 2]
+                .parse()
+                .unwrap_or(0),
+            series: p
+                .series
+                .iter()
+                .map(|s| {
+                    (i..j)
+                        .map(|d| s.get(d).copied().unwrap_or(f64::NAN))
+                        .collect()
+                })
+                .collect(),
+        })
+        .collect();
+    Ok(gleaner_synth::NetworkPanel {
+        positions: panels[0].positions.clone(),
+        first_day: a,
+        modalities,
+        event_days: Vec::new(),
+    })
+}
+
+/// Earliest date in the CAF daily files, days since 1970-01-01.
+fn first_day(dir: &Path) -> Result<i64, String> {
+    let daily = dir.join("caf").join("Daily");
+    let mut first = i64::MAX;
+    for e in std::fs::read_dir(&daily).map_err(|e| format!("listing {}: {e}", daily.display()))? {
+        let path = e.map_err(|e| e.to_string())?.path();
+        if path.extension().is_none_or(|x| x != "txt") {
+            continue;
+        }
+        let text =
+            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        if let Some(d) = text
+            .lines()
+            .nth(1)
+            .and_then(|l| l.split('\t').nth(1))
+            .and_then(parse_date)
+        {
+            first = first.min(d);
+        }
+    }
+    Ok(first)
+}

@@ -8,6 +8,8 @@ fn faults_occur_at_their_configured_rates() {
         spike_per_reading: 0.002,
         stuck_per_step: 0.001,
         stuck_mean_steps: 5.0,
+        probe_dropout_per_step: 0.0,
+        probe_dropout_mean_steps: 1.0,
     };
     let (sensors, steps, mods) = (400usize, 365usize, 4usize);
     let config = SynthConfig {

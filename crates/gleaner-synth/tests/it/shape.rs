@@ -80,6 +80,7 @@ fn hourly_sampling_has_a_daily_temperature_cycle() {
         t_depths_cm: vec![5],
         vw_depths_cm: vec![30],
         faults: FaultRates::none(),
+        event_count: 0,
         ..small(6, 5, 4)
     };
     let farm = generate(&config).unwrap();
