@@ -26,7 +26,8 @@
 //! the newest reading — in O(cells × neighbours) instead of O(history); [`compute_full`]
 //! always reads the history. Both give the same scores within 1e-9 relative.
 //!
-//! Read models: [`field_view`] (the cell table), [`missions`], [`mission`].
+//! Read models: [`field_view`] (the cell table), [`missions`], [`mission`], [`cell_detail`]
+//! (one cell's weighted terms, rank and recent series).
 //!
 //! Units: times are seconds since 1970-01-01T00:00:00Z (UTC); positions WGS84 ([`LatLon`],
 //! lat then lon); lengths metres; energies joules; data volumes bytes.
@@ -35,6 +36,7 @@
 #![deny(missing_docs)]
 
 mod cell_csv;
+mod cell_detail;
 mod error;
 mod explore;
 mod ingest;
@@ -51,6 +53,7 @@ mod state;
 mod summaries;
 mod view;
 
+pub use cell_detail::{CellDetail, Contributions, SeriesPoint, cell_detail};
 pub use error::{AppError, Result};
 pub use explore::{Exploration, ExploreRequest, explore};
 pub use ingest::{Format, IngestOutcome, IngestRequest, detect, ingest};
@@ -76,6 +79,6 @@ pub use gleaner_ingest::time::{format_rfc3339, parse_timestamp};
 pub use gleaner_mission::Planner;
 pub use gleaner_store::{
     CellMetadata, CellScores, EnergyBreakdown, FlightProfile, MissionId, MissionKind,
-    MissionRecord, MissionStatus, NewMission, SqliteStore, StopRecord, Store, StoreRead,
-    StoreWrite, VisitRecord,
+    MissionRecord, MissionStatus, NewMission, SqliteStore, StopRecord, Store, StoreError,
+    StoreRead, StoreWrite, VisitRecord,
 };

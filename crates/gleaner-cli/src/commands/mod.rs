@@ -7,4 +7,5 @@ pub mod demo;
 pub mod export;
 pub mod plan;
 pub mod score;
+pub mod serve;
 pub mod synth;
