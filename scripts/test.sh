@@ -6,6 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/python-env.sh
+bash scripts/browser-env.sh  # headless chromium + chromium-driver for the dashboard's browser test
 # Property tests draw their cases from a fixed seed, so every run tests the same cases (set
 # PROPTEST_RNG_SEED to explore others; failures are kept in proptest-regressions/).
 export PROPTEST_RNG_SEED="${PROPTEST_RNG_SEED:-20261130}"

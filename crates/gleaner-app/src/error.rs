@@ -34,6 +34,9 @@ pub enum AppError {
         /// Its id as given.
         id: String,
     },
+    /// The request conflicts with the project's state (a mission already recorded as flown).
+    #[error("{0}")]
+    Conflict(String),
     /// A core computation rejected its inputs (grid, utility, energy, planner).
     #[error("{context}: {message}")]
     Core {

@@ -27,7 +27,8 @@
 //! the newest reading — in O(cells × neighbours) instead of O(history); [`compute_full`]
 //! always reads the history. Both give the same scores within 1e-9 relative.
 //!
-//! Read models: [`field_view`] (the cell table), [`missions`], [`mission`].
+//! Read models: [`field_view`] (the cell table), [`missions`], [`mission`], [`cell_detail`]
+//! (one cell's weighted terms, rank and recent series).
 //!
 //! Units: times are seconds since 1970-01-01T00:00:00Z (UTC); positions WGS84 ([`LatLon`],
 //! lat then lon); lengths metres; energies joules; data volumes bytes.
@@ -36,6 +37,7 @@
 #![deny(missing_docs)]
 
 pub mod cell_csv;
+mod cell_detail;
 mod error;
 mod explore;
 mod ingest;
@@ -53,6 +55,7 @@ mod state;
 mod summaries;
 mod view;
 
+pub use cell_detail::{CellDetail, Contributions, SeriesPoint, cell_detail};
 pub use error::{AppError, Result};
 pub use explore::{Exploration, ExploreRequest, explore};
 pub use ingest::{Format, IngestOutcome, IngestRequest, detect, ingest};
@@ -80,5 +83,6 @@ pub use gleaner_mission::Planner;
 pub use gleaner_store::{
     AnyStore, CellMetadata, CellScores, Database, EnergyBreakdown, FlightProfile, MissionId,
     MissionKind, MissionRecord, MissionStatus, NewMission, PgStore, SqliteStore, StopRecord, Store,
+    StoreError,
     StoreRead, StoreWrite, VisitRecord,
 };

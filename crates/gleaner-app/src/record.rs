@@ -85,7 +85,7 @@ pub(crate) fn record_parsed<S: Store>(
             id: format!("#{}", request.mission),
         })?;
     if mission.status == MissionStatus::Flown && !request.amend {
-        return Err(AppError::Invalid(format!(
+        return Err(AppError::Conflict(format!(
             "mission #{} was already recorded as flown{}; pass --amend to replace that record",
             request.mission,
             mission

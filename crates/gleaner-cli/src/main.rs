@@ -15,7 +15,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use gleaner_app as app;
 use gleaner_app::{MissionId, Project};
 
-use commands::{bench, cells, demo, export, migrate, plan, score, synth};
+use commands::{bench, cells, demo, export, migrate, plan, score, serve, synth};
 
 /// Utility-driven UAV data collection for farm sensor networks.
 ///
@@ -277,6 +277,11 @@ enum Command {
     /// and recorded -> rescoring. `--data` runs it on the real CAF network.
     #[command(after_help = "Example:\n  gleaner demo --dir gleaner-demo --seed 1")]
     Demo(demo::DemoArgs),
+    /// Serve the HTTP API (/api/v1) and the web dashboard for a project until ctrl-c.
+    #[command(
+        after_help = "Binds 127.0.0.1:8080 by default. Writes (saving a plan, scoring, uploads) need\n`Authorization: Bearer <token>`: the token comes from --token-file or GLEANER_TOKEN, or on\nloopback is drawn at start-up and printed once in the dashboard's address. Binding any other\naddress needs a token. Request log on standard error (GLEANER_LOG=debug for more).\n\nExamples:\n  gleaner serve --project caf\n  GLEANER_TOKEN=$(cat token) gleaner serve --project caf --addr 0.0.0.0:8080"
+    )]
+    Serve(serve::ServeArgs),
 }
 
 /// `--project`: the project directory.
@@ -761,6 +766,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Demo(args) => print!("{}", demo::run(&args)?),
         Command::Migrate(args) => println!("{}", migrate::run(&args, &progress)?),
+        Command::Serve(args) => serve::run(args)?,
     }
     Ok(())
 }

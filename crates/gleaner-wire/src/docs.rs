@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 
 /// Latest F, R, A, U, S of a cell.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct CellScoresDoc {
     /// Freshness in [0, 1].
     pub freshness: f64,
@@ -23,6 +24,7 @@ pub struct CellScoresDoc {
 
 /// A cell series summary, values in the modality's unit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct SummaryDoc {
     /// Modality.
     pub modality: String,
@@ -44,6 +46,7 @@ pub struct SummaryDoc {
 
 /// A neighbour correlation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct CorrelationDoc {
     /// Neighbour cell id.
     pub neighbour: String,
@@ -57,6 +60,7 @@ pub struct CorrelationDoc {
 
 /// One row of the cell metadata table (SPEC §5). Positions `[lon, lat]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct CellRowDoc {
     /// Cell id, e.g. `x3y-1`.
     pub cell: String,
@@ -88,6 +92,7 @@ pub struct CellRowDoc {
 
 /// One scored cell. Positions `[lon, lat]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ScoreRowDoc {
     /// Cell id.
     pub cell: String,
@@ -119,6 +124,7 @@ pub struct ScoreRowDoc {
 
 /// The condition model behind U.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ConditionDoc {
     /// Modality the classes come from (`user` for user probabilities).
     pub modality: String,
@@ -130,6 +136,7 @@ pub struct ConditionDoc {
 
 /// A scoring at mission time t.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ScoringDoc {
     /// Mission time, RFC 3339.
     pub t: String,
@@ -147,6 +154,7 @@ pub struct ScoringDoc {
 
 /// An exploration plan: its sorties as missions.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ExplorationDoc {
     /// Planned for, RFC 3339.
     pub planned_at: String,

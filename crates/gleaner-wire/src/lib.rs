@@ -115,6 +115,7 @@ pub const VERSION: u32 = 1;
 
 /// How the aircraft is to fly a mission: what the energy model assumed.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ProfileDoc {
     /// Base station (take-off and landing) `[lon, lat]`, WGS84 degrees.
     pub base_lon_lat: [f64; 2],
@@ -128,6 +129,7 @@ pub struct ProfileDoc {
 
 /// One stop of a mission, in visiting order.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct StopDoc {
     /// Position in the visiting order, from 1.
     pub order: u32,
@@ -155,6 +157,7 @@ pub struct StopDoc {
 
 /// The energy breakdown of a sortie (SPEC §3).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct EnergyDoc {
     /// E_t: travel from the base through the cells, J.
     pub travel_j: f64,
@@ -178,6 +181,7 @@ pub struct EnergyDoc {
 
 /// Headline numbers of a comparison plan (the paper's greedy on the same instance).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct BaselineDoc {
     /// Planner name.
     pub planner: String,
@@ -191,6 +195,7 @@ pub struct BaselineDoc {
 
 /// A planned or flown mission (`gleaner.mission` version 1).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct MissionDoc {
     /// Always [`MISSION_FORMAT`].
     pub format: String,
@@ -236,6 +241,7 @@ pub struct MissionDoc {
 
 /// A cell's latest utility terms.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ScoresDoc {
     /// Freshness F.
     pub f: f64,
@@ -253,6 +259,7 @@ pub struct ScoresDoc {
 
 /// One grid cell for maps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct CellDoc {
     /// Cell id (`x12y-3`).
     pub cell: String,
@@ -268,6 +275,7 @@ pub struct CellDoc {
 
 /// A sensor station for maps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct SensorDoc {
     /// Sensor id.
     pub id: String,
@@ -277,6 +285,7 @@ pub struct SensorDoc {
 
 /// The field: grid, scores and sensors (`gleaner.field` version 1).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct FieldDoc {
     /// Always [`FIELD_FORMAT`].
     pub format: String,

@@ -8,4 +8,5 @@ pub mod export;
 pub mod migrate;
 pub mod plan;
 pub mod score;
+pub mod serve;
 pub mod synth;

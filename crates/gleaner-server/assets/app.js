@@ -1,0 +1,446 @@
+// gleaner dashboard: talks only to this server's /api/v1. Written for gleaner; no libraries.
+"use strict";
+
+const API = "/api/v1";
+const state = {
+  project: null, field: null, missions: [], preview: null, previewBody: null,
+  selected: null, shown: null, colourBy: "s",
+};
+const $ = (id) => document.getElementById(id);
+
+// ---- helpers -------------------------------------------------------------------------
+
+function el(tag, attrs, ...children) {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs || {})) {
+    if (v === null || v === undefined || v === false) continue;
+    if (k === "class") e.className = v;
+    else if (k.startsWith("on")) e.addEventListener(k.slice(2), v);
+    else e.setAttribute(k, v === true ? "" : String(v));
+  }
+  for (const c of children.flat()) {
+    if (c === null || c === undefined) continue;
+    e.append(c instanceof Node ? c : document.createTextNode(String(c)));
+  }
+  return e;
+}
+
+function token() {
+  return $("token").value.trim();
+}
+
+function status(text, cls) {
+  const s = $("status");
+  s.textContent = text;
+  s.className = cls || "muted";
+}
+
+async function call(method, path, body, { write = false, raw = false } = {}) {
+  const headers = {};
+  if (write && token()) headers["Authorization"] = "Bearer " + token();
+  let payload = body;
+  if (body !== undefined && !(body instanceof FormData)) {
+    headers["Content-Type"] = "application/json";
+    payload = JSON.stringify(body);
+  }
+  const r = await fetch(API + path, { method, headers, body: payload });
+  if (!r.ok) {
+    let msg = r.status + " " + r.statusText;
+    try {
+      const e = await r.json();
+      msg = e.reason + (e.field ? " (" + e.field + ")" : "");
+    } catch (_) { /* not JSON */ }
+    throw new Error(msg);
+  }
+  return raw ? r.text() : r.json();
+}
+
+const kJ = (j) => (j / 1000).toFixed(2);
+const pct = (x) => (100 * x).toFixed(1) + "%";
+const fmt = (x, d = 3) => (x === null || x === undefined ? "–" : Number(x).toFixed(d));
+
+// A sequential ramp (light yellow to dark blue-green) for cell values in [0, 1].
+const RAMP = [[255, 247, 188], [199, 233, 180], [127, 205, 187], [65, 182, 196], [34, 94, 168], [12, 44, 132]];
+function ramp(t) {
+  t = Math.max(0, Math.min(1, t));
+  const x = t * (RAMP.length - 1), i = Math.min(RAMP.length - 2, Math.floor(x)), f = x - i;
+  const c = RAMP[i].map((v, k) => Math.round(v + f * (RAMP[i + 1][k] - v)));
+  return `rgb(${c[0]},${c[1]},${c[2]})`;
+}
+
+// ---- the map ---------------------------------------------------------------------------
+
+function cellValue(cell, key) {
+  return cell.scores ? cell.scores[key] : null;
+}
+
+function colourCells() {
+  const svg = $("map").querySelector("svg");
+  if (!svg || !state.field) return;
+  const key = state.colourBy;
+  const bar = svg.querySelector("#colour-bar");
+  if (bar) bar.style.display = key === "s" ? "" : "none";
+  const values = state.field.cells.map((c) => cellValue(c, key)).filter((v) => v !== null);
+  const lo = Math.min(...values), hi = Math.max(...values);
+  svg.querySelectorAll("path.cell").forEach((p) => {
+    if (key === "s") { p.style.fill = ""; return; }
+    const v = cellValue(state.field.cells[+p.dataset.k], key);
+    p.style.fill = v === null ? "#d9d9d9" : ramp(hi > lo ? (v - lo) / (hi - lo) : 0.5);
+  });
+  const legend = $("legend");
+  legend.replaceChildren();
+  if (key !== "s" && values.length) {
+    const r = el("span", { class: "ramp" });
+    r.style.background = `linear-gradient(to right, ${ramp(0)}, ${ramp(0.5)}, ${ramp(1)})`;
+    legend.append(fmt(lo, 2), r, fmt(hi, 2));
+  }
+}
+
+function showSvg(text, caption) {
+  const doc = new DOMParser().parseFromString(text, "image/svg+xml");
+  const svg = document.importNode(doc.documentElement, true);
+  svg.removeAttribute("width");
+  svg.removeAttribute("height");
+  svg.setAttribute("role", "img");
+  const map = $("map");
+  map.replaceChildren(svg);
+  const tip = $("tooltip");
+  svg.querySelectorAll('path[id^="cell-"]').forEach((p) => {
+    const k = +p.id.slice(5);
+    const cell = state.field && state.field.cells[k];
+    if (!cell) return;
+    p.classList.add("cell");
+    p.dataset.k = k;
+    p.dataset.cell = cell.cell;
+    if (cell.cell === state.selected) p.classList.add("selected");
+    p.addEventListener("mousemove", (ev) => {
+      const s = cell.scores;
+      tip.textContent = cell.cell + (s ? `  S ${fmt(s.s)}  F ${fmt(s.f, 2)}  R ${fmt(s.r, 2)}  A ${fmt(s.a, 2)}  U ${fmt(s.u, 2)}` : "  not scored");
+      tip.style.left = ev.clientX + 12 + "px";
+      tip.style.top = ev.clientY + 12 + "px";
+      tip.hidden = false;
+    });
+    p.addEventListener("mouseleave", () => { tip.hidden = true; });
+    p.addEventListener("click", () => selectCell(cell.cell));
+  });
+  $("map-caption").textContent = caption || "";
+  colourCells();
+  drawBasemap(svg);
+}
+
+async function loadMap(missionId) {
+  const q = missionId ? "?mission=" + missionId : "";
+  const text = await call("GET", "/map.svg" + q, undefined, { raw: true });
+  state.shown = missionId || (state.missions.length ? state.missions[state.missions.length - 1].mission_id : null);
+  showSvg(text, state.shown ? "Mission " + state.shown : "No mission yet");
+  renderMissions();
+  if (!performance.getEntriesByName("map-ready").length) performance.mark("map-ready");
+}
+
+// Optional basemap: XYZ tiles under the cells, placed by fitting the SVG's (equirectangular)
+// frame to two cells' known positions.
+function drawBasemap(svg) {
+  const url = state.project && state.project.basemap_url;
+  if (!url || !state.field) return;
+  const paths = [...svg.querySelectorAll("path.cell")];
+  if (paths.length < 2) return;
+  const pick = (p) => { const b = p.getBBox(); const c = state.field.cells[+p.dataset.k].centre_lon_lat; return { x: b.x + b.width / 2, y: b.y + b.height / 2, lon: c[0], lat: c[1] }; };
+  const pts = paths.map(pick);
+  let a = pts[0], b = pts[0];
+  for (const p of pts) { if (Math.abs(p.lon - a.lon) > Math.abs(b.lon - a.lon)) b = p; }
+  let c = pts[0];
+  for (const p of pts) { if (Math.abs(p.lat - a.lat) > Math.abs(c.lat - a.lat)) c = p; }
+  if (b.lon === a.lon || c.lat === a.lat) return;
+  const sx = (b.x - a.x) / (b.lon - a.lon), sy = (c.y - a.y) / (c.lat - a.lat);
+  const X = (lon) => a.x + (lon - a.lon) * sx, Y = (lat) => a.y + (lat - a.lat) * sy;
+  const lons = pts.map((p) => p.lon), lats = pts.map((p) => p.lat);
+  const [w, e, s, n] = [Math.min(...lons), Math.max(...lons), Math.min(...lats), Math.max(...lats)];
+  const z = Math.max(1, Math.min(19, Math.floor(Math.log2(360 / Math.max(1e-6, (e - w) * 3)))));
+  const tx = (lon) => Math.floor((lon + 180) / 360 * 2 ** z);
+  const ty = (lat) => { const r = lat * Math.PI / 180; return Math.floor((1 - Math.log(Math.tan(r) + 1 / Math.cos(r)) / Math.PI) / 2 * 2 ** z); };
+  const lonOf = (x) => x / 2 ** z * 360 - 180;
+  const latOf = (y) => { const m = Math.PI - 2 * Math.PI * y / 2 ** z; return 180 / Math.PI * Math.atan(Math.sinh(m)); };
+  const g = document.createElementNS("http://www.w3.org/2000/svg", "g");
+  g.setAttribute("id", "basemap");
+  g.setAttribute("opacity", "0.6");
+  for (let x = tx(w) - 1; x <= tx(e) + 1; x++) {
+    for (let y = ty(n) - 1; y <= ty(s) + 1; y++) {
+      const img = document.createElementNS("http://www.w3.org/2000/svg", "image");
+      const x0 = X(lonOf(x)), x1 = X(lonOf(x + 1)), y0 = Y(latOf(y)), y1 = Y(latOf(y + 1));
+      img.setAttribute("href", url.replace("{z}", z).replace("{x}", x).replace("{y}", y));
+      img.setAttribute("x", Math.min(x0, x1)); img.setAttribute("y", Math.min(y0, y1));
+      img.setAttribute("width", Math.abs(x1 - x0)); img.setAttribute("height", Math.abs(y1 - y0));
+      img.setAttribute("preserveAspectRatio", "none");
+      g.append(img);
+    }
+  }
+  const cells = svg.querySelector("#cells");
+  if (cells) { cells.parentNode.insertBefore(g, cells); cells.setAttribute("fill-opacity", "0.75"); }
+}
+
+// ---- cell panel ----------------------------------------------------------------------------
+
+function sparkline(series) {
+  const W = 360, H = 80, P = 4;
+  const svg = document.createElementNS("http://www.w3.org/2000/svg", "svg");
+  svg.setAttribute("viewBox", `0 0 ${W} ${H}`);
+  svg.setAttribute("class", "spark");
+  const t0 = series.t[0], t1 = series.t[series.t.length - 1];
+  const v0 = Math.min(...series.values), v1 = Math.max(...series.values);
+  const x = (t) => P + (t1 > t0 ? (t - t0) / (t1 - t0) : 0.5) * (W - 2 * P);
+  const y = (v) => H - P - (v1 > v0 ? (v - v0) / (v1 - v0) : 0.5) * (H - 2 * P);
+  const line = document.createElementNS("http://www.w3.org/2000/svg", "polyline");
+  line.setAttribute("points", series.t.map((t, i) => x(t).toFixed(1) + "," + y(series.values[i]).toFixed(1)).join(" "));
+  line.setAttribute("fill", "none");
+  line.setAttribute("stroke", "#3b6ea5");
+  line.setAttribute("stroke-width", "1.5");
+  svg.append(line);
+  return svg;
+}
+
+async function selectCell(id) {
+  state.selected = id;
+  document.querySelectorAll("path.cell").forEach((p) => p.classList.toggle("selected", p.dataset.cell === id));
+  $("cell-hint").textContent = "Loading " + id + "…";
+  try {
+    const d = await call("GET", "/cells/" + encodeURIComponent(id) + "?days=60");
+    renderCell(d);
+  } catch (e) {
+    $("cell-hint").textContent = e.message;
+  }
+}
+
+function renderCell(d) {
+  const c = d.cell, s = c.scores;
+  $("cell-hint").textContent = "";
+  const body = $("cell-body");
+  body.replaceChildren();
+  body.append(el("h3", {}, "Cell ", c.cell), el("p", { class: "muted" },
+    `sensors ${c.sensors.join(", ")} · last collected ${c.last_collected || "never"}`));
+  if (!s) {
+    body.append(el("p", {}, "Not scored yet: run a scoring or plan a mission."));
+  } else {
+    const w = d.weights, k = d.contributions;
+    const rows = [
+      ["F freshness", s.freshness, w[0], k.freshness],
+      ["A anomaly", s.anomaly, w[1], k.anomaly],
+      ["U uncertainty", s.uncertainty, w[2], k.uncertainty],
+      ["R redundancy", s.redundancy, w[3], k.redundancy],
+    ];
+    const max = Math.max(...rows.map((r) => Math.abs(r[3])), 1e-9);
+    const t = el("table", { class: "terms" }, el("tr", {}, el("th", {}, "term"), el("th", {}, "value"), el("th", {}, "weight"), el("th", {}, "in S"), el("th", {}, "")));
+    for (const [name, v, wt, contrib] of rows) {
+      const bar = el("div", { class: "hbar" + (contrib < 0 ? " neg" : "") });
+      bar.style.width = (100 * Math.abs(contrib) / max).toFixed(1) + "%";
+      t.append(el("tr", {}, el("td", {}, name), el("td", {}, fmt(v)), el("td", {}, fmt(wt, 2)), el("td", {}, (contrib >= 0 ? "+" : "") + fmt(contrib)), el("td", { class: "bar-cell" }, bar)));
+    }
+    t.append(el("tr", {}, el("th", {}, "S"), el("th", {}, fmt(s.score)), el("th", {}), el("th", {}), el("th", {})));
+    body.append(t, el("p", { id: "cell-why" },
+      `Ranks #${d.rank} of ${d.scored} scored cells; its largest term is ${d.driver}` +
+      (k.redundancy < -0.05 ? ", held down by redundancy with its neighbours." : ".")));
+  }
+  if (d.series.length) {
+    const sel = el("select", {}, d.series.map((sr, i) => el("option", { value: i }, sr.sensor + " " + sr.modality)));
+    const holder = el("div");
+    const draw = () => {
+      const sr = d.series[+sel.value];
+      const last = sr.values[sr.values.length - 1];
+      holder.replaceChildren(sparkline(sr), el("p", { class: "muted" },
+        `${sr.values.length} readings to ${d.latest}; latest ${fmt(last)} (min ${fmt(Math.min(...sr.values))}, max ${fmt(Math.max(...sr.values))})`));
+    };
+    const vw = d.series.findIndex((sr) => sr.modality.startsWith("vw"));
+    if (vw >= 0) sel.value = vw;
+    sel.addEventListener("change", draw);
+    body.append(el("label", {}, "Recent series (60 days)", sel), holder);
+    draw();
+  }
+}
+
+// ---- planning --------------------------------------------------------------------------------
+
+function planBody(dryRun) {
+  const f = new FormData($("plan-form"));
+  const b = { dry_run: dryRun };
+  for (const k of ["at", "history_until", "solver"]) if (f.get(k)) b[k] = f.get(k);
+  for (const k of ["time_limit_s"]) if (f.get(k) !== "") b[k] = Number(f.get(k));
+  for (const k of ["seed", "iterations"]) if (f.get(k) !== "") b[k] = parseInt(f.get(k), 10);
+  return b;
+}
+
+function energyView(m) {
+  const e = m.energy;
+  const scale = Math.max(e.budget_j, e.total_j);
+  const bar = el("div", { class: "bar", title: "E_t, E_h, E_c, E_r against the usable budget" });
+  for (const [cls, v] of [["et", e.travel_j], ["eh", e.hover_j], ["ec", e.comm_j], ["er", e.return_j]]) {
+    const s = el("span", { class: cls });
+    s.style.width = (100 * v / scale).toFixed(2) + "%";
+    bar.append(s);
+  }
+  const key = (cls, label, v) => el("span", {}, el("i", { class: "" }, ""), label + " " + kJ(v) + " kJ");
+  const keys = el("div", { class: "keys" });
+  for (const [cls, label, v] of [["et", "E_t travel", e.travel_j], ["eh", "E_h hover", e.hover_j], ["ec", "E_c radio", e.comm_j], ["er", "E_r return", e.return_j]]) {
+    const k = key(cls, label, v);
+    k.firstChild.style.background = getComputedStyle(document.documentElement).getPropertyValue("--" + cls);
+    keys.append(k);
+  }
+  return el("div", {},
+    el("p", {}, el("strong", {}, m.stops.length + " cells"), ` · total S ${fmt(m.total_score, 2)} · planner ${m.planner} · t = ${m.planned_at}`),
+    bar, keys,
+    el("p", {}, "Energy ", el("strong", { id: "energy-total", "data-joules": e.total_j }, kJ(e.total_j) + " kJ"),
+      ` of ${kJ(e.budget_j)} kJ usable (${pct(e.utilisation)}) · ${(e.distance_m / 1000).toFixed(2)} km · ${(e.flight_time_s / 60).toFixed(1)} min`),
+    el("p", { class: "muted" }, "Route: base → " + m.stops.map((s) => s.cell).join(" → ") + " → base"));
+}
+
+async function preview(ev) {
+  ev.preventDefault();
+  const body = planBody(true);
+  status("Planning (dry run)…");
+  $("preview").disabled = true;
+  try {
+    const m = await call("POST", "/plan", body);
+    state.preview = m;
+    state.previewBody = body;
+    const svg = await call("POST", "/map.svg", m, { raw: true });
+    showSvg(svg, "Preview (not saved)");
+    $("plan-result").replaceChildren(el("p", { class: "muted" }, "Preview — not saved yet:"), energyView(m));
+    $("save").disabled = false;
+    status("Route planned: check it, then save.", "ok");
+  } catch (e) {
+    $("plan-result").replaceChildren(el("p", { class: "error" }, e.message));
+    status("Planning failed.", "error");
+  } finally {
+    $("preview").disabled = false;
+  }
+}
+
+async function save() {
+  if (!state.previewBody) return;
+  $("save").disabled = true;
+  status("Saving the mission…");
+  try {
+    const m = await call("POST", "/plan", { ...state.previewBody, dry_run: false }, { write: true });
+    $("plan-result").replaceChildren(el("p", { class: "ok", id: "saved" }, "Saved as mission " + m.mission_id + "."), energyView(m));
+    await refresh();
+    await loadMap(m.mission_id);
+    if (state.selected) await selectCell(state.selected);
+    status("Mission " + m.mission_id + " saved.", "ok");
+  } catch (e) {
+    $("plan-result").append(el("p", { class: "error" }, e.message));
+    $("save").disabled = false;
+    status("Saving failed.", "error");
+  }
+}
+
+// ---- missions and downloads ------------------------------------------------------------------
+
+function renderMissions() {
+  const box = $("missions");
+  if (!state.missions.length) {
+    box.replaceChildren(el("p", { class: "muted" }, "No missions yet."));
+  } else {
+    const t = el("table", {}, el("tr", {}, ...["id", "kind", "status", "t", "cells", "energy"].map((h) => el("th", {}, h))));
+    for (const m of [...state.missions].reverse()) {
+      t.append(el("tr", {
+        class: "clickable" + (m.mission_id === state.shown ? " current" : ""),
+        "data-mission": m.mission_id,
+        onclick: () => loadMap(m.mission_id),
+      }, el("td", {}, "#" + m.mission_id), el("td", {}, m.kind), el("td", {}, m.status),
+        el("td", {}, m.planned_at.slice(0, 10)), el("td", {}, m.stops.length), el("td", {}, pct(m.energy.utilisation))));
+    }
+    box.replaceChildren(t);
+  }
+  const dl = $("downloads");
+  dl.replaceChildren();
+  if (state.shown) {
+    const files = [["mission.plan", ".plan"], ["mission.waypoints", "WPL"], ["mission.geojson", "GeoJSON"], ["mission.svg", "SVG"], ["mission.png", "PNG"]];
+    dl.append(el("span", { class: "muted" }, "Mission " + state.shown + ":"));
+    for (const [name, label] of files) {
+      dl.append(el("a", { href: `${API}/missions/${state.shown}/files/${name}`, download: `mission-${state.shown}-${name.slice(8)}`, id: "dl-" + name.slice(8) }, label));
+    }
+  }
+  const target = $("upload-target");
+  const keep = target.value;
+  target.replaceChildren(el("option", { value: "" }, "no mission: ingest readings"),
+    ...state.missions.map((m) => el("option", { value: m.mission_id }, `mission #${m.mission_id} (${m.status})`)));
+  if (keep) target.value = keep;
+}
+
+// ---- uploads -----------------------------------------------------------------------------------
+
+async function upload(files) {
+  if (!files.length) return;
+  const target = $("upload-target").value;
+  const form = new FormData();
+  for (const f of files) form.append("files", f, f.name);
+  const out = $("upload-result");
+  out.replaceChildren(el("p", { class: "muted" }, `Uploading ${files.length} file(s)…`));
+  try {
+    let text;
+    if (target) {
+      if ($("upload-at").value) form.append("at", $("upload-at").value);
+      const r = await call("POST", `/missions/${target}/record`, form, { write: true });
+      text = `Mission #${r.mission} recorded at ${r.at}: ${r.cells.length} cells, ${r.sensors_collected} sensors, ${r.readings_inserted} new readings.`;
+    } else {
+      const r = await call("POST", "/ingest", form, { write: true });
+      text = `Ingested ${r.files} file(s): ${r.readings} readings (${r.inserted} new, ${r.unchanged} already stored).`;
+    }
+    out.replaceChildren(el("p", { class: "ok" }, text));
+    await refresh();
+    await loadMap(state.shown);
+  } catch (e) {
+    out.replaceChildren(el("p", { class: "error" }, "Nothing was stored: " + e.message));
+  }
+}
+
+function wireUpload() {
+  const drop = $("drop");
+  drop.addEventListener("dragover", (e) => { e.preventDefault(); drop.classList.add("over"); });
+  drop.addEventListener("dragleave", () => drop.classList.remove("over"));
+  drop.addEventListener("drop", (e) => {
+    e.preventDefault();
+    drop.classList.remove("over");
+    upload([...e.dataTransfer.files]);
+  });
+  $("upload-files").addEventListener("change", (e) => upload([...e.target.files]));
+}
+
+// ---- start ---------------------------------------------------------------------------------------
+
+async function refresh() {
+  const [project, field, missions] = await Promise.all([
+    call("GET", "/project"), call("GET", "/field"), call("GET", "/missions"),
+  ]);
+  state.project = project;
+  state.field = field;
+  state.missions = missions;
+  $("project-name").textContent = "· " + project.name;
+  $("project-facts").textContent = `${field.cells.length} cells of ${project.cell_size_m} m · ${project.sensors} sensors · ` +
+    `${project.readings.toLocaleString("en")} readings to ${project.latest_reading || "–"} · ${missions.length} missions · energy preset ${project.energy_preset}` +
+    (project.writable ? "" : " · read-only server");
+}
+
+async function start() {
+  const m = /token=([^&]+)/.exec(location.hash);
+  if (m) {
+    sessionStorage.setItem("gleaner-token", decodeURIComponent(m[1]));
+    history.replaceState(null, "", location.pathname + location.search);
+  }
+  $("token").value = sessionStorage.getItem("gleaner-token") || "";
+  $("token").addEventListener("change", () => sessionStorage.setItem("gleaner-token", token()));
+  $("colour-by").addEventListener("change", (e) => { state.colourBy = e.target.value; colourCells(); });
+  $("plan-form").addEventListener("submit", preview);
+  $("save").addEventListener("click", save);
+  wireUpload();
+  try {
+    await refresh();
+    const f = $("plan-form");
+    f.elements.time_limit_s.placeholder = state.project.time_limit_s;
+    f.elements.seed.placeholder = state.project.seed;
+    await loadMap(null);
+    status("Ready.");
+  } catch (e) {
+    status("Cannot load the project: " + e.message, "error");
+  }
+}
+
+start();

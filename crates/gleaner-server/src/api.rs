@@ -1,0 +1,287 @@
+//! The API's own request and response types (serialisable counterparts of the application
+//! layer's plain data, converted explicitly here). Documents the CLI also prints
+//! (`gleaner.mission`, `gleaner.field`, cell rows, scorings, explorations) are gleaner-wire's.
+
+use gleaner_app as app;
+use serde::{Deserialize, Serialize};
+use utoipa::ToSchema;
+
+use crate::error::ApiError;
+
+/// The project and its settings.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct ProjectDoc {
+    /// Project name.
+    pub name: String,
+    /// gleaner's version.
+    pub version: String,
+    /// Base station `[lon, lat]`, WGS84 degrees.
+    pub base_lon_lat: [f64; 2],
+    /// Base station altitude above mean sea level, m.
+    pub base_alt_m: f64,
+    /// Cell side, m.
+    pub cell_size_m: f64,
+    /// Number of sensors.
+    pub sensors: usize,
+    /// Number of stored readings.
+    pub readings: u64,
+    /// Newest stored reading, RFC 3339 UTC (absent without readings).
+    pub latest_reading: Option<String>,
+    /// Number of missions.
+    pub missions: usize,
+    /// Weights α, β, γ, δ of S = α·F + β·A + γ·U − δ·R.
+    pub weights: [f64; 4],
+    /// Energy preset (`paper`, `large_pack`).
+    pub energy_preset: String,
+    /// Default route planner.
+    pub solver: String,
+    /// Default planner time limit, s.
+    pub time_limit_s: f64,
+    /// Longest planner time limit a request may ask for, s.
+    pub max_time_limit_s: f64,
+    /// Default planner seed.
+    pub seed: u64,
+    /// Basemap tile URL template (`{z}/{x}/{y}`) the dashboard draws under the cells, if set.
+    pub basemap_url: Option<String>,
+    /// Whether writes are possible (the server has a token).
+    pub writable: bool,
+    /// Largest upload accepted, bytes.
+    pub max_upload_bytes: u64,
+}
+
+/// A time range of collected history and a mission time, as the CLI's `--at`,
+/// `--history-from`, `--history-until`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ScoreBody {
+    /// Mission time, RFC 3339 or `YYYY-MM-DD` (UTC) [default: the latest reading].
+    pub at: Option<String>,
+    /// Use only readings from this time on as collected history.
+    pub history_from: Option<String>,
+    /// Use only readings up to this time as collected history.
+    pub history_until: Option<String>,
+    /// Compute without storing the scores.
+    #[serde(default)]
+    pub dry_run: bool,
+}
+
+/// A planning request (`gleaner plan`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PlanBody {
+    /// Mission time, RFC 3339 or `YYYY-MM-DD` (UTC) [default: the latest reading].
+    pub at: Option<String>,
+    /// Use only readings from this time on as collected history.
+    pub history_from: Option<String>,
+    /// Use only readings up to this time as collected history.
+    pub history_until: Option<String>,
+    /// Route planner: `default`, `greedy`, `exact` [default: the project's].
+    pub solver: Option<String>,
+    /// Planner time limit, s [default: the project's; at most the server's maximum].
+    pub time_limit_s: Option<f64>,
+    /// Planner seed [default: the project's].
+    pub seed: Option<u64>,
+    /// Stop the search after this many iterations (machine-independent routes).
+    pub iterations: Option<u64>,
+    /// Plan without storing the mission (the dashboard's preview).
+    #[serde(default)]
+    pub dry_run: bool,
+}
+
+/// An exploration request (`gleaner explore`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ExploreBody {
+    /// Planning time, RFC 3339 or `YYYY-MM-DD` (UTC) [default: the latest reading].
+    pub at: Option<String>,
+    /// Plan without storing the sorties.
+    #[serde(default)]
+    pub dry_run: bool,
+}
+
+/// The weighted terms of S for one cell.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct ContributionsDoc {
+    /// α·F.
+    pub freshness: f64,
+    /// β·A.
+    pub anomaly: f64,
+    /// γ·U.
+    pub uncertainty: f64,
+    /// −δ·R.
+    pub redundancy: f64,
+}
+
+/// One modality's recent readings from one sensor.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct SeriesDoc {
+    /// Sensor id.
+    pub sensor: String,
+    /// Modality (`vw@30cm`).
+    pub modality: String,
+    /// Times, seconds since the Unix epoch (UTC), ascending.
+    pub t: Vec<i64>,
+    /// Values, in the modality's unit, one per time.
+    pub values: Vec<f64>,
+}
+
+/// One cell for the dashboard's panel: its row, why it ranks where it does, its series.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct CellDetailDoc {
+    /// The cell's row (as `gleaner cells --json`).
+    pub cell: gleaner_wire::docs::CellRowDoc,
+    /// Weights α, β, γ, δ.
+    pub weights: [f64; 4],
+    /// The weighted terms of its latest scores.
+    pub contributions: Option<ContributionsDoc>,
+    /// The largest positive weighted term: `freshness`, `anomaly`, `uncertainty` or `none`.
+    pub driver: Option<String>,
+    /// Rank by S among the scored cells, from 1.
+    pub rank: Option<usize>,
+    /// Number of scored cells.
+    pub scored: usize,
+    /// The readings of its sensors within the requested window of their newest one.
+    pub series: Vec<SeriesDoc>,
+    /// Newest reading of its sensors, RFC 3339 UTC.
+    pub latest: Option<String>,
+}
+
+impl CellDetailDoc {
+    /// Converts the application's cell detail.
+    pub fn from_app(d: &app::CellDetail, cell_size_m: f64) -> Self {
+        let mut series: Vec<SeriesDoc> = Vec::new();
+        for p in &d.series {
+            let same = series.last().is_some_and(|s| {
+                s.sensor == p.sensor.as_str() && s.modality == p.modality.as_str()
+            });
+            if !same {
+                series.push(SeriesDoc {
+                    sensor: p.sensor.as_str().to_string(),
+                    modality: p.modality.as_str().to_string(),
+                    t: Vec::new(),
+                    values: Vec::new(),
+                });
+            }
+            let s = series.last_mut().expect("pushed above");
+            s.t.push(p.t);
+            s.values.push(p.value);
+        }
+        Self {
+            cell: gleaner_wire::convert::cell_row(&d.cell, cell_size_m),
+            weights: d.weights,
+            contributions: d.contributions.map(|c| ContributionsDoc {
+                freshness: c.freshness,
+                anomaly: c.anomaly,
+                uncertainty: c.uncertainty,
+                redundancy: c.redundancy,
+            }),
+            driver: d.driver.map(str::to_string),
+            rank: d.rank,
+            scored: d.scored,
+            series,
+            latest: d.latest.map(app::format_rfc3339),
+        }
+    }
+}
+
+/// What an ingest stored.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct IngestDoc {
+    /// Files read.
+    pub files: usize,
+    /// Data rows read.
+    pub rows_read: u64,
+    /// Readings parsed.
+    pub readings: u64,
+    /// Readings newly stored.
+    pub inserted: u64,
+    /// Readings already stored.
+    pub unchanged: u64,
+    /// Conflicting readings kept as stored.
+    pub conflicts: u64,
+    /// Missing values (`NA`).
+    pub missing: u64,
+    /// Duplicate rows within a file.
+    pub duplicates: u64,
+    /// Rows skipped (`on_error = skip` only), with why.
+    pub skipped: Vec<String>,
+    /// Cells whose summaries were refreshed.
+    pub cells_refreshed: usize,
+}
+
+impl IngestDoc {
+    /// Converts the application's ingest outcome.
+    pub fn from_app(o: &app::IngestOutcome) -> Self {
+        let r = &o.report;
+        Self {
+            files: o.files,
+            rows_read: r.rows_read,
+            readings: r.readings,
+            inserted: o.inserted,
+            unchanged: o.unchanged,
+            conflicts: o.conflicts,
+            missing: r.missing,
+            duplicates: r.duplicates,
+            skipped: r.skipped_rows.iter().map(|s| s.reason.clone()).collect(),
+            cells_refreshed: o.cells_refreshed,
+        }
+    }
+}
+
+/// What recording a flight stored.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct RecordDoc {
+    /// The mission.
+    pub mission: i64,
+    /// Collection time, RFC 3339 UTC.
+    pub at: String,
+    /// Cells visited, in order.
+    pub cells: Vec<String>,
+    /// Sensors collected.
+    pub sensors_collected: usize,
+    /// Readings newly stored.
+    pub readings_inserted: u64,
+    /// Readings brought back that were already stored.
+    pub readings_unchanged: u64,
+    /// Whether an earlier record was replaced.
+    pub amended: bool,
+}
+
+impl RecordDoc {
+    /// Converts the application's record outcome.
+    pub fn from_app(o: &app::RecordOutcome) -> Self {
+        Self {
+            mission: o.mission.0,
+            at: app::format_rfc3339(o.at),
+            cells: o.cells.iter().map(|c| c.to_string()).collect(),
+            sensors_collected: o.sensors_collected,
+            readings_inserted: o.readings_inserted,
+            readings_unchanged: o.readings_unchanged,
+            amended: o.amended,
+        }
+    }
+}
+
+/// Parses an optional time field (RFC 3339 or `YYYY-MM-DD`, UTC) into seconds.
+pub fn parse_time(field: &str, value: Option<&str>) -> Result<Option<i64>, ApiError> {
+    value
+        .map(|v| {
+            app::parse_timestamp(v).ok_or_else(|| {
+                ApiError::bad_request(
+                    Some(field),
+                    format!(
+                        "expected RFC 3339 (2014-03-01T12:00:00Z) or a date (2014-03-01), got {v:?}"
+                    ),
+                )
+            })
+        })
+        .transpose()
+}
+
+/// The history range of a request (unbounded sides as the CLI's).
+pub fn history(from: Option<i64>, until: Option<i64>) -> app::History {
+    app::History {
+        from: from.unwrap_or(i64::MIN),
+        until: until.unwrap_or(i64::MAX),
+    }
+}

@@ -1,0 +1,95 @@
+//! The dashboard: one HTML page, its stylesheet and its script, written for gleaner and
+//! embedded in the binary (`include_str!`), so `cargo build` alone gives a server with the
+//! whole dashboard and the page needs no network. The map itself is the SVG the CLI's export
+//! draws (`/api/v1/map.svg`), made interactive by the script.
+//!
+//! Every asset is served with a Content-Security-Policy that allows only this server (and
+//! the configured basemap's origin for images), so the page cannot load or send anything
+//! elsewhere.
+
+use axum::Router;
+use axum::http::{HeaderName, HeaderValue, header};
+use axum::response::{IntoResponse, Response};
+use axum::routing::get;
+
+use crate::state::AppState;
+
+/// The page.
+pub const INDEX_HTML: &str = include_str!("../assets/index.html");
+/// Its script.
+pub const APP_JS: &str = include_str!("../assets/app.js");
+/// Its stylesheet.
+pub const APP_CSS: &str = include_str!("../assets/app.css");
+
+/// The origin (`scheme://host[:port]`) of a basemap URL template.
+fn origin(url: &str) -> Option<&str> {
+    let rest = url.split_once("://")?.1;
+    let host_len = rest.find('/').unwrap_or(rest.len());
+    Some(&url[..url.len() - rest.len() + host_len])
+}
+
+fn asset(body: &'static str, media: &'static str, csp: &HeaderValue) -> Response {
+    let mut r = body.into_response();
+    let h = r.headers_mut();
+    h.insert(header::CONTENT_TYPE, HeaderValue::from_static(media));
+    h.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-cache"));
+    h.insert(
+        HeaderName::from_static("x-content-type-options"),
+        HeaderValue::from_static("nosniff"),
+    );
+    h.insert(
+        HeaderName::from_static("referrer-policy"),
+        HeaderValue::from_static("no-referrer"),
+    );
+    h.insert(header::CONTENT_SECURITY_POLICY, csp.clone());
+    r
+}
+
+/// The dashboard's routes: `/`, `/app.js`, `/app.css`.
+pub fn routes(basemap_url: Option<&str>) -> Router<AppState> {
+    let img = match basemap_url.and_then(origin) {
+        Some(o) => format!("'self' data: blob: {o}"),
+        None => "'self' data: blob:".to_string(),
+    };
+    let csp = HeaderValue::from_str(&format!(
+        "default-src 'self'; img-src {img}; style-src 'self' 'unsafe-inline'; script-src 'self'; connect-src 'self'; frame-ancestors 'none'; base-uri 'none'; form-action 'self'"
+    ))
+    .unwrap_or_else(|_| HeaderValue::from_static("default-src 'self'"));
+    let (c1, c2, c3) = (csp.clone(), csp.clone(), csp);
+    Router::new()
+        .route(
+            "/",
+            get(move || async move { asset(INDEX_HTML, "text/html; charset=utf-8", &c1) }),
+        )
+        .route(
+            "/app.js",
+            get(move || async move { asset(APP_JS, "text/javascript; charset=utf-8", &c2) }),
+        )
+        .route(
+            "/app.css",
+            get(move || async move { asset(APP_CSS, "text/css; charset=utf-8", &c3) }),
+        )
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn basemap_origin() {
+        assert_eq!(
+            super::origin("https://tiles.example/a/{z}/{x}/{y}.png"),
+            Some("https://tiles.example")
+        );
+        assert_eq!(super::origin("http://h:8000"), Some("http://h:8000"));
+    }
+
+    #[test]
+    fn the_page_loads_nothing_from_elsewhere() {
+        for text in [super::INDEX_HTML, super::APP_JS, super::APP_CSS] {
+            // The only absolute URL is the SVG namespace (a name, never fetched).
+            let rest = text.replace("http://www.w3.org/2000/svg", "");
+            assert!(
+                !rest.contains("http://") && !rest.contains("https://") && !rest.contains("//cdn")
+            );
+        }
+    }
+}

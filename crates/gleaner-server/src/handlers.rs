@@ -1,0 +1,797 @@
+//! The endpoints under `/api/v1`: each parses its request, calls one application use case on
+//! a blocking thread and converts the result. No lifecycle logic lives here.
+
+use std::path::PathBuf;
+
+use axum::Json;
+use axum::body::Bytes;
+use axum::extract::rejection::{BytesRejection, QueryRejection};
+use axum::extract::{Multipart, Path, Query, State};
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use gleaner_app::{self as app, MissionId, StoreRead};
+use gleaner_wire::docs::{CellRowDoc, ExplorationDoc, ScoringDoc};
+use gleaner_wire::{FieldDoc, MissionDoc};
+use serde::Deserialize;
+use serde::de::DeserializeOwned;
+use utoipa::{IntoParams, OpenApi};
+
+use crate::api::{
+    CellDetailDoc, ExploreBody, IngestDoc, PlanBody, ProjectDoc, RecordDoc, ScoreBody, history,
+    parse_time,
+};
+use crate::auth::authorize;
+use crate::error::{ApiError, ApiResult, ErrorBody};
+use crate::state::AppState;
+
+/// The OpenAPI document's header; the paths come from the handlers (utoipa-axum).
+#[derive(OpenApi)]
+#[openapi(
+    info(
+        title = "gleaner",
+        description = "Score a farm's sensor cells, plan battery-limited UAV missions, download their flight files and record the flights. Writes need `Authorization: Bearer <token>`. Units: m, s, J, W; positions WGS84 [lon, lat] degrees; times RFC 3339 UTC or seconds since the Unix epoch."
+    ),
+    tags(
+        (name = "project", description = "The project, its field and cells"),
+        (name = "missions", description = "Planning, exploration, missions and their files"),
+        (name = "data", description = "Scoring, readings uploads and recorded flights")
+    ),
+    components(schemas(ErrorBody))
+)]
+pub struct ApiDoc;
+
+/// The wall clock, seconds since the epoch: provenance only (creation times), never results.
+fn clock_now() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs() as i64)
+}
+
+/// A JSON body (empty = `{}`), refusing unknown fields; errors name the field at fault.
+fn json_body<T: DeserializeOwned>(body: Result<Bytes, BytesRejection>) -> ApiResult<T> {
+    let bytes = body.map_err(|r| {
+        if r.status() == StatusCode::PAYLOAD_TOO_LARGE {
+            ApiError::too_large(None, r.body_text())
+        } else {
+            ApiError::bad_request(None, r.body_text())
+        }
+    })?;
+    let bytes: &[u8] = if bytes.iter().all(u8::is_ascii_whitespace) {
+        b"{}"
+    } else {
+        &bytes
+    };
+    let de = &mut serde_json::Deserializer::from_slice(bytes);
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.inner().to_string();
+        // serde names an unknown or missing field in its message, not in the path.
+        let field = if path == "." {
+            inner
+                .split('`')
+                .nth(1)
+                .map(str::to_string)
+                .filter(|_| inner.contains("field"))
+        } else {
+            Some(path)
+        };
+        ApiError::bad_request(field.as_deref(), format!("invalid JSON body: {inner}"))
+    })
+}
+
+fn query<T>(q: Result<Query<T>, QueryRejection>) -> ApiResult<T> {
+    q.map(|Query(t)| t)
+        .map_err(|r| ApiError::bad_request(None, r.body_text()))
+}
+
+fn mission_id(text: &str) -> ApiResult<MissionId> {
+    text.parse::<i64>().map(MissionId).map_err(|_| {
+        ApiError::bad_request(
+            Some("mission"),
+            format!("mission id {text:?}: expected an integer"),
+        )
+    })
+}
+
+fn cell_index(text: &str) -> ApiResult<gleaner_field::CellIndex> {
+    gleaner_field::CellIndex::parse(text).ok_or_else(|| {
+        ApiError::bad_request(
+            Some("cell"),
+            format!("cell {text:?}: expected a cell id like x3y-1"),
+        )
+    })
+}
+
+/// The project and its settings.
+#[utoipa::path(get, path = "/api/v1/project", tag = "project",
+    responses((status = 200, body = ProjectDoc), (status = 500, body = ErrorBody)))]
+pub async fn project(State(s): State<AppState>) -> ApiResult<Json<ProjectDoc>> {
+    let basemap_url = s.0.basemap_url.clone();
+    let writable = s.0.token.is_some();
+    let (max_upload_bytes, max_time_limit_s) = (s.0.max_upload_bytes as u64, s.0.max_time_limit_s);
+    let doc = s
+        .run(move |p| {
+            let view = app::field_view(p)?;
+            let latest = view
+                .cells
+                .iter()
+                .flat_map(|c| c.metadata.summaries.iter().map(|m| m.stats.latest_t))
+                .max();
+            let settings = p.settings();
+            let u = &settings.utility;
+            Ok(ProjectDoc {
+                name: view.project.clone(),
+                version: env!("CARGO_PKG_VERSION").to_string(),
+                base_lon_lat: [view.base.lon(), view.base.lat()],
+                base_alt_m: view.base_alt_m,
+                cell_size_m: view.cell_size_m,
+                sensors: view.sensors.len(),
+                readings: p.store().reading_count().map_err(app::AppError::from)?,
+                latest_reading: latest.map(app::format_rfc3339),
+                missions: app::missions(p)?.len(),
+                weights: [u.alpha, u.beta, u.gamma, u.delta],
+                energy_preset: settings.energy.preset.clone(),
+                solver: settings.planner.solver.clone(),
+                time_limit_s: settings.planner.time_limit_s,
+                max_time_limit_s,
+                seed: settings.planner.seed,
+                basemap_url,
+                writable,
+                max_upload_bytes,
+            })
+        })
+        .await?;
+    Ok(Json(doc))
+}
+
+/// The field for maps: cells with their squares and latest scores, sensors, base
+/// (`gleaner.field` version 1).
+#[utoipa::path(get, path = "/api/v1/field", tag = "project",
+    responses((status = 200, body = FieldDoc), (status = 500, body = ErrorBody)))]
+pub async fn field(State(s): State<AppState>) -> ApiResult<Json<FieldDoc>> {
+    let doc = s
+        .run(|p| Ok(gleaner_wire::convert::field(&app::field_view(p)?)))
+        .await?;
+    Ok(Json(doc))
+}
+
+/// The cell table with its metadata, by cell id (as `gleaner cells --json`).
+#[utoipa::path(get, path = "/api/v1/cells", tag = "project",
+    responses((status = 200, body = Vec<CellRowDoc>), (status = 500, body = ErrorBody)))]
+pub async fn cells(State(s): State<AppState>) -> ApiResult<Json<Vec<CellRowDoc>>> {
+    let rows = s
+        .run(|p| {
+            let view = app::field_view(p)?;
+            Ok(view
+                .cells
+                .iter()
+                .map(|c| gleaner_wire::convert::cell_row(c, view.cell_size_m))
+                .collect())
+        })
+        .await?;
+    Ok(Json(rows))
+}
+
+/// How much of a cell's series to return.
+#[derive(Debug, Deserialize, IntoParams)]
+#[into_params(parameter_in = Query)]
+pub struct SeriesQuery {
+    /// Days of readings before the cell's newest one, in [0, 3660] [default: 30].
+    pub days: Option<f64>,
+}
+
+/// One cell: its row, the weighted terms of S and its rank (why it ranks where it does),
+/// and its sensors' recent readings.
+#[utoipa::path(get, path = "/api/v1/cells/{cell}", tag = "project",
+    params(("cell" = String, Path, description = "Cell id, e.g. x3y-1"), SeriesQuery),
+    responses((status = 200, body = CellDetailDoc), (status = 400, body = ErrorBody),
+        (status = 404, body = ErrorBody)))]
+pub async fn cell(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+    q: Result<Query<SeriesQuery>, QueryRejection>,
+) -> ApiResult<Json<CellDetailDoc>> {
+    let index = cell_index(&id)?;
+    let days = query(q)?.days.unwrap_or(30.0);
+    if !(days.is_finite() && (0.0..=3660.0).contains(&days)) {
+        return Err(ApiError::bad_request(
+            Some("days"),
+            format!("days = {days}: expected a number in [0, 3660]"),
+        ));
+    }
+    let doc = s
+        .run(move |p| {
+            let d = app::cell_detail(p, index, (days * 86_400.0) as i64)?;
+            Ok(CellDetailDoc::from_app(&d, p.settings().field.cell_size_m))
+        })
+        .await?;
+    Ok(Json(doc))
+}
+
+/// Scores every cell at a mission time and (unless `dry_run`) keeps the scores in the cell
+/// metadata table.
+#[utoipa::path(post, path = "/api/v1/score", tag = "data", request_body = ScoreBody,
+    security((), ("bearer" = [])),
+    responses((status = 200, body = ScoringDoc), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 413, body = ErrorBody)))]
+pub async fn score(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    body: Result<Bytes, BytesRejection>,
+) -> ApiResult<Json<ScoringDoc>> {
+    let b: ScoreBody = json_body(body)?;
+    if !b.dry_run {
+        authorize(s.0.token.as_ref(), &headers)?;
+    }
+    let request = app::ScoreRequest {
+        at: parse_time("at", b.at.as_deref())?,
+        history: history(
+            parse_time("history_from", b.history_from.as_deref())?,
+            parse_time("history_until", b.history_until.as_deref())?,
+        ),
+        probabilities: None,
+        dry_run: b.dry_run,
+    };
+    let doc = s
+        .run(move |p| Ok(gleaner_wire::convert::scoring(&app::score(p, &request)?)))
+        .await?;
+    Ok(Json(doc))
+}
+
+/// All missions (planned and flown), oldest first (`gleaner.mission` documents).
+#[utoipa::path(get, path = "/api/v1/missions", tag = "missions",
+    responses((status = 200, body = Vec<MissionDoc>), (status = 500, body = ErrorBody)))]
+pub async fn missions(State(s): State<AppState>) -> ApiResult<Json<Vec<MissionDoc>>> {
+    let docs = s
+        .run(|p| {
+            Ok(app::missions(p)?
+                .iter()
+                .map(gleaner_wire::convert::stored_mission)
+                .collect())
+        })
+        .await?;
+    Ok(Json(docs))
+}
+
+/// One mission with its stops and energy breakdown.
+#[utoipa::path(get, path = "/api/v1/missions/{id}", tag = "missions",
+    params(("id" = i64, Path, description = "Mission id")),
+    responses((status = 200, body = MissionDoc), (status = 400, body = ErrorBody),
+        (status = 404, body = ErrorBody)))]
+pub async fn mission(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+) -> ApiResult<Json<MissionDoc>> {
+    let id = mission_id(&id)?;
+    let doc = s
+        .run(move |p| Ok(gleaner_wire::convert::stored_mission(&app::mission(p, id)?)))
+        .await?;
+    Ok(Json(doc))
+}
+
+/// Plans a mission: scores the cells, chooses and orders those that fit the battery, and
+/// (unless `dry_run`) stores it. One planning search runs at a time; reads are never held up.
+#[utoipa::path(post, path = "/api/v1/plan", tag = "missions", request_body = PlanBody,
+    security((), ("bearer" = [])),
+    responses((status = 200, body = MissionDoc), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 413, body = ErrorBody)))]
+pub async fn plan(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    body: Result<Bytes, BytesRejection>,
+) -> ApiResult<Json<MissionDoc>> {
+    let b: PlanBody = json_body(body)?;
+    if !b.dry_run {
+        authorize(s.0.token.as_ref(), &headers)?;
+    }
+    if let Some(t) = b.time_limit_s
+        && !(t.is_finite() && t >= 0.0 && t <= s.0.max_time_limit_s)
+    {
+        return Err(ApiError::bad_request(
+            Some("time_limit_s"),
+            format!(
+                "time limit {t} s: expected seconds in [0, {}]",
+                s.0.max_time_limit_s
+            ),
+        ));
+    }
+    let planner = b
+        .solver
+        .as_deref()
+        .map(app::parse_planner)
+        .transpose()
+        .map_err(|e| ApiError::from(e).in_field("solver"))?;
+    let request = app::PlanRequest {
+        at: parse_time("at", b.at.as_deref())?,
+        history: history(
+            parse_time("history_from", b.history_from.as_deref())?,
+            parse_time("history_until", b.history_until.as_deref())?,
+        ),
+        scores: None,
+        planner,
+        time_limit_s: b.time_limit_s,
+        seed: b.seed,
+        max_iterations: b.iterations,
+        dry_run: b.dry_run,
+    };
+    let _slot =
+        s.0.planning
+            .acquire()
+            .await
+            .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    let doc = s
+        .run(move |p| {
+            Ok(gleaner_wire::convert::planned_mission(&app::plan(
+                p,
+                &request,
+                clock_now(),
+            )?))
+        })
+        .await?;
+    Ok(Json(doc))
+}
+
+/// Plans the exploration phase: the fewest budget-feasible sorties that together visit every
+/// cell, each stored (unless `dry_run`) as an exploration mission.
+#[utoipa::path(post, path = "/api/v1/explore", tag = "missions", request_body = ExploreBody,
+    security((), ("bearer" = [])),
+    responses((status = 200, body = ExplorationDoc), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody)))]
+pub async fn explore(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    body: Result<Bytes, BytesRejection>,
+) -> ApiResult<Json<ExplorationDoc>> {
+    let b: ExploreBody = json_body(body)?;
+    if !b.dry_run {
+        authorize(s.0.token.as_ref(), &headers)?;
+    }
+    let request = app::ExploreRequest {
+        at: parse_time("at", b.at.as_deref())?,
+        dry_run: b.dry_run,
+    };
+    let _slot =
+        s.0.planning
+            .acquire()
+            .await
+            .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    let doc = s
+        .run(move |p| {
+            Ok(gleaner_wire::convert::exploration(&app::explore(
+                p,
+                &request,
+                clock_now(),
+            )?))
+        })
+        .await?;
+    Ok(Json(doc))
+}
+
+/// The files a mission can be downloaded as: name, media type, what it is.
+pub const MISSION_FILES: [(&str, &str, &str); 6] = [
+    ("mission.plan", "application/json", "QGroundControl plan"),
+    (
+        "mission.waypoints",
+        "text/plain; charset=utf-8",
+        "QGC WPL 110 waypoints",
+    ),
+    (
+        "mission.geojson",
+        "application/geo+json",
+        "GeoJSON: cells, route, base",
+    ),
+    (
+        "mission.json",
+        "application/json",
+        "the gleaner.mission document",
+    ),
+    ("mission.svg", "image/svg+xml", "the mission map"),
+    ("mission.png", "image/png", "the mission map, 1600 px wide"),
+];
+
+/// A mission's file for its ground station or report, made in memory from the checked export
+/// (no path on disk is ever read, so no request can reach outside the project). Refused (400)
+/// for a mission that is not safe to fly.
+#[utoipa::path(get, path = "/api/v1/missions/{id}/files/{name}", tag = "missions",
+    params(("id" = i64, Path, description = "Mission id"),
+        ("name" = String, Path, description = "mission.plan, mission.waypoints, mission.geojson, mission.json, mission.svg or mission.png")),
+    responses((status = 200, description = "The file, as an attachment", content_type = "application/octet-stream"),
+        (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
+pub async fn mission_file(
+    State(s): State<AppState>,
+    Path((id, name)): Path<(String, String)>,
+) -> ApiResult<Response> {
+    let id = mission_id(&id)?;
+    let Some(&(name, media, _)) = MISSION_FILES.iter().find(|f| f.0 == name) else {
+        return Err(ApiError::not_found(
+            Some("name"),
+            format!(
+                "no mission file {name:?}: expected one of {}",
+                MISSION_FILES.map(|f| f.0).join(", ")
+            ),
+        ));
+    };
+    let bytes = s
+        .run(move |p| {
+            let export = app::export(p, id)?;
+            let doc = gleaner_wire::convert::stored_mission(&export.mission);
+            let field = gleaner_wire::convert::field(&export.field);
+            let export_err =
+                |e: gleaner_wire::ExportError| ApiError::bad_request(None, e.to_string());
+            let render_err = |e: gleaner_render::RenderError| ApiError::internal(e.to_string());
+            Ok(match name {
+                "mission.plan" => gleaner_wire::qgc_plan(&doc)
+                    .map_err(export_err)?
+                    .into_bytes(),
+                "mission.waypoints" => gleaner_wire::wpl(&doc).map_err(export_err)?.into_bytes(),
+                "mission.geojson" => gleaner_wire::geojson(&field, &doc)
+                    .map_err(export_err)?
+                    .into_bytes(),
+                "mission.json" => serde_json::to_vec_pretty(&doc)
+                    .map_err(|e| ApiError::internal(e.to_string()))?,
+                "mission.svg" => {
+                    gleaner_render::mission_figure_svg(&field, &doc, &Default::default())
+                        .map_err(render_err)?
+                        .into_bytes()
+                }
+                _ => {
+                    let svg = gleaner_render::mission_figure_svg(&field, &doc, &Default::default())
+                        .map_err(render_err)?;
+                    gleaner_render::svg_to_png(&svg, 1600).map_err(render_err)?
+                }
+            })
+        })
+        .await?;
+    let disposition = format!("attachment; filename=\"mission-{}-{}\"", id.0, &name[8..]);
+    let mut r = bytes.into_response();
+    let h = r.headers_mut();
+    h.insert(header::CONTENT_TYPE, HeaderValue::from_static(media));
+    if let Ok(v) = HeaderValue::from_str(&disposition) {
+        h.insert(header::CONTENT_DISPOSITION, v);
+    }
+    Ok(r)
+}
+
+/// Which mission the map shows.
+#[derive(Debug, Deserialize, IntoParams)]
+#[into_params(parameter_in = Query)]
+pub struct MapQuery {
+    /// Mission id [default: the newest mission; none: the field alone].
+    pub mission: Option<i64>,
+}
+
+fn svg_response(svg: String) -> Response {
+    let mut r = svg.into_response();
+    r.headers_mut().insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("image/svg+xml"),
+    );
+    r
+}
+
+/// Dashboard map size: the full page width of a paper, so the map's text stays small on a
+/// screen.
+fn map_options() -> gleaner_render::FigureOptions {
+    gleaner_render::FigureOptions {
+        width_mm: 178.0,
+        ..Default::default()
+    }
+}
+
+/// The map the CLI's export draws (cells coloured by S, `<path id="cell-K">` for the K-th
+/// cell of `/field`, the route with visiting order, the energy table), for a stored mission.
+#[utoipa::path(get, path = "/api/v1/map.svg", tag = "missions", params(MapQuery),
+    responses((status = 200, description = "SVG", content_type = "image/svg+xml"),
+        (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
+pub async fn map(
+    State(s): State<AppState>,
+    q: Result<Query<MapQuery>, QueryRejection>,
+) -> ApiResult<Response> {
+    let which = query(q)?.mission;
+    let svg = s
+        .run(move |p| {
+            let field = gleaner_wire::convert::field(&app::field_view(p)?);
+            let mission = match which {
+                Some(id) => Some(app::mission(p, MissionId(id))?),
+                None => app::missions(p)?.pop(),
+            };
+            let svg = match mission {
+                Some(m) => gleaner_render::mission_figure_svg(
+                    &field,
+                    &gleaner_wire::convert::stored_mission(&m),
+                    &map_options(),
+                ),
+                None => gleaner_render::exploration_map_svg(&field, &[], &map_options()),
+            };
+            svg.map_err(|e| ApiError::internal(e.to_string()))
+        })
+        .await?;
+    Ok(svg_response(svg))
+}
+
+/// The same map for a mission that is not stored (a dry run's `gleaner.mission` document),
+/// over the project's field: the dashboard's preview before saving. Writes nothing.
+#[utoipa::path(post, path = "/api/v1/map.svg", tag = "missions", request_body = MissionDoc,
+    responses((status = 200, description = "SVG", content_type = "image/svg+xml"),
+        (status = 400, body = ErrorBody), (status = 413, body = ErrorBody)))]
+pub async fn map_of(
+    State(s): State<AppState>,
+    body: Result<Bytes, BytesRejection>,
+) -> ApiResult<Response> {
+    let doc: MissionDoc = json_body(body)?;
+    let svg = s
+        .run(move |p| {
+            let field = gleaner_wire::convert::field(&app::field_view(p)?);
+            gleaner_render::mission_figure_svg(&field, &doc, &map_options())
+                .map_err(|e| ApiError::bad_request(None, e.to_string()))
+        })
+        .await?;
+    Ok(svg_response(svg))
+}
+
+/// Multipart form parts of an upload: the files (saved into a temporary folder under
+/// sanitised names) and the text fields.
+struct Upload {
+    _dir: tempfile::TempDir,
+    files: Vec<PathBuf>,
+    /// The client's name of each file (its last path component).
+    names: Vec<String>,
+    fields: Vec<(String, String)>,
+}
+
+impl Upload {
+    /// Rewrites an error's message to name the client's files, not the temporary copies.
+    fn client_names(&self, mut e: ApiError) -> ApiError {
+        for (path, name) in self.files.iter().zip(&self.names) {
+            e.body.reason = e.body.reason.replace(&path.display().to_string(), name);
+        }
+        e
+    }
+
+    fn field(&self, name: &str) -> Option<&str> {
+        self.fields
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_str())
+    }
+}
+
+/// A file name reduced to letters, digits, `.`, `-`, `_` (never a path), prefixed with its
+/// position so two uploads of the same name stay apart.
+fn safe_name(k: usize, name: &str) -> String {
+    let base = name.rsplit(['/', '\\']).next().unwrap_or("");
+    let clean: String = base
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let clean = clean.trim_start_matches('.');
+    format!("{k:03}-{}", if clean.is_empty() { "upload" } else { clean })
+}
+
+fn multipart_error(e: axum::extract::multipart::MultipartError) -> ApiError {
+    if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+        ApiError::too_large(
+            Some("files"),
+            format!("the upload is too large: {}", e.body_text()),
+        )
+    } else {
+        ApiError::bad_request(
+            Some("files"),
+            format!("bad multipart upload: {}", e.body_text()),
+        )
+    }
+}
+
+/// Reads a whole multipart upload to disk before any use case runs, so an upload cut off or
+/// over the limit half-way stores nothing.
+async fn read_upload(mut m: Multipart) -> ApiResult<Upload> {
+    use tokio::io::AsyncWriteExt as _;
+    let dir = tempfile::Builder::new()
+        .prefix("gleaner-upload-")
+        .tempdir()
+        .map_err(|e| ApiError::internal(format!("cannot create a temporary folder: {e}")))?;
+    let mut files = Vec::new();
+    let mut names = Vec::new();
+    let mut fields = Vec::new();
+    while let Some(mut part) = m.next_field().await.map_err(multipart_error)? {
+        let name = part.name().unwrap_or("").to_string();
+        match part.file_name().map(str::to_string) {
+            Some(file_name) => {
+                let path = dir.path().join(safe_name(files.len(), &file_name));
+                let mut out = tokio::fs::File::create(&path)
+                    .await
+                    .map_err(|e| ApiError::internal(format!("cannot store the upload: {e}")))?;
+                while let Some(chunk) = part.chunk().await.map_err(multipart_error)? {
+                    out.write_all(&chunk)
+                        .await
+                        .map_err(|e| ApiError::internal(format!("cannot store the upload: {e}")))?;
+                }
+                out.flush()
+                    .await
+                    .map_err(|e| ApiError::internal(format!("cannot store the upload: {e}")))?;
+                files.push(path);
+                names.push(
+                    file_name
+                        .rsplit(['/', '\\'])
+                        .next()
+                        .unwrap_or("")
+                        .to_string(),
+                );
+            }
+            None => {
+                let text = part.text().await.map_err(multipart_error)?;
+                fields.push((name, text));
+            }
+        }
+    }
+    Ok(Upload {
+        _dir: dir,
+        files,
+        names,
+        fields,
+    })
+}
+
+fn format_of(text: Option<&str>) -> ApiResult<app::Format> {
+    Ok(match text.unwrap_or("auto") {
+        "auto" => app::Format::Auto,
+        "long-csv" => app::Format::Long,
+        "wide-csv" => app::Format::Wide,
+        "caf-daily" => app::Format::CafDaily,
+        "hubbard-brook" => app::Format::HubbardBrook,
+        other => {
+            return Err(ApiError::bad_request(
+                Some("format"),
+                format!(
+                    "format {other:?}: expected auto, long-csv, wide-csv, caf-daily or hubbard-brook"
+                ),
+            ));
+        }
+    })
+}
+
+fn flag(upload: &Upload, name: &str) -> ApiResult<bool> {
+    match upload.field(name) {
+        None | Some("false") | Some("0") | Some("") => Ok(false),
+        Some("true") | Some("1") | Some("on") => Ok(true),
+        Some(v) => Err(ApiError::bad_request(
+            Some(name),
+            format!("{name} = {v:?}: expected true or false"),
+        )),
+    }
+}
+
+/// Ingests uploaded readings files (multipart: one or more `files` parts and optional
+/// `format`, `modality`, `unit`, `utc_offset_h`, `on_error` fields), all or nothing.
+#[utoipa::path(post, path = "/api/v1/ingest", tag = "data",
+    request_body(content_type = "multipart/form-data", description = "files (one part per file); format = auto | long-csv | wide-csv | caf-daily | hubbard-brook; modality; unit; utc_offset_h; on_error = fail | skip"),
+    security(("bearer" = [])),
+    responses((status = 200, body = IngestDoc), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 413, body = ErrorBody)))]
+pub async fn ingest(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    m: Multipart,
+) -> ApiResult<Json<IngestDoc>> {
+    authorize(s.0.token.as_ref(), &headers)?;
+    let upload = read_upload(m).await?;
+    if upload.files.is_empty() {
+        return Err(ApiError::bad_request(
+            Some("files"),
+            "no file in the upload: send one or more `files` parts",
+        ));
+    }
+    let utc_offset_h = match upload.field("utc_offset_h") {
+        None | Some("") => 0.0,
+        Some(v) => v
+            .parse::<f64>()
+            .ok()
+            .filter(|h| h.is_finite())
+            .ok_or_else(|| {
+                ApiError::bad_request(
+                    Some("utc_offset_h"),
+                    format!("utc_offset_h = {v:?}: expected hours"),
+                )
+            })?,
+    };
+    let on_error = match upload.field("on_error") {
+        None | Some("") | Some("fail") => app::OnError::Fail,
+        Some("skip") => app::OnError::Skip,
+        Some(v) => {
+            return Err(ApiError::bad_request(
+                Some("on_error"),
+                format!("on_error = {v:?}: expected fail or skip"),
+            ));
+        }
+    };
+    let request = app::IngestRequest {
+        files: upload.files.clone(),
+        format: format_of(upload.field("format"))?,
+        modality: upload
+            .field("modality")
+            .filter(|v| !v.is_empty())
+            .map(str::to_string),
+        unit: upload
+            .field("unit")
+            .filter(|v| !v.is_empty())
+            .map(str::to_string),
+        utc_offset_h,
+        on_error,
+        metadata: None,
+        now: None,
+    };
+    let doc = s
+        .run(move |p| {
+            let out = app::ingest(p, &request, clock_now(), &app::Silent)
+                .map_err(|e| upload.client_names(e.into()));
+            Ok(IngestDoc::from_app(&out?))
+        })
+        .await?;
+    Ok(Json(doc))
+}
+
+/// Records a flown mission (multipart: optional `at`, `cells` (comma-separated, in visiting
+/// order), `amend`, and the readings files brought back as `files` parts). 409 when the
+/// mission was already recorded and `amend` is not set.
+#[utoipa::path(post, path = "/api/v1/missions/{id}/record", tag = "data",
+    params(("id" = i64, Path, description = "Mission id")),
+    request_body(content_type = "multipart/form-data", description = "at (RFC 3339 or date); cells (comma-separated ids); amend (true/false); files (readings brought back, any ingest format)"),
+    security(("bearer" = [])),
+    responses((status = 200, body = RecordDoc), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody),
+        (status = 413, body = ErrorBody)))]
+pub async fn record(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    Path(id): Path<String>,
+    m: Multipart,
+) -> ApiResult<Json<RecordDoc>> {
+    authorize(s.0.token.as_ref(), &headers)?;
+    let id = mission_id(&id)?;
+    let upload = read_upload(m).await?;
+    let cells = upload
+        .field("cells")
+        .filter(|c| !c.trim().is_empty())
+        .map(|c| c.split(',').map(|s| s.trim().to_string()).collect());
+    let request = app::RecordRequest {
+        mission: id,
+        at: parse_time("at", upload.field("at").filter(|v| !v.is_empty()))?,
+        cells,
+        readings: (!upload.files.is_empty()).then(|| app::IngestRequest {
+            files: upload.files.clone(),
+            ..Default::default()
+        }),
+        amend: flag(&upload, "amend")?,
+    };
+    let doc = s
+        .run(move |p| {
+            let out = app::record_flight(p, &request, clock_now(), &app::Silent)
+                .map_err(|e| upload.client_names(e.into()));
+            Ok(RecordDoc::from_app(&out?))
+        })
+        .await?;
+    Ok(Json(doc))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uploaded_names_never_become_paths() {
+        assert_eq!(safe_name(0, "../../etc/passwd"), "000-passwd");
+        assert_eq!(safe_name(1, "C:\\x\\..\\CAF003.txt"), "001-CAF003.txt");
+        assert_eq!(safe_name(2, ".."), "002-upload");
+        assert_eq!(safe_name(3, "a b;c.csv"), "003-a_b_c.csv");
+    }
+}

@@ -1,0 +1,607 @@
+//! Every endpoint and every error code, against a server on an ephemeral loopback port over
+//! a CAF project.
+
+use serde_json::{Value, json};
+
+use gleaner_server::client::Part;
+use gleaner_server::handlers::MISSION_FILES;
+
+use crate::common::{Server, TOKEN, caf_project, flight_csv};
+
+/// Every API route (method, path as in the OpenAPI document).
+const ROUTES: [(&str, &str); 14] = [
+    ("get", "/api/v1/project"),
+    ("get", "/api/v1/field"),
+    ("get", "/api/v1/cells"),
+    ("get", "/api/v1/cells/{cell}"),
+    ("post", "/api/v1/score"),
+    ("get", "/api/v1/missions"),
+    ("get", "/api/v1/missions/{id}"),
+    ("post", "/api/v1/plan"),
+    ("post", "/api/v1/explore"),
+    ("get", "/api/v1/missions/{id}/files/{name}"),
+    ("get", "/api/v1/map.svg"),
+    ("post", "/api/v1/map.svg"),
+    ("post", "/api/v1/ingest"),
+    ("post", "/api/v1/missions/{id}/record"),
+];
+
+fn error(r: &gleaner_server::client::Response) -> (String, Option<String>, String) {
+    let v = r
+        .json()
+        .unwrap_or_else(|_| panic!("not JSON: {}", r.text()));
+    (
+        v["error"].as_str().unwrap().to_string(),
+        v["field"].as_str().map(str::to_string),
+        v["reason"].as_str().unwrap().to_string(),
+    )
+}
+
+/// A quick, machine-independent plan request.
+fn plan_body(dry_run: bool) -> Value {
+    json!({"solver": "greedy", "seed": 1, "dry_run": dry_run})
+}
+
+#[test]
+fn openapi_lists_every_route_and_every_route_answers() {
+    let server = Server::caf();
+    let doc = server.get_json("/api/v1/openapi.json");
+    assert!(doc["openapi"].as_str().unwrap().starts_with("3."));
+    let paths = doc["paths"].as_object().unwrap();
+    let mut documented: Vec<(String, String)> = paths
+        .iter()
+        .flat_map(|(p, ops)| {
+            ops.as_object()
+                .unwrap()
+                .keys()
+                .map(move |m| (m.clone(), p.clone()))
+        })
+        .collect();
+    documented.sort();
+    let mut expected: Vec<(String, String)> = ROUTES
+        .iter()
+        .map(|(m, p)| (m.to_string(), p.to_string()))
+        .collect();
+    expected.sort();
+    assert_eq!(documented, expected);
+    assert!(doc["components"]["schemas"]["MissionDoc"].is_object());
+    assert!(doc["components"]["securitySchemes"]["bearer"].is_object());
+    // Each route exists on the server (an empty request gets anything but 404/405 for the
+    // route itself).
+    let mut c = server.client();
+    for (method, path) in ROUTES {
+        let concrete = path
+            .replace("{cell}", "x0y0")
+            .replace("{id}", "1")
+            .replace("{name}", "mission.plan");
+        let r = c
+            .request(&method.to_uppercase(), &concrete, &[], Some(b""))
+            .unwrap();
+        assert_ne!(r.status, 405, "{method} {path}");
+        if r.status == 404 {
+            let (_, field, _) = error(&r);
+            assert!(
+                field.is_some(),
+                "{method} {path} is not routed: {}",
+                r.text()
+            );
+        }
+    }
+}
+
+#[test]
+fn reads_project_field_cells_cell_and_map() {
+    let server = Server::caf();
+    let project = server.get_json("/api/v1/project");
+    assert_eq!(project["name"], "caf");
+    assert_eq!(project["sensors"], 42);
+    assert!(project["readings"].as_u64().unwrap() > 50_000);
+    assert!(
+        project["latest_reading"]
+            .as_str()
+            .unwrap()
+            .starts_with("2013-12")
+    );
+    assert_eq!(project["writable"], true);
+    assert_eq!(project["basemap_url"], Value::Null);
+
+    let field = server.get_json("/api/v1/field");
+    assert_eq!(field["format"], "gleaner.field");
+    let n = field["cells"].as_array().unwrap().len();
+    assert!((30..=42).contains(&n), "{n} cells");
+    let cells = server.get_json("/api/v1/cells");
+    assert_eq!(cells.as_array().unwrap().len(), n);
+
+    let id = field["cells"][0]["cell"].as_str().unwrap().to_string();
+    let detail = server.get_json(&format!("/api/v1/cells/{id}?days=10"));
+    assert_eq!(detail["cell"]["cell"], id);
+    assert_eq!(detail["rank"], Value::Null, "not scored yet");
+    let series = detail["series"].as_array().unwrap();
+    assert!(!series.is_empty());
+    for s in series {
+        let t = s["t"].as_array().unwrap();
+        assert_eq!(t.len(), s["values"].as_array().unwrap().len());
+        let first = t[0].as_i64().unwrap();
+        let last = t[t.len() - 1].as_i64().unwrap();
+        assert!(last - first <= 10 * 86_400, "10 days of series");
+    }
+
+    // The map: one cell shape per cell of /field, in the same order.
+    let r = server.client().get("/api/v1/map.svg").unwrap();
+    assert_eq!(r.status, 200);
+    assert_eq!(r.header("content-type"), Some("image/svg+xml"));
+    let svg = r.text();
+    assert_eq!(svg.matches("<path id=\"cell-").count(), n);
+    assert!(svg.contains(&format!("<title>{id} ")));
+
+    assert_eq!(server.get_json("/api/v1/missions"), json!([]));
+
+    // The dashboard is served by the same binary, with a strict content policy.
+    let r = server.client().get("/").unwrap();
+    assert_eq!(r.status, 200);
+    assert!(r.text().contains("<script src=\"/app.js\""));
+    assert!(
+        r.header("content-security-policy")
+            .unwrap()
+            .contains("default-src 'self'")
+    );
+    for asset in ["/app.js", "/app.css"] {
+        assert_eq!(server.client().get(asset).unwrap().status, 200, "{asset}");
+    }
+}
+
+#[test]
+fn score_plan_export_record_lifecycle() {
+    let server = Server::caf();
+    let mut c = server.client();
+
+    // Scoring: a dry run needs no token and stores nothing; a stored one needs it.
+    let r = c
+        .post_json(
+            "/api/v1/score",
+            &json!({"at": "2014-01-01", "dry_run": true}),
+            None,
+        )
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert!(r.json().unwrap()["cells"].as_array().unwrap().len() > 20);
+    assert!(server.get_json("/api/v1/cells")[0]["scores"].is_null());
+    let r = c
+        .post_json("/api/v1/score", &json!({"at": "2014-01-01"}), Some(TOKEN))
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert!(server.get_json("/api/v1/cells")[0]["scores"].is_object());
+    let field = server.get_json("/api/v1/field");
+    let id = field["cells"][0]["cell"].as_str().unwrap();
+    let detail = server.get_json(&format!("/api/v1/cells/{id}"));
+    assert!(detail["rank"].as_u64().unwrap() >= 1);
+    assert!(
+        ["freshness", "anomaly", "uncertainty", "none"]
+            .contains(&detail["driver"].as_str().unwrap())
+    );
+    let k = &detail["contributions"];
+    let s = detail["cell"]["scores"]["score"].as_f64().unwrap();
+    let sum: f64 = ["freshness", "anomaly", "uncertainty", "redundancy"]
+        .iter()
+        .map(|t| k[t].as_f64().unwrap())
+        .sum();
+    assert!((sum - s).abs() < 1e-9, "the weighted terms add up to S");
+
+    // Planning: the dry run is previewed, then saved.
+    let dry = c.post_json("/api/v1/plan", &plan_body(true), None).unwrap();
+    assert_eq!(dry.status, 200, "{}", dry.text());
+    let dry = dry.json().unwrap();
+    assert_eq!(dry["status"], "dry-run");
+    assert_eq!(server.get_json("/api/v1/missions"), json!([]));
+    let r = c.post_json("/api/v1/map.svg", &dry, None).unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert!(r.text().contains("id=\"route\""));
+    let saved = c
+        .post_json("/api/v1/plan", &plan_body(false), Some(TOKEN))
+        .unwrap();
+    assert_eq!(saved.status, 200, "{}", saved.text());
+    let saved = saved.json().unwrap();
+    let mid = saved["mission_id"].as_i64().unwrap();
+    assert_eq!(
+        saved["stops"], dry["stops"],
+        "the saved route is the previewed one"
+    );
+    let stored = server.get_json(&format!("/api/v1/missions/{mid}"));
+    assert_eq!(stored["energy"], saved["energy"]);
+    assert_eq!(
+        server
+            .get_json("/api/v1/missions")
+            .as_array()
+            .unwrap()
+            .len(),
+        1
+    );
+
+    // Downloads: every file, as an attachment of its type.
+    for (name, media, _) in MISSION_FILES {
+        let r = c
+            .get(&format!("/api/v1/missions/{mid}/files/{name}"))
+            .unwrap();
+        assert_eq!(r.status, 200, "{name}: {}", r.text());
+        assert_eq!(r.header("content-type"), Some(media), "{name}");
+        assert!(
+            r.header("content-disposition")
+                .unwrap()
+                .starts_with("attachment; filename=\"mission-"),
+            "{name}"
+        );
+        match name {
+            "mission.plan" => {
+                assert_eq!(r.json().unwrap()["fileType"], "Plan");
+            }
+            "mission.waypoints" => assert!(r.text().starts_with("QGC WPL 110")),
+            "mission.geojson" => assert_eq!(r.json().unwrap()["type"], "FeatureCollection"),
+            "mission.json" => assert_eq!(r.json().unwrap()["mission_id"], mid),
+            "mission.svg" => assert!(r.text().contains("<svg")),
+            _ => assert_eq!(&r.body[1..4], b"PNG"),
+        }
+    }
+    let svg = c.get(&format!("/api/v1/map.svg?mission={mid}")).unwrap();
+    assert_eq!(svg.status, 200);
+    let svg = svg.text();
+    assert!(svg.contains("<text"), "the map has its labels");
+    assert!(
+        svg.contains(&format!("Mission {mid}")),
+        "the map is the mission's"
+    );
+
+    // Recording the flight with the readings brought back.
+    let sensors: Vec<String> = stored["stops"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|s| {
+            let cell = s["cell"].as_str().unwrap();
+            let cells = server.get_json(&format!("/api/v1/cells/{cell}?days=0"));
+            cells["cell"]["sensors"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_str().unwrap().to_string())
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let flight = flight_csv(sensors.iter().map(String::as_str));
+    let before = server.get_json("/api/v1/project")["readings"]
+        .as_u64()
+        .unwrap();
+    let parts = [
+        Part::Text("at".into(), "2014-02-01T00:00:00Z".into()),
+        Part::File("files".into(), "flight.csv".into(), flight.clone()),
+    ];
+    let r = c
+        .post_multipart(
+            &format!("/api/v1/missions/{mid}/record"),
+            &parts,
+            Some(TOKEN),
+        )
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    let rec = r.json().unwrap();
+    let inserted = rec["readings_inserted"].as_u64().unwrap();
+    assert!(inserted > 0);
+    assert_eq!(
+        server.get_json("/api/v1/project")["readings"]
+            .as_u64()
+            .unwrap(),
+        before + inserted
+    );
+    assert_eq!(
+        server.get_json(&format!("/api/v1/missions/{mid}"))["status"],
+        "flown"
+    );
+    // 409 on a second record, unless amending.
+    let again = c
+        .post_multipart(
+            &format!("/api/v1/missions/{mid}/record"),
+            &parts,
+            Some(TOKEN),
+        )
+        .unwrap();
+    assert_eq!(again.status, 409, "{}", again.text());
+    assert_eq!(error(&again).0, "conflict");
+    let mut amend = parts.to_vec();
+    amend.push(Part::Text("amend".into(), "true".into()));
+    let r = c
+        .post_multipart(
+            &format!("/api/v1/missions/{mid}/record"),
+            &amend,
+            Some(TOKEN),
+        )
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(r.json().unwrap()["amended"], true);
+
+    // Exploration: a dry run stores nothing; a saved one stores every sortie.
+    let r = c
+        .post_json("/api/v1/explore", &json!({"dry_run": true}), None)
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    let sorties = r.json().unwrap()["sorties"].as_array().unwrap().len();
+    assert!(sorties >= 1);
+    assert_eq!(
+        server
+            .get_json("/api/v1/missions")
+            .as_array()
+            .unwrap()
+            .len(),
+        1
+    );
+    let r = c
+        .post_json("/api/v1/explore", &json!({}), Some(TOKEN))
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(
+        server
+            .get_json("/api/v1/missions")
+            .as_array()
+            .unwrap()
+            .len(),
+        1 + sorties
+    );
+}
+
+#[test]
+fn ingest_is_all_or_nothing() {
+    let server = Server::caf();
+    let mut c = server.client();
+    let readings = || {
+        server.get_json("/api/v1/project")["readings"]
+            .as_u64()
+            .unwrap()
+    };
+    let before = readings();
+    let good = flight_csv(["CAF003"]);
+    let mut bad = good.clone();
+    bad.extend_from_slice(b"CAF003,2014-01-40,vw@30cm,0.2,m3/m3\n");
+    // The first file is fine, the second fails half-way: nothing of either is stored.
+    let r = c
+        .post_multipart(
+            "/api/v1/ingest",
+            &[
+                Part::File("files".into(), "good.csv".into(), good.clone()),
+                Part::File("files".into(), "../../bad.csv".into(), bad),
+            ],
+            Some(TOKEN),
+        )
+        .unwrap();
+    assert_eq!(r.status, 400, "{}", r.text());
+    let (code, field, reason) = error(&r);
+    assert_eq!(
+        (code.as_str(), field.as_deref()),
+        ("bad_request", Some("files"))
+    );
+    assert!(
+        reason.starts_with("bad.csv:33: "),
+        "the client's file and line: {reason}"
+    );
+    assert!(!reason.contains("/tmp"), "no server path: {reason}");
+    assert_eq!(readings(), before);
+
+    // The good file alone is stored; a second upload of it changes nothing.
+    let parts = [Part::File("files".into(), "good.csv".into(), good)];
+    let r = c
+        .post_multipart("/api/v1/ingest", &parts, Some(TOKEN))
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    let n = r.json().unwrap()["inserted"].as_u64().unwrap();
+    assert_eq!(n, 31);
+    assert_eq!(readings(), before + n);
+    let r = c
+        .post_multipart("/api/v1/ingest", &parts, Some(TOKEN))
+        .unwrap();
+    assert_eq!(r.json().unwrap()["unchanged"], 31);
+    assert_eq!(readings(), before + n);
+}
+
+#[test]
+fn every_error_code() {
+    let server = Server::caf();
+    let mut c = server.client();
+    // 400: a bad value, naming its field.
+    let r = c
+        .post_json(
+            "/api/v1/score",
+            &json!({"at": "yesterday", "dry_run": true}),
+            None,
+        )
+        .unwrap();
+    assert_eq!(r.status, 400);
+    assert_eq!(error(&r).1.as_deref(), Some("at"));
+    let r = c
+        .post_json("/api/v1/plan", &json!({"dry_run": true, "budget": 3}), None)
+        .unwrap();
+    assert_eq!(r.status, 400);
+    assert_eq!(error(&r).1.as_deref(), Some("budget"));
+    let r = c
+        .post_json(
+            "/api/v1/plan",
+            &json!({"dry_run": true, "seed": "one"}),
+            None,
+        )
+        .unwrap();
+    assert_eq!(r.status, 400);
+    assert_eq!(error(&r).1.as_deref(), Some("seed"));
+    let r = c
+        .post_json(
+            "/api/v1/plan",
+            &json!({"dry_run": true, "solver": "magic"}),
+            None,
+        )
+        .unwrap();
+    assert_eq!((r.status, error(&r).1.as_deref()), (400, Some("solver")));
+    let r = c
+        .post_json(
+            "/api/v1/plan",
+            &json!({"dry_run": true, "time_limit_s": 1e9}),
+            None,
+        )
+        .unwrap();
+    assert_eq!(
+        (r.status, error(&r).1.as_deref()),
+        (400, Some("time_limit_s"))
+    );
+    let r = c.get("/api/v1/missions/abc").unwrap();
+    assert_eq!((r.status, error(&r).1.as_deref()), (400, Some("mission")));
+    let r = c.get("/api/v1/cells/nowhere").unwrap();
+    assert_eq!((r.status, error(&r).1.as_deref()), (400, Some("cell")));
+    let r = c.get("/api/v1/cells/x0y0?days=-1").unwrap();
+    assert_eq!((r.status, error(&r).1.as_deref()), (400, Some("days")));
+    let r = c
+        .request("POST", "/api/v1/score", &[], Some(b"{not json"))
+        .unwrap();
+    assert_eq!(r.status, 400);
+    assert_eq!(error(&r).0, "bad_request");
+
+    // 404: missions, cells, files, routes.
+    let r = c.get("/api/v1/missions/999").unwrap();
+    assert_eq!((r.status, error(&r).0.as_str()), (404, "not_found"));
+    let r = c.get("/api/v1/cells/x999y999").unwrap();
+    assert_eq!((r.status, error(&r).1.as_deref()), (404, Some("cell")));
+    let r = c
+        .get("/api/v1/missions/1/files/..%2F..%2Fgleaner.db")
+        .unwrap();
+    assert_eq!((r.status, error(&r).1.as_deref()), (404, Some("name")));
+    let r = c.get("/api/v1/nothing").unwrap();
+    assert_eq!((r.status, error(&r).0.as_str()), (404, "not_found"));
+    let r = c.get("/../gleaner.toml").unwrap();
+    assert_eq!(r.status, 404);
+
+    // 401: writes without the token or with another one; 403 on a read-only server.
+    let r = c
+        .post_json("/api/v1/plan", &plan_body(false), None)
+        .unwrap();
+    assert_eq!((r.status, error(&r).0.as_str()), (401, "unauthorized"));
+    assert_eq!(r.header("www-authenticate"), Some("Bearer"));
+    let r = c
+        .post_json(
+            "/api/v1/plan",
+            &plan_body(false),
+            Some("not-the-token-at-all"),
+        )
+        .unwrap();
+    assert_eq!(r.status, 401);
+    let r = c
+        .post_multipart(
+            "/api/v1/ingest",
+            &[Part::File(
+                "files".into(),
+                "a.csv".into(),
+                flight_csv(["CAF003"]),
+            )],
+            Some("wrong-token-0123456789"),
+        )
+        .unwrap();
+    assert_eq!(r.status, 401);
+    assert_eq!(
+        server.get_json("/api/v1/missions"),
+        json!([]),
+        "nothing written"
+    );
+    let r = c
+        .post_json("/api/v1/plan", &plan_body(false), Some(TOKEN))
+        .unwrap();
+    assert_eq!(r.status, 200, "the right token is accepted: {}", r.text());
+
+    // 409: recording a flown mission again (also in the lifecycle test).
+    let mid = r.json().unwrap()["mission_id"].as_i64().unwrap();
+    for expected in [200, 409] {
+        let r = c
+            .post_multipart(&format!("/api/v1/missions/{mid}/record"), &[], Some(TOKEN))
+            .unwrap();
+        assert_eq!(r.status, expected, "{}", r.text());
+    }
+
+    // 413: a JSON body over 1 MiB.
+    let big = json!({"at": "x".repeat(2 << 20)});
+    let r = c.post_json("/api/v1/score", &big, None).unwrap();
+    assert_eq!((r.status, error(&r).0.as_str()), (413, "payload_too_large"));
+
+    let read_only = Server::start(caf_project(), |_| {});
+    let r = read_only
+        .client()
+        .post_json("/api/v1/plan", &plan_body(false), Some(TOKEN))
+        .unwrap();
+    assert_eq!((r.status, error(&r).0.as_str()), (403, "forbidden"));
+}
+
+#[test]
+fn uploads_over_the_limit_are_refused_and_store_nothing() {
+    let server = Server::start(caf_project(), |c| {
+        c.token = Some(gleaner_server::Token::new(TOKEN).unwrap());
+        c.max_upload_bytes = 4096;
+    });
+    let before = server.get_json("/api/v1/project")["readings"]
+        .as_u64()
+        .unwrap();
+    let good = flight_csv(["CAF003"]);
+    assert!(good.len() < 4096);
+    let mut big = good.clone();
+    while big.len() < 64 << 10 {
+        big.extend_from_slice(b"CAF003,2014-01-01,vw@30cm,0.2,m3/m3\n");
+    }
+    let r = server
+        .client()
+        .post_multipart(
+            "/api/v1/ingest",
+            &[
+                Part::File("files".into(), "good.csv".into(), good),
+                Part::File("files".into(), "big.csv".into(), big),
+            ],
+            Some(TOKEN),
+        )
+        .unwrap();
+    assert_eq!(r.status, 413, "{}", r.text());
+    assert_eq!(error(&r).1.as_deref(), Some("files"));
+    assert_eq!(
+        server.get_json("/api/v1/project")["readings"]
+            .as_u64()
+            .unwrap(),
+        before
+    );
+}
+
+#[test]
+fn configuration_is_checked() {
+    let mut config = gleaner_server::ServerConfig::new("p".into());
+    assert!(config.check().is_ok());
+    config.addr = "0.0.0.0:8080".parse().unwrap();
+    let e = config.check().unwrap_err().to_string();
+    assert!(e.contains("needs a token"), "{e}");
+    config.token = Some(gleaner_server::Token::new(TOKEN).unwrap());
+    assert!(config.check().is_ok());
+    config.cors_origins = vec!["*".into()];
+    assert!(config.check().is_err());
+    config.cors_origins = vec!["http://localhost:3000".into()];
+    config.basemap_url = Some("https://tiles.example/{z}/{x}/{y}.png".into());
+    assert!(config.check().is_ok());
+    config.basemap_url = Some("javascript:alert(1)".into());
+    assert!(config.check().is_err());
+}
+
+#[test]
+fn cors_is_off_unless_configured() {
+    let server = Server::caf();
+    let origin = [("Origin", "http://elsewhere.example")];
+    let r = server
+        .client()
+        .request("GET", "/api/v1/project", &origin, None)
+        .unwrap();
+    assert_eq!(r.header("access-control-allow-origin"), None);
+    let server = Server::start(caf_project(), |c| {
+        c.cors_origins = vec!["http://elsewhere.example".into()];
+    });
+    let r = server
+        .client()
+        .request("GET", "/api/v1/project", &origin, None)
+        .unwrap();
+    assert_eq!(
+        r.header("access-control-allow-origin"),
+        Some("http://elsewhere.example")
+    );
+}

@@ -1,0 +1,235 @@
+//! The dashboard in a real headless Chromium (Debian's `chromium` and `chromium-driver`,
+//! installed by `scripts/browser-env.sh`), driven over WebDriver: it opens the dashboard on a
+//! CAF project, sees one shape per cell, plans a mission through the form, sees the route
+//! drawn and the energy total equal to the API's, downloads the `.plan`, and saves a
+//! screenshot. Fails (never skips) when the browser is missing.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use fantoccini::{ClientBuilder, Locator};
+use serde_json::json;
+
+use crate::common::{Server, TOKEN};
+
+/// Where the screenshot goes: `GLEANER_SCREENSHOT`, or the test's target folder.
+fn screenshot_path() -> PathBuf {
+    std::env::var_os("GLEANER_SCREENSHOT")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_TARGET_TMPDIR")).join("dashboard.png"))
+}
+
+fn which(name: &str) -> Option<PathBuf> {
+    std::env::var_os("PATH").and_then(|paths| {
+        std::env::split_paths(&paths)
+            .map(|p| p.join(name))
+            .find(|p| p.is_file())
+    })
+}
+
+/// chromedriver on a free loopback port, stopped on drop.
+struct Driver {
+    child: Child,
+    port: u16,
+}
+
+impl Driver {
+    fn start() -> Self {
+        let driver = which("chromedriver").unwrap_or_else(|| {
+            panic!("chromedriver is missing: run scripts/browser-env.sh (apt-get install chromium chromium-driver)")
+        });
+        assert!(
+            which("chromium").is_some(),
+            "chromium is missing: run scripts/browser-env.sh (apt-get install chromium chromium-driver)"
+        );
+        // A free port: bind 0, read it, release it for chromedriver.
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        let mut child = Command::new(driver)
+            .arg(format!("--port={port}"))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("chromedriver starts");
+        // Explicit synchronisation: chromedriver says when it listens.
+        let out = child.stdout.take().unwrap();
+        let mut lines = BufReader::new(out).lines();
+        let mut ready = false;
+        for line in lines.by_ref().take(50) {
+            if line.unwrap_or_default().contains("started successfully") {
+                ready = true;
+                break;
+            }
+        }
+        assert!(ready, "chromedriver did not report that it started");
+        // Keep draining its output so it never blocks on a full pipe.
+        std::thread::spawn(move || for _ in lines {});
+        Self { child, port }
+    }
+}
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        self.child.kill().ok();
+        self.child.wait().ok();
+    }
+}
+
+#[test]
+fn dashboard_in_headless_chromium() {
+    let server = Server::caf();
+    let driver = Driver::start();
+    let downloads = tempfile::tempdir().unwrap();
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap();
+    rt.block_on(async {
+        let mut caps = serde_json::Map::new();
+        caps.insert(
+            "goog:chromeOptions".into(),
+            json!({
+                "binary": which("chromium").unwrap(),
+                "args": ["--headless=new", "--no-sandbox", "--disable-gpu",
+                         "--disable-dev-shm-usage", "--window-size=1400,1100",
+                         "--no-first-run", "--no-default-browser-check"],
+                "prefs": {
+                    "download.default_directory": downloads.path(),
+                    "download.prompt_for_download": false
+                }
+            }),
+        );
+        let connector = hyper_util::client::legacy::connect::HttpConnector::new();
+        let c = ClientBuilder::new(connector)
+            .capabilities(caps)
+            .connect(&format!("http://127.0.0.1:{}", driver.port))
+            .await
+            .expect("a WebDriver session");
+        let result = drive(&c, &server, downloads.path()).await;
+        let shot = c.screenshot().await;
+        c.close().await.ok();
+        if let Ok(png) = shot {
+            let path = screenshot_path();
+            std::fs::create_dir_all(path.parent().unwrap()).ok();
+            std::fs::write(&path, png).unwrap();
+        }
+        result.unwrap();
+    });
+}
+
+type Res = Result<(), Box<dyn std::error::Error>>;
+
+async fn drive(c: &fantoccini::Client, server: &Server, downloads: &Path) -> Res {
+    let field = server.get_json("/api/v1/field");
+    let n_cells = field["cells"].as_array().unwrap().len();
+    let wait = Duration::from_secs(60); // a bound on a stuck browser, not a timing assertion
+
+    c.goto(&format!("http://{}/#token={TOKEN}", server.addr))
+        .await?;
+    c.wait()
+        .at_most(wait)
+        .for_element(Locator::Css("#map path.cell"))
+        .await?;
+    // The token moved from the address into the session, out of the URL.
+    assert!(!c.current_url().await?.as_str().contains("token"));
+    let shapes = c.find_all(Locator::Css("#map path.cell")).await?;
+    assert_eq!(shapes.len(), n_cells, "one shape per cell");
+
+    // Click a cell: its panel explains its rank and shows its series.
+    shapes[0].click().await?;
+    c.wait()
+        .at_most(wait)
+        .for_element(Locator::Css("#cell-body svg.spark"))
+        .await?;
+
+    // Plan through the form: preview, then save.
+    let form = c.form(Locator::Id("plan-form")).await?;
+    form.set_by_name("seed", "1").await?;
+    form.set_by_name("iterations", "500").await?;
+    form.set_by_name("time_limit_s", "5").await?;
+    c.find(Locator::Id("preview")).await?.click().await?;
+    c.wait()
+        .at_most(wait)
+        .for_element(Locator::Css("#plan-result #energy-total"))
+        .await?;
+    c.find(Locator::Id("save")).await?.click().await?;
+    c.wait()
+        .at_most(wait)
+        .for_element(Locator::Id("saved"))
+        .await?;
+    c.wait()
+        .at_most(wait)
+        .for_element(Locator::Css("#missions tr.current"))
+        .await?;
+
+    // The route is drawn on the map, one marker per stop.
+    let missions = server.get_json("/api/v1/missions");
+    let m = &missions[0];
+    let id = m["mission_id"].as_i64().unwrap();
+    let stops = m["stops"].as_array().unwrap().len();
+    assert!(stops > 0);
+    let route = c.find_all(Locator::Css("#map #route *")).await?;
+    assert!(!route.is_empty(), "the route is drawn");
+    let markers = c.find_all(Locator::Css("#map #stops circle")).await?;
+    assert_eq!(markers.len(), stops, "one marker per stop");
+    // The energy total on the page is the API's.
+    let shown = c
+        .find(Locator::Id("energy-total"))
+        .await?
+        .attr("data-joules")
+        .await?
+        .unwrap();
+    let api = server.get_json(&format!("/api/v1/missions/{id}"))["energy"]["total_j"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(shown.parse::<f64>()?, api);
+    let text = c.find(Locator::Id("energy-total")).await?.text().await?;
+    assert_eq!(text, format!("{:.2} kJ", api / 1000.0));
+
+    // Download the .plan through its button.
+    c.find(Locator::Id("dl-plan")).await?.click().await?;
+    let file = downloads.join(format!("mission-{id}-plan"));
+    let mut plan = None;
+    // Each round trip to the browser paces the check; the count bounds it.
+    for _ in 0..2000 {
+        if let Ok(text) = std::fs::read_to_string(&file)
+            && let Ok(v) = serde_json::from_str::<serde_json::Value>(&text)
+        {
+            plan = Some(v);
+            break;
+        }
+        c.title().await?;
+    }
+    let plan = plan.ok_or("the .plan was not downloaded")?;
+    assert_eq!(plan["fileType"], "Plan");
+    let items = plan["mission"]["items"].as_array().unwrap();
+    assert!(
+        items.len() >= stops,
+        "{} items for {stops} stops",
+        items.len()
+    );
+
+    // Colour by another term: the cells change colour, the S colour bar is hidden.
+    let before = shapes_fill(c).await?;
+    c.find(Locator::Css("#colour-by option[value='f']"))
+        .await?
+        .click()
+        .await?;
+    assert_ne!(shapes_fill(c).await?, before);
+    Ok(())
+}
+
+async fn shapes_fill(c: &fantoccini::Client) -> Result<String, fantoccini::error::CmdError> {
+    let v = c
+        .execute(
+            "return [...document.querySelectorAll('#map path.cell')].map(p => getComputedStyle(p).fill).join(';')",
+            vec![],
+        )
+        .await?;
+    Ok(v.as_str().unwrap_or("").to_string())
+}
