@@ -12,7 +12,7 @@ use crate::auth::Token;
 use crate::error::{ApiError, ApiResult};
 
 /// A project as [`Project::open`] opens it (the one place naming the backend it returns).
-pub type Opened = Project<gleaner_app::SqliteStore>;
+pub type Opened = Project<gleaner_app::AnyStore>;
 
 /// What every handler shares.
 #[derive(Clone)]
