@@ -167,7 +167,8 @@ pub struct Climate {
     /// Relative seasonal amplitude of the storm rate, in [0, 1] (default 0.7): the rate is
     /// `mean x (1 + a cos(2 pi (doy - peak_doy) / 365.25))`.
     pub storm_seasonality: f64,
-    /// Day of year of the wettest season, days since 1 January (default 340, early December).
+    /// Day of year of the wettest season (peak storm rate), days since 1 January (default 30,
+    /// end of January: with the growing season it makes the soil wettest in April).
     pub storm_peak_doy: f64,
     /// Mean rain per storm, millimetres (exponentially distributed; default 7 mm).
     pub storm_mean_mm: f64,

@@ -653,4 +653,43 @@ mod tests {
         mask[40] = true;
         assert_eq!(z_exceedance_fraction(&[s], &[mask], 3.0, 30), 0.0);
     }
+
+    #[test]
+    fn network_stats_of_a_hand_made_panel() {
+        // Two stations 50 m apart with identical daily changes at 30 cm (synchrony 1) and a
+        // soil temperature that dips below 0 °C once; the second station's last day is an
+        // event day, left out of everything but the missing-data counts.
+        let first = gleaner_field::time::days_from_civil(2014, 1, 1).unwrap();
+        let base: Vec<f64> = (0..60).map(|d| 0.2 + 0.01 * ((d * 7) % 5) as f64).collect();
+        let shifted: Vec<f64> = base.iter().map(|v| v + 0.05).collect();
+        let mut t = vec![vec![2.0; 60], vec![3.0; 60]];
+        t[0][10] = -1.0;
+        t[1][59] = -5.0;
+        let mut mask = vec![vec![false; 60], vec![false; 60]];
+        mask[1][59] = true;
+        let modality = |name: &str, is_water: bool, series: Vec<Vec<f64>>| PanelModality {
+            name: name.into(),
+            is_water,
+            depth_cm: 30,
+            series,
+        };
+        let panel = NetworkPanel {
+            positions: vec![LocalPoint::new(0.0, 0.0), LocalPoint::new(50.0, 0.0)],
+            first_day: first,
+            modalities: vec![
+                modality("vw@30cm", true, vec![base.clone(), shifted]),
+                modality("t@30cm", false, t),
+            ],
+            event_days: mask,
+        };
+        let s = network_stats(&panel);
+        assert!((s.sync_30 - 1.0).abs() < 1e-9, "{}", s.sync_30);
+        assert!(s.sync_90.is_nan());
+        assert_eq!(s.t30_min, -1.0);
+        // 119 temperatures left after the mask, one below 0 °C.
+        assert!((s.t30_below_zero - 1.0 / 119.0).abs() < 1e-12);
+        assert_eq!(s.missing_fraction, 0.0);
+        assert_eq!(s.per_modality.len(), 2);
+        assert!((s.per_modality[0].corr_near - 1.0).abs() < 1e-9);
+    }
 }
