@@ -26,6 +26,10 @@
 //! the newest reading — in O(cells × neighbours) instead of O(history); [`compute_full`]
 //! always reads the history. Both give the same scores within 1e-9 relative.
 //!
+//! Evaluation: [`reconstruct`] estimates every sensor's current value (last value carried
+//! forward, and space-time kriging with its variance) from what is known; [`campaign`]
+//! replays a dataset as a campaign of missions per strategy through these same use cases.
+//!
 //! Read models: [`field_view`] (the cell table), [`missions`], [`mission`].
 //!
 //! Units: times are seconds since 1970-01-01T00:00:00Z (UTC); positions WGS84 ([`LatLon`],
@@ -34,6 +38,7 @@
 //! [`LatLon`]: gleaner_field::LatLon
 #![deny(missing_docs)]
 
+pub mod campaign;
 mod cell_csv;
 mod error;
 mod explore;
@@ -43,6 +48,7 @@ mod knowledge;
 mod plan;
 mod progress;
 mod project;
+mod reconstruct;
 mod record;
 mod score;
 pub mod settings;
@@ -61,10 +67,13 @@ pub use plan::{
 };
 pub use progress::{Progress, Silent};
 pub use project::Project;
+pub use reconstruct::{
+    DEFAULT_NEIGHBOURS, ReconstructRequest, Reconstruction, SensorEstimate, reconstruct,
+};
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};
 pub use settings::Settings;
-pub use simulate::{Truth, fly};
+pub use simulate::{Truth, fly, fly_buffered};
 pub use summaries::{pending_bytes, series_summary};
 pub use view::{
     CellView, FieldView, MissionExport, check_flyable, export, field_view, mission, missions,

@@ -6,5 +6,8 @@ pub mod cells;
 pub mod demo;
 pub mod export;
 pub mod plan;
+pub mod reconstruct;
+pub mod report;
 pub mod score;
+pub mod simulate;
 pub mod synth;
