@@ -419,6 +419,17 @@ pub fn ingest<S: Store>(
     let limits = project.settings().ingest.value_limits();
     let parsed = parse_files(request, known_sensors(project.store())?, &limits, progress)?;
     refuse_future(&parsed, clock_now)?;
+    ingest_parsed(project, parsed, request, clock_now, progress)
+}
+
+/// [`ingest`] with the readings already read (from files, or a simulation's history).
+pub(crate) fn ingest_parsed<S: Store>(
+    project: &mut Project<S>,
+    parsed: Parsed,
+    request: &IngestRequest,
+    clock_now: UnixSeconds,
+    progress: &dyn Progress,
+) -> Result<IngestOutcome> {
     let policy = match request.on_error {
         OnError::Fail => ConflictPolicy::Fail,
         OnError::Skip => ConflictPolicy::Skip,
@@ -440,7 +451,7 @@ pub fn ingest<S: Store>(
     })?;
     progress.finish();
     Ok(IngestOutcome {
-        files: request.files.len(),
+        files: parsed.files.len(),
         report: parsed.report,
         inserted: stats.inserted,
         unchanged: stats.unchanged,

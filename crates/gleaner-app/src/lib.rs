@@ -27,6 +27,10 @@
 //! the newest reading — in O(cells × neighbours) instead of O(history); [`compute_full`]
 //! always reads the history. Both give the same scores within 1e-9 relative.
 //!
+//! Evaluation: [`reconstruct`] estimates every sensor's current value (last value carried
+//! forward, and space-time kriging with its variance) from what is known; [`campaign`]
+//! replays a dataset as a campaign of missions per strategy through these same use cases.
+//!
 //! Read models: [`field_view`] (the cell table), [`missions`], [`mission`], [`cell_detail`]
 //! (one cell's weighted terms, rank and recent series).
 //!
@@ -36,6 +40,7 @@
 //! [`LatLon`]: gleaner_field::LatLon
 #![deny(missing_docs)]
 
+pub mod campaign;
 pub mod cell_csv;
 mod cell_detail;
 mod error;
@@ -47,6 +52,7 @@ mod migrate;
 mod plan;
 mod progress;
 mod project;
+mod reconstruct;
 mod record;
 mod score;
 pub mod settings;
@@ -67,10 +73,13 @@ pub use plan::{
 };
 pub use progress::{Progress, Silent};
 pub use project::{Project, database};
+pub use reconstruct::{
+    DEFAULT_NEIGHBOURS, ReconstructRequest, Reconstruction, SensorEstimate, reconstruct,
+};
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};
 pub use settings::Settings;
-pub use simulate::{Truth, fly};
+pub use simulate::{Truth, fly, fly_buffered};
 pub use summaries::{pending_bytes, series_summary};
 pub use view::{
     CellView, FieldView, MissionExport, check_flyable, export, field_view, mission, missions,
@@ -83,6 +92,5 @@ pub use gleaner_mission::Planner;
 pub use gleaner_store::{
     AnyStore, CellMetadata, CellScores, Database, EnergyBreakdown, FlightProfile, MissionId,
     MissionKind, MissionRecord, MissionStatus, NewMission, PgStore, SqliteStore, StopRecord, Store,
-    StoreError,
-    StoreRead, StoreWrite, VisitRecord,
+    StoreError, StoreRead, StoreWrite, VisitRecord,
 };

@@ -40,6 +40,9 @@ pub struct PlanRequest {
     pub history: History,
     /// Per-cell scores from a CSV (`cell_id,score`) instead of the utility engine.
     pub scores: Option<PathBuf>,
+    /// Per-cell scores in field order, given directly (a campaign strategy's own utility)
+    /// instead of the utility engine; takes precedence over `scores`.
+    pub cell_scores: Option<Vec<f64>>,
     /// Planner [default: the project's `[planner] solver`].
     pub planner: Option<Planner>,
     /// Planner time limit, seconds [default: the project's], in [0, 86400].
@@ -115,6 +118,12 @@ fn read_scores(path: &Path, k: &Knowledge) -> Result<Vec<f64>> {
     }
     // Cells the file leaves out score 0: never worth a detour.
     Ok(scores.into_iter().map(|s| s.unwrap_or(0.0)).collect())
+}
+
+/// Scores given instead of the utility engine's.
+enum Given<'a> {
+    File(&'a PathBuf),
+    Values(&'a Vec<f64>),
 }
 
 /// The energy model of the project's `[energy]` settings.
@@ -225,21 +234,31 @@ pub fn plan<S: Store>(
         )));
     }
     let seed = request.seed.unwrap_or(settings.planner.seed);
-    let (file_knowledge, scoring, scores, t, anomaly_form, weights) = match &request.scores {
-        Some(path) => {
+    let given = match (&request.cell_scores, &request.scores) {
+        (Some(v), _) => Some(Given::Values(v)),
+        (None, Some(p)) => Some(Given::File(p)),
+        (None, None) => None,
+    };
+    let (file_knowledge, scoring, scores, t, anomaly_form, weights) = match given {
+        Some(given) => {
             let k = knowledge(project, request.at, request.history)?;
             let t = request.at.or(k.latest).ok_or_else(|| {
                 AppError::Invalid("no readings and no mission time: cannot tell the time".into())
             })?;
-            let s = read_scores(path, &k)?;
-            (
-                Some(k),
-                None,
-                s,
-                t,
-                "n/a (scores from file)".to_string(),
-                [0.0; 4],
-            )
+            let (s, form) = match given {
+                Given::File(path) => (read_scores(path, &k)?, "n/a (scores from file)"),
+                Given::Values(v) => {
+                    if v.len() != k.field.cells().len() {
+                        return Err(AppError::Invalid(format!(
+                            "{} cell scores given for {} cells",
+                            v.len(),
+                            k.field.cells().len()
+                        )));
+                    }
+                    (v.clone(), "n/a (scores given)")
+                }
+            };
+            (Some(k), None, s, t, form.to_string(), [0.0; 4])
         }
         None => {
             let scoring = score::compute(

@@ -22,6 +22,9 @@ pub struct Truth {
     /// available only from t + period on (a daily mean stamped at midnight is known at the
     /// next midnight).
     pub period_s: i64,
+    /// A sensor's log holds at most this many readings per modality: when full, the oldest
+    /// uncollected reading is dropped (`None`: unlimited).
+    pub buffer_readings: Option<usize>,
 }
 
 impl Truth {
@@ -47,7 +50,46 @@ impl Truth {
         for (_, _, r, _) in parsed.files {
             readings.append(r);
         }
-        Ok(Self { readings, period_s })
+        Ok(Self {
+            readings,
+            period_s,
+            buffer_readings: None,
+        })
+    }
+
+    /// The ground truth from readings already read, with the logging period (seconds).
+    pub fn from_readings(readings: Readings, period_s: i64) -> Result<Self> {
+        if period_s < 0 {
+            return Err(AppError::Invalid(format!(
+                "logging period {period_s} s must be >= 0"
+            )));
+        }
+        Ok(Self {
+            readings,
+            period_s,
+            buffer_readings: None,
+        })
+    }
+
+    /// Every reading, whether collected or not.
+    pub fn readings(&self) -> &Readings {
+        &self.readings
+    }
+
+    /// The readings available by `at` (t + period <= at): what a project starting its
+    /// campaign at `at` may hold as history.
+    pub fn available_by(&self, at: UnixSeconds) -> Readings {
+        Readings {
+            sensors: self.readings.sensors.clone(),
+            modalities: self.readings.modalities.clone(),
+            rows: self
+                .readings
+                .rows
+                .iter()
+                .filter(|r| r.t.saturating_add(self.period_s) <= at)
+                .copied()
+                .collect(),
+        }
     }
 
     /// Number of readings.
@@ -68,20 +110,21 @@ impl Truth {
     }
 
     /// What `sensors` logged after their last collection (`None`: ever) and is available at
-    /// `at` (t + period <= at).
+    /// `at` (t + period <= at), and how many of those readings a full buffer dropped (the
+    /// oldest beyond `buffer_readings` per sensor and modality).
     fn brought_back(
         &self,
         sensors: &HashSet<SensorId>,
         last: &HashMap<SensorId, UnixSeconds>,
         at: UnixSeconds,
-    ) -> Readings {
+    ) -> (Readings, u64) {
         let r = &self.readings;
         let keep: Vec<Option<Option<UnixSeconds>>> = r
             .sensors
             .iter()
             .map(|s| sensors.contains(s).then(|| last.get(s).copied()))
             .collect();
-        let rows: Vec<Row> = r
+        let mut rows: Vec<Row> = r
             .rows
             .iter()
             .filter(|row| match keep.get(row.sensor as usize) {
@@ -93,11 +136,39 @@ impl Truth {
             })
             .copied()
             .collect();
-        Readings {
-            sensors: r.sensors.clone(),
-            modalities: r.modalities.clone(),
-            rows,
+        let mut lost = 0u64;
+        if let Some(capacity) = self.buffer_readings {
+            // Newest first within each (sensor, modality); keep the first `capacity`.
+            rows.sort_by(|a, b| {
+                (a.sensor, a.modality)
+                    .cmp(&(b.sensor, b.modality))
+                    .then(b.t.cmp(&a.t))
+            });
+            let mut kept = Vec::with_capacity(rows.len());
+            let mut run: Option<(u32, u32, usize)> = None;
+            for row in rows {
+                let n = match run {
+                    Some((s, m, n)) if (s, m) == (row.sensor, row.modality) => n + 1,
+                    _ => 1,
+                };
+                run = Some((row.sensor, row.modality, n));
+                if n <= capacity {
+                    kept.push(row);
+                } else {
+                    lost += 1;
+                }
+            }
+            kept.sort_by_key(|row| (row.sensor, row.modality, row.t));
+            rows = kept;
         }
+        (
+            Readings {
+                sensors: r.sensors.clone(),
+                modalities: r.modalities.clone(),
+                rows,
+            },
+            lost,
+        )
     }
 }
 
@@ -111,6 +182,18 @@ pub fn fly<S: Store>(
     at: UnixSeconds,
     clock_now: UnixSeconds,
 ) -> Result<RecordOutcome> {
+    fly_buffered(project, truth, id, at, clock_now).map(|(outcome, _)| outcome)
+}
+
+/// [`fly`], also returning how many readings the visited sensors' full buffers had dropped
+/// (see [`Truth::buffer_readings`]).
+pub fn fly_buffered<S: Store>(
+    project: &mut Project<S>,
+    truth: &Truth,
+    id: MissionId,
+    at: UnixSeconds,
+    clock_now: UnixSeconds,
+) -> Result<(RecordOutcome, u64)> {
     let mission = project
         .store()
         .mission(id)?
@@ -128,12 +211,30 @@ pub fn fly<S: Store>(
         .collect();
     // The last collection, or the latest reading already stored for a sensor never flown to
     // (its history came from an earlier ingest).
-    let last: HashMap<SensorId, UnixSeconds> = project
+    let mut last: HashMap<SensorId, UnixSeconds> = project
         .store()
         .sensor_last_collected()?
         .into_iter()
         .collect();
-    let readings = truth.brought_back(&sensors, &last, at);
+    let never: Vec<SensorId> = sensors
+        .iter()
+        .filter(|s| !last.contains_key(*s))
+        .cloned()
+        .collect();
+    if !never.is_empty() {
+        // Collected when its latest stored reading became available.
+        let stored = project
+            .store()
+            .readings_of_sensors(&never, UnixSeconds::MIN..=at)?;
+        for r in &stored.rows {
+            if let Some(s) = stored.sensors.get(r.sensor as usize) {
+                let t = r.t.saturating_add(truth.period_s);
+                let e = last.entry(s.clone()).or_insert(t);
+                *e = (*e).max(t);
+            }
+        }
+    }
+    let (readings, lost) = truth.brought_back(&sensors, &last, at);
     let report = IngestReport {
         rows_read: readings.rows.len() as u64,
         readings: readings.rows.len() as u64,
@@ -148,7 +249,7 @@ pub fn fly<S: Store>(
         )],
         report,
     };
-    record_parsed(
+    let outcome = record_parsed(
         project,
         &RecordRequest {
             mission: id,
@@ -159,5 +260,6 @@ pub fn fly<S: Store>(
         },
         Some(parsed),
         clock_now,
-    )
+    )?;
+    Ok((outcome, lost))
 }

@@ -15,7 +15,9 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use gleaner_app as app;
 use gleaner_app::{MissionId, Project};
 
-use commands::{bench, cells, demo, export, migrate, plan, score, serve, synth};
+use commands::{
+    bench, cells, demo, export, migrate, plan, reconstruct, report, score, serve, simulate, synth,
+};
 
 /// Utility-driven UAV data collection for farm sensor networks.
 ///
@@ -282,6 +284,49 @@ enum Command {
         after_help = "Binds 127.0.0.1:8080 by default. Writes (saving a plan, scoring, uploads) need\n`Authorization: Bearer <token>`: the token comes from --token-file or GLEANER_TOKEN, or on\nloopback is drawn at start-up and printed once in the dashboard's address. Binding any other\naddress needs a token. Request log on standard error (GLEANER_LOG=debug for more).\n\nExamples:\n  gleaner serve --project caf\n  GLEANER_TOKEN=$(cat token) gleaner serve --project caf --addr 0.0.0.0:8080"
     )]
     Serve(serve::ServeArgs),
+    /// Replay a dataset as a campaign of missions, one run per strategy, seed and budget,
+    /// through the same score, plan and record use cases; writes CSV results and a report.
+    #[command(
+        after_help = "Each run is its own in-memory project: it starts with the history (readings available by
+--history-until) and knows only what its flights bring back; a reading stamped t is
+available from t + period on. After each mission every sensor's value is reconstructed
+(last value carried forward, and kriging) and compared with the truth.
+
+Examples:
+  gleaner simulate --dataset caf-daily --out sims/caf
+  gleaner simulate --dataset caf-daily --out sims/caf --strategies all --budgets 0.25,0.5,1,1.5,2
+  gleaner simulate --dataset synthetic --out sims/synth --farm-seeds 1,2,3,4,5,6,7,8,9,10
+  gleaner simulate --dataset hubbard-brook --out sims/hb   (large-pack battery)"
+    )]
+    Simulate(simulate::SimulateArgs),
+    /// Write report.md (tables with 95% intervals, SVG charts) from a simulation directory.
+    #[command(after_help = "Example:\n  gleaner report sims/caf")]
+    Report {
+        /// The directory `gleaner simulate --out` wrote.
+        dir: PathBuf,
+    },
+    /// Estimate every sensor's current value of a modality from what is known: last value
+    /// carried forward, and kriging (Gaussian conditional mean) with its standard deviation.
+    #[command(
+        after_help = "The field model (each sensor's mean; a separable exponential space-time covariance) is
+fitted on the readings known at --at.
+
+Example:
+  gleaner reconstruct --project caf --at 2014-03-01 --modality vw@30cm"
+    )]
+    Reconstruct {
+        #[command(flatten)]
+        project: ProjectArg,
+        /// Estimation time (RFC 3339 or date) [default: the latest reading].
+        #[arg(long, value_parser = parse_time)]
+        at: Option<i64>,
+        /// Modality [default: vw@30cm, else the first vw@...].
+        #[arg(long)]
+        modality: Option<String>,
+        /// Observations per estimate.
+        #[arg(long, default_value_t = app::DEFAULT_NEIGHBOURS)]
+        neighbours: usize,
+    },
 }
 
 /// `--project`: the project directory.
@@ -425,7 +470,7 @@ fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
     Ok((lat, lon))
 }
 
-fn parse_time(s: &str) -> Result<i64, String> {
+pub(crate) fn parse_time(s: &str) -> Result<i64, String> {
     gleaner_app::parse_timestamp(s).ok_or_else(|| {
         format!("expected RFC 3339 (2014-03-01T12:00:00Z) or a date (2014-03-01), got {s:?}")
     })
@@ -649,6 +694,7 @@ fn run(cli: Cli) -> Result<()> {
                     at: when.at,
                     history: when.history(),
                     scores,
+                    cell_scores: None,
                     planner: solver.as_deref().map(app::parse_planner).transpose()?,
                     time_limit_s: time_limit,
                     seed,
@@ -767,6 +813,31 @@ fn run(cli: Cli) -> Result<()> {
         Command::Demo(args) => print!("{}", demo::run(&args)?),
         Command::Migrate(args) => println!("{}", migrate::run(&args, &progress)?),
         Command::Serve(args) => serve::run(args)?,
+        Command::Simulate(args) => {
+            let line: Vec<String> = std::env::args().skip(1).collect();
+            let command = format!("gleaner {}", line.join(" "));
+            print!("{}", simulate::run(&args, &command, &progress)?);
+        }
+        Command::Report { dir } => {
+            println!("{}", report::write_report(&dir)?.display());
+        }
+        Command::Reconstruct {
+            project,
+            at,
+            modality,
+            neighbours,
+        } => {
+            let p = project.open()?;
+            let r = app::reconstruct(
+                &p,
+                &app::ReconstructRequest {
+                    at,
+                    modality,
+                    neighbours: Some(neighbours),
+                },
+            )?;
+            print!("{}", reconstruct::table(&r));
+        }
     }
     Ok(())
 }

@@ -6,6 +6,8 @@
 //!   and visiting order, the dashed return leg, the base, coordinate ticks, a north arrow, a
 //!   scale bar, a legend and the energy breakdown in kJ.
 //! - [`exploration_map_svg`]: the exploration sorties on one map, one colour per sortie.
+//! - [`line_chart_svg`] and [`interval_chart_svg`]: campaign report charts (a metric per
+//!   strategy over time or budget; means with 95% intervals).
 //! - [`svg_to_png`]: rasterises either with resvg, loading only the bundled DejaVu Sans
 //!   ([`FONT_FAMILY`]), so output is the same on every machine; [`outline_text`] turns the
 //!   text of a figure into outlines of that font for a vector file that needs no fonts.
@@ -28,6 +30,7 @@
 //! ```
 #![deny(missing_docs)]
 
+mod chart;
 mod colour;
 pub mod example;
 mod exploration;
@@ -38,6 +41,9 @@ mod png;
 mod svg;
 mod ticks;
 
+pub use chart::{
+    IntervalChart, IntervalRow, Line, LineChart, XAxis, interval_chart_svg, line_chart_svg,
+};
 pub use exploration::exploration_map_svg;
 pub use figure::mission_figure_svg;
 pub use font::FONT_FAMILY;

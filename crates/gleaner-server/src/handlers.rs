@@ -310,6 +310,7 @@ pub async fn plan(
             parse_time("history_until", b.history_until.as_deref())?,
         ),
         scores: None,
+        cell_scores: None,
         planner,
         time_limit_s: b.time_limit_s,
         seed: b.seed,

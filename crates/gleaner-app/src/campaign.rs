@@ -1,0 +1,1064 @@
+//! Campaign simulation (SPEC §7): a dataset replayed as a campaign of missions, one run per
+//! strategy, seed and budget, each against its own real store and through the same use cases
+//! the CLI calls (`score`/`compute`, `plan`, `explore`, `fly` → `record`).
+//!
+//! The planner knows only what its project's store holds: the history available when the
+//! campaign starts plus what its flights brought back. A reading stamped t becomes available
+//! at t + period ([`Truth::period_s`]); a flight at T brings back only readings available by T
+//! ([`crate::fly`]). The evaluator alone reads the whole [`Truth`]: after each mission it
+//! compares every sensor's estimated value (last value carried forward, and kriging from
+//! the field model fitted on the history) with the true reading stamped T − period, checks
+//! which anomaly events the flights have caught, how stale the sensors are, and how well the
+//! condition model predicted the cells' classes before the flight.
+
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::path::PathBuf;
+
+use gleaner_field::{CellIndex, Modality, SensorId, UnixSeconds};
+use gleaner_ingest::{IngestReport, Readings};
+use gleaner_kriging::{Covariance, FieldModel, variance_reduction};
+use gleaner_mission::Planner;
+use gleaner_store::{SqliteStore, StoreRead};
+use rayon::prelude::*;
+
+use crate::error::{AppError, Result};
+use crate::explore::{ExploreRequest, explore};
+use crate::ingest::{Format, IngestRequest, Parsed, ingest_parsed};
+use crate::init::{InitRequest, init_store};
+use crate::plan::{PlanRequest, plan};
+use crate::progress::{Progress, Silent};
+use crate::project::Project;
+use crate::reconstruct::{estimate, fit_model, target_modality};
+use crate::score::{ScoreRequest, compute, score};
+use crate::settings::Settings;
+use crate::simulate::{Truth, fly_buffered};
+
+/// A utility term, for ablations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Term {
+    /// Freshness F (alpha).
+    Freshness,
+    /// Anomaly A (beta).
+    Anomaly,
+    /// Model uncertainty U (gamma).
+    Uncertainty,
+    /// Redundancy R (delta).
+    Redundancy,
+}
+
+/// How a run chooses the cells of each mission.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Strategy {
+    /// Every cell, in as many sorties as it takes (the exploration plan at each mission).
+    Exhaustive,
+    /// Longest-unvisited first: score = days since the cell's last collection.
+    RoundRobin,
+    /// S with freshness only (alpha = 1, the other weights 0), default planner.
+    Freshness,
+    /// Uniform random scores in (0, 1], seeded, default planner.
+    Random,
+    /// Every cell worth the same, the paper's greedy insertion: the nearest cells first.
+    Nearest,
+    /// The paper's method: its S, its greedy planner.
+    Paper,
+    /// gleaner's default: S with the project's weights, the default planner.
+    Gleaner,
+    /// gleaner's default with one utility term switched off.
+    Without(Term),
+    /// Expected reduction of the field's posterior variance (greedy marginal gains of the
+    /// kriging model fitted on the history), default planner.
+    Variance,
+}
+
+impl Strategy {
+    /// Every strategy, ablations included, in report order.
+    pub const ALL: [Strategy; 12] = [
+        Strategy::Gleaner,
+        Strategy::Paper,
+        Strategy::Variance,
+        Strategy::Freshness,
+        Strategy::RoundRobin,
+        Strategy::Random,
+        Strategy::Nearest,
+        Strategy::Exhaustive,
+        Strategy::Without(Term::Freshness),
+        Strategy::Without(Term::Anomaly),
+        Strategy::Without(Term::Uncertainty),
+        Strategy::Without(Term::Redundancy),
+    ];
+
+    /// The strategy's name in outputs and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Exhaustive => "exhaustive",
+            Strategy::RoundRobin => "round-robin",
+            Strategy::Freshness => "freshness",
+            Strategy::Random => "random",
+            Strategy::Nearest => "nearest",
+            Strategy::Paper => "paper",
+            Strategy::Gleaner => "gleaner",
+            Strategy::Without(Term::Freshness) => "no-freshness",
+            Strategy::Without(Term::Anomaly) => "no-anomaly",
+            Strategy::Without(Term::Uncertainty) => "no-uncertainty",
+            Strategy::Without(Term::Redundancy) => "no-redundancy",
+            Strategy::Variance => "variance",
+        }
+    }
+
+    /// Parses a name of [`Strategy::name`].
+    pub fn parse(name: &str) -> Result<Self> {
+        Self::ALL
+            .iter()
+            .copied()
+            .find(|s| s.name() == name)
+            .ok_or_else(|| {
+                AppError::Invalid(format!(
+                    "unknown strategy {name:?}: expected one of {}",
+                    Self::ALL.map(Strategy::name).join(", ")
+                ))
+            })
+    }
+
+    /// The run's settings: the campaign's with this strategy's weights and planner.
+    fn settings(self, base: &Settings) -> Settings {
+        let mut s = base.clone();
+        let u = &mut s.utility;
+        match self {
+            Strategy::Freshness => {
+                (u.alpha, u.beta, u.gamma, u.delta) = (1.0, 0.0, 0.0, 0.0);
+            }
+            Strategy::Without(Term::Freshness) => u.alpha = 0.0,
+            Strategy::Without(Term::Anomaly) => u.beta = 0.0,
+            Strategy::Without(Term::Uncertainty) => u.gamma = 0.0,
+            Strategy::Without(Term::Redundancy) => u.delta = 0.0,
+            _ => {}
+        }
+        s
+    }
+
+    fn planner(self) -> Planner {
+        match self {
+            Strategy::Paper | Strategy::Nearest => Planner::Greedy,
+            _ => Planner::Default,
+        }
+    }
+}
+
+/// An anomaly event to catch: sensors, and the readings' times it covers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TruthEvent {
+    /// Identifier.
+    pub id: String,
+    /// The affected sensors (caught when any of them is collected with an event reading).
+    pub sensors: Vec<SensorId>,
+    /// First affected reading's time, seconds.
+    pub start: UnixSeconds,
+    /// End (exclusive), seconds: the first reading time no longer in the event.
+    pub end: UnixSeconds,
+}
+
+/// Events of the real-data rule: for each sensor, z = (Δ − mean Δ) / sd Δ of its consecutive
+/// one-step changes over its whole `modality` series in the truth; an event is a maximal run
+/// of consecutive steps with |z| > `z_threshold` (a sudden wetting or drying).
+pub fn rule_events(truth: &Truth, modality: &str, z_threshold: f64) -> Vec<TruthEvent> {
+    let series = truth_series(truth, modality);
+    let mut events = Vec::new();
+    for (sensor, (times, values)) in &series {
+        let step = crate::knowledge::sampling_step(std::slice::from_ref(times)).max(1);
+        let changes: Vec<(UnixSeconds, f64)> = times
+            .windows(2)
+            .zip(values.windows(2))
+            .filter(|(t, _)| t[1] - t[0] == step)
+            .map(|(t, v)| (t[1], v[1] - v[0]))
+            .collect();
+        if changes.len() < 10 {
+            continue;
+        }
+        let n = changes.len() as f64;
+        let mean = changes.iter().map(|c| c.1).sum::<f64>() / n;
+        let sd = (changes.iter().map(|c| (c.1 - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        if sd.is_nan() || sd <= 0.0 {
+            continue;
+        }
+        let mut run: Option<(UnixSeconds, UnixSeconds)> = None;
+        let close = |run: (UnixSeconds, UnixSeconds), events: &mut Vec<TruthEvent>| {
+            events.push(TruthEvent {
+                id: String::new(),
+                sensors: vec![sensor.clone()],
+                start: run.0,
+                end: run.1 + step,
+            });
+        };
+        for &(t, d) in &changes {
+            if ((d - mean) / sd).abs() > z_threshold {
+                run = match run {
+                    Some((s, e)) if t - e == step => Some((s, t)),
+                    Some(r) => {
+                        close(r, &mut events);
+                        Some((t, t))
+                    }
+                    None => Some((t, t)),
+                };
+            }
+        }
+        if let Some(r) = run {
+            close(r, &mut events);
+        }
+    }
+    events.sort_by(|a, b| (a.start, &a.sensors).cmp(&(b.start, &b.sensors)));
+    for (k, e) in events.iter_mut().enumerate() {
+        e.id = format!("Z{:04}", k + 1);
+    }
+    events
+}
+
+/// Per sensor: the truth's `modality` series (times ascending, seconds; values).
+fn truth_series(truth: &Truth, modality: &str) -> BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)> {
+    let r = truth.readings();
+    let Some(m) = r
+        .modalities
+        .iter()
+        .position(|x| x.modality.to_string() == modality)
+    else {
+        return BTreeMap::new();
+    };
+    let mut out: BTreeMap<SensorId, Vec<(UnixSeconds, f64)>> = BTreeMap::new();
+    for row in r.rows.iter().filter(|row| row.modality as usize == m) {
+        if let Some(s) = r.sensors.get(row.sensor as usize) {
+            out.entry(s.clone()).or_default().push((row.t, row.value));
+        }
+    }
+    out.into_iter()
+        .map(|(s, mut v)| {
+            v.sort_by_key(|p| p.0);
+            v.dedup_by_key(|p| p.0);
+            (
+                s,
+                (
+                    v.iter().map(|p| p.0).collect(),
+                    v.iter().map(|p| p.1).collect(),
+                ),
+            )
+        })
+        .collect()
+}
+
+/// A campaign to run.
+#[derive(Debug, Clone)]
+pub struct CampaignRequest {
+    /// The dataset's name in outputs.
+    pub label: String,
+    /// The sensors (as for `init`; its directory is not used).
+    pub init: InitRequest,
+    /// The settings every run starts from (grid, utility, energy at 100% budget, planner).
+    pub settings: Settings,
+    /// Readings available by this time (t + period <= it) are the history every run starts
+    /// with, seconds.
+    pub history_until: UnixSeconds,
+    /// Readings before this time are left out of the history, seconds [default: none].
+    pub history_from: Option<UnixSeconds>,
+    /// Mission times, seconds, ascending, after `history_until`.
+    pub schedule: Vec<UnixSeconds>,
+    /// Strategies.
+    pub strategies: Vec<Strategy>,
+    /// Replicate seeds (planner and random choices).
+    pub seeds: Vec<u64>,
+    /// Battery capacities as fractions of the settings' (1 = the paper's budget).
+    pub budgets: Vec<f64>,
+    /// The evaluated modality [default: the condition modality].
+    pub modality: Option<String>,
+    /// Ground-truth events (synthetic farms) [default: [`rule_events`] with `event_z`].
+    pub events: Option<Vec<TruthEvent>>,
+    /// |z| threshold of the real-data event rule.
+    pub event_z: f64,
+    /// Planner iteration cap (results independent of the machine's speed).
+    pub planner_iterations: u64,
+    /// Observations per kriging estimate.
+    pub neighbours: usize,
+    /// Runs in parallel (threads; 0 = rayon's default).
+    pub jobs: usize,
+    /// Provenance time stamped on missions, seconds.
+    pub clock_now: UnixSeconds,
+}
+
+/// One mission's metrics (after its flights were recorded).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MissionMetrics {
+    /// Mission number, from 0.
+    pub index: usize,
+    /// Mission time T, seconds.
+    pub t: UnixSeconds,
+    /// Sorties flown.
+    pub sorties: usize,
+    /// Cells visited.
+    pub cells: usize,
+    /// Energy of all sorties, J.
+    pub energy_j: f64,
+    /// Usable budget per sortie, J.
+    pub budget_j: f64,
+    /// Root-mean-square error of last value carried forward, the modality's unit.
+    pub rmse_carried: f64,
+    /// Mean absolute error of last value carried forward.
+    pub mae_carried: f64,
+    /// Root-mean-square error of the kriging estimate.
+    pub rmse_kriged: f64,
+    /// Mean absolute error of the kriging estimate.
+    pub mae_kriged: f64,
+    /// Mean kriging variance, the unit squared.
+    pub mean_variance: f64,
+    /// Sensors with a true value at T − period (those evaluated).
+    pub evaluated: usize,
+    /// Mean time since each sensor's last collection, seconds.
+    pub staleness_mean_s: f64,
+    /// Largest time since a sensor's last collection, seconds.
+    pub staleness_max_s: f64,
+    /// Share of cells whose class the condition model predicted right before the flight.
+    pub classifier_accuracy: Option<f64>,
+    /// Readings dropped by full buffers, brought to light by this mission's collections.
+    pub lost_readings: u64,
+    /// Events first caught at this mission.
+    pub events_caught: usize,
+}
+
+/// A run's identity.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunKey {
+    /// Strategy.
+    pub strategy: Strategy,
+    /// Replicate seed.
+    pub seed: u64,
+    /// Budget as a fraction of the settings' battery.
+    pub budget: f64,
+}
+
+/// One run's results.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    /// Which run.
+    pub key: RunKey,
+    /// One per scheduled mission.
+    pub missions: Vec<MissionMetrics>,
+    /// Per campaign event (same order as [`CampaignResult::events`]): when it was caught
+    /// (the mission time), seconds.
+    pub caught: Vec<Option<UnixSeconds>>,
+}
+
+/// A campaign's results.
+#[derive(Debug, Clone)]
+pub struct CampaignResult {
+    /// The dataset's name.
+    pub label: String,
+    /// The evaluated modality.
+    pub modality: String,
+    /// The logging period, seconds.
+    pub period_s: i64,
+    /// The field model fitted on the history.
+    pub covariance: Covariance,
+    /// Events that became available during the campaign.
+    pub events: Vec<TruthEvent>,
+    /// One per (strategy, seed, budget), in that order.
+    pub runs: Vec<RunResult>,
+}
+
+/// A small deterministic generator (SplitMix64) for the random strategy.
+fn splitmix(mut x: u64) -> u64 {
+    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^ (x >> 31)
+}
+
+/// What every run shares: the history, the truth's evaluation series, the cells' sensors.
+struct Shared<'a> {
+    request: &'a CampaignRequest,
+    truth: &'a Truth,
+    history: Readings,
+    modality: Modality,
+    /// Truth series of the evaluated modality, per sensor id.
+    series: BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
+    /// Truth series of the condition modality (may equal `series`).
+    class_series: BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
+    events: Vec<TruthEvent>,
+    model: FieldModel,
+    step_s: i64,
+}
+
+fn value_at(
+    series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
+    s: &SensorId,
+    t: UnixSeconds,
+) -> Option<f64> {
+    let (times, values) = series.get(s)?;
+    times.binary_search(&t).ok().map(|k| values[k])
+}
+
+/// A new in-memory project for one run, with the history ingested.
+fn new_run_project(shared: &Shared<'_>, settings: Settings) -> Result<Project<SqliteStore>> {
+    let request = shared.request;
+    let store = SqliteStore::open_in_memory()?;
+    let dir = request.init.dir.clone();
+    let mut project = Project::new(&dir, settings, store);
+    init_store(&mut project, &request.init)?;
+    let report = IngestReport {
+        rows_read: shared.history.rows.len() as u64,
+        readings: shared.history.rows.len() as u64,
+        ..IngestReport::default()
+    };
+    let parsed = Parsed {
+        files: vec![(
+            PathBuf::from(format!("{} history", request.label)),
+            Format::Long,
+            shared.history.clone(),
+            report.clone(),
+        )],
+        report,
+    };
+    ingest_parsed(
+        &mut project,
+        parsed,
+        &IngestRequest {
+            now: Some(request.history_until),
+            ..IngestRequest::default()
+        },
+        request.clock_now,
+        &Silent,
+    )?;
+    // As after any bulk ingest: the first scoring rebuilds the persisted utility state, so
+    // every mission's scoring takes the fast path.
+    score(
+        &mut project,
+        &ScoreRequest {
+            at: Some(request.history_until),
+            ..ScoreRequest::default()
+        },
+    )?;
+    Ok(project)
+}
+
+/// Runs the campaign: every (strategy, seed, budget) in parallel over `jobs` threads, each
+/// deterministic, so the results do not depend on the thread count.
+pub fn run_campaign(
+    request: &CampaignRequest,
+    truth: &Truth,
+    progress: &(dyn Progress + Sync),
+) -> Result<CampaignResult> {
+    if request.schedule.is_empty() {
+        return Err(AppError::Invalid(
+            "the campaign has no mission times".into(),
+        ));
+    }
+    if request.schedule.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(AppError::Invalid(
+            "mission times must be strictly increasing".into(),
+        ));
+    }
+    if request.schedule[0] < request.history_until {
+        return Err(AppError::Invalid(
+            "the first mission is before the end of the history".into(),
+        ));
+    }
+    if request.budgets.iter().any(|b| !(b.is_finite() && *b > 0.0)) {
+        return Err(AppError::Invalid(
+            "budgets must be positive fractions".into(),
+        ));
+    }
+    let mut history = truth.available_by(request.history_until);
+    if let Some(from) = request.history_from {
+        history.rows.retain(|r| r.t >= from);
+    }
+    // The field model, fitted once on the history (the exploration history every run shares).
+    let probe = {
+        let shared0 = Shared {
+            request,
+            truth,
+            history: history.clone(),
+            modality: Modality::new("vw@30cm").map_err(|e| AppError::Invalid(e.to_string()))?,
+            series: BTreeMap::new(),
+            class_series: BTreeMap::new(),
+            events: Vec::new(),
+            model: FieldModel {
+                covariance: Covariance::new(1.0, 0.0, 1.0, 1.0)
+                    .map_err(|e| AppError::core("field model", e))?,
+                means: Vec::new(),
+            },
+            step_s: 1,
+        };
+        new_run_project(&shared0, request.settings.clone())?
+    };
+    let modality = target_modality(&probe, request.modality.as_deref())?;
+    let (model, step_s) = fit_model(&probe, &modality, request.history_until)?;
+    let names: Vec<String> = probe
+        .store()
+        .modalities()?
+        .into_iter()
+        .map(|m| m.modality.to_string())
+        .collect();
+    let class_name = crate::score::condition_modality(probe.settings(), &names);
+    drop(probe);
+    let series = truth_series(truth, &modality.to_string());
+    let class_series = match &class_name {
+        Some(c) if *c != modality.to_string() => truth_series(truth, c),
+        _ => series.clone(),
+    };
+    let last = *request.schedule.last().unwrap_or(&request.history_until);
+    let all_events = match &request.events {
+        Some(e) => e.clone(),
+        None => rule_events(truth, &modality.to_string(), request.event_z),
+    };
+    let events: Vec<TruthEvent> = all_events
+        .into_iter()
+        .filter(|e| {
+            let available = e.start.saturating_add(truth.period_s);
+            available > request.history_until && available <= last
+        })
+        .collect();
+    let shared = Shared {
+        request,
+        truth,
+        history,
+        modality,
+        series,
+        class_series,
+        events,
+        model,
+        step_s,
+    };
+    let mut keys = Vec::new();
+    for &strategy in &request.strategies {
+        for &seed in &request.seeds {
+            for &budget in &request.budgets {
+                keys.push(RunKey {
+                    strategy,
+                    seed,
+                    budget,
+                });
+            }
+        }
+    }
+    progress.start(
+        &format!("{}: missions", request.label),
+        Some((keys.len() * request.schedule.len()) as u64),
+    );
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(request.jobs)
+        .build()
+        .map_err(|e| AppError::Invalid(format!("cannot start {} threads: {e}", request.jobs)))?;
+    let runs: Vec<Result<RunResult>> = pool.install(|| {
+        keys.par_iter()
+            .map(|key| run_one(&shared, key.clone(), progress))
+            .collect()
+    });
+    progress.finish();
+    let runs = runs.into_iter().collect::<Result<Vec<_>>>()?;
+    Ok(CampaignResult {
+        label: request.label.clone(),
+        modality: shared.modality.to_string(),
+        period_s: truth.period_s,
+        covariance: shared.model.covariance,
+        events: shared.events,
+        runs,
+    })
+}
+
+/// The predicted (argmax) and true class of every cell, as a share right.
+fn classifier_accuracy(
+    scoring: &crate::score::Scoring,
+    cells: &[(CellIndex, Vec<SensorId>)],
+    class_series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
+    at: UnixSeconds,
+) -> Option<f64> {
+    let cond = scoring.condition.as_ref()?;
+    if cond.thresholds.is_empty() {
+        return None;
+    }
+    let k = &scoring.knowledge;
+    let mut right = 0usize;
+    let mut total = 0usize;
+    for (c, cell) in k.field.cells().iter().enumerate() {
+        let Some((_, sensors)) = cells.iter().find(|(i, _)| *i == cell.index) else {
+            continue;
+        };
+        let values: Vec<f64> = sensors
+            .iter()
+            .filter_map(|s| value_at(class_series, s, at))
+            .collect();
+        if values.is_empty() {
+            continue;
+        }
+        let truth = values.iter().sum::<f64>() / values.len() as f64;
+        let true_class = gleaner_utility::class_of(truth, &cond.thresholds);
+        let predicted = cond.probabilities[c]
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map(|p| p.0)?;
+        total += 1;
+        right += usize::from(predicted == true_class);
+    }
+    (total > 0).then(|| right as f64 / total as f64)
+}
+
+fn run_one(
+    shared: &Shared<'_>,
+    key: RunKey,
+    progress: &(dyn Progress + Sync),
+) -> Result<RunResult> {
+    let request = shared.request;
+    let truth = shared.truth;
+    let period = truth.period_s;
+    let mut settings = key.strategy.settings(&request.settings);
+    let battery = settings.energy.to_core()?.battery.capacity_j;
+    settings.energy.battery_j = Some(battery * key.budget);
+    settings.planner.solver = key.strategy.planner().name().to_string();
+    settings.planner.seed = key.seed;
+    let mut project = new_run_project(shared, settings)?;
+    let cells: Vec<(CellIndex, Vec<SensorId>)> = project
+        .store()
+        .cells()?
+        .into_iter()
+        .map(|c| (c.index, c.sensors))
+        .collect();
+    let (sensors, field) = project.field()?;
+    let sensor_of_cell: HashMap<CellIndex, &Vec<SensorId>> =
+        cells.iter().map(|(i, s)| (*i, s)).collect();
+    let centres: Vec<[f64; 2]> = field
+        .cells()
+        .iter()
+        .map(|c| [c.centre.e, c.centre.n])
+        .collect();
+    let cell_sensor_ids: Vec<Vec<SensorId>> = field
+        .cells()
+        .iter()
+        .map(|c| c.sensors.iter().map(|&s| sensors[s].id.clone()).collect())
+        .collect();
+    let lookback = (5.0 * shared.model.covariance.time_scale_s).clamp(
+        7.0 * 86_400.0_f64.max(shared.step_s as f64),
+        730.0 * 86_400.0,
+    ) as i64;
+    // When each sensor's data was last brought home: its latest history reading's
+    // availability, then its collections.
+    let mut last: HashMap<SensorId, UnixSeconds> = HashMap::new();
+    for r in &shared.history.rows {
+        if let Some(s) = shared.history.sensors.get(r.sensor as usize) {
+            let t = r.t.saturating_add(period);
+            let e = last.entry(s.clone()).or_insert(t);
+            *e = (*e).max(t);
+        }
+    }
+    let mut caught: Vec<Option<UnixSeconds>> = vec![None; shared.events.len()];
+    let mut missions = Vec::with_capacity(request.schedule.len());
+    for (index, &t) in request.schedule.iter().enumerate() {
+        let cell_age = |c: usize| -> Option<f64> {
+            cell_sensor_ids[c]
+                .iter()
+                .filter_map(|s| last.get(s))
+                .min()
+                .map(|&l| (t - l).max(0) as f64)
+        };
+        let given: Option<Vec<f64>> = match key.strategy {
+            Strategy::RoundRobin => {
+                let ages: Vec<Option<f64>> = (0..centres.len()).map(cell_age).collect();
+                let oldest = ages.iter().flatten().fold(0.0f64, |a, b| a.max(*b));
+                Some(
+                    ages.iter()
+                        .map(|a| a.unwrap_or(oldest + 86_400.0) / 86_400.0 + 1e-3)
+                        .collect(),
+                )
+            }
+            Strategy::Random => Some(
+                (0..centres.len())
+                    .map(|c| {
+                        let x = splitmix(key.seed ^ splitmix(index as u64 ^ ((c as u64) << 32)));
+                        ((x >> 11) as f64 + 1.0) / (1u64 << 53) as f64
+                    })
+                    .collect(),
+            ),
+            Strategy::Nearest => Some(vec![1.0; centres.len()]),
+            Strategy::Variance => {
+                let ages: Vec<Option<f64>> = (0..centres.len()).map(cell_age).collect();
+                let weights: Vec<f64> = cell_sensor_ids.iter().map(|s| s.len() as f64).collect();
+                Some(
+                    variance_reduction(&shared.model.covariance, &centres, &ages, &weights)
+                        .map_err(|e| AppError::core("variance-reduction utility", e))?,
+                )
+            }
+            _ => None,
+        };
+        // What the planner believed before the flight (for the classifier's accuracy).
+        let scoring = compute(
+            &project,
+            &ScoreRequest {
+                at: Some(t),
+                dry_run: true,
+                ..ScoreRequest::default()
+            },
+        )?;
+        let accuracy = classifier_accuracy(&scoring, &cells, &shared.class_series, t - period);
+        drop(scoring);
+        let mut flown = Vec::new();
+        let (mut energy_j, mut budget_j) = (0.0, 0.0);
+        if key.strategy == Strategy::Exhaustive {
+            let plan = explore(
+                &mut project,
+                &ExploreRequest {
+                    at: Some(t),
+                    dry_run: false,
+                },
+                request.clock_now,
+            )?;
+            for (id, m) in &plan.sorties {
+                energy_j += m.energy.total_j;
+                budget_j = m.energy.budget_j;
+                flown.extend(*id);
+            }
+        } else {
+            let planned = plan(
+                &mut project,
+                &PlanRequest {
+                    at: Some(t),
+                    cell_scores: given,
+                    max_iterations: Some(request.planner_iterations),
+                    time_limit_s: Some(3_600.0),
+                    ..PlanRequest::default()
+                },
+                request.clock_now,
+            )?;
+            energy_j = planned.mission.energy.total_j;
+            budget_j = planned.mission.energy.budget_j;
+            if !planned.mission.stops.is_empty() {
+                flown.extend(planned.id);
+            }
+        }
+        let mut visited: HashSet<SensorId> = HashSet::new();
+        let mut cells_visited = 0;
+        let mut lost_readings = 0;
+        for id in &flown {
+            let (outcome, lost) = fly_buffered(&mut project, truth, *id, t, request.clock_now)?;
+            lost_readings += lost;
+            cells_visited += outcome.cells.len();
+            for c in &outcome.cells {
+                if let Some(s) = sensor_of_cell.get(c) {
+                    visited.extend(s.iter().cloned());
+                }
+            }
+        }
+        // Events first caught now: a visited sensor brought back one of the event's readings
+        // (still in its buffer).
+        let mut events_caught = 0;
+        let keep_from = truth
+            .buffer_readings
+            .map(|n| t - period - (n as i64 - 1) * shared.step_s);
+        for (e, event) in shared.events.iter().enumerate() {
+            if caught[e].is_some() || event.start.saturating_add(period) > t {
+                continue;
+            }
+            let in_buffer = keep_from.is_none_or(|from| event.end - shared.step_s >= from);
+            if in_buffer && event.sensors.iter().any(|s| visited.contains(s)) {
+                caught[e] = Some(t);
+                events_caught += 1;
+            }
+        }
+        // Reconstruction of every sensor's value stamped T − period.
+        let target = t - period;
+        let estimates = estimate(
+            &project,
+            &shared.modality,
+            &shared.model,
+            target,
+            lookback,
+            request.neighbours,
+        )?;
+        let (mut se_c, mut ae_c, mut se_k, mut ae_k, mut var, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0);
+        for e in &estimates {
+            let Some(v) = value_at(&shared.series, &e.sensor, target) else {
+                continue;
+            };
+            se_c += (e.carried - v).powi(2);
+            ae_c += (e.carried - v).abs();
+            se_k += (e.kriged - v).powi(2);
+            ae_k += (e.kriged - v).abs();
+            var += e.variance;
+            n += 1;
+        }
+        let nf = (n as f64).max(1.0);
+        for s in &visited {
+            last.insert(s.clone(), t);
+        }
+        // Staleness over every sensor (one never brought home counts from the campaign start).
+        let ages: Vec<f64> = sensors
+            .iter()
+            .map(|s| (t - last.get(&s.id).copied().unwrap_or(request.history_until)).max(0) as f64)
+            .collect();
+        let staleness_mean_s = ages.iter().sum::<f64>() / (ages.len() as f64).max(1.0);
+        let staleness_max_s = ages.iter().fold(0.0f64, |a, b| a.max(*b));
+        missions.push(MissionMetrics {
+            index,
+            t,
+            sorties: flown.len(),
+            cells: cells_visited,
+            energy_j,
+            budget_j,
+            rmse_carried: (se_c / nf).sqrt(),
+            mae_carried: ae_c / nf,
+            rmse_kriged: (se_k / nf).sqrt(),
+            mae_kriged: ae_k / nf,
+            mean_variance: var / nf,
+            evaluated: n,
+            staleness_mean_s,
+            staleness_max_s,
+            classifier_accuracy: accuracy,
+            lost_readings,
+            events_caught,
+        });
+        progress.advance(1);
+    }
+    Ok(RunResult {
+        key,
+        missions,
+        caught,
+    })
+}
+
+/// A schedule: every `step_s` seconds from `start` to `end` inclusive.
+pub fn every(start: UnixSeconds, end: UnixSeconds, step_s: i64) -> Result<Vec<UnixSeconds>> {
+    if step_s <= 0 {
+        return Err(AppError::Invalid(format!(
+            "mission interval {step_s} s must be positive"
+        )));
+    }
+    if end < start {
+        return Err(AppError::Invalid(
+            "the schedule ends before it starts".into(),
+        ));
+    }
+    let n = (end - start) / step_s + 1;
+    if n > 1_000_000 {
+        return Err(AppError::Invalid(format!(
+            "{n} missions: at most 1,000,000"
+        )));
+    }
+    Ok((0..n).map(|k| start + k * step_s).collect())
+}
+
+/// A mean with its 95% confidence interval.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Interval {
+    /// The mean.
+    pub mean: f64,
+    /// Lower end of the 95% interval.
+    pub low: f64,
+    /// Upper end of the 95% interval.
+    pub high: f64,
+    /// Number of independent values the interval rests on.
+    pub n: usize,
+}
+
+/// Two-sided 97.5% quantile of Student's t with `df` degrees of freedom.
+fn t975(df: usize) -> f64 {
+    const T: [f64; 30] = [
+        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
+        2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
+        2.052, 2.048, 2.045, 2.042,
+    ];
+    match df {
+        0 => f64::NAN,
+        1..=30 => T[df - 1],
+        31..=60 => 2.000 + (2.042 - 2.000) * (60 - df) as f64 / 30.0,
+        61..=120 => 1.980 + (2.000 - 1.980) * (120 - df) as f64 / 60.0,
+        _ => 1.960,
+    }
+}
+
+/// The mean of `values` (non-finite ones left out) with Student's t 95% interval (the
+/// interval is the mean itself for a single value).
+pub fn interval(values: &[f64]) -> Interval {
+    let v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    let n = v.len();
+    if n == 0 {
+        return Interval {
+            mean: f64::NAN,
+            low: f64::NAN,
+            high: f64::NAN,
+            n,
+        };
+    }
+    let mean = v.iter().sum::<f64>() / n as f64;
+    if n == 1 {
+        return Interval {
+            mean,
+            low: mean,
+            high: mean,
+            n,
+        };
+    }
+    let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt();
+    let h = t975(n - 1) * sd / (n as f64).sqrt();
+    Interval {
+        mean,
+        low: mean - h,
+        high: mean + h,
+        n,
+    }
+}
+
+/// Missions per block when a single run's missions stand in for replicates: consecutive
+/// missions are correlated, so intervals rest on the means of blocks of this many missions.
+pub const BLOCK_MISSIONS: usize = 7;
+
+/// The values an interval rests on: one mean per run when there are several runs, else the
+/// means of consecutive blocks of [`BLOCK_MISSIONS`] missions of the single run.
+fn replicate_means(per_run: &[Vec<f64>]) -> Vec<f64> {
+    let mean = |v: &[f64]| {
+        let f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+        if f.is_empty() {
+            f64::NAN
+        } else {
+            f.iter().sum::<f64>() / f.len() as f64
+        }
+    };
+    match per_run {
+        [single] => single.chunks(BLOCK_MISSIONS).map(mean).collect(),
+        many => many.iter().map(|v| mean(v)).collect(),
+    }
+}
+
+/// A per-mission metric, by name: `rmse_kriged`, `rmse_carried`, `mae_kriged`,
+/// `mae_carried`, `staleness_mean_days`, `staleness_max_days`, `energy_kj`, `utilisation`,
+/// `cells`, `classifier_accuracy`, `lost_readings`, `mean_sd` (square root of the mean
+/// kriging variance).
+pub fn metric(m: &MissionMetrics, name: &str) -> f64 {
+    match name {
+        "rmse_kriged" => m.rmse_kriged,
+        "rmse_carried" => m.rmse_carried,
+        "mae_kriged" => m.mae_kriged,
+        "mae_carried" => m.mae_carried,
+        "staleness_mean_days" => m.staleness_mean_s / 86_400.0,
+        "staleness_max_days" => m.staleness_max_s / 86_400.0,
+        "energy_kj" => m.energy_j / 1_000.0,
+        "utilisation" => {
+            if m.budget_j > 0.0 && m.sorties > 0 {
+                m.energy_j / (m.budget_j * m.sorties as f64)
+            } else {
+                0.0
+            }
+        }
+        "cells" => m.cells as f64,
+        "classifier_accuracy" => m.classifier_accuracy.unwrap_or(f64::NAN),
+        "lost_readings" => m.lost_readings as f64,
+        "mean_sd" => m.mean_variance.sqrt(),
+        _ => f64::NAN,
+    }
+}
+
+/// The per-mission metrics [`metric`] knows, in report order.
+pub const METRICS: [&str; 12] = [
+    "rmse_kriged",
+    "rmse_carried",
+    "mae_kriged",
+    "mae_carried",
+    "mean_sd",
+    "staleness_mean_days",
+    "staleness_max_days",
+    "energy_kj",
+    "utilisation",
+    "cells",
+    "classifier_accuracy",
+    "lost_readings",
+];
+
+/// One strategy at one budget, over every run (and dataset) given.
+#[derive(Debug, Clone)]
+pub struct Summary {
+    /// Strategy.
+    pub strategy: Strategy,
+    /// Budget fraction.
+    pub budget: f64,
+    /// Runs pooled.
+    pub runs: usize,
+    /// Per [`METRICS`] name: the mean over missions with its 95% interval.
+    pub metrics: Vec<(&'static str, Interval)>,
+    /// Events caught / events, pooled.
+    pub events_caught: (usize, usize),
+    /// Delay from an event's first available reading to its catch, days (caught events).
+    pub delay_days: Interval,
+    /// Kriging RMSE minus the reference strategy's, paired by mission (same dataset, seed,
+    /// budget), with its 95% interval; `None` for the reference itself or without a pair.
+    pub rmse_vs_reference: Option<Interval>,
+}
+
+/// Summaries of every (strategy, budget) over the given campaigns (e.g. one per synthetic
+/// seed), with paired RMSE differences against `reference`.
+pub fn summarise(results: &[CampaignResult], reference: Strategy) -> Vec<Summary> {
+    let mut keys: Vec<(Strategy, u64)> = Vec::new();
+    for r in results {
+        for run in &r.runs {
+            let k = (run.key.strategy, run.key.budget.to_bits());
+            if !keys.contains(&k) {
+                keys.push(k);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for (strategy, budget_bits) in keys {
+        let budget = f64::from_bits(budget_bits);
+        let runs: Vec<(&CampaignResult, &RunResult)> = results
+            .iter()
+            .flat_map(|r| r.runs.iter().map(move |run| (r, run)))
+            .filter(|(_, run)| run.key.strategy == strategy && run.key.budget == budget)
+            .collect();
+        let metrics = METRICS
+            .iter()
+            .map(|&name| {
+                let per_run: Vec<Vec<f64>> = runs
+                    .iter()
+                    .map(|(_, run)| run.missions.iter().map(|m| metric(m, name)).collect())
+                    .collect();
+                (name, interval(&replicate_means(&per_run)))
+            })
+            .collect();
+        let mut caught = 0;
+        let mut total = 0;
+        let mut delays = Vec::new();
+        for (r, run) in &runs {
+            for (e, c) in r.events.iter().zip(&run.caught) {
+                total += 1;
+                if let Some(at) = c {
+                    caught += 1;
+                    delays.push((at - e.start - r.period_s) as f64 / 86_400.0);
+                }
+            }
+        }
+        let rmse_vs_reference = (strategy != reference)
+            .then(|| {
+                let per_run: Vec<Vec<f64>> = runs
+                    .iter()
+                    .filter_map(|(r, run)| {
+                        let other = r.runs.iter().find(|o| {
+                            o.key.strategy == reference
+                                && o.key.seed == run.key.seed
+                                && o.key.budget == run.key.budget
+                        })?;
+                        Some(
+                            run.missions
+                                .iter()
+                                .zip(&other.missions)
+                                .map(|(a, b)| a.rmse_kriged - b.rmse_kriged)
+                                .collect(),
+                        )
+                    })
+                    .collect();
+                (!per_run.is_empty()).then(|| interval(&replicate_means(&per_run)))
+            })
+            .flatten();
+        out.push(Summary {
+            strategy,
+            budget,
+            runs: runs.len(),
+            metrics,
+            events_caught: (caught, total),
+            delay_days: interval(&delays),
+            rmse_vs_reference,
+        });
+    }
+    out
+}

@@ -1,0 +1,214 @@
+//! Campaign simulation through the application layer: no strategy sees the future (a
+//! synthetic farm whose future is rewritten plans and scores the same until the rewrite
+//! becomes available), and an end-to-end campaign on the real CAF network.
+
+use gleaner_app::campaign::{
+    CampaignRequest, CampaignResult, Strategy, every, run_campaign, summarise,
+};
+use gleaner_app::{self as app, Silent, Truth};
+
+#[allow(dead_code)] // the fixtures this test does not use
+mod common;
+use common::{caf_files, shared_data};
+
+const DAY: i64 = 86_400;
+
+fn request(
+    label: &str,
+    project: &app::Project<app::AnyStore>,
+    init: app::InitRequest,
+    history_until: i64,
+    schedule: Vec<i64>,
+    strategies: Vec<Strategy>,
+) -> CampaignRequest {
+    CampaignRequest {
+        label: label.into(),
+        init,
+        settings: project.settings().clone(),
+        history_until,
+        history_from: None,
+        schedule,
+        strategies,
+        seeds: vec![3],
+        budgets: vec![1.0],
+        modality: None,
+        events: None,
+        event_z: 3.0,
+        planner_iterations: 100,
+        neighbours: 16,
+        jobs: 2,
+        clock_now: 0,
+    }
+}
+
+#[test]
+fn no_strategy_sees_the_future() {
+    use gleaner_synth::{SynthConfig, generate, write_readings_csv, write_sensors_csv};
+    let farm = generate(&SynthConfig {
+        seed: 11,
+        sensor_count: 24,
+        days: 70,
+        vw_depths_cm: vec![30],
+        t_depths_cm: vec![30],
+        ..SynthConfig::default()
+    })
+    .unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let sensors = tmp.path().join("sensors.csv");
+    write_sensors_csv(&farm, &mut std::fs::File::create(&sensors).unwrap()).unwrap();
+    let readings = tmp.path().join("readings.csv");
+    write_readings_csv(&farm, &mut std::fs::File::create(&readings).unwrap()).unwrap();
+    let init = app::InitRequest {
+        dir: tmp.path().join("farm"),
+        sensors,
+        base: Some(farm.base()),
+        ..Default::default()
+    };
+    let (project, _) = app::init(&init).unwrap();
+    let truth = Truth::from_files(
+        &project,
+        &app::IngestRequest {
+            files: vec![readings],
+            ..Default::default()
+        },
+        DAY,
+        &Silent,
+    )
+    .unwrap();
+    let t0 = farm.times()[0];
+    let history_until = t0 + 50 * DAY;
+    let schedule = every(history_until, history_until + 2 * DAY, DAY).unwrap();
+    let mut req = request(
+        "synthetic",
+        &project,
+        init,
+        history_until,
+        schedule.clone(),
+        Strategy::ALL.to_vec(),
+    );
+    req.events = Some(Vec::new());
+    let before = run_campaign(&req, &truth, &Silent).unwrap();
+    // The future of mission 1: every reading not yet available at T_1, rewritten.
+    let cut = schedule[1] - DAY;
+    let mut changed = truth.readings().clone();
+    for r in &mut changed.rows {
+        if r.t > cut {
+            r.value += 0.2;
+        }
+    }
+    let rewritten = Truth::from_readings(changed, DAY).unwrap();
+    let after = run_campaign(&req, &rewritten, &Silent).unwrap();
+    let mut differs_later = false;
+    for (a, b) in before.runs.iter().zip(&after.runs) {
+        assert_eq!(a.key, b.key);
+        for k in 0..=1 {
+            assert_eq!(
+                a.missions[k],
+                b.missions[k],
+                "{} mission {k} changed with the future",
+                a.key.strategy.name()
+            );
+        }
+        differs_later |= a.missions[2] != b.missions[2];
+    }
+    assert!(differs_later, "the rewrite is seen once it is available");
+    for run in &before.runs {
+        for m in &run.missions {
+            if run.key.strategy != Strategy::Exhaustive {
+                assert!(m.sorties <= 1 && m.energy_j <= m.budget_j + 1e-6);
+            }
+        }
+    }
+}
+
+fn caf_campaign() -> CampaignResult {
+    let data = shared_data();
+    let tmp = tempfile::tempdir().unwrap();
+    let files = caf_files(&data.join("caf/Daily"), &tmp.path().join("in"), 2013..=2014);
+    let init = app::InitRequest {
+        dir: tmp.path().join("caf"),
+        sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
+        utm_zone: Some("11N".into()),
+        ..Default::default()
+    };
+    let (project, _) = app::init(&init).unwrap();
+    let truth = Truth::from_files(
+        &project,
+        &app::IngestRequest {
+            files,
+            ..Default::default()
+        },
+        DAY,
+        &Silent,
+    )
+    .unwrap();
+    let start = app::parse_timestamp("2014-04-01").unwrap();
+    let req = request(
+        "caf",
+        &project,
+        init,
+        start,
+        every(start, start + 2 * DAY, DAY).unwrap(),
+        vec![
+            Strategy::Gleaner,
+            Strategy::Nearest,
+            Strategy::Exhaustive,
+            Strategy::Variance,
+        ],
+    );
+    run_campaign(&req, &truth, &Silent).unwrap()
+}
+
+#[test]
+fn caf_campaign_end_to_end() {
+    let result = caf_campaign();
+    assert_eq!(result.modality, "vw@30cm");
+    assert_eq!(result.runs.len(), 4);
+    let c = result.covariance;
+    assert!(
+        c.sill > 0.0 && c.range_m > 0.0 && c.time_scale_s > DAY as f64,
+        "{c:?}"
+    );
+    let run = |s: Strategy| result.runs.iter().find(|r| r.key.strategy == s).unwrap();
+    // Exhaustive visits every cell: every sensor's value is then known exactly.
+    for m in &run(Strategy::Exhaustive).missions {
+        assert!(m.sorties > 1, "more than one battery for 42 cells");
+        assert!(m.cells >= 30);
+        assert!(m.rmse_carried < 1e-12 && m.rmse_kriged < 1e-9, "{m:?}");
+        assert!(m.staleness_max_s == 0.0);
+        assert!(m.evaluated > 10);
+    }
+    for s in [Strategy::Gleaner, Strategy::Nearest, Strategy::Variance] {
+        for m in &run(s).missions {
+            assert_eq!(m.sorties, 1);
+            assert!(
+                m.energy_j <= m.budget_j && m.energy_j > 0.5 * m.budget_j,
+                "{m:?}"
+            );
+            assert!((66_499.0..66_501.0).contains(&m.budget_j));
+            assert!(m.cells >= 5 && m.cells < 42);
+            assert!(m.rmse_kriged.is_finite() && m.rmse_kriged > 0.0);
+            assert!(
+                m.classifier_accuracy
+                    .is_some_and(|a| (0.0..=1.0).contains(&a))
+            );
+        }
+    }
+    // Kriging uses the neighbours: it beats carrying stale values forward on average.
+    let g = &run(Strategy::Gleaner).missions;
+    let carried: f64 = g.iter().map(|m| m.rmse_carried).sum();
+    let kriged: f64 = g.iter().map(|m| m.rmse_kriged).sum();
+    assert!(
+        kriged < carried * 1.05,
+        "kriged {kriged} vs carried {carried}"
+    );
+    let summary = summarise(std::slice::from_ref(&result), Strategy::Gleaner);
+    assert_eq!(summary.len(), 4);
+    assert!(summary.iter().all(|s| s.runs == 1));
+    assert!(
+        summary
+            .iter()
+            .filter(|s| s.strategy != Strategy::Gleaner)
+            .all(|s| s.rmse_vs_reference.is_some())
+    );
+}

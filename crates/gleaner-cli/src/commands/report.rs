@@ -1,0 +1,599 @@
+//! `gleaner report <sim-dir>`: the campaign results as CSV files (written by `simulate`) and
+//! read back into the application's plain types, summarised by the application layer, and
+//! written as Markdown with SVG charts.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use gleaner_app::campaign::{
+    CampaignResult, Interval, METRICS, MissionMetrics, RunKey, RunResult, Strategy, Summary,
+    TruthEvent, metric, summarise,
+};
+use gleaner_app::format_rfc3339;
+use gleaner_field::SensorId;
+use gleaner_kriging::Covariance;
+use gleaner_render::{
+    IntervalChart, IntervalRow, Line, LineChart, XAxis, interval_chart_svg, line_chart_svg,
+};
+
+const CAMPAIGN: &str = "campaign.csv";
+const MISSIONS: &str = "missions.csv";
+const EVENTS: &str = "events.csv";
+const CATCHES: &str = "catches.csv";
+const COMMAND: &str = "command.txt";
+
+const MISSIONS_HEADER: &str = "label,strategy,seed,budget,index,t,sorties,cells,energy_j,budget_j,rmse_carried,mae_carried,rmse_kriged,mae_kriged,mean_variance,evaluated,staleness_mean_s,staleness_max_s,classifier_accuracy,lost_readings,events_caught";
+
+fn write(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
+}
+
+/// Writes the campaigns' results as CSV files into `dir`, with the command that made them.
+pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> Result<()> {
+    let mut campaign = String::from("label,modality,period_s,sill,nugget,range_m,time_scale_s\n");
+    let mut missions = format!("{MISSIONS_HEADER}\n");
+    let mut events = String::from("label,event,sensors,start,end\n");
+    let mut catches = String::from("label,strategy,seed,budget,event,caught_at\n");
+    for r in results {
+        let c = r.covariance;
+        writeln!(
+            campaign,
+            "{},{},{},{},{},{},{}",
+            r.label, r.modality, r.period_s, c.sill, c.nugget, c.range_m, c.time_scale_s
+        )?;
+        for e in &r.events {
+            let ids: Vec<&str> = e.sensors.iter().map(SensorId::as_str).collect();
+            writeln!(
+                events,
+                "{},{},{},{},{}",
+                r.label,
+                e.id,
+                ids.join(";"),
+                e.start,
+                e.end
+            )?;
+        }
+        for run in &r.runs {
+            let k = &run.key;
+            let head = format!("{},{},{},{}", r.label, k.strategy.name(), k.seed, k.budget);
+            for m in &run.missions {
+                writeln!(
+                    missions,
+                    "{head},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    m.index,
+                    m.t,
+                    m.sorties,
+                    m.cells,
+                    m.energy_j,
+                    m.budget_j,
+                    m.rmse_carried,
+                    m.mae_carried,
+                    m.rmse_kriged,
+                    m.mae_kriged,
+                    m.mean_variance,
+                    m.evaluated,
+                    m.staleness_mean_s,
+                    m.staleness_max_s,
+                    m.classifier_accuracy
+                        .map_or(String::new(), |a| a.to_string()),
+                    m.lost_readings,
+                    m.events_caught
+                )?;
+            }
+            for (e, c) in r.events.iter().zip(&run.caught) {
+                writeln!(
+                    catches,
+                    "{head},{},{}",
+                    e.id,
+                    c.map_or(String::new(), |t| t.to_string())
+                )?;
+            }
+        }
+    }
+    write(&dir.join(CAMPAIGN), &campaign)?;
+    write(&dir.join(MISSIONS), &missions)?;
+    write(&dir.join(EVENTS), &events)?;
+    write(&dir.join(CATCHES), &catches)?;
+    write(&dir.join(COMMAND), &format!("{command}\n"))?;
+    Ok(())
+}
+
+/// Rows of one of our CSV files (header skipped), with a located error on a short row.
+fn rows(path: &Path, columns: usize) -> Result<Vec<(usize, Vec<String>)>> {
+    let text = std::fs::read_to_string(path).with_context(|| {
+        format!(
+            "{}: cannot read (run `gleaner simulate` first)",
+            path.display()
+        )
+    })?;
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate().skip(1) {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let cells: Vec<String> = line.split(',').map(str::to_string).collect();
+        if cells.len() != columns {
+            bail!(
+                "{}:{}: {} fields, expected {columns}",
+                path.display(),
+                n + 1,
+                cells.len()
+            );
+        }
+        out.push((n + 1, cells));
+    }
+    Ok(out)
+}
+
+fn num<T: std::str::FromStr>(path: &Path, line: usize, column: &str, v: &str) -> Result<T> {
+    v.parse().map_err(|_| {
+        anyhow::anyhow!(
+            "{}:{line}: column `{column}`: invalid value {v:?}",
+            path.display()
+        )
+    })
+}
+
+/// Reads the results `write_results` wrote.
+pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
+    let mut results: Vec<CampaignResult> = Vec::new();
+    let p = dir.join(CAMPAIGN);
+    for (line, c) in rows(&p, 7)? {
+        let cov = Covariance::new(
+            num(&p, line, "sill", &c[3])?,
+            num(&p, line, "nugget", &c[4])?,
+            num(&p, line, "range_m", &c[5])?,
+            num(&p, line, "time_scale_s", &c[6])?,
+        )
+        .with_context(|| format!("{}:{line}", p.display()))?;
+        results.push(CampaignResult {
+            label: c[0].clone(),
+            modality: c[1].clone(),
+            period_s: num(&p, line, "period_s", &c[2])?,
+            covariance: cov,
+            events: Vec::new(),
+            runs: Vec::new(),
+        });
+    }
+    let find = |results: &mut Vec<CampaignResult>, label: &str, p: &Path, line: usize| {
+        results
+            .iter()
+            .position(|r| r.label == label)
+            .ok_or_else(|| anyhow::anyhow!("{}:{line}: unknown campaign {label:?}", p.display()))
+    };
+    let p = dir.join(EVENTS);
+    for (line, c) in rows(&p, 5)? {
+        let r = find(&mut results, &c[0], &p, line)?;
+        let sensors = c[2]
+            .split(';')
+            .filter(|s| !s.is_empty())
+            .map(|s| SensorId::new(s).map_err(|e| anyhow::anyhow!("{}:{line}: {e}", p.display())))
+            .collect::<Result<Vec<_>>>()?;
+        results[r].events.push(TruthEvent {
+            id: c[1].clone(),
+            sensors,
+            start: num(&p, line, "start", &c[3])?,
+            end: num(&p, line, "end", &c[4])?,
+        });
+    }
+    let p = dir.join(MISSIONS);
+    for (line, c) in rows(&p, MISSIONS_HEADER.split(',').count())? {
+        let r = find(&mut results, &c[0], &p, line)?;
+        let key = RunKey {
+            strategy: Strategy::parse(&c[1]).with_context(|| format!("{}:{line}", p.display()))?,
+            seed: num(&p, line, "seed", &c[2])?,
+            budget: num(&p, line, "budget", &c[3])?,
+        };
+        let f = |k: usize, name: &str| num::<f64>(&p, line, name, &c[k]);
+        let m = MissionMetrics {
+            index: num(&p, line, "index", &c[4])?,
+            t: num(&p, line, "t", &c[5])?,
+            sorties: num(&p, line, "sorties", &c[6])?,
+            cells: num(&p, line, "cells", &c[7])?,
+            energy_j: f(8, "energy_j")?,
+            budget_j: f(9, "budget_j")?,
+            rmse_carried: f(10, "rmse_carried")?,
+            mae_carried: f(11, "mae_carried")?,
+            rmse_kriged: f(12, "rmse_kriged")?,
+            mae_kriged: f(13, "mae_kriged")?,
+            mean_variance: f(14, "mean_variance")?,
+            evaluated: num(&p, line, "evaluated", &c[15])?,
+            staleness_mean_s: f(16, "staleness_mean_s")?,
+            staleness_max_s: f(17, "staleness_max_s")?,
+            classifier_accuracy: if c[18].is_empty() {
+                None
+            } else {
+                Some(f(18, "classifier_accuracy")?)
+            },
+            lost_readings: num(&p, line, "lost_readings", &c[19])?,
+            events_caught: num(&p, line, "events_caught", &c[20])?,
+        };
+        let n_events = results[r].events.len();
+        let runs = &mut results[r].runs;
+        match runs.iter_mut().find(|x| x.key == key) {
+            Some(run) => run.missions.push(m),
+            None => runs.push(RunResult {
+                key,
+                missions: vec![m],
+                caught: vec![None; n_events],
+            }),
+        }
+    }
+    let p = dir.join(CATCHES);
+    for (line, c) in rows(&p, 6)? {
+        let r = find(&mut results, &c[0], &p, line)?;
+        if c[5].is_empty() {
+            continue;
+        }
+        let strategy = Strategy::parse(&c[1]).with_context(|| format!("{}:{line}", p.display()))?;
+        let seed: u64 = num(&p, line, "seed", &c[2])?;
+        let budget: f64 = num(&p, line, "budget", &c[3])?;
+        let at: i64 = num(&p, line, "caught_at", &c[5])?;
+        let Some(e) = results[r].events.iter().position(|e| e.id == c[4]) else {
+            bail!("{}:{line}: unknown event {:?}", p.display(), c[4]);
+        };
+        if let Some(run) = results[r]
+            .runs
+            .iter_mut()
+            .find(|x| x.key.strategy == strategy && x.key.seed == seed && x.key.budget == budget)
+        {
+            run.caught[e] = Some(at);
+        }
+    }
+    Ok(results)
+}
+
+fn fmt_iv(i: &Interval, scale: f64, d: usize) -> String {
+    if !i.mean.is_finite() {
+        return "–".into();
+    }
+    if i.n <= 1 || (i.high - i.low).abs() < 1e-15 {
+        return format!("{:.d$}", i.mean * scale);
+    }
+    format!(
+        "{:.d$} [{:.d$}, {:.d$}]",
+        i.mean * scale,
+        i.low * scale,
+        i.high * scale
+    )
+}
+
+fn get<'a>(s: &'a Summary, name: &str) -> &'a Interval {
+    &s.metrics
+        .iter()
+        .find(|m| m.0 == name)
+        .expect("known metric")
+        .1
+}
+
+/// What a metric is, for tables and chart labels: (title, unit label, scale, decimals).
+fn describe(name: &str, unit: &str) -> (&'static str, String, f64, usize) {
+    match name {
+        "rmse_kriged" => ("RMSE, kriging", format!("{unit} ×1000"), 1000.0, 2),
+        "rmse_carried" => (
+            "RMSE, last value carried forward",
+            format!("{unit} ×1000"),
+            1000.0,
+            2,
+        ),
+        "mae_kriged" => ("MAE, kriging", format!("{unit} ×1000"), 1000.0, 2),
+        "mae_carried" => (
+            "MAE, last value carried forward",
+            format!("{unit} ×1000"),
+            1000.0,
+            2,
+        ),
+        "mean_sd" => (
+            "kriging standard deviation (mean variance)",
+            format!("{unit} ×1000"),
+            1000.0,
+            2,
+        ),
+        "staleness_mean_days" => ("mean staleness", "days".into(), 1.0, 2),
+        "staleness_max_days" => ("max staleness", "days".into(), 1.0, 1),
+        "energy_kj" => ("energy per mission", "kJ".into(), 1.0, 1),
+        "utilisation" => ("battery utilisation per sortie", "%".into(), 100.0, 1),
+        "cells" => ("cells per mission", "cells".into(), 1.0, 1),
+        "classifier_accuracy" => ("condition classifier accuracy", "%".into(), 100.0, 1),
+        "lost_readings" => ("readings lost to full buffers", "readings".into(), 1.0, 1),
+        _ => ("?", String::new(), 1.0, 2),
+    }
+}
+
+/// Reads the results in `dir` and writes `report.md` with its charts under `figures/`.
+pub fn write_report(dir: &Path) -> Result<PathBuf> {
+    let results = read_results(dir)?;
+    if results.is_empty() {
+        bail!("{}: no campaigns in {CAMPAIGN}", dir.display());
+    }
+    let command = std::fs::read_to_string(dir.join(COMMAND)).unwrap_or_default();
+    let figures = dir.join("figures");
+    std::fs::create_dir_all(&figures)
+        .with_context(|| format!("{}: cannot create", figures.display()))?;
+    let summaries = summarise(&results, Strategy::Gleaner);
+    let unit = "m³/m³";
+    let modality = &results[0].modality;
+    let mut budgets: Vec<f64> = summaries.iter().map(|s| s.budget).collect();
+    budgets.sort_by(f64::total_cmp);
+    budgets.dedup();
+    let main_budget = budgets
+        .iter()
+        .copied()
+        .min_by(|a, b| (a - 1.0).abs().total_cmp(&(b - 1.0).abs()))
+        .unwrap_or(1.0);
+    let labels: Vec<&str> = results.iter().map(|r| r.label.as_str()).collect();
+    let first = &results[0];
+    let missions = first.runs.first().map_or(0, |r| r.missions.len());
+    let (t0, t1) = first
+        .runs
+        .first()
+        .and_then(|r| Some((r.missions.first()?.t, r.missions.last()?.t)))
+        .unwrap_or((0, 0));
+    let mut md = String::new();
+    writeln!(md, "# Campaign report: {}\n", labels.join(", "))?;
+    writeln!(md, "Reproduce with:\n\n```\n{}\n```\n", command.trim())?;
+    writeln!(
+        md,
+        "- {} campaign(s); {} missions each, {} .. {}; evaluated modality `{modality}`.",
+        results.len(),
+        missions,
+        format_rfc3339(t0),
+        format_rfc3339(t1)
+    )?;
+    let c = first.covariance;
+    writeln!(
+        md,
+        "- Field model fitted on the history{}: sill {:.3e}, nugget {:.3e} ({unit})², range {:.0} m, time scale {:.1} days.",
+        if results.len() > 1 {
+            " (first campaign)"
+        } else {
+            ""
+        },
+        c.sill,
+        c.nugget,
+        c.range_m,
+        c.time_scale_s / 86_400.0
+    )?;
+    let n_events: usize = results.iter().map(|r| r.events.len()).sum();
+    writeln!(
+        md,
+        "- {n_events} anomaly events became available during the campaign(s) ({}).",
+        if first.events.first().is_some_and(|e| e.id.starts_with('Z')) {
+            "real-data rule: runs of |z| > threshold of a sensor's one-step change, z against its whole series"
+        } else {
+            "the synthetic farms' ground truth"
+        }
+    )?;
+    writeln!(
+        md,
+        "- Budgets (fractions of the preset battery): {}.\n",
+        budgets
+            .iter()
+            .map(|b| format!("{b}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )?;
+    writeln!(md, "## Strategies at budget {main_budget}\n")?;
+    writeln!(
+        md,
+        "Means over missions with 95% intervals ({}). RMSE/MAE in {unit} ×1000 against the true \
+         reading stamped T − period of every sensor that has one; ΔRMSE is the strategy's \
+         kriging RMSE minus gleaner's, paired by mission.\n",
+        if first.runs.len() > 1 || results.len() > 1 {
+            "over replicate runs when there are several, else over blocks of 7 consecutive missions"
+        } else {
+            "over blocks of 7 consecutive missions"
+        }
+    )?;
+    writeln!(
+        md,
+        "| strategy | runs | RMSE kriging | ΔRMSE vs gleaner | RMSE carried | MAE kriging | energy kJ/mission | utilisation % | cells/mission | staleness mean d | staleness max d | events caught | delay d | classifier % | lost readings |"
+    )?;
+    writeln!(
+        md,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    )?;
+    let at_main: Vec<&Summary> = summaries
+        .iter()
+        .filter(|s| s.budget == main_budget)
+        .collect();
+    for s in &at_main {
+        let (caught, total) = s.events_caught;
+        writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {caught}/{total} | {} | {} | {} |",
+            s.strategy.name(),
+            s.runs,
+            fmt_iv(get(s, "rmse_kriged"), 1000.0, 2),
+            s.rmse_vs_reference
+                .as_ref()
+                .map_or("–".into(), |i| fmt_iv(i, 1000.0, 2)),
+            fmt_iv(get(s, "rmse_carried"), 1000.0, 2),
+            fmt_iv(get(s, "mae_kriged"), 1000.0, 2),
+            fmt_iv(get(s, "energy_kj"), 1.0, 1),
+            fmt_iv(get(s, "utilisation"), 100.0, 1),
+            fmt_iv(get(s, "cells"), 1.0, 1),
+            fmt_iv(get(s, "staleness_mean_days"), 1.0, 2),
+            fmt_iv(get(s, "staleness_max_days"), 1.0, 1),
+            fmt_iv(&s.delay_days, 1.0, 2),
+            fmt_iv(get(s, "classifier_accuracy"), 100.0, 1),
+            fmt_iv(get(s, "lost_readings"), 1.0, 1),
+        )?;
+    }
+    writeln!(md)?;
+    let rows: Vec<IntervalRow> = at_main
+        .iter()
+        .map(|s| {
+            let i = get(s, "rmse_kriged");
+            IntervalRow {
+                name: s.strategy.name().into(),
+                mean: i.mean * 1000.0,
+                low: i.low * 1000.0,
+                high: i.high * 1000.0,
+            }
+        })
+        .filter(|r| r.mean.is_finite())
+        .collect();
+    let svg = interval_chart_svg(&IntervalChart {
+        title: format!("Kriging RMSE at budget {main_budget} (95% intervals)"),
+        x_label: format!("RMSE, {unit} ×1000"),
+        rows,
+    })?;
+    write(&figures.join("rmse_intervals.svg"), &svg)?;
+    writeln!(
+        md,
+        "![RMSE with 95% intervals](figures/rmse_intervals.svg)\n"
+    )?;
+    writeln!(
+        md,
+        "## Each metric over the campaign (budget {main_budget})\n"
+    )?;
+    let strategies: Vec<Strategy> = at_main.iter().map(|s| s.strategy).collect();
+    for name in METRICS {
+        let (title, ylabel, scale, _) = describe(name, unit);
+        let lines: Vec<Line> = strategies
+            .iter()
+            .map(|&st| {
+                // Mean over runs (and campaigns) by mission index; x = the first run's times.
+                let runs: Vec<&RunResult> = results
+                    .iter()
+                    .flat_map(|r| r.runs.iter())
+                    .filter(|r| r.key.strategy == st && r.key.budget == main_budget)
+                    .collect();
+                let n = runs.iter().map(|r| r.missions.len()).min().unwrap_or(0);
+                let points = (0..n)
+                    .map(|k| {
+                        let v: Vec<f64> = runs
+                            .iter()
+                            .map(|r| metric(&r.missions[k], name))
+                            .filter(|v| v.is_finite())
+                            .collect();
+                        let y = if v.is_empty() {
+                            f64::NAN
+                        } else {
+                            v.iter().sum::<f64>() / v.len() as f64 * scale
+                        };
+                        (runs[0].missions[k].t as f64, y)
+                    })
+                    .collect();
+                Line {
+                    name: st.name().into(),
+                    points,
+                }
+            })
+            .collect();
+        if lines
+            .iter()
+            .all(|l| l.points.iter().all(|p| !p.1.is_finite()))
+        {
+            continue;
+        }
+        let svg = line_chart_svg(&LineChart {
+            title: format!("{title} per mission"),
+            x_label: "mission time (UTC)".into(),
+            y_label: ylabel,
+            x_axis: XAxis::Date,
+            lines,
+        })?;
+        let file = format!("{name}_over_campaign.svg");
+        write(&figures.join(&file), &svg)?;
+        writeln!(md, "![{title}](figures/{file})\n")?;
+    }
+    if budgets.len() > 1 {
+        writeln!(md, "## Each metric against the budget\n")?;
+        writeln!(
+            md,
+            "| strategy | budget | RMSE kriging | energy kJ/mission | events caught | delay d |\n|---|---|---|---|---|---|"
+        )?;
+        for s in &summaries {
+            writeln!(
+                md,
+                "| {} | {} | {} | {} | {}/{} | {} |",
+                s.strategy.name(),
+                s.budget,
+                fmt_iv(get(s, "rmse_kriged"), 1000.0, 2),
+                fmt_iv(get(s, "energy_kj"), 1.0, 1),
+                s.events_caught.0,
+                s.events_caught.1,
+                fmt_iv(&s.delay_days, 1.0, 2)
+            )?;
+        }
+        writeln!(md)?;
+        let mut metrics: Vec<&str> = METRICS.to_vec();
+        metrics.push("events_caught_share");
+        metrics.push("delay_days");
+        for name in metrics {
+            let (title, ylabel, scale) = match name {
+                "events_caught_share" => ("events caught", "%".to_string(), 100.0),
+                "delay_days" => ("delay to catch an event", "days".to_string(), 1.0),
+                other => {
+                    let (t, y, s, _) = describe(other, unit);
+                    (t, y, s)
+                }
+            };
+            let lines: Vec<Line> = strategies
+                .iter()
+                .map(|&st| Line {
+                    name: st.name().into(),
+                    points: summaries
+                        .iter()
+                        .filter(|s| s.strategy == st)
+                        .map(|s| {
+                            let y = match name {
+                                "events_caught_share" => {
+                                    s.events_caught.0 as f64 / s.events_caught.1.max(1) as f64
+                                }
+                                "delay_days" => s.delay_days.mean,
+                                other => get(s, other).mean,
+                            };
+                            (s.budget * 100.0, y * scale)
+                        })
+                        .collect(),
+                })
+                .collect();
+            if lines
+                .iter()
+                .all(|l| l.points.iter().all(|p| !p.1.is_finite()))
+            {
+                continue;
+            }
+            let svg = line_chart_svg(&LineChart {
+                title: format!("{title} against the budget"),
+                x_label: "budget, % of the preset battery".into(),
+                y_label: ylabel,
+                x_axis: XAxis::Number,
+                lines,
+            })?;
+            let file = format!("{name}_vs_budget.svg");
+            write(&figures.join(&file), &svg)?;
+            writeln!(md, "![{title} against the budget](figures/{file})\n")?;
+        }
+    }
+    writeln!(md, "## Definitions\n")?;
+    writeln!(
+        md,
+        "- Every run is its own project (an in-memory store) driven through gleaner's score, plan, \
+         explore and record use cases; the planner knows only the history and what its flights \
+         brought back; a reading stamped t is available from t + period on.\n\
+         - Strategies: gleaner = S (project weights) + the default planner; paper = S + the \
+         paper's greedy; variance = greedy expected reduction of the kriging posterior variance, \
+         routed by the default planner; freshness = S with F only; round-robin = days since the \
+         last collection; random = seeded uniform scores; nearest = equal scores with greedy \
+         insertion; exhaustive = every cell, as many sorties as it takes; no-X = gleaner without \
+         term X.\n\
+         - Reconstruction at mission T (after its flights): each sensor's value stamped T − period; \
+         carried = its last collected value; kriging = simple kriging of residuals from each \
+         sensor's history mean with a separable exponential space-time covariance fitted on \
+         the history, from the 16 most correlated latest readings.\n\
+         - An event is caught at the first mission that collects one of its sensors (with an \
+         event reading still in the buffer) once its first reading is available; delay = catch \
+         time − (start + period).\n\
+         - Classifier accuracy: the condition model's most likely class per cell before the \
+         flight against the class of the cell's true value (the model's own thresholds).\n\
+         - Staleness: mission time minus each sensor's last collection."
+    )?;
+    let path = dir.join("report.md");
+    write(&path, &md)?;
+    Ok(path)
+}

@@ -1,0 +1,378 @@
+//! `gleaner simulate`: translates the arguments into campaign requests (a dataset preset is
+//! only where its files are and how to read them), runs them through the application layer,
+//! and writes the results as CSV files plus the report.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use gleaner_app::campaign::{
+    CampaignRequest, CampaignResult, Strategy, TruthEvent, every, run_campaign,
+};
+use gleaner_app::{self as app, Format, IngestRequest, InitRequest, Project, Truth};
+
+use super::synth::{self, SynthArgs};
+
+/// Which data a campaign replays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Dataset {
+    /// CAF daily files (42 stations; VW and T at 5 depths): history to the end of 2013,
+    /// missions every day of 2014 by default.
+    CafDaily,
+    /// The CAF hourly subset (32 stations, VW 30 cm, Jan-Apr 2015, timestamps read as UTC):
+    /// history January, missions daily Feb 1 - Apr 21 by default.
+    CafHourly,
+    /// Hubbard Brook (12 loggers, hourly, sites ~4 km apart; `large-pack` battery): history
+    /// to 2024-06-30, missions daily 2024-07-01 .. 2025-06-30 by default.
+    HubbardBrook,
+    /// Seeded synthetic farms with ground-truth events, one per seed (--farm-seeds).
+    Synthetic,
+}
+
+// The arguments of `gleaner simulate` (the variant's doc comment is the help).
+#[derive(clap::Args)]
+pub struct SimulateArgs {
+    /// The dataset to replay.
+    #[arg(long, value_enum)]
+    pub dataset: Dataset,
+    /// Output directory (missions.csv, events.csv, catches.csv, campaign.csv, report.md).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Shared data directory [env GLEANER_DATA_DIR, default ../shared/data].
+    #[arg(long, env = "GLEANER_DATA_DIR", default_value = "../shared/data")]
+    pub data_dir: PathBuf,
+    /// Readings available by this time are the history (RFC 3339 or date) [default: the
+    /// dataset's].
+    #[arg(long, value_parser = crate::parse_time)]
+    pub history_until: Option<i64>,
+    /// Leave readings before this time out of the history [default: the dataset's].
+    #[arg(long, value_parser = crate::parse_time)]
+    pub history_from: Option<i64>,
+    /// First mission [default: the end of the history].
+    #[arg(long, value_parser = crate::parse_time)]
+    pub start: Option<i64>,
+    /// Last mission at or before this time [default: the dataset's].
+    #[arg(long, value_parser = crate::parse_time)]
+    pub end: Option<i64>,
+    /// Hours between missions.
+    #[arg(long, default_value_t = 24.0)]
+    pub every_hours: f64,
+    /// Mission times instead of a period (comma-separated RFC 3339 or dates).
+    #[arg(long, value_delimiter = ',', value_parser = crate::parse_time)]
+    pub times: Option<Vec<i64>>,
+    /// Strategies, comma-separated, or `all` / `main` (gleaner, paper, variance, freshness,
+    /// round-robin, random, nearest, exhaustive). Names: gleaner, paper, variance,
+    /// freshness, round-robin, random, nearest, exhaustive, no-freshness, no-anomaly,
+    /// no-uncertainty, no-redundancy.
+    #[arg(long, value_delimiter = ',', default_value = "main")]
+    pub strategies: Vec<String>,
+    /// Replicate seeds (planner and random choices).
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    pub seeds: Vec<u64>,
+    /// Battery capacities as fractions of the preset's (1 = the paper's 70 kJ).
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    pub budgets: Vec<f64>,
+    /// Energy preset: `paper` or `large-pack` [default: paper; large-pack for Hubbard Brook].
+    #[arg(long)]
+    pub energy_preset: Option<String>,
+    /// Sensor buffers hold this many readings per modality; the oldest are dropped
+    /// [default: unlimited].
+    #[arg(long)]
+    pub buffer: Option<usize>,
+    /// The evaluated modality [default: the condition modality, vw@30cm or the first vw@...].
+    #[arg(long)]
+    pub modality: Option<String>,
+    /// |z| threshold of the real-data event rule (runs of |z| of the daily change above it).
+    #[arg(long, default_value_t = 3.0)]
+    pub event_z: f64,
+    /// Planner iteration cap per mission (results independent of the machine's speed).
+    #[arg(long, default_value_t = 300)]
+    pub planner_iterations: u64,
+    /// Observations per kriging estimate.
+    #[arg(long, default_value_t = app::DEFAULT_NEIGHBOURS)]
+    pub neighbours: usize,
+    /// Runs in parallel.
+    #[arg(long, default_value_t = 2)]
+    pub jobs: usize,
+    /// Cell side, metres [default 40].
+    #[arg(long)]
+    pub cell_size: Option<f64>,
+    /// Synthetic: farm seeds, one campaign each.
+    #[arg(long, value_delimiter = ',', default_value = "1,2,3,4,5,6,7,8,9,10")]
+    pub farm_seeds: Vec<u64>,
+    /// Synthetic: sensor stations per farm.
+    #[arg(long, default_value_t = 42)]
+    pub farm_sensors: usize,
+    /// Synthetic: days of record (history then missions).
+    #[arg(long, default_value_t = 365)]
+    pub farm_days: u32,
+    /// Synthetic: days of history before the first mission.
+    #[arg(long, default_value_t = 180)]
+    pub farm_history_days: u32,
+    /// Synthetic: ground-truth events per farm.
+    #[arg(long, default_value_t = 12)]
+    pub farm_events: usize,
+    /// Synthetic: grow the field with the sensor count (CAF's density).
+    #[arg(long)]
+    pub farm_scale_extent: bool,
+}
+
+/// The strategies named on the command line.
+pub fn strategies(names: &[String]) -> Result<Vec<Strategy>> {
+    let mut out = Vec::new();
+    for n in names {
+        match n.as_str() {
+            "all" => out.extend(Strategy::ALL),
+            "main" => out.extend(&Strategy::ALL[..8]),
+            other => out.push(Strategy::parse(other)?),
+        }
+    }
+    out.dedup();
+    Ok(out)
+}
+
+fn day(s: &str) -> i64 {
+    app::parse_timestamp(s).unwrap_or(0)
+}
+
+/// One campaign's inputs: the request and its truth.
+struct Prepared {
+    request: CampaignRequest,
+    truth: Truth,
+}
+
+fn files_in(dir: &Path, keep: impl Fn(&str) -> bool) -> Result<Vec<PathBuf>> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("{}: cannot list", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.file_name().and_then(|n| n.to_str()).is_some_and(&keep))
+        .collect();
+    v.sort();
+    if v.is_empty() {
+        bail!("{}: no readings files", dir.display());
+    }
+    Ok(v)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn prepare(
+    args: &SimulateArgs,
+    label: &str,
+    project_dir: &Path,
+    init: InitRequest,
+    readings: IngestRequest,
+    period_s: i64,
+    defaults: (i64, Option<i64>, i64),
+    preset: &str,
+    events: Option<Vec<TruthEvent>>,
+) -> Result<Prepared> {
+    let (project, _) = if project_dir.join("gleaner.toml").exists() {
+        (Project::open(project_dir)?, ())
+    } else {
+        let (p, _) = app::init(&InitRequest {
+            dir: project_dir.to_path_buf(),
+            cell_size_m: args.cell_size,
+            name: Some(label.to_string()),
+            ..init.clone()
+        })?;
+        (p, ())
+    };
+    let mut settings = project.settings().clone();
+    settings.energy.preset = args
+        .energy_preset
+        .clone()
+        .unwrap_or_else(|| preset.to_string());
+    settings.validate()?;
+    let mut truth = Truth::from_files(&project, &readings, period_s, &app::Silent)?;
+    truth.buffer_readings = args.buffer;
+    let (until, from, end) = defaults;
+    let history_until = args.history_until.unwrap_or(until);
+    let start = args.start.unwrap_or(history_until);
+    let end = args.end.unwrap_or(end);
+    let schedule = match &args.times {
+        Some(t) => t.clone(),
+        None => every(start, end, (args.every_hours * 3600.0).round() as i64)?,
+    };
+    Ok(Prepared {
+        request: CampaignRequest {
+            label: label.to_string(),
+            init: InitRequest {
+                dir: project_dir.to_path_buf(),
+                ..init
+            },
+            settings,
+            history_until,
+            history_from: args.history_from.or(from),
+            schedule,
+            strategies: strategies(&args.strategies)?,
+            seeds: args.seeds.clone(),
+            budgets: args.budgets.clone(),
+            modality: args.modality.clone(),
+            events,
+            event_z: args.event_z,
+            planner_iterations: args.planner_iterations,
+            neighbours: args.neighbours,
+            jobs: args.jobs,
+            clock_now: crate::clock_now(),
+        },
+        truth,
+    })
+}
+
+/// The synthetic farm of one seed: written (small files) under `dir`, with its events.
+fn synthetic(args: &SimulateArgs, seed: u64, dir: &Path) -> Result<Prepared> {
+    let farm_dir = dir.join(format!("farm-{seed}"));
+    let (farm, files) = synth::run(&SynthArgs {
+        out: farm_dir.clone(),
+        seed,
+        sensors: args.farm_sensors,
+        days: args.farm_days,
+        interval_s: 86_400,
+        events: args.farm_events,
+        correlation_length_m: 500.0,
+        no_faults: false,
+        scale_extent: args.farm_scale_extent,
+        vw_depths_cm: vec![30, 60, 90],
+        t_depths_cm: vec![30],
+    })?;
+    let events: Vec<TruthEvent> = farm
+        .events()
+        .iter()
+        .map(|e| TruthEvent {
+            id: e.id.clone(),
+            sensors: e
+                .affected
+                .iter()
+                .map(|&s| farm.sensors()[s].id.clone())
+                .collect(),
+            start: e.start,
+            end: e.end,
+        })
+        .collect();
+    let t0 = farm.times().first().copied().unwrap_or(0);
+    let t_end = farm.times().last().copied().unwrap_or(0);
+    let until = t0 + i64::from(args.farm_history_days) * 86_400;
+    let prepared = prepare(
+        args,
+        &format!("synthetic-{seed}"),
+        &farm_dir.join("project"),
+        InitRequest {
+            sensors: files.sensors.clone(),
+            ..InitRequest::default()
+        },
+        IngestRequest {
+            files: vec![files.readings.clone()],
+            ..IngestRequest::default()
+        },
+        86_400,
+        (until, None, t_end),
+        "paper",
+        Some(events),
+    )?;
+    // The readings are in memory now; keep only the small files.
+    std::fs::remove_file(&files.readings).ok();
+    Ok(prepared)
+}
+
+/// Runs the campaigns the arguments describe and writes the results into `args.out`.
+pub fn run(
+    args: &SimulateArgs,
+    command_line: &str,
+    progress: &crate::progress::Terminal,
+) -> Result<String> {
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot create", args.out.display()))?;
+    let data = &args.data_dir;
+    let mut results: Vec<CampaignResult> = Vec::new();
+    let mut run_one = |p: Prepared| -> Result<()> {
+        let r = run_campaign(&p.request, &p.truth, progress)?;
+        results.push(r);
+        Ok(())
+    };
+    let project_dir = args.out.join("project");
+    match args.dataset {
+        Dataset::CafDaily => run_one(prepare(
+            args,
+            "caf-daily",
+            &project_dir,
+            InitRequest {
+                sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
+                utm_zone: Some("11N".into()),
+                ..InitRequest::default()
+            },
+            IngestRequest {
+                files: files_in(&data.join("caf/Daily"), |n| n.ends_with(".txt"))?,
+                format: Format::CafDaily,
+                ..IngestRequest::default()
+            },
+            86_400,
+            (
+                day("2014-01-01"),
+                Some(day("2011-01-01")),
+                day("2014-12-31"),
+            ),
+            "paper",
+            None,
+        )?)?,
+        Dataset::CafHourly => run_one(prepare(
+            args,
+            "caf-hourly",
+            &project_dir,
+            InitRequest {
+                sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
+                utm_zone: Some("11N".into()),
+                ..InitRequest::default()
+            },
+            IngestRequest {
+                files: vec![data.join("caf/derived/water_content_2015_Jan_April_32_sensors.csv")],
+                format: Format::Wide,
+                modality: Some("vw@30cm".into()),
+                unit: Some("m3/m3".into()),
+                ..IngestRequest::default()
+            },
+            3_600,
+            (day("2015-02-01"), None, day("2015-04-21")),
+            "paper",
+            None,
+        )?)?,
+        Dataset::HubbardBrook => {
+            let dir = data.join("hubbard_brook");
+            run_one(prepare(
+                args,
+                "hubbard-brook",
+                &project_dir,
+                InitRequest {
+                    sensors: dir.join("sensor_metadata.csv"),
+                    hubbard_brook: true,
+                    ..InitRequest::default()
+                },
+                IngestRequest {
+                    files: files_in(&dir, |n| n.starts_with("z6-") && n.ends_with(".csv"))?,
+                    format: Format::HubbardBrook,
+                    ..IngestRequest::default()
+                },
+                3_600,
+                (day("2024-07-01"), None, day("2025-06-30")),
+                "large-pack",
+                None,
+            )?)?
+        }
+        Dataset::Synthetic => {
+            for &seed in &args.farm_seeds {
+                run_one(synthetic(args, seed, &args.out)?)?;
+            }
+        }
+    }
+    super::report::write_results(&args.out, &results, command_line)?;
+    let report = super::report::write_report(&args.out)?;
+    let mut out = String::new();
+    writeln!(
+        out,
+        "{} campaign(s), {} runs; results in {}; report {}",
+        results.len(),
+        results.iter().map(|r| r.runs.len()).sum::<usize>(),
+        args.out.display(),
+        report.display()
+    )?;
+    Ok(out)
+}
