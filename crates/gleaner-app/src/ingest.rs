@@ -349,7 +349,12 @@ pub const FUTURE_TOLERANCE_S: i64 = 86_400;
 
 /// Refuses readings dated more than [`FUTURE_TOLERANCE_S`] after `clock_now`: a sensor cannot
 /// have measured the future, and one such reading would move the default mission time there.
+/// A clock at or before the epoch is no clock (callers and tests that pass 0): nothing is
+/// refused then, and the year range of the readers still applies.
 pub(crate) fn refuse_future(parsed: &Parsed, clock_now: UnixSeconds) -> Result<()> {
+    if clock_now <= 0 {
+        return Ok(());
+    }
     let limit = clock_now.saturating_add(FUTURE_TOLERANCE_S);
     for (path, _, readings, _) in &parsed.files {
         if let Some(r) = readings
@@ -409,7 +414,8 @@ fn conflict_in_file(e: StoreError, path: &Path, readings: &Readings) -> AppError
 /// The use case: reads every file, then stores all readings, their provenance and the
 /// refreshed cell summaries in one transaction: a failure anywhere stores nothing.
 /// `clock_now` is the wall-clock time (seconds since the epoch): recorded as provenance, and
-/// readings dated more than [`FUTURE_TOLERANCE_S`] after it are refused.
+/// readings dated more than [`FUTURE_TOLERANCE_S`] after it are refused (unless it is 0 or
+/// earlier: no clock).
 pub fn ingest<S: Store>(
     project: &mut Project<S>,
     request: &IngestRequest,

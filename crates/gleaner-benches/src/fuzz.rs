@@ -46,11 +46,13 @@ pub enum Target {
     Flight,
     /// `Settings::load` of a `gleaner.toml`.
     Config,
+    /// The orienteering benchmark readers `parse_classic` and `parse_oplib` (`bench op`).
+    OpInstance,
 }
 
 impl Target {
     /// Every target, in the order `--target all` runs them.
-    pub const ALL: [Target; 9] = [
+    pub const ALL: [Target; 10] = [
         Target::Sensors,
         Target::Long,
         Target::Wide,
@@ -60,6 +62,7 @@ impl Target {
         Target::CellCsv,
         Target::Flight,
         Target::Config,
+        Target::OpInstance,
     ];
 
     /// The target's name on the command line.
@@ -74,6 +77,7 @@ impl Target {
             Target::CellCsv => "cell-csv",
             Target::Flight => "flight",
             Target::Config => "config",
+            Target::OpInstance => "op-instance",
         }
     }
 
@@ -95,6 +99,7 @@ impl Target {
             Target::CellCsv => &["scores", "probabilities"],
             Target::Flight => &["flight", "long", "wide", "caf"],
             Target::Config => &["toml"],
+            Target::OpInstance => &[],
         }
     }
 
@@ -126,6 +131,9 @@ pub struct FuzzConfig {
     pub crashes: PathBuf,
     /// Largest generated input, bytes.
     pub max_len: usize,
+    /// Folder for the input file written at every execution (a memory file system such as
+    /// `/dev/shm` keeps the run CPU-bound); the system's temporary folder when `None`.
+    pub scratch: Option<PathBuf>,
 }
 
 /// What a run did.
@@ -345,6 +353,26 @@ pub fn seeds(target: Target, root: &Path) -> Vec<Vec<u8>> {
             }
         }
     }
+    if target == Target::OpInstance {
+        // The benchmark instances themselves (shared data, not in the repository): the
+        // smallest of each set.
+        let data = std::env::var_os("GLEANER_DATA_DIR")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| root.join("../shared/data"));
+        for set in ["classic", "oplib/gen1", "oplib/gen2", "oplib/gen3"] {
+            let mut files: Vec<(u64, PathBuf)> = walk(&data.join("op").join(set))
+                .into_iter()
+                .filter_map(|p| Some((std::fs::metadata(&p).ok()?.len(), p)))
+                .filter(|(len, _)| *len <= 200_000)
+                .collect();
+            files.sort();
+            for (_, f) in files.into_iter().take(12) {
+                if let Ok(bytes) = std::fs::read(&f) {
+                    out.push(bytes);
+                }
+            }
+        }
+    }
     match target {
         Target::Config => out.push(VALID_TOML.as_bytes().to_vec()),
         Target::CellCsv => out.push(
@@ -353,6 +381,24 @@ pub fn seeds(target: Target, root: &Path) -> Vec<Vec<u8>> {
         ),
         _ => {}
     }
+    out
+}
+
+/// The files under `dir`, recursively, sorted.
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return out;
+    };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out.sort();
     out
 }
 
@@ -462,6 +508,16 @@ fn run_one(target: Target, path: &Path, dir: &Path) -> Vec<Option<String>> {
             }]
         }
         Target::Config => vec![err(gleaner_app::Settings::load(dir))],
+        Target::OpInstance => {
+            let text = match std::fs::read(path) {
+                Ok(b) => String::from_utf8_lossy(&b).into_owned(),
+                Err(e) => return vec![Some(e.to_string())],
+            };
+            vec![
+                err(gleaner_op_formats::parse_classic("fuzz", "classic", &text)),
+                err(gleaner_op_formats::parse_oplib("fuzz", "gen1", &text)),
+            ]
+        }
     }
 }
 
@@ -470,7 +526,10 @@ pub fn fuzz(
     config: &FuzzConfig,
     mut progress: impl FnMut(&FuzzReport),
 ) -> std::io::Result<FuzzReport> {
-    let dir = tempfile::tempdir()?;
+    let dir = match &config.scratch {
+        Some(s) => tempfile::tempdir_in(s)?,
+        None => tempfile::tempdir()?,
+    };
     std::fs::write(dir.path().join("sensor_metadata.csv"), HB_METADATA)?;
     let path = dir.path().join(config.target.file_name());
     let mut pool = seeds(config.target, &config.root);

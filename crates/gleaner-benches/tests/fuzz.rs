@@ -26,6 +26,7 @@ fn no_reader_panics_on_mutated_or_arbitrary_bytes() {
             root: root.clone(),
             crashes: crashes.path().to_path_buf(),
             max_len: 16_384,
+            scratch: None,
         };
         let report = fuzz(&config, |_| {}).expect("fuzz");
         assert_eq!(report.execs, 250);

@@ -379,3 +379,114 @@ fn a_refused_init_into_an_existing_directory_leaves_no_database() {
         .collect();
     assert_eq!(left, vec!["sensors.csv".to_string()]);
 }
+
+/// Hostile command-line values and settings, each refused with its message and nothing
+/// written (regressions of the hostile-user session: panics in `Duration::from_secs_f64`,
+/// overflowing UTC offsets, a sensor counted twice, an export at −30 m).
+#[test]
+fn hostile_arguments_are_refused_and_write_nothing() {
+    let bases = bases();
+    let project = farm_copy(&bases);
+    let p = s(project.path());
+    let readings = corpus().join("../readings.csv");
+    let sensors = corpus().join("../sensors.csv");
+    let scratch = tempfile::tempdir().expect("temp dir");
+    let new = scratch.path().join("new");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["plan", "--project", p, "--time-limit", "inf"],
+            "time limit inf s: expected a number of seconds in [0, 86400]",
+        ),
+        (
+            vec!["plan", "--project", p, "--time-limit", "1e20"],
+            "expected a number of seconds in [0, 86400]",
+        ),
+        (
+            vec!["plan", "--project", p, "--time-limit=-1"],
+            "time limit -1 s",
+        ),
+        (
+            vec!["plan", "--project", p, "--time-limit", "NaN"],
+            "time limit NaN s",
+        ),
+        (
+            vec![
+                "ingest",
+                "--project",
+                p,
+                "--modality",
+                "vw@30cm",
+                "--utc-offset",
+                "1e18",
+                s(&readings),
+            ],
+            "expected hours in [-14, 14]",
+        ),
+        (
+            vec![
+                "ingest",
+                "--project",
+                p,
+                "--modality",
+                "vw@30cm",
+                "--utc-offset",
+                "NaN",
+                s(&readings),
+            ],
+            "UTC offset NaN h",
+        ),
+        (
+            vec![
+                "record",
+                "--project",
+                p,
+                "--mission",
+                "1",
+                "--cells",
+                "x0y0,x0y0",
+            ],
+            "cell x0y0 is listed twice",
+        ),
+        (
+            vec![
+                "init",
+                "--dir",
+                s(&new),
+                "--sensors",
+                s(&sensors),
+                "--cell-size",
+                "0.001",
+            ],
+            "field.cell_size_m = 0.001: allowed [0.5, 10000] m",
+        ),
+    ];
+    let before = dump(project.path());
+    for (args, expected) in &cases {
+        let out = gleaner(args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expected), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert_eq!(dump(project.path()), before, "{args:?} wrote");
+        assert!(!new.exists());
+    }
+    // An altitude the flight files must not carry: refused before anything is exported.
+    for altitude in ["-30", "nan", "1e300"] {
+        let toml = std::fs::read_to_string(project.path().join("gleaner.toml")).expect("toml");
+        let edited = toml.replace(
+            "[energy]\n",
+            &format!("[energy]\naltitude_m = {altitude}\n"),
+        );
+        let dir = tempfile::tempdir().expect("temp dir");
+        copy_dir(project.path(), dir.path());
+        std::fs::write(dir.path().join("gleaner.toml"), edited).expect("write");
+        let out = gleaner(&["export", "--project", s(dir.path()), "--mission", "1"]);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("energy.altitude_m = "), "{err}");
+        assert!(
+            !dir.path().join("missions").exists(),
+            "{altitude}: files written"
+        );
+    }
+}

@@ -18,7 +18,7 @@ use gleaner_benches::fuzz::{FuzzConfig, Target, fuzz};
 #[derive(Debug, Parser)]
 #[command(
     name = "gleaner-fuzz",
-    after_help = "Targets: sensors, long, wide, caf, hubbard-brook, hubbard-brook-metadata, cell-csv, flight, config, all.\n\nExample:\n  gleaner-fuzz --target long --seconds 600 --seed 1"
+    after_help = "Targets: sensors, long, wide, caf, hubbard-brook, hubbard-brook-metadata, cell-csv, flight, config, op-instance, all.\n\nExample:\n  gleaner-fuzz --target long --seconds 600 --seed 1"
 )]
 struct Args {
     /// Reader to fuzz, or `all` (each in turn, `--seconds` each).
@@ -42,6 +42,9 @@ struct Args {
     /// Largest input, bytes.
     #[arg(long, default_value_t = 65_536)]
     max_len: usize,
+    /// Folder for the per-execution input file (e.g. `/dev/shm`); default: the temporary folder.
+    #[arg(long)]
+    scratch: Option<PathBuf>,
 }
 
 fn main() -> anyhow::Result<()> {
@@ -73,6 +76,7 @@ fn main() -> anyhow::Result<()> {
             root: args.root.clone(),
             crashes: args.crashes.clone(),
             max_len: args.max_len,
+            scratch: args.scratch.clone(),
         };
         let bar = std::io::stderr().is_terminal().then(|| {
             let bar = indicatif::ProgressBar::new_spinner();
