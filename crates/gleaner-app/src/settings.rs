@@ -244,6 +244,13 @@ pub struct EnergySection {
     pub reading_interval_s: Option<f64>,
     /// Bytes per logged reading.
     pub bytes_per_reading: Option<f64>,
+    /// Plain linear model instead of the physical one: energy per metre flown, J/m (give
+    /// `linear_j_per_cell` with it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub linear_j_per_m: Option<f64>,
+    /// Plain linear model: energy per cell visited, J.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub linear_j_per_cell: Option<f64>,
 }
 
 impl Default for EnergySection {
@@ -262,6 +269,8 @@ impl Default for EnergySection {
             noise_power_dbm: None,
             reading_interval_s: None,
             bytes_per_reading: None,
+            linear_j_per_m: None,
+            linear_j_per_cell: None,
         }
     }
 }
@@ -384,6 +393,16 @@ impl EnergySection {
         set(&mut c.link.noise_power_dbm, self.noise_power_dbm);
         set(&mut c.logging.reading_interval_s, self.reading_interval_s);
         set(&mut c.logging.bytes_per_reading, self.bytes_per_reading);
+        c.linear = match (self.linear_j_per_m, self.linear_j_per_cell) {
+            (None, None) => None,
+            (Some(j_per_m), Some(j_per_cell)) => Some(gleaner_energy::LinearEnergy {
+                j_per_m,
+                j_per_cell,
+            }),
+            _ => bail!(
+                "energy.linear_j_per_m and energy.linear_j_per_cell go together: give both or neither"
+            ),
+        };
         Ok(c)
     }
 }

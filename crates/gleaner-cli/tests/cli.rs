@@ -139,7 +139,17 @@ fn ingest_skip_mode_reports_rows() {
 #[test]
 fn every_command_has_help_with_an_example() {
     for cmd in [
-        "init", "ingest", "cells", "score", "plan", "record", "synth", "demo",
+        "init",
+        "ingest",
+        "cells",
+        "score",
+        "plan",
+        "record",
+        "synth",
+        "demo",
+        "simulate",
+        "report",
+        "reconstruct",
     ] {
         let out = ok(&[cmd, "--help"]);
         assert!(
@@ -820,4 +830,78 @@ fn exploration_sorties_export_like_any_mission() {
     );
     ok(&["map-exploration", "--project", p]);
     assert!(dir.path().join("missions/exploration.png").exists());
+}
+
+#[test]
+fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sim = dir.path().join("sim");
+    let out = ok(&[
+        "simulate",
+        "--dataset",
+        "synthetic",
+        "--out",
+        s(&sim),
+        "--farm-seeds",
+        "5",
+        "--farm-sensors",
+        "12",
+        "--farm-days",
+        "24",
+        "--farm-history-days",
+        "21",
+        "--farm-events",
+        "2",
+        "--strategies",
+        "gleaner,nearest",
+        "--planner-iterations",
+        "50",
+    ]);
+    assert!(out.contains("1 campaign(s), 2 runs"), "{out}");
+    let missions = std::fs::read_to_string(sim.join("missions.csv")).expect("missions.csv");
+    // A header, then 2 strategies x 3 missions.
+    assert_eq!(missions.lines().count(), 7, "{missions}");
+    let report = std::fs::read_to_string(sim.join("report.md")).expect("report.md");
+    assert!(report.contains("| gleaner | 1 |"), "{report}");
+    assert!(report.contains("Reproduce with"), "{report}");
+    assert!(sim.join("figures/rmse_intervals.svg").exists());
+    // The report is rebuilt from the CSV files alone.
+    std::fs::remove_file(sim.join("report.md")).expect("remove");
+    ok(&["report", s(&sim)]);
+    assert!(sim.join("report.md").exists());
+    // A damaged results file is refused with its line.
+    std::fs::write(
+        sim.join("missions.csv"),
+        format!("{missions}caf,gleaner,1\n"),
+    )
+    .expect("write");
+    let err = fail(&["report", s(&sim)]);
+    assert!(err.contains("missions.csv:8"), "{err}");
+
+    // reconstruct on a project of its own.
+    let farm = dir.path().join("farm");
+    ok(&[
+        "synth",
+        "--out",
+        s(&farm),
+        "--sensors",
+        "12",
+        "--days",
+        "30",
+    ]);
+    let p = dir.path().join("p");
+    ok(&[
+        "init",
+        "--dir",
+        s(&p),
+        "--sensors",
+        s(&farm.join("sensors.csv")),
+    ]);
+    ok(&["ingest", "--project", s(&p), s(&farm.join("readings.csv"))]);
+    let out = ok(&["reconstruct", "--project", s(&p), "--modality", "vw@30cm"]);
+    assert!(
+        out.contains("vw@30cm at") && out.contains("kriged"),
+        "{out}"
+    );
+    assert_eq!(out.lines().count(), 2 + 12, "{out}");
 }

@@ -143,6 +143,19 @@ pub struct EnergyConfig {
     pub rx_power_w: f64,
     /// Climb and descent energy; `None` (default) leaves it out.
     pub vertical: Option<VerticalConfig>,
+    /// A plain linear model instead of the physical one, for comparison with other studies
+    /// (`None`, the default: the rotary-wing model).
+    pub linear: Option<LinearEnergy>,
+}
+
+/// A plain linear energy model: a constant energy per metre flown and per cell visited
+/// (whatever the hover time), replacing P(V)/V and (P(0) + P_rx)·hover_s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearEnergy {
+    /// Energy per metre flown, J/m.
+    pub j_per_m: f64,
+    /// Energy per cell visited (hover and collection), J.
+    pub j_per_cell: f64,
 }
 
 impl Default for EnergyConfig {
@@ -168,6 +181,7 @@ impl EnergyConfig {
             },
             rx_power_w: 0.5,
             vertical: None,
+            linear: None,
         }
     }
 
@@ -194,6 +208,10 @@ impl EnergyConfig {
         self.logging.validate()?;
         self.hover.validate()?;
         non_negative("receiver power P_rx (W)", self.rx_power_w)?;
+        if let Some(l) = &self.linear {
+            positive("linear energy per metre (J/m)", l.j_per_m)?;
+            non_negative("linear energy per cell (J)", l.j_per_cell)?;
+        }
         if let Some(v) = &self.vertical {
             positive("climb speed (m/s)", v.climb_speed_mps)?;
             positive("descent speed (m/s)", v.descent_speed_mps)?;

@@ -42,7 +42,8 @@ mod mission;
 mod propulsion;
 
 pub use config::{
-    Battery, CruiseSpeed, EnergyConfig, PAPER_CELL_SIZE_M, PowerSource, VerticalConfig,
+    Battery, CruiseSpeed, EnergyConfig, LinearEnergy, PAPER_CELL_SIZE_M, PowerSource,
+    VerticalConfig,
 };
 pub use error::EnergyError;
 pub use link::{DataLogging, HoverConfig, LinkConfig, SensorBacklog};

@@ -172,6 +172,8 @@ pub struct MissionEnergyModel {
     budget_j: f64,
     vertical_j: f64,
     vertical_s: f64,
+    /// The linear model's energy per cell visited, J (`None`: the physical model).
+    per_cell_j: Option<f64>,
     link: LinkConfig,
     logging: DataLogging,
     hover: HoverConfig,
@@ -212,7 +214,10 @@ impl MissionEnergyModel {
             power,
             cruise_speed_mps,
             cruise_power_w,
-            energy_per_metre_j: cruise_power_w / cruise_speed_mps,
+            energy_per_metre_j: config
+                .linear
+                .map_or(cruise_power_w / cruise_speed_mps, |l| l.j_per_m),
+            per_cell_j: config.linear.map(|l| l.j_per_cell),
             hover_power_w,
             rx_power_w: config.rx_power_w,
             budget_j: config.battery.usable_j(),
@@ -280,14 +285,19 @@ impl MissionEnergyModel {
         &self.hover
     }
 
-    /// Travel energy between two points at cruise speed, P(V)·distance/V, J.
+    /// Travel energy between two points at cruise speed, P(V)·distance/V (the linear model:
+    /// its energy per metre · distance), J.
     pub fn travel_energy_j(&self, from: LocalPoint, to: LocalPoint) -> f64 {
         self.energy_per_metre_j * distance_m(&from, &to)
     }
 
-    /// Service energy of hovering `hover_s` seconds at a cell, (P(0) + P_rx)·hover_s, J.
+    /// Service energy of hovering `hover_s` seconds at a cell, (P(0) + P_rx)·hover_s, J (the
+    /// linear model: its energy per cell, whatever the hover time).
     pub fn service_energy_j(&self, hover_s: f64) -> f64 {
-        (self.hover_power_w + self.rx_power_w) * hover_s
+        match self.per_cell_j {
+            Some(j) => j,
+            None => (self.hover_power_w + self.rx_power_w) * hover_s,
+        }
     }
 
     /// Collection at a cell whose sensors have `sensors` waiting: upload time, hover time and
@@ -423,8 +433,10 @@ impl MissionEnergyModel {
             previous = to;
         }
         for v in route {
-            let hover_j = self.hover_power_w * v.hover_s;
-            let comm_j = self.rx_power_w * v.hover_s;
+            let (hover_j, comm_j) = match self.per_cell_j {
+                Some(j) => (j, 0.0),
+                None => (self.hover_power_w * v.hover_s, self.rx_power_w * v.hover_s),
+            };
             cells.push(CellEnergy {
                 hover_s: v.hover_s,
                 hover_j,
@@ -703,5 +715,42 @@ mod tests {
                 prop_assert!(b.distance_m <= a.distance_m + 1e-9 && b.total_j <= a.total_j + tol);
             }
         }
+    }
+
+    #[test]
+    fn the_linear_model_charges_per_metre_and_per_cell() {
+        let cfg = EnergyConfig {
+            linear: Some(crate::LinearEnergy {
+                j_per_m: 10.0,
+                j_per_cell: 1_000.0,
+            }),
+            ..EnergyConfig::paper()
+        };
+        let m = MissionEnergyModel::new(&cfg).unwrap();
+        let base = LocalPoint::new(0.0, 0.0);
+        let visits = [
+            CellVisit {
+                centre: LocalPoint::new(300.0, 0.0),
+                hover_s: 30.0,
+            },
+            CellVisit {
+                centre: LocalPoint::new(300.0, 400.0),
+                hover_s: 95.0,
+            },
+        ];
+        let e = m.breakdown(base, &visits).unwrap();
+        assert!(
+            (e.total_j - (10.0 * 1_200.0 + 2_000.0)).abs() < 1e-9,
+            "{e:?}"
+        );
+        assert!((m.service_energy_j(95.0) - 1_000.0).abs() < 1e-12);
+        let bad = EnergyConfig {
+            linear: Some(crate::LinearEnergy {
+                j_per_m: -1.0,
+                j_per_cell: 0.0,
+            }),
+            ..EnergyConfig::paper()
+        };
+        assert!(MissionEnergyModel::new(&bad).is_err());
     }
 }
