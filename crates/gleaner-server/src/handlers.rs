@@ -234,7 +234,9 @@ pub async fn score(
         dry_run: b.dry_run,
     };
     let doc = s
-        .run(move |p| Ok(gleaner_wire::convert::scoring(&app::score(p, &request)?)))
+        .run_write(request.dry_run, move |p| {
+            Ok(gleaner_wire::convert::scoring(&app::score(p, &request)?))
+        })
         .await?;
     Ok(Json(doc))
 }
@@ -321,13 +323,21 @@ pub async fn plan(
             .acquire()
             .await
             .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    let preset = match b.energy_preset.as_deref() {
+        None | Some("") => None,
+        Some(p @ ("paper" | "large-pack")) => Some(p.to_string()),
+        Some(other) => {
+            return Err(ApiError::bad_request(
+                Some("energy_preset"),
+                format!("energy preset {other:?}: expected paper or large-pack"),
+            ));
+        }
+    };
     let doc = s
-        .run(move |p| {
-            Ok(gleaner_wire::convert::planned_mission(&app::plan(
-                p,
-                &request,
-                clock_now(),
-            )?))
+        .run_write(request.dry_run, move |p| {
+            Ok(gleaner_wire::convert::planned_mission(
+                &app::plan_with_preset(p, &request, preset.as_deref(), clock_now())?,
+            ))
         })
         .await?;
     Ok(Json(doc))
@@ -358,7 +368,7 @@ pub async fn explore(
             .await
             .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
     let doc = s
-        .run(move |p| {
+        .run_write(request.dry_run, move |p| {
             Ok(gleaner_wire::convert::exploration(&app::explore(
                 p,
                 &request,
@@ -730,7 +740,7 @@ pub async fn ingest(
         now: None,
     };
     let doc = s
-        .run(move |p| {
+        .run_write(false, move |p| {
             let out = app::ingest(p, &request, clock_now(), &app::Silent)
                 .map_err(|e| upload.client_names(e.into()));
             Ok(IngestDoc::from_app(&out?))
@@ -774,7 +784,7 @@ pub async fn record(
         amend: flag(&upload, "amend")?,
     };
     let doc = s
-        .run(move |p| {
+        .run_write(false, move |p| {
             let out = app::record_flight(p, &request, clock_now(), &app::Silent)
                 .map_err(|e| upload.client_names(e.into()));
             Ok(RecordDoc::from_app(&out?))

@@ -77,7 +77,8 @@ pub struct ServerConfig {
     pub max_upload_bytes: usize,
     /// Longest planner time limit a request may ask for, s.
     pub max_time_limit_s: f64,
-    /// Open projects kept for reuse.
+    /// Projects opened at start-up and shared by the requests (at most this many use cases
+    /// run at once).
     pub pool_size: usize,
 }
 
