@@ -148,28 +148,46 @@ pub async fn project(State(s): State<AppState>) -> ApiResult<Json<ProjectDoc>> {
 /// (`gleaner.field` version 1).
 #[utoipa::path(get, path = "/api/v1/field", tag = "project",
     responses((status = 200, body = FieldDoc), (status = 500, body = ErrorBody)))]
-pub async fn field(State(s): State<AppState>) -> ApiResult<Json<FieldDoc>> {
-    let doc = s
-        .run(|p| Ok(gleaner_wire::convert::field(&app::field_view(p)?)))
+pub async fn field(State(s): State<AppState>) -> ApiResult<Response> {
+    let bytes = s
+        .cached("field", |p| {
+            to_json(&gleaner_wire::convert::field(&app::field_view(p)?))
+        })
         .await?;
-    Ok(Json(doc))
+    Ok(json_response(bytes))
+}
+
+/// Serialises a document.
+fn to_json<T: serde::Serialize>(doc: &T) -> ApiResult<Vec<u8>> {
+    serde_json::to_vec(doc).map_err(|e| ApiError::internal(format!("serialising: {e}")))
+}
+
+/// A JSON response from serialised bytes.
+fn json_response(bytes: Bytes) -> Response {
+    let mut r = bytes.into_response();
+    r.headers_mut().insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("application/json"),
+    );
+    r
 }
 
 /// The cell table with its metadata, by cell id (as `gleaner cells --json`).
 #[utoipa::path(get, path = "/api/v1/cells", tag = "project",
     responses((status = 200, body = Vec<CellRowDoc>), (status = 500, body = ErrorBody)))]
-pub async fn cells(State(s): State<AppState>) -> ApiResult<Json<Vec<CellRowDoc>>> {
-    let rows = s
-        .run(|p| {
+pub async fn cells(State(s): State<AppState>) -> ApiResult<Response> {
+    let bytes = s
+        .cached("cells", |p| {
             let view = app::field_view(p)?;
-            Ok(view
+            let rows: Vec<CellRowDoc> = view
                 .cells
                 .iter()
                 .map(|c| gleaner_wire::convert::cell_row(c, view.cell_size_m))
-                .collect())
+                .collect();
+            to_json(&rows)
         })
         .await?;
-    Ok(Json(rows))
+    Ok(json_response(bytes))
 }
 
 /// How much of a cell's series to return.

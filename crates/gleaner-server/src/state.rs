@@ -2,8 +2,13 @@
 //! token and the limits. Use cases run on tokio's blocking threads (the store is
 //! synchronous), so a long planning request never holds up the reads.
 
+use std::collections::HashMap;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use axum::body::Bytes;
 
 use gleaner_app::Project;
 use tokio::sync::Semaphore;
@@ -37,7 +42,16 @@ pub(crate) struct Inner {
     /// One planning or exploration search at a time: they use a core each for seconds, and
     /// queueing them keeps a core for the reads.
     pub(crate) planning: Semaphore,
+    /// Bumped after every write through this server.
+    generation: AtomicU64,
+    /// Serialised answers of the large reads, with the generation they were computed at.
+    cache: Mutex<HashMap<&'static str, (u64, Instant, Bytes)>>,
 }
+
+/// How long a cached read is served without recomputing it when nothing was written through
+/// this server: the bound on how late a write by another process (a CLI command on the same
+/// project) shows.
+pub const CACHE_TTL: Duration = Duration::from_secs(1);
 
 impl AppState {
     /// State for the project in `config.project`, with `config.pool_size` (at least 1)
@@ -57,6 +71,8 @@ impl AppState {
             max_time_limit_s: config.max_time_limit_s,
             writer: tokio::sync::Mutex::new(()),
             planning: Semaphore::new(1),
+            generation: AtomicU64::new(0),
+            cache: Mutex::new(HashMap::new()),
         })))
     }
 
@@ -85,7 +101,34 @@ impl AppState {
             return self.run(f).await;
         }
         let _writer = self.0.writer.lock().await;
-        self.run(f).await
+        let out = self.run(f).await;
+        // Even a failed write is assumed to have changed something: the cache only costs a
+        // recomputation.
+        self.0.generation.fetch_add(1, Ordering::SeqCst);
+        out
+    }
+
+    /// The serialised answer of the read `key`, recomputed by `f` when something was written
+    /// through this server since, or when it is older than [`CACHE_TTL`].
+    pub async fn cached(
+        &self,
+        key: &'static str,
+        f: impl FnOnce(&mut Opened) -> ApiResult<Vec<u8>> + Send + 'static,
+    ) -> ApiResult<Bytes> {
+        let generation = self.0.generation.load(Ordering::SeqCst);
+        if let Ok(cache) = self.0.cache.lock()
+            && let Some((g, at, bytes)) = cache.get(key)
+            && *g == generation
+            && at.elapsed() < CACHE_TTL
+        {
+            return Ok(bytes.clone());
+        }
+        let started = Instant::now();
+        let bytes = Bytes::from(self.run(f).await?);
+        if let Ok(mut cache) = self.0.cache.lock() {
+            cache.insert(key, (generation, started, bytes.clone()));
+        }
+        Ok(bytes)
     }
 
     /// Runs `f` on a pooled project on a blocking thread, once a project is free. A use case
