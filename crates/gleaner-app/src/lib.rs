@@ -70,6 +70,7 @@ pub use knowledge::{History, Knowledge, knowledge};
 pub use migrate::{MigrateOutcome, migrate};
 pub use plan::{
     Baseline, PlanRequest, PlannedMission, energy_model, flight_profile, parse_planner, plan,
+    plan_with_preset,
 };
 pub use progress::{Progress, Silent};
 pub use project::{Project, database};

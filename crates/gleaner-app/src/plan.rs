@@ -220,6 +220,18 @@ pub fn plan<S: Store>(
     request: &PlanRequest,
     clock_now: UnixSeconds,
 ) -> Result<PlannedMission> {
+    plan_with_preset(project, request, None, clock_now)
+}
+
+/// [`plan`] with the battery budget of another energy preset (`paper`, `large-pack`) in
+/// place of `[energy] preset`; fields set in `[energy]` still override the preset's values.
+/// `None` is [`plan`].
+pub fn plan_with_preset<S: Store>(
+    project: &mut Project<S>,
+    request: &PlanRequest,
+    energy_preset: Option<&str>,
+    clock_now: UnixSeconds,
+) -> Result<PlannedMission> {
     let settings = project.settings().clone();
     let planner = match request.planner {
         Some(p) => p,
@@ -280,7 +292,15 @@ pub fn plan<S: Store>(
         .map(|s| &s.knowledge)
         .or(file_knowledge.as_ref())
         .ok_or_else(|| AppError::Invalid("nothing known at the mission time".into()))?;
-    let model = energy_model(project)?;
+    let model = match energy_preset {
+        None => energy_model(project)?,
+        Some(preset) => {
+            let mut energy = settings.energy.clone();
+            energy.preset = preset.to_string();
+            MissionEnergyModel::new(&energy.to_core()?)
+                .map_err(|e| AppError::core("energy preset", e))?
+        }
+    };
     let profile = flight_profile(project, &model)?;
     let services = services(&model, k, t)?;
     let candidates: Vec<Candidate> = k

@@ -261,7 +261,7 @@ function renderCell(d) {
 function planBody(dryRun) {
   const f = new FormData($("plan-form"));
   const b = { dry_run: dryRun };
-  for (const k of ["at", "history_until", "solver"]) if (f.get(k)) b[k] = f.get(k);
+  for (const k of ["at", "history_until", "solver", "energy_preset"]) if (f.get(k)) b[k] = f.get(k);
   for (const k of ["time_limit_s"]) if (f.get(k) !== "") b[k] = Number(f.get(k));
   for (const k of ["seed", "iterations"]) if (f.get(k) !== "") b[k] = parseInt(f.get(k), 10);
   return b;

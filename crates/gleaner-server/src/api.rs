@@ -83,6 +83,8 @@ pub struct PlanBody {
     pub seed: Option<u64>,
     /// Stop the search after this many iterations (machine-independent routes).
     pub iterations: Option<u64>,
+    /// Battery budget preset: `paper` or `large-pack` [default: the project's `[energy]`].
+    pub energy_preset: Option<String>,
     /// Plan without storing the mission (the dashboard's preview).
     #[serde(default)]
     pub dry_run: bool,

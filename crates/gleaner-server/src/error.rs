@@ -118,6 +118,10 @@ impl From<AppError> for ApiError {
                 SE::UnknownSensor(_) | SE::UnknownModality(_) | SE::UnitMismatch { .. } => {
                     Self::bad_request(Some("files"), reason)
                 }
+                // Another process (a CLI command) held the database past the busy timeout.
+                SE::Backend(text) if text.contains("database is locked") => Self::unavailable(
+                    format!("{reason}: another process is writing to the project; try again"),
+                ),
                 _ => Self::internal(reason),
             },
             _ => Self::internal(reason),

@@ -148,28 +148,46 @@ pub async fn project(State(s): State<AppState>) -> ApiResult<Json<ProjectDoc>> {
 /// (`gleaner.field` version 1).
 #[utoipa::path(get, path = "/api/v1/field", tag = "project",
     responses((status = 200, body = FieldDoc), (status = 500, body = ErrorBody)))]
-pub async fn field(State(s): State<AppState>) -> ApiResult<Json<FieldDoc>> {
-    let doc = s
-        .run(|p| Ok(gleaner_wire::convert::field(&app::field_view(p)?)))
+pub async fn field(State(s): State<AppState>) -> ApiResult<Response> {
+    let bytes = s
+        .cached("field", |p| {
+            to_json(&gleaner_wire::convert::field(&app::field_view(p)?))
+        })
         .await?;
-    Ok(Json(doc))
+    Ok(json_response(bytes))
+}
+
+/// Serialises a document.
+fn to_json<T: serde::Serialize>(doc: &T) -> ApiResult<Vec<u8>> {
+    serde_json::to_vec(doc).map_err(|e| ApiError::internal(format!("serialising: {e}")))
+}
+
+/// A JSON response from serialised bytes.
+fn json_response(bytes: Bytes) -> Response {
+    let mut r = bytes.into_response();
+    r.headers_mut().insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("application/json"),
+    );
+    r
 }
 
 /// The cell table with its metadata, by cell id (as `gleaner cells --json`).
 #[utoipa::path(get, path = "/api/v1/cells", tag = "project",
     responses((status = 200, body = Vec<CellRowDoc>), (status = 500, body = ErrorBody)))]
-pub async fn cells(State(s): State<AppState>) -> ApiResult<Json<Vec<CellRowDoc>>> {
-    let rows = s
-        .run(|p| {
+pub async fn cells(State(s): State<AppState>) -> ApiResult<Response> {
+    let bytes = s
+        .cached("cells", |p| {
             let view = app::field_view(p)?;
-            Ok(view
+            let rows: Vec<CellRowDoc> = view
                 .cells
                 .iter()
                 .map(|c| gleaner_wire::convert::cell_row(c, view.cell_size_m))
-                .collect())
+                .collect();
+            to_json(&rows)
         })
         .await?;
-    Ok(Json(rows))
+    Ok(json_response(bytes))
 }
 
 /// How much of a cell's series to return.
@@ -234,7 +252,9 @@ pub async fn score(
         dry_run: b.dry_run,
     };
     let doc = s
-        .run(move |p| Ok(gleaner_wire::convert::scoring(&app::score(p, &request)?)))
+        .run_write(request.dry_run, move |p| {
+            Ok(gleaner_wire::convert::scoring(&app::score(p, &request)?))
+        })
         .await?;
     Ok(Json(doc))
 }
@@ -322,13 +342,21 @@ pub async fn plan(
             .acquire()
             .await
             .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    let preset = match b.energy_preset.as_deref() {
+        None | Some("") => None,
+        Some(p @ ("paper" | "large-pack")) => Some(p.to_string()),
+        Some(other) => {
+            return Err(ApiError::bad_request(
+                Some("energy_preset"),
+                format!("energy preset {other:?}: expected paper or large-pack"),
+            ));
+        }
+    };
     let doc = s
-        .run(move |p| {
-            Ok(gleaner_wire::convert::planned_mission(&app::plan(
-                p,
-                &request,
-                clock_now(),
-            )?))
+        .run_write(request.dry_run, move |p| {
+            Ok(gleaner_wire::convert::planned_mission(
+                &app::plan_with_preset(p, &request, preset.as_deref(), clock_now())?,
+            ))
         })
         .await?;
     Ok(Json(doc))
@@ -359,7 +387,7 @@ pub async fn explore(
             .await
             .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
     let doc = s
-        .run(move |p| {
+        .run_write(request.dry_run, move |p| {
             Ok(gleaner_wire::convert::exploration(&app::explore(
                 p,
                 &request,
@@ -731,7 +759,7 @@ pub async fn ingest(
         now: None,
     };
     let doc = s
-        .run(move |p| {
+        .run_write(false, move |p| {
             let out = app::ingest(p, &request, clock_now(), &app::Silent)
                 .map_err(|e| upload.client_names(e.into()));
             Ok(IngestDoc::from_app(&out?))
@@ -775,7 +803,7 @@ pub async fn record(
         amend: flag(&upload, "amend")?,
     };
     let doc = s
-        .run(move |p| {
+        .run_write(false, move |p| {
             let out = app::record_flight(p, &request, clock_now(), &app::Silent)
                 .map_err(|e| upload.client_names(e.into()));
             Ok(RecordDoc::from_app(&out?))

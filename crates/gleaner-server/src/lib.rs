@@ -9,7 +9,9 @@
 //!   CLI), finishing the requests in flight.
 //! - Every use case runs on a blocking thread over a small pool of open projects
 //!   ([`AppState`]); planning and exploration searches queue one at a time, so reads keep
-//!   being answered while a mission is planned.
+//!   being answered while a mission is planned. Writes through the server run one at a time;
+//!   the large reads (`/cells`, `/field`) are cached until the next write and for at most
+//!   [`state::CACHE_TTL`].
 //! - Security: [`ServerConfig::check`] refuses a non-loopback address without a token; every
 //!   request that writes needs `Authorization: Bearer <token>` ([`auth`], constant-time
 //!   compare, never logged); uploads are size-limited and saved under sanitised names in a
@@ -34,7 +36,7 @@ pub mod client;
 pub mod dashboard;
 mod error;
 pub mod handlers;
-mod state;
+pub mod state;
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -77,7 +79,8 @@ pub struct ServerConfig {
     pub max_upload_bytes: usize,
     /// Longest planner time limit a request may ask for, s.
     pub max_time_limit_s: f64,
-    /// Open projects kept for reuse.
+    /// Projects opened at start-up and shared by the requests (at most this many use cases
+    /// run at once).
     pub pool_size: usize,
 }
 

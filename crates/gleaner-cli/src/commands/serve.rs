@@ -39,7 +39,7 @@ pub struct ServeArgs {
     max_time_limit: f64,
 }
 
-/// Runs the server until ctrl-c; prints the dashboard's address (with the token in the URL's
+/// Runs the server until ctrl-c or SIGTERM; prints the dashboard's address (with the token in the URL's
 /// fragment when the token was generated here, so it never reaches a log).
 pub fn run(args: ServeArgs) -> Result<()> {
     let mut generated = false;
@@ -75,6 +75,7 @@ pub fn run(args: ServeArgs) -> Result<()> {
                 .unwrap_or_else(|_| "info,tower_http=debug".into()),
         )
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
@@ -94,11 +95,29 @@ pub fn run(args: ServeArgs) -> Result<()> {
             (None, _) => println!("dashboard: http://{addr}/  (read-only)"),
         }
         println!("API: http://{addr}/api/v1/openapi.json · stop with ctrl-c");
-        gleaner_server::serve(listener, &config, async {
-            tokio::signal::ctrl_c().await.ok();
-        })
-        .await?;
+        gleaner_server::serve(listener, &config, shutdown_signal()).await?;
         println!("stopped");
         Ok(())
     })
+}
+
+/// Completes on ctrl-c (SIGINT) or, on Unix, SIGTERM (a service manager's stop).
+async fn shutdown_signal() {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{SignalKind, signal};
+        match signal(SignalKind::terminate()) {
+            Ok(mut term) => {
+                tokio::select! {
+                    _ = tokio::signal::ctrl_c() => {}
+                    _ = term.recv() => {}
+                }
+            }
+            Err(_) => {
+                tokio::signal::ctrl_c().await.ok();
+            }
+        }
+    }
+    #[cfg(not(unix))]
+    tokio::signal::ctrl_c().await.ok();
 }

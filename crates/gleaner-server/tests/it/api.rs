@@ -446,6 +446,17 @@ fn every_error_code() {
         (r.status, error(&r).1.as_deref()),
         (400, Some("time_limit_s"))
     );
+    let r = c
+        .post_json(
+            "/api/v1/plan",
+            &json!({"dry_run": true, "energy_preset": "huge"}),
+            None,
+        )
+        .unwrap();
+    assert_eq!(
+        (r.status, error(&r).1.as_deref()),
+        (400, Some("energy_preset"))
+    );
     let r = c.get("/api/v1/missions/abc").unwrap();
     assert_eq!((r.status, error(&r).1.as_deref()), (400, Some("mission")));
     let r = c.get("/api/v1/cells/nowhere").unwrap();

@@ -96,7 +96,7 @@ fn dashboard_in_headless_chromium() {
             json!({
                 "binary": which("chromium").unwrap(),
                 "args": ["--headless=new", "--no-sandbox", "--disable-gpu",
-                         "--disable-dev-shm-usage", "--window-size=1400,1100",
+                         "--disable-dev-shm-usage", "--window-size=1400,1560",
                          "--no-first-run", "--no-default-browser-check"],
                 "prefs": {
                     "download.default_directory": downloads.path(),

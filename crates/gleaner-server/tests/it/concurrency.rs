@@ -78,7 +78,7 @@ fn scoring_planning_and_recording_race_and_leave_the_store_consistent() {
     let mut reader = server.client();
     for _ in 0..20 {
         let r = reader.get("/api/v1/missions").unwrap();
-        assert_eq!(r.status, 200);
+        assert_eq!(r.status, 200, "{}", r.text());
         let n = r.json().unwrap().as_array().unwrap().len();
         assert!(n == 1 || n == 2, "{n} missions");
     }
