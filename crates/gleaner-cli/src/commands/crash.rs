@@ -43,6 +43,9 @@ pub struct CrashArgs {
     /// Working directory for the trial projects [default: a temporary directory].
     #[arg(long)]
     pub work: Option<PathBuf>,
+    /// Use cases to test.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [UseCase::Ingest, UseCase::Plan, UseCase::Record])]
+    pub use_cases: Vec<UseCase>,
     /// The shared data directory [default: GLEANER_DATA_DIR or ../shared/data].
     #[arg(long, env = "GLEANER_DATA_DIR", default_value = "../shared/data")]
     pub data: PathBuf,
@@ -60,10 +63,14 @@ pub enum Backends {
 }
 
 /// The use cases under test.
-#[derive(Clone, Copy, Debug)]
-enum UseCase {
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum UseCase {
+    /// `gleaner ingest` of half the CAF stations' 2011 files into a project holding the other
+    /// half.
     Ingest,
+    /// `gleaner plan` at 2012-01-01 (seed 1, 200 iterations) on all of 2011.
     Plan,
+    /// `gleaner record` of mission 1 with the visited stations' January 2012 readings.
     Record,
 }
 
@@ -133,7 +140,7 @@ pub fn run(args: &CrashArgs) -> Result<(String, bool)> {
     };
     let mut trial = 0usize;
     for pg in backends {
-        for case in [UseCase::Ingest, UseCase::Plan, UseCase::Record] {
+        for &case in &args.use_cases {
             let (steps, tally) = sweep(&fixture, case, pg, args.kill_points, &work, &mut trial)?;
             writeln!(
                 report,
