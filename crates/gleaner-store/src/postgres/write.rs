@@ -561,6 +561,8 @@ pub(super) fn upsert_cell_metadata(
         )
         .db()?;
     for md in metadata {
+        // One write step per cell's metadata rows (crash-safety harness).
+        crate::failpoint::step();
         let ck = cell_key(&md.cell)?;
         let s = md.scores.as_ref();
         c.execute(
