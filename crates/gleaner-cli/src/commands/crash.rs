@@ -425,7 +425,7 @@ fn inspect(dir: &Path, database: &Option<String>) -> Result<(Vec<String>, String
         if m.mission.stops.is_empty() {
             problems.push(format!("mission {} without stops", m.id));
         }
-        if (m.status == app::MissionStatus::Flown) != !m.visits.is_empty() {
+        if (m.status == app::MissionStatus::Flown) == m.visits.is_empty() {
             problems.push(format!(
                 "mission {} {:?} with {} visits",
                 m.id,
