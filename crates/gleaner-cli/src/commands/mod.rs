@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod cells;
+pub mod crash;
 pub mod demo;
 pub mod export;
 pub mod migrate;

@@ -330,6 +330,9 @@ fn insert_mission(c: &mut Transaction<'_>, m: &NewMission, id: Option<i64>) -> R
     let p = &m.profile;
     // The same 64 bits as a signed integer (BIGINT is signed).
     let seed = m.seed as i64;
+    // The next id is max + 1, like SQLite's, not the identity sequence: sequences are not
+    // transactional, so a rolled-back plan would leave a gap and a rerun a different id. Safe
+    // because the project's writers are serialised by its advisory lock.
     let id: i64 = c
         .query_one(
             "INSERT INTO missions (created_at, kind, planned_at, solver, seed,
@@ -339,7 +342,7 @@ fn insert_mission(c: &mut Transaction<'_>, m: &NewMission, id: Option<i64>) -> R
                  flight_time_s, return_distance_m, status, flown_at, summary_json, id)
              VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17,
                      $18, $19, $20, $21, $22, $23, $24, $25, $26, NULL, NULL,
-                     COALESCE($27, nextval(pg_get_serial_sequence('missions', 'id'))))
+                     COALESCE($27, (SELECT COALESCE(MAX(id), 0) + 1 FROM missions)))
              RETURNING id",
             &[
                 &m.created_at,
@@ -561,6 +564,8 @@ pub(super) fn upsert_cell_metadata(
         )
         .db()?;
     for md in metadata {
+        // One write step per cell's metadata rows (crash-safety harness).
+        crate::failpoint::step();
         let ck = cell_key(&md.cell)?;
         let s = md.scores.as_ref();
         c.execute(

@@ -512,6 +512,8 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
         )
         .db()?;
     for md in metadata {
+        // One write step per cell's metadata rows (crash-safety harness).
+        crate::failpoint::step();
         let ck = cell_key(&md.cell)?;
         let s = md.scores.as_ref();
         row.execute(params![
