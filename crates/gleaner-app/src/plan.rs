@@ -128,7 +128,8 @@ enum Given<'a> {
 
 /// The energy model of the project's `[energy]` settings.
 pub fn energy_model<S: Store>(project: &Project<S>) -> Result<MissionEnergyModel> {
-    project.settings().energy.mission_model()
+    MissionEnergyModel::new(&project.settings().energy.to_core()?)
+        .map_err(|e| AppError::core("[energy] settings", e))
 }
 
 /// How the aircraft flies missions of this project: base, altitudes, cruise speed.

@@ -244,13 +244,6 @@ pub struct EnergySection {
     pub reading_interval_s: Option<f64>,
     /// Bytes per logged reading.
     pub bytes_per_reading: Option<f64>,
-    /// Energy model: `physical` (default when left out: the propulsion curve, hover and
-    /// receiver power) or `linear` (`j_per_m` + `j_per_cell`, for comparison with other studies).
-    pub model: Option<String>,
-    /// Linear model only: energy per metre flown, J/m.
-    pub j_per_m: Option<f64>,
-    /// Linear model only: energy per cell visited, J.
-    pub j_per_cell: Option<f64>,
 }
 
 impl Default for EnergySection {
@@ -269,9 +262,6 @@ impl Default for EnergySection {
             noise_power_dbm: None,
             reading_interval_s: None,
             bytes_per_reading: None,
-            model: None,
-            j_per_m: None,
-            j_per_cell: None,
         }
     }
 }
@@ -396,43 +386,6 @@ impl EnergySection {
         set(&mut c.logging.bytes_per_reading, self.bytes_per_reading);
         Ok(c)
     }
-
-    /// The linear model's coefficients when `model = "linear"`, `None` for the physical model.
-    /// Refuses an unknown model, a linear model missing a coefficient, and coefficients given
-    /// to the physical model (they would be silently ignored).
-    pub fn linear(&self) -> Result<Option<gleaner_energy::LinearEnergy>> {
-        match self.model.as_deref().unwrap_or("physical") {
-            "physical" => {
-                if self.j_per_m.is_some() || self.j_per_cell.is_some() {
-                    bail!(
-                        "energy.j_per_m / energy.j_per_cell apply only to energy.model = \"linear\" (the model is \"physical\")"
-                    );
-                }
-                Ok(None)
-            }
-            "linear" => match (self.j_per_m, self.j_per_cell) {
-                (Some(j_per_m), Some(j_per_cell)) => Ok(Some(gleaner_energy::LinearEnergy {
-                    j_per_m,
-                    j_per_cell,
-                })),
-                _ => bail!(
-                    "energy.model = \"linear\" needs both energy.j_per_m (J per metre flown) and energy.j_per_cell (J per cell visited)"
-                ),
-            },
-            other => bail!("energy.model = {other:?}: expected \"physical\" or \"linear\""),
-        }
-    }
-
-    /// The mission energy model of these settings: physical, or linear (see
-    /// [`EnergySection::linear`]).
-    pub fn mission_model(&self) -> Result<gleaner_energy::MissionEnergyModel> {
-        let config = self.to_core()?;
-        match self.linear()? {
-            None => gleaner_energy::MissionEnergyModel::new(&config),
-            Some(l) => gleaner_energy::MissionEnergyModel::with_linear(&config, l),
-        }
-        .map_err(|e| AppError::core("[energy] settings", e))
-    }
 }
 
 impl Settings {
@@ -539,7 +492,8 @@ impl Settings {
         crate::plan::parse_planner(&self.planner.solver)?;
         self.utility.to_core(&[])?;
         let energy = self.energy.to_core()?;
-        self.energy.mission_model()?;
+        gleaner_energy::MissionEnergyModel::new(&energy)
+            .map_err(|e| AppError::core("[energy] settings", e))?;
         let alt = energy.link.altitude_m;
         if !(alt.is_finite() && alt > 0.0 && alt <= 120.0) {
             bail!("energy.altitude_m = {alt} must be in (0, 120] metres");
@@ -555,7 +509,7 @@ impl Settings {
         let u = &self.utility;
         let e = &self.energy;
         let p = &self.planner;
-        let values: [(&str, Option<f64>); 34] = [
+        let values: [(&str, Option<f64>); 32] = [
             ("field.base_alt_m", Some(f.base_alt_m)),
             ("field.cell_size_m", Some(f.cell_size_m)),
             ("field.neighbour_k", Some(f.neighbour_k as f64)),
@@ -594,8 +548,6 @@ impl Settings {
             ("energy.noise_power_dbm", e.noise_power_dbm),
             ("energy.reading_interval_s", e.reading_interval_s),
             ("energy.bytes_per_reading", e.bytes_per_reading),
-            ("energy.j_per_m", e.j_per_m),
-            ("energy.j_per_cell", e.j_per_cell),
             ("planner.time_limit_s", Some(p.time_limit_s)),
             (
                 "energy.cruise",
@@ -716,8 +668,6 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ("energy.reading_interval_s", 1.0, 31_622_400.0, false, "s"),
     ("energy.bytes_per_reading", 0.0, 1e6, true, "bytes"),
     ("energy.cruise", 0.0, 50.0, true, "m/s"),
-    ("energy.j_per_m", 0.0, 1e6, false, "J/m"),
-    ("energy.j_per_cell", 0.0, 1e9, false, "J"),
     ("planner.time_limit_s", 0.0, 86_400.0, false, "s"),
 ];
 
@@ -777,32 +727,6 @@ pub fn parse_utm_zone(s: &str) -> Result<(u8, bool)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn linear_energy_setting() {
-        let default = EnergySection::default();
-        assert!(default.linear().unwrap().is_none());
-        assert!(default.mission_model().unwrap().linear().is_none());
-        let section: EnergySection =
-            toml::from_str("model = \"linear\"\nj_per_m = 15.0\nj_per_cell = 4000.0\n").unwrap();
-        let m = section.mission_model().unwrap();
-        assert_eq!(m.energy_per_metre_j(), 15.0);
-        assert_eq!(m.service_energy_j(30.0), 4_000.0);
-        let missing: EnergySection =
-            toml::from_str("model = \"linear\"\nj_per_m = 15.0\n").unwrap();
-        let err = missing.linear().unwrap_err().to_string();
-        assert!(err.contains("energy.j_per_cell"), "{err}");
-        let stray: EnergySection = toml::from_str("j_per_m = 15.0\n").unwrap();
-        assert!(stray.linear().unwrap_err().to_string().contains("linear"));
-        let unknown: EnergySection = toml::from_str("model = \"cubic\"\n").unwrap();
-        assert!(unknown.linear().unwrap_err().to_string().contains("cubic"));
-        let err = check_range("energy.j_per_m", -1.0).unwrap_err().to_string();
-        assert!(
-            err.contains("energy.j_per_m = -1") && err.contains("J/m"),
-            "{err}"
-        );
-        assert!(check_range("energy.j_per_cell", 2e9).is_err());
-    }
 
     #[test]
     fn utm_zones() {

@@ -13,9 +13,6 @@
 //!   [`MissionEnergy`] breakdown (E_t, E_h, E_c, E_r, per leg and per cell, budget,
 //!   utilisation, feasibility) of a route, and the additive travel / service costs an
 //!   orienteering planner needs.
-//! - [`LinearEnergy`]: the plain linear model (J per metre flown + J per cell visited), for
-//!   comparison with other studies; [`MissionEnergyModel::with_linear`] uses it in place of the
-//!   physical costs.
 //!
 //! Planning (which cells, in which order, in how many sorties) lives in `gleaner-mission`.
 //!
@@ -39,7 +36,6 @@
 
 mod config;
 mod error;
-mod linear;
 mod link;
 pub mod minimise;
 mod mission;
@@ -49,7 +45,6 @@ pub use config::{
     Battery, CruiseSpeed, EnergyConfig, PAPER_CELL_SIZE_M, PowerSource, VerticalConfig,
 };
 pub use error::EnergyError;
-pub use linear::{LINEAR_MAX_J, LinearEnergy};
 pub use link::{DataLogging, HoverConfig, LinkConfig, SensorBacklog};
 pub use mission::{
     CellEnergy, CellService, CellVisit, LegEnergy, MissionEnergy, MissionEnergyModel,

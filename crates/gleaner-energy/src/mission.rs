@@ -5,7 +5,6 @@ use gleaner_field::{CellId, Field, LocalPoint};
 
 use crate::config::{CruiseSpeed, EnergyConfig};
 use crate::error::{EnergyError, finite, non_negative};
-use crate::linear::LinearEnergy;
 use crate::link::{DataLogging, HoverConfig, LinkConfig, SensorBacklog};
 use crate::propulsion::PowerModel;
 
@@ -176,7 +175,6 @@ pub struct MissionEnergyModel {
     link: LinkConfig,
     logging: DataLogging,
     hover: HoverConfig,
-    linear: Option<LinearEnergy>,
 }
 
 impl MissionEnergyModel {
@@ -223,40 +221,7 @@ impl MissionEnergyModel {
             link: config.link,
             logging: config.logging,
             hover: config.hover,
-            linear: None,
         })
-    }
-
-    /// The plain linear model instead of the physical one: travel costs `linear.j_per_m` J per
-    /// metre, every visited cell costs `linear.j_per_cell` J whatever its hover time (reported
-    /// as hover energy, with 0 J receiver energy), and there is no climb/descent energy. The
-    /// budget, link, logging, hover-time rule and cruise speed (for flight times) still come
-    /// from `config`.
-    ///
-    /// ```
-    /// use gleaner_energy::{CellVisit, EnergyConfig, LinearEnergy, MissionEnergyModel};
-    /// use gleaner_field::LocalPoint;
-    /// let linear = LinearEnergy { j_per_m: 10.0, j_per_cell: 1_000.0 };
-    /// let m = MissionEnergyModel::with_linear(&EnergyConfig::paper(), linear).unwrap();
-    /// let route = [CellVisit { centre: LocalPoint::new(30.0, 40.0), hover_s: 30.0 }];
-    /// let e = m.breakdown(LocalPoint::new(0.0, 0.0), &route).unwrap();
-    /// assert_eq!(e.total_j, 10.0 * 100.0 + 1_000.0); // J
-    /// ```
-    ///
-    /// # Errors
-    /// As [`MissionEnergyModel::new`], and [`LinearEnergy::validate`].
-    pub fn with_linear(config: &EnergyConfig, linear: LinearEnergy) -> Result<Self, EnergyError> {
-        linear.validate()?;
-        let mut m = Self::new(config)?;
-        m.energy_per_metre_j = linear.j_per_m;
-        m.vertical_j = 0.0;
-        m.linear = Some(linear);
-        Ok(m)
-    }
-
-    /// The linear model in use, if any (see [`MissionEnergyModel::with_linear`]).
-    pub fn linear(&self) -> Option<&LinearEnergy> {
-        self.linear.as_ref()
     }
 
     /// The propulsion power curve.
@@ -274,7 +239,7 @@ impl MissionEnergyModel {
         self.cruise_power_w
     }
 
-    /// Travel energy per metre at cruise speed P(V)/V (the linear model's `j_per_m`), J/m.
+    /// Travel energy per metre at cruise speed P(V)/V, J/m.
     pub fn energy_per_metre_j(&self) -> f64 {
         self.energy_per_metre_j
     }
@@ -320,22 +285,9 @@ impl MissionEnergyModel {
         self.energy_per_metre_j * distance_m(&from, &to)
     }
 
-    /// Service energy of hovering `hover_s` seconds at a cell, (P(0) + P_rx)·hover_s, J (the
-    /// linear model's `j_per_cell` whatever `hover_s`).
+    /// Service energy of hovering `hover_s` seconds at a cell, (P(0) + P_rx)·hover_s, J.
     pub fn service_energy_j(&self, hover_s: f64) -> f64 {
-        match &self.linear {
-            Some(l) => l.j_per_cell,
-            None => (self.hover_power_w + self.rx_power_w) * hover_s,
-        }
-    }
-
-    /// Hover and receiver energy of `hover_s` seconds at one cell, J (linear model: `j_per_cell`
-    /// and 0).
-    fn service_split_j(&self, hover_s: f64) -> (f64, f64) {
-        match &self.linear {
-            Some(l) => (l.j_per_cell, 0.0),
-            None => (self.hover_power_w * hover_s, self.rx_power_w * hover_s),
-        }
+        (self.hover_power_w + self.rx_power_w) * hover_s
     }
 
     /// Collection at a cell whose sensors have `sensors` waiting: upload time, hover time and
@@ -346,7 +298,8 @@ impl MissionEnergyModel {
     pub fn cell_service(&self, sensors: &[SensorBacklog]) -> Result<CellService, EnergyError> {
         let collection_s = self.link.collection_time_s(sensors)?;
         let hover_s = self.hover.hover_s(collection_s);
-        let (hover_j, comm_j) = self.service_split_j(hover_s);
+        let hover_j = self.hover_power_w * hover_s;
+        let comm_j = self.rx_power_w * hover_s;
         Ok(CellService {
             collection_s,
             hover_s,
@@ -470,7 +423,8 @@ impl MissionEnergyModel {
             previous = to;
         }
         for v in route {
-            let (hover_j, comm_j) = self.service_split_j(v.hover_s);
+            let hover_j = self.hover_power_w * v.hover_s;
+            let comm_j = self.rx_power_w * v.hover_s;
             cells.push(CellEnergy {
                 hover_s: v.hover_s,
                 hover_j,
@@ -557,43 +511,6 @@ mod tests {
         assert!((e.comm_j - 15.0).abs() < 1e-12);
         assert!((e.flight_time_s - (100.0 / m.cruise_speed_mps() + 30.0)).abs() < 1e-9);
         assert_eq!(e.legs.len(), 2);
-    }
-
-    #[test]
-    fn linear_model_hand_checked() {
-        let linear = LinearEnergy {
-            j_per_m: 20.0,
-            j_per_cell: 3_000.0,
-        };
-        let m = MissionEnergyModel::with_linear(&EnergyConfig::paper(), linear).unwrap();
-        // B(0,0) -> (30,40) -> (30,0) -> B: 50 + 40 + 30 = 120 m; 2 cells.
-        let e = m
-            .breakdown(
-                LocalPoint::new(0.0, 0.0),
-                &visits(&[(30.0, 40.0), (30.0, 0.0)], 45.0),
-            )
-            .unwrap();
-        assert_eq!(e.total_j, 20.0 * 120.0 + 2.0 * 3_000.0);
-        assert_eq!((e.hover_j, e.comm_j, e.vertical_j), (6_000.0, 0.0, 0.0));
-        assert_eq!(m.service_energy_j(999.0), 3_000.0);
-        assert_eq!(
-            m.travel_cost_matrix(&[LocalPoint::new(0.0, 0.0), LocalPoint::new(3.0, 4.0)])
-                .get(0, 1),
-            100.0
-        );
-        assert_eq!(m.usable_budget_j(), 66_500.0);
-        // Climb and descent are not part of the linear model.
-        let cfg = EnergyConfig {
-            vertical: Some(VerticalConfig::default()),
-            ..EnergyConfig::paper()
-        };
-        let v = MissionEnergyModel::with_linear(&cfg, linear).unwrap();
-        assert_eq!(v.sortie_fixed_j(), 0.0);
-        let bad = LinearEnergy {
-            j_per_m: f64::INFINITY,
-            ..linear
-        };
-        assert!(MissionEnergyModel::with_linear(&EnergyConfig::paper(), bad).is_err());
     }
 
     #[test]
