@@ -355,7 +355,7 @@ pub fn plan<S: Store>(
         weights,
         anomaly_form: anomaly_form.clone(),
         total_score: plan.total_score,
-        profile: profile.clone(),
+        profile,
         energy: breakdown(&plan.energy),
         return_distance_m: if plan.order.is_empty() {
             0.0
