@@ -69,8 +69,8 @@ pub use init::{DEFAULT_CELL_SIZE_M, InitOutcome, InitRequest, init, init_store, 
 pub use knowledge::{History, Knowledge, knowledge};
 pub use migrate::{MigrateOutcome, migrate};
 pub use plan::{
-    Baseline, PlanRequest, PlannedMission, energy_model, flight_profile, parse_planner, plan,
-    plan_with_preset,
+    Baseline, ExtraSortie, MAX_SORTIES, PlanRequest, PlannedMission, energy_model, flight_profile,
+    parse_planner, plan, plan_with_preset,
 };
 pub use progress::{Progress, Silent};
 pub use project::{Project, database};

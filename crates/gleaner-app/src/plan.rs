@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use gleaner_energy::{CellService, MissionEnergy, MissionEnergyModel};
 use gleaner_field::{LocalPoint, UnixSeconds};
-use gleaner_mission::{Candidate, MissionPlan, PlanOptions, Planner, plan_mission};
+use gleaner_mission::{Candidate, MissionPlan, PlanOptions, Planner, plan_mission, plan_sorties};
 use gleaner_store::{
     EnergyBreakdown, FlightProfile, MissionId, MissionKind, NewMission, StopRecord, Store,
     StoreWrite,
@@ -53,6 +53,22 @@ pub struct PlanRequest {
     pub max_iterations: Option<u64>,
     /// Plan only; write nothing.
     pub dry_run: bool,
+    /// Sorties this mission day (battery swaps) [default 1], in 1..=MAX_SORTIES: disjoint
+    /// routes from the base, each within the budget, planned together by the team orienteering
+    /// solver; each is stored as its own mission.
+    pub sorties: Option<usize>,
+}
+
+/// Most sorties one `plan` may ask for.
+pub const MAX_SORTIES: usize = 20;
+
+/// A sortie after the first, when several are planned.
+#[derive(Debug, Clone)]
+pub struct ExtraSortie {
+    /// Its id, unless a dry run.
+    pub id: Option<MissionId>,
+    /// The sortie as stored.
+    pub mission: NewMission,
 }
 
 /// The headline numbers of a comparison plan.
@@ -84,6 +100,8 @@ pub struct PlannedMission {
     pub seed: u64,
     /// Time limit, seconds.
     pub time_limit_s: f64,
+    /// Sorties 2..=K when several were asked for (`mission` is sortie 1); empty otherwise.
+    pub extra_sorties: Vec<ExtraSortie>,
 }
 
 /// Largest magnitude of a user-given score (the utility engine's scores are a few units).
@@ -324,8 +342,15 @@ pub fn plan_with_preset<S: Store>(
     .with_time_limit_secs(time_limit_s)
     .map_err(|e| AppError::core("planner", e))?;
     let base = LocalPoint::new(0.0, 0.0);
-    let plan = plan_mission(&model, base, &candidates, &options)
+    let sorties = request.sorties.unwrap_or(1);
+    if !(1..=MAX_SORTIES).contains(&sorties) {
+        return Err(AppError::Invalid(format!(
+            "sorties = {sorties}: allowed 1..={MAX_SORTIES}"
+        )));
+    }
+    let mut plans = plan_sorties(&model, base, &candidates, &options, sorties)
         .map_err(|e| AppError::core("planner", e))?;
+    let plan = plans.remove(0);
     let greedy = plan_mission(
         &model,
         base,
@@ -337,15 +362,18 @@ pub fn plan_with_preset<S: Store>(
     )
     .map_err(|e| AppError::core("planner", e))?;
     check_feasible(&plan)?;
+    for p in &plans {
+        check_feasible(p)?;
+    }
     let terms = scoring.as_ref().map(|s| s.terms.as_slice());
-    let mission = NewMission {
+    let new_mission = |plan: &MissionPlan| NewMission {
         created_at: clock_now,
         kind: MissionKind::Adaptive,
         planned_at: t,
         solver: planner.name().to_string(),
         seed,
         weights,
-        anomaly_form,
+        anomaly_form: anomaly_form.clone(),
         total_score: plan.total_score,
         profile,
         energy: breakdown(&plan.energy),
@@ -356,6 +384,14 @@ pub fn plan_with_preset<S: Store>(
         },
         stops: stops(k, &plan.order, &plan.energy, &services, &scores, terms),
     };
+    let mission = new_mission(&plan);
+    let extra_sorties: Vec<ExtraSortie> = plans
+        .iter()
+        .map(|p| ExtraSortie {
+            id: None,
+            mission: new_mission(p),
+        })
+        .collect();
     let mut planned = PlannedMission {
         id: None,
         mission,
@@ -369,6 +405,7 @@ pub fn plan_with_preset<S: Store>(
         },
         seed,
         time_limit_s,
+        extra_sorties,
     };
     if !request.dry_run {
         let rows = match &planned.scoring {
@@ -379,13 +416,23 @@ pub fn plan_with_preset<S: Store>(
             None => Vec::new(),
         };
         let mission = &planned.mission;
-        let id = project.store_mut().write(|tx| {
+        let extra = &planned.extra_sorties;
+        // Every sortie in one transaction: all stored or none.
+        let (id, extra_ids) = project.store_mut().write(|tx| {
             if !rows.is_empty() {
                 score::write_scoring(tx, rows)?;
             }
-            Ok::<_, AppError>(tx.create_mission(mission)?)
+            let id = tx.create_mission(mission)?;
+            let mut extra_ids = Vec::with_capacity(extra.len());
+            for e in extra {
+                extra_ids.push(tx.create_mission(&e.mission)?);
+            }
+            Ok::<_, AppError>((id, extra_ids))
         })?;
         planned.id = Some(id);
+        for (e, id) in planned.extra_sorties.iter_mut().zip(extra_ids) {
+            e.id = Some(id);
+        }
     }
     Ok(planned)
 }

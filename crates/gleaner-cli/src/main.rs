@@ -179,6 +179,11 @@ enum Command {
         /// Do not store the mission.
         #[arg(long)]
         dry_run: bool,
+        /// Sorties this mission day (battery swaps), 1..=20: disjoint routes from the base, each
+        /// within the budget, planned together to maximise total S; each is stored as its own
+        /// mission (export/record each by its id). With K > 1, --json prints an array.
+        #[arg(long, default_value_t = 1)]
+        sorties: usize,
     },
     /// Plan the exploration phase: as few sorties as possible, each within the battery, that
     /// together visit every cell; each sortie is stored as an exploration mission.
@@ -695,6 +700,7 @@ fn run(cli: Cli) -> Result<()> {
             iterations,
             json,
             dry_run,
+            sorties,
         } => {
             let mut p = project.open()?;
             let planned = app::plan(
@@ -709,6 +715,7 @@ fn run(cli: Cli) -> Result<()> {
                     seed,
                     max_iterations: iterations,
                     dry_run,
+                    sorties: Some(sorties),
                 },
                 clock_now(),
             )?;
@@ -716,7 +723,22 @@ fn run(cli: Cli) -> Result<()> {
                 warn(s);
             }
             let doc = gleaner_wire::convert::planned_mission(&planned);
-            json.emit(&doc, "serialising the mission", || plan::table(&doc))?;
+            if planned.extra_sorties.is_empty() {
+                json.emit(&doc, "serialising the mission", || plan::table(&doc))?;
+            } else {
+                let mut docs = vec![doc];
+                docs.extend(planned.extra_sorties.iter().map(|e| {
+                    gleaner_wire::convert::mission_doc(
+                        e.id,
+                        &e.mission,
+                        if e.id.is_some() { "planned" } else { "dry-run" },
+                        None,
+                    )
+                }));
+                json.emit(&docs, "serialising the sorties", || {
+                    plan::sorties_table(&docs)
+                })?;
+            }
         }
         Command::Explore {
             project,

@@ -360,6 +360,46 @@ fn plan_from_a_scores_file_and_its_errors() {
 }
 
 #[test]
+fn plan_several_sorties() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    // A battery for about one cell per sortie, so the second sortie must collect more.
+    let toml = dir.path().join("gleaner.toml");
+    let text = std::fs::read_to_string(&toml).expect("read settings");
+    std::fs::write(
+        &toml,
+        text.replace("[energy]\n", "[energy]\nbattery_j = 12000\n"),
+    )
+    .expect("write settings");
+    let one = ok(&["plan", "--project", p, "--iterations", "200", "--dry-run"]);
+    assert!(!one.contains("sorties:"), "{one}");
+    let out = ok(&[
+        "plan",
+        "--project",
+        p,
+        "--sorties",
+        "2",
+        "--iterations",
+        "200",
+    ]);
+    let summary = &out[out.find("2 sorties:").expect("summary")..];
+    insta::assert_snapshot!("plan_two_sorties", summary);
+    // Each sortie is its own stored mission, exportable on its own.
+    ok(&[
+        "export",
+        "--project",
+        p,
+        "--mission",
+        "2",
+        "--out",
+        s(&dir.path().join("m2")),
+    ]);
+    let err = fail(&["plan", "--project", p, "--sorties", "0"]);
+    assert!(err.contains("sorties = 0"), "{err}");
+}
+
+#[test]
 fn user_probabilities_are_validated() {
     let dir = small_project();
     let p = s(dir.path());

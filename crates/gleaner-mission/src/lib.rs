@@ -182,6 +182,23 @@ pub fn plan_mission(
     candidates: &[Candidate],
     options: &PlanOptions,
 ) -> Result<MissionPlan, PlanError> {
+    let mut plans = plan_sorties(model, base, candidates, options, 1)?;
+    Ok(plans.remove(0))
+}
+
+/// Plans `sorties` (>= 1; 0 is taken as 1) disjoint sorties from `base` over `candidates` — one
+/// per battery, each within the usable budget — maximising their total score with the team
+/// orienteering solver (one vehicle per sortie). Returns one plan per sortie, in the solver's
+/// route order; a sortie with nothing worth visiting has an empty order and 0 J. With
+/// `sorties == 1` this is [`plan_mission`].
+pub fn plan_sorties(
+    model: &MissionEnergyModel,
+    base: LocalPoint,
+    candidates: &[Candidate],
+    options: &PlanOptions,
+    sorties: usize,
+) -> Result<Vec<MissionPlan>, PlanError> {
+    let sorties = sorties.max(1);
     for (index, c) in candidates.iter().enumerate() {
         if !c.score.is_finite() {
             return Err(PlanError::InvalidCandidate {
@@ -202,7 +219,7 @@ pub fn plan_mission(
         .filter(|&k| candidates[k].score > 0.0)
         .collect();
     let started = Instant::now();
-    let mut order = Vec::new();
+    let mut orders: Vec<Vec<usize>> = vec![Vec::new(); sorties];
     let budget = model.usable_budget_j() - model.sortie_fixed_j();
     if !chosen.is_empty() && budget > 0.0 {
         let mut points = Vec::with_capacity(chosen.len() + 1);
@@ -219,7 +236,8 @@ pub fn plan_mission(
         );
         let problem = Problem::new(cost, rewards, budget)?
             .with_service_costs(service)?
-            .with_endpoints(0, 0)?;
+            .with_endpoints(0, 0)?
+            .with_vehicles(sorties)?;
         let mut solve_options = SolveOptions::default()
             .with_time_limit(options.time_limit)
             .with_seed(options.seed);
@@ -230,35 +248,41 @@ pub fn plan_mission(
             Planner::Exact => SolverKind::Exact,
         };
         let solution = solve(&problem, kind, &solve_options)?;
-        order = solution.routes[0]
-            .iter()
-            .filter(|&&node| node != 0)
-            .map(|&node| chosen[node - 1])
-            .collect();
+        for (order, route) in orders.iter_mut().zip(&solution.routes) {
+            *order = route
+                .iter()
+                .filter(|&&node| node != 0)
+                .map(|&node| chosen[node - 1])
+                .collect();
+        }
     }
     let solve_seconds = started.elapsed().as_secs_f64();
-    let visits: Vec<CellVisit> = order
-        .iter()
-        .map(|&k| CellVisit {
-            centre: candidates[k].centre,
-            hover_s: candidates[k].hover_s,
-        })
-        .collect();
-    let energy = model.breakdown(base, &visits)?;
-    if !energy.feasible {
-        return Err(PlanError::Infeasible {
-            total_j: energy.total_j,
-            budget_j: energy.budget_j,
+    let mut plans = Vec::with_capacity(sorties);
+    for order in orders {
+        let visits: Vec<CellVisit> = order
+            .iter()
+            .map(|&k| CellVisit {
+                centre: candidates[k].centre,
+                hover_s: candidates[k].hover_s,
+            })
+            .collect();
+        let energy = model.breakdown(base, &visits)?;
+        if !energy.feasible {
+            return Err(PlanError::Infeasible {
+                total_j: energy.total_j,
+                budget_j: energy.budget_j,
+            });
+        }
+        plans.push(MissionPlan {
+            total_score: order.iter().map(|&k| candidates[k].score).sum(),
+            order,
+            energy,
+            considered: chosen.len(),
+            planner: options.planner,
+            solve_seconds,
         });
     }
-    Ok(MissionPlan {
-        total_score: order.iter().map(|&k| candidates[k].score).sum(),
-        order,
-        energy,
-        considered: chosen.len(),
-        planner: options.planner,
-        solve_seconds,
-    })
+    Ok(plans)
 }
 
 #[cfg(test)]
@@ -292,6 +316,68 @@ mod tests {
             time_limit: Duration::from_secs(30),
             seed: 1,
         }
+    }
+
+    /// 40 cells on a 40 m grid, scores varying, for the several-sorties tests.
+    fn grid40() -> Vec<Candidate> {
+        (0..40)
+            .map(|k| {
+                cell(
+                    40.0 * f64::from(k % 8) + 20.0,
+                    40.0 * f64::from(k / 8) + 20.0,
+                    1.0 + f64::from((k * 7) % 5),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn one_sortie_is_the_single_sortie_plan() {
+        let cells = grid40();
+        let one = plan_sorties(
+            &model(),
+            LocalPoint::default(),
+            &cells,
+            &opts(Planner::Default),
+            1,
+        )
+        .unwrap();
+        let single = plan(&cells, Planner::Default).unwrap();
+        assert_eq!(one.len(), 1);
+        assert_eq!(one[0].order, single.order);
+        assert_eq!(one[0].energy, single.energy);
+    }
+
+    #[test]
+    fn two_sorties_are_disjoint_within_budget_and_collect_more() {
+        let cells = grid40();
+        let m = model();
+        let two = plan_sorties(
+            &m,
+            LocalPoint::default(),
+            &cells,
+            &opts(Planner::Default),
+            2,
+        )
+        .unwrap();
+        let single = plan(&cells, Planner::Default).unwrap();
+        assert_eq!(two.len(), 2);
+        let mut seen = std::collections::HashSet::new();
+        for p in &two {
+            assert!(p.energy.feasible && p.energy.total_j <= m.usable_budget_j());
+            assert!(!p.order.is_empty());
+            for &c in &p.order {
+                assert!(seen.insert(c), "cell {c} visited twice");
+            }
+        }
+        let total: f64 = two.iter().map(|p| p.total_score).sum();
+        assert!(
+            total >= single.total_score,
+            "{total} < {}",
+            single.total_score
+        );
+        // The paper battery fits at most 13 such cells, so a second battery must add cells.
+        assert!(seen.len() > single.order.len());
     }
 
     #[test]

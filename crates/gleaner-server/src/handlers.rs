@@ -336,6 +336,7 @@ pub async fn plan(
         seed: b.seed,
         max_iterations: b.iterations,
         dry_run: b.dry_run,
+        sorties: None,
     };
     let _slot =
         s.0.planning

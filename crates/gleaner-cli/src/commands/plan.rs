@@ -3,6 +3,39 @@
 use gleaner_wire::MissionDoc;
 use gleaner_wire::docs::ExplorationDoc;
 
+/// Several sorties of one mission day: each sortie's table, then one line per sortie (id,
+/// cells, S, energy in J) and the totals.
+pub fn sorties_table(docs: &[MissionDoc]) -> String {
+    let mut out = String::new();
+    for (k, m) in docs.iter().enumerate() {
+        out.push_str(&format!("== sortie {} of {}\n", k + 1, docs.len()));
+        out.push_str(&table(m));
+        out.push('\n');
+    }
+    out.push_str(&format!("{} sorties:\n", docs.len()));
+    for (k, m) in docs.iter().enumerate() {
+        let cells: Vec<&str> = m.stops.iter().map(|s| s.cell.as_str()).collect();
+        out.push_str(&format!(
+            "  sortie {}{}: {} cells, S = {:.3}, {:.1} J of {:.1} J: {}\n",
+            k + 1,
+            m.mission_id
+                .map_or(String::new(), |id| format!(" (mission #{id})")),
+            m.stops.len(),
+            m.total_score,
+            m.energy.total_j,
+            m.energy.budget_j,
+            cells.join(" ")
+        ));
+    }
+    out.push_str(&format!(
+        "total: {} cells, S = {:.3}, {:.1} J",
+        docs.iter().map(|m| m.stops.len()).sum::<usize>(),
+        docs.iter().map(|m| m.total_score).sum::<f64>(),
+        docs.iter().map(|m| m.energy.total_j).sum::<f64>()
+    ));
+    out
+}
+
 /// A mission summary (SPEC §6) as a readable table.
 pub fn table(m: &MissionDoc) -> String {
     let mut out = format!(
