@@ -104,6 +104,70 @@
 //! foreign-key lookups cost about 40% of bulk-insert CPU time.
 #![deny(missing_docs)]
 
+/// The [`StoreRead`] methods, each a call of the backend's shared query in its own `read`
+/// module through the type's own `read` wrapper (the paths resolve where the macro is used:
+/// `sqlite.rs` and `postgres.rs`). Defined before those modules so both can use it.
+macro_rules! store_read_methods {
+    () => {
+        fn schema_version(&self) -> Result<i64> {
+            self.read(read::schema_version)
+        }
+        fn sensors(&self) -> Result<Vec<SensorRecord>> {
+            self.read(read::sensors)
+        }
+        fn modalities(&self) -> Result<Vec<ModalityRecord>> {
+            self.read(read::modalities)
+        }
+        fn readings_for(
+            &self,
+            modality: Option<&Modality>,
+            range: RangeInclusive<UnixSeconds>,
+        ) -> Result<ReadingBatch> {
+            self.read(|c| read::readings_for(c, modality, range))
+        }
+        fn readings_of_sensors(
+            &self,
+            sensors: &[SensorId],
+            range: RangeInclusive<UnixSeconds>,
+        ) -> Result<ReadingBatch> {
+            self.read(|c| read::readings_of_sensors(c, sensors, range))
+        }
+        fn reading_count(&self) -> Result<u64> {
+            self.read(read::reading_count)
+        }
+        fn ingests(&self) -> Result<Vec<IngestRecord>> {
+            self.read(read::ingests)
+        }
+        fn cells(&self) -> Result<Vec<CellRecord>> {
+            self.read(read::cells)
+        }
+        fn cell_metadata(&self) -> Result<Vec<CellMetadata>> {
+            self.read(read::cell_metadata)
+        }
+        fn sensor_last_collected(&self) -> Result<Vec<(SensorId, UnixSeconds)>> {
+            self.read(read::sensor_last_collected)
+        }
+        fn missions(&self) -> Result<Vec<MissionRecord>> {
+            self.read(|c| read::missions(c, None))
+        }
+        fn mission(&self, id: MissionId) -> Result<Option<MissionRecord>> {
+            self.read(|c| Ok(read::missions(c, Some(id))?.pop()))
+        }
+        fn config_get(&self, key: &str) -> Result<Option<String>> {
+            self.read(|c| read::config_get(c, key))
+        }
+        fn blob_get(&self, key: &str) -> Result<Option<Vec<u8>>> {
+            self.read(|c| read::blob_get(c, key))
+        }
+        fn config_entries(&self) -> Result<Vec<(String, String)>> {
+            self.read(read::config_entries)
+        }
+        fn blob_keys(&self) -> Result<Vec<String>> {
+            self.read(read::blob_keys)
+        }
+    };
+}
+
 mod any;
 mod checks;
 #[cfg(any(test, feature = "conformance"))]
