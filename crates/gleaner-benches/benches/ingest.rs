@@ -1,4 +1,6 @@
-//! Targets: generic long CSV parsing >= 1,000,000 readings/s; all 42 CAF daily files parsed.
+//! Targets: generic long CSV parsing >= 1,000,000 readings/s; all 42 CAF daily files parsed;
+//! the CAF readings inserted into a new store (SQLite, and PostgreSQL's binary `COPY` when
+//! `GLEANER_TEST_PG_URL` names a server: target >= 500,000 readings/s).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -73,60 +75,127 @@ fn long_csv(c: &mut Criterion) {
 /// What `gleaner ingest` does with the CAF daily files: parse all 42, then one store
 /// transaction (sensors, modalities, readings).
 fn caf_into_fresh_db(files: &[PathBuf], db: &std::path::Path) -> u64 {
-    use gleaner_store::{
-        ConflictPolicy, ModalityRecord, Reading, ReadingBatch, SensorRecord, SqliteStore, Store,
-        StoreWrite,
-    };
-    let mut all = gleaner_ingest::Readings::default();
-    for f in files {
-        all.append(
-            read_caf_daily(f, &IngestOptions::default())
-                .expect("parse")
-                .0,
-        );
-    }
-    let mut store = SqliteStore::open(db).expect("open");
-    let sensors: Vec<SensorRecord> = all
-        .sensors
-        .iter()
-        .map(|id| SensorRecord {
-            id: id.clone(),
-            position: gleaner_field::LatLon::new(46.78, -117.08).expect("valid"),
-            elevation_m: None,
-            source: "bench".into(),
-        })
-        .collect();
-    let modalities: Vec<ModalityRecord> = all
-        .modalities
-        .iter()
-        .map(|m| ModalityRecord {
-            modality: m.modality.clone(),
-            unit: m.unit.clone(),
-        })
-        .collect();
-    let batch = ReadingBatch {
-        sensors: all.sensors.clone(),
-        modalities: all.modalities.iter().map(|m| m.modality.clone()).collect(),
-        rows: all
-            .rows
-            .iter()
-            .map(|r| Reading {
-                sensor: r.sensor,
-                modality: r.modality,
-                t: r.t,
-                value: r.value,
-            })
-            .collect(),
-    };
-    store
-        .write(|tx| {
-            tx.upsert_sensors(&sensors)?;
-            tx.upsert_modalities(&modalities)?;
-            tx.insert_readings(&batch, ConflictPolicy::Fail)
-        })
-        .expect("insert")
-        .inserted
+    let rows = CafRows::parse(files);
+    let mut store = gleaner_store::SqliteStore::open(db).expect("open");
+    rows.insert(&mut store)
 }
 
-criterion_group!(benches, long_csv);
+/// The CAF daily readings as the store's input: sensors, modalities and one batch.
+struct CafRows {
+    sensors: Vec<gleaner_store::SensorRecord>,
+    modalities: Vec<gleaner_store::ModalityRecord>,
+    batch: gleaner_store::ReadingBatch,
+}
+
+impl CafRows {
+    fn parse(files: &[PathBuf]) -> Self {
+        use gleaner_store::{ModalityRecord, Reading, ReadingBatch, SensorRecord};
+        let mut all = gleaner_ingest::Readings::default();
+        for f in files {
+            all.append(
+                read_caf_daily(f, &IngestOptions::default())
+                    .expect("parse")
+                    .0,
+            );
+        }
+        let sensors = all
+            .sensors
+            .iter()
+            .map(|id| SensorRecord {
+                id: id.clone(),
+                position: gleaner_field::LatLon::new(46.78, -117.08).expect("valid"),
+                elevation_m: None,
+                source: "bench".into(),
+            })
+            .collect();
+        let modalities = all
+            .modalities
+            .iter()
+            .map(|m| ModalityRecord {
+                modality: m.modality.clone(),
+                unit: m.unit.clone(),
+            })
+            .collect();
+        let batch = ReadingBatch {
+            sensors: all.sensors.clone(),
+            modalities: all.modalities.iter().map(|m| m.modality.clone()).collect(),
+            rows: all
+                .rows
+                .iter()
+                .map(|r| Reading {
+                    sensor: r.sensor,
+                    modality: r.modality,
+                    t: r.t,
+                    value: r.value,
+                })
+                .collect(),
+        };
+        CafRows {
+            sensors,
+            modalities,
+            batch,
+        }
+    }
+
+    /// One write transaction: sensors, modalities, readings; returns the readings inserted.
+    fn insert<S: gleaner_store::Store>(&self, store: &mut S) -> u64 {
+        use gleaner_store::{ConflictPolicy, StoreWrite};
+        store
+            .write(|tx| {
+                tx.upsert_sensors(&self.sensors)?;
+                tx.upsert_modalities(&self.modalities)?;
+                tx.insert_readings(&self.batch, ConflictPolicy::Fail)
+            })
+            .expect("insert")
+            .inserted
+    }
+}
+
+/// The 759,915 CAF daily readings, already parsed, inserted into a new project: SQLite, and
+/// PostgreSQL when `GLEANER_TEST_PG_URL` is set (a new schema per iteration, dropped after).
+fn store_insert(c: &mut Criterion) {
+    let files: Vec<PathBuf> = std::fs::read_dir(shared_data().join("caf/Daily"))
+        .expect("CAF data (set GLEANER_DATA_DIR)")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    let rows = CafRows::parse(&files);
+    let mut group = c.benchmark_group("store_insert");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(rows.batch.rows.len() as u64));
+    group.bench_function("caf_daily_sqlite", |b| {
+        b.iter_with_setup(
+            || tempfile::tempdir().expect("temp dir"),
+            |dir| {
+                let mut store =
+                    gleaner_store::SqliteStore::open(&dir.path().join("caf.db")).expect("open");
+                rows.insert(&mut store)
+            },
+        )
+    });
+    match std::env::var("GLEANER_TEST_PG_URL") {
+        Ok(url) => {
+            let mut k = 0u32;
+            let project = |k: u32| format!("bench_insert_{}_{k}", std::process::id());
+            group.bench_function("caf_daily_postgres_copy", |b| {
+                b.iter_with_setup(
+                    || {
+                        // The previous iteration's project is dropped here, untimed.
+                        gleaner_store::PgStore::drop_project(&url, &project(k)).expect("drop");
+                        k += 1;
+                        gleaner_store::PgStore::open(&url, &project(k)).expect("open")
+                    },
+                    |mut store| rows.insert(&mut store),
+                )
+            });
+            gleaner_store::PgStore::drop_project(&url, &project(k)).expect("drop");
+        }
+        Err(_) => eprintln!(
+            "store_insert/caf_daily_postgres_copy skipped: set GLEANER_TEST_PG_URL \
+             (scripts/pg-cluster.sh start; scripts/pg-cluster.sh env DIR)"
+        ),
+    }
+    group.finish();
+}
+
+criterion_group!(benches, long_csv, store_insert);
 criterion_main!(benches);

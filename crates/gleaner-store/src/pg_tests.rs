@@ -204,3 +204,104 @@ fn database_settings_name_a_backend_and_a_schema() {
     assert_eq!(schema_for_name("2024 trial"), "p_2024_trial");
     assert_eq!(schema_for_name("pg_farm"), "p_pg_farm");
 }
+
+/// Whether the project's `readings` table has its primary key (asked on a connection of
+/// its own).
+fn has_readings_pkey(store: &PgStore) -> bool {
+    ::postgres::Client::connect(&pg_test_url(), ::postgres::NoTls)
+        .unwrap()
+        .query_one(
+            "SELECT count(*) FROM pg_constraint c JOIN pg_namespace n ON n.oid = c.connamespace
+             WHERE c.conname = 'readings_pkey' AND c.contype = 'p' AND n.nspname = $1",
+            &[&store.project()],
+        )
+        .unwrap()
+        .get::<_, i64>(0)
+        == 1
+}
+
+/// `n` readings of `s` at t = t0, t0 + 1, ... with value t / 1000.
+fn run_of(s: &str, t0: i64, n: i64) -> ReadingBatch {
+    let rows: Vec<(String, i64)> = (t0..t0 + n).map(|t| (s.to_string(), t)).collect();
+    let rows: Vec<(&str, &str, i64, f64)> = rows
+        .iter()
+        .map(|(s, t)| (s.as_str(), "vw@30cm", *t, *t as f64 / 1000.0))
+        .collect();
+    batch(&rows)
+}
+
+#[test]
+fn a_bulk_load_classifies_like_an_indexed_table_and_restores_the_key() {
+    let mut fresh = Fresh::new();
+    let mut store = fresh.open("bulk");
+    let setup = |tx: &mut PgTx<'_>| -> Result<()> {
+        tx.upsert_sensors(&[sensor("a", 46.0, -117.0), sensor("b", 46.1, -117.0)])?;
+        tx.upsert_modalities(&[ModalityRecord {
+            modality: md("vw@30cm"),
+            unit: Some("m3/m3".into()),
+        }])?;
+        Ok(())
+    };
+    // A load that fails after its first large insert leaves nothing, the key in place.
+    let failed: Result<()> = store.write(|tx| {
+        setup(tx)?;
+        tx.insert_readings(&run_of("a", 0, 5000), ConflictPolicy::Fail)?;
+        Err(StoreError::Invalid {
+            what: "test",
+            detail: "abandoned".into(),
+        })
+    });
+    assert!(failed.is_err());
+    assert_eq!(store.reading_count().unwrap(), 0);
+    assert!(has_readings_pkey(&store));
+
+    let seen = store
+        .write(|tx| {
+            setup(tx)?;
+            assert!(!tx.bulk_loading());
+            let first = tx.insert_readings(&run_of("a", 0, 5000), ConflictPolicy::Fail)?;
+            assert!(
+                tx.bulk_loading(),
+                "a large insert into an empty table starts a load"
+            );
+            let other = tx.insert_readings(&run_of("b", 0, 5000), ConflictPolicy::Fail)?;
+            assert!(
+                tx.bulk_loading(),
+                "disjoint rows need no lookup and keep the load"
+            );
+            // Meets the load's rows: 10 identical (unchanged), 10 new.
+            let overlap = tx.insert_readings(&run_of("a", 4990, 20), ConflictPolicy::Fail)?;
+            assert!(
+                !tx.bulk_loading(),
+                "rows meeting the load's need the key back"
+            );
+            // A conflicting value is refused and the refusal changes nothing.
+            let conflict = tx.insert_readings(
+                &batch(&[("b", "vw@30cm", 10, 9.0), ("b", "vw@30cm", 99_999, 1.0)]),
+                ConflictPolicy::Fail,
+            );
+            assert!(
+                matches!(conflict, Err(StoreError::Conflicts(_))),
+                "{conflict:?}"
+            );
+            // A second large load after the key came back keeps it (the table is not empty).
+            let later = tx.insert_readings(&run_of("b", 10_000, 5000), ConflictPolicy::Fail)?;
+            Ok::<_, StoreError>((
+                first.inserted,
+                other.inserted,
+                overlap.inserted,
+                overlap.unchanged,
+                later.inserted,
+                tx.reading_count()?,
+            ))
+        })
+        .unwrap();
+    assert_eq!(seen, (5000, 5000, 10, 10, 5000, 15_010));
+    assert!(has_readings_pkey(&store));
+    assert_eq!(store.reading_count().unwrap(), 15_010);
+    // Stored rows are found again by the indexed path: re-inserting changes nothing.
+    let again = store
+        .write(|tx| tx.insert_readings(&run_of("b", 0, 5000), ConflictPolicy::Fail))
+        .unwrap();
+    assert_eq!((again.inserted, again.unchanged), (0, 5000));
+}

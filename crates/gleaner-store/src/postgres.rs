@@ -17,7 +17,11 @@
 //! - **Methods**: every write method runs in a savepoint of the transaction (PostgreSQL
 //!   aborts a whole transaction on a failed statement), after the same argument checks as
 //!   SQLite's (`crate::checks`), so both backends refuse the same inputs the same way.
-//! - **Bulk ingest**: new readings go in with one binary `COPY readings FROM STDIN`.
+//! - **Bulk ingest**: new readings go in with one binary `COPY readings FROM STDIN`. A large
+//!   insert into an empty `readings` table drops its primary key for the rest of the load and
+//!   builds it once, before the next read or the commit (`write::BulkLoad`); the drop is
+//!   transactional (a crash or rollback restores the key) but holds an exclusive lock on the
+//!   table until commit, so other connections' reads of that project wait for a first load.
 //! - **Migrations**: [`schema`], applied under the same advisory lock at open.
 
 mod read;
@@ -130,6 +134,9 @@ impl std::fmt::Debug for PgStore {
 /// the transaction's earlier writes stay.
 pub struct PgTx<'a> {
     tx: RefCell<Transaction<'a>>,
+    /// The bulk load in progress, if any: `readings` has no primary key until the next
+    /// read or the commit builds it again (see `write::BulkLoad`).
+    bulk: RefCell<Option<write::BulkLoad>>,
 }
 
 impl std::fmt::Debug for PgTx<'_> {
@@ -331,9 +338,18 @@ fn migrate(client: &mut Client, project: &str, lock_key: i64) -> Result<()> {
 }
 
 impl PgTx<'_> {
-    /// Runs the query `f` inside the transaction.
+    /// Whether a bulk load has the primary key of `readings` dropped (for tests).
+    #[cfg(test)]
+    pub(crate) fn bulk_loading(&self) -> bool {
+        self.bulk.borrow().is_some()
+    }
+
+    /// Runs the query `f` inside the transaction, after building again the primary key a
+    /// bulk load dropped (so every read sees an indexed table).
     fn read<T>(&self, f: impl FnOnce(&mut Transaction<'_>) -> Result<T>) -> Result<T> {
-        f(&mut self.tx.borrow_mut())
+        let mut tx = self.tx.borrow_mut();
+        write::restore_primary_key(&mut tx, &mut self.bulk.borrow_mut())?;
+        f(&mut tx)
     }
 
     /// Runs the writes `f` in a savepoint: all of them or, on error, none.
@@ -369,7 +385,12 @@ impl StoreWrite for PgTx<'_> {
         batch: &ReadingBatch,
         policy: ConflictPolicy,
     ) -> Result<InsertStats> {
-        self.atomically(|c| write::insert_readings(c, batch, policy))
+        // The bulk-load state changes only if the savepoint commits: a failed insert rolls
+        // back its own drop or rebuild of the primary key with everything else.
+        let mut bulk = self.bulk.get_mut().clone();
+        let stats = self.atomically(|c| write::insert_readings(c, batch, policy, &mut bulk))?;
+        *self.bulk.get_mut() = bulk;
+        Ok(stats)
     }
 
     fn record_ingest(&mut self, ingest: &IngestRecord) -> Result<i64> {
@@ -448,9 +469,11 @@ impl Store for PgStore {
         }
         let mut tx = PgTx {
             tx: RefCell::new(tx),
+            bulk: RefCell::new(None),
         };
         // On an error (or a panic) `tx` is dropped unfinished, which rolls it back.
         let out = f(&mut tx)?;
+        write::restore_primary_key(tx.tx.get_mut(), tx.bulk.get_mut())?;
         crate::failpoint::step();
         tx.tx.into_inner().commit().db()?;
         crate::failpoint::committed();
