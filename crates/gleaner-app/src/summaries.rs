@@ -92,8 +92,11 @@ pub(crate) fn refresh_cells<W: StoreWrite>(
         let batch = tx.readings_of_sensors(&cell.sensors, UnixSeconds::MIN..=UnixSeconds::MAX)?;
         // Cell series per modality: mean over the cell's sensors at each t (SPEC §2).
         let mut slots: BTreeMap<&Modality, BTreeMap<UnixSeconds, (f64, u32)>> = BTreeMap::new();
-        // Per sensor and modality: (count, first t, last t).
-        let mut per_series: HashMap<(u32, u32), (u64, UnixSeconds, UnixSeconds)> = HashMap::new();
+        // Per sensor and modality: (count, first t, last t). Ordered, so the pending volume
+        // is summed in the same order by every process (a hash map's order varies per run
+        // and changed the last bits of the sum).
+        let mut per_series: BTreeMap<(u32, u32), (u64, UnixSeconds, UnixSeconds)> =
+            BTreeMap::new();
         for r in &batch.rows {
             let Some(m) = batch.modalities.get(r.modality as usize) else {
                 continue;

@@ -27,7 +27,8 @@ fn sigkill_at_write_steps_leaves_whole_use_cases_on_both_backends() {
         "{report}\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    // 1 kill point (just before the commit, everything written) x 3 use cases x 2 backends.
-    assert!(report.contains("total: 6 kill points"), "{report}");
+    // 1 kill point (just before the commit, everything written) x 4 use cases (first ingest,
+    // ingest, plan, record) x 2 backends.
+    assert!(report.contains("total: 8 kill points"), "{report}");
     assert!(report.contains(" 0 failures"), "{report}");
 }

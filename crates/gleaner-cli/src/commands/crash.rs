@@ -44,7 +44,7 @@ pub struct CrashArgs {
     #[arg(long)]
     pub work: Option<PathBuf>,
     /// Use cases to test.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [UseCase::Ingest, UseCase::Plan, UseCase::Record])]
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [UseCase::FirstIngest, UseCase::Ingest, UseCase::Plan, UseCase::Record])]
     pub use_cases: Vec<UseCase>,
     /// The shared data directory [default: GLEANER_DATA_DIR or ../shared/data].
     #[arg(long, env = "GLEANER_DATA_DIR", default_value = "../shared/data")]
@@ -65,6 +65,9 @@ pub enum Backends {
 /// The use cases under test.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum UseCase {
+    /// `gleaner ingest` of half the CAF stations' 2011 files into a project holding no
+    /// readings yet (PostgreSQL's bulk load: the primary key dropped and built again).
+    FirstIngest,
     /// `gleaner ingest` of half the CAF stations' 2011 files into a project holding the other
     /// half.
     Ingest,
@@ -77,7 +80,17 @@ pub enum UseCase {
 impl UseCase {
     fn name(self) -> &'static str {
         match self {
+            Self::FirstIngest => "first-ingest",
             Self::Ingest => "ingest",
+            Self::Plan => "plan",
+            Self::Record => "record",
+        }
+    }
+
+    /// The `gleaner` subcommand it runs.
+    fn command(self) -> &'static str {
+        match self {
+            Self::FirstIngest | Self::Ingest => "ingest",
             Self::Plan => "plan",
             Self::Record => "record",
         }
@@ -102,9 +115,12 @@ pub struct Tally {
 /// The fixtures: starting projects (SQLite directories) and the use cases' arguments.
 struct Fixture {
     /// Starting project of each use case.
+    first_ingest_start: PathBuf,
     ingest_start: PathBuf,
     plan_start: PathBuf,
     record_start: PathBuf,
+    /// The files the first ingest stores.
+    first_files: Vec<PathBuf>,
     /// The files the ingest use case stores.
     ingest_files: Vec<PathBuf>,
     /// The flight's readings file.
@@ -215,15 +231,17 @@ fn fixture(data: &Path, dir: &Path) -> Result<Fixture> {
     }
     let (first, second) = files.split_at(files.len() / 2);
     let ingest_start = dir.join("ingest");
-    let (mut p, _) = app::init(&app::InitRequest {
+    let (p, _) = app::init(&app::InitRequest {
         dir: ingest_start.clone(),
         sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
         utm_zone: Some("11N".into()),
         name: Some("crash".into()),
         ..Default::default()
     })?;
-    ingest(&mut p, first)?;
     drop(p);
+    let first_ingest_start = dir.join("first-ingest");
+    copy_project(&ingest_start, &first_ingest_start)?;
+    ingest(&mut Project::open(&ingest_start)?, first)?;
     let plan_start = dir.join("plan");
     copy_project(&ingest_start, &plan_start)?;
     ingest(&mut Project::open(&plan_start)?, second)?;
@@ -258,9 +276,11 @@ fn fixture(data: &Path, dir: &Path) -> Result<Fixture> {
     let flight = dir.join("flight.csv");
     std::fs::write(&flight, csv)?;
     Ok(Fixture {
+        first_ingest_start,
         ingest_start,
         plan_start,
         record_start,
+        first_files: first.to_vec(),
         ingest_files: second.to_vec(),
         flight,
     })
@@ -341,11 +361,14 @@ fn run_child(
     report: Option<&Path>,
 ) -> Result<bool> {
     let mut cmd = Command::new(std::env::current_exe()?);
-    cmd.arg(case.name()).arg("--project").arg(dir);
+    cmd.arg(case.command()).arg("--project").arg(dir);
     if let Some(db) = database {
         cmd.arg("--database").arg(db);
     }
     match case {
+        UseCase::FirstIngest => {
+            cmd.args(&fixture.first_files);
+        }
         UseCase::Ingest => {
             cmd.args(&fixture.ingest_files);
         }
@@ -415,6 +438,41 @@ fn digest(store: &AnyStore) -> Result<String> {
     ))
 }
 
+/// The parts of two digests that differ (tables in [`digest`]'s order), for a failure report.
+fn differing_parts(a: &str, b: &str) -> String {
+    const PARTS: [&str; 10] = [
+        "sensors",
+        "modalities",
+        "readings",
+        "ingests",
+        "cells",
+        "cell metadata",
+        "sensor collection",
+        "missions",
+        "config",
+        "blobs",
+    ];
+    let (a, b): (Vec<&str>, Vec<&str>) = (a.split('|').collect(), b.split('|').collect());
+    let differing: Vec<String> = (0..a.len().max(b.len()))
+        .filter(|&k| a.get(k) != b.get(k))
+        .map(|k| {
+            let name = PARTS.get(k).copied().unwrap_or("?");
+            let (x, y) = (
+                a.get(k).copied().unwrap_or(""),
+                b.get(k).copied().unwrap_or(""),
+            );
+            let at = x.bytes().zip(y.bytes()).take_while(|(p, q)| p == q).count();
+            let show = |s: &str| {
+                s.get(at.saturating_sub(40)..(at + 80).min(s.len()))
+                    .unwrap_or("")
+                    .to_string()
+            };
+            format!("{name} (…{}… vs …{}…)", show(x), show(y))
+        })
+        .collect();
+    differing.join(", ")
+}
+
 /// The store of a trial project, its integrity problems and its digest.
 fn inspect(dir: &Path, database: &Option<String>) -> Result<(Vec<String>, String)> {
     let p = Project::open_with(dir, database.as_deref())?;
@@ -463,6 +521,7 @@ fn sweep(
     trial: &mut usize,
 ) -> Result<(u64, Tally)> {
     let start = match case {
+        UseCase::FirstIngest => &fixture.first_ingest_start,
         UseCase::Ingest => &fixture.ingest_start,
         UseCase::Plan => &fixture.plan_start,
         UseCase::Record => &fixture.record_start,
@@ -522,9 +581,10 @@ fn sweep(
                 Ok(_) => {
                     let (problems, state) = inspect(&dir, &db)?;
                     if !problems.is_empty() || state != after {
-                        tally
-                            .failures
-                            .push(format!("{label}: rerun ended elsewhere: {problems:?}"));
+                        tally.failures.push(format!(
+                            "{label}: rerun ended elsewhere: {problems:?}; differs in {}",
+                            differing_parts(&state, &after)
+                        ));
                     }
                 }
                 Err(e) => tally.failures.push(format!("{label}: rerun failed: {e}")),
