@@ -1,5 +1,5 @@
 //! The crash-safety harness in the test suite: one kill point (the commit) per use case on both
-//! backends (the full sweep is `gleaner crash-test --kill-points 34`, see BENCHMARKS.md). Needs
+//! backends (the full sweep is `gleaner crash-test --kill-points 30`, see BENCHMARKS.md). Needs
 //! the shared data and a PostgreSQL server (`GLEANER_TEST_PG_URL`; fails without one).
 
 use std::process::Command;
