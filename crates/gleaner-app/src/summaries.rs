@@ -95,8 +95,7 @@ pub(crate) fn refresh_cells<W: StoreWrite>(
         // Per sensor and modality: (count, first t, last t). Ordered, so the pending volume
         // is summed in the same order by every process (a hash map's order varies per run
         // and changed the last bits of the sum).
-        let mut per_series: BTreeMap<(u32, u32), (u64, UnixSeconds, UnixSeconds)> =
-            BTreeMap::new();
+        let mut per_series: BTreeMap<(u32, u32), (u64, UnixSeconds, UnixSeconds)> = BTreeMap::new();
         for r in &batch.rows {
             let Some(m) = batch.modalities.get(r.modality as usize) else {
                 continue;

@@ -88,6 +88,9 @@ pub struct PlanBody {
     /// Plan without storing the mission (the dashboard's preview).
     #[serde(default)]
     pub dry_run: bool,
+    /// Disjoint sorties on this mission day (battery swaps), 1..=20, each a battery's worth
+    /// and stored as its own mission: only with `POST /api/v1/plan/sorties` [default: 1].
+    pub sorties: Option<usize>,
 }
 
 /// An exploration request (`gleaner explore`).

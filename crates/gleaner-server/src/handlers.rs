@@ -303,8 +303,43 @@ pub async fn plan(
     body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<Json<MissionDoc>> {
     let b: PlanBody = json_body(body)?;
+    if b.sorties.is_some_and(|k| k != 1) {
+        return Err(ApiError::bad_request(
+            Some("sorties"),
+            "several sorties are planned by POST /api/v1/plan/sorties",
+        ));
+    }
+    let mut docs = plan_request(&s, &headers, b).await?;
+    Ok(Json(docs.swap_remove(0)))
+}
+
+/// Plans several disjoint sorties for one mission day (battery swaps; `sorties` in the body,
+/// 1..=20): the team orienteering planner shares the cells among them, each within one
+/// battery, and (unless `dry_run`) stores each as its own mission in one transaction. The
+/// answer lists them in flying order, as `gleaner plan --sorties K --json` does.
+#[utoipa::path(post, path = "/api/v1/plan/sorties", tag = "missions", request_body = PlanBody,
+    security((), ("bearer" = [])),
+    responses((status = 200, body = Vec<MissionDoc>), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 413, body = ErrorBody)))]
+pub async fn plan_sorties(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    body: Result<Bytes, BytesRejection>,
+) -> ApiResult<Json<Vec<MissionDoc>>> {
+    let b: PlanBody = json_body(body)?;
+    Ok(Json(plan_request(&s, &headers, b).await?))
+}
+
+/// The plan use case behind both plan routes: checks, one planning search at a time, the
+/// mission and any further sorties as wire documents, sortie 1 first (never empty).
+async fn plan_request(
+    s: &AppState,
+    headers: &HeaderMap,
+    b: PlanBody,
+) -> ApiResult<Vec<MissionDoc>> {
     if !b.dry_run {
-        authorize(s.0.token.as_ref(), &headers)?;
+        authorize(s.0.token.as_ref(), headers)?;
     }
     if let Some(t) = b.time_limit_s
         && !(t.is_finite() && t >= 0.0 && t <= s.0.max_time_limit_s)
@@ -336,7 +371,7 @@ pub async fn plan(
         seed: b.seed,
         max_iterations: b.iterations,
         dry_run: b.dry_run,
-        sorties: None,
+        sorties: b.sorties,
     };
     let _slot =
         s.0.planning
@@ -353,14 +388,20 @@ pub async fn plan(
             ));
         }
     };
-    let doc = s
-        .run_write(request.dry_run, move |p| {
-            Ok(gleaner_wire::convert::planned_mission(
-                &app::plan_with_preset(p, &request, preset.as_deref(), clock_now())?,
-            ))
-        })
-        .await?;
-    Ok(Json(doc))
+    s.run_write(request.dry_run, move |p| {
+        let planned = app::plan_with_preset(p, &request, preset.as_deref(), clock_now())?;
+        let mut docs = vec![gleaner_wire::convert::planned_mission(&planned)];
+        docs.extend(planned.extra_sorties.iter().map(|e| {
+            gleaner_wire::convert::mission_doc(
+                e.id,
+                &e.mission,
+                if e.id.is_some() { "planned" } else { "dry-run" },
+                None,
+            )
+        }));
+        Ok(docs)
+    })
+    .await
 }
 
 /// Plans the exploration phase: the fewest budget-feasible sorties that together visit every

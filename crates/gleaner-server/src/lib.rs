@@ -185,6 +185,7 @@ fn api_routes(max_upload_bytes: usize) -> (Router<AppState>, utoipa::openapi::Op
         .routes(routes!(handlers::missions))
         .routes(routes!(handlers::mission))
         .routes(routes!(handlers::plan))
+        .routes(routes!(handlers::plan_sorties))
         .routes(routes!(handlers::explore))
         .routes(routes!(handlers::mission_file))
         .routes(routes!(handlers::map, handlers::map_of))

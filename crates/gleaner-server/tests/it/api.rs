@@ -9,7 +9,7 @@ use gleaner_server::handlers::MISSION_FILES;
 use crate::common::{Server, TOKEN, caf_project, flight_csv};
 
 /// Every API route (method, path as in the OpenAPI document).
-const ROUTES: [(&str, &str); 14] = [
+const ROUTES: [(&str, &str); 15] = [
     ("get", "/api/v1/project"),
     ("get", "/api/v1/field"),
     ("get", "/api/v1/cells"),
@@ -18,6 +18,7 @@ const ROUTES: [(&str, &str); 14] = [
     ("get", "/api/v1/missions"),
     ("get", "/api/v1/missions/{id}"),
     ("post", "/api/v1/plan"),
+    ("post", "/api/v1/plan/sorties"),
     ("post", "/api/v1/explore"),
     ("get", "/api/v1/missions/{id}/files/{name}"),
     ("get", "/api/v1/map.svg"),
@@ -148,6 +149,79 @@ fn reads_project_field_cells_cell_and_map() {
     for asset in ["/app.js", "/app.css"] {
         assert_eq!(server.client().get(asset).unwrap().status, 200, "{asset}");
     }
+}
+
+#[test]
+fn several_sorties_share_the_cells_each_within_one_battery() {
+    let server = Server::caf();
+    let mut c = server.client();
+    let body = |sorties: i64, dry_run: bool| json!({"solver": "greedy", "seed": 1, "sorties": sorties, "dry_run": dry_run});
+    // The single-mission route points to this one for several sorties.
+    let r = c.post_json("/api/v1/plan", &body(2, true), None).unwrap();
+    assert_eq!(r.status, 400, "{}", r.text());
+    assert_eq!(error(&r).1.as_deref(), Some("sorties"));
+    for bad in [0, 21] {
+        let r = c
+            .post_json("/api/v1/plan/sorties", &body(bad, true), None)
+            .unwrap();
+        assert_eq!(r.status, 400, "sorties {bad}: {}", r.text());
+        assert!(error(&r).2.contains("sorties"), "{}", r.text());
+    }
+    // A dry run: three sorties, no cell twice, each within its battery, nothing stored.
+    let r = c
+        .post_json("/api/v1/plan/sorties", &body(3, true), None)
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    let docs = r.json().unwrap();
+    let docs = docs.as_array().unwrap();
+    assert_eq!(docs.len(), 3);
+    let mut cells: Vec<String> = Vec::new();
+    for d in docs {
+        assert_eq!(d["status"], "dry-run");
+        let e = &d["energy"];
+        assert!(e["total_j"].as_f64().unwrap() <= e["budget_j"].as_f64().unwrap() + 1e-6);
+        for stop in d["stops"].as_array().unwrap() {
+            cells.push(stop["cell"].as_str().unwrap().to_string());
+        }
+    }
+    let n = cells.len();
+    cells.sort();
+    cells.dedup();
+    assert_eq!(cells.len(), n, "a cell in two sorties");
+    assert!(
+        n > docs[0]["stops"].as_array().unwrap().len(),
+        "the others add cells"
+    );
+    assert_eq!(server.get_json("/api/v1/missions"), json!([]));
+    // Stored: a token is needed; then three missions with the previewed routes.
+    let r = c
+        .post_json("/api/v1/plan/sorties", &body(3, false), None)
+        .unwrap();
+    assert_eq!(r.status, 401, "{}", r.text());
+    let r = c
+        .post_json("/api/v1/plan/sorties", &body(3, false), Some(TOKEN))
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    let saved = r.json().unwrap();
+    let saved = saved.as_array().unwrap();
+    assert_eq!(saved.len(), 3);
+    for (s, d) in saved.iter().zip(docs) {
+        assert_eq!(
+            s["stops"], d["stops"],
+            "the saved routes are the previewed ones"
+        );
+        let id = s["mission_id"].as_i64().unwrap();
+        let stored = server.get_json(&format!("/api/v1/missions/{id}"));
+        assert_eq!(stored["stops"], s["stops"]);
+    }
+    assert_eq!(
+        server
+            .get_json("/api/v1/missions")
+            .as_array()
+            .unwrap()
+            .len(),
+        3
+    );
 }
 
 #[test]
