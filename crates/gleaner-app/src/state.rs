@@ -46,7 +46,7 @@ use crate::ingest::Parsed;
 use crate::knowledge::{Columns, Knowledge, cell_series_of, columns};
 use crate::project::Project;
 use crate::score::{
-    NO_MODALITY, ScoreRequest, Scoring, condition_modality, condition_output, fit_condition,
+    NO_MODALITY, ScoreRequest, Scoring, condition_modality, condition_output, fit_condition_from,
     neighbour_lists,
 };
 use crate::settings::Settings;
@@ -57,7 +57,7 @@ pub(crate) const BLOB_KEY: &str = "utility.incremental";
 /// Magic of the blob (8 bytes), followed by [`VERSION`] as a little-endian `u32`.
 const MAGIC: &[u8; 8] = b"GLNAPPST";
 /// Blob format version; a blob of another version is rebuilt.
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 /// Grid slots kept in the state, in grid steps (32 days of daily data).
 const RETENTION_STEPS: i64 = 32;
 
@@ -76,6 +76,11 @@ enum ConditionState {
     Fitted {
         modality: String,
         fitted_to: UnixSeconds,
+        /// Class-modality readings in the store at the fit.
+        trained: u64,
+        /// Class-modality readings added since (the refit cadence, see
+        /// [`Settings`]' `utility.condition_refit_growth`).
+        pending: u64,
         /// Labels before `fitted_to`: what scoring at t = `fitted_to` trains.
         at_latest: Fit,
         /// Labels at or before `fitted_to`: what scoring at a later t trains; `None` when
@@ -292,12 +297,16 @@ impl Persisted {
             ConditionState::Fitted {
                 modality,
                 fitted_to,
+                trained,
+                pending,
                 at_latest,
                 after_latest,
             } => {
                 o.u8(2);
                 o.bytes(modality.as_bytes());
                 o.i64(*fitted_to);
+                o.u64(*trained);
+                o.u64(*pending);
                 put_fit(&mut o, at_latest);
                 match after_latest {
                     None => o.u8(0),
@@ -352,6 +361,8 @@ impl Persisted {
             2 => ConditionState::Fitted {
                 modality: i.string()?,
                 fitted_to: i.i64()?,
+                trained: i.u64()?,
+                pending: i.u64()?,
                 at_latest: get_fit(&mut i)?,
                 after_latest: match i.u8()? {
                     0 => None,
@@ -425,13 +436,17 @@ fn grid_of(p: &Persisted) -> TimeGrid {
     }
 }
 
-/// Trains the condition model (labels before `latest`) from the class modality's series.
+/// Trains the condition model (labels before `latest`) from the class modality's series,
+/// Newton's method warm-started from `previous` when given; `trained`: the class modality's
+/// readings in the store.
 fn condition_state(
     settings: &Settings,
     modalities: &[String],
     field: &Field,
     class_series: impl FnOnce(usize) -> Vec<OwnedSeries>,
     latest: UnixSeconds,
+    trained: impl FnOnce(usize) -> u64,
+    previous: Option<&ConditionModel>,
 ) -> ConditionState {
     let Some(name) = condition_modality(settings, modalities) else {
         return ConditionState::NoModality;
@@ -442,13 +457,22 @@ fn condition_state(
     let series = class_series(m);
     let cells: Vec<Series<'_>> = series.iter().map(OwnedSeries::as_series).collect();
     let neighbours = neighbour_lists(field);
-    let at_latest = fit_condition(settings, &cells, &neighbours, latest);
+    let at_latest = fit_condition_from(settings, &cells, &neighbours, latest, previous);
     let point_at_latest = cells.iter().any(|s| s.times.last() == Some(&latest));
-    let after_latest = point_at_latest
-        .then(|| fit_condition(settings, &cells, &neighbours, latest.saturating_add(1)));
+    let after_latest = point_at_latest.then(|| {
+        fit_condition_from(
+            settings,
+            &cells,
+            &neighbours,
+            latest.saturating_add(1),
+            at_latest.as_ref().ok().or(previous),
+        )
+    });
     ConditionState::Fitted {
         modality: name,
         fitted_to: latest,
+        trained: trained(m),
+        pending: 0,
         at_latest,
         after_latest,
     }
@@ -544,6 +568,15 @@ fn rebuild<R: StoreRead>(store: &R, settings: &Settings) -> Result<Option<Persis
                 .collect()
         },
         latest,
+        |m| {
+            c.times
+                .iter()
+                .skip(m)
+                .step_by(nm.max(1))
+                .map(|t| t.len() as u64)
+                .sum()
+        },
+        None,
     );
     let last_reading = c.last_collected.clone();
     Ok(Some(Persisted {
@@ -767,8 +800,35 @@ fn update<W: StoreWrite>(
     let Some(latest) = p.latest else {
         return Ok(None);
     };
+    // The refit cadence: keep the last fit while the class modality's readings added since
+    // stay within `condition_refit_growth` of those it was trained on.
+    let growth = settings.utility.condition_refit_growth;
+    let class_name = condition_modality(settings, &p.modalities);
+    let mut previous = None;
+    if let ConditionState::Fitted {
+        modality,
+        trained,
+        pending,
+        at_latest,
+        after_latest,
+        ..
+    } = &mut p.condition
+        && class_name.as_deref() == Some(modality.as_str())
+    {
+        let added = rows.iter().filter(|r| r.1 == *modality).count() as u64;
+        *pending += added;
+        if growth > 0.0 && (*pending as f64) <= growth * (*trained as f64) {
+            return Ok(Some(p));
+        }
+        previous = after_latest
+            .as_ref()
+            .and_then(|f| f.as_ref().ok())
+            .or(at_latest.as_ref().ok())
+            .cloned();
+    }
     // Refit the condition model on the class modality's whole history.
     let mut class_error = None;
+    let class_readings = std::cell::Cell::new(0u64);
     p.condition = condition_state(
         settings,
         &p.modalities,
@@ -779,6 +839,7 @@ fn update<W: StoreWrite>(
             };
             match tx.readings_for(Some(&modality), UnixSeconds::MIN..=UnixSeconds::MAX) {
                 Ok(batch) => {
+                    class_readings.set(batch.rows.len() as u64);
                     let c = all_columns(&sensors, &batch, Some(grid));
                     let Some(m) = c.modalities.iter().position(|x| *x == p.modalities[m]) else {
                         return vec![OwnedSeries::default(); field.cells().len()];
@@ -795,6 +856,8 @@ fn update<W: StoreWrite>(
             }
         },
         latest,
+        |_| class_readings.get(),
+        previous.as_ref(),
     );
     if let Some(e) = class_error {
         return Err(e.into());
@@ -862,16 +925,18 @@ pub(crate) fn fast_scoring<S: Store>(
             fitted_to,
             at_latest,
             after_latest,
+            ..
         } => {
             let Ok(m) = p.modalities.binary_search(modality) else {
                 return Ok(None);
             };
-            if *fitted_to != latest {
+            // An earlier fit is one the refit cadence kept (see `update`).
+            if *fitted_to > latest {
                 return Ok(None);
             }
             // At a later t the full path also trains on the labels at the newest reading.
             let fit = match after_latest {
-                Some(fit) if t > latest => fit,
+                Some(fit) if t > *fitted_to => fit,
                 _ => at_latest,
             };
             match fit {
@@ -1046,6 +1111,8 @@ mod tests {
             condition: ConditionState::Fitted {
                 modality: "vw@30cm".into(),
                 fitted_to: 39 * 86_400,
+                trained: 78,
+                pending: 0,
                 at_latest: Err("no condition model (too little data); U = 0".into()),
                 after_latest: None,
             },
