@@ -1008,6 +1008,28 @@ pub(crate) fn fast_scoring<S: Store>(
     }))
 }
 
+/// What planning without scores needs (the field, the sensors, their last collections and
+/// first readings, the newest reading): from the persisted state when it describes the store
+/// (see [`fast_scoring`]), else from the history ([`knowledge`](crate::knowledge())). From
+/// the state, the series hold only the retained recent points: callers must not use them.
+pub(crate) fn collection_knowledge<S: Store>(
+    project: &Project<S>,
+    at: Option<UnixSeconds>,
+    history: History,
+) -> Result<Knowledge> {
+    if history == History::default() {
+        let request = ScoreRequest {
+            at,
+            dry_run: true,
+            ..ScoreRequest::default()
+        };
+        if let Some(scoring) = fast_scoring(project, &request)? {
+            return Ok(scoring.knowledge);
+        }
+    }
+    crate::knowledge(project, at, history)
+}
+
 /// Fills cell `c`'s correlations, anomalies and series summaries from the persisted
 /// statistics (what `metadata_rows` computes from the full series otherwise).
 pub(crate) fn metadata_from_state(
