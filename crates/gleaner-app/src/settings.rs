@@ -179,8 +179,10 @@ pub struct UtilitySection {
     /// `record` and `score` keep current): a write refits it only when the class modality's
     /// readings added since the last fit exceed this fraction of the readings it was trained
     /// on; until then scoring predicts with the last fit (default 0.05; 0 = refit at every
-    /// write, the exact model of the whole history). Scoring from the whole history
-    /// (`--history-until`, windows) always fits afresh.
+    /// write, the exact model of the whole history). With a cadence, a fit also uses the label
+    /// at the newest reading when scoring at exactly that time (the exact mode and the full
+    /// path leave it out there). Scoring from the whole history (`--history-until`, windows)
+    /// always fits afresh.
     pub condition_refit_growth: f64,
 }
 
