@@ -536,6 +536,18 @@ fn all_columns(sensors: &[Sensor], batch: &ReadingBatch, grid: Option<TimeGrid>)
 
 /// Builds the state from every stored reading. O(history).
 fn rebuild<R: StoreRead>(store: &R, settings: &Settings) -> Result<Option<Persisted>> {
+    rebuild_keeping(store, settings, None)
+}
+
+/// [`rebuild`] after a write the incremental update could not take (e.g. readings older than
+/// the retention horizon): `carry` is the condition model of the state before the write and
+/// the class-modality readings the write added. The refit cadence applies as in `update`: the
+/// model is kept while those readings stay within `condition_refit_growth`, else refit from it.
+fn rebuild_keeping<R: StoreRead>(
+    store: &R,
+    settings: &Settings,
+    carry: Option<(ConditionState, u64)>,
+) -> Result<Option<Persisted>> {
     let Some((sensors, field)) = field_of(store, settings)? else {
         return Ok(None);
     };
@@ -579,27 +591,61 @@ fn rebuild<R: StoreRead>(store: &R, settings: &Settings) -> Result<Option<Persis
     }
     drop(readings);
     state.trim();
-    let condition = condition_state(
-        settings,
-        &c.modalities,
-        &field,
-        |m| {
-            cell_series_of(&field, &c, Some(m))
-                .into_iter()
-                .map(|mut v| v.pop().unwrap_or_default())
-                .collect()
+    let class_name = condition_modality(settings, &c.modalities);
+    let growth = settings.utility.condition_refit_growth;
+    let mut previous = None;
+    let mut kept = None;
+    if let Some((
+        ConditionState::Fitted {
+            modality,
+            fitted_to,
+            trained,
+            pending,
+            at_latest,
+            after_latest,
         },
-        latest,
-        |m| {
-            c.times
-                .iter()
-                .skip(m)
-                .step_by(nm.max(1))
-                .map(|t| t.len() as u64)
-                .sum()
-        },
-        None,
-    );
+        added,
+    )) = carry
+        && class_name.as_deref() == Some(modality.as_str())
+    {
+        let pending = pending + added;
+        if growth > 0.0 && (pending as f64) <= growth * (trained as f64) && fitted_to <= latest {
+            kept = Some(ConditionState::Fitted {
+                modality,
+                fitted_to,
+                trained,
+                pending,
+                at_latest,
+                after_latest,
+            });
+        } else {
+            previous = after_latest.and_then(Result::ok).or(at_latest.ok());
+        }
+    }
+    let condition = match kept {
+        Some(kept) => kept,
+        None => condition_state(
+            settings,
+            &c.modalities,
+            &field,
+            |m| {
+                cell_series_of(&field, &c, Some(m))
+                    .into_iter()
+                    .map(|mut v| v.pop().unwrap_or_default())
+                    .collect()
+            },
+            latest,
+            |m| {
+                c.times
+                    .iter()
+                    .skip(m)
+                    .step_by(nm.max(1))
+                    .map(|t| t.len() as u64)
+                    .sum()
+            },
+            previous.as_ref(),
+        ),
+    };
     let last_reading = c.last_collected.clone();
     Ok(Some(Persisted {
         field_fp: field_fingerprint(&sensors, &field),
@@ -695,11 +741,16 @@ pub(crate) fn after_insert<W: StoreWrite>(
     plan: Plan,
     settings: &Settings,
 ) -> Result<()> {
+    let mut carry = None;
     let updated = match plan {
         Plan::Rebuild => None,
         Plan::Update(p, rows) => {
             if rows.is_empty() && is_current(&*tx, &p, settings)? {
                 return Ok(());
+            }
+            if let ConditionState::Fitted { modality, .. } = &p.condition {
+                let added = rows.iter().filter(|r| r.1 == *modality).count() as u64;
+                carry = Some((p.condition.clone(), added));
             }
             update(tx, *p, &rows, settings)?
         }
@@ -707,7 +758,7 @@ pub(crate) fn after_insert<W: StoreWrite>(
     match updated {
         Some(p) => write_blob(tx, Some(&p)),
         None => {
-            let p = rebuild(&*tx, settings)?;
+            let p = rebuild_keeping(&*tx, settings, carry)?;
             write_blob(tx, p.as_ref())
         }
     }
