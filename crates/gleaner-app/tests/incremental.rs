@@ -389,10 +389,19 @@ fn farm_with_growth(tmp: &Path, growth: f64) -> app::Project<app::AnyStore> {
 #[test]
 fn refit_cadence_keeps_the_last_fit_until_the_class_modality_grows() {
     // Growth 0.1%: the flight's readings exceed it, so recording refits the model (warm-started
-    // from the last fit) and the fast path equals a fresh fit on the whole history.
+    // from the last fit) and the fast path equals a fresh fit on the whole history after the
+    // newest reading (at it, a cadence's fit also knows the newest label; the full path not).
     let tmp = tempfile::tempdir().unwrap();
     let project = farm_with_growth(tmp.path(), 0.001);
-    assert!(same_scores(&project, None), "refit at the flight");
+    let latest = app::compute(&project, &app::ScoreRequest::default())
+        .unwrap()
+        .knowledge
+        .latest
+        .unwrap();
+    assert!(
+        same_scores(&project, Some(latest + 86_400)),
+        "refit at the flight"
+    );
     // Growth 1000%: the flight's readings stay within it; scoring stays on the fast path with
     // the model fitted before the flight (its quantile thresholds are those of the history
     // without the flight), while the other terms take the flight into account exactly.
