@@ -381,6 +381,9 @@ struct Shared<'a> {
     events: Vec<TruthEvent>,
     model: FieldModel,
     step_s: i64,
+    /// The store every run starts from (the history ingested, the utility state built),
+    /// copied for each run.
+    template: Option<std::sync::Mutex<SqliteStore>>,
 }
 
 fn value_at(
@@ -392,9 +395,26 @@ fn value_at(
     times.binary_search(&t).ok().map(|k| values[k])
 }
 
-/// A new in-memory project for one run, with the history ingested.
+/// A new in-memory project for one run, with the history ingested: a copy of the campaign's
+/// template store when there is one (what the steps below would write again), scored once
+/// with the run's settings.
 fn new_run_project(shared: &Shared<'_>, settings: Settings) -> Result<Project<SqliteStore>> {
     let request = shared.request;
+    if let Some(template) = &shared.template {
+        let store = template
+            .lock()
+            .map_err(|_| AppError::Invalid("a campaign run panicked".into()))?
+            .copy_in_memory()?;
+        let mut project = Project::new(&request.init.dir, settings, store);
+        score(
+            &mut project,
+            &ScoreRequest {
+                at: Some(request.history_until),
+                ..ScoreRequest::default()
+            },
+        )?;
+        return Ok(project);
+    }
     let store = SqliteStore::open_in_memory()?;
     let dir = request.init.dir.clone();
     let mut project = Project::new(&dir, settings, store);
@@ -482,6 +502,7 @@ pub fn run_campaign(
                 means: Vec::new(),
             },
             step_s: 1,
+            template: None,
         };
         new_run_project(&shared0, request.settings.clone())?
     };
@@ -494,7 +515,7 @@ pub fn run_campaign(
         .map(|m| m.modality.to_string())
         .collect();
     let class_name = crate::score::condition_modality(probe.settings(), &names);
-    drop(probe);
+    let (_, _, template) = probe.into_parts();
     let series = truth_series(truth, &modality.to_string());
     let class_series = match &class_name {
         Some(c) if *c != modality.to_string() => truth_series(truth, c),
@@ -522,6 +543,7 @@ pub fn run_campaign(
         events,
         model,
         step_s,
+        template: Some(std::sync::Mutex::new(template)),
     };
     let mut keys = Vec::new();
     for &strategy in &request.strategies {

@@ -8,7 +8,7 @@ use gleaner_mission::exploration::{ExplorationOptions, plan_exploration};
 use gleaner_store::{MissionId, MissionKind, NewMission, Store, StoreWrite};
 
 use crate::error::{AppError, Result};
-use crate::knowledge::{History, knowledge};
+use crate::knowledge::History;
 use crate::plan::{breakdown, energy_model, flight_profile, services, stops};
 use crate::project::Project;
 
@@ -45,7 +45,7 @@ pub fn explore<S: Store>(
     request: &ExploreRequest,
     clock_now: UnixSeconds,
 ) -> Result<Exploration> {
-    let k = knowledge(project, request.at, History::default())?;
+    let k = crate::state::collection_knowledge(project, request.at, History::default())?;
     let t = request.at.or(k.latest).unwrap_or(clock_now);
     let model = energy_model(project)?;
     let profile = flight_profile(project, &model)?;

@@ -287,7 +287,8 @@ pub(crate) fn batch_of(all: &Readings) -> (Vec<ModalityRecord>, ReadingBatch) {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum StatePolicy {
     /// Bring it up to date in the same transaction (a flight's readings: the next scoring is
-    /// fast). Refits the condition model.
+    /// fast; the refit cadence decides whether the condition model is refit). The cell
+    /// summaries are left to the caller (`record` refreshes every visited cell afterwards).
     Maintain,
     /// Mark it stale when readings were added (a bulk ingest stays as fast as the store
     /// allows; the next `score` rebuilds the state once, O(history)).
@@ -329,7 +330,9 @@ pub(crate) fn store_parsed<W: StoreWrite>(
         stats.unchanged += s.unchanged;
         stats.conflicts.extend(s.conflicts);
     }
-    let changed: Vec<SensorId> = if stats.inserted > 0 {
+    // A flight's readings (`Maintain`): `record` refreshes the visited cells itself once it
+    // has marked their sensors collected (a superset of these; the same readings).
+    let changed: Vec<SensorId> = if stats.inserted > 0 && state_policy != StatePolicy::Maintain {
         parsed.sensors()
     } else {
         Vec::new()

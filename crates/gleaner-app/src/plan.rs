@@ -13,7 +13,7 @@ use gleaner_store::{
 
 use crate::cell_csv;
 use crate::error::{AppError, Result};
-use crate::knowledge::{History, Knowledge, knowledge};
+use crate::knowledge::{History, Knowledge};
 use crate::project::Project;
 use crate::score::{self, ScoreRequest, Scoring};
 
@@ -271,7 +271,7 @@ pub fn plan_with_preset<S: Store>(
     };
     let (file_knowledge, scoring, scores, t, anomaly_form, weights) = match given {
         Some(given) => {
-            let k = knowledge(project, request.at, request.history)?;
+            let k = crate::state::collection_knowledge(project, request.at, request.history)?;
             let t = request.at.or(k.latest).ok_or_else(|| {
                 AppError::Invalid("no readings and no mission time: cannot tell the time".into())
             })?;

@@ -79,6 +79,11 @@ impl<S: Store> Project<S> {
         &self.store
     }
 
+    /// The directory, the settings and the store.
+    pub fn into_parts(self) -> (PathBuf, Settings, S) {
+        (self.dir, self.settings, self.store)
+    }
+
     /// The store, for a use case's writes.
     pub(crate) fn store_mut(&mut self) -> &mut S {
         &mut self.store

@@ -142,6 +142,18 @@ pub(crate) fn fit_condition(
     neighbours: &[Vec<usize>],
     t: UnixSeconds,
 ) -> std::result::Result<ConditionModel, String> {
+    fit_condition_from(settings, cells, neighbours, t, None)
+}
+
+/// [`fit_condition`], Newton's method warm-started from `start` (the same model to the
+/// solver's tolerance, see [`ConditionModel::fit_from`]).
+pub(crate) fn fit_condition_from(
+    settings: &Settings,
+    cells: &[Series<'_>],
+    neighbours: &[Vec<usize>],
+    t: UnixSeconds,
+    start: Option<&ConditionModel>,
+) -> std::result::Result<ConditionModel, String> {
     let u = &settings.utility;
     let config = ConditionConfig {
         n_classes: u.condition_classes,
@@ -157,7 +169,7 @@ pub(crate) fn fit_condition(
         .min()
         .copied()
         .unwrap_or(t);
-    ConditionModel::fit(cells, neighbours, from, t, &config)
+    ConditionModel::fit_from(cells, neighbours, from, t, &config, start)
         .map_err(|e| format!("no condition model ({e}); U = 0 for every cell"))
 }
 

@@ -175,6 +175,15 @@ pub struct UtilitySection {
     pub condition_classes: usize,
     /// K − 1 class thresholds in the modality's unit (default: quantiles of the history).
     pub condition_thresholds: Option<Vec<f64>>,
+    /// Refit cadence of the condition model kept in the persisted utility state (what
+    /// `record` and `score` keep current): a write refits it only when the class modality's
+    /// readings added since the last fit exceed this fraction of the readings it was trained
+    /// on; until then scoring predicts with the last fit (default 0.05; 0 = refit at every
+    /// write, the exact model of the whole history). With a cadence, a fit also uses the label
+    /// at the newest reading when scoring at exactly that time (the exact mode and the full
+    /// path leave it out there). Scoring from the whole history (`--history-until`, windows)
+    /// always fits afresh.
+    pub condition_refit_growth: f64,
 }
 
 impl Default for UtilitySection {
@@ -210,9 +219,14 @@ impl Default for UtilitySection {
             condition_modality: None,
             condition_classes: condition.n_classes,
             condition_thresholds: None,
+            condition_refit_growth: DEFAULT_CONDITION_REFIT_GROWTH,
         }
     }
 }
+
+/// Default of [`UtilitySection::condition_refit_growth`]: refit the persisted condition model
+/// once the class modality has grown by 5% since the last fit.
+pub const DEFAULT_CONDITION_REFIT_GROWTH: f64 = 0.05;
 
 /// `[energy]`: the UAV energy model (SPEC §3). Every field left out takes the preset's value.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -528,7 +542,7 @@ impl Settings {
         let u = &self.utility;
         let e = &self.energy;
         let p = &self.planner;
-        let values: [(&str, Option<f64>); 32] = [
+        let values: [(&str, Option<f64>); 33] = [
             ("field.base_alt_m", Some(f.base_alt_m)),
             ("field.cell_size_m", Some(f.cell_size_m)),
             ("field.neighbour_k", Some(f.neighbour_k as f64)),
@@ -555,6 +569,10 @@ impl Settings {
             (
                 "utility.condition_classes",
                 Some(u.condition_classes as f64),
+            ),
+            (
+                "utility.condition_refit_growth",
+                Some(u.condition_refit_growth),
             ),
             ("energy.battery_j", e.battery_j),
             ("energy.reserve_fraction", e.reserve_fraction),
@@ -675,6 +693,7 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ),
     ("utility.anomaly_min_neighbours", 1.0, 64.0, false, "cells"),
     ("utility.condition_classes", 2.0, 20.0, false, "classes"),
+    ("utility.condition_refit_growth", 0.0, 10.0, false, ""),
     ("energy.battery_j", 0.0, 1e9, true, "J"),
     ("energy.reserve_fraction", 0.0, 0.99, false, ""),
     ("energy.altitude_m", 0.0, 120.0, true, "m"),

@@ -12,7 +12,11 @@
 //!   reading, step: the median gap — is known without reading the history);
 //! - the condition model behind U, trained on the whole class-modality history with label
 //!   times before the newest reading (exactly what the full path trains when scoring at the
-//!   newest reading), or the warning its training gave.
+//!   newest reading), or the warning its training gave. With a refit cadence
+//!   (`utility.condition_refit_growth` > 0, the default 0.05) it is one model trained on every
+//!   label up to the newest reading at its fit, kept (with the class-modality reading counts
+//!   at the fit and since) until the readings added since exceed that fraction of those it was
+//!   trained on; a refit starts Newton's method from it (same optimum, fewer iterations).
 //!
 //! Kept up to date inside the transaction of every ingest and recorded flight: the readings
 //! that are new to the store are added to the statistics (O(new readings × neighbours)) and
@@ -46,7 +50,7 @@ use crate::ingest::Parsed;
 use crate::knowledge::{Columns, Knowledge, cell_series_of, columns};
 use crate::project::Project;
 use crate::score::{
-    NO_MODALITY, ScoreRequest, Scoring, condition_modality, condition_output, fit_condition,
+    NO_MODALITY, ScoreRequest, Scoring, condition_modality, condition_output, fit_condition_from,
     neighbour_lists,
 };
 use crate::settings::Settings;
@@ -57,7 +61,7 @@ pub(crate) const BLOB_KEY: &str = "utility.incremental";
 /// Magic of the blob (8 bytes), followed by [`VERSION`] as a little-endian `u32`.
 const MAGIC: &[u8; 8] = b"GLNAPPST";
 /// Blob format version; a blob of another version is rebuilt.
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 /// Grid slots kept in the state, in grid steps (32 days of daily data).
 const RETENTION_STEPS: i64 = 32;
 
@@ -76,6 +80,11 @@ enum ConditionState {
     Fitted {
         modality: String,
         fitted_to: UnixSeconds,
+        /// Class-modality readings in the store at the fit.
+        trained: u64,
+        /// Class-modality readings added since (the refit cadence, see
+        /// [`Settings`]' `utility.condition_refit_growth`).
+        pending: u64,
         /// Labels before `fitted_to`: what scoring at t = `fitted_to` trains.
         at_latest: Fit,
         /// Labels at or before `fitted_to`: what scoring at a later t trains; `None` when
@@ -292,12 +301,16 @@ impl Persisted {
             ConditionState::Fitted {
                 modality,
                 fitted_to,
+                trained,
+                pending,
                 at_latest,
                 after_latest,
             } => {
                 o.u8(2);
                 o.bytes(modality.as_bytes());
                 o.i64(*fitted_to);
+                o.u64(*trained);
+                o.u64(*pending);
                 put_fit(&mut o, at_latest);
                 match after_latest {
                     None => o.u8(0),
@@ -352,6 +365,8 @@ impl Persisted {
             2 => ConditionState::Fitted {
                 modality: i.string()?,
                 fitted_to: i.i64()?,
+                trained: i.u64()?,
+                pending: i.u64()?,
                 at_latest: get_fit(&mut i)?,
                 after_latest: match i.u8()? {
                     0 => None,
@@ -425,13 +440,17 @@ fn grid_of(p: &Persisted) -> TimeGrid {
     }
 }
 
-/// Trains the condition model (labels before `latest`) from the class modality's series.
+/// Trains the condition model (labels before `latest`) from the class modality's series,
+/// Newton's method warm-started from `previous` when given; `trained`: the class modality's
+/// readings in the store.
 fn condition_state(
     settings: &Settings,
     modalities: &[String],
     field: &Field,
     class_series: impl FnOnce(usize) -> Vec<OwnedSeries>,
     latest: UnixSeconds,
+    trained: impl FnOnce(usize) -> u64,
+    previous: Option<&ConditionModel>,
 ) -> ConditionState {
     let Some(name) = condition_modality(settings, modalities) else {
         return ConditionState::NoModality;
@@ -442,13 +461,40 @@ fn condition_state(
     let series = class_series(m);
     let cells: Vec<Series<'_>> = series.iter().map(OwnedSeries::as_series).collect();
     let neighbours = neighbour_lists(field);
-    let at_latest = fit_condition(settings, &cells, &neighbours, latest);
     let point_at_latest = cells.iter().any(|s| s.times.last() == Some(&latest));
-    let after_latest = point_at_latest
-        .then(|| fit_condition(settings, &cells, &neighbours, latest.saturating_add(1)));
+    if settings.utility.condition_refit_growth > 0.0 {
+        // With a refit cadence the model is kept for later times anyway: one fit on every
+        // label up to and including the newest reading (known data), used for every t.
+        return ConditionState::Fitted {
+            modality: name,
+            fitted_to: latest,
+            trained: trained(m),
+            pending: 0,
+            at_latest: fit_condition_from(
+                settings,
+                &cells,
+                &neighbours,
+                latest.saturating_add(1),
+                previous,
+            ),
+            after_latest: None,
+        };
+    }
+    let at_latest = fit_condition_from(settings, &cells, &neighbours, latest, previous);
+    let after_latest = point_at_latest.then(|| {
+        fit_condition_from(
+            settings,
+            &cells,
+            &neighbours,
+            latest.saturating_add(1),
+            at_latest.as_ref().ok().or(previous),
+        )
+    });
     ConditionState::Fitted {
         modality: name,
         fitted_to: latest,
+        trained: trained(m),
+        pending: 0,
         at_latest,
         after_latest,
     }
@@ -490,6 +536,18 @@ fn all_columns(sensors: &[Sensor], batch: &ReadingBatch, grid: Option<TimeGrid>)
 
 /// Builds the state from every stored reading. O(history).
 fn rebuild<R: StoreRead>(store: &R, settings: &Settings) -> Result<Option<Persisted>> {
+    rebuild_keeping(store, settings, None)
+}
+
+/// [`rebuild`] after a write the incremental update could not take (e.g. readings older than
+/// the retention horizon): `carry` is the condition model of the state before the write and
+/// the class-modality readings the write added. The refit cadence applies as in `update`: the
+/// model is kept while those readings stay within `condition_refit_growth`, else refit from it.
+fn rebuild_keeping<R: StoreRead>(
+    store: &R,
+    settings: &Settings,
+    carry: Option<(ConditionState, u64)>,
+) -> Result<Option<Persisted>> {
     let Some((sensors, field)) = field_of(store, settings)? else {
         return Ok(None);
     };
@@ -533,18 +591,61 @@ fn rebuild<R: StoreRead>(store: &R, settings: &Settings) -> Result<Option<Persis
     }
     drop(readings);
     state.trim();
-    let condition = condition_state(
-        settings,
-        &c.modalities,
-        &field,
-        |m| {
-            cell_series_of(&field, &c, Some(m))
-                .into_iter()
-                .map(|mut v| v.pop().unwrap_or_default())
-                .collect()
+    let class_name = condition_modality(settings, &c.modalities);
+    let growth = settings.utility.condition_refit_growth;
+    let mut previous = None;
+    let mut kept = None;
+    if let Some((
+        ConditionState::Fitted {
+            modality,
+            fitted_to,
+            trained,
+            pending,
+            at_latest,
+            after_latest,
         },
-        latest,
-    );
+        added,
+    )) = carry
+        && class_name.as_deref() == Some(modality.as_str())
+    {
+        let pending = pending + added;
+        if growth > 0.0 && (pending as f64) <= growth * (trained as f64) && fitted_to <= latest {
+            kept = Some(ConditionState::Fitted {
+                modality,
+                fitted_to,
+                trained,
+                pending,
+                at_latest,
+                after_latest,
+            });
+        } else {
+            previous = after_latest.and_then(Result::ok).or(at_latest.ok());
+        }
+    }
+    let condition = match kept {
+        Some(kept) => kept,
+        None => condition_state(
+            settings,
+            &c.modalities,
+            &field,
+            |m| {
+                cell_series_of(&field, &c, Some(m))
+                    .into_iter()
+                    .map(|mut v| v.pop().unwrap_or_default())
+                    .collect()
+            },
+            latest,
+            |m| {
+                c.times
+                    .iter()
+                    .skip(m)
+                    .step_by(nm.max(1))
+                    .map(|t| t.len() as u64)
+                    .sum()
+            },
+            previous.as_ref(),
+        ),
+    };
     let last_reading = c.last_collected.clone();
     Ok(Some(Persisted {
         field_fp: field_fingerprint(&sensors, &field),
@@ -640,11 +741,16 @@ pub(crate) fn after_insert<W: StoreWrite>(
     plan: Plan,
     settings: &Settings,
 ) -> Result<()> {
+    let mut carry = None;
     let updated = match plan {
         Plan::Rebuild => None,
         Plan::Update(p, rows) => {
             if rows.is_empty() && is_current(&*tx, &p, settings)? {
                 return Ok(());
+            }
+            if let ConditionState::Fitted { modality, .. } = &p.condition {
+                let added = rows.iter().filter(|r| r.1 == *modality).count() as u64;
+                carry = Some((p.condition.clone(), added));
             }
             update(tx, *p, &rows, settings)?
         }
@@ -652,7 +758,7 @@ pub(crate) fn after_insert<W: StoreWrite>(
     match updated {
         Some(p) => write_blob(tx, Some(&p)),
         None => {
-            let p = rebuild(&*tx, settings)?;
+            let p = rebuild_keeping(&*tx, settings, carry)?;
             write_blob(tx, p.as_ref())
         }
     }
@@ -767,8 +873,35 @@ fn update<W: StoreWrite>(
     let Some(latest) = p.latest else {
         return Ok(None);
     };
+    // The refit cadence: keep the last fit while the class modality's readings added since
+    // stay within `condition_refit_growth` of those it was trained on.
+    let growth = settings.utility.condition_refit_growth;
+    let class_name = condition_modality(settings, &p.modalities);
+    let mut previous = None;
+    if let ConditionState::Fitted {
+        modality,
+        trained,
+        pending,
+        at_latest,
+        after_latest,
+        ..
+    } = &mut p.condition
+        && class_name.as_deref() == Some(modality.as_str())
+    {
+        let added = rows.iter().filter(|r| r.1 == *modality).count() as u64;
+        *pending += added;
+        if growth > 0.0 && (*pending as f64) <= growth * (*trained as f64) {
+            return Ok(Some(p));
+        }
+        previous = after_latest
+            .as_ref()
+            .and_then(|f| f.as_ref().ok())
+            .or(at_latest.as_ref().ok())
+            .cloned();
+    }
     // Refit the condition model on the class modality's whole history.
     let mut class_error = None;
+    let class_readings = std::cell::Cell::new(0u64);
     p.condition = condition_state(
         settings,
         &p.modalities,
@@ -779,6 +912,7 @@ fn update<W: StoreWrite>(
             };
             match tx.readings_for(Some(&modality), UnixSeconds::MIN..=UnixSeconds::MAX) {
                 Ok(batch) => {
+                    class_readings.set(batch.rows.len() as u64);
                     let c = all_columns(&sensors, &batch, Some(grid));
                     let Some(m) = c.modalities.iter().position(|x| *x == p.modalities[m]) else {
                         return vec![OwnedSeries::default(); field.cells().len()];
@@ -795,6 +929,8 @@ fn update<W: StoreWrite>(
             }
         },
         latest,
+        |_| class_readings.get(),
+        previous.as_ref(),
     );
     if let Some(e) = class_error {
         return Err(e.into());
@@ -862,16 +998,18 @@ pub(crate) fn fast_scoring<S: Store>(
             fitted_to,
             at_latest,
             after_latest,
+            ..
         } => {
             let Ok(m) = p.modalities.binary_search(modality) else {
                 return Ok(None);
             };
-            if *fitted_to != latest {
+            // An earlier fit is one the refit cadence kept (see `update`).
+            if *fitted_to > latest {
                 return Ok(None);
             }
             // At a later t the full path also trains on the labels at the newest reading.
             let fit = match after_latest {
-                Some(fit) if t > latest => fit,
+                Some(fit) if t > *fitted_to => fit,
                 _ => at_latest,
             };
             match fit {
@@ -941,6 +1079,28 @@ pub(crate) fn fast_scoring<S: Store>(
         warnings,
         incremental: Some(state),
     }))
+}
+
+/// What planning without scores needs (the field, the sensors, their last collections and
+/// first readings, the newest reading): from the persisted state when it describes the store
+/// (see [`fast_scoring`]), else from the history ([`knowledge`](crate::knowledge())). From
+/// the state, the series hold only the retained recent points: callers must not use them.
+pub(crate) fn collection_knowledge<S: Store>(
+    project: &Project<S>,
+    at: Option<UnixSeconds>,
+    history: History,
+) -> Result<Knowledge> {
+    if history == History::default() {
+        let request = ScoreRequest {
+            at,
+            dry_run: true,
+            ..ScoreRequest::default()
+        };
+        if let Some(scoring) = fast_scoring(project, &request)? {
+            return Ok(scoring.knowledge);
+        }
+    }
+    crate::knowledge(project, at, history)
 }
 
 /// Fills cell `c`'s correlations, anomalies and series summaries from the persisted
@@ -1046,6 +1206,8 @@ mod tests {
             condition: ConditionState::Fitted {
                 modality: "vw@30cm".into(),
                 fitted_to: 39 * 86_400,
+                trained: 78,
+                pending: 0,
                 at_latest: Err("no condition model (too little data); U = 0".into()),
                 after_latest: None,
             },

@@ -1,8 +1,10 @@
 //! The persisted utility state: scoring from it (the fast path of `compute`) equals scoring
 //! from the whole history (`compute_full`) within 1e-9 relative, after ingests and a recorded
-//! flight, on the real CAF network and on a synthetic farm.
+//! flight, on the real CAF network and on a synthetic farm, when the condition model is refit
+//! at every write (`utility.condition_refit_growth = 0`); with a refit cadence, the model
+//! kept between refits is the last one fitted (warm-started refits still equal a fresh fit).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use gleaner_app::{self as app, Silent};
 
@@ -14,6 +16,14 @@ fn close(a: f64, b: f64, what: &str) {
         (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1e-12),
         "{what}: fast {a} vs full {b}"
     );
+}
+
+/// The project in `dir` reopened with `utility.condition_refit_growth = growth`.
+fn with_refit_growth(dir: &Path, growth: f64) -> app::Project<app::AnyStore> {
+    let mut settings = app::Settings::load(dir).unwrap();
+    settings.utility.condition_refit_growth = growth;
+    settings.save(dir).unwrap();
+    app::Project::open(dir).unwrap()
 }
 
 /// Scores with the fast path and the full path and checks they agree; returns whether the
@@ -125,14 +135,15 @@ fn fast_scoring_equals_full_scoring_on_caf() {
     let daily = data.join("caf/Daily");
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("caf");
-    let (mut project, _) = app::init(&app::InitRequest {
-        dir,
+    app::init(&app::InitRequest {
+        dir: dir.clone(),
         sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
         utm_zone: Some("11N".into()),
         name: Some("caf".into()),
         ..Default::default()
     })
     .unwrap();
+    let mut project = with_refit_growth(&dir, 0.0);
     // 2011-2012, then 2013 as a second ingest (an incremental update of the state).
     for (k, years) in [(0, 2011..=2012), (1, 2013..=2013)] {
         let files = caf_files(&daily, &tmp.path().join(format!("in{k}")), years);
@@ -232,7 +243,7 @@ fn fast_scoring_equals_full_scoring_on_a_synthetic_farm() {
         p
     };
     let (f1, f2) = (file("a.csv", &first), file("b.csv", &second));
-    let (mut project, _) = app::init(&app::InitRequest {
+    app::init(&app::InitRequest {
         dir: tmp.path().join("farm"),
         sensors,
         base: Some(farm.base()),
@@ -241,6 +252,7 @@ fn fast_scoring_equals_full_scoring_on_a_synthetic_farm() {
         ..Default::default()
     })
     .unwrap();
+    let mut project = with_refit_growth(&tmp.path().join("farm"), 0.0);
     for f in [f1, f2] {
         app::ingest(
             &mut project,
@@ -300,4 +312,123 @@ fn fast_scoring_equals_full_scoring_on_a_synthetic_farm() {
             .is_some()
     );
     assert!(same_scores(&project, None), "rebuilt by score");
+}
+
+/// A synthetic farm project (120 sensors, days 0-69 ingested and scored) with
+/// `utility.condition_refit_growth = growth`, and a flight at day 80 that brings back days
+/// 70-79 of the visited sensors.
+fn farm_with_growth(tmp: &Path, growth: f64) -> app::Project<app::AnyStore> {
+    use gleaner_synth::{SynthConfig, generate, write_readings_csv, write_sensors_csv};
+    let farm = generate(&SynthConfig {
+        seed: 11,
+        sensor_count: 120,
+        days: 80,
+        scale_extent_with_sensors: true,
+        vw_depths_cm: vec![30],
+        t_depths_cm: vec![30],
+        ..SynthConfig::default()
+    })
+    .unwrap();
+    let sensors = tmp.join("sensors.csv");
+    write_sensors_csv(&farm, &mut std::fs::File::create(&sensors).unwrap()).unwrap();
+    let mut all = Vec::new();
+    write_readings_csv(&farm, &mut all).unwrap();
+    let text = String::from_utf8(all).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let split = app::format_rfc3339(farm.times()[70]);
+    let (mut history, mut later) = (vec![header], vec![header]);
+    for l in lines {
+        if l.split(',').nth(1).unwrap() < split.as_str() {
+            history.push(l);
+        } else {
+            later.push(l);
+        }
+    }
+    let history_file = tmp.join("history.csv");
+    std::fs::write(&history_file, history.join("\n") + "\n").unwrap();
+    let dir = tmp.join("farm");
+    app::init(&app::InitRequest {
+        dir: dir.clone(),
+        sensors,
+        base: Some(farm.base()),
+        cell_size_m: Some(app::DEFAULT_CELL_SIZE_M),
+        name: Some("synthetic".into()),
+        ..Default::default()
+    })
+    .unwrap();
+    let mut project = with_refit_growth(&dir, growth);
+    app::ingest(
+        &mut project,
+        &app::IngestRequest {
+            files: vec![history_file],
+            ..Default::default()
+        },
+        common::INGEST_CLOCK,
+        &Silent,
+    )
+    .unwrap();
+    app::score(&mut project, &app::ScoreRequest::default()).unwrap();
+    let at = farm.times()[79] + 86_400;
+    record_first_sortie(&mut project, at, |visited| {
+        let rows: Vec<&str> = std::iter::once(header)
+            .chain(
+                later[1..]
+                    .iter()
+                    .copied()
+                    .filter(|l| visited.iter().any(|s| l.starts_with(&format!("{s},")))),
+            )
+            .collect();
+        let p = tmp.join("flight.csv");
+        std::fs::write(&p, rows.join("\n") + "\n").unwrap();
+        Some(p)
+    });
+    project
+}
+
+#[test]
+fn refit_cadence_keeps_the_last_fit_until_the_class_modality_grows() {
+    // Growth 0.1%: the flight's readings exceed it, so recording refits the model (warm-started
+    // from the last fit) and the fast path equals a fresh fit on the whole history after the
+    // newest reading (at it, a cadence's fit also knows the newest label; the full path not).
+    let tmp = tempfile::tempdir().unwrap();
+    let project = farm_with_growth(tmp.path(), 0.001);
+    let latest = app::compute(&project, &app::ScoreRequest::default())
+        .unwrap()
+        .knowledge
+        .latest
+        .unwrap();
+    assert!(
+        same_scores(&project, Some(latest + 86_400)),
+        "refit at the flight"
+    );
+    // Growth 1000%: the flight's readings stay within it; scoring stays on the fast path with
+    // the model fitted before the flight (its quantile thresholds are those of the history
+    // without the flight), while the other terms take the flight into account exactly.
+    let tmp2 = tempfile::tempdir().unwrap();
+    let project = farm_with_growth(tmp2.path(), 10.0);
+    let request = app::ScoreRequest {
+        dry_run: true,
+        ..Default::default()
+    };
+    let fast = app::compute(&project, &request).unwrap();
+    let full = app::compute_full(&project, &request).unwrap();
+    assert!(fast.incremental.is_some(), "fast path with a kept model");
+    let (kept, fresh) = (fast.condition.unwrap(), full.condition.unwrap());
+    assert_ne!(
+        kept.thresholds, fresh.thresholds,
+        "the flight moved the quantiles"
+    );
+    let every_write = {
+        let tmp3 = tempfile::tempdir().unwrap();
+        let p = farm_with_growth(tmp3.path(), 0.0);
+        // The same farm and flight refit at every write: its thresholds are `fresh`'s.
+        app::compute(&p, &request).unwrap().condition.unwrap()
+    };
+    assert_eq!(every_write.thresholds, fresh.thresholds);
+    for (a, b) in fast.terms.iter().zip(&full.terms) {
+        for (x, y) in [(a.f, b.f), (a.a, b.a), (a.r, b.r)] {
+            close(x, y, "F, A, R do not depend on the refit cadence");
+        }
+    }
 }

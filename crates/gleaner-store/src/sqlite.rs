@@ -100,6 +100,18 @@ impl SqliteStore {
         Self::setup(Connection::open_in_memory().db()?)
     }
 
+    /// An independent copy of this database in memory (SQLite's online backup of every page),
+    /// e.g. to start several simulated runs from one prepared project instead of preparing
+    /// each. Later writes to either store do not show in the other.
+    pub fn copy_in_memory(&self) -> Result<Self> {
+        let mut conn = Connection::open_in_memory().db()?;
+        rusqlite::backup::Backup::new(&self.conn, &mut conn)
+            .db()?
+            .run_to_completion(i32::MAX, Duration::ZERO, None)
+            .db()?;
+        Self::setup(conn)
+    }
+
     fn setup(mut conn: Connection) -> Result<Self> {
         conn.busy_timeout(BUSY_TIMEOUT).db()?;
         let foreign: Vec<String> = conn

@@ -39,6 +39,18 @@ fn count(store: &SqliteStore, sql: &str) -> i64 {
 }
 
 #[test]
+fn an_in_memory_copy_is_equal_and_independent() {
+    let mut store = SqliteStore::open_in_memory().unwrap();
+    store_with_network(&mut store);
+    let mut copy = store.copy_in_memory().unwrap();
+    assert_eq!(copy.dump().unwrap(), store.dump().unwrap());
+    copy.write(|tx| tx.upsert_sensors(&[sensor("d", 46.002, -117.0)]))
+        .unwrap();
+    assert_eq!(count(&copy, "SELECT COUNT(*) FROM sensors"), 4);
+    assert_eq!(count(&store, "SELECT COUNT(*) FROM sensors"), 3);
+}
+
+#[test]
 fn conformance_in_memory() {
     conformance::run_all(|| SqliteStore::open_in_memory().unwrap());
 }

@@ -306,3 +306,75 @@ fn caf_scores_and_condition_model() {
         );
     }
 }
+
+/// The refit cadence of the persisted condition model (gleaner-app's
+/// `utility.condition_refit_growth`, default 0.05): just before a refit, the kept model misses
+/// at most 5% of the class modality's readings. On CAF vw@30cm (2011-2013, then the whole
+/// network's next 5%: about 43 days), compare the kept model's U at the refit time with a
+/// fresh fit's, and check that a warm-started refit equals a cold one.
+#[test]
+fn caf_refit_cadence_error() {
+    let caf = load();
+    let neighbours: Vec<Vec<usize>> = caf
+        .field
+        .all_neighbours()
+        .iter()
+        .map(|n| n.iter().map(|c| c.index()).collect())
+        .collect();
+    let from = date(2011, 1, 1);
+    let fitted = date(2014, 1, 1);
+    let series = cell_series_between(&caf, from, date(2014, 7, 1));
+    let vw30: Vec<Series> = series.iter().map(|c| c[0].as_series()).collect();
+    let count = |to: i64| -> usize { vw30.iter().map(|s| s.between(from, to - 1).len()).sum() };
+    let trained = count(fitted);
+    // The first day at which the readings added since `fitted` exceed 5% of `trained`.
+    let mut refit = fitted;
+    while (count(refit) - trained) as f64 <= 0.05 * trained as f64 {
+        refit += DAY;
+    }
+    let config = ConditionConfig::default();
+    let kept = ConditionModel::fit(&vw30, &neighbours, from, fitted, &config).unwrap();
+    let fresh = ConditionModel::fit(&vw30, &neighbours, from, refit, &config).unwrap();
+    let warm =
+        ConditionModel::fit_from(&vw30, &neighbours, from, refit, &config, Some(&kept)).unwrap();
+    let known: Vec<OwnedSeries> = series
+        .iter()
+        .map(|c| {
+            let s = c[0].as_series().between(from, refit - 1);
+            OwnedSeries {
+                times: s.times.to_vec(),
+                values: s.values.to_vec(),
+            }
+        })
+        .collect();
+    let known: Vec<Series> = known.iter().map(OwnedSeries::as_series).collect();
+    let u = |m: &ConditionModel| -> Vec<f64> {
+        m.predict_proba(&known, &neighbours, refit)
+            .iter()
+            .map(|p| gleaner_utility::uncertainty(p))
+            .collect()
+    };
+    let (uk, uf, uw) = (u(&kept), u(&fresh), u(&warm));
+    let diff: Vec<f64> = uk.iter().zip(&uf).map(|(a, b)| (a - b).abs()).collect();
+    let max = diff.iter().fold(0.0f64, |a, b| a.max(*b));
+    let mean = diff.iter().sum::<f64>() / diff.len() as f64;
+    let warm_max = uw
+        .iter()
+        .zip(&uf)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f64, f64::max);
+    println!(
+        "refit after {} days: {} -> {} readings; |U kept - U fresh| max {max:.4}, mean {mean:.4}; \
+         warm vs cold max {warm_max:.2e}; thresholds {:?} vs {:?}",
+        (refit - fitted) / DAY,
+        trained,
+        count(refit),
+        kept.thresholds(),
+        fresh.thresholds()
+    );
+    assert!(warm_max < 1e-9, "warm-started refit = cold fit");
+    assert!(
+        max < 0.1,
+        "a model missing 5% of the readings moves U by {max}"
+    );
+}
