@@ -59,9 +59,11 @@ pub enum Strategy {
     Random,
     /// Every cell worth the same, the paper's greedy insertion: the nearest cells first.
     Nearest,
-    /// The paper's method: its S, its greedy planner.
+    /// The paper's method: its S (SPEC §2 at the paper's values,
+    /// [`crate::settings::UtilitySection::paper`], whatever the project's), its greedy planner.
     Paper,
-    /// gleaner's default: S with the project's weights, the default planner.
+    /// gleaner's default: the project's utility settings (S, and S + η·V when
+    /// `[utility] variance_weight` is set), the default planner.
     Gleaner,
     /// gleaner's default with one utility term switched off.
     Without(Term),
@@ -122,10 +124,14 @@ impl Strategy {
     /// The run's settings: the campaign's with this strategy's weights and planner.
     fn settings(self, base: &Settings) -> Settings {
         let mut s = base.clone();
+        if self == Strategy::Paper {
+            s.utility = s.utility.paper();
+        }
         let u = &mut s.utility;
         match self {
             Strategy::Freshness => {
                 (u.alpha, u.beta, u.gamma, u.delta) = (1.0, 0.0, 0.0, 0.0);
+                u.variance_weight = 0.0;
             }
             Strategy::Without(Term::Freshness) => u.alpha = 0.0,
             Strategy::Without(Term::Anomaly) => u.beta = 0.0,

@@ -175,6 +175,10 @@ pub struct UtilitySection {
     pub condition_classes: usize,
     /// K − 1 class thresholds in the modality's unit (default: quantiles of the history).
     pub condition_thresholds: Option<Vec<f64>>,
+    /// η: weight of gleaner's variance-reduction term V in [0, 1] (each cell's expected
+    /// reduction of the field's posterior variance, divided by the largest; see
+    /// docs/method-improvement.md): the planner routes by S + η·V. 0 = the paper's S alone.
+    pub variance_weight: f64,
 }
 
 impl Default for UtilitySection {
@@ -210,6 +214,7 @@ impl Default for UtilitySection {
             condition_modality: None,
             condition_classes: condition.n_classes,
             condition_thresholds: None,
+            variance_weight: 0.0,
         }
     }
 }
@@ -300,6 +305,28 @@ impl Default for PlannerSection {
 }
 
 impl UtilitySection {
+    /// The paper's score (SPEC §2 exactly): this section with the weights, the freshness
+    /// half-life and the anomaly's form and reference at the paper's values (the core
+    /// defaults: alpha = beta = gamma = delta = 1, 3 days, raw, own history) and no variance
+    /// term; the history window, `min_overlap`, epsilon, modality weights and the condition
+    /// model's settings are kept.
+    pub fn paper(&self) -> Self {
+        let core = gleaner_utility::UtilityConfig::default();
+        let paper = Self::default();
+        Self {
+            alpha: core.alpha,
+            beta: core.beta,
+            gamma: core.gamma,
+            delta: core.delta,
+            freshness_half_life_s: core.freshness_half_life_s,
+            anomaly_form: "raw".into(),
+            anomaly_kappa: paper.anomaly_kappa,
+            anomaly_reference: "own".into(),
+            variance_weight: 0.0,
+            ..self.clone()
+        }
+    }
+
     /// The core configuration, with modality weights laid out in `modalities` order.
     pub fn to_core(&self, modalities: &[String]) -> Result<gleaner_utility::UtilityConfig> {
         use gleaner_utility::{
@@ -528,7 +555,7 @@ impl Settings {
         let u = &self.utility;
         let e = &self.energy;
         let p = &self.planner;
-        let values: [(&str, Option<f64>); 32] = [
+        let values: [(&str, Option<f64>); 33] = [
             ("field.base_alt_m", Some(f.base_alt_m)),
             ("field.cell_size_m", Some(f.cell_size_m)),
             ("field.neighbour_k", Some(f.neighbour_k as f64)),
@@ -556,6 +583,7 @@ impl Settings {
                 "utility.condition_classes",
                 Some(u.condition_classes as f64),
             ),
+            ("utility.variance_weight", Some(u.variance_weight)),
             ("energy.battery_j", e.battery_j),
             ("energy.reserve_fraction", e.reserve_fraction),
             ("energy.altitude_m", e.altitude_m),
@@ -675,6 +703,7 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ),
     ("utility.anomaly_min_neighbours", 1.0, 64.0, false, "cells"),
     ("utility.condition_classes", 2.0, 20.0, false, "classes"),
+    ("utility.variance_weight", 0.0, 1e6, false, ""),
     ("energy.battery_j", 0.0, 1e9, true, "J"),
     ("energy.reserve_fraction", 0.0, 0.99, false, ""),
     ("energy.altitude_m", 0.0, 120.0, true, "m"),
@@ -785,5 +814,32 @@ mod tests {
             ..UtilitySection::default()
         };
         assert!(zero.to_core(&modalities).is_err());
+    }
+
+    #[test]
+    fn the_paper_section_restores_the_papers_score_and_keeps_the_rest() {
+        let modalities = ["vw@30cm".to_string()];
+        let custom: UtilitySection = toml::from_str(
+            "alpha = 2.0\nfreshness_half_life_s = 1209600.0\nanomaly_form = \"bounded\"\n\
+             anomaly_reference = \"neighbours\"\nvariance_weight = 1.0\nmin_overlap = 20\n",
+        )
+        .unwrap();
+        assert_eq!(custom.variance_weight, 1.0);
+        let paper = custom.paper();
+        assert_eq!(
+            paper.to_core(&modalities).unwrap(),
+            gleaner_utility::UtilityConfig {
+                min_overlap: 20,
+                ..gleaner_utility::UtilityConfig::default()
+            }
+        );
+        assert_eq!(paper.variance_weight, 0.0);
+        assert_eq!(paper.min_overlap, 20);
+        // Out of range: named with its key.
+        let text = "[project]\nname = \"p\"\ndatabase = \"g.db\"\n[field]\nbase_lat = 38.7\n\
+                    base_lon = -117.1\ncell_size_m = 40.0\n[sensors]\nfile = \"s.csv\"\n\
+                    [utility]\nvariance_weight = -1.0\n";
+        let err = Settings::parse(text).unwrap_err();
+        assert!(err.contains("utility.variance_weight"), "{err}");
     }
 }
