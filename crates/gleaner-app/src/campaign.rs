@@ -62,10 +62,12 @@ pub enum Strategy {
     /// The paper's method: its S (SPEC §2 at the paper's values,
     /// [`crate::settings::UtilitySection::paper`], whatever the project's), its greedy planner.
     Paper,
-    /// gleaner's default: the project's utility settings (S, and S + η·V when
-    /// `[utility] variance_weight` is set), the default planner.
+    /// gleaner's method: the project's utility settings made gleaner's
+    /// ([`crate::settings::UtilitySection::gleaner`]: gated S, 14-day freshness half-life,
+    /// bounded anomaly; plus η·V when `[utility] variance_weight` is set), the default planner.
     Gleaner,
-    /// gleaner's default with one utility term switched off.
+    /// gleaner's method with one utility term switched off (with α = 0 the gated S is 0
+    /// everywhere: nothing is worth a flight).
     Without(Term),
     /// Expected reduction of the field's posterior variance (greedy marginal gains of the
     /// kriging model fitted on the history), default planner.
@@ -124,8 +126,10 @@ impl Strategy {
     /// The run's settings: the campaign's with this strategy's weights and planner.
     fn settings(self, base: &Settings) -> Settings {
         let mut s = base.clone();
-        if self == Strategy::Paper {
-            s.utility = s.utility.paper();
+        match self {
+            Strategy::Paper => s.utility = s.utility.paper(),
+            Strategy::Gleaner | Strategy::Without(_) => s.utility = s.utility.gleaner(),
+            _ => {}
         }
         let u = &mut s.utility;
         match self {

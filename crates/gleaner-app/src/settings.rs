@@ -175,15 +175,24 @@ pub struct UtilitySection {
     pub condition_classes: usize,
     /// K − 1 class thresholds in the modality's unit (default: quantiles of the history).
     pub condition_thresholds: Option<Vec<f64>>,
+    /// How the terms combine: `additive` (the paper's S = αF + βA + γU − δR) or `gated`
+    /// (S = αF·max(0, 1 + βA + γU − δR): staleness times the cell's value; see
+    /// docs/method-improvement.md).
+    pub score_form: String,
     /// η: weight of gleaner's variance-reduction term V in [0, 1] (each cell's expected
     /// reduction of the field's posterior variance, divided by the largest; see
     /// docs/method-improvement.md): the planner routes by S + η·V. 0 = the paper's S alone.
     pub variance_weight: f64,
 }
 
+/// gleaner's own freshness half-life, seconds (14 days): F grows about linearly with age
+/// over the days between visits instead of saturating (docs/method-improvement.md).
+pub const GLEANER_HALF_LIFE_S: f64 = 14.0 * 86_400.0;
+
 impl Default for UtilitySection {
     /// The core's defaults ([`gleaner_utility::UtilityConfig::default`],
-    /// [`gleaner_utility::ConditionConfig::default`]).
+    /// [`gleaner_utility::ConditionConfig::default`]): the paper's score.
+    /// [`UtilitySection::gleaner`] gives gleaner's method.
     fn default() -> Self {
         use gleaner_utility::{AnomalyForm, ConditionConfig, HistoryWindow, UtilityConfig};
         let core = UtilityConfig::default();
@@ -214,6 +223,7 @@ impl Default for UtilitySection {
             condition_modality: None,
             condition_classes: condition.n_classes,
             condition_thresholds: None,
+            score_form: "additive".into(),
             variance_weight: 0.0,
         }
     }
@@ -305,6 +315,20 @@ impl Default for PlannerSection {
 }
 
 impl UtilitySection {
+    /// gleaner's method (docs/method-improvement.md): this section with the gated score
+    /// form (S = αF·max(0, 1 + βA + γU − δR)), a 14-day freshness half-life
+    /// ([`GLEANER_HALF_LIFE_S`]) and the bounded anomaly (1 − exp(−A/kappa)); the weights,
+    /// kappa, the anomaly's reference, the variance weight and everything else are kept.
+    /// The `gleaner` strategy of campaigns uses it.
+    pub fn gleaner(&self) -> Self {
+        Self {
+            freshness_half_life_s: GLEANER_HALF_LIFE_S,
+            anomaly_form: "bounded".into(),
+            score_form: "gated".into(),
+            ..self.clone()
+        }
+    }
+
     /// The paper's score (SPEC §2 exactly): this section with the weights, the freshness
     /// half-life and the anomaly's form and reference at the paper's values (the core
     /// defaults: alpha = beta = gamma = delta = 1, 3 days, raw, own history) and no variance
@@ -322,6 +346,7 @@ impl UtilitySection {
             anomaly_form: "raw".into(),
             anomaly_kappa: paper.anomaly_kappa,
             anomaly_reference: "own".into(),
+            score_form: "additive".into(),
             variance_weight: 0.0,
             ..self.clone()
         }
@@ -330,7 +355,7 @@ impl UtilitySection {
     /// The core configuration, with modality weights laid out in `modalities` order.
     pub fn to_core(&self, modalities: &[String]) -> Result<gleaner_utility::UtilityConfig> {
         use gleaner_utility::{
-            AnomalyForm, AnomalyReference, HistoryWindow, ModalityWeights, UtilityConfig,
+            AnomalyForm, AnomalyReference, HistoryWindow, ModalityWeights, ScoreForm, UtilityConfig,
         };
         let weights = |w: &Option<std::collections::BTreeMap<String, f64>>| match w {
             None => ModalityWeights::Equal,
@@ -372,6 +397,13 @@ impl UtilitySection {
                 other => bail!(
                     "utility.anomaly_reference = {other:?}: expected \"own\" or \"neighbours\""
                 ),
+            },
+            score_form: match self.score_form.as_str() {
+                "additive" => ScoreForm::Additive,
+                "gated" => ScoreForm::Gated,
+                other => {
+                    bail!("utility.score_form = {other:?}: expected \"additive\" or \"gated\"")
+                }
             },
         };
         config
@@ -835,6 +867,20 @@ mod tests {
         );
         assert_eq!(paper.variance_weight, 0.0);
         assert_eq!(paper.min_overlap, 20);
+        let gleaner = UtilitySection::default()
+            .gleaner()
+            .to_core(&modalities)
+            .unwrap();
+        assert_eq!(gleaner.score_form, gleaner_utility::ScoreForm::Gated);
+        assert_eq!(gleaner.freshness_half_life_s, GLEANER_HALF_LIFE_S);
+        assert_eq!(
+            gleaner.anomaly_form,
+            gleaner_utility::AnomalyForm::Bounded { kappa: 3.0 }
+        );
+        assert_eq!(
+            UtilitySection::default().gleaner().paper(),
+            UtilitySection::default()
+        );
         // Out of range: named with its key.
         let text = "[project]\nname = \"p\"\ndatabase = \"g.db\"\n[field]\nbase_lat = 38.7\n\
                     base_lon = -117.1\ncell_size_m = 40.0\n[sensors]\nfile = \"s.csv\"\n\
