@@ -1183,3 +1183,63 @@ pub fn summarise(results: &[CampaignResult], reference: Strategy) -> Vec<Summary
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DAY: i64 = 86_400;
+
+    #[test]
+    fn blocks_are_seven_days_of_missions_averaged_over_runs() {
+        // Daily missions over 3 weeks: 3 blocks; two runs averaged within each block.
+        let a: Vec<(UnixSeconds, f64)> = (0..21).map(|d| (d * DAY, (d / 7) as f64)).collect();
+        let b: Vec<(UnixSeconds, f64)> = (0..21).map(|d| (d * DAY, 10.0)).collect();
+        assert_eq!(block_means(&[a.clone()]), vec![0.0, 1.0, 2.0]);
+        assert_eq!(block_means(&[a, b]), vec![5.0, 5.5, 6.0]);
+        // Weekly missions: one per block; non-finite values left out.
+        let w: Vec<(UnixSeconds, f64)> = (0..4)
+            .map(|k| (k * 7 * DAY, if k == 2 { f64::NAN } else { k as f64 }))
+            .collect();
+        assert_eq!(block_means(&[w]), vec![0.0, 1.0, 3.0]);
+        assert!(block_means(&[]).is_empty());
+    }
+
+    #[test]
+    fn no_interval_on_fewer_than_ten_blocks() {
+        let short: Vec<(UnixSeconds, f64)> = (0..63).map(|d| (d * DAY, d as f64)).collect();
+        let i = block_interval(&[short]);
+        assert_eq!(i.n, 9);
+        assert!(i.mean.is_finite() && i.low.is_nan() && i.high.is_nan());
+        let long: Vec<(UnixSeconds, f64)> = (0..70).map(|d| (d * DAY, (d % 3) as f64)).collect();
+        let i = block_interval(&[long]);
+        assert_eq!(i.n, 10);
+        assert!(i.low <= i.mean && i.mean <= i.high, "{i:?}");
+    }
+
+    #[test]
+    fn paper_and_gleaner_strategies_score_their_own_way() {
+        let mut base = crate::settings::Settings::parse(
+            "[project]\nname = \"p\"\ndatabase = \"g.db\"\n[field]\nbase_lat = 38.7\n\
+             base_lon = -117.1\ncell_size_m = 40.0\n[sensors]\nfile = \"s.csv\"\n",
+        )
+        .unwrap();
+        base.utility.alpha = 3.0;
+        base.utility.score_form = "gated".into();
+        let paper = Strategy::Paper.settings(&base).utility;
+        assert_eq!(paper, base.utility.paper());
+        assert_eq!((paper.alpha, paper.score_form.as_str()), (1.0, "additive"));
+        assert_eq!(Strategy::Paper.planner(), Planner::Greedy);
+        let gleaner = Strategy::Gleaner.settings(&base).utility;
+        assert_eq!(gleaner, base.utility.gleaner());
+        assert_eq!(gleaner.alpha, 3.0);
+        assert_eq!(Strategy::Gleaner.planner(), Planner::Default);
+        let ablation = Strategy::Without(Term::Anomaly).settings(&base).utility;
+        assert_eq!(
+            (ablation.beta, ablation.score_form.as_str()),
+            (0.0, "gated")
+        );
+        let fresh = Strategy::Freshness.settings(&base).utility;
+        assert_eq!((fresh.beta, fresh.variance_weight), (0.0, 0.0));
+    }
+}
