@@ -1195,7 +1195,7 @@ mod tests {
         // Daily missions over 3 weeks: 3 blocks; two runs averaged within each block.
         let a: Vec<(UnixSeconds, f64)> = (0..21).map(|d| (d * DAY, (d / 7) as f64)).collect();
         let b: Vec<(UnixSeconds, f64)> = (0..21).map(|d| (d * DAY, 10.0)).collect();
-        assert_eq!(block_means(&[a.clone()]), vec![0.0, 1.0, 2.0]);
+        assert_eq!(block_means(std::slice::from_ref(&a)), vec![0.0, 1.0, 2.0]);
         assert_eq!(block_means(&[a, b]), vec![5.0, 5.5, 6.0]);
         // Weekly missions: one per block; non-finite values left out.
         let w: Vec<(UnixSeconds, f64)> = (0..4)
