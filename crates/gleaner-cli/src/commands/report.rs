@@ -612,16 +612,18 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         "- Every run is its own project (an in-memory store) driven through gleaner's score, plan, \
          explore and record use cases; the planner knows only the history and what its flights \
          brought back; a reading stamped t is available from t + period on.\n\
-         - Strategies: gleaner = S (project weights) + the default planner; paper = S + the \
-         paper's greedy; variance = greedy expected reduction of the kriging posterior variance, \
+         - Strategies: gleaner = gleaner's method (gated S = αF·max(0, 1 + βA + γU − δR), \
+         14-day freshness half-life, bounded anomaly; project weights) + the default planner; \
+         paper = the paper's S (SPEC §2 at its values) + the paper's greedy; variance = greedy expected reduction of the kriging posterior variance, \
          routed by the default planner; freshness = S with F only; round-robin = days since the \
          last collection; random = seeded uniform scores; nearest = equal scores with greedy \
          insertion; exhaustive = every cell, as many sorties as it takes; no-X = gleaner without \
          term X.\n\
          - Reconstruction at mission T (after its flights): each sensor's value stamped T − period; \
-         carried = its last collected value; kriging = simple kriging of residuals from each \
-         sensor's history mean with a separable exponential space-time covariance fitted on \
-         the history, from the 16 most correlated latest readings.\n\
+         carried = its last collected value; kriging = ordinary kriging (simple kriging with \
+         `--simple-kriging`) of residuals from each sensor's history mean with a separable \
+         exponential space-time covariance and a temporal nugget fitted on the history, from \
+         the 16 most correlated latest readings.\n\
          - An event is caught at the first mission that collects one of its sensors (with an \
          event reading still in the buffer) once its first reading is available; delay = catch \
          time − (start + period).\n\
