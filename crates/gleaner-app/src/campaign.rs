@@ -59,11 +59,15 @@ pub enum Strategy {
     Random,
     /// Every cell worth the same, the paper's greedy insertion: the nearest cells first.
     Nearest,
-    /// The paper's method: its S, its greedy planner.
+    /// The paper's method: its S (SPEC §2 at the paper's values,
+    /// [`crate::settings::UtilitySection::paper`], whatever the project's), its greedy planner.
     Paper,
-    /// gleaner's default: S with the project's weights, the default planner.
+    /// gleaner's method: the project's utility settings made gleaner's
+    /// ([`crate::settings::UtilitySection::gleaner`]: gated S, 14-day freshness half-life,
+    /// bounded anomaly; plus η·V when `[utility] variance_weight` is set), the default planner.
     Gleaner,
-    /// gleaner's default with one utility term switched off.
+    /// gleaner's method with one utility term switched off (with α = 0 the gated S is 0
+    /// everywhere: nothing is worth a flight).
     Without(Term),
     /// Expected reduction of the field's posterior variance (greedy marginal gains of the
     /// kriging model fitted on the history), default planner.
@@ -122,10 +126,16 @@ impl Strategy {
     /// The run's settings: the campaign's with this strategy's weights and planner.
     fn settings(self, base: &Settings) -> Settings {
         let mut s = base.clone();
+        match self {
+            Strategy::Paper => s.utility = s.utility.paper(),
+            Strategy::Gleaner | Strategy::Without(_) => s.utility = s.utility.gleaner(),
+            _ => {}
+        }
         let u = &mut s.utility;
         match self {
             Strategy::Freshness => {
                 (u.alpha, u.beta, u.gamma, u.delta) = (1.0, 0.0, 0.0, 0.0);
+                u.variance_weight = 0.0;
             }
             Strategy::Without(Term::Freshness) => u.alpha = 0.0,
             Strategy::Without(Term::Anomaly) => u.beta = 0.0,
@@ -275,6 +285,9 @@ pub struct CampaignRequest {
     pub planner_iterations: u64,
     /// Observations per kriging estimate.
     pub neighbours: usize,
+    /// Kriging of the reconstruction: ordinary ([`gleaner_kriging::Mean::Unknown`], the
+    /// default of `reconstruct`) or simple ([`gleaner_kriging::Mean::Known`]).
+    pub kriging_mean: gleaner_kriging::Mean,
     /// Runs in parallel (threads; 0 = rayon's default).
     pub jobs: usize,
     /// Provenance time stamped on missions, seconds.
@@ -341,6 +354,32 @@ pub struct RunResult {
     /// Per campaign event (same order as [`CampaignResult::events`]): when it was caught
     /// (the mission time), seconds.
     pub caught: Vec<Option<UnixSeconds>>,
+    /// Every cell visited, with the utility terms the planner's scoring gave it before the
+    /// flight (diagnostics: which terms drove the choice, revisit counts). Empty when the
+    /// results were read back from files that do not hold it.
+    pub visits: Vec<Visit>,
+}
+
+/// One visited cell of one mission, with its pre-flight utility terms (the project's weights
+/// and forms, whatever the strategy chose by).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Visit {
+    /// Mission number, from 0.
+    pub index: usize,
+    /// The cell.
+    pub cell: CellIndex,
+    /// Days since the cell was last collected (its stalest sensor), at the mission time.
+    pub age_days: f64,
+    /// Freshness F, in [0, 1].
+    pub f: f64,
+    /// Anomaly as scored (raw or bounded).
+    pub a: f64,
+    /// Uncertainty U, in [0, 1].
+    pub u: f64,
+    /// Redundancy R, in [0, 1].
+    pub r: f64,
+    /// Score S with the project's weights.
+    pub s: f64,
 }
 
 /// A campaign's results.
@@ -669,6 +708,7 @@ fn run_one(
     }
     let mut caught: Vec<Option<UnixSeconds>> = vec![None; shared.events.len()];
     let mut missions = Vec::with_capacity(request.schedule.len());
+    let mut visits = Vec::new();
     for (index, &t) in request.schedule.iter().enumerate() {
         let cell_age = |c: usize| -> Option<f64> {
             cell_sensor_ids[c]
@@ -716,7 +756,15 @@ fn run_one(
             },
         )?;
         let accuracy = classifier_accuracy(&scoring, &cells, &shared.class_series, t - period);
-        drop(scoring);
+        let terms_of: HashMap<CellIndex, (usize, &gleaner_utility::CellTerms)> = scoring
+            .knowledge
+            .field
+            .cells()
+            .iter()
+            .zip(&scoring.terms)
+            .enumerate()
+            .map(|(k, (c, terms))| (c.index, (k, terms)))
+            .collect();
         let mut flown = Vec::new();
         let (mut energy_j, mut budget_j) = (0.0, 0.0);
         if key.strategy == Strategy::Exhaustive {
@@ -759,11 +807,25 @@ fn run_one(
             lost_readings += lost;
             cells_visited += outcome.cells.len();
             for c in &outcome.cells {
+                if let Some(&(k, terms)) = terms_of.get(c) {
+                    visits.push(Visit {
+                        index,
+                        cell: *c,
+                        age_days: cell_age(k).unwrap_or(f64::NAN) / 86_400.0,
+                        f: terms.f,
+                        a: terms.a,
+                        u: terms.u,
+                        r: terms.r,
+                        s: terms.s,
+                    });
+                }
                 if let Some(s) = sensor_of_cell.get(c) {
                     visited.extend(s.iter().cloned());
                 }
             }
         }
+        drop(terms_of);
+        drop(scoring);
         // Events first caught now: a visited sensor brought back one of the event's readings
         // (still in its buffer).
         let mut events_caught = 0;
@@ -788,7 +850,7 @@ fn run_one(
             &shared.model,
             target,
             lookback,
-            request.neighbours,
+            (request.neighbours, request.kriging_mean),
         )?;
         let (mut se_c, mut ae_c, mut se_k, mut ae_k, mut var, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0);
         for e in &estimates {
@@ -838,6 +900,7 @@ fn run_one(
         key,
         missions,
         caught,
+        visits,
     })
 }
 
@@ -923,25 +986,51 @@ pub fn interval(values: &[f64]) -> Interval {
     }
 }
 
-/// Missions per block when a single run's missions stand in for replicates: consecutive
-/// missions are correlated, so intervals rest on the means of blocks of this many missions.
-pub const BLOCK_MISSIONS: usize = 7;
+/// Days of mission time per block: consecutive missions are correlated (the same weather,
+/// the same stale sensors), so intervals rest on the means of blocks of this many days of
+/// missions, not on single missions.
+pub const BLOCK_DAYS: i64 = 7;
 
-/// The values an interval rests on: one mean per run when there are several runs, else the
-/// means of consecutive blocks of [`BLOCK_MISSIONS`] missions of the single run.
-fn replicate_means(per_run: &[Vec<f64>]) -> Vec<f64> {
-    let mean = |v: &[f64]| {
-        let f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-        if f.is_empty() {
-            f64::NAN
-        } else {
-            f.iter().sum::<f64>() / f.len() as f64
-        }
+/// Fewest blocks an interval rests on: with fewer, Student's t over so few block means is
+/// too wide to mean anything (or, worse, too narrow by chance), and no interval is given.
+pub const MIN_BLOCKS: usize = 10;
+
+/// The values an interval rests on: per block of [`BLOCK_DAYS`] days of mission time (from the
+/// first mission of any run), the mean over runs of each run's mean over its missions in
+/// that block. Runs are averaged within a block rather than counted as separate values, so
+/// replicates of the same dataset (which share its weather) do not pass for independent
+/// evidence; blocks are the units, taken as approximately independent at a week apart.
+pub fn block_means(per_run: &[Vec<(UnixSeconds, f64)>]) -> Vec<f64> {
+    let Some(t0) = per_run.iter().flatten().map(|p| p.0).min() else {
+        return Vec::new();
     };
-    match per_run {
-        [single] => single.chunks(BLOCK_MISSIONS).map(mean).collect(),
-        many => many.iter().map(|v| mean(v)).collect(),
+    let block_s = BLOCK_DAYS * 86_400;
+    let mut blocks: BTreeMap<i64, (f64, usize)> = BTreeMap::new();
+    for run in per_run {
+        let mut own: BTreeMap<i64, (f64, usize)> = BTreeMap::new();
+        for &(t, v) in run.iter().filter(|p| p.1.is_finite()) {
+            let e = own.entry((t - t0).div_euclid(block_s)).or_insert((0.0, 0));
+            e.0 += v;
+            e.1 += 1;
+        }
+        for (b, (sum, n)) in own {
+            let e = blocks.entry(b).or_insert((0.0, 0));
+            e.0 += sum / n as f64;
+            e.1 += 1;
+        }
     }
+    blocks.values().map(|(sum, n)| sum / *n as f64).collect()
+}
+
+/// The mean over blocks with Student's t 95% interval over the [`block_means`], given only
+/// when there are at least [`MIN_BLOCKS`] blocks (else `low` and `high` are NaN).
+pub fn block_interval(per_run: &[Vec<(UnixSeconds, f64)>]) -> Interval {
+    let mut i = interval(&block_means(per_run));
+    if i.n < MIN_BLOCKS {
+        i.low = f64::NAN;
+        i.high = f64::NAN;
+    }
+    i
 }
 
 /// A per-mission metric, by name: `rmse_kriged`, `rmse_carried`, `mae_kriged`,
@@ -997,15 +1086,21 @@ pub struct Summary {
     pub budget: f64,
     /// Runs pooled.
     pub runs: usize,
-    /// Per [`METRICS`] name: the mean over missions with its 95% interval.
+    /// Per [`METRICS`] name: the mean over blocks of missions with its 95% interval
+    /// ([`block_interval`]).
     pub metrics: Vec<(&'static str, Interval)>,
     /// Events caught / events, pooled.
     pub events_caught: (usize, usize),
     /// Delay from an event's first available reading to its catch, days (caught events).
     pub delay_days: Interval,
     /// Kriging RMSE minus the reference strategy's, paired by mission (same dataset, seed,
-    /// budget), with its 95% interval; `None` for the reference itself or without a pair.
+    /// budget), with its 95% interval over blocks ([`block_interval`]); `None` for the
+    /// reference itself or without a pair.
     pub rmse_vs_reference: Option<Interval>,
+    /// Catch delay minus the reference strategy's, days, over the events both caught (same
+    /// dataset, seed, budget), with Student's t 95% interval over those events; `None` for
+    /// the reference itself or without a pair.
+    pub delay_vs_reference: Option<Interval>,
 }
 
 /// Summaries of every (strategy, budget) over the given campaigns (e.g. one per synthetic
@@ -1031,11 +1126,16 @@ pub fn summarise(results: &[CampaignResult], reference: Strategy) -> Vec<Summary
         let metrics = METRICS
             .iter()
             .map(|&name| {
-                let per_run: Vec<Vec<f64>> = runs
+                let per_run: Vec<Vec<(UnixSeconds, f64)>> = runs
                     .iter()
-                    .map(|(_, run)| run.missions.iter().map(|m| metric(m, name)).collect())
+                    .map(|(_, run)| {
+                        run.missions
+                            .iter()
+                            .map(|m| (m.t, metric(m, name)))
+                            .collect()
+                    })
                     .collect();
-                (name, interval(&replicate_means(&per_run)))
+                (name, block_interval(&per_run))
             })
             .collect();
         let mut caught = 0;
@@ -1052,7 +1152,7 @@ pub fn summarise(results: &[CampaignResult], reference: Strategy) -> Vec<Summary
         }
         let rmse_vs_reference = (strategy != reference)
             .then(|| {
-                let per_run: Vec<Vec<f64>> = runs
+                let per_run: Vec<Vec<(UnixSeconds, f64)>> = runs
                     .iter()
                     .filter_map(|(r, run)| {
                         let other = r.runs.iter().find(|o| {
@@ -1064,12 +1164,32 @@ pub fn summarise(results: &[CampaignResult], reference: Strategy) -> Vec<Summary
                             run.missions
                                 .iter()
                                 .zip(&other.missions)
-                                .map(|(a, b)| a.rmse_kriged - b.rmse_kriged)
+                                .map(|(a, b)| (a.t, a.rmse_kriged - b.rmse_kriged))
                                 .collect(),
                         )
                     })
                     .collect();
-                (!per_run.is_empty()).then(|| interval(&replicate_means(&per_run)))
+                (!per_run.is_empty()).then(|| block_interval(&per_run))
+            })
+            .flatten();
+        let delay_vs_reference = (strategy != reference)
+            .then(|| {
+                let mut diffs = Vec::new();
+                for (r, run) in &runs {
+                    let Some(other) = r.runs.iter().find(|o| {
+                        o.key.strategy == reference
+                            && o.key.seed == run.key.seed
+                            && o.key.budget == run.key.budget
+                    }) else {
+                        continue;
+                    };
+                    for (a, b) in run.caught.iter().zip(&other.caught) {
+                        if let (Some(a), Some(b)) = (a, b) {
+                            diffs.push((a - b) as f64 / 86_400.0);
+                        }
+                    }
+                }
+                (!diffs.is_empty()).then(|| interval(&diffs))
             })
             .flatten();
         out.push(Summary {
@@ -1080,7 +1200,68 @@ pub fn summarise(results: &[CampaignResult], reference: Strategy) -> Vec<Summary
             events_caught: (caught, total),
             delay_days: interval(&delays),
             rmse_vs_reference,
+            delay_vs_reference,
         });
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DAY: i64 = 86_400;
+
+    #[test]
+    fn blocks_are_seven_days_of_missions_averaged_over_runs() {
+        // Daily missions over 3 weeks: 3 blocks; two runs averaged within each block.
+        let a: Vec<(UnixSeconds, f64)> = (0..21).map(|d| (d * DAY, (d / 7) as f64)).collect();
+        let b: Vec<(UnixSeconds, f64)> = (0..21).map(|d| (d * DAY, 10.0)).collect();
+        assert_eq!(block_means(std::slice::from_ref(&a)), vec![0.0, 1.0, 2.0]);
+        assert_eq!(block_means(&[a, b]), vec![5.0, 5.5, 6.0]);
+        // Weekly missions: one per block; non-finite values left out.
+        let w: Vec<(UnixSeconds, f64)> = (0..4)
+            .map(|k| (k * 7 * DAY, if k == 2 { f64::NAN } else { k as f64 }))
+            .collect();
+        assert_eq!(block_means(&[w]), vec![0.0, 1.0, 3.0]);
+        assert!(block_means(&[]).is_empty());
+    }
+
+    #[test]
+    fn no_interval_on_fewer_than_ten_blocks() {
+        let short: Vec<(UnixSeconds, f64)> = (0..63).map(|d| (d * DAY, d as f64)).collect();
+        let i = block_interval(&[short]);
+        assert_eq!(i.n, 9);
+        assert!(i.mean.is_finite() && i.low.is_nan() && i.high.is_nan());
+        let long: Vec<(UnixSeconds, f64)> = (0..70).map(|d| (d * DAY, (d % 3) as f64)).collect();
+        let i = block_interval(&[long]);
+        assert_eq!(i.n, 10);
+        assert!(i.low <= i.mean && i.mean <= i.high, "{i:?}");
+    }
+
+    #[test]
+    fn paper_and_gleaner_strategies_score_their_own_way() {
+        let mut base = crate::settings::Settings::parse(
+            "[project]\nname = \"p\"\ndatabase = \"g.db\"\n[field]\nbase_lat = 38.7\n\
+             base_lon = -117.1\ncell_size_m = 40.0\n[sensors]\nfile = \"s.csv\"\n",
+        )
+        .unwrap();
+        base.utility.alpha = 3.0;
+        base.utility.score_form = "gated".into();
+        let paper = Strategy::Paper.settings(&base).utility;
+        assert_eq!(paper, base.utility.paper());
+        assert_eq!((paper.alpha, paper.score_form.as_str()), (1.0, "additive"));
+        assert_eq!(Strategy::Paper.planner(), Planner::Greedy);
+        let gleaner = Strategy::Gleaner.settings(&base).utility;
+        assert_eq!(gleaner, base.utility.gleaner());
+        assert_eq!(gleaner.alpha, 3.0);
+        assert_eq!(Strategy::Gleaner.planner(), Planner::Default);
+        let ablation = Strategy::Without(Term::Anomaly).settings(&base).utility;
+        assert_eq!(
+            (ablation.beta, ablation.score_form.as_str()),
+            (0.0, "gated")
+        );
+        let fresh = Strategy::Freshness.settings(&base).utility;
+        assert_eq!((fresh.beta, fresh.variance_weight), (0.0, 0.0));
+    }
 }

@@ -59,6 +59,7 @@ pub mod settings;
 mod simulate;
 mod state;
 mod summaries;
+mod value;
 mod view;
 
 pub use cell_detail::{CellDetail, Contributions, SeriesPoint, cell_detail};

@@ -300,8 +300,23 @@ pub fn plan_with_preset<S: Store>(
                     dry_run: true,
                 },
             )?;
-            let scores: Vec<f64> = scoring.terms.iter().map(|c| c.s).collect();
-            let (t, form, w) = (scoring.t, scoring.anomaly_form.clone(), scoring.weights);
+            let mut scoring = scoring;
+            let mut scores: Vec<f64> = scoring.terms.iter().map(|c| c.s).collect();
+            let mut form = scoring.anomaly_form.clone();
+            let eta = settings.utility.variance_weight;
+            if eta > 0.0 {
+                // gleaner's variance-reduction term: the planner routes by S + η·V.
+                match crate::value::variance_gains(project, &scoring.knowledge, scoring.t)? {
+                    Ok(v) => {
+                        for (s, v) in scores.iter_mut().zip(&v) {
+                            *s += eta * v;
+                        }
+                        form = format!("{form}; S + {eta}·V (variance reduction)");
+                    }
+                    Err(why) => scoring.warnings.push(why),
+                }
+            }
+            let (t, w) = (scoring.t, scoring.weights);
             (None, Some(scoring), scores, t, form, w)
         }
     };

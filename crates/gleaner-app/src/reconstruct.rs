@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 
 use gleaner_field::{LatLon, Modality, SensorId, UnixSeconds};
-use gleaner_kriging::{FieldModel, FitOptions, Observation, SensorSeries, fit, krige};
+use gleaner_kriging::{FieldModel, FitOptions, Mean, Observation, SensorSeries, fit, krige_with};
 use gleaner_store::{ReadingBatch, Store};
 
 use crate::error::{AppError, Result};
@@ -24,6 +24,9 @@ pub struct ReconstructRequest {
     pub modality: Option<String>,
     /// Observations per estimate [default: [`DEFAULT_NEIGHBOURS`]].
     pub neighbours: Option<usize>,
+    /// Simple kriging towards the sensors' long-run means instead of ordinary kriging (the
+    /// default, [`Mean::Unknown`]: the field's current level is estimated from the data).
+    pub simple: bool,
 }
 
 /// One sensor's estimate.
@@ -107,6 +110,10 @@ fn per_sensor(ids: &[SensorId], batch: &ReadingBatch) -> Vec<(Vec<UnixSeconds>, 
     out
 }
 
+/// Largest lag of the temporal fit, days: the ages readings reach between visits in a
+/// campaign (a 14-day fit saw only the slow seasonal part and gave a time scale of months).
+pub const FIT_LAG_DAYS: i64 = 28;
+
 /// Fits the field model of `modality` on everything known at or before `at` (seconds).
 pub(crate) fn fit_model<S: Store>(
     project: &Project<S>,
@@ -134,8 +141,9 @@ pub(crate) fn fit_model<S: Store>(
         .collect();
     let options = FitOptions {
         step_s: step,
-        // Lags covering two weeks whatever the sampling step.
-        max_lag_steps: (14 * 86_400 / step).clamp(14, 400),
+        // Lags covering the four weeks a campaign's readings typically age, whatever the
+        // sampling step; the lag-0 intercept is fitted (a temporal nugget).
+        max_lag_steps: (FIT_LAG_DAYS * 86_400 / step).clamp(14, 1_000),
         ..FitOptions::default()
     };
     let model = fit(&series, &options)
@@ -155,14 +163,14 @@ fn positions(sensors: &[gleaner_field::Sensor], field: &gleaner_field::Field) ->
 }
 
 /// Estimates every sensor's `modality` value at `at` with a fitted model, from each sensor's
-/// latest known reading within `lookback_s` before `at`.
+/// latest known reading within `lookback_s` before `at`, by kriging with `mean`.
 pub(crate) fn estimate<S: Store>(
     project: &Project<S>,
     modality: &Modality,
     model: &FieldModel,
     at: UnixSeconds,
     lookback_s: i64,
-    neighbours: usize,
+    (neighbours, mean): (usize, Mean),
 ) -> Result<Vec<SensorEstimate>> {
     let sensors = project.sensors()?;
     let (_, field) = project.field()?;
@@ -198,7 +206,13 @@ pub(crate) fn estimate<S: Store>(
         .iter()
         .enumerate()
         .map(|(k, s)| {
-            let e = krige(&model.covariance, &observations, positions[k], neighbours);
+            let e = krige_with(
+                &model.covariance,
+                &observations,
+                positions[k],
+                neighbours,
+                mean,
+            );
             SensorEstimate {
                 sensor: s.id.clone(),
                 position: s.position,
@@ -239,7 +253,14 @@ pub fn reconstruct<S: Store>(
         &model,
         at,
         UnixSeconds::MAX / 4,
-        neighbours,
+        (
+            neighbours,
+            if request.simple {
+                Mean::Known
+            } else {
+                Mean::Unknown
+            },
+        ),
     )?;
     Ok(Reconstruction {
         at,

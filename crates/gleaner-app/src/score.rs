@@ -74,9 +74,13 @@ pub struct Scoring {
 /// The anomaly label of every output: the form, and the reference when it is not the
 /// paper's own history (e.g. `raw, neighbours(min=2)`).
 pub(crate) fn anomaly_label(config: &gleaner_utility::UtilityConfig) -> String {
-    match config.anomaly_reference {
+    let label = match config.anomaly_reference {
         gleaner_utility::AnomalyReference::OwnHistory => config.anomaly_form.label(),
         r => format!("{}, {}", config.anomaly_form.label(), r.label()),
+    };
+    match config.score_form {
+        gleaner_utility::ScoreForm::Additive => label,
+        f => format!("{label}; S {}", f.label()),
     }
 }
 

@@ -184,11 +184,24 @@ pub struct UtilitySection {
     /// path leave it out there). Scoring from the whole history (`--history-until`, windows)
     /// always fits afresh.
     pub condition_refit_growth: f64,
+    /// How the terms combine: `additive` (the paper's S = αF + βA + γU − δR) or `gated`
+    /// (S = αF·max(0, 1 + βA + γU − δR): staleness times the cell's value; see
+    /// docs/method-improvement.md).
+    pub score_form: String,
+    /// η: weight of gleaner's variance-reduction term V in [0, 1] (each cell's expected
+    /// reduction of the field's posterior variance, divided by the largest; see
+    /// docs/method-improvement.md): the planner routes by S + η·V. 0 = the paper's S alone.
+    pub variance_weight: f64,
 }
+
+/// gleaner's own freshness half-life, seconds (14 days): F grows about linearly with age
+/// over the days between visits instead of saturating (docs/method-improvement.md).
+pub const GLEANER_HALF_LIFE_S: f64 = 14.0 * 86_400.0;
 
 impl Default for UtilitySection {
     /// The core's defaults ([`gleaner_utility::UtilityConfig::default`],
-    /// [`gleaner_utility::ConditionConfig::default`]).
+    /// [`gleaner_utility::ConditionConfig::default`]): the paper's score.
+    /// [`UtilitySection::gleaner`] gives gleaner's method.
     fn default() -> Self {
         use gleaner_utility::{AnomalyForm, ConditionConfig, HistoryWindow, UtilityConfig};
         let core = UtilityConfig::default();
@@ -220,6 +233,8 @@ impl Default for UtilitySection {
             condition_classes: condition.n_classes,
             condition_thresholds: None,
             condition_refit_growth: DEFAULT_CONDITION_REFIT_GROWTH,
+            score_form: "additive".into(),
+            variance_weight: 0.0,
         }
     }
 }
@@ -314,10 +329,47 @@ impl Default for PlannerSection {
 }
 
 impl UtilitySection {
+    /// gleaner's method (docs/method-improvement.md): this section with the gated score
+    /// form (S = αF·max(0, 1 + βA + γU − δR)), a 14-day freshness half-life
+    /// ([`GLEANER_HALF_LIFE_S`]) and the bounded anomaly (1 − exp(−A/kappa)); the weights,
+    /// kappa, the anomaly's reference, the variance weight and everything else are kept.
+    /// The `gleaner` strategy of campaigns uses it.
+    pub fn gleaner(&self) -> Self {
+        Self {
+            freshness_half_life_s: GLEANER_HALF_LIFE_S,
+            anomaly_form: "bounded".into(),
+            score_form: "gated".into(),
+            ..self.clone()
+        }
+    }
+
+    /// The paper's score (SPEC §2 exactly): this section with the weights, the freshness
+    /// half-life and the anomaly's form and reference at the paper's values (the core
+    /// defaults: alpha = beta = gamma = delta = 1, 3 days, raw, own history) and no variance
+    /// term; the history window, `min_overlap`, epsilon, modality weights and the condition
+    /// model's settings are kept.
+    pub fn paper(&self) -> Self {
+        let core = gleaner_utility::UtilityConfig::default();
+        let paper = Self::default();
+        Self {
+            alpha: core.alpha,
+            beta: core.beta,
+            gamma: core.gamma,
+            delta: core.delta,
+            freshness_half_life_s: core.freshness_half_life_s,
+            anomaly_form: "raw".into(),
+            anomaly_kappa: paper.anomaly_kappa,
+            anomaly_reference: "own".into(),
+            score_form: "additive".into(),
+            variance_weight: 0.0,
+            ..self.clone()
+        }
+    }
+
     /// The core configuration, with modality weights laid out in `modalities` order.
     pub fn to_core(&self, modalities: &[String]) -> Result<gleaner_utility::UtilityConfig> {
         use gleaner_utility::{
-            AnomalyForm, AnomalyReference, HistoryWindow, ModalityWeights, UtilityConfig,
+            AnomalyForm, AnomalyReference, HistoryWindow, ModalityWeights, ScoreForm, UtilityConfig,
         };
         let weights = |w: &Option<std::collections::BTreeMap<String, f64>>| match w {
             None => ModalityWeights::Equal,
@@ -359,6 +411,13 @@ impl UtilitySection {
                 other => bail!(
                     "utility.anomaly_reference = {other:?}: expected \"own\" or \"neighbours\""
                 ),
+            },
+            score_form: match self.score_form.as_str() {
+                "additive" => ScoreForm::Additive,
+                "gated" => ScoreForm::Gated,
+                other => {
+                    bail!("utility.score_form = {other:?}: expected \"additive\" or \"gated\"")
+                }
             },
         };
         config
@@ -542,7 +601,7 @@ impl Settings {
         let u = &self.utility;
         let e = &self.energy;
         let p = &self.planner;
-        let values: [(&str, Option<f64>); 33] = [
+        let values: [(&str, Option<f64>); 34] = [
             ("field.base_alt_m", Some(f.base_alt_m)),
             ("field.cell_size_m", Some(f.cell_size_m)),
             ("field.neighbour_k", Some(f.neighbour_k as f64)),
@@ -574,6 +633,7 @@ impl Settings {
                 "utility.condition_refit_growth",
                 Some(u.condition_refit_growth),
             ),
+            ("utility.variance_weight", Some(u.variance_weight)),
             ("energy.battery_j", e.battery_j),
             ("energy.reserve_fraction", e.reserve_fraction),
             ("energy.altitude_m", e.altitude_m),
@@ -694,6 +754,7 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ("utility.anomaly_min_neighbours", 1.0, 64.0, false, "cells"),
     ("utility.condition_classes", 2.0, 20.0, false, "classes"),
     ("utility.condition_refit_growth", 0.0, 10.0, false, ""),
+    ("utility.variance_weight", 0.0, 1e6, false, ""),
     ("energy.battery_j", 0.0, 1e9, true, "J"),
     ("energy.reserve_fraction", 0.0, 0.99, false, ""),
     ("energy.altitude_m", 0.0, 120.0, true, "m"),
@@ -804,5 +865,46 @@ mod tests {
             ..UtilitySection::default()
         };
         assert!(zero.to_core(&modalities).is_err());
+    }
+
+    #[test]
+    fn the_paper_section_restores_the_papers_score_and_keeps_the_rest() {
+        let modalities = ["vw@30cm".to_string()];
+        let custom: UtilitySection = toml::from_str(
+            "alpha = 2.0\nfreshness_half_life_s = 1209600.0\nanomaly_form = \"bounded\"\n\
+             anomaly_reference = \"neighbours\"\nvariance_weight = 1.0\nmin_overlap = 20\n",
+        )
+        .unwrap();
+        assert_eq!(custom.variance_weight, 1.0);
+        let paper = custom.paper();
+        assert_eq!(
+            paper.to_core(&modalities).unwrap(),
+            gleaner_utility::UtilityConfig {
+                min_overlap: 20,
+                ..gleaner_utility::UtilityConfig::default()
+            }
+        );
+        assert_eq!(paper.variance_weight, 0.0);
+        assert_eq!(paper.min_overlap, 20);
+        let gleaner = UtilitySection::default()
+            .gleaner()
+            .to_core(&modalities)
+            .unwrap();
+        assert_eq!(gleaner.score_form, gleaner_utility::ScoreForm::Gated);
+        assert_eq!(gleaner.freshness_half_life_s, GLEANER_HALF_LIFE_S);
+        assert_eq!(
+            gleaner.anomaly_form,
+            gleaner_utility::AnomalyForm::Bounded { kappa: 3.0 }
+        );
+        assert_eq!(
+            UtilitySection::default().gleaner().paper(),
+            UtilitySection::default()
+        );
+        // Out of range: named with its key.
+        let text = "[project]\nname = \"p\"\ndatabase = \"g.db\"\n[field]\nbase_lat = 38.7\n\
+                    base_lon = -117.1\ncell_size_m = 40.0\n[sensors]\nfile = \"s.csv\"\n\
+                    [utility]\nvariance_weight = -1.0\n";
+        let err = Settings::parse(text).unwrap_err();
+        assert!(err.contains("utility.variance_weight"), "{err}");
     }
 }

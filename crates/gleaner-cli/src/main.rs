@@ -322,8 +322,9 @@ Examples:
     /// Estimate every sensor's current value of a modality from what is known: last value
     /// carried forward, and kriging (Gaussian conditional mean) with its standard deviation.
     #[command(
-        after_help = "The field model (each sensor's mean; a separable exponential space-time covariance) is
-fitted on the readings known at --at.
+        after_help = "The field model (each sensor's mean; a separable exponential space-time covariance
+with a temporal nugget) is fitted on the readings known at --at; estimates are ordinary kriging
+(the field's current level estimated from the data) unless --simple.
 
 Example:
   gleaner reconstruct --project caf --at 2014-03-01 --modality vw@30cm"
@@ -340,6 +341,9 @@ Example:
         /// Observations per estimate.
         #[arg(long, default_value_t = app::DEFAULT_NEIGHBOURS)]
         neighbours: usize,
+        /// Simple kriging towards each sensor's long-run mean instead of ordinary kriging.
+        #[arg(long)]
+        simple: bool,
     },
 }
 
@@ -857,6 +861,7 @@ fn run(cli: Cli) -> Result<()> {
             at,
             modality,
             neighbours,
+            simple,
         } => {
             let p = project.open()?;
             let r = app::reconstruct(
@@ -865,6 +870,7 @@ fn run(cli: Cli) -> Result<()> {
                     at,
                     modality,
                     neighbours: Some(neighbours),
+                    simple,
                 },
             )?;
             print!("{}", reconstruct::table(&r));

@@ -4,7 +4,9 @@
 //! a smooth field with a separable exponential covariance plus the sensor's own deviation
 //! from it (the `nugget`: site-specific, independent between sensors, decaying in time like
 //! the field), so ([`Covariance::between`])
-//! `cov(r(x, t), r(x', t')) = (sill · exp(−d/range) + nugget · [x = x']) · exp(−|t − t'|/time_scale)`.
+//! `cov(r(x, t), r(x', t')) = (sill · exp(−d/range) + nugget · [x = x']) · ρ(t − t')`, with
+//! `ρ(0) = 1` and `ρ(Δ) = temporal_share · exp(−|Δ|/time_scale)` otherwise (the part of the
+//! variance renewed at every time step, `1 − temporal_share`, is a temporal nugget).
 //!
 //! - [`fit`] estimates the means and the covariance from sensor series (pooled temporal
 //!   autocorrelation for the time scale, pairwise correlations against distance for the range
@@ -12,7 +14,10 @@
 //! - [`krige`] is simple kriging of one target from the most informative observations: the
 //!   Gaussian conditional mean of the target's residual now and its variance, given every
 //!   observation's residual and age — the last value carried forward and the neighbours'
-//!   fresher values are weighed by the model instead of by hand;
+//!   fresher values are weighed by the model instead of by hand; [`krige_with`] with
+//!   [`Mean::Unknown`] is ordinary kriging (the field's current level is estimated from the
+//!   observations, weights sum to 1), which does not pull a wet winter back towards the
+//!   sensors' long-run means;
 //! - [`variance_reduction`] is the expected reduction of the field's posterior variance from
 //!   visiting cells, picked greedily on the (submodular) marginal gain.
 //!
@@ -83,6 +88,11 @@ pub struct Covariance {
     pub range_m: f64,
     /// Temporal e-folding time, seconds.
     pub time_scale_s: f64,
+    /// Share of the variance that persists from one time step to the next, in (0, 1]
+    /// (dimensionless; 1 = no temporal nugget). The rest, `1 − temporal_share`, is renewed
+    /// at every step (fast weather, measurement noise): a reading a step old already misses
+    /// it, a fresh neighbour's reading does not.
+    pub temporal_share: f64,
 }
 
 impl Covariance {
@@ -119,21 +129,46 @@ impl Covariance {
             nugget,
             range_m,
             time_scale_s,
+            temporal_share: 1.0,
         })
+    }
+
+    /// The same covariance with a temporal nugget: `share` of the variance persists in time
+    /// (decaying with the time scale), `1 − share` is renewed at every time step. `share`
+    /// must be in (0, 1].
+    pub fn with_temporal_share(mut self, share: f64) -> Result<Self, KrigingError> {
+        if !(share.is_finite() && share > 0.0 && share <= 1.0) {
+            return Err(KrigingError::Parameter {
+                what: "temporal share",
+                value: share,
+                expected: "in (0, 1]",
+            });
+        }
+        self.temporal_share = share;
+        Ok(self)
+    }
+
+    /// Temporal correlation at `lag_s` seconds: 1 at lag 0, else
+    /// `temporal_share · exp(−|lag|/time_scale)`.
+    pub fn temporal(&self, lag_s: f64) -> f64 {
+        if lag_s == 0.0 {
+            1.0
+        } else {
+            self.temporal_share * (-lag_s.abs() / self.time_scale_s).exp()
+        }
     }
 
     /// Covariance of the smooth field between two points `distance_m` apart and `lag_s`
     /// apart in time (no nugget).
     pub fn smooth(&self, distance_m: f64, lag_s: f64) -> f64 {
-        self.sill * (-distance_m.abs() / self.range_m - lag_s.abs() / self.time_scale_s).exp()
+        self.sill * (-distance_m.abs() / self.range_m).exp() * self.temporal(lag_s)
     }
 
     /// Covariance of two readings `distance_m` apart (0: the same sensor, which adds the
     /// nugget) and `lag_s` apart in time.
     pub fn between(&self, distance_m: f64, lag_s: f64) -> f64 {
         let own = if distance_m == 0.0 { self.nugget } else { 0.0 };
-        (self.sill * (-distance_m.abs() / self.range_m).exp() + own)
-            * (-lag_s.abs() / self.time_scale_s).exp()
+        (self.sill * (-distance_m.abs() / self.range_m).exp() + own) * self.temporal(lag_s)
     }
 
     /// Variance of one reading with no information: sill + nugget.
@@ -221,16 +256,43 @@ fn forward(l: &[f64], n: usize, b: &mut [f64]) {
     }
 }
 
+/// What kriging assumes about the residuals' mean at the estimation time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Mean {
+    /// Known and zero (simple kriging): the residuals revert to the sensors' long-run means.
+    #[default]
+    Known,
+    /// Unknown and common to the observations used (ordinary kriging): the weights sum to 1,
+    /// so a field-wide shift (a wet winter, a storm) carries through instead of being pulled
+    /// back towards the long-run means. The variance then includes the uncertainty of that
+    /// level and may exceed the prior.
+    Unknown,
+}
+
 /// Simple kriging of the residual at `target` (age 0) from the `max_neighbours` observations
 /// most correlated with it (all of them when fewer). An observation at the target's position
 /// (the same sensor) shares its nugget; one of age 0 is the target itself, so the estimate
 /// returns it with variance 0. Without observations the estimate is the prior: residual 0,
-/// variance sill + nugget.
+/// variance sill + nugget. Same as [`krige_with`] with [`Mean::Known`].
 pub fn krige(
     cov: &Covariance,
     observations: &[Observation],
     target: [f64; 2],
     max_neighbours: usize,
+) -> Estimate {
+    krige_with(cov, observations, target, max_neighbours, Mean::Known)
+}
+
+/// Kriging of the residual at `target` (age 0) from the `max_neighbours` observations most
+/// correlated with it, simple ([`Mean::Known`], see [`krige`]) or ordinary
+/// ([`Mean::Unknown`]). Ordinary kriging returns a fresh reading at the target exactly too;
+/// without observations both give the prior (residual 0, variance sill + nugget).
+pub fn krige_with(
+    cov: &Covariance,
+    observations: &[Observation],
+    target: [f64; 2],
+    max_neighbours: usize,
+    mean_model: Mean,
 ) -> Estimate {
     let cross = |o: &Observation| cov.between(distance(o.position, target), o.age_s);
     let mut chosen: Vec<(f64, &Observation)> = observations
@@ -279,11 +341,38 @@ pub fn krige(
     let mut z: Vec<f64> = chosen.iter().map(|c| c.1.residual).collect();
     forward(&a, n, &mut y);
     forward(&a, n, &mut z);
-    let mean: f64 = y.iter().zip(&z).map(|(a, b)| a * b).sum();
-    let explained: f64 = y.iter().map(|v| v * v).sum();
-    Estimate {
-        residual: mean,
-        variance: (prior - explained).clamp(0.0, prior),
+    let dot = |p: &[f64], q: &[f64]| p.iter().zip(q).map(|(a, b)| a * b).sum::<f64>();
+    let mean = dot(&y, &z);
+    let explained = dot(&y, &y);
+    match mean_model {
+        Mean::Known => Estimate {
+            residual: mean,
+            variance: (prior - explained).clamp(0.0, prior),
+        },
+        Mean::Unknown => {
+            // o = L⁻¹1; the Lagrange multiplier mu = (1 − 1ᵀK⁻¹k) / 1ᵀK⁻¹1 moves the simple
+            // kriging weights K⁻¹k along K⁻¹1 until they sum to 1.
+            let mut o = vec![1.0; n];
+            forward(&a, n, &mut o);
+            let oo = dot(&o, &o);
+            if !(oo > 0.0 && oo.is_finite()) {
+                return Estimate {
+                    residual: mean,
+                    variance: (prior - explained).clamp(0.0, prior),
+                };
+            }
+            let mu = (1.0 - dot(&o, &y)) / oo;
+            let residual = mean + mu * dot(&o, &z);
+            let variance = (prior - explained + mu * mu * oo).max(0.0);
+            if residual.is_finite() && variance.is_finite() {
+                Estimate { residual, variance }
+            } else {
+                Estimate {
+                    residual: mean,
+                    variance: (prior - explained).clamp(0.0, prior),
+                }
+            }
+        }
     }
 }
 
@@ -311,10 +400,14 @@ pub struct FitOptions {
     pub max_pairs: usize,
     /// Bounds of the spatial range, metres.
     pub range_bounds_m: (f64, f64),
+    /// Fit a temporal nugget (the intercept of the lag fit, [`Covariance::temporal_share`])
+    /// instead of forcing the temporal correlation through 1 at lag 0.
+    pub temporal_nugget: bool,
 }
 
 impl Default for FitOptions {
-    /// Daily step, lags up to 14 steps, 10 common points, 20,000 pairs, range 1 m .. 100 km.
+    /// Daily step, lags up to 14 steps, 10 common points, 20,000 pairs, range 1 m .. 100 km,
+    /// with a temporal nugget.
     fn default() -> Self {
         Self {
             step_s: 86_400,
@@ -322,6 +415,7 @@ impl Default for FitOptions {
             min_overlap: 10,
             max_pairs: 20_000,
             range_bounds_m: (1.0, 100_000.0),
+            temporal_nugget: true,
         }
     }
 }
@@ -374,7 +468,8 @@ fn line(points: &[(f64, f64)]) -> (f64, f64) {
 /// The mean of each sensor is the mean of its readings; residuals are readings minus means.
 /// The total variance is the pooled residual variance. The time scale comes from the pooled
 /// lag-k autocorrelation (k = 1..max_lag): −1/slope of a least-squares line through
-/// (k·step, ln ρ_k). The pairwise zero-lag correlations ρ(d) ≈ c·exp(−d/range) give, by a
+/// (k·step, ln ρ_k), and its intercept the share of the variance that persists past one step
+/// ([`Covariance::temporal_share`], when [`FitOptions::temporal_nugget`]). The pairwise zero-lag correlations ρ(d) ≈ c·exp(−d/range) give, by a
 /// least-squares line through (d, ln ρ), the range (−1/slope, clamped to the bounds) and the
 /// smooth field's share c = e^intercept of the variance: sill = c·total, nugget =
 /// (1 − c)·total. Errors when fewer than 2 sensors or too few points.
@@ -430,13 +525,28 @@ pub fn fit(series: &[SensorSeries<'_>], options: &FitOptions) -> Result<FieldMod
             }
         }
     }
-    let time_scale_s = match lag_points.len() {
-        0 => step as f64 * 0.5,
+    // ln ρ_k ≈ ln share − k·step/τ: the slope gives the time scale, the intercept the share
+    // of the variance that persists past one step (the rest is a temporal nugget, renewed at
+    // every step). Without the intercept, a fast component (rain pulses, noise) that is gone
+    // after a day would be spread over a long time scale and a day-old reading would look
+    // almost as good as a fresh one.
+    let (time_scale_s, temporal_share) = match lag_points.len() {
+        0 => (step as f64 * 0.5, 1.0),
         1 => {
             let (x, y) = lag_points[0];
-            x / (-y).max(1e-6)
+            (x / (-y).max(1e-6), 1.0)
         }
-        _ => -1.0 / line(&lag_points).0.min(-1e-15),
+        _ => {
+            let (slope, intercept) = line(&lag_points);
+            (
+                -1.0 / slope.min(-1e-15),
+                if options.temporal_nugget {
+                    intercept.exp().clamp(0.05, 1.0)
+                } else {
+                    1.0
+                },
+            )
+        }
     };
     let time_scale_s = time_scale_s.clamp(step as f64 * 0.1, 1e9);
     // Spatial: pairwise zero-lag correlations against distance; the intercept is the smooth
@@ -477,7 +587,8 @@ pub fn fit(series: &[SensorSeries<'_>], options: &FitOptions) -> Result<FieldMod
             (c, (-1.0 / slope.min(-1e-15)).clamp(lo, hi))
         }
     };
-    let covariance = Covariance::new(c * total, (1.0 - c) * total, range_m, time_scale_s)?;
+    let covariance = Covariance::new(c * total, (1.0 - c) * total, range_m, time_scale_s)?
+        .with_temporal_share(temporal_share)?;
     Ok(FieldModel { covariance, means })
 }
 
@@ -654,6 +765,112 @@ mod tests {
     }
 
     #[test]
+    fn ordinary_kriging_keeps_a_field_wide_shift() {
+        // Every observation is +0.5 above its long-run mean (a wet spell): simple kriging
+        // pulls a stale target back towards its mean, ordinary kriging keeps the level.
+        let c = Covariance::new(1.0, 0.1, 100.0, 20.0 * 86_400.0).unwrap();
+        let obs: Vec<Observation> = [[0.0, 0.0], [80.0, 0.0], [0.0, 120.0]]
+            .iter()
+            .enumerate()
+            .map(|(k, p)| Observation {
+                position: *p,
+                age_s: (5 + 3 * k) as f64 * 86_400.0,
+                residual: 0.5,
+            })
+            .collect();
+        let simple = krige_with(&c, &obs, [0.0, 0.0], 8, Mean::Known);
+        let ordinary = krige_with(&c, &obs, [0.0, 0.0], 8, Mean::Unknown);
+        assert!(simple.residual < 0.45, "{simple:?}");
+        assert!((ordinary.residual - 0.5).abs() < 1e-9, "{ordinary:?}");
+        assert!(ordinary.variance >= simple.variance - 1e-12);
+    }
+
+    #[test]
+    fn ordinary_kriging_returns_a_fresh_reading_exactly() {
+        let obs = [
+            Observation {
+                position: [0.0, 0.0],
+                age_s: 0.0,
+                residual: -0.3,
+            },
+            Observation {
+                position: [30.0, 0.0],
+                age_s: 86_400.0,
+                residual: 0.9,
+            },
+        ];
+        let e = krige_with(&cov(), &obs, [0.0, 0.0], 8, Mean::Unknown);
+        assert!((e.residual + 0.3).abs() < 1e-6, "{e:?}");
+        assert!(e.variance < 1e-6, "{e:?}");
+        // Without observations: the prior.
+        let p = krige_with(&cov(), &[], [0.0, 0.0], 8, Mean::Unknown);
+        assert_eq!(p.residual, 0.0);
+        assert!((p.variance - cov().prior_variance()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_temporal_nugget_makes_a_day_old_reading_worth_less() {
+        let c = cov();
+        let n = c.with_temporal_share(0.8).unwrap();
+        assert_eq!(n.temporal(0.0), 1.0);
+        assert!((n.temporal(86_400.0) - 0.8 * c.temporal(86_400.0)).abs() < 1e-12);
+        assert!(c.with_temporal_share(0.0).is_err());
+        assert!(c.with_temporal_share(1.5).is_err());
+        let one = |cov: &Covariance| {
+            krige(
+                cov,
+                &[Observation {
+                    position: [0.0, 0.0],
+                    age_s: 86_400.0,
+                    residual: 1.0,
+                }],
+                [0.0, 0.0],
+                8,
+            )
+        };
+        assert!(one(&n).variance > one(&c).variance);
+    }
+
+    #[test]
+    fn fit_finds_the_temporal_nugget_of_a_noisy_series() {
+        // A slow signal plus fresh noise every day: the lag-1 correlation drops at once by
+        // the noise share, then decays slowly; the fit must put the drop in the nugget.
+        let day = 86_400;
+        let times: Vec<i64> = (0..600).map(|d| d * day).collect();
+        let noise = |k: usize, s: f64| ((k as f64 * 12.9898 + s).sin() * 43_758.545).fract() - 0.5;
+        let series: Vec<Vec<f64>> = (0..3)
+            .map(|s| {
+                (0..600)
+                    .map(|d| (d as f64 / 60.0).sin() + 0.8 * noise(d, s as f64))
+                    .collect()
+            })
+            .collect();
+        let s: Vec<SensorSeries<'_>> = series
+            .iter()
+            .enumerate()
+            .map(|(k, v)| SensorSeries {
+                position: [40.0 * k as f64, 0.0],
+                times: &times,
+                values: v,
+            })
+            .collect();
+        let with = fit(&s, &FitOptions::default()).unwrap().covariance;
+        let without = fit(
+            &s,
+            &FitOptions {
+                temporal_nugget: false,
+                ..FitOptions::default()
+            },
+        )
+        .unwrap()
+        .covariance;
+        assert!(with.temporal_share < 0.95, "{with:?}");
+        assert_eq!(without.temporal_share, 1.0);
+        // The model's lag-1 correlation is close to the data's (well below 1).
+        assert!(with.temporal(day as f64) < 0.95, "{with:?}");
+    }
+
+    #[test]
     fn invalid_parameters_are_refused() {
         assert!(Covariance::new(0.0, 0.0, 1.0, 1.0).is_err());
         assert!(Covariance::new(1.0, -1.0, 1.0, 1.0).is_err());
@@ -730,6 +947,25 @@ mod tests {
             let e = krige(&c, &obs, [tx, 0.0], 8);
             prop_assert!(e.variance >= 0.0 && e.variance <= c.prior_variance() + 1e-12);
             prop_assert!(e.residual.is_finite());
+        }
+
+        #[test]
+        fn ordinary_kriging_is_finite_and_its_weights_sum_to_one(
+            pts in proptest::collection::vec((-500.0f64..500.0, -500.0f64..500.0, 0.0f64..1e6, -1.0f64..1.0), 1..20),
+            tx in -500.0f64..500.0,
+            shift in -2.0f64..2.0,
+        ) {
+            // Weights summing to 1: adding a constant to every residual adds it to the estimate.
+            let c = cov().with_temporal_share(0.9).unwrap();
+            let obs: Vec<Observation> = pts.iter().map(|&(x, y, a, r)| Observation {
+                position: [x, y], age_s: a, residual: r }).collect();
+            let shifted: Vec<Observation> = obs.iter().map(|o| Observation {
+                residual: o.residual + shift, ..*o }).collect();
+            let e = krige_with(&c, &obs, [tx, 0.0], 8, Mean::Unknown);
+            let f = krige_with(&c, &shifted, [tx, 0.0], 8, Mean::Unknown);
+            prop_assert!(e.residual.is_finite() && e.variance.is_finite() && e.variance >= 0.0);
+            prop_assert!((f.residual - e.residual - shift).abs() < 1e-6 * (1.0 + shift.abs()),
+                "{e:?} {f:?}");
         }
 
         #[test]

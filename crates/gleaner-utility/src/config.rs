@@ -122,6 +122,32 @@ impl AnomalyForm {
     }
 }
 
+/// How the four terms combine into S.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ScoreForm {
+    /// S = alpha·F + beta·A + gamma·U − delta·R (SPEC §2, the paper's; the default).
+    #[default]
+    Additive,
+    /// S = alpha·F·max(0, 1 + beta·A + gamma·U − delta·R): freshness gated by the cell's
+    /// value per unit of staleness. A just-collected cell (F = 0) is worth nothing however
+    /// anomalous, uncertain or unique it is, and a cell that matters twice as much is
+    /// revisited about twice as often once F grows about linearly with age (a long
+    /// half-life). In the additive form the static part of S (A, U, R change little after a
+    /// visit) outweighs F's range of [0, 1], and the same cells win every mission
+    /// (docs/method-improvement.md). alpha = 0 makes every cell worth 0 in this form.
+    Gated,
+}
+
+impl ScoreForm {
+    /// A short label for outputs: `additive` or `gated`.
+    pub fn label(self) -> &'static str {
+        match self {
+            ScoreForm::Additive => "additive",
+            ScoreForm::Gated => "gated",
+        }
+    }
+}
+
 /// What the anomaly A_i^m measures the latest value against.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum AnomalyReference {
@@ -183,6 +209,8 @@ pub struct UtilityConfig {
     pub anomaly_form: AnomalyForm,
     /// What the anomaly compares the latest value with (default the cell's own history).
     pub anomaly_reference: AnomalyReference,
+    /// How the terms combine into S (default additive, the paper's).
+    pub score_form: ScoreForm,
 }
 
 impl Default for UtilityConfig {
@@ -200,6 +228,7 @@ impl Default for UtilityConfig {
             anomaly_weights: ModalityWeights::Equal,
             anomaly_form: AnomalyForm::Raw,
             anomaly_reference: AnomalyReference::OwnHistory,
+            score_form: ScoreForm::Additive,
         }
     }
 }

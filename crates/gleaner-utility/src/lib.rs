@@ -76,7 +76,7 @@ pub use condition::{
     class_of, condition_features, quantile_thresholds,
 };
 pub use config::{
-    AnomalyForm, AnomalyReference, DAY_S, HistoryWindow, ModalityWeights, UtilityConfig,
+    AnomalyForm, AnomalyReference, DAY_S, HistoryWindow, ModalityWeights, ScoreForm, UtilityConfig,
 };
 pub use engine::{CellInputs, CellTerms, score_cells, score_cells_parallel};
 pub use error::UtilityError;

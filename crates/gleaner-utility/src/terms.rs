@@ -356,8 +356,19 @@ pub fn uncertainty(probabilities: &[f64]) -> f64 {
 /// let s = score(0.5, 1.0, 0.25, 0.75, &UtilityConfig::default());
 /// assert!((s - 1.0).abs() < 1e-12);
 /// ```
+///
+/// With [`crate::ScoreForm::Gated`]: S = alpha·F·max(0, 1 + beta·A + gamma·U − delta·R).
 pub fn score(f: f64, a: f64, u: f64, r: f64, config: &UtilityConfig) -> f64 {
-    config.alpha * f + config.beta * a + config.gamma * u - config.delta * r
+    match config.score_form {
+        crate::ScoreForm::Additive => {
+            config.alpha * f + config.beta * a + config.gamma * u - config.delta * r
+        }
+        crate::ScoreForm::Gated => {
+            config.alpha
+                * f
+                * (1.0 + config.beta * a + config.gamma * u - config.delta * r).max(0.0)
+        }
+    }
 }
 
 #[cfg(test)]
@@ -499,12 +510,41 @@ mod tests {
         assert!(close(score(0.5, 2.0, 0.1, 0.25, &c), 1.0 + 1.0 + 0.3 - 1.0));
     }
 
+    #[test]
+    fn gated_score_by_hand() {
+        let c = UtilityConfig {
+            alpha: 2.0,
+            beta: 0.5,
+            gamma: 3.0,
+            delta: 4.0,
+            score_form: crate::ScoreForm::Gated,
+            ..UtilityConfig::default()
+        };
+        // 2·0.5·(1 + 1 + 0.3 − 1) = 1.3
+        assert!(close(score(0.5, 2.0, 0.1, 0.25, &c), 1.3));
+        // A just-collected cell is worth nothing however anomalous.
+        assert_eq!(score(0.0, 9.0, 1.0, 0.0, &c), 0.0);
+        // Never negative: a fully redundant cell is worth 0.
+        assert_eq!(score(1.0, 0.0, 0.0, 1.0, &c), 0.0);
+    }
+
     fn series_strategy() -> impl Strategy<Value = (Vec<i64>, Vec<f64>)> {
         proptest::collection::btree_map(0i64..60, -100.0f64..100.0, 0..40)
             .prop_map(|m| m.into_iter().unzip())
     }
 
     proptest! {
+        #[test]
+        fn gated_score_is_non_negative_and_grows_with_staleness(
+            f1 in 0.0f64..=1.0, df in 0.0f64..=1.0, a in 0.0f64..1.0, u in 0.0f64..=1.0,
+            r in 0.0f64..=1.0,
+        ) {
+            let c = UtilityConfig { score_form: crate::ScoreForm::Gated, ..UtilityConfig::default() };
+            let f2 = (f1 + df).min(1.0);
+            let (s1, s2) = (score(f1, a, u, r, &c), score(f2, a, u, r, &c));
+            prop_assert!(s1 >= 0.0 && s2 >= s1);
+        }
+
         #[test]
         fn pearson_is_symmetric_and_bounded(
             pairs in proptest::collection::vec((-1e3f64..1e3, -1e3f64..1e3), 0..50)

@@ -22,6 +22,7 @@ const MISSIONS: &str = "missions.csv";
 const EVENTS: &str = "events.csv";
 const CATCHES: &str = "catches.csv";
 const COMMAND: &str = "command.txt";
+const VISITS: &str = "visits.csv";
 
 const MISSIONS_HEADER: &str = "label,strategy,seed,budget,index,t,sorties,cells,energy_j,budget_j,rmse_carried,mae_carried,rmse_kriged,mae_kriged,mean_variance,evaluated,staleness_mean_s,staleness_max_s,classifier_accuracy,lost_readings,events_caught";
 
@@ -31,16 +32,25 @@ fn write(path: &Path, text: &str) -> Result<()> {
 
 /// Writes the campaigns' results as CSV files into `dir`, with the command that made them.
 pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> Result<()> {
-    let mut campaign = String::from("label,modality,period_s,sill,nugget,range_m,time_scale_s\n");
+    let mut campaign =
+        String::from("label,modality,period_s,sill,nugget,range_m,time_scale_s,temporal_share\n");
     let mut missions = format!("{MISSIONS_HEADER}\n");
     let mut events = String::from("label,event,sensors,start,end\n");
     let mut catches = String::from("label,strategy,seed,budget,event,caught_at\n");
+    let mut visits = String::from("label,strategy,seed,budget,index,cell,age_days,f,a,u,r,s\n");
     for r in results {
         let c = r.covariance;
         writeln!(
             campaign,
-            "{},{},{},{},{},{},{}",
-            r.label, r.modality, r.period_s, c.sill, c.nugget, c.range_m, c.time_scale_s
+            "{},{},{},{},{},{},{},{}",
+            r.label,
+            r.modality,
+            r.period_s,
+            c.sill,
+            c.nugget,
+            c.range_m,
+            c.time_scale_s,
+            c.temporal_share
         )?;
         for e in &r.events {
             let ids: Vec<&str> = e.sensors.iter().map(SensorId::as_str).collect();
@@ -81,6 +91,13 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
                     m.events_caught
                 )?;
             }
+            for v in &run.visits {
+                writeln!(
+                    visits,
+                    "{head},{},{},{},{},{},{},{},{}",
+                    v.index, v.cell, v.age_days, v.f, v.a, v.u, v.r, v.s
+                )?;
+            }
             for (e, c) in r.events.iter().zip(&run.caught) {
                 writeln!(
                     catches,
@@ -95,6 +112,7 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
     write(&dir.join(MISSIONS), &missions)?;
     write(&dir.join(EVENTS), &events)?;
     write(&dir.join(CATCHES), &catches)?;
+    write(&dir.join(VISITS), &visits)?;
     write(&dir.join(COMMAND), &format!("{command}\n"))?;
     Ok(())
 }
@@ -139,13 +157,20 @@ fn num<T: std::str::FromStr>(path: &Path, line: usize, column: &str, v: &str) ->
 pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
     let mut results: Vec<CampaignResult> = Vec::new();
     let p = dir.join(CAMPAIGN);
-    for (line, c) in rows(&p, 7)? {
+    // Files written before the temporal nugget have 7 columns (temporal share 1).
+    let campaign_rows = rows(&p, 8).or_else(|_| rows(&p, 7))?;
+    for (line, c) in campaign_rows {
+        let share = match c.get(7) {
+            Some(v) => num(&p, line, "temporal_share", v)?,
+            None => 1.0,
+        };
         let cov = Covariance::new(
             num(&p, line, "sill", &c[3])?,
             num(&p, line, "nugget", &c[4])?,
             num(&p, line, "range_m", &c[5])?,
             num(&p, line, "time_scale_s", &c[6])?,
         )
+        .and_then(|c| c.with_temporal_share(share))
         .with_context(|| format!("{}:{line}", p.display()))?;
         results.push(CampaignResult {
             label: c[0].clone(),
@@ -217,6 +242,7 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
                 key,
                 missions: vec![m],
                 caught: vec![None; n_events],
+                visits: Vec::new(),
             }),
         }
     }
@@ -248,7 +274,7 @@ fn fmt_iv(i: &Interval, scale: f64, d: usize) -> String {
     if !i.mean.is_finite() {
         return "–".into();
     }
-    if i.n <= 1 || (i.high - i.low).abs() < 1e-15 {
+    if i.n <= 1 || !(i.low.is_finite() && i.high.is_finite()) || (i.high - i.low).abs() < 1e-15 {
         return format!("{:.d$}", i.mean * scale);
     }
     format!(
@@ -344,7 +370,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
     let c = first.covariance;
     writeln!(
         md,
-        "- Field model fitted on the history{}: sill {:.3e}, nugget {:.3e} ({unit})², range {:.0} m, time scale {:.1} days.",
+        "- Field model fitted on the history{}: sill {:.3e}, nugget {:.3e} ({unit})², range {:.0} m, time scale {:.1} days, {:.0}% of the variance persisting past one step (temporal nugget {:.0}%).",
         if results.len() > 1 {
             " (first campaign)"
         } else {
@@ -353,7 +379,9 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         c.sill,
         c.nugget,
         c.range_m,
-        c.time_scale_s / 86_400.0
+        c.time_scale_s / 86_400.0,
+        100.0 * c.temporal_share,
+        100.0 * (1.0 - c.temporal_share)
     )?;
     let n_events: usize = results.iter().map(|r| r.events.len()).sum();
     writeln!(
@@ -377,22 +405,22 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
     writeln!(md, "## Strategies at budget {main_budget}\n")?;
     writeln!(
         md,
-        "Means over missions with 95% intervals ({}). RMSE/MAE in {unit} ×1000 against the true \
-         reading stamped T − period of every sensor that has one; ΔRMSE is the strategy's \
-         kriging RMSE minus gleaner's, paired by mission.\n",
-        if first.runs.len() > 1 || results.len() > 1 {
-            "over replicate runs when there are several, else over blocks of 7 consecutive missions"
-        } else {
-            "over blocks of 7 consecutive missions"
-        }
+        "Means over missions with 95% intervals: Student's t over the means of blocks of {} days \
+         of missions (runs and campaigns averaged within a block, so replicates of one dataset \
+         do not count as independent evidence), given only with at least {} blocks. RMSE/MAE in \
+         {unit} ×1000 against the true reading stamped T − period of every sensor that has one; \
+         ΔRMSE is the strategy's kriging RMSE minus gleaner's, paired by mission; Δdelay is the \
+         strategy's catch delay minus gleaner's over the events both caught (t over events).\n",
+        gleaner_app::campaign::BLOCK_DAYS,
+        gleaner_app::campaign::MIN_BLOCKS,
     )?;
     writeln!(
         md,
-        "| strategy | runs | RMSE kriging | ΔRMSE vs gleaner | RMSE carried | MAE kriging | energy kJ/mission | utilisation % | cells/mission | staleness mean d | staleness max d | events caught | delay d | classifier % | lost readings |"
+        "| strategy | runs | RMSE kriging | ΔRMSE vs gleaner | RMSE carried | MAE kriging | energy kJ/mission | utilisation % | cells/mission | staleness mean d | staleness max d | events caught | delay d | Δdelay vs gleaner d | classifier % | lost readings |"
     )?;
     writeln!(
         md,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     )?;
     let at_main: Vec<&Summary> = summaries
         .iter()
@@ -402,7 +430,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         let (caught, total) = s.events_caught;
         writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {caught}/{total} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {caught}/{total} | {} | {} | {} | {} |",
             s.strategy.name(),
             s.runs,
             fmt_iv(get(s, "rmse_kriged"), 1000.0, 2),
@@ -417,6 +445,9 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
             fmt_iv(get(s, "staleness_mean_days"), 1.0, 2),
             fmt_iv(get(s, "staleness_max_days"), 1.0, 1),
             fmt_iv(&s.delay_days, 1.0, 2),
+            s.delay_vs_reference
+                .as_ref()
+                .map_or("–".into(), |i| fmt_iv(i, 1.0, 2)),
             fmt_iv(get(s, "classifier_accuracy"), 100.0, 1),
             fmt_iv(get(s, "lost_readings"), 1.0, 1),
         )?;
@@ -426,11 +457,16 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         .iter()
         .map(|s| {
             let i = get(s, "rmse_kriged");
+            let (low, high) = if i.low.is_finite() && i.high.is_finite() {
+                (i.low, i.high)
+            } else {
+                (i.mean, i.mean)
+            };
             IntervalRow {
                 name: s.strategy.name().into(),
                 mean: i.mean * 1000.0,
-                low: i.low * 1000.0,
-                high: i.high * 1000.0,
+                low: low * 1000.0,
+                high: high * 1000.0,
             }
         })
         .filter(|r| r.mean.is_finite())
@@ -576,16 +612,18 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         "- Every run is its own project (an in-memory store) driven through gleaner's score, plan, \
          explore and record use cases; the planner knows only the history and what its flights \
          brought back; a reading stamped t is available from t + period on.\n\
-         - Strategies: gleaner = S (project weights) + the default planner; paper = S + the \
-         paper's greedy; variance = greedy expected reduction of the kriging posterior variance, \
+         - Strategies: gleaner = gleaner's method (gated S = αF·max(0, 1 + βA + γU − δR), \
+         14-day freshness half-life, bounded anomaly; project weights) + the default planner; \
+         paper = the paper's S (SPEC §2 at its values) + the paper's greedy; variance = greedy expected reduction of the kriging posterior variance, \
          routed by the default planner; freshness = S with F only; round-robin = days since the \
          last collection; random = seeded uniform scores; nearest = equal scores with greedy \
          insertion; exhaustive = every cell, as many sorties as it takes; no-X = gleaner without \
          term X.\n\
          - Reconstruction at mission T (after its flights): each sensor's value stamped T − period; \
-         carried = its last collected value; kriging = simple kriging of residuals from each \
-         sensor's history mean with a separable exponential space-time covariance fitted on \
-         the history, from the 16 most correlated latest readings.\n\
+         carried = its last collected value; kriging = ordinary kriging (simple kriging with \
+         `--simple-kriging`) of residuals from each sensor's history mean with a separable \
+         exponential space-time covariance and a temporal nugget fitted on the history, from \
+         the 16 most correlated latest readings.\n\
          - An event is caught at the first mission that collects one of its sensors (with an \
          event reading still in the buffer) once its first reading is available; delay = catch \
          time − (start + period).\n\

@@ -91,6 +91,10 @@ pub struct SimulateArgs {
     /// Observations per kriging estimate.
     #[arg(long, default_value_t = app::DEFAULT_NEIGHBOURS)]
     pub neighbours: usize,
+    /// Reconstruct by simple kriging towards each sensor's long-run mean instead of ordinary
+    /// kriging (the field's current level estimated from the data).
+    #[arg(long)]
+    pub simple_kriging: bool,
     /// Runs in parallel.
     #[arg(long, default_value_t = 2)]
     pub jobs: usize,
@@ -212,6 +216,11 @@ fn prepare(
             event_z: args.event_z,
             planner_iterations: args.planner_iterations,
             neighbours: args.neighbours,
+            kriging_mean: if args.simple_kriging {
+                gleaner_kriging::Mean::Known
+            } else {
+                gleaner_kriging::Mean::Unknown
+            },
             jobs: args.jobs,
             clock_now: crate::clock_now(),
         },
