@@ -256,8 +256,9 @@ fn check_units(all: &Readings, next: &Readings, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The store's batch of parsed readings.
-pub(crate) fn batch_of(all: &Readings) -> (Vec<ModalityRecord>, ReadingBatch) {
+/// The store's batch of parsed readings: their modalities (with units) and one batch of
+/// rows indexing the same sensor and modality tables (values in the modality's unit, times s).
+pub fn batch_of(all: &Readings) -> (Vec<ModalityRecord>, ReadingBatch) {
     let modalities = all
         .modalities
         .iter()

@@ -65,7 +65,7 @@ mod view;
 pub use cell_detail::{CellDetail, Contributions, SeriesPoint, cell_detail};
 pub use error::{AppError, Result};
 pub use explore::{Exploration, ExploreRequest, explore};
-pub use ingest::{Format, IngestOutcome, IngestRequest, detect, ingest};
+pub use ingest::{Format, IngestOutcome, IngestRequest, batch_of, detect, ingest};
 pub use init::{DEFAULT_CELL_SIZE_M, InitOutcome, InitRequest, init, init_store, relative_to};
 pub use knowledge::{History, Knowledge, knowledge};
 pub use migrate::{MigrateOutcome, migrate};

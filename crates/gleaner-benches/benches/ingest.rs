@@ -89,7 +89,6 @@ struct CafRows {
 
 impl CafRows {
     fn parse(files: &[PathBuf]) -> Self {
-        use gleaner_store::{ModalityRecord, Reading, ReadingBatch, SensorRecord};
         let mut all = gleaner_ingest::Readings::default();
         for f in files {
             all.append(
@@ -101,35 +100,15 @@ impl CafRows {
         let sensors = all
             .sensors
             .iter()
-            .map(|id| SensorRecord {
+            .map(|id| gleaner_store::SensorRecord {
                 id: id.clone(),
                 position: gleaner_field::LatLon::new(46.78, -117.08).expect("valid"),
                 elevation_m: None,
                 source: "bench".into(),
             })
             .collect();
-        let modalities = all
-            .modalities
-            .iter()
-            .map(|m| ModalityRecord {
-                modality: m.modality.clone(),
-                unit: m.unit.clone(),
-            })
-            .collect();
-        let batch = ReadingBatch {
-            sensors: all.sensors.clone(),
-            modalities: all.modalities.iter().map(|m| m.modality.clone()).collect(),
-            rows: all
-                .rows
-                .iter()
-                .map(|r| Reading {
-                    sensor: r.sensor,
-                    modality: r.modality,
-                    t: r.t,
-                    value: r.value,
-                })
-                .collect(),
-        };
+        // The same conversion `gleaner ingest` makes.
+        let (modalities, batch) = gleaner_app::batch_of(&all);
         CafRows {
             sensors,
             modalities,
