@@ -408,9 +408,12 @@ fn run_child(
     Ok(false)
 }
 
+/// Every table's content as text, named: equal states have equal digests.
+type Digest = Vec<(&'static str, String)>;
+
 /// Everything the store holds but wall-clock provenance (ingest times, mission creation
-/// times), as text: equal states have equal digests.
-fn digest(store: &AnyStore) -> Result<String> {
+/// times), table by table.
+fn digest(store: &AnyStore) -> Result<Digest> {
     let mut ingests = store.ingests()?;
     for i in &mut ingests {
         i.at = 0;
@@ -423,44 +426,33 @@ fn digest(store: &AnyStore) -> Result<String> {
     for k in store.blob_keys()? {
         blobs.push((k.clone(), store.blob_get(&k)?));
     }
-    Ok(format!(
-        "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
-        store.sensors()?,
-        store.modalities()?,
-        store.readings_for(None, i64::MIN..=i64::MAX)?,
-        ingests,
-        store.cells()?,
-        store.cell_metadata()?,
-        store.sensor_last_collected()?,
-        missions,
-        store.config_entries()?,
-        blobs
-    ))
+    Ok(vec![
+        ("sensors", format!("{:?}", store.sensors()?)),
+        ("modalities", format!("{:?}", store.modalities()?)),
+        (
+            "readings",
+            format!("{:?}", store.readings_for(None, i64::MIN..=i64::MAX)?),
+        ),
+        ("ingests", format!("{ingests:?}")),
+        ("cells", format!("{:?}", store.cells()?)),
+        ("cell metadata", format!("{:?}", store.cell_metadata()?)),
+        (
+            "sensor collection",
+            format!("{:?}", store.sensor_last_collected()?),
+        ),
+        ("missions", format!("{missions:?}")),
+        ("config", format!("{:?}", store.config_entries()?)),
+        ("blobs", format!("{blobs:?}")),
+    ])
 }
 
-/// The parts of two digests that differ (tables in [`digest`]'s order), for a failure report.
-fn differing_parts(a: &str, b: &str) -> String {
-    const PARTS: [&str; 10] = [
-        "sensors",
-        "modalities",
-        "readings",
-        "ingests",
-        "cells",
-        "cell metadata",
-        "sensor collection",
-        "missions",
-        "config",
-        "blobs",
-    ];
-    let (a, b): (Vec<&str>, Vec<&str>) = (a.split('|').collect(), b.split('|').collect());
-    let differing: Vec<String> = (0..a.len().max(b.len()))
-        .filter(|&k| a.get(k) != b.get(k))
-        .map(|k| {
-            let name = PARTS.get(k).copied().unwrap_or("?");
-            let (x, y) = (
-                a.get(k).copied().unwrap_or(""),
-                b.get(k).copied().unwrap_or(""),
-            );
+/// The tables in which two digests differ, each with both values around the first
+/// difference, for a failure report.
+fn differing_parts(a: &Digest, b: &Digest) -> String {
+    a.iter()
+        .zip(b)
+        .filter(|((_, x), (_, y))| x != y)
+        .map(|((name, x), (_, y))| {
             let at = x.bytes().zip(y.bytes()).take_while(|(p, q)| p == q).count();
             let show = |s: &str| {
                 s.get(at.saturating_sub(40)..(at + 80).min(s.len()))
@@ -469,12 +461,12 @@ fn differing_parts(a: &str, b: &str) -> String {
             };
             format!("{name} (…{}… vs …{}…)", show(x), show(y))
         })
-        .collect();
-    differing.join(", ")
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The store of a trial project, its integrity problems and its digest.
-fn inspect(dir: &Path, database: &Option<String>) -> Result<(Vec<String>, String)> {
+fn inspect(dir: &Path, database: &Option<String>) -> Result<(Vec<String>, Digest)> {
     let p = Project::open_with(dir, database.as_deref())?;
     let problems = p.store().integrity_check()?;
     // Every mission has its stops; a flown one its visits.
