@@ -72,11 +72,17 @@ pub enum Strategy {
     /// Expected reduction of the field's posterior variance (greedy marginal gains of the
     /// kriging model fitted on the history), default planner.
     Variance,
+    /// Expected error: each cell worth the sum over its sensors of the staleness index of
+    /// their drift ([`gleaner_utility::staleness_index`] of the evaluated modality's mean
+    /// squared change over the last [`DRIFT_WINDOW_DAYS`] of collected readings, shrunk
+    /// halfway — geometrically — to the field's median), times gleaner's anomaly gate
+    /// 1 + βA; default planner.
+    Drift,
 }
 
 impl Strategy {
     /// Every strategy, ablations included, in report order.
-    pub const ALL: [Strategy; 12] = [
+    pub const ALL: [Strategy; 13] = [
         Strategy::Gleaner,
         Strategy::Paper,
         Strategy::Variance,
@@ -89,6 +95,7 @@ impl Strategy {
         Strategy::Without(Term::Anomaly),
         Strategy::Without(Term::Uncertainty),
         Strategy::Without(Term::Redundancy),
+        Strategy::Drift,
     ];
 
     /// The strategy's name in outputs and on the command line.
@@ -106,6 +113,7 @@ impl Strategy {
             Strategy::Without(Term::Uncertainty) => "no-uncertainty",
             Strategy::Without(Term::Redundancy) => "no-redundancy",
             Strategy::Variance => "variance",
+            Strategy::Drift => "drift",
         }
     }
 
@@ -128,7 +136,9 @@ impl Strategy {
         let mut s = base.clone();
         match self {
             Strategy::Paper => s.utility = s.utility.paper(),
-            Strategy::Gleaner | Strategy::Without(_) => s.utility = s.utility.gleaner(),
+            Strategy::Gleaner | Strategy::Without(_) | Strategy::Drift => {
+                s.utility = s.utility.gleaner()
+            }
             _ => {}
         }
         let u = &mut s.utility;
@@ -319,6 +329,13 @@ pub struct MissionMetrics {
     pub mae_kriged: f64,
     /// Mean kriging variance, the unit squared.
     pub mean_variance: f64,
+    /// Root-mean-square error of last value carried forward from what was known before this
+    /// mission's flights (after the previous mission's), against the same truth: the error the
+    /// operator lived with between the two missions, at its largest. NaN when not measured
+    /// (results files of an older version).
+    pub rmse_carried_before: f64,
+    /// The same for the kriging estimate.
+    pub rmse_kriged_before: f64,
     /// Sensors with a true value at T − period (those evaluated).
     pub evaluated: usize,
     /// Mean time since each sensor's last collection, seconds.
@@ -717,7 +734,27 @@ fn run_one(
                 .min()
                 .map(|&l| (t - l).max(0) as f64)
         };
+        // What the planner believed before the flight (for the classifier's accuracy).
+        let scoring = compute(
+            &project,
+            &ScoreRequest {
+                at: Some(t),
+                dry_run: true,
+                ..ScoreRequest::default()
+            },
+        )?;
         let given: Option<Vec<f64>> = match key.strategy {
+            Strategy::Drift => {
+                let beta = project.settings().utility.beta;
+                let index = drift_index(&project, shared, &cell_sensor_ids, &last, t)?;
+                Some(
+                    index
+                        .iter()
+                        .zip(&scoring.terms)
+                        .map(|(i, x)| i * (1.0 + beta * x.a).max(0.0) + 1e-12)
+                        .collect(),
+                )
+            }
             Strategy::RoundRobin => {
                 let ages: Vec<Option<f64>> = (0..centres.len()).map(cell_age).collect();
                 let oldest = ages.iter().flatten().fold(0.0f64, |a, b| a.max(*b));
@@ -746,15 +783,6 @@ fn run_one(
             }
             _ => None,
         };
-        // What the planner believed before the flight (for the classifier's accuracy).
-        let scoring = compute(
-            &project,
-            &ScoreRequest {
-                at: Some(t),
-                dry_run: true,
-                ..ScoreRequest::default()
-            },
-        )?;
         let accuracy = classifier_accuracy(&scoring, &cells, &shared.class_series, t - period);
         let terms_of: HashMap<CellIndex, (usize, &gleaner_utility::CellTerms)> = scoring
             .knowledge
@@ -765,6 +793,21 @@ fn run_one(
             .enumerate()
             .map(|(k, (c, terms))| (c.index, (k, terms)))
             .collect();
+        // Reconstruction of every sensor's value stamped T − period from what was known
+        // before the flights.
+        let target = t - period;
+        let before = reconstruction_errors(
+            &estimate(
+                &project,
+                &shared.modality,
+                &shared.model,
+                target,
+                lookback,
+                (request.neighbours, request.kriging_mean),
+            )?,
+            &shared.series,
+            target,
+        );
         let mut flown = Vec::new();
         let (mut energy_j, mut budget_j) = (0.0, 0.0);
         if key.strategy == Strategy::Exhaustive {
@@ -842,29 +885,19 @@ fn run_one(
                 events_caught += 1;
             }
         }
-        // Reconstruction of every sensor's value stamped T − period.
-        let target = t - period;
-        let estimates = estimate(
-            &project,
-            &shared.modality,
-            &shared.model,
+        // Reconstruction of every sensor's value stamped T − period, after the flights.
+        let after = reconstruction_errors(
+            &estimate(
+                &project,
+                &shared.modality,
+                &shared.model,
+                target,
+                lookback,
+                (request.neighbours, request.kriging_mean),
+            )?,
+            &shared.series,
             target,
-            lookback,
-            (request.neighbours, request.kriging_mean),
-        )?;
-        let (mut se_c, mut ae_c, mut se_k, mut ae_k, mut var, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0);
-        for e in &estimates {
-            let Some(v) = value_at(&shared.series, &e.sensor, target) else {
-                continue;
-            };
-            se_c += (e.carried - v).powi(2);
-            ae_c += (e.carried - v).abs();
-            se_k += (e.kriged - v).powi(2);
-            ae_k += (e.kriged - v).abs();
-            var += e.variance;
-            n += 1;
-        }
-        let nf = (n as f64).max(1.0);
+        );
         for s in &visited {
             last.insert(s.clone(), t);
         }
@@ -882,12 +915,14 @@ fn run_one(
             cells: cells_visited,
             energy_j,
             budget_j,
-            rmse_carried: (se_c / nf).sqrt(),
-            mae_carried: ae_c / nf,
-            rmse_kriged: (se_k / nf).sqrt(),
-            mae_kriged: ae_k / nf,
-            mean_variance: var / nf,
-            evaluated: n,
+            rmse_carried: after.rmse_carried,
+            mae_carried: after.mae_carried,
+            rmse_kriged: after.rmse_kriged,
+            mae_kriged: after.mae_kriged,
+            mean_variance: after.mean_variance,
+            rmse_carried_before: before.rmse_carried,
+            rmse_kriged_before: before.rmse_kriged,
+            evaluated: after.evaluated,
             staleness_mean_s,
             staleness_max_s,
             classifier_accuracy: accuracy,
@@ -902,6 +937,120 @@ fn run_one(
         caught,
         visits,
     })
+}
+
+/// Lags of the drift strategy's structure functions, grid steps.
+const DRIFT_MAX_LAG: usize = 30;
+/// Days of collected readings the drift strategy estimates each sensor's drift on.
+pub const DRIFT_WINDOW_DAYS: i64 = 365;
+
+/// [`Strategy::Drift`]'s index per cell (field order): the sum over the cell's sensors of
+/// the staleness index (value unit² × grid steps) of the time since their last collection,
+/// each sensor's structure function estimated on the evaluated modality's readings the run
+/// holds (what was collected) from the last [`DRIFT_WINDOW_DAYS`], lag by lag the geometric
+/// mean of the sensor's and the field's median (a sensor without 10 pairs at a lag: the
+/// median).
+fn drift_index(
+    project: &Project<SqliteStore>,
+    shared: &Shared<'_>,
+    cell_sensor_ids: &[Vec<SensorId>],
+    last: &HashMap<SensorId, UnixSeconds>,
+    t: UnixSeconds,
+) -> Result<Vec<f64>> {
+    let batch = project
+        .store()
+        .readings_for(Some(&shared.modality), (t - DRIFT_WINDOW_DAYS * 86_400)..=t)?;
+    let mut series: HashMap<&SensorId, Vec<(UnixSeconds, f64)>> = HashMap::new();
+    for r in &batch.rows {
+        if let Some(s) = batch.sensors.get(r.sensor as usize) {
+            series.entry(s).or_default().push((r.t, r.value));
+        }
+    }
+    let own: HashMap<&SensorId, Vec<Option<f64>>> = series
+        .into_iter()
+        .map(|(s, mut v)| {
+            v.sort_by_key(|p| p.0);
+            let times: Vec<UnixSeconds> = v.iter().map(|p| p.0).collect();
+            let values: Vec<f64> = v.iter().map(|p| p.1).collect();
+            let d = gleaner_utility::mean_squared_change(
+                &times,
+                &values,
+                shared.step_s,
+                DRIFT_MAX_LAG,
+                10,
+            );
+            (s, d)
+        })
+        .collect();
+    let median: Vec<f64> = (0..DRIFT_MAX_LAG)
+        .map(|k| {
+            let mut v: Vec<f64> = own.values().filter_map(|d| d[k]).collect();
+            v.sort_by(f64::total_cmp);
+            v.get(v.len() / 2).copied().unwrap_or(0.0)
+        })
+        .collect();
+    let step = shared.step_s.max(1) as f64;
+    Ok(cell_sensor_ids
+        .iter()
+        .map(|ids| {
+            ids.iter()
+                .map(|s| {
+                    let d: Vec<f64> = median
+                        .iter()
+                        .enumerate()
+                        .map(|(k, m)| match own.get(s).and_then(|d| d[k]) {
+                            Some(x) => (x * m).sqrt(),
+                            None => *m,
+                        })
+                        .collect();
+                    let age = last
+                        .get(s)
+                        .map_or(f64::INFINITY, |&l| (t - l).max(0) as f64);
+                    gleaner_utility::staleness_index(&d, age.min(1e12) / step)
+                })
+                .sum()
+        })
+        .collect())
+}
+
+/// The errors of one reconstruction against the truth (see [`MissionMetrics`]).
+struct Errors {
+    rmse_carried: f64,
+    mae_carried: f64,
+    rmse_kriged: f64,
+    mae_kriged: f64,
+    mean_variance: f64,
+    evaluated: usize,
+}
+
+/// Errors of `estimates` against the true values stamped `target` (sensors without one are
+/// left out; 0 when none has one).
+fn reconstruction_errors(
+    estimates: &[crate::reconstruct::SensorEstimate],
+    series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
+    target: UnixSeconds,
+) -> Errors {
+    let (mut se_c, mut ae_c, mut se_k, mut ae_k, mut var, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0);
+    for e in estimates {
+        let Some(v) = value_at(series, &e.sensor, target) else {
+            continue;
+        };
+        se_c += (e.carried - v).powi(2);
+        ae_c += (e.carried - v).abs();
+        se_k += (e.kriged - v).powi(2);
+        ae_k += (e.kriged - v).abs();
+        var += e.variance;
+        n += 1;
+    }
+    let nf = (n as f64).max(1.0);
+    Errors {
+        rmse_carried: (se_c / nf).sqrt(),
+        mae_carried: ae_c / nf,
+        rmse_kriged: (se_k / nf).sqrt(),
+        mae_kriged: ae_k / nf,
+        mean_variance: var / nf,
+        evaluated: n,
+    }
 }
 
 /// A schedule: every `step_s` seconds from `start` to `end` inclusive.
@@ -1033,7 +1182,8 @@ pub fn block_interval(per_run: &[Vec<(UnixSeconds, f64)>]) -> Interval {
     i
 }
 
-/// A per-mission metric, by name: `rmse_kriged`, `rmse_carried`, `mae_kriged`,
+/// A per-mission metric, by name: `rmse_kriged`, `rmse_carried`, `rmse_kriged_before`,
+/// `rmse_carried_before`, `mae_kriged`,
 /// `mae_carried`, `staleness_mean_days`, `staleness_max_days`, `energy_kj`, `utilisation`,
 /// `cells`, `classifier_accuracy`, `lost_readings`, `mean_sd` (square root of the mean
 /// kriging variance).
@@ -1041,6 +1191,8 @@ pub fn metric(m: &MissionMetrics, name: &str) -> f64 {
     match name {
         "rmse_kriged" => m.rmse_kriged,
         "rmse_carried" => m.rmse_carried,
+        "rmse_kriged_before" => m.rmse_kriged_before,
+        "rmse_carried_before" => m.rmse_carried_before,
         "mae_kriged" => m.mae_kriged,
         "mae_carried" => m.mae_carried,
         "staleness_mean_days" => m.staleness_mean_s / 86_400.0,
@@ -1062,9 +1214,11 @@ pub fn metric(m: &MissionMetrics, name: &str) -> f64 {
 }
 
 /// The per-mission metrics [`metric`] knows, in report order.
-pub const METRICS: [&str; 12] = [
+pub const METRICS: [&str; 14] = [
     "rmse_kriged",
     "rmse_carried",
+    "rmse_kriged_before",
+    "rmse_carried_before",
     "mae_kriged",
     "mae_carried",
     "mean_sd",
