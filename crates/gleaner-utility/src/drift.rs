@@ -75,7 +75,7 @@ pub fn mean_squared_change(
 /// held constant after the last one. Unit: value unit² × grid steps; 0 for `age_steps <= 0`
 /// or an empty `d`; never negative. See the module docs.
 pub fn staleness_index(d: &[f64], age_steps: f64) -> f64 {
-    if !(age_steps > 0.0) || d.is_empty() {
+    if age_steps.is_nan() || age_steps <= 0.0 || d.is_empty() {
         return 0.0;
     }
     // Running maximum, non-finite entries skipped.
