@@ -571,7 +571,33 @@ pub fn run_campaign(
         .map(|m| m.modality.to_string())
         .collect();
     let class_name = crate::score::condition_modality(probe.settings(), &names);
-    let (_, _, template) = probe.into_parts();
+    let (dir, probe_settings, mut template) = probe.into_parts();
+    // Exhaustive collection must reach every cell within one battery: refuse a budget that
+    // cannot, now rather than when its run fails after the others have run for minutes.
+    if request.strategies.contains(&Strategy::Exhaustive) {
+        for &budget in &request.budgets {
+            let mut settings = probe_settings.clone();
+            let battery = settings.energy.to_core()?.battery.capacity_j;
+            settings.energy.battery_j = Some(battery * budget);
+            let mut check = Project::new(&dir, settings, template);
+            let explored = explore(
+                &mut check,
+                &ExploreRequest {
+                    at: Some(request.history_until),
+                    dry_run: true,
+                },
+                request.clock_now,
+            );
+            (_, _, template) = check.into_parts();
+            if let Err(e) = explored {
+                return Err(AppError::Invalid(format!(
+                    "budget {budget} ({:.1} kJ battery): exhaustive collection cannot be flown \
+                     ({e}); raise the budget or leave exhaustive out of the strategies",
+                    battery * budget / 1_000.0
+                )));
+            }
+        }
+    }
     let series = truth_series(truth, &modality.to_string());
     let class_series = match &class_name {
         Some(c) if *c != modality.to_string() => truth_series(truth, c),

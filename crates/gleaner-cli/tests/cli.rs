@@ -971,3 +971,33 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     );
     assert_eq!(out.lines().count(), 2 + 12, "{out}");
 }
+
+#[test]
+fn simulate_refuses_up_front_a_budget_exhaustive_collection_cannot_fly() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sim = dir.path().join("sim");
+    let err = fail(&[
+        "simulate",
+        "--dataset",
+        "synthetic",
+        "--out",
+        s(&sim),
+        "--farm-seeds",
+        "5",
+        "--farm-sensors",
+        "12",
+        "--farm-days",
+        "24",
+        "--farm-history-days",
+        "21",
+        "--strategies",
+        "gleaner,exhaustive",
+        "--budgets",
+        "1,0.001",
+    ]);
+    assert!(
+        err.contains("budget 0.001") && err.contains("exhaustive collection cannot be flown"),
+        "{err}"
+    );
+    assert!(!sim.join("missions.csv").exists());
+}
