@@ -63,8 +63,9 @@ pub enum Strategy {
     /// [`crate::settings::UtilitySection::paper`], whatever the project's), its greedy planner.
     Paper,
     /// gleaner's method: the project's utility settings made gleaner's
-    /// ([`crate::settings::UtilitySection::gleaner`]: gated S, 14-day freshness half-life,
-    /// bounded anomaly; plus η·V when `[utility] variance_weight` is set), the default planner.
+    /// ([`crate::settings::UtilitySection::gleaner`]: gated S with the drift freshness, the
+    /// bounded anomaly, γ = δ = 0; plus η·V when `[utility] variance_weight` is set), the
+    /// default planner.
     Gleaner,
     /// gleaner's method with one utility term switched off (with α = 0 the gated S is 0
     /// everywhere: nothing is worth a flight).
@@ -72,12 +73,10 @@ pub enum Strategy {
     /// Expected reduction of the field's posterior variance (greedy marginal gains of the
     /// kriging model fitted on the history), default planner.
     Variance,
-    /// Expected error: each cell worth the sum over its sensors of the staleness index of
-    /// their drift ([`gleaner_utility::staleness_index`] of the evaluated modality's mean
-    /// squared change over the last [`DRIFT_WINDOW_DAYS`] of collected readings, shrunk
-    /// halfway — geometrically — to the field's median), times gleaner's anomaly gate
-    /// 1 + βA; default planner.
-    Drift,
+    /// gleaner's earlier method ([`crate::settings::UtilitySection::gated`]: gated S with a
+    /// 14-day freshness half-life and the bounded anomaly, the project's γ and δ), the
+    /// default planner.
+    Gated,
 }
 
 impl Strategy {
@@ -95,7 +94,7 @@ impl Strategy {
         Strategy::Without(Term::Anomaly),
         Strategy::Without(Term::Uncertainty),
         Strategy::Without(Term::Redundancy),
-        Strategy::Drift,
+        Strategy::Gated,
     ];
 
     /// The strategy's name in outputs and on the command line.
@@ -113,7 +112,7 @@ impl Strategy {
             Strategy::Without(Term::Uncertainty) => "no-uncertainty",
             Strategy::Without(Term::Redundancy) => "no-redundancy",
             Strategy::Variance => "variance",
-            Strategy::Drift => "drift",
+            Strategy::Gated => "gated",
         }
     }
 
@@ -136,9 +135,8 @@ impl Strategy {
         let mut s = base.clone();
         match self {
             Strategy::Paper => s.utility = s.utility.paper(),
-            Strategy::Gleaner | Strategy::Without(_) | Strategy::Drift => {
-                s.utility = s.utility.gleaner()
-            }
+            Strategy::Gleaner | Strategy::Without(_) => s.utility = s.utility.gleaner(),
+            Strategy::Gated => s.utility = s.utility.gated(),
             _ => {}
         }
         let u = &mut s.utility;
@@ -770,17 +768,6 @@ fn run_one(
             },
         )?;
         let given: Option<Vec<f64>> = match key.strategy {
-            Strategy::Drift => {
-                let beta = project.settings().utility.beta;
-                let index = drift_index(&project, shared, &cell_sensor_ids, &last, t)?;
-                Some(
-                    index
-                        .iter()
-                        .zip(&scoring.terms)
-                        .map(|(i, x)| i * (1.0 + beta * x.a).max(0.0) + 1e-12)
-                        .collect(),
-                )
-            }
             Strategy::RoundRobin => {
                 let ages: Vec<Option<f64>> = (0..centres.len()).map(cell_age).collect();
                 let oldest = ages.iter().flatten().fold(0.0f64, |a, b| a.max(*b));
@@ -963,80 +950,6 @@ fn run_one(
         caught,
         visits,
     })
-}
-
-/// Lags of the drift strategy's structure functions, grid steps.
-const DRIFT_MAX_LAG: usize = 30;
-/// Days of collected readings the drift strategy estimates each sensor's drift on.
-pub const DRIFT_WINDOW_DAYS: i64 = 365;
-
-/// [`Strategy::Drift`]'s index per cell (field order): the sum over the cell's sensors of
-/// the staleness index (value unit² × grid steps) of the time since their last collection,
-/// each sensor's structure function estimated on the evaluated modality's readings the run
-/// holds (what was collected) from the last [`DRIFT_WINDOW_DAYS`], lag by lag the geometric
-/// mean of the sensor's and the field's median (a sensor without 10 pairs at a lag: the
-/// median).
-fn drift_index(
-    project: &Project<SqliteStore>,
-    shared: &Shared<'_>,
-    cell_sensor_ids: &[Vec<SensorId>],
-    last: &HashMap<SensorId, UnixSeconds>,
-    t: UnixSeconds,
-) -> Result<Vec<f64>> {
-    let batch = project
-        .store()
-        .readings_for(Some(&shared.modality), (t - DRIFT_WINDOW_DAYS * 86_400)..=t)?;
-    let mut series: HashMap<&SensorId, Vec<(UnixSeconds, f64)>> = HashMap::new();
-    for r in &batch.rows {
-        if let Some(s) = batch.sensors.get(r.sensor as usize) {
-            series.entry(s).or_default().push((r.t, r.value));
-        }
-    }
-    let own: HashMap<&SensorId, Vec<Option<f64>>> = series
-        .into_iter()
-        .map(|(s, mut v)| {
-            v.sort_by_key(|p| p.0);
-            let times: Vec<UnixSeconds> = v.iter().map(|p| p.0).collect();
-            let values: Vec<f64> = v.iter().map(|p| p.1).collect();
-            let d = gleaner_utility::mean_squared_change(
-                &times,
-                &values,
-                shared.step_s,
-                DRIFT_MAX_LAG,
-                10,
-            );
-            (s, d)
-        })
-        .collect();
-    let median: Vec<f64> = (0..DRIFT_MAX_LAG)
-        .map(|k| {
-            let mut v: Vec<f64> = own.values().filter_map(|d| d[k]).collect();
-            v.sort_by(f64::total_cmp);
-            v.get(v.len() / 2).copied().unwrap_or(0.0)
-        })
-        .collect();
-    let step = shared.step_s.max(1) as f64;
-    Ok(cell_sensor_ids
-        .iter()
-        .map(|ids| {
-            ids.iter()
-                .map(|s| {
-                    let d: Vec<f64> = median
-                        .iter()
-                        .enumerate()
-                        .map(|(k, m)| match own.get(s).and_then(|d| d[k]) {
-                            Some(x) => (x * m).sqrt(),
-                            None => *m,
-                        })
-                        .collect();
-                    let age = last
-                        .get(s)
-                        .map_or(f64::INFINITY, |&l| (t - l).max(0) as f64);
-                    gleaner_utility::staleness_index(&d, age.min(1e12) / step)
-                })
-                .sum()
-        })
-        .collect())
 }
 
 /// The errors of one reconstruction against the truth (see [`MissionMetrics`]).

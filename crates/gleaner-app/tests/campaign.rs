@@ -155,7 +155,7 @@ fn caf_campaign() -> CampaignResult {
             Strategy::Nearest,
             Strategy::Exhaustive,
             Strategy::Variance,
-            Strategy::Drift,
+            Strategy::Gated,
         ],
     );
     // One season of history keeps the test quick.
@@ -203,7 +203,7 @@ fn caf_campaign_end_to_end() {
         Strategy::Gleaner,
         Strategy::Nearest,
         Strategy::Variance,
-        Strategy::Drift,
+        Strategy::Gated,
     ] {
         for m in &run(s).missions {
             assert_eq!(m.sorties, 1);
