@@ -234,10 +234,16 @@ fn condition<S: Store>(
 /// cells' drift freshness and S recomputed (`drift.rs`; reads the condition modality's
 /// readings of the last `drift_window_days`).
 pub fn compute<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
-    let mut scoring = match state::fast_scoring(project, request)? {
+    let scoring = match state::fast_scoring(project, request)? {
         Some(scoring) => scoring,
-        None => compute_full(project, request)?,
+        None => compute_history(project, request)?,
     };
+    with_freshness_form(project, scoring)
+}
+
+/// F as `[utility] freshness_form` asks: the half-life's (as computed) or, with `drift`, each
+/// cell's drift freshness, S recomputed (`drift.rs`).
+fn with_freshness_form<S: Store>(project: &Project<S>, mut scoring: Scoring) -> Result<Scoring> {
     let u = &project.settings().utility;
     if u.freshness_form == "drift" {
         let k = &scoring.knowledge;
@@ -269,6 +275,11 @@ pub fn compute<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result
 /// [`compute`] from the stored history, never from the persisted state: loads every reading
 /// known at t and refits the condition model. O(history).
 pub fn compute_full<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
+    with_freshness_form(project, compute_history(project, request)?)
+}
+
+/// [`compute_full`] before `[utility] freshness_form` is applied.
+fn compute_history<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
     let k = knowledge(project, request.at, request.history)?;
     let Some(t) = request.at.or(k.latest) else {
         return Err(AppError::Invalid(
