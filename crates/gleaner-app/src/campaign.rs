@@ -809,18 +809,18 @@ fn run_one(
         // Reconstruction of every sensor's value stamped T − period from what was known
         // before the flights.
         let target = t - period;
-        let before = reconstruction_errors(
-            &estimate(
-                &project,
+        let errors_now = |project: &Project<SqliteStore>| -> Result<Errors> {
+            let estimates = estimate(
+                project,
                 &shared.modality,
                 &shared.model,
                 target,
                 lookback,
                 (request.neighbours, request.kriging_mean),
-            )?,
-            &shared.series,
-            target,
-        );
+            )?;
+            Ok(reconstruction_errors(&estimates, &shared.series, target))
+        };
+        let before = errors_now(&project)?;
         let mut flown = Vec::new();
         let (mut energy_j, mut budget_j) = (0.0, 0.0);
         if key.strategy == Strategy::Exhaustive {
@@ -899,18 +899,7 @@ fn run_one(
             }
         }
         // Reconstruction of every sensor's value stamped T − period, after the flights.
-        let after = reconstruction_errors(
-            &estimate(
-                &project,
-                &shared.modality,
-                &shared.model,
-                target,
-                lookback,
-                (request.neighbours, request.kriging_mean),
-            )?,
-            &shared.series,
-            target,
-        );
+        let after = errors_now(&project)?;
         for s in &visited {
             last.insert(s.clone(), t);
         }

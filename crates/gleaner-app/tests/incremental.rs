@@ -129,34 +129,30 @@ fn record_first_sortie<S: app::Store>(
     .unwrap();
 }
 
-#[test]
-fn fast_scoring_equals_full_scoring_on_caf() {
-    let data = shared_data();
-    let daily = data.join("caf/Daily");
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("caf");
+/// A new project of the CAF network in `dir`.
+fn init_caf(data: &Path, dir: &Path) {
     app::init(&app::InitRequest {
-        dir: dir.clone(),
+        dir: dir.to_path_buf(),
         sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
         utm_zone: Some("11N".into()),
         name: Some("caf".into()),
         ..Default::default()
     })
     .unwrap();
+}
+
+#[test]
+fn fast_scoring_equals_full_scoring_on_caf() {
+    let data = shared_data();
+    let daily = data.join("caf/Daily");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("caf");
+    init_caf(&data, &dir);
     let mut project = with_refit_growth(&dir, 0.0);
     // 2011-2012, then 2013 as a second ingest (an incremental update of the state).
     for (k, years) in [(0, 2011..=2012), (1, 2013..=2013)] {
         let files = caf_files(&daily, &tmp.path().join(format!("in{k}")), years);
-        app::ingest(
-            &mut project,
-            &app::IngestRequest {
-                files,
-                ..Default::default()
-            },
-            common::INGEST_CLOCK,
-            &Silent,
-        )
-        .unwrap();
+        common::ingest_files(&mut project, files);
     }
     // A bulk ingest leaves the state stale (the ingest stays as fast as the store); the first
     // scoring that writes rebuilds it, and from then on scoring takes the fast path.
@@ -442,30 +438,14 @@ fn drift_freshness_on_caf() {
     let daily = data.join("caf/Daily");
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("caf");
-    app::init(&app::InitRequest {
-        dir: dir.clone(),
-        sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
-        utm_zone: Some("11N".into()),
-        name: Some("caf".into()),
-        ..Default::default()
-    })
-    .unwrap();
+    init_caf(&data, &dir);
     let mut settings = app::Settings::load(&dir).unwrap();
     settings.utility = settings.utility.gleaner();
     settings.utility.condition_refit_growth = 0.0;
     settings.save(&dir).unwrap();
     let mut project = app::Project::open(&dir).unwrap();
     let files = caf_files(&daily, &tmp.path().join("in"), 2013..=2013);
-    app::ingest(
-        &mut project,
-        &app::IngestRequest {
-            files,
-            ..Default::default()
-        },
-        common::INGEST_CLOCK,
-        &Silent,
-    )
-    .unwrap();
+    common::ingest_files(&mut project, files);
     app::score(&mut project, &app::ScoreRequest::default()).unwrap();
     let t = app::parse_timestamp("2014-03-01").unwrap();
     record_first_sortie(&mut project, t, |sensors| {

@@ -872,16 +872,15 @@ fn exploration_sorties_export_like_any_mission() {
     assert!(dir.path().join("missions/exploration.png").exists());
 }
 
-#[test]
-fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
-    let dir = tempfile::tempdir().expect("temp dir");
-    let sim = dir.path().join("sim");
-    let out = ok(&[
+/// `simulate` arguments for a 12-sensor synthetic farm (seed 5, 21 days of history, 3 daily
+/// missions) writing into `out`, then `extra`.
+fn small_farm_simulation<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
         "simulate",
         "--dataset",
         "synthetic",
         "--out",
-        s(&sim),
+        s(out),
         "--farm-seeds",
         "5",
         "--farm-sensors",
@@ -890,13 +889,26 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
         "24",
         "--farm-history-days",
         "21",
-        "--farm-events",
-        "2",
-        "--strategies",
-        "gleaner,nearest,exhaustive",
-        "--planner-iterations",
-        "50",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    args
+}
+
+#[test]
+fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sim = dir.path().join("sim");
+    let out = ok(&small_farm_simulation(
+        &sim,
+        &[
+            "--farm-events",
+            "2",
+            "--strategies",
+            "gleaner,nearest,exhaustive",
+            "--planner-iterations",
+            "50",
+        ],
+    ));
     assert!(out.contains("1 campaign(s), 3 runs"), "{out}");
     let missions = std::fs::read_to_string(sim.join("missions.csv")).expect("missions.csv");
     // A header, then 3 strategies x 3 missions.
@@ -976,25 +988,10 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
 fn simulate_refuses_up_front_a_budget_exhaustive_collection_cannot_fly() {
     let dir = tempfile::tempdir().expect("temp dir");
     let sim = dir.path().join("sim");
-    let err = fail(&[
-        "simulate",
-        "--dataset",
-        "synthetic",
-        "--out",
-        s(&sim),
-        "--farm-seeds",
-        "5",
-        "--farm-sensors",
-        "12",
-        "--farm-days",
-        "24",
-        "--farm-history-days",
-        "21",
-        "--strategies",
-        "gleaner,exhaustive",
-        "--budgets",
-        "1,0.001",
-    ]);
+    let err = fail(&small_farm_simulation(
+        &sim,
+        &["--strategies", "gleaner,exhaustive", "--budgets", "1,0.001"],
+    ));
     assert!(
         err.contains("budget 0.001") && err.contains("exhaustive collection cannot be flown"),
         "{err}"

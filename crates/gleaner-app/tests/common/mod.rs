@@ -80,3 +80,21 @@ pub fn flight_file<'a>(
     }
     (path, n)
 }
+
+/// Ingests `files` into `project` at [`INGEST_CLOCK`] with the default options.
+#[allow(dead_code)] // not every test binary ingests this way
+pub fn ingest_files<S: gleaner_app::Store>(
+    project: &mut gleaner_app::Project<S>,
+    files: Vec<PathBuf>,
+) -> gleaner_app::IngestOutcome {
+    gleaner_app::ingest(
+        project,
+        &gleaner_app::IngestRequest {
+            files,
+            ..Default::default()
+        },
+        INGEST_CLOCK,
+        &gleaner_app::Silent,
+    )
+    .unwrap()
+}
