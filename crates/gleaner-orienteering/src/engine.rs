@@ -34,11 +34,18 @@ pub(crate) struct Ctx<'a> {
 }
 
 impl<'a> Ctx<'a> {
-    pub fn new(p: &'a Problem, k: usize) -> Ctx<'a> {
+    /// Context over the candidates: with `prune`, only the nodes some feasible route can
+    /// visit ([`Problem::reachable_candidates`]); without, every non-terminal node of
+    /// positive reward (the reference path).
+    pub fn new(p: &'a Problem, k: usize, prune: bool) -> Ctx<'a> {
         let n = p.len();
-        let cands: Vec<usize> = (0..n)
-            .filter(|&v| !p.is_terminal(v) && p.reward(v) > 0.0)
-            .collect();
+        let cands: Vec<usize> = if prune {
+            p.reachable_candidates()
+        } else {
+            (0..n)
+                .filter(|&v| !p.is_terminal(v) && p.reward(v) > 0.0)
+                .collect()
+        };
         let k = k.min(n.saturating_sub(1)).max(1);
         let knn = neighbour_lists(p, k);
         let eps = 1e-9 * p.budget().abs().max(1e-3);
@@ -86,6 +93,8 @@ fn neighbour_lists(p: &Problem, k: usize) -> Vec<u32> {
             x1 = x1.max(q[0]);
             y1 = y1.max(q[1]);
         }
+        // Costs are `scale` times the metric distance.
+        let scale = p.cost_per_unit().unwrap_or(1.0);
         let g = ((n as f64 / 2.0).sqrt().ceil() as usize).max(1);
         let cell = ((x1 - x0).max(y1 - y0) / g as f64).max(1e-12);
         let idx = |v: f64, lo: f64| (((v - lo) / cell) as usize).min(g - 1);
@@ -116,7 +125,7 @@ fn neighbour_lists(p: &Problem, k: usize) -> Vec<u32> {
                 let enough = buf.len() >= k;
                 if enough {
                     buf.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                    if buf[k - 1].0 <= r as f64 * cell {
+                    if buf[k - 1].0 <= scale * r as f64 * cell {
                         break;
                     }
                 }
