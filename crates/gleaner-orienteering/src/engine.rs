@@ -31,6 +31,11 @@ pub(crate) struct Ctx<'a> {
     /// Evaluate insertions only next to a node's neighbours (large instances); otherwise at
     /// every edge (exact cheapest insertion).
     pub restricted: bool,
+    /// `cands` by reward, largest first (ties: lower index first), sorted once.
+    by_reward: Vec<usize>,
+    /// Travel costs satisfy the triangle inequality, so an insertion costs at least the
+    /// node's service cost: nodes whose service exceeds a route's slack are skipped.
+    metric: bool,
 }
 
 impl<'a> Ctx<'a> {
@@ -49,6 +54,8 @@ impl<'a> Ctx<'a> {
         let k = k.min(n.saturating_sub(1)).max(1);
         let knn = neighbour_lists(p, k);
         let eps = 1e-9 * p.budget().abs().max(1e-3);
+        let mut by_reward = cands.clone();
+        by_reward.sort_by(|&a, &b| p.reward(b).total_cmp(&p.reward(a)).then(a.cmp(&b)));
         Ctx {
             p,
             cands,
@@ -56,6 +63,8 @@ impl<'a> Ctx<'a> {
             k,
             eps,
             restricted: false,
+            by_reward,
+            metric: p.is_metric(),
         }
     }
 
@@ -67,6 +76,17 @@ impl<'a> Ctx<'a> {
     #[inline]
     pub fn c(&self, i: usize, j: usize) -> f64 {
         self.p.cost(i, j)
+    }
+
+    /// False when `v` provably fits in no route of `state` (metric costs: an insertion costs
+    /// at least the service cost, up to rounding far below the tolerance).
+    #[inline]
+    fn may_fit(&self, state: &State, v: usize) -> bool {
+        if !self.metric {
+            return true;
+        }
+        let room = self.p.budget() + 2.0 * self.p.tolerance();
+        state.cost.iter().any(|&c| self.p.service(v) <= room - c)
     }
 
     #[inline]
@@ -332,11 +352,14 @@ impl State {
         rng: &mut ChaCha8Rng,
     ) -> usize {
         let nr = self.routes.len();
+        // Nodes that fit nowhere now never will in this call (route costs only grow).
         let mut free: Vec<usize> = ctx
             .cands
             .iter()
             .copied()
-            .filter(|&v| self.route_of[v] == FREE && !forbidden.contains(&v))
+            .filter(|&v| {
+                self.route_of[v] == FREE && !forbidden.contains(&v) && ctx.may_fit(self, v)
+            })
             .collect();
         let mut slots: Vec<Slot> = Vec::with_capacity(free.len() * nr);
         for &v in &free {
@@ -627,14 +650,13 @@ impl State {
     pub fn swap(&mut self, ctx: &Ctx, scan_all: bool) -> bool {
         let mut any = false;
         let nr = self.routes.len();
-        let mut free: Vec<usize> = ctx
-            .cands
+        // Largest rewards first (the order sorted once in the context).
+        let free: Vec<usize> = ctx
+            .by_reward
             .iter()
             .copied()
             .filter(|&v| self.route_of[v] == FREE)
             .collect();
-        // Largest rewards first.
-        free.sort_by(|&a, &b| ctx.p.reward(b).total_cmp(&ctx.p.reward(a)).then(a.cmp(&b)));
         for &u in &free {
             if self.route_of[u] != FREE {
                 continue;
@@ -644,6 +666,16 @@ impl State {
             for r in 0..nr {
                 let route = &self.routes[r];
                 if route.len() <= 2 {
+                    continue;
+                }
+                // Without a full scan only `u`'s routed neighbours can be replaced: none on
+                // this route, no move (skip the edge scan).
+                if !scan_all
+                    && !ctx
+                        .neighbours(u)
+                        .iter()
+                        .any(|&x| self.route_of[x as usize] == r as u32)
+                {
                     continue;
                 }
                 // Three cheapest insertion edges (by index of their first node).
