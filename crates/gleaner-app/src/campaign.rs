@@ -63,8 +63,9 @@ pub enum Strategy {
     /// [`crate::settings::UtilitySection::paper`], whatever the project's), its greedy planner.
     Paper,
     /// gleaner's method: the project's utility settings made gleaner's
-    /// ([`crate::settings::UtilitySection::gleaner`]: gated S, 14-day freshness half-life,
-    /// bounded anomaly; plus η·V when `[utility] variance_weight` is set), the default planner.
+    /// ([`crate::settings::UtilitySection::gleaner`]: gated S with the drift freshness, the
+    /// bounded anomaly, γ = δ = 0; plus η·V when `[utility] variance_weight` is set), the
+    /// default planner.
     Gleaner,
     /// gleaner's method with one utility term switched off (with α = 0 the gated S is 0
     /// everywhere: nothing is worth a flight).
@@ -72,11 +73,15 @@ pub enum Strategy {
     /// Expected reduction of the field's posterior variance (greedy marginal gains of the
     /// kriging model fitted on the history), default planner.
     Variance,
+    /// gleaner's earlier method ([`crate::settings::UtilitySection::gated`]: gated S with a
+    /// 14-day freshness half-life and the bounded anomaly, the project's γ and δ), the
+    /// default planner.
+    Gated,
 }
 
 impl Strategy {
     /// Every strategy, ablations included, in report order.
-    pub const ALL: [Strategy; 12] = [
+    pub const ALL: [Strategy; 13] = [
         Strategy::Gleaner,
         Strategy::Paper,
         Strategy::Variance,
@@ -89,6 +94,7 @@ impl Strategy {
         Strategy::Without(Term::Anomaly),
         Strategy::Without(Term::Uncertainty),
         Strategy::Without(Term::Redundancy),
+        Strategy::Gated,
     ];
 
     /// The strategy's name in outputs and on the command line.
@@ -106,6 +112,7 @@ impl Strategy {
             Strategy::Without(Term::Uncertainty) => "no-uncertainty",
             Strategy::Without(Term::Redundancy) => "no-redundancy",
             Strategy::Variance => "variance",
+            Strategy::Gated => "gated",
         }
     }
 
@@ -129,6 +136,7 @@ impl Strategy {
         match self {
             Strategy::Paper => s.utility = s.utility.paper(),
             Strategy::Gleaner | Strategy::Without(_) => s.utility = s.utility.gleaner(),
+            Strategy::Gated => s.utility = s.utility.gated(),
             _ => {}
         }
         let u = &mut s.utility;
@@ -319,6 +327,13 @@ pub struct MissionMetrics {
     pub mae_kriged: f64,
     /// Mean kriging variance, the unit squared.
     pub mean_variance: f64,
+    /// Root-mean-square error of last value carried forward from what was known before this
+    /// mission's flights (after the previous mission's), against the same truth: the error the
+    /// operator lived with between the two missions, at its largest. NaN when not measured
+    /// (results files of an older version).
+    pub rmse_carried_before: f64,
+    /// The same for the kriging estimate.
+    pub rmse_kriged_before: f64,
     /// Sensors with a true value at T − period (those evaluated).
     pub evaluated: usize,
     /// Mean time since each sensor's last collection, seconds.
@@ -554,7 +569,33 @@ pub fn run_campaign(
         .map(|m| m.modality.to_string())
         .collect();
     let class_name = crate::score::condition_modality(probe.settings(), &names);
-    let (_, _, template) = probe.into_parts();
+    let (dir, probe_settings, mut template) = probe.into_parts();
+    // Exhaustive collection must reach every cell within one battery: refuse a budget that
+    // cannot, now rather than when its run fails after the others have run for minutes.
+    if request.strategies.contains(&Strategy::Exhaustive) {
+        for &budget in &request.budgets {
+            let mut settings = probe_settings.clone();
+            let battery = settings.energy.to_core()?.battery.capacity_j;
+            settings.energy.battery_j = Some(battery * budget);
+            let mut check = Project::new(&dir, settings, template);
+            let explored = explore(
+                &mut check,
+                &ExploreRequest {
+                    at: Some(request.history_until),
+                    dry_run: true,
+                },
+                request.clock_now,
+            );
+            (_, _, template) = check.into_parts();
+            if let Err(e) = explored {
+                return Err(AppError::Invalid(format!(
+                    "budget {budget} ({:.1} kJ battery): exhaustive collection cannot be flown \
+                     ({e}); raise the budget or leave exhaustive out of the strategies",
+                    battery * budget / 1_000.0
+                )));
+            }
+        }
+    }
     let series = truth_series(truth, &modality.to_string());
     let class_series = match &class_name {
         Some(c) if *c != modality.to_string() => truth_series(truth, c),
@@ -717,6 +758,15 @@ fn run_one(
                 .min()
                 .map(|&l| (t - l).max(0) as f64)
         };
+        // What the planner believed before the flight (for the classifier's accuracy).
+        let scoring = compute(
+            &project,
+            &ScoreRequest {
+                at: Some(t),
+                dry_run: true,
+                ..ScoreRequest::default()
+            },
+        )?;
         let given: Option<Vec<f64>> = match key.strategy {
             Strategy::RoundRobin => {
                 let ages: Vec<Option<f64>> = (0..centres.len()).map(cell_age).collect();
@@ -746,15 +796,6 @@ fn run_one(
             }
             _ => None,
         };
-        // What the planner believed before the flight (for the classifier's accuracy).
-        let scoring = compute(
-            &project,
-            &ScoreRequest {
-                at: Some(t),
-                dry_run: true,
-                ..ScoreRequest::default()
-            },
-        )?;
         let accuracy = classifier_accuracy(&scoring, &cells, &shared.class_series, t - period);
         let terms_of: HashMap<CellIndex, (usize, &gleaner_utility::CellTerms)> = scoring
             .knowledge
@@ -765,6 +806,21 @@ fn run_one(
             .enumerate()
             .map(|(k, (c, terms))| (c.index, (k, terms)))
             .collect();
+        // Reconstruction of every sensor's value stamped T − period from what was known
+        // before the flights.
+        let target = t - period;
+        let before = reconstruction_errors(
+            &estimate(
+                &project,
+                &shared.modality,
+                &shared.model,
+                target,
+                lookback,
+                (request.neighbours, request.kriging_mean),
+            )?,
+            &shared.series,
+            target,
+        );
         let mut flown = Vec::new();
         let (mut energy_j, mut budget_j) = (0.0, 0.0);
         if key.strategy == Strategy::Exhaustive {
@@ -842,29 +898,19 @@ fn run_one(
                 events_caught += 1;
             }
         }
-        // Reconstruction of every sensor's value stamped T − period.
-        let target = t - period;
-        let estimates = estimate(
-            &project,
-            &shared.modality,
-            &shared.model,
+        // Reconstruction of every sensor's value stamped T − period, after the flights.
+        let after = reconstruction_errors(
+            &estimate(
+                &project,
+                &shared.modality,
+                &shared.model,
+                target,
+                lookback,
+                (request.neighbours, request.kriging_mean),
+            )?,
+            &shared.series,
             target,
-            lookback,
-            (request.neighbours, request.kriging_mean),
-        )?;
-        let (mut se_c, mut ae_c, mut se_k, mut ae_k, mut var, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0);
-        for e in &estimates {
-            let Some(v) = value_at(&shared.series, &e.sensor, target) else {
-                continue;
-            };
-            se_c += (e.carried - v).powi(2);
-            ae_c += (e.carried - v).abs();
-            se_k += (e.kriged - v).powi(2);
-            ae_k += (e.kriged - v).abs();
-            var += e.variance;
-            n += 1;
-        }
-        let nf = (n as f64).max(1.0);
+        );
         for s in &visited {
             last.insert(s.clone(), t);
         }
@@ -882,12 +928,14 @@ fn run_one(
             cells: cells_visited,
             energy_j,
             budget_j,
-            rmse_carried: (se_c / nf).sqrt(),
-            mae_carried: ae_c / nf,
-            rmse_kriged: (se_k / nf).sqrt(),
-            mae_kriged: ae_k / nf,
-            mean_variance: var / nf,
-            evaluated: n,
+            rmse_carried: after.rmse_carried,
+            mae_carried: after.mae_carried,
+            rmse_kriged: after.rmse_kriged,
+            mae_kriged: after.mae_kriged,
+            mean_variance: after.mean_variance,
+            rmse_carried_before: before.rmse_carried,
+            rmse_kriged_before: before.rmse_kriged,
+            evaluated: after.evaluated,
             staleness_mean_s,
             staleness_max_s,
             classifier_accuracy: accuracy,
@@ -902,6 +950,46 @@ fn run_one(
         caught,
         visits,
     })
+}
+
+/// The errors of one reconstruction against the truth (see [`MissionMetrics`]).
+struct Errors {
+    rmse_carried: f64,
+    mae_carried: f64,
+    rmse_kriged: f64,
+    mae_kriged: f64,
+    mean_variance: f64,
+    evaluated: usize,
+}
+
+/// Errors of `estimates` against the true values stamped `target` (sensors without one are
+/// left out; 0 when none has one).
+fn reconstruction_errors(
+    estimates: &[crate::reconstruct::SensorEstimate],
+    series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
+    target: UnixSeconds,
+) -> Errors {
+    let (mut se_c, mut ae_c, mut se_k, mut ae_k, mut var, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0);
+    for e in estimates {
+        let Some(v) = value_at(series, &e.sensor, target) else {
+            continue;
+        };
+        se_c += (e.carried - v).powi(2);
+        ae_c += (e.carried - v).abs();
+        se_k += (e.kriged - v).powi(2);
+        ae_k += (e.kriged - v).abs();
+        var += e.variance;
+        n += 1;
+    }
+    let nf = (n as f64).max(1.0);
+    Errors {
+        rmse_carried: (se_c / nf).sqrt(),
+        mae_carried: ae_c / nf,
+        rmse_kriged: (se_k / nf).sqrt(),
+        mae_kriged: ae_k / nf,
+        mean_variance: var / nf,
+        evaluated: n,
+    }
 }
 
 /// A schedule: every `step_s` seconds from `start` to `end` inclusive.
@@ -1033,7 +1121,8 @@ pub fn block_interval(per_run: &[Vec<(UnixSeconds, f64)>]) -> Interval {
     i
 }
 
-/// A per-mission metric, by name: `rmse_kriged`, `rmse_carried`, `mae_kriged`,
+/// A per-mission metric, by name: `rmse_kriged`, `rmse_carried`, `rmse_kriged_before`,
+/// `rmse_carried_before`, `mae_kriged`,
 /// `mae_carried`, `staleness_mean_days`, `staleness_max_days`, `energy_kj`, `utilisation`,
 /// `cells`, `classifier_accuracy`, `lost_readings`, `mean_sd` (square root of the mean
 /// kriging variance).
@@ -1041,6 +1130,8 @@ pub fn metric(m: &MissionMetrics, name: &str) -> f64 {
     match name {
         "rmse_kriged" => m.rmse_kriged,
         "rmse_carried" => m.rmse_carried,
+        "rmse_kriged_before" => m.rmse_kriged_before,
+        "rmse_carried_before" => m.rmse_carried_before,
         "mae_kriged" => m.mae_kriged,
         "mae_carried" => m.mae_carried,
         "staleness_mean_days" => m.staleness_mean_s / 86_400.0,
@@ -1062,9 +1153,11 @@ pub fn metric(m: &MissionMetrics, name: &str) -> f64 {
 }
 
 /// The per-mission metrics [`metric`] knows, in report order.
-pub const METRICS: [&str; 12] = [
+pub const METRICS: [&str; 14] = [
     "rmse_kriged",
     "rmse_carried",
+    "rmse_kriged_before",
+    "rmse_carried_before",
     "mae_kriged",
     "mae_carried",
     "mean_sd",

@@ -229,16 +229,57 @@ fn condition<S: Store>(
 /// record, see `state.rs`) in O(cells × neighbours × modalities) without reading the history;
 /// the result equals [`compute_full`]'s within 1e-9 relative. Anything else, or a missing or
 /// stale state, takes the full path.
+///
+/// With `[utility] freshness_form = "drift"` (gleaner's method) F is then replaced by the
+/// cells' drift freshness and S recomputed (`drift.rs`; reads the condition modality's
+/// readings of the last `drift_window_days`).
 pub fn compute<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
-    if let Some(scoring) = state::fast_scoring(project, request)? {
-        return Ok(scoring);
+    let scoring = match state::fast_scoring(project, request)? {
+        Some(scoring) => scoring,
+        None => compute_history(project, request)?,
+    };
+    with_freshness_form(project, scoring)
+}
+
+/// F as `[utility] freshness_form` asks: the half-life's (as computed) or, with `drift`, each
+/// cell's drift freshness, S recomputed (`drift.rs`).
+fn with_freshness_form<S: Store>(project: &Project<S>, mut scoring: Scoring) -> Result<Scoring> {
+    let u = &project.settings().utility;
+    if u.freshness_form == "drift" {
+        let k = &scoring.knowledge;
+        match condition_modality(project.settings(), &k.modalities) {
+            Some(name) => {
+                let modality =
+                    Modality::new(&name).map_err(|e| AppError::Invalid(e.to_string()))?;
+                let index = crate::drift::drift_index(
+                    project,
+                    k,
+                    &modality,
+                    scoring.t,
+                    (u.drift_window_days * 86_400.0) as i64,
+                )?;
+                let config = u.to_core(&k.modalities)?;
+                crate::drift::apply(&mut scoring.terms, &index, &config)?;
+                scoring.anomaly_form = format!("{}; F drift", scoring.anomaly_form);
+            }
+            None => scoring.warnings.push(
+                "freshness_form = \"drift\" needs a soil-moisture (condition) modality: F from \
+                 the half-life"
+                    .into(),
+            ),
+        }
     }
-    compute_full(project, request)
+    Ok(scoring)
 }
 
 /// [`compute`] from the stored history, never from the persisted state: loads every reading
 /// known at t and refits the condition model. O(history).
 pub fn compute_full<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
+    with_freshness_form(project, compute_history(project, request)?)
+}
+
+/// [`compute_full`] before `[utility] freshness_form` is applied.
+fn compute_history<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
     let k = knowledge(project, request.at, request.history)?;
     let Some(t) = request.at.or(k.latest) else {
         return Err(AppError::Invalid(

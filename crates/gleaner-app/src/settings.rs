@@ -192,6 +192,16 @@ pub struct UtilitySection {
     /// reduction of the field's posterior variance, divided by the largest; see
     /// docs/method-improvement.md): the planner routes by S + η·V. 0 = the paper's S alone.
     pub variance_weight: f64,
+    /// What F measures: `half-life` (the paper's: 1 − 2^(−age/half-life), the same for every
+    /// cell) or `drift` (gleaner's: the expected error of the cell's carried-forward values,
+    /// the staleness index a·D(a) − ∫₀ᵃ D of each sensor's own mean squared change D of the
+    /// condition modality over the last `drift_window_days` of collected readings, shrunk
+    /// halfway to the field's median, summed over the cell's sensors and divided by the
+    /// largest cell's: in [0, 1]; see docs/method-improvement.md).
+    pub freshness_form: String,
+    /// `drift` only: days of collected readings each sensor's drift is estimated on
+    /// (default 365).
+    pub drift_window_days: f64,
 }
 
 /// gleaner's own freshness half-life, seconds (14 days): F grows about linearly with age
@@ -235,9 +245,14 @@ impl Default for UtilitySection {
             condition_refit_growth: DEFAULT_CONDITION_REFIT_GROWTH,
             score_form: "additive".into(),
             variance_weight: 0.0,
+            freshness_form: "half-life".into(),
+            drift_window_days: DEFAULT_DRIFT_WINDOW_DAYS,
         }
     }
 }
+
+/// Default of [`UtilitySection::drift_window_days`], days.
+pub const DEFAULT_DRIFT_WINDOW_DAYS: f64 = 365.0;
 
 /// Default of [`UtilitySection::condition_refit_growth`]: refit the persisted condition model
 /// once the class modality has grown by 5% since the last fit.
@@ -330,15 +345,29 @@ impl Default for PlannerSection {
 
 impl UtilitySection {
     /// gleaner's method (docs/method-improvement.md): this section with the gated score
-    /// form (S = αF·max(0, 1 + βA + γU − δR)), a 14-day freshness half-life
-    /// ([`GLEANER_HALF_LIFE_S`]) and the bounded anomaly (1 − exp(−A/kappa)); the weights,
-    /// kappa, the anomaly's reference, the variance weight and everything else are kept.
-    /// The `gleaner` strategy of campaigns uses it.
+    /// form (S = αF·max(0, 1 + βA + γU − δR)), the drift freshness (`freshness_form =
+    /// "drift"`), γ = δ = 0 (on CAF, 2014 and 2015, the gated score was more accurate
+    /// without U and without R) and the bounded anomaly (1 − exp(−A/kappa)); α, β, kappa,
+    /// the anomaly's reference, the variance weight and everything else are kept. The
+    /// `gleaner` strategy of campaigns uses it.
     pub fn gleaner(&self) -> Self {
+        Self {
+            freshness_form: "drift".into(),
+            gamma: 0.0,
+            delta: 0.0,
+            ..self.gated()
+        }
+    }
+
+    /// gleaner's earlier method (the `gated` strategy of campaigns): the gated score form, a
+    /// 14-day freshness half-life ([`GLEANER_HALF_LIFE_S`]) and the bounded anomaly; the
+    /// weights and everything else are kept.
+    pub fn gated(&self) -> Self {
         Self {
             freshness_half_life_s: GLEANER_HALF_LIFE_S,
             anomaly_form: "bounded".into(),
             score_form: "gated".into(),
+            freshness_form: "half-life".into(),
             ..self.clone()
         }
     }
@@ -362,6 +391,7 @@ impl UtilitySection {
             anomaly_reference: "own".into(),
             score_form: "additive".into(),
             variance_weight: 0.0,
+            freshness_form: "half-life".into(),
             ..self.clone()
         }
     }
@@ -601,7 +631,7 @@ impl Settings {
         let u = &self.utility;
         let e = &self.energy;
         let p = &self.planner;
-        let values: [(&str, Option<f64>); 34] = [
+        let values: [(&str, Option<f64>); 35] = [
             ("field.base_alt_m", Some(f.base_alt_m)),
             ("field.cell_size_m", Some(f.cell_size_m)),
             ("field.neighbour_k", Some(f.neighbour_k as f64)),
@@ -634,6 +664,7 @@ impl Settings {
                 Some(u.condition_refit_growth),
             ),
             ("utility.variance_weight", Some(u.variance_weight)),
+            ("utility.drift_window_days", Some(u.drift_window_days)),
             ("energy.battery_j", e.battery_j),
             ("energy.reserve_fraction", e.reserve_fraction),
             ("energy.altitude_m", e.altitude_m),
@@ -659,6 +690,12 @@ impl Settings {
             if let Some(v) = value {
                 check_range(key, v)?;
             }
+        }
+        if !matches!(u.freshness_form.as_str(), "half-life" | "drift") {
+            bail!(
+                "utility.freshness_form = {:?}: expected \"half-life\" or \"drift\"",
+                u.freshness_form
+            );
         }
         if f.neighbour_radius_m > 100.0 * f.cell_size_m.max(1.0) {
             bail!(
@@ -755,6 +792,7 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ("utility.condition_classes", 2.0, 20.0, false, "classes"),
     ("utility.condition_refit_growth", 0.0, 10.0, false, ""),
     ("utility.variance_weight", 0.0, 1e6, false, ""),
+    ("utility.drift_window_days", 1.0, 36_500.0, false, "days"),
     ("energy.battery_j", 0.0, 1e9, true, "J"),
     ("energy.reserve_fraction", 0.0, 0.99, false, ""),
     ("energy.altitude_m", 0.0, 120.0, true, "m"),
@@ -891,7 +929,11 @@ mod tests {
             .to_core(&modalities)
             .unwrap();
         assert_eq!(gleaner.score_form, gleaner_utility::ScoreForm::Gated);
-        assert_eq!(gleaner.freshness_half_life_s, GLEANER_HALF_LIFE_S);
+        assert_eq!((gleaner.gamma, gleaner.delta), (0.0, 0.0));
+        assert_eq!(UtilitySection::default().gleaner().freshness_form, "drift");
+        let gated = UtilitySection::default().gated();
+        assert_eq!(gated.freshness_form, "half-life");
+        assert_eq!(gated.freshness_half_life_s, GLEANER_HALF_LIFE_S);
         assert_eq!(
             gleaner.anomaly_form,
             gleaner_utility::AnomalyForm::Bounded { kappa: 3.0 }
@@ -906,5 +948,9 @@ mod tests {
                     [utility]\nvariance_weight = -1.0\n";
         let err = Settings::parse(text).unwrap_err();
         assert!(err.contains("utility.variance_weight"), "{err}");
+        let err =
+            Settings::parse(&text.replace("variance_weight = -1.0", "freshness_form = \"fast\""))
+                .unwrap_err();
+        assert!(err.contains("utility.freshness_form"), "{err}");
     }
 }

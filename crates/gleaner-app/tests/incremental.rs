@@ -432,3 +432,88 @@ fn refit_cadence_keeps_the_last_fit_until_the_class_modality_grows() {
         }
     }
 }
+
+/// gleaner's drift freshness (`freshness_form = "drift"`): F in [0, 1] with 1 at the cell whose
+/// carried-forward values are most likely wrong, 0 at the cells just collected, S = F·(1 + βA)
+/// with γ = δ = 0, and the fast path still equals the full path.
+#[test]
+fn drift_freshness_on_caf() {
+    let data = shared_data();
+    let daily = data.join("caf/Daily");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("caf");
+    app::init(&app::InitRequest {
+        dir: dir.clone(),
+        sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
+        utm_zone: Some("11N".into()),
+        name: Some("caf".into()),
+        ..Default::default()
+    })
+    .unwrap();
+    let mut settings = app::Settings::load(&dir).unwrap();
+    settings.utility = settings.utility.gleaner();
+    settings.utility.condition_refit_growth = 0.0;
+    settings.save(&dir).unwrap();
+    let mut project = app::Project::open(&dir).unwrap();
+    let files = caf_files(&daily, &tmp.path().join("in"), 2013..=2013);
+    app::ingest(
+        &mut project,
+        &app::IngestRequest {
+            files,
+            ..Default::default()
+        },
+        common::INGEST_CLOCK,
+        &Silent,
+    )
+    .unwrap();
+    app::score(&mut project, &app::ScoreRequest::default()).unwrap();
+    let t = app::parse_timestamp("2014-03-01").unwrap();
+    record_first_sortie(&mut project, t, |sensors| {
+        Some(flight_file(&daily, sensors, tmp.path()).0)
+    });
+    assert!(same_scores(&project, Some(t)), "fast path taken");
+    let scoring = app::compute(
+        &project,
+        &app::ScoreRequest {
+            at: Some(t),
+            dry_run: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(
+        scoring.anomaly_form.ends_with("F drift"),
+        "{}",
+        scoring.anomaly_form
+    );
+    let top = scoring.terms.iter().map(|c| c.f).fold(0.0, f64::max);
+    assert_eq!(top, 1.0);
+    let beta = project.settings().utility.beta;
+    let mut just_collected = 0;
+    for (cell, c) in scoring.knowledge.field.cells().iter().zip(&scoring.terms) {
+        assert!((0.0..=1.0).contains(&c.f), "{c:?}");
+        assert!((c.s - c.f * (1.0 + beta * c.a)).abs() < 1e-12, "{c:?}");
+        let fresh = cell
+            .sensors
+            .iter()
+            .all(|&p| scoring.knowledge.last_collected[p] == Some(t));
+        if fresh {
+            just_collected += 1;
+            assert_eq!(
+                c.f, 0.0,
+                "a cell collected at t has nothing to carry forward"
+            );
+        }
+    }
+    assert!(just_collected > 0);
+    // The cells not collected at t were all last collected at the end of 2013: the same age,
+    // yet F differs by the sensors' drift (the one-day change varies 95-fold in variance).
+    let fs: Vec<f64> = scoring
+        .terms
+        .iter()
+        .map(|c| c.f)
+        .filter(|f| *f > 0.0)
+        .collect();
+    let low = fs.iter().copied().fold(1.0, f64::min);
+    assert!(low < 0.4, "smallest F {low} of {fs:?}");
+}

@@ -893,16 +893,42 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
         "--farm-events",
         "2",
         "--strategies",
-        "gleaner,nearest",
+        "gleaner,nearest,exhaustive",
         "--planner-iterations",
         "50",
     ]);
-    assert!(out.contains("1 campaign(s), 2 runs"), "{out}");
+    assert!(out.contains("1 campaign(s), 3 runs"), "{out}");
     let missions = std::fs::read_to_string(sim.join("missions.csv")).expect("missions.csv");
-    // A header, then 2 strategies x 3 missions.
-    assert_eq!(missions.lines().count(), 7, "{missions}");
+    // A header, then 3 strategies x 3 missions.
+    assert_eq!(missions.lines().count(), 10, "{missions}");
     let report = std::fs::read_to_string(sim.join("report.md")).expect("report.md");
     assert!(report.contains("| gleaner | 1 |"), "{report}");
+    assert!(
+        report.contains("## Against exhaustive collection")
+            && report.contains("| exhaustive | 1.00 |"),
+        "{report}"
+    );
+    // Results files of the version before the pre-flight errors still make a report
+    // (without that section).
+    let old = tempfile::tempdir().expect("temp dir");
+    for f in [
+        "campaign.csv",
+        "events.csv",
+        "catches.csv",
+        "visits.csv",
+        "command.txt",
+    ] {
+        std::fs::copy(sim.join(f), old.path().join(f)).expect("copy");
+    }
+    let v1: Vec<String> = missions
+        .lines()
+        .map(|l| l.split(',').take(21).collect::<Vec<_>>().join(","))
+        .collect();
+    std::fs::write(old.path().join("missions.csv"), v1.join("\n") + "\n").expect("write");
+    ok(&["report", s(old.path())]);
+    let report_v1 = std::fs::read_to_string(old.path().join("report.md")).expect("report.md");
+    assert!(report_v1.contains("| gleaner | 1 |"), "{report_v1}");
+    assert!(!report_v1.contains("## Against exhaustive"), "{report_v1}");
     assert!(report.contains("Reproduce with"), "{report}");
     assert!(sim.join("figures/rmse_intervals.svg").exists());
     // The report is rebuilt from the CSV files alone.
@@ -916,7 +942,7 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     )
     .expect("write");
     let err = fail(&["report", s(&sim)]);
-    assert!(err.contains("missions.csv:8"), "{err}");
+    assert!(err.contains("missions.csv:11"), "{err}");
 
     // reconstruct on a project of its own.
     let farm = dir.path().join("farm");
@@ -944,4 +970,34 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
         "{out}"
     );
     assert_eq!(out.lines().count(), 2 + 12, "{out}");
+}
+
+#[test]
+fn simulate_refuses_up_front_a_budget_exhaustive_collection_cannot_fly() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sim = dir.path().join("sim");
+    let err = fail(&[
+        "simulate",
+        "--dataset",
+        "synthetic",
+        "--out",
+        s(&sim),
+        "--farm-seeds",
+        "5",
+        "--farm-sensors",
+        "12",
+        "--farm-days",
+        "24",
+        "--farm-history-days",
+        "21",
+        "--strategies",
+        "gleaner,exhaustive",
+        "--budgets",
+        "1,0.001",
+    ]);
+    assert!(
+        err.contains("budget 0.001") && err.contains("exhaustive collection cannot be flown"),
+        "{err}"
+    );
+    assert!(!sim.join("missions.csv").exists());
 }

@@ -64,6 +64,7 @@
 mod codec;
 mod condition;
 mod config;
+mod drift;
 mod engine;
 mod error;
 mod incremental;
@@ -78,6 +79,7 @@ pub use condition::{
 pub use config::{
     AnomalyForm, AnomalyReference, DAY_S, HistoryWindow, ModalityWeights, ScoreForm, UtilityConfig,
 };
+pub use drift::{mean_squared_change, staleness_index};
 pub use engine::{CellInputs, CellTerms, score_cells, score_cells_parallel};
 pub use error::UtilityError;
 pub use incremental::{IncrementalState, PairStats, Reading, RunningStats, SeriesStats};

@@ -24,7 +24,9 @@ const CATCHES: &str = "catches.csv";
 const COMMAND: &str = "command.txt";
 const VISITS: &str = "visits.csv";
 
-const MISSIONS_HEADER: &str = "label,strategy,seed,budget,index,t,sorties,cells,energy_j,budget_j,rmse_carried,mae_carried,rmse_kriged,mae_kriged,mean_variance,evaluated,staleness_mean_s,staleness_max_s,classifier_accuracy,lost_readings,events_caught";
+const MISSIONS_HEADER: &str = "label,strategy,seed,budget,index,t,sorties,cells,energy_j,budget_j,rmse_carried,mae_carried,rmse_kriged,mae_kriged,mean_variance,evaluated,staleness_mean_s,staleness_max_s,classifier_accuracy,lost_readings,events_caught,rmse_carried_before,rmse_kriged_before";
+/// Columns of `missions.csv` before the pre-flight errors were added (still read).
+const MISSIONS_COLUMNS_V1: usize = 21;
 
 fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
@@ -70,7 +72,7 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
             for m in &run.missions {
                 writeln!(
                     missions,
-                    "{head},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    "{head},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     m.index,
                     m.t,
                     m.sorties,
@@ -88,7 +90,9 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
                     m.classifier_accuracy
                         .map_or(String::new(), |a| a.to_string()),
                     m.lost_readings,
-                    m.events_caught
+                    m.events_caught,
+                    m.rmse_carried_before,
+                    m.rmse_kriged_before
                 )?;
             }
             for v in &run.visits {
@@ -119,6 +123,11 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
 
 /// Rows of one of our CSV files (header skipped), with a located error on a short row.
 fn rows(path: &Path, columns: usize) -> Result<Vec<(usize, Vec<String>)>> {
+    rows_of(path, &[columns])
+}
+
+/// [`rows`] of a file whose rows may have any of `columns` fields (older versions).
+fn rows_of(path: &Path, columns: &[usize]) -> Result<Vec<(usize, Vec<String>)>> {
     let text = std::fs::read_to_string(path).with_context(|| {
         format!(
             "{}: cannot read (run `gleaner simulate` first)",
@@ -131,12 +140,14 @@ fn rows(path: &Path, columns: usize) -> Result<Vec<(usize, Vec<String>)>> {
             continue;
         }
         let cells: Vec<String> = line.split(',').map(str::to_string).collect();
-        if cells.len() != columns {
+        if !columns.contains(&cells.len()) {
+            let expected: Vec<String> = columns.iter().map(usize::to_string).collect();
             bail!(
-                "{}:{}: {} fields, expected {columns}",
+                "{}:{}: {} fields, expected {}",
                 path.display(),
                 n + 1,
-                cells.len()
+                cells.len(),
+                expected.join(" or ")
             );
         }
         out.push((n + 1, cells));
@@ -203,7 +214,10 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
         });
     }
     let p = dir.join(MISSIONS);
-    for (line, c) in rows(&p, MISSIONS_HEADER.split(',').count())? {
+    for (line, c) in rows_of(
+        &p,
+        &[MISSIONS_HEADER.split(',').count(), MISSIONS_COLUMNS_V1],
+    )? {
         let r = find(&mut results, &c[0], &p, line)?;
         let key = RunKey {
             strategy: Strategy::parse(&c[1]).with_context(|| format!("{}:{line}", p.display()))?,
@@ -233,6 +247,16 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
             },
             lost_readings: num(&p, line, "lost_readings", &c[19])?,
             events_caught: num(&p, line, "events_caught", &c[20])?,
+            rmse_carried_before: if c.len() > 21 {
+                f(21, "rmse_carried_before")?
+            } else {
+                f64::NAN
+            },
+            rmse_kriged_before: if c.len() > 22 {
+                f(22, "rmse_kriged_before")?
+            } else {
+                f64::NAN
+            },
         };
         let n_events = results[r].events.len();
         let runs = &mut results[r].runs;
@@ -294,11 +318,84 @@ fn get<'a>(s: &'a Summary, name: &str) -> &'a Interval {
 }
 
 /// What a metric is, for tables and chart labels: (title, unit label, scale, decimals).
+/// "Against exhaustive collection": each strategy's energy and error as a share of
+/// exhaustive collection's, with the error measured before the flights (after them
+/// exhaustive collection is exact by construction, so only the error lived with between
+/// missions compares). Nothing when exhaustive collection was not run or the files predate
+/// the pre-flight errors.
+fn exhaustive_section(md: &mut String, at_main: &[&Summary], main_budget: f64) -> Result<()> {
+    let get = |s: &Summary, name: &str| -> f64 {
+        s.metrics
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map_or(f64::NAN, |(_, i)| i.mean)
+    };
+    let Some(ex) = at_main.iter().find(|s| s.strategy == Strategy::Exhaustive) else {
+        return Ok(());
+    };
+    let (ex_energy, ex_kriged, ex_carried) = (
+        get(ex, "energy_kj"),
+        get(ex, "rmse_kriged_before"),
+        get(ex, "rmse_carried_before"),
+    );
+    if !(ex_energy > 0.0 && ex_kriged > 0.0 && ex_carried > 0.0) {
+        return Ok(());
+    }
+    writeln!(
+        md,
+        "## Against exhaustive collection (budget {main_budget})\n"
+    )?;
+    writeln!(
+        md,
+        "Exhaustive collection flies every cell at every mission, in as many sorties as it \
+         takes ({ex_energy:.1} kJ per mission). Right after its flights it knows every value \
+         (RMSE 0 by construction), so the errors compared here are those of what was known \
+         *before* each mission's flights — the largest error the operator lives with between \
+         two missions — as a ratio to exhaustive collection's, beside the energy ratio. Target \
+         of the method: ratio ≤ 1.2 at an energy ratio ≤ 1/3.\n"
+    )?;
+    writeln!(
+        md,
+        "| strategy | energy / exhaustive | RMSE kriging before | / exhaustive | RMSE carried before | / exhaustive |\n|---|---|---|---|---|---|"
+    )?;
+    for s in at_main {
+        let (e, k, c) = (
+            get(s, "energy_kj"),
+            get(s, "rmse_kriged_before"),
+            get(s, "rmse_carried_before"),
+        );
+        writeln!(
+            md,
+            "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            s.strategy.name(),
+            e / ex_energy,
+            k * 1000.0,
+            k / ex_kriged,
+            c * 1000.0,
+            c / ex_carried
+        )?;
+    }
+    writeln!(md)?;
+    Ok(())
+}
+
 fn describe(name: &str, unit: &str) -> (&'static str, String, f64, usize) {
     match name {
         "rmse_kriged" => ("RMSE, kriging", format!("{unit} ×1000"), 1000.0, 2),
         "rmse_carried" => (
             "RMSE, last value carried forward",
+            format!("{unit} ×1000"),
+            1000.0,
+            2,
+        ),
+        "rmse_kriged_before" => (
+            "RMSE before the flights, kriging",
+            format!("{unit} ×1000"),
+            1000.0,
+            2,
+        ),
+        "rmse_carried_before" => (
+            "RMSE before the flights, last value carried forward",
             format!("{unit} ×1000"),
             1000.0,
             2,
@@ -481,6 +578,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         md,
         "![RMSE with 95% intervals](figures/rmse_intervals.svg)\n"
     )?;
+    exhaustive_section(&mut md, &at_main, main_budget)?;
     writeln!(
         md,
         "## Each metric over the campaign (budget {main_budget})\n"

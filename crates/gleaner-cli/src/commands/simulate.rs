@@ -63,7 +63,8 @@ pub struct SimulateArgs {
     /// Strategies, comma-separated, or `all` / `main` (gleaner, paper, variance, freshness,
     /// round-robin, random, nearest, exhaustive). Names: gleaner, paper, variance,
     /// freshness, round-robin, random, nearest, exhaustive, no-freshness, no-anomaly,
-    /// no-uncertainty, no-redundancy.
+    /// no-uncertainty, no-redundancy, gated (gleaner's earlier method: the gated S with a
+    /// 14-day freshness half-life).
     #[arg(long, value_delimiter = ',', default_value = "main")]
     pub strategies: Vec<String>,
     /// Replicate seeds (planner and random choices).

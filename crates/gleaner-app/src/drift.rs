@@ -1,0 +1,170 @@
+//! gleaner's drift freshness (`[utility] freshness_form = "drift"`): F as the expected error
+//! of each cell's carried-forward values, from each sensor's own drift.
+//!
+//! Per sensor, the mean squared change D(h) of the condition modality at lags of 1..=30 grid
+//! steps is estimated on its collected readings of the last `drift_window_days`
+//! ([`gleaner_utility::mean_squared_change`], at least 10 pairs per lag), then shrunk halfway
+//! to the field: lag by lag the geometric mean of the sensor's and the field's median (the
+//! median alone where the sensor has too few pairs). Its staleness index
+//! ([`gleaner_utility::staleness_index`]) at the time since the sensor was last collected,
+//! summed over the cell's sensors and divided by the largest cell's, is the cell's F in [0, 1]
+//! (all 0 when no cell has drifted). Why: on CAF the one-day change of the 30 cm soil moisture
+//! differs 95-fold in variance between stations, so equal freshness spends visits on cells
+//! that hardly moved (docs/method-improvement.md).
+
+use std::collections::HashMap;
+
+use gleaner_field::{Modality, SensorId, UnixSeconds};
+use gleaner_utility::CellTerms;
+
+use crate::Store;
+use crate::error::{AppError, Result};
+use crate::knowledge::Knowledge;
+use crate::project::Project;
+
+/// Lags of the structure functions, grid steps.
+pub const DRIFT_MAX_LAG: usize = 30;
+/// Fewest pairs for a sensor's own estimate at a lag.
+const MIN_PAIRS: usize = 10;
+
+/// Each cell's drift index (field order; value unit² × grid steps) at `t`, from the readings
+/// of `modality` in the store within `window_s` seconds before `t` (grid step: the median gap
+/// between a sensor's readings) and each sensor's last collection in `k`; see the module docs.
+pub fn drift_index<S: Store>(
+    project: &Project<S>,
+    k: &Knowledge,
+    modality: &Modality,
+    t: UnixSeconds,
+    window_s: i64,
+) -> Result<Vec<f64>> {
+    let batch = project
+        .store()
+        .readings_for(Some(modality), t.saturating_sub(window_s.max(0))..=t)?;
+    let mut series: HashMap<&SensorId, Vec<(UnixSeconds, f64)>> = HashMap::new();
+    for r in &batch.rows {
+        if let Some(s) = batch.sensors.get(r.sensor as usize) {
+            series.entry(s).or_default().push((r.t, r.value));
+        }
+    }
+    for v in series.values_mut() {
+        v.sort_by_key(|p| p.0);
+    }
+    // The sampling step: the median gap between a sensor's consecutive readings.
+    let step_s = crate::knowledge::sampling_step(
+        &series
+            .values()
+            .map(|v| v.iter().map(|p| p.0).collect())
+            .collect::<Vec<Vec<UnixSeconds>>>(),
+    );
+    let own: HashMap<&SensorId, Vec<Option<f64>>> = series
+        .into_iter()
+        .map(|(s, v)| {
+            let times: Vec<UnixSeconds> = v.iter().map(|p| p.0).collect();
+            let values: Vec<f64> = v.iter().map(|p| p.1).collect();
+            let d = gleaner_utility::mean_squared_change(
+                &times,
+                &values,
+                step_s,
+                DRIFT_MAX_LAG,
+                MIN_PAIRS,
+            );
+            (s, d)
+        })
+        .collect();
+    let median: Vec<f64> = (0..DRIFT_MAX_LAG)
+        .map(|lag| {
+            let mut v: Vec<f64> = own.values().filter_map(|d| d[lag]).collect();
+            v.sort_by(f64::total_cmp);
+            v.get(v.len() / 2).copied().unwrap_or(0.0)
+        })
+        .collect();
+    let step = step_s.max(1) as f64;
+    let index_of_sensor = |p: usize| -> f64 {
+        let id = &k.sensors[p].id;
+        let d: Vec<f64> = median
+            .iter()
+            .enumerate()
+            .map(|(lag, m)| match own.get(id).and_then(|d| d[lag]) {
+                Some(x) => (x * m).sqrt(),
+                None => *m,
+            })
+            .collect();
+        // Never collected: as old as can matter (the index is flat past the last lag).
+        let age_s = k.last_collected[p].map_or(f64::INFINITY, |l| (t - l).max(0) as f64);
+        gleaner_utility::staleness_index(&d, (age_s / step).min((2 * DRIFT_MAX_LAG) as f64))
+    };
+    Ok(k.field
+        .cells()
+        .iter()
+        .map(|c| c.sensors.iter().map(|&p| index_of_sensor(p)).sum())
+        .collect())
+}
+
+/// Replaces every cell's F by its drift index divided by the largest (in [0, 1]) and
+/// recomputes S with `config`. `index` in field order, one per term.
+pub fn apply(
+    terms: &mut [CellTerms],
+    index: &[f64],
+    config: &gleaner_utility::UtilityConfig,
+) -> Result<()> {
+    if index.len() != terms.len() {
+        return Err(AppError::Invalid(format!(
+            "drift index of {} cells for {} cells",
+            index.len(),
+            terms.len()
+        )));
+    }
+    let top = index
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .fold(0.0, f64::max);
+    for (c, &i) in terms.iter_mut().zip(index) {
+        c.f = if top > 0.0 && i.is_finite() {
+            (i / top).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        c.s = gleaner_utility::score(c.f, c.a, c.u, c.r, config);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn terms(a: f64) -> CellTerms {
+        CellTerms {
+            f: 0.5,
+            r: 0.2,
+            a,
+            a_raw: a,
+            u: 0.1,
+            s: 0.0,
+            r_by_modality: Vec::new(),
+            a_by_modality: Vec::new(),
+            probabilities: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn apply_scales_f_to_the_largest_and_rescores() {
+        let config = gleaner_utility::UtilityConfig {
+            score_form: gleaner_utility::ScoreForm::Gated,
+            gamma: 0.0,
+            delta: 0.0,
+            ..gleaner_utility::UtilityConfig::default()
+        };
+        let mut t = vec![terms(0.0), terms(0.5), terms(0.0)];
+        apply(&mut t, &[2.0, 1.0, 0.0], &config).unwrap();
+        assert_eq!([t[0].f, t[1].f, t[2].f], [1.0, 0.5, 0.0]);
+        assert!((t[0].s - 1.0).abs() < 1e-12);
+        assert!((t[1].s - 0.75).abs() < 1e-12); // 0.5 · (1 + 0.5)
+        assert_eq!(t[2].s, 0.0);
+        // Nothing drifted: F = 0 everywhere.
+        apply(&mut t, &[0.0; 3], &config).unwrap();
+        assert!(t.iter().all(|c| c.f == 0.0 && c.s == 0.0));
+        assert!(apply(&mut t, &[1.0], &config).is_err());
+    }
+}
