@@ -40,7 +40,8 @@ use std::time::{Duration, Instant};
 use gleaner_energy::{CellVisit, EnergyError, MissionEnergy, MissionEnergyModel};
 use gleaner_field::LocalPoint;
 use gleaner_orienteering::{
-    Problem, ProblemError, SolveError, SolveOptions, SolverKind, solve, time_limit_from_secs,
+    Metric, Problem, ProblemError, SolveError, SolveOptions, SolverKind, solve,
+    time_limit_from_secs,
 };
 use thiserror::Error;
 
@@ -222,10 +223,15 @@ pub fn plan_sorties(
     let mut orders: Vec<Vec<usize>> = vec![Vec::new(); sorties];
     let budget = model.usable_budget_j() - model.sortie_fixed_j();
     if !chosen.is_empty() && budget > 0.0 {
+        // Travel costs: energy per metre times the straight-line distance (m), evaluated on
+        // demand by the solver (exactly the entries of `travel_cost_matrix`, without its
+        // n² memory: 800 MB for 10,000 cells).
         let mut points = Vec::with_capacity(chosen.len() + 1);
-        points.push(base);
-        points.extend(chosen.iter().map(|&k| candidates[k].centre));
-        let cost = model.travel_cost_matrix(&points).into_vec();
+        points.push([base.e, base.n]);
+        points.extend(chosen.iter().map(|&k| {
+            let c = candidates[k].centre;
+            [c.e, c.n]
+        }));
         let mut rewards = vec![0.0];
         rewards.extend(chosen.iter().map(|&k| candidates[k].score));
         let mut service = vec![0.0];
@@ -234,10 +240,16 @@ pub fn plan_sorties(
                 .iter()
                 .map(|&k| model.service_energy_j(candidates[k].hover_s)),
         );
-        let problem = Problem::new(cost, rewards, budget)?
-            .with_service_costs(service)?
-            .with_endpoints(0, 0)?
-            .with_vehicles(sorties)?;
+        let problem = Problem::from_scaled_points(
+            &points,
+            Metric::Euclidean,
+            model.energy_per_metre_j(),
+            rewards,
+            budget,
+        )?
+        .with_service_costs(service)?
+        .with_endpoints(0, 0)?
+        .with_vehicles(sorties)?;
         let mut solve_options = SolveOptions::default()
             .with_time_limit(options.time_limit)
             .with_seed(options.seed);

@@ -1,9 +1,16 @@
-//! Large random instances: greedy + local search to a local optimum ("fast" options).
+//! Large random instances.
 //!
-//! Uniform points in a 1000 × 1000 square, depot at the centre (closed tour), rewards 1..=100,
+//! `fast_local_optimum`: greedy + local search to a local optimum ("fast" options). Uniform
+//! points in a 1000 × 1000 square, depot at the centre (closed tour), rewards 1..=100,
 //! budget sized so that roughly 10-20% of the nodes fit. "Locally optimal" means: no
 //! improving 2-opt or Or-opt move within the candidate lists and no feasible insertion or
 //! replacement move left (see `SolveOptions::fast`).
+//!
+//! `short_reach_300_iterations`: the default solver at a 300-iteration cap on 10,000 nodes
+//! spread over a 15 km × 6 km rectangle, depot at the middle of a long side, costs 12.3 per
+//! metre (scaled points), service 5,000 per node and a budget of 66,500: the budget reaches a
+//! few hundred nodes and a route holds only a handful. Measures how the search scales with
+//! what the budget reaches rather than with the instance.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use gleaner_orienteering::{Metric, Problem, SolveOptions, evaluate, solve_default};
@@ -75,5 +82,50 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench);
+/// 10,000 nodes over 15 km × 6 km, depot at (7.5 km, 0), 12.3 per metre, service 5,000,
+/// budget 66,500, rewards uniform in (0, 1].
+fn short_reach_instance(seed: u64) -> Problem {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let n = 10_000;
+    let mut pts = vec![[12.3 * 7_500.0, 0.0]];
+    let mut rewards = vec![0.0];
+    for _ in 1..n {
+        // Coordinates in cost units (12.3 per metre).
+        pts.push([
+            12.3 * rng.random_range(0.0..15_000.0),
+            12.3 * rng.random_range(0.0..6_000.0),
+        ]);
+        rewards.push(rng.random_range(1e-3..=1.0));
+    }
+    let mut service = vec![5_000.0; n];
+    service[0] = 0.0;
+    Problem::from_points(&pts, Metric::Euclidean, rewards, 66_500.0)
+        .and_then(|p| p.with_service_costs(service))
+        .expect("valid instance")
+}
+
+fn bench_short_reach(c: &mut Criterion) {
+    let mut group = c.benchmark_group("short_reach_300_iterations");
+    group.sample_size(10);
+    let p = short_reach_instance(3);
+    let opts = SolveOptions::default()
+        .with_iterations(300)
+        .with_time_limit(std::time::Duration::from_secs(3_600));
+    let s = solve_default(&p, &opts);
+    let checked = evaluate(&p, &s.routes).expect("feasible");
+    eprintln!(
+        "n = 10000: {} reachable nodes, visited {}, reward {:.4}, cost {:.1} of {:.1}",
+        (1..p.len())
+            .filter(|&v| p.cost(0, v) * 2.0 + p.service(v) <= p.budget())
+            .count(),
+        s.visited(),
+        checked.reward,
+        checked.costs[0],
+        p.budget()
+    );
+    group.bench_function("n10000", |b| b.iter(|| solve_default(&p, &opts)));
+    group.finish();
+}
+
+criterion_group!(benches, bench, bench_short_reach);
 criterion_main!(benches);

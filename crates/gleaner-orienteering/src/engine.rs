@@ -31,17 +31,31 @@ pub(crate) struct Ctx<'a> {
     /// Evaluate insertions only next to a node's neighbours (large instances); otherwise at
     /// every edge (exact cheapest insertion).
     pub restricted: bool,
+    /// `cands` by reward, largest first (ties: lower index first), sorted once.
+    by_reward: Vec<usize>,
+    /// Travel costs satisfy the triangle inequality, so an insertion costs at least the
+    /// node's service cost: nodes whose service exceeds a route's slack are skipped.
+    metric: bool,
 }
 
 impl<'a> Ctx<'a> {
-    pub fn new(p: &'a Problem, k: usize) -> Ctx<'a> {
+    /// Context over the candidates: with `prune`, only the nodes some feasible route can
+    /// visit ([`Problem::reachable_candidates`]); without, every non-terminal node of
+    /// positive reward (the reference path).
+    pub fn new(p: &'a Problem, k: usize, prune: bool) -> Ctx<'a> {
         let n = p.len();
-        let cands: Vec<usize> = (0..n)
-            .filter(|&v| !p.is_terminal(v) && p.reward(v) > 0.0)
-            .collect();
+        let cands: Vec<usize> = if prune {
+            p.reachable_candidates()
+        } else {
+            (0..n)
+                .filter(|&v| !p.is_terminal(v) && p.reward(v) > 0.0)
+                .collect()
+        };
         let k = k.min(n.saturating_sub(1)).max(1);
         let knn = neighbour_lists(p, k);
         let eps = 1e-9 * p.budget().abs().max(1e-3);
+        let mut by_reward = cands.clone();
+        by_reward.sort_by(|&a, &b| p.reward(b).total_cmp(&p.reward(a)).then(a.cmp(&b)));
         Ctx {
             p,
             cands,
@@ -49,6 +63,8 @@ impl<'a> Ctx<'a> {
             k,
             eps,
             restricted: false,
+            by_reward,
+            metric: p.is_metric(),
         }
     }
 
@@ -60,6 +76,17 @@ impl<'a> Ctx<'a> {
     #[inline]
     pub fn c(&self, i: usize, j: usize) -> f64 {
         self.p.cost(i, j)
+    }
+
+    /// False when `v` provably fits in no route of `state` (metric costs: an insertion costs
+    /// at least the service cost, up to rounding far below the tolerance).
+    #[inline]
+    fn may_fit(&self, state: &State, v: usize) -> bool {
+        if !self.metric {
+            return true;
+        }
+        let room = self.p.budget() + 2.0 * self.p.tolerance();
+        state.cost.iter().any(|&c| self.p.service(v) <= room - c)
     }
 
     #[inline]
@@ -86,6 +113,8 @@ fn neighbour_lists(p: &Problem, k: usize) -> Vec<u32> {
             x1 = x1.max(q[0]);
             y1 = y1.max(q[1]);
         }
+        // Costs are `scale` times the metric distance.
+        let scale = p.cost_per_unit().unwrap_or(1.0);
         let g = ((n as f64 / 2.0).sqrt().ceil() as usize).max(1);
         let cell = ((x1 - x0).max(y1 - y0) / g as f64).max(1e-12);
         let idx = |v: f64, lo: f64| (((v - lo) / cell) as usize).min(g - 1);
@@ -116,7 +145,7 @@ fn neighbour_lists(p: &Problem, k: usize) -> Vec<u32> {
                 let enough = buf.len() >= k;
                 if enough {
                     buf.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                    if buf[k - 1].0 <= r as f64 * cell {
+                    if buf[k - 1].0 <= scale * r as f64 * cell {
                         break;
                     }
                 }
@@ -323,11 +352,14 @@ impl State {
         rng: &mut ChaCha8Rng,
     ) -> usize {
         let nr = self.routes.len();
+        // Nodes that fit nowhere now never will in this call (route costs only grow).
         let mut free: Vec<usize> = ctx
             .cands
             .iter()
             .copied()
-            .filter(|&v| self.route_of[v] == FREE && !forbidden.contains(&v))
+            .filter(|&v| {
+                self.route_of[v] == FREE && !forbidden.contains(&v) && ctx.may_fit(self, v)
+            })
             .collect();
         let mut slots: Vec<Slot> = Vec::with_capacity(free.len() * nr);
         for &v in &free {
@@ -618,14 +650,13 @@ impl State {
     pub fn swap(&mut self, ctx: &Ctx, scan_all: bool) -> bool {
         let mut any = false;
         let nr = self.routes.len();
-        let mut free: Vec<usize> = ctx
-            .cands
+        // Largest rewards first (the order sorted once in the context).
+        let free: Vec<usize> = ctx
+            .by_reward
             .iter()
             .copied()
             .filter(|&v| self.route_of[v] == FREE)
             .collect();
-        // Largest rewards first.
-        free.sort_by(|&a, &b| ctx.p.reward(b).total_cmp(&ctx.p.reward(a)).then(a.cmp(&b)));
         for &u in &free {
             if self.route_of[u] != FREE {
                 continue;
@@ -635,6 +666,16 @@ impl State {
             for r in 0..nr {
                 let route = &self.routes[r];
                 if route.len() <= 2 {
+                    continue;
+                }
+                // Without a full scan only `u`'s routed neighbours can be replaced: none on
+                // this route, no move (skip the edge scan).
+                if !scan_all
+                    && !ctx
+                        .neighbours(u)
+                        .iter()
+                        .any(|&x| self.route_of[x as usize] == r as u32)
+                {
                     continue;
                 }
                 // Three cheapest insertion edges (by index of their first node).

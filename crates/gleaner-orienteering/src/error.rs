@@ -56,6 +56,13 @@ pub enum ProblemError {
         /// The node.
         node: usize,
     },
+    /// The cost per unit of distance of [`crate::Problem::from_scaled_points`] is negative or
+    /// not finite.
+    #[error("cost per unit of distance is {value}; it must be finite and >= 0")]
+    BadCostScale {
+        /// The value given.
+        value: f64,
+    },
     /// A reward is negative or not finite.
     #[error("reward of node {node} is {value}; rewards must be finite and >= 0")]
     BadReward {

@@ -73,7 +73,7 @@ pub fn improve_routes(
     options: &ImproveOptions,
 ) -> Result<Solution, SolutionError> {
     let given = evaluate(problem, routes)?;
-    let ctx = Ctx::new(problem, options.neighbours.max(1));
+    let ctx = Ctx::new(problem, options.neighbours.max(1), true);
     let mut state = State::from_routes(problem, &given.routes);
     for _ in 0..options.max_rounds {
         state.improve_tours(&ctx);

@@ -73,6 +73,16 @@
 //!   [`SolveOptions::exact_threshold`] candidates are solved exactly. Above
 //!   [`SolveOptions::full_scan_limit`] candidates, insertion and replacement only look at
 //!   edges next to a node's candidate neighbours, so 10,000 nodes are practical.
+//! - **Pruning** ([`SolveOptions::prune`], default on): the search only considers
+//!   [`Problem::reachable_candidates`], the nodes for which start -> node -> end fits the
+//!   budget by shortest-path cost (direct costs for points and a metric; Dijkstra over a cost
+//!   matrix, which need not satisfy the triangle inequality). No feasible route is lost, and
+//!   the work follows what the budget reaches rather than the instance: 10,000 nodes of
+//!   which the budget reaches about 1,000 and a route holds 10 take 0.3 s for 300 iterations
+//!   instead of 8.9 s. On metric costs an insertion costs at least the node's service cost,
+//!   so insertion skips nodes whose service exceeds every route's slack; replacement skips
+//!   routes that hold none of the node's candidate neighbours (large instances). Both
+//!   shortcuts leave the result unchanged.
 //! - **Exact**: DP over (subset, last node) of the positive-reward nodes (Held-Karp),
 //!   then the best feasible subset (or, for several vehicles, the best combination of
 //!   disjoint feasible subsets by subset convolution); up to [`EXACT_MAX_NODES`] candidates.

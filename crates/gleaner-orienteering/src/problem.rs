@@ -29,12 +29,13 @@ impl Metric {
     }
 }
 
-/// Travel costs: a dense matrix, or points and a metric evaluated on demand (so 10,000-node
-/// instances do not need an 800 MB matrix).
+/// Travel costs: a dense matrix, or points, a metric and a cost per unit of distance
+/// evaluated on demand (so 10,000-node instances do not need an 800 MB matrix).
 #[derive(Debug, Clone)]
 enum Costs {
     Dense(Vec<f64>),
-    Points(Vec<[f64; 2]>, Metric),
+    /// Points, metric, cost per unit of distance (1 for [`Problem::from_points`]).
+    Points(Vec<[f64; 2]>, Metric, f64),
 }
 
 /// A validated (team) orienteering problem.
@@ -140,6 +141,28 @@ impl Problem {
         rewards: Vec<f64>,
         budget: f64,
     ) -> Result<Problem, ProblemError> {
+        Problem::from_scaled_points(points, metric, 1.0, rewards, budget)
+    }
+
+    /// Builds a problem like [`Problem::from_points`] whose travel cost is `cost_per_unit`
+    /// times the metric distance (e.g. joules per metre of flight when the coordinates are
+    /// metres and the budget is in joules): the cost from `i` to `j` is exactly
+    /// `cost_per_unit * metric.distance(p_i, p_j)`, evaluated on demand.
+    ///
+    /// Errors: as [`Problem::from_points`], and [`ProblemError::BadCostScale`] for a
+    /// `cost_per_unit` that is negative or not finite.
+    pub fn from_scaled_points(
+        points: &[[f64; 2]],
+        metric: Metric,
+        cost_per_unit: f64,
+        rewards: Vec<f64>,
+        budget: f64,
+    ) -> Result<Problem, ProblemError> {
+        if !cost_per_unit.is_finite() || cost_per_unit < 0.0 {
+            return Err(ProblemError::BadCostScale {
+                value: cost_per_unit,
+            });
+        }
         if points.len() != rewards.len() {
             return Err(ProblemError::LengthMismatch {
                 what: "points",
@@ -157,7 +180,7 @@ impl Problem {
         }
         Problem::assemble(
             points.len(),
-            Costs::Points(points.to_vec(), metric),
+            Costs::Points(points.to_vec(), metric, cost_per_unit),
             rewards,
             budget,
         )
@@ -260,16 +283,32 @@ impl Problem {
     pub fn cost(&self, i: usize, j: usize) -> f64 {
         match &self.cost {
             Costs::Dense(m) => m[i * self.n + j],
-            Costs::Points(p, metric) => metric.distance(p[i], p[j]),
+            Costs::Points(p, metric, scale) => *scale * metric.distance(p[i], p[j]),
         }
     }
 
-    /// The planar points and metric when the problem was built by [`Problem::from_points`].
+    /// The planar points and metric when the problem was built by [`Problem::from_points`]
+    /// or [`Problem::from_scaled_points`].
     pub fn points(&self) -> Option<(&[[f64; 2]], Metric)> {
         match &self.cost {
             Costs::Dense(_) => None,
-            Costs::Points(p, m) => Some((p, *m)),
+            Costs::Points(p, m, _) => Some((p, *m)),
         }
+    }
+
+    /// Cost per unit of distance of a problem built from points (1 for
+    /// [`Problem::from_points`]); `None` for a cost matrix.
+    pub fn cost_per_unit(&self) -> Option<f64> {
+        match &self.cost {
+            Costs::Dense(_) => None,
+            Costs::Points(_, _, scale) => Some(*scale),
+        }
+    }
+
+    /// True when the travel costs are known to satisfy the triangle inequality (points and a
+    /// metric, up to floating-point rounding); a cost matrix is not assumed to.
+    pub fn is_metric(&self) -> bool {
+        matches!(self.cost, Costs::Points(..))
     }
 
     /// Reward of node `i`.
@@ -318,6 +357,74 @@ impl Problem {
     #[inline]
     pub fn is_terminal(&self, i: usize) -> bool {
         i == self.start || i == self.end
+    }
+
+    /// Non-terminal nodes of positive reward that some feasible route may visit, ascending;
+    /// every other node is on no feasible route.
+    ///
+    /// A route through `v` costs at least `d(start, v) + d(v, end) + service(v)` plus the
+    /// terminals' service costs, where `d` is the shortest-path cost (service costs of other
+    /// nodes are >= 0). Nodes whose bound exceeds the budget (plus [`Problem::tolerance`]) can
+    /// never be visited and are left out, so the search scales with what the budget reaches
+    /// rather than with the instance. For points and a metric `d` is the direct cost (triangle
+    /// inequality; the tolerance absorbs rounding); for a cost matrix, which need not satisfy
+    /// it, `d` comes from Dijkstra's algorithm over the matrix (O(n²), like reading it once).
+    pub fn reachable_candidates(&self) -> Vec<usize> {
+        let p = self;
+        let n = p.len();
+        let (s, e) = (p.start(), p.end());
+        let (from_start, to_end) = if p.is_metric() {
+            (
+                (0..n).map(|v| p.cost(s, v)).collect::<Vec<f64>>(),
+                (0..n).map(|v| p.cost(v, e)).collect::<Vec<f64>>(),
+            )
+        } else {
+            let ds = p.shortest_costs(s);
+            let de = if e == s {
+                ds.clone()
+            } else {
+                p.shortest_costs(e)
+            };
+            (ds, de)
+        };
+        let terminals = p.empty_route_cost() - p.cost(s, e);
+        let limit = p.budget() + p.tolerance();
+        (0..n)
+            .filter(|&v| !p.is_terminal(v) && p.reward(v) > 0.0)
+            .filter(|&v| terminals + from_start[v] + to_end[v] + p.service(v) <= limit)
+            .collect()
+    }
+
+    /// Shortest-path travel cost from `source` to every node over the (symmetric) cost
+    /// matrix: Dijkstra's algorithm with an array, O(n²).
+    fn shortest_costs(&self, source: usize) -> Vec<f64> {
+        let p = self;
+        let n = p.len();
+        let mut dist: Vec<f64> = (0..n).map(|v| p.cost(source, v)).collect();
+        dist[source] = 0.0;
+        let mut done = vec![false; n];
+        done[source] = true;
+        for _ in 1..n {
+            let mut u = usize::MAX;
+            for v in 0..n {
+                if !done[v] && (u == usize::MAX || dist[v] < dist[u]) {
+                    u = v;
+                }
+            }
+            if u == usize::MAX {
+                break;
+            }
+            done[u] = true;
+            for v in 0..n {
+                if !done[v] {
+                    let via = dist[u] + p.cost(u, v);
+                    if via < dist[v] {
+                        dist[v] = via;
+                    }
+                }
+            }
+        }
+        dist
     }
 
     /// Reward collected by the terminals (start, and end if different): always collected.

@@ -38,6 +38,11 @@ pub struct SolveOptions {
     pub full_scan_limit: usize,
     /// Double-bridge kicks used to shorten the tours of promising solutions (0 disables).
     pub kicks: usize,
+    /// Search only the nodes some feasible route can visit
+    /// ([`Problem::reachable_candidates`]: start -> node -> end within the budget), so the
+    /// work scales with what the budget reaches rather than with the instance (default
+    /// true). False searches every candidate: the reference path, for comparisons.
+    pub prune: bool,
 }
 
 impl Default for SolveOptions {
@@ -51,6 +56,7 @@ impl Default for SolveOptions {
             exact_threshold: 12,
             kicks: 10,
             full_scan_limit: 200,
+            prune: true,
         }
     }
 }
@@ -150,7 +156,8 @@ pub fn solve(
 /// ties go to the larger reward, then the lower node index, then the lower route index.
 /// Nodes with zero reward are never inserted. Deterministic, no options.
 pub fn greedy(problem: &Problem) -> Solution {
-    let ctx = Ctx::new(problem, 1);
+    // Pruning cannot change greedy's result: a pruned node never fits anywhere.
+    let ctx = Ctx::new(problem, 1, true);
     let mut state = State::empty(problem);
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     state.fill(&ctx, &[], 0.0, &mut rng);
@@ -244,7 +251,7 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
     {
         return s;
     }
-    let mut ctx = Ctx::new(problem, options.neighbours.max(2));
+    let mut ctx = Ctx::new(problem, options.neighbours.max(2), options.prune);
     let scan_all = ctx.cands.len() <= options.full_scan_limit;
     ctx.restricted = !scan_all;
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
