@@ -162,6 +162,10 @@ fn positions(sensors: &[gleaner_field::Sensor], field: &gleaner_field::Field) ->
         .collect()
 }
 
+/// How far back from the estimate's time the first read of [`estimate`] looks, s (a week and
+/// a day: every sensor of a network visited at least weekly is found in it).
+const RECENT_S: i64 = 8 * 86_400;
+
 /// Estimates every sensor's `modality` value at `at` with a fitted model, from each sensor's
 /// latest known reading within `lookback_s` before `at`, by kriging with `mean`.
 pub(crate) fn estimate<S: Store>(
@@ -183,13 +187,35 @@ pub(crate) fn estimate<S: Store>(
     }
     let ids: Vec<SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
     let from = at.saturating_sub(lookback_s.max(0));
-    let batch = project.store().readings_for(Some(modality), from..=at)?;
-    let columns = per_sensor(&ids, &batch);
-    let positions = positions(&sensors, &field);
-    let latest: Vec<Option<(UnixSeconds, f64)>> = columns
+    // The latest reading per sensor: first from the recent readings only, then, for the
+    // sensors without one, from the rest of the look-back (the same readings as one read of
+    // the whole look-back, at a fraction of the rows).
+    let near = at.saturating_sub(RECENT_S).max(from);
+    let batch = project.store().readings_for(Some(modality), near..=at)?;
+    let latest_of = |batch: &ReadingBatch| -> Vec<Option<(UnixSeconds, f64)>> {
+        per_sensor(&ids, batch)
+            .iter()
+            .map(|(t, v)| t.last().copied().zip(v.last().copied()))
+            .collect()
+    };
+    let mut latest = latest_of(&batch);
+    let missing: Vec<SensorId> = ids
         .iter()
-        .map(|(t, v)| t.last().copied().zip(v.last().copied()))
+        .zip(&latest)
+        .filter(|(_, l)| l.is_none())
+        .map(|(s, _)| s.clone())
         .collect();
+    if near > from && !missing.is_empty() {
+        let mut older = project
+            .store()
+            .readings_of_sensors(&missing, from..=near - 1)?;
+        let m = older.modalities.iter().position(|m| m == modality);
+        older.rows.retain(|r| Some(r.modality as usize) == m);
+        for (l, o) in latest.iter_mut().zip(latest_of(&older)) {
+            *l = l.or(o);
+        }
+    }
+    let positions = positions(&sensors, &field);
     let observations: Vec<Observation> = latest
         .iter()
         .zip(&positions)

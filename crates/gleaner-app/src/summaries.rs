@@ -517,6 +517,24 @@ pub(crate) fn invalidate_cache<W: StoreWrite>(tx: &mut W) -> Result<()> {
     Ok(())
 }
 
+/// Builds the summary cache from the store unless it is current (same cells, same reading
+/// count), so the next recorded flight only adds its own readings. O(stored readings) when
+/// it builds.
+pub(crate) fn prepare_cache<W: StoreWrite>(tx: &mut W) -> Result<()> {
+    let cells = tx.cells()?;
+    let count = tx.reading_count()?;
+    let fp = cells_fingerprint(&cells);
+    let current = tx
+        .blob_get(CACHE_KEY)?
+        .and_then(|b| Cache::from_bytes(&b))
+        .is_some_and(|c| c.cells_fp == fp && c.reading_count == count);
+    if !current {
+        let cache = Cache::build(&*tx, &cells, count)?;
+        tx.blob_put(CACHE_KEY, &cache.to_bytes())?;
+    }
+    Ok(())
+}
+
 /// [`refresh_cells`] after a flight, incrementally: `added` are the readings this
 /// transaction inserted (new to the store: sensor, modality, time in s, value). The
 /// persisted summary cache is brought up to date from them alone when it matches the store
