@@ -284,3 +284,68 @@ pub fn fly_buffered<S: Store>(
     )?;
     Ok((outcome, lost))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
+
+        /// The indexed pick brings back exactly the rows (and in the same order) that
+        /// filtering every row by the definition does.
+        #[test]
+        fn brought_back_is_the_filter_over_every_row(
+            rows in prop::collection::vec((0..4u32, 0..2u32, -20..60i64), 0..80),
+            since in prop::collection::vec(prop::option::of(-10..50i64), 4),
+            visited in prop::collection::vec(any::<bool>(), 4),
+            period in 0..5i64,
+            at in 0..70i64,
+        ) {
+            let readings = Readings {
+                sensors: (0..4).map(|k| SensorId::new(format!("s{k}")).unwrap()).collect(),
+                modalities: Vec::new(),
+                rows: rows
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &(sensor, modality, t))| Row {
+                        sensor,
+                        modality,
+                        t,
+                        value: k as f64,
+                        line: k as u32,
+                    })
+                    .collect(),
+            };
+            let truth = Truth::from_readings(readings.clone(), period).unwrap();
+            let sensors: HashSet<SensorId> = readings
+                .sensors
+                .iter()
+                .zip(&visited)
+                .filter(|(_, v)| **v)
+                .map(|(s, _)| s.clone())
+                .collect();
+            let last: HashMap<SensorId, UnixSeconds> = readings
+                .sensors
+                .iter()
+                .zip(&since)
+                .filter_map(|(s, t)| Some((s.clone(), (*t)?)))
+                .collect();
+            let want: Vec<Row> = readings
+                .rows
+                .iter()
+                .filter(|r| {
+                    let s = &readings.sensors[r.sensor as usize];
+                    sensors.contains(s)
+                        && r.t + period <= at
+                        && last.get(s).is_none_or(|&since| r.t > since - period)
+                })
+                .copied()
+                .collect();
+            let (got, lost) = truth.brought_back(&sensors, &last, at);
+            prop_assert_eq!(got.rows, want);
+            prop_assert_eq!(lost, 0);
+        }
+    }
+}
