@@ -580,7 +580,7 @@ pub(crate) fn refresh_cells_after<W: StoreWrite>(
     let collected: HashMap<SensorId, UnixSeconds> =
         tx.sensor_last_collected()?.into_iter().collect();
     let mut stored: HashMap<CellIndex, CellMetadata> = tx
-        .cell_metadata()?
+        .cell_metadata_scalars()?
         .into_iter()
         .map(|m| (m.cell, m))
         .collect();
