@@ -18,7 +18,7 @@ use gleaner_field::{CellIndex, Modality, SensorId, UnixSeconds};
 use gleaner_ingest::{IngestReport, Readings};
 use gleaner_kriging::{Covariance, FieldModel, variance_reduction};
 use gleaner_mission::Planner;
-use gleaner_store::{SqliteStore, StoreRead};
+use gleaner_store::{SqliteStore, Store, StoreRead};
 use rayon::prelude::*;
 
 use crate::error::{AppError, Result};
@@ -596,6 +596,9 @@ pub fn run_campaign(
             }
         }
     }
+    // Every run's first recorded flight would otherwise rebuild the cell-summary cache from
+    // the whole history; built once here, every copy starts with it.
+    template.write(|tx| crate::summaries::prepare_cache(tx))?;
     let series = truth_series(truth, &modality.to_string());
     let class_series = match &class_name {
         Some(c) if *c != modality.to_string() => truth_series(truth, c),

@@ -306,11 +306,19 @@ pub(crate) fn store_parsed<W: StoreWrite>(
     now: UnixSeconds,
     settings: &crate::settings::Settings,
     state_policy: StatePolicy,
-) -> std::result::Result<(InsertStats, usize), AppError> {
+) -> std::result::Result<(InsertStats, usize, Vec<state::Row>), AppError> {
     let mut stats = InsertStats::default();
     let plan = match state_policy {
         StatePolicy::Maintain => Some(state::before_insert(&*tx, parsed)?),
         StatePolicy::Invalidate => None,
+    };
+    // What the insert adds, for the caller's incremental cell summaries (a flight's).
+    let added = match &plan {
+        Some(plan) => match plan.new_rows() {
+            Some(rows) => rows.to_vec(),
+            None => state::new_rows(&*tx, parsed)?,
+        },
+        None => Vec::new(),
     };
     for (path, format, readings, report) in &parsed.files {
         let (modalities, batch) = batch_of(readings);
@@ -339,12 +347,15 @@ pub(crate) fn store_parsed<W: StoreWrite>(
         Vec::new()
     };
     let refreshed = summaries::refresh_cells(tx, &changed, now, settings)?;
+    if stats.inserted > 0 && state_policy != StatePolicy::Maintain {
+        summaries::invalidate_cache(tx)?;
+    }
     match plan {
         Some(plan) => state::after_insert(tx, plan, settings)?,
         None if stats.inserted > 0 => state::invalidate(tx)?,
         None => {}
     }
-    Ok((stats, refreshed))
+    Ok((stats, refreshed, added))
 }
 
 /// How far past the clock a reading may be dated, seconds (a day: a logger's clock running
@@ -448,7 +459,7 @@ pub(crate) fn ingest_parsed<S: Store>(
     let now = request.now.or(latest).unwrap_or(clock_now);
     let settings = project.settings().clone();
     progress.start(&format!("storing {} readings", parsed.len()), None);
-    let (stats, refreshed) = project.store_mut().write(|tx| {
+    let (stats, refreshed, _) = project.store_mut().write(|tx| {
         store_parsed(
             tx,
             &parsed,

@@ -170,8 +170,9 @@ pub(crate) fn record_parsed<S: Store>(
     let amend = request.amend;
     let (inserted, unchanged) = project.store_mut().write(|tx| {
         let mut stats = (0, 0);
+        let mut added = Vec::new();
         if let Some(parsed) = &parsed {
-            let (s, _) = store_parsed(
+            let (s, _, new_rows) = store_parsed(
                 tx,
                 parsed,
                 ConflictPolicy::Fail,
@@ -181,11 +182,12 @@ pub(crate) fn record_parsed<S: Store>(
                 StatePolicy::Maintain,
             )?;
             stats = (s.inserted, s.unchanged);
+            added = new_rows;
         }
         tx.set_sensors_collected(&collected)?;
         tx.record_visits(id, &visits, at, amend)?;
         let sensors: Vec<SensorId> = collected.iter().map(|(s, _)| s.clone()).collect();
-        summaries::refresh_cells(tx, &sensors, at, &settings)?;
+        summaries::refresh_cells_after(tx, &sensors, &added, at, &settings)?;
         Ok::<_, AppError>(stats)
     })?;
     Ok(RecordOutcome {

@@ -371,7 +371,7 @@ pub(crate) fn write_scoring<W: StoreWrite>(
     mut rows: Vec<CellMetadata>,
 ) -> std::result::Result<(), AppError> {
     let stored: HashMap<gleaner_field::CellIndex, CellMetadata> = tx
-        .cell_metadata()?
+        .cell_metadata_scalars()?
         .into_iter()
         .map(|m| (m.cell, m))
         .collect();

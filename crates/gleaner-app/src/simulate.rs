@@ -25,6 +25,23 @@ pub struct Truth {
     /// A sensor's log holds at most this many readings per modality: when full, the oldest
     /// uncollected reading is dropped (`None`: unlimited).
     pub buffer_readings: Option<usize>,
+    /// Per sensor of `readings` (by its index there): (time in s, row index) of its rows,
+    /// in time order, so a flight finds what it brings back without scanning every row.
+    by_sensor: Vec<Vec<(UnixSeconds, usize)>>,
+}
+
+/// [`Truth::by_sensor`] of `readings`.
+fn index_by_sensor(readings: &Readings) -> Vec<Vec<(UnixSeconds, usize)>> {
+    let mut by_sensor = vec![Vec::new(); readings.sensors.len()];
+    for (k, row) in readings.rows.iter().enumerate() {
+        if let Some(rows) = by_sensor.get_mut(row.sensor as usize) {
+            rows.push((row.t, k));
+        }
+    }
+    for rows in &mut by_sensor {
+        rows.sort_unstable();
+    }
+    by_sensor
 }
 
 impl Truth {
@@ -51,6 +68,7 @@ impl Truth {
             readings.append(r);
         }
         Ok(Self {
+            by_sensor: index_by_sensor(&readings),
             readings,
             period_s,
             buffer_readings: None,
@@ -65,6 +83,7 @@ impl Truth {
             )));
         }
         Ok(Self {
+            by_sensor: index_by_sensor(&readings),
             readings,
             period_s,
             buffer_readings: None,
@@ -119,23 +138,25 @@ impl Truth {
         at: UnixSeconds,
     ) -> (Readings, u64) {
         let r = &self.readings;
-        let keep: Vec<Option<Option<UnixSeconds>>> = r
-            .sensors
-            .iter()
-            .map(|s| sensors.contains(s).then(|| last.get(s).copied()))
-            .collect();
-        let mut rows: Vec<Row> = r
-            .rows
-            .iter()
-            .filter(|row| match keep.get(row.sensor as usize) {
-                Some(Some(since)) => {
-                    row.t.saturating_add(self.period_s) <= at
-                        && since.is_none_or(|since| row.t > since - self.period_s)
-                }
-                _ => false,
-            })
-            .copied()
-            .collect();
+        // Per visited sensor, the time range of its rows that qualify (t + period <= at and
+        // t > since − period), then those rows in the readings' own order.
+        let mut picked: Vec<usize> = Vec::new();
+        for (k, s) in r.sensors.iter().enumerate() {
+            if !sensors.contains(s) {
+                continue;
+            }
+            let times = &self.by_sensor[k];
+            let hi = times.partition_point(|&(t, _)| t.saturating_add(self.period_s) <= at);
+            let lo = match last.get(s) {
+                Some(&since) => times.partition_point(|&(t, _)| t <= since - self.period_s),
+                None => 0,
+            };
+            if lo < hi {
+                picked.extend(times[lo..hi].iter().map(|&(_, row)| row));
+            }
+        }
+        picked.sort_unstable();
+        let mut rows: Vec<Row> = picked.into_iter().map(|k| r.rows[k]).collect();
         let mut lost = 0u64;
         if let Some(capacity) = self.buffer_readings {
             // Newest first within each (sensor, modality); keep the first `capacity`.
@@ -262,4 +283,69 @@ pub fn fly_buffered<S: Store>(
         clock_now,
     )?;
     Ok((outcome, lost))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
+
+        /// The indexed pick brings back exactly the rows (and in the same order) that
+        /// filtering every row by the definition does.
+        #[test]
+        fn brought_back_is_the_filter_over_every_row(
+            rows in prop::collection::vec((0..4u32, 0..2u32, -20..60i64), 0..80),
+            since in prop::collection::vec(prop::option::of(-10..50i64), 4),
+            visited in prop::collection::vec(any::<bool>(), 4),
+            period in 0..5i64,
+            at in 0..70i64,
+        ) {
+            let readings = Readings {
+                sensors: (0..4).map(|k| SensorId::new(format!("s{k}")).unwrap()).collect(),
+                modalities: Vec::new(),
+                rows: rows
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &(sensor, modality, t))| Row {
+                        sensor,
+                        modality,
+                        t,
+                        value: k as f64,
+                        line: k as u32,
+                    })
+                    .collect(),
+            };
+            let truth = Truth::from_readings(readings.clone(), period).unwrap();
+            let sensors: HashSet<SensorId> = readings
+                .sensors
+                .iter()
+                .zip(&visited)
+                .filter(|(_, v)| **v)
+                .map(|(s, _)| s.clone())
+                .collect();
+            let last: HashMap<SensorId, UnixSeconds> = readings
+                .sensors
+                .iter()
+                .zip(&since)
+                .filter_map(|(s, t)| Some((s.clone(), (*t)?)))
+                .collect();
+            let want: Vec<Row> = readings
+                .rows
+                .iter()
+                .filter(|r| {
+                    let s = &readings.sensors[r.sensor as usize];
+                    sensors.contains(s)
+                        && r.t + period <= at
+                        && last.get(s).is_none_or(|&since| r.t > since - period)
+                })
+                .copied()
+                .collect();
+            let (got, lost) = truth.brought_back(&sensors, &last, at);
+            prop_assert_eq!(got.rows, want);
+            prop_assert_eq!(lost, 0);
+        }
+    }
 }

@@ -137,22 +137,22 @@ pub(crate) struct Persisted {
 // Fingerprints
 
 /// FNV-1a, 64 bits: a deterministic hash that does not depend on the Rust version.
-struct Fnv(u64);
+pub(crate) struct Fnv(pub(crate) u64);
 
 impl Fnv {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self(0xcbf2_9ce4_8422_2325)
     }
-    fn bytes(&mut self, b: &[u8]) {
+    pub(crate) fn bytes(&mut self, b: &[u8]) {
         for &x in b {
             self.0 ^= u64::from(x);
             self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
         }
     }
-    fn u64(&mut self, v: u64) {
+    pub(crate) fn u64(&mut self, v: u64) {
         self.bytes(&v.to_le_bytes());
     }
-    fn str(&mut self, s: &str) {
+    pub(crate) fn str(&mut self, s: &str) {
         self.u64(s.len() as u64);
         self.bytes(s.as_bytes());
     }
@@ -197,19 +197,19 @@ fn settings_fingerprint(settings: &Settings) -> u64 {
 // ---------------------------------------------------------------------------------------
 // Encoding
 
-struct Out(Vec<u8>);
+pub(crate) struct Out(pub(crate) Vec<u8>);
 
 impl Out {
-    fn u8(&mut self, v: u8) {
+    pub(crate) fn u8(&mut self, v: u8) {
         self.0.push(v);
     }
-    fn u64(&mut self, v: u64) {
+    pub(crate) fn u64(&mut self, v: u64) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
-    fn i64(&mut self, v: i64) {
+    pub(crate) fn i64(&mut self, v: i64) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
-    fn opt(&mut self, v: Option<i64>) {
+    pub(crate) fn opt(&mut self, v: Option<i64>) {
         match v {
             Some(x) => {
                 self.u8(1);
@@ -218,16 +218,16 @@ impl Out {
             None => self.u8(0),
         }
     }
-    fn bytes(&mut self, b: &[u8]) {
+    pub(crate) fn bytes(&mut self, b: &[u8]) {
         self.u64(b.len() as u64);
         self.0.extend_from_slice(b);
     }
 }
 
-struct In<'a>(&'a [u8]);
+pub(crate) struct In<'a>(pub(crate) &'a [u8]);
 
 impl<'a> In<'a> {
-    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
+    pub(crate) fn take(&mut self, n: usize) -> Option<&'a [u8]> {
         if n > self.0.len() {
             return None;
         }
@@ -235,16 +235,16 @@ impl<'a> In<'a> {
         self.0 = b;
         Some(a)
     }
-    fn u8(&mut self) -> Option<u8> {
+    pub(crate) fn u8(&mut self) -> Option<u8> {
         Some(self.take(1)?[0])
     }
-    fn u64(&mut self) -> Option<u64> {
+    pub(crate) fn u64(&mut self) -> Option<u64> {
         Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
     }
-    fn i64(&mut self) -> Option<i64> {
+    pub(crate) fn i64(&mut self) -> Option<i64> {
         Some(i64::from_le_bytes(self.take(8)?.try_into().ok()?))
     }
-    fn opt(&mut self) -> Option<Option<i64>> {
+    pub(crate) fn opt(&mut self) -> Option<Option<i64>> {
         match self.u8()? {
             0 => Some(None),
             1 => Some(Some(self.i64()?)),
@@ -252,15 +252,15 @@ impl<'a> In<'a> {
         }
     }
     /// A count of elements of at least `min` bytes each, checked against the bytes left.
-    fn count(&mut self, min: usize) -> Option<usize> {
+    pub(crate) fn count(&mut self, min: usize) -> Option<usize> {
         let n = usize::try_from(self.u64()?).ok()?;
         (n.checked_mul(min.max(1))? <= self.0.len()).then_some(n)
     }
-    fn bytes(&mut self) -> Option<&'a [u8]> {
+    pub(crate) fn bytes(&mut self) -> Option<&'a [u8]> {
         let n = self.count(1)?;
         self.take(n)
     }
-    fn string(&mut self) -> Option<String> {
+    pub(crate) fn string(&mut self) -> Option<String> {
         String::from_utf8(self.bytes()?.to_vec()).ok()
     }
 }
@@ -674,7 +674,7 @@ fn write_blob<W: StoreWrite>(tx: &mut W, p: Option<&Persisted>) -> Result<()> {
 }
 
 /// A new reading: sensor id, modality name, time (s), value.
-type Row = (SensorId, String, UnixSeconds, f64);
+pub(crate) type Row = (SensorId, String, UnixSeconds, f64);
 
 /// What to do after the readings are inserted.
 pub(crate) enum Plan {
@@ -682,6 +682,16 @@ pub(crate) enum Plan {
     Rebuild,
     /// Add these readings (new to the store) to the persisted state.
     Update(Box<Persisted>, Vec<Row>),
+}
+
+impl Plan {
+    /// The readings new to the store, when the plan computed them (an update).
+    pub(crate) fn new_rows(&self) -> Option<&[Row]> {
+        match self {
+            Plan::Rebuild => None,
+            Plan::Update(_, rows) => Some(rows),
+        }
+    }
 }
 
 /// Before inserting `parsed`: loads the state and works out which readings are new to the
@@ -694,6 +704,13 @@ pub(crate) fn before_insert<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Pla
     else {
         return Ok(Plan::Rebuild);
     };
+    Ok(Plan::Update(Box::new(p), new_rows(tx, parsed)?))
+}
+
+/// The readings of `parsed` that are not yet in the store (one per sensor, modality and
+/// time, in the files' order): what an insert will add. Reads the stored readings of those
+/// sensors between the parsed readings' first and last time (s) only.
+pub(crate) fn new_rows<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Vec<Row>> {
     let mut seen: HashSet<(SensorId, String, UnixSeconds)> = HashSet::new();
     let mut rows: Vec<Row> = Vec::new();
     for (_, _, readings, _) in &parsed.files {
@@ -711,7 +728,7 @@ pub(crate) fn before_insert<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Pla
         }
     }
     if rows.is_empty() {
-        return Ok(Plan::Update(Box::new(p), rows));
+        return Ok(rows);
     }
     let mut ids: Vec<SensorId> = rows.iter().map(|r| r.0.clone()).collect();
     ids.sort();
@@ -731,7 +748,7 @@ pub(crate) fn before_insert<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Pla
         })
         .collect();
     rows.retain(|r| !existing.contains(&(r.0.clone(), r.1.clone(), r.2)));
-    Ok(Plan::Update(Box::new(p), rows))
+    Ok(rows)
 }
 
 /// After inserting: brings the persisted state up to date (see the module docs), in the

@@ -183,6 +183,7 @@ any_read! {
     ingests() -> Vec<IngestRecord>;
     cells() -> Vec<CellRecord>;
     cell_metadata() -> Vec<CellMetadata>;
+    cell_metadata_scalars() -> Vec<CellMetadata>;
     sensor_last_collected() -> Vec<(SensorId, UnixSeconds)>;
     missions() -> Vec<MissionRecord>;
     mission(id: MissionId) -> Option<MissionRecord>;

@@ -61,6 +61,7 @@ pub fn run_all<S: Store>(mut fresh: impl FnMut() -> S) {
         blobs_round_trip,
         sensors_collected_never_move_back,
         cell_metadata_round_trips_and_upserts_by_key,
+        cell_metadata_scalars_are_the_rows_without_children,
         replace_cells_keeps_or_deletes_metadata,
         missions_round_trip_with_stops,
         record_visits_refuses_a_flown_mission_unless_amend,
@@ -969,6 +970,40 @@ pub fn cell_metadata_round_trips_and_upserts_by_key<S: Store>(store: &mut S) {
     let twice = [CellMetadata::new(x0), CellMetadata::new(x0)];
     assert!(w(store, |tx| tx.upsert_cell_metadata(&twice)).is_err());
     assert_eq!(store.cell_metadata().unwrap(), before);
+}
+
+/// `cell_metadata_scalars` gives what `cell_metadata` gives with the child lists emptied, in
+/// a transaction and outside one, for described and undescribed cells.
+pub fn cell_metadata_scalars_are_the_rows_without_children<S: Store>(store: &mut S) {
+    network(store);
+    w(store, |tx| {
+        tx.replace_cells(&[cell(0, 0, &["a", "b"]), cell(1, 0, &["c"]), cell(2, 0, &[])])
+    })
+    .unwrap();
+    let (x0, x1) = (CellIndex { i: 0, j: 0 }, CellIndex { i: 1, j: 0 });
+    let mut second = full_metadata(x1, x0);
+    second.class_probabilities.reverse();
+    second.scores = None;
+    w(store, |tx| {
+        tx.upsert_cell_metadata(&[full_metadata(x0, x1), second])
+    })
+    .unwrap();
+    let stripped = |rows: Vec<CellMetadata>| -> Vec<CellMetadata> {
+        rows.into_iter()
+            .map(|mut m| {
+                m.summaries.clear();
+                m.correlations.clear();
+                m.anomalies.clear();
+                m
+            })
+            .collect()
+    };
+    let want = stripped(store.cell_metadata().unwrap());
+    assert_eq!(want.len(), 3);
+    assert!(!want[0].class_probabilities.is_empty());
+    assert_eq!(store.cell_metadata_scalars().unwrap(), want);
+    let in_tx = w(store, |tx| tx.cell_metadata_scalars()).unwrap();
+    assert_eq!(in_tx, want);
 }
 
 /// `replace_cells` keeps identical cells with their metadata and deletes every other stored

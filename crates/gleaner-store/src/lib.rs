@@ -144,6 +144,9 @@ macro_rules! store_read_methods {
         fn cell_metadata(&self) -> Result<Vec<CellMetadata>> {
             self.read(read::cell_metadata)
         }
+        fn cell_metadata_scalars(&self) -> Result<Vec<CellMetadata>> {
+            self.read(read::cell_metadata_scalars)
+        }
         fn sensor_last_collected(&self) -> Result<Vec<(SensorId, UnixSeconds)>> {
             self.read(read::sensor_last_collected)
         }

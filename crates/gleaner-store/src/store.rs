@@ -54,6 +54,11 @@ pub trait StoreRead {
     /// The cell metadata table: one entry per stored cell (empty for cells never described),
     /// sorted by cell index.
     fn cell_metadata(&self) -> Result<Vec<CellMetadata>>;
+    /// [`cell_metadata`](Self::cell_metadata) without the child lists: every row's scalar
+    /// fields, scores and class probabilities, with `summaries`, `correlations` and
+    /// `anomalies` empty (what a writer that replaces the scalar fields needs to carry over;
+    /// the anomaly history grows with every scoring, so reading it back costs ever more).
+    fn cell_metadata_scalars(&self) -> Result<Vec<CellMetadata>>;
     /// Last collection time per sensor (collected sensors only), sorted by sensor id.
     fn sensor_last_collected(&self) -> Result<Vec<(SensorId, UnixSeconds)>>;
 

@@ -310,6 +310,16 @@ pub(super) fn cells(c: &mut Transaction<'_>) -> Result<Vec<CellRecord>> {
 }
 
 pub(super) fn cell_metadata(c: &mut Transaction<'_>) -> Result<Vec<CellMetadata>> {
+    cell_metadata_with(c, true)
+}
+
+/// The cell metadata rows without the child lists (summaries, correlations, anomalies).
+pub(super) fn cell_metadata_scalars(c: &mut Transaction<'_>) -> Result<Vec<CellMetadata>> {
+    cell_metadata_with(c, false)
+}
+
+/// The cell metadata rows, with the child lists when `children`.
+fn cell_metadata_with(c: &mut Transaction<'_>, children: bool) -> Result<Vec<CellMetadata>> {
     let rows = c
         .query(
             "SELECT c.id, c.label, md.last_collected, md.pending_bytes, md.expected_energy_j,
@@ -326,35 +336,47 @@ pub(super) fn cell_metadata(c: &mut Transaction<'_>) -> Result<Vec<CellMetadata>
         )
         .db()?,
     );
-    let mut summaries = grouped(
-        c.query(
-            "SELECT cs.cell, m.name, cs.count, cs.mean, cs.std, cs.min, cs.max, cs.latest_t,
-                    cs.latest_value
-             FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
-             ORDER BY cs.cell, m.name COLLATE \"C\"",
-            &[],
+    let mut summaries = if children {
+        grouped(
+            c.query(
+                "SELECT cs.cell, m.name, cs.count, cs.mean, cs.std, cs.min, cs.max, cs.latest_t,
+                        cs.latest_value
+                 FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
+                 ORDER BY cs.cell, m.name COLLATE \"C\"",
+                &[],
+            )
+            .db()?,
         )
-        .db()?,
-    );
-    let mut correlations = grouped(
-        c.query(
-            "SELECT cc.cell, n.label, m.name, cc.correlation, cc.overlap
-             FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
-                  JOIN modalities m ON m.id = cc.modality
-             ORDER BY cc.cell, n.i, n.j, m.name COLLATE \"C\"",
-            &[],
+    } else {
+        Default::default()
+    };
+    let mut correlations = if children {
+        grouped(
+            c.query(
+                "SELECT cc.cell, n.label, m.name, cc.correlation, cc.overlap
+                 FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
+                      JOIN modalities m ON m.id = cc.modality
+                 ORDER BY cc.cell, n.i, n.j, m.name COLLATE \"C\"",
+                &[],
+            )
+            .db()?,
         )
-        .db()?,
-    );
-    let mut anomalies = grouped(
-        c.query(
-            "SELECT ca.cell, m.name, ca.t, ca.anomaly, ca.flagged
-             FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
-             ORDER BY ca.cell, m.name COLLATE \"C\", ca.t",
-            &[],
+    } else {
+        Default::default()
+    };
+    let mut anomalies = if children {
+        grouped(
+            c.query(
+                "SELECT ca.cell, m.name, ca.t, ca.anomaly, ca.flagged
+                 FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
+                 ORDER BY ca.cell, m.name COLLATE \"C\", ca.t",
+                &[],
+            )
+            .db()?,
         )
-        .db()?,
-    );
+    } else {
+        Default::default()
+    };
     let mut out = Vec::with_capacity(rows.len());
     for r in &rows {
         let id: i64 = r.get(0);

@@ -277,6 +277,16 @@ pub(super) fn cells(c: &Connection) -> Result<Vec<CellRecord>> {
 }
 
 pub(super) fn cell_metadata(c: &Connection) -> Result<Vec<CellMetadata>> {
+    cell_metadata_with(c, true)
+}
+
+/// The cell metadata rows without the child lists (summaries, correlations, anomalies).
+pub(super) fn cell_metadata_scalars(c: &Connection) -> Result<Vec<CellMetadata>> {
+    cell_metadata_with(c, false)
+}
+
+/// The cell metadata rows, with the child lists when `children`.
+fn cell_metadata_with(c: &Connection, children: bool) -> Result<Vec<CellMetadata>> {
     type MetaRow = (
         i64,
         String,
@@ -323,58 +333,60 @@ pub(super) fn cell_metadata(c: &Connection) -> Result<Vec<CellMetadata>> {
             md.class_probabilities
                 .push(ClassProbability { class, probability });
         }
-        type SummaryRow = (String, i64, f64, Option<f64>, f64, f64, i64, f64);
-        let srows: Vec<SummaryRow> = select(
-            c,
-            "SELECT m.name, cs.count, cs.mean, cs.std, cs.min, cs.max, cs.latest_t, cs.latest_value
-             FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
-             WHERE cs.cell = ?1 ORDER BY m.name",
-            [id],
-        )?;
-        for (m, n, mean, std, min, max, latest_t, latest_value) in srows {
-            md.summaries.push(ModalitySummary {
-                modality: parse_modality("cell_summaries", &m)?,
-                stats: SeriesStats {
-                    count: count("cell_summaries", n)?,
-                    mean,
-                    std,
-                    min,
-                    max,
-                    latest_t,
-                    latest_value,
-                },
-            });
-        }
-        let crows: Vec<(String, String, f64, i64)> = select(
-            c,
-            "SELECT n.label, m.name, cc.correlation, cc.overlap
-             FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
-                  JOIN modalities m ON m.id = cc.modality
-             WHERE cc.cell = ?1 ORDER BY n.i, n.j, m.name",
-            [id],
-        )?;
-        for (n, m, correlation, overlap) in crows {
-            md.correlations.push(Correlation {
-                neighbour: parse_cell("cell_correlations", &n)?,
-                modality: parse_modality("cell_correlations", &m)?,
-                correlation,
-                overlap: count("cell_correlations", overlap)?,
-            });
-        }
-        let arows: Vec<(String, i64, f64, bool)> = select(
-            c,
-            "SELECT m.name, ca.t, ca.anomaly, ca.flagged
-             FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
-             WHERE ca.cell = ?1 ORDER BY m.name, ca.t",
-            [id],
-        )?;
-        for (m, t, anomaly, flagged) in arows {
-            md.anomalies.push(AnomalyRecord {
-                modality: parse_modality("cell_anomalies", &m)?,
-                t,
-                anomaly,
-                flagged,
-            });
+        if children {
+            type SummaryRow = (String, i64, f64, Option<f64>, f64, f64, i64, f64);
+            let srows: Vec<SummaryRow> = select(
+                c,
+                "SELECT m.name, cs.count, cs.mean, cs.std, cs.min, cs.max, cs.latest_t, cs.latest_value
+                 FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
+                 WHERE cs.cell = ?1 ORDER BY m.name",
+                [id],
+            )?;
+            for (m, n, mean, std, min, max, latest_t, latest_value) in srows {
+                md.summaries.push(ModalitySummary {
+                    modality: parse_modality("cell_summaries", &m)?,
+                    stats: SeriesStats {
+                        count: count("cell_summaries", n)?,
+                        mean,
+                        std,
+                        min,
+                        max,
+                        latest_t,
+                        latest_value,
+                    },
+                });
+            }
+            let crows: Vec<(String, String, f64, i64)> = select(
+                c,
+                "SELECT n.label, m.name, cc.correlation, cc.overlap
+                 FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
+                      JOIN modalities m ON m.id = cc.modality
+                 WHERE cc.cell = ?1 ORDER BY n.i, n.j, m.name",
+                [id],
+            )?;
+            for (n, m, correlation, overlap) in crows {
+                md.correlations.push(Correlation {
+                    neighbour: parse_cell("cell_correlations", &n)?,
+                    modality: parse_modality("cell_correlations", &m)?,
+                    correlation,
+                    overlap: count("cell_correlations", overlap)?,
+                });
+            }
+            let arows: Vec<(String, i64, f64, bool)> = select(
+                c,
+                "SELECT m.name, ca.t, ca.anomaly, ca.flagged
+                 FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
+                 WHERE ca.cell = ?1 ORDER BY m.name, ca.t",
+                [id],
+            )?;
+            for (m, t, anomaly, flagged) in arows {
+                md.anomalies.push(AnomalyRecord {
+                    modality: parse_modality("cell_anomalies", &m)?,
+                    t,
+                    anomaly,
+                    flagged,
+                });
+            }
         }
         out.push(md);
     }
