@@ -336,47 +336,31 @@ fn cell_metadata_with(c: &mut Transaction<'_>, children: bool) -> Result<Vec<Cel
         )
         .db()?,
     );
-    let mut summaries = if children {
-        grouped(
-            c.query(
-                "SELECT cs.cell, m.name, cs.count, cs.mean, cs.std, cs.min, cs.max, cs.latest_t,
+    // A child table's rows grouped by cell, or none when the children are not wanted.
+    let mut child = |sql: &str| -> Result<HashMap<i64, Vec<postgres::Row>>> {
+        Ok(if children {
+            grouped(c.query(sql, &[]).db()?)
+        } else {
+            HashMap::new()
+        })
+    };
+    let mut summaries = child(
+        "SELECT cs.cell, m.name, cs.count, cs.mean, cs.std, cs.min, cs.max, cs.latest_t,
                         cs.latest_value
                  FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
                  ORDER BY cs.cell, m.name COLLATE \"C\"",
-                &[],
-            )
-            .db()?,
-        )
-    } else {
-        Default::default()
-    };
-    let mut correlations = if children {
-        grouped(
-            c.query(
-                "SELECT cc.cell, n.label, m.name, cc.correlation, cc.overlap
+    )?;
+    let mut correlations = child(
+        "SELECT cc.cell, n.label, m.name, cc.correlation, cc.overlap
                  FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
                       JOIN modalities m ON m.id = cc.modality
                  ORDER BY cc.cell, n.i, n.j, m.name COLLATE \"C\"",
-                &[],
-            )
-            .db()?,
-        )
-    } else {
-        Default::default()
-    };
-    let mut anomalies = if children {
-        grouped(
-            c.query(
-                "SELECT ca.cell, m.name, ca.t, ca.anomaly, ca.flagged
+    )?;
+    let mut anomalies = child(
+        "SELECT ca.cell, m.name, ca.t, ca.anomaly, ca.flagged
                  FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
                  ORDER BY ca.cell, m.name COLLATE \"C\", ca.t",
-                &[],
-            )
-            .db()?,
-        )
-    } else {
-        Default::default()
-    };
+    )?;
     let mut out = Vec::with_capacity(rows.len());
     for r in &rows {
         let id: i64 = r.get(0);
