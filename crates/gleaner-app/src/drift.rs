@@ -1,7 +1,7 @@
 //! gleaner's drift freshness (`[utility] freshness_form = "drift"`): F as the expected error
 //! of each cell's carried-forward values, from each sensor's own drift.
 //!
-//! Per sensor, the mean squared change D(h) of the condition modality at lags of 1..=30 grid
+//! Per sensor, the mean squared change D(h) of the condition modality at lags of 1..=90 grid
 //! steps is estimated on its collected readings of the last `drift_window_days`
 //! ([`gleaner_utility::mean_squared_change`], at least 10 pairs per lag), then shrunk halfway
 //! to the field: lag by lag the geometric mean of the sensor's and the field's median (the
@@ -23,7 +23,7 @@ use crate::knowledge::Knowledge;
 use crate::project::Project;
 
 /// Lags of the structure functions, grid steps.
-pub const DRIFT_MAX_LAG: usize = 30;
+pub const DRIFT_MAX_LAG: usize = 90;
 /// Fewest pairs for a sensor's own estimate at a lag.
 const MIN_PAIRS: usize = 10;
 
