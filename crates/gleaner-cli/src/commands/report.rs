@@ -317,26 +317,20 @@ fn get<'a>(s: &'a Summary, name: &str) -> &'a Interval {
         .1
 }
 
-/// What a metric is, for tables and chart labels: (title, unit label, scale, decimals).
 /// "Against exhaustive collection": each strategy's energy and error as a share of
 /// exhaustive collection's, with the error measured before the flights (after them
 /// exhaustive collection is exact by construction, so only the error lived with between
 /// missions compares). Nothing when exhaustive collection was not run or the files predate
 /// the pre-flight errors.
 fn exhaustive_section(md: &mut String, at_main: &[&Summary], main_budget: f64) -> Result<()> {
-    let get = |s: &Summary, name: &str| -> f64 {
-        s.metrics
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map_or(f64::NAN, |(_, i)| i.mean)
-    };
+    let mean = |s: &Summary, name: &str| get(s, name).mean;
     let Some(ex) = at_main.iter().find(|s| s.strategy == Strategy::Exhaustive) else {
         return Ok(());
     };
     let (ex_energy, ex_kriged, ex_carried) = (
-        get(ex, "energy_kj"),
-        get(ex, "rmse_kriged_before"),
-        get(ex, "rmse_carried_before"),
+        mean(ex, "energy_kj"),
+        mean(ex, "rmse_kriged_before"),
+        mean(ex, "rmse_carried_before"),
     );
     if !(ex_energy > 0.0 && ex_kriged > 0.0 && ex_carried > 0.0) {
         return Ok(());
@@ -360,9 +354,9 @@ fn exhaustive_section(md: &mut String, at_main: &[&Summary], main_budget: f64) -
     )?;
     for s in at_main {
         let (e, k, c) = (
-            get(s, "energy_kj"),
-            get(s, "rmse_kriged_before"),
-            get(s, "rmse_carried_before"),
+            mean(s, "energy_kj"),
+            mean(s, "rmse_kriged_before"),
+            mean(s, "rmse_carried_before"),
         );
         writeln!(
             md,
@@ -379,6 +373,7 @@ fn exhaustive_section(md: &mut String, at_main: &[&Summary], main_budget: f64) -
     Ok(())
 }
 
+/// What a metric is, for tables and chart labels: (title, unit label, scale, decimals).
 fn describe(name: &str, unit: &str) -> (&'static str, String, f64, usize) {
     match name {
         "rmse_kriged" => ("RMSE, kriging", format!("{unit} ×1000"), 1000.0, 2),
