@@ -185,10 +185,12 @@ pub fn line_chart_svg(chart: &LineChart) -> Result<String, RenderError> {
     );
     for (k, l) in chart.lines.iter().enumerate() {
         let (colour, dash) = qualitative(k);
-        let dash_attr = if dash > 0 {
-            r#" stroke-dasharray="4 2""#
-        } else {
-            ""
+        // Solid, dashed, then dotted: each pass through the palette its own pattern, so a
+        // 13th line does not look like the 7th.
+        let dash_attr = match dash {
+            0 => "",
+            1 => r#" stroke-dasharray="4 2""#,
+            _ => r#" stroke-dasharray="1 2""#,
         };
         let mut d = String::new();
         let mut pen_up = true;
@@ -349,5 +351,25 @@ mod tests {
             ..chart
         };
         assert!(line_chart_svg(&bad).is_err());
+    }
+
+    #[test]
+    fn thirteen_lines_get_thirteen_styles() {
+        let chart = LineChart {
+            title: "RMSE".into(),
+            x_label: "mission".into(),
+            y_label: "m3/m3".into(),
+            x_axis: XAxis::Date,
+            lines: (0..13)
+                .map(|k| Line {
+                    name: format!("s{k}"),
+                    points: vec![(0.0, k as f64), (1.0, k as f64)],
+                })
+                .collect(),
+        };
+        let svg = line_chart_svg(&chart).unwrap();
+        // Six solid (path and legend line each), six dashed, one dotted.
+        assert_eq!(svg.matches(r#"stroke-dasharray="4 2""#).count(), 12);
+        assert_eq!(svg.matches(r#"stroke-dasharray="1 2""#).count(), 2);
     }
 }
