@@ -136,19 +136,25 @@ fn caf_campaign() -> CampaignResult {
     )
 }
 
+/// A new CAF project (its sensors, no readings) in `dir`/caf, and the request that made it.
+fn caf_project(dir: &std::path::Path) -> (app::InitRequest, app::Project<app::AnyStore>) {
+    let init = app::InitRequest {
+        dir: dir.join("caf"),
+        sensors: shared_data().join("caf/sensors/CAF_sensor_locations.csv"),
+        utm_zone: Some("11N".into()),
+        ..Default::default()
+    };
+    let (project, _) = app::init(&init).unwrap();
+    (init, project)
+}
+
 /// Three daily CAF missions from 2014-04-01 (history: that season) with `strategies`, each
 /// mission flying `sorties` batteries.
 fn caf_campaign_with(strategies: Vec<Strategy>, sorties: usize) -> CampaignResult {
     let data = shared_data();
     let tmp = tempfile::tempdir().unwrap();
     let files = caf_files(&data.join("caf/Daily"), &tmp.path().join("in"), 2014..=2014);
-    let init = app::InitRequest {
-        dir: tmp.path().join("caf"),
-        sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
-        utm_zone: Some("11N".into()),
-        ..Default::default()
-    };
-    let (project, _) = app::init(&init).unwrap();
+    let (init, project) = caf_project(tmp.path());
     let truth = Truth::from_files(
         &project,
         &app::IngestRequest {
@@ -272,15 +278,8 @@ fn campaign_missions_fly_several_sorties() {
     };
     assert!(mean(two) < mean(one), "{} vs {}", mean(two), mean(one));
     // Out of range: refused before anything runs.
-    let data = shared_data();
     let tmp = tempfile::tempdir().unwrap();
-    let init = app::InitRequest {
-        dir: tmp.path().join("caf"),
-        sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
-        utm_zone: Some("11N".into()),
-        ..Default::default()
-    };
-    let (project, _) = app::init(&init).unwrap();
+    let (init, project) = caf_project(tmp.path());
     let mut req = request("caf", &project, init, 0, vec![DAY], vec![Strategy::Gleaner]);
     req.sorties = 0;
     let empty = Truth::from_readings(Default::default(), DAY).unwrap();
