@@ -36,7 +36,7 @@ fn request(
         event_z: 3.0,
         planner_iterations: 100,
         neighbours: 16,
-        kriging_mean: gleaner_kriging::Mean::Unknown,
+        estimator: gleaner_app::Estimator::Changes,
         jobs: 2,
         clock_now: 0,
     }

@@ -341,9 +341,14 @@ Example:
         /// Observations per estimate.
         #[arg(long, default_value_t = app::DEFAULT_NEIGHBOURS)]
         neighbours: usize,
-        /// Simple kriging towards each sensor's long-run mean instead of ordinary kriging.
-        #[arg(long)]
+        /// Simple kriging of levels towards each sensor's long-run mean instead of kriging
+        /// of changes.
+        #[arg(long, conflicts_with = "levels")]
         simple: bool,
+        /// Ordinary kriging of levels (from every sensor's latest reading) instead of kriging
+        /// of changes.
+        #[arg(long)]
+        levels: bool,
     },
 }
 
@@ -862,6 +867,7 @@ fn run(cli: Cli) -> Result<()> {
             modality,
             neighbours,
             simple,
+            levels,
         } => {
             let p = project.open()?;
             let r = app::reconstruct(
@@ -870,7 +876,13 @@ fn run(cli: Cli) -> Result<()> {
                     at,
                     modality,
                     neighbours: Some(neighbours),
-                    simple,
+                    estimator: if simple {
+                        app::Estimator::Levels(gleaner_kriging::Mean::Known)
+                    } else if levels {
+                        app::Estimator::Levels(gleaner_kriging::Mean::Unknown)
+                    } else {
+                        app::Estimator::Changes
+                    },
                 },
             )?;
             print!("{}", reconstruct::table(&r));
