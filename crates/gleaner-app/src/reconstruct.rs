@@ -108,8 +108,11 @@ pub(crate) fn target_modality<S: Store>(
     Modality::new(&name).map_err(|e| AppError::Invalid(format!("modality {name:?}: {e}")))
 }
 
+/// Per sensor: the times (seconds, ascending) and values of its readings.
+type Columns = Vec<(Vec<UnixSeconds>, Vec<f64>)>;
+
 /// Per project sensor (sorted by id): times and values of one batch's readings.
-fn per_sensor(ids: &[SensorId], batch: &ReadingBatch) -> Vec<(Vec<UnixSeconds>, Vec<f64>)> {
+fn per_sensor(ids: &[SensorId], batch: &ReadingBatch) -> Columns {
     let index: HashMap<&SensorId, usize> = ids.iter().enumerate().map(|(k, s)| (s, k)).collect();
     let mut out = vec![(Vec::new(), Vec::new()); ids.len()];
     for r in &batch.rows {
@@ -215,10 +218,9 @@ fn fit_inner<S: Store>(
 /// between visits in a campaign).
 pub const CHANGE_LAG_DAYS: [i64; 11] = [1, 2, 3, 5, 7, 10, 14, 21, 28, 42, 56];
 
-/// Longest stretch before the estimate's time the kriging of changes reads, seconds: a
-/// neighbour's change is taken from its reading at (or just before) the target's last one,
-/// or from the stretch's first reading when the target is staler than this.
-pub const CHANGE_WINDOW_S: i64 = 60 * 86_400;
+/// How far before the stalest sensor's last reading the kriging of changes reads, seconds (a
+/// neighbour missing that day is taken from its latest reading before it).
+pub const CHANGE_MARGIN_S: i64 = 8 * 86_400;
 
 /// Sensor positions in the field's local frame, east/north metres.
 fn positions(sensors: &[gleaner_field::Sensor], field: &gleaner_field::Field) -> Vec<[f64; 2]> {
@@ -238,7 +240,8 @@ const RECENT_S: i64 = 8 * 86_400;
 
 /// Estimates every sensor's `modality` value at `at` with the fitted models, from each
 /// sensor's latest known reading within `lookback_s` before `at` (and, for
-/// [`Estimator::Changes`], the known readings of the [`CHANGE_WINDOW_S`] before `at`), with
+/// [`Estimator::Changes`], every known reading from [`CHANGE_MARGIN_S`] before the stalest
+/// sensor's latest one), with
 /// `estimator` and at most `neighbours` observations per estimate.
 pub(crate) fn estimate<S: Store>(
     project: &Project<S>,
@@ -262,13 +265,10 @@ pub(crate) fn estimate<S: Store>(
     // The latest reading per sensor: from the most recent readings first, then from ever
     // longer stretches before them (×8 each time) for the sensors not found yet: the same
     // readings as one read of the whole look-back, at a fraction of the rows when most
-    // sensors were read lately. The first stretch's series are kept for the changes.
+    // sensors were read lately.
     let mut latest: Vec<Option<(UnixSeconds, f64)>> = vec![None; ids.len()];
-    let mut recent: Vec<(Vec<UnixSeconds>, Vec<f64>)> = Vec::new();
+    let mut recent: Option<(UnixSeconds, Columns)> = None;
     let (mut end, mut span) = (at, RECENT_S);
-    if estimator == Estimator::Changes {
-        span = CHANGE_WINDOW_S.max(RECENT_S);
-    }
     loop {
         let start = end.saturating_sub(span).max(from);
         let batch = project.store().readings_for(Some(modality), start..=end)?;
@@ -276,8 +276,8 @@ pub(crate) fn estimate<S: Store>(
         for (l, (t, v)) in latest.iter_mut().zip(&columns) {
             *l = l.or(t.last().copied().zip(v.last().copied()));
         }
-        if recent.is_empty() {
-            recent = columns;
+        if recent.is_none() {
+            recent = Some((start, columns));
         }
         if start <= from || latest.iter().all(Option::is_some) {
             break;
@@ -285,6 +285,28 @@ pub(crate) fn estimate<S: Store>(
         end = start - 1;
         span = span.saturating_mul(8);
     }
+    // The kriging of changes needs every sensor's readings from a little before the stalest
+    // sensor's last one: the first stretch when it reaches that far, else one more read.
+    let (first_start, first) = recent.unwrap_or((at, Vec::new()));
+    let series = match estimator {
+        Estimator::Levels(_) => Vec::new(),
+        Estimator::Changes => {
+            let needed = latest
+                .iter()
+                .flatten()
+                .map(|l| l.0)
+                .min()
+                .unwrap_or(at)
+                .saturating_sub(CHANGE_MARGIN_S)
+                .max(from);
+            if needed >= first_start {
+                first
+            } else {
+                let batch = project.store().readings_for(Some(modality), needed..=at)?;
+                per_sensor(&ids, &batch)
+            }
+        }
+    };
     let positions = positions(&sensors, &field);
     let observations: Vec<Observation> = latest
         .iter()
@@ -321,7 +343,7 @@ pub(crate) fn estimate<S: Store>(
                     (model.means[k] + e.residual, e.variance)
                 }
                 (Estimator::Changes, Some((t_k, v_k))) => {
-                    let known = neighbour_changes(&recent, &positions, k, t_k, at);
+                    let known = neighbour_changes(&series, &positions, k, t_k, at);
                     let e = estimate_change(
                         changes,
                         &known,

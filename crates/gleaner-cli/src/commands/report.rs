@@ -700,6 +700,28 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         }
     }
     writeln!(md, "## Definitions\n")?;
+    // The model-based estimate ("kriging" columns) the simulation used.
+    let model_based = if command.contains("--simple-kriging") || command.contains("--level-kriging")
+    {
+        format!(
+            "kriging = {} kriging of levels (residuals from each sensor's history mean) with a \
+             separable exponential space-time covariance and a temporal nugget fitted on the \
+             history, from the 16 most correlated latest readings",
+            if command.contains("--simple-kriging") {
+                "simple"
+            } else {
+                "ordinary"
+            }
+        )
+    } else {
+        "kriging = kriging of changes: each sensor's last collected value plus its change since, \
+         estimated by simple kriging from the changes its neighbours are known to have made over \
+         (part of) that interval (a model of changes fitted on the history: a field-wide part \
+         correlated in space, each sensor's own part; exponential variograms with a nugget), \
+         from the 16 most informative changes; with no neighbour collected since, exactly the \
+         carried value"
+            .to_string()
+    };
     writeln!(
         md,
         "- Every run is its own project (an in-memory store) driven through gleaner's score, plan, \
@@ -713,10 +735,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
          insertion; exhaustive = every cell, as many sorties as it takes; no-X = gleaner without \
          term X.\n\
          - Reconstruction at mission T (after its flights): each sensor's value stamped T − period; \
-         carried = its last collected value; kriging = ordinary kriging (simple kriging with \
-         `--simple-kriging`) of residuals from each sensor's history mean with a separable \
-         exponential space-time covariance and a temporal nugget fitted on the history, from \
-         the 16 most correlated latest readings.\n\
+         carried = its last collected value; {model_based}.\n\
          - An event is caught at the first mission that collects one of its sensors (with an \
          event reading still in the buffer) once its first reading is available; delay = catch \
          time − (start + period).\n\
