@@ -408,6 +408,8 @@ pub struct CampaignResult {
     pub period_s: i64,
     /// The field model fitted on the history.
     pub covariance: Covariance,
+    /// The model of changes fitted on the history (`None` in results written before it).
+    pub changes: Option<IncrementModel>,
     /// Events that became available during the campaign.
     pub events: Vec<TruthEvent>,
     /// One per (strategy, seed, budget), in that order.
@@ -672,6 +674,7 @@ pub fn run_campaign(
         modality: shared.modality.to_string(),
         period_s: truth.period_s,
         covariance: shared.model.covariance,
+        changes: Some(shared.changes),
         events: shared.events,
         runs,
     })
