@@ -343,7 +343,13 @@ pub(crate) fn estimate<S: Store>(
                     (model.means[k] + e.residual, e.variance)
                 }
                 (Estimator::Changes, Some((t_k, v_k))) => {
-                    let known = neighbour_changes(&series, &positions, k, t_k, at);
+                    let known = neighbour_changes(
+                        &series,
+                        &positions,
+                        (k, t_k),
+                        at,
+                        CHANGE_CANDIDATES.max(4 * neighbours),
+                    );
                     let e = estimate_change(
                         changes,
                         &known,
@@ -367,27 +373,40 @@ pub(crate) fn estimate<S: Store>(
 }
 
 /// The changes known over the unseen interval of sensor `k` (last read at `t_k`, estimated
-/// at `at`), times in seconds relative to `at`: every other sensor's latest reading after
-/// `t_k` minus its reading at or just before `t_k` (its first reading in `series` when it has
-/// none by then). `series` per sensor, ascending.
+/// at `at`), times in seconds relative to `at`: for the `max_candidates` sensors nearest to it
+/// among those read after `t_k`, the latest reading minus the reading at or just before `t_k`
+/// (the first reading in `series` when there is none by then). `series` per sensor,
+/// ascending; positions metres.
 fn neighbour_changes(
     series: &[(Vec<UnixSeconds>, Vec<f64>)],
     positions: &[[f64; 2]],
-    k: usize,
-    t_k: UnixSeconds,
+    (k, t_k): (usize, UnixSeconds),
     at: UnixSeconds,
+    max_candidates: usize,
 ) -> Vec<Change> {
-    let mut out = Vec::new();
-    for (j, (times, values)) in series.iter().enumerate() {
-        if j == k {
-            continue;
-        }
+    let p = positions[k];
+    // Squared distance and index of every sensor read after t_k.
+    let mut candidates: Vec<(f64, usize)> = series
+        .iter()
+        .enumerate()
+        .filter(|(j, (times, _))| *j != k && times.last().is_some_and(|&b| b > t_k))
+        .map(|(j, _)| {
+            let q = positions[j];
+            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2), j)
+        })
+        .collect();
+    let m = max_candidates.max(1);
+    if candidates.len() > m {
+        candidates.select_nth_unstable_by(m - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        candidates.truncate(m);
+    }
+    candidates.sort_by_key(|c| c.1);
+    let mut out = Vec::with_capacity(candidates.len());
+    for (_, j) in candidates {
+        let (times, values) = &series[j];
         let (Some(&b), Some(&vb)) = (times.last(), values.last()) else {
             continue;
         };
-        if b <= t_k {
-            continue;
-        }
         // Readings at or before t_k: the latest of them, else the first reading.
         let i = times.partition_point(|&t| t <= t_k).saturating_sub(1);
         let (a, va) = (times[i], values[i]);
@@ -403,6 +422,11 @@ fn neighbour_changes(
     }
     out
 }
+
+/// Fewest candidate neighbours (the nearest read after the target) the kriging of changes
+/// weighs for each estimate, before choosing the most informative of them; at least 4 times
+/// the neighbours asked for. Bounds the cost on large networks.
+pub const CHANGE_CANDIDATES: usize = 64;
 
 /// The use case: fits the field model of the modality on everything known at `at` and
 /// estimates every sensor's value then. Writes nothing.
@@ -472,7 +496,14 @@ mod tests {
             (vec![], vec![]),
         ];
         let positions: Vec<[f64; 2]> = (0..6).map(|k| [10.0 * k as f64, 0.0]).collect();
-        let c = neighbour_changes(&series, &positions, 0, 90 * DAY, at);
+        let c = neighbour_changes(&series, &positions, (0, 90 * DAY), at, 64);
+        // Only the nearest 2 candidates: sensors 1 and 3 (sensor 2 knows nothing newer).
+        let near = neighbour_changes(&series, &positions, (0, 90 * DAY), at, 2);
+        assert_eq!(near.len(), 2, "{near:?}");
+        assert_eq!(
+            (near[0].position, near[1].position),
+            ([10.0, 0.0], [30.0, 0.0])
+        );
         assert_eq!(c.len(), 3, "{c:?}");
         let rel = |d: i64| ((d * DAY) - at) as f64;
         assert_eq!((c[0].from_s, c[0].to_s), (rel(90), rel(99)));
@@ -483,6 +514,6 @@ mod tests {
         assert_eq!((c[2].from_s, c[2].to_s), (rel(92), rel(96)));
         assert!((c[2].change + 0.05).abs() < 1e-12);
         // A target read after everyone else: no neighbour knows more.
-        assert!(neighbour_changes(&series, &positions, 1, 99 * DAY, at).is_empty());
+        assert!(neighbour_changes(&series, &positions, (1, 99 * DAY), at, 64).is_empty());
     }
 }
