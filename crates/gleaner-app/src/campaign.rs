@@ -16,7 +16,7 @@ use std::path::PathBuf;
 
 use gleaner_field::{CellIndex, Modality, SensorId, UnixSeconds};
 use gleaner_ingest::{IngestReport, Readings};
-use gleaner_kriging::{Covariance, FieldModel, variance_reduction};
+use gleaner_kriging::{Covariance, FieldModel, IncrementModel, variance_reduction};
 use gleaner_mission::Planner;
 use gleaner_store::{SqliteStore, Store, StoreRead};
 use rayon::prelude::*;
@@ -28,7 +28,7 @@ use crate::init::{InitRequest, init_store};
 use crate::plan::{PlanRequest, plan};
 use crate::progress::{Progress, Silent};
 use crate::project::Project;
-use crate::reconstruct::{estimate, fit_model, target_modality};
+use crate::reconstruct::{estimate, fit_models, target_modality};
 use crate::score::{ScoreRequest, compute, score};
 use crate::settings::Settings;
 use crate::simulate::{Truth, fly_buffered};
@@ -297,9 +297,9 @@ pub struct CampaignRequest {
     pub sorties: usize,
     /// Observations per kriging estimate.
     pub neighbours: usize,
-    /// Kriging of the reconstruction: ordinary ([`gleaner_kriging::Mean::Unknown`], the
-    /// default of `reconstruct`) or simple ([`gleaner_kriging::Mean::Known`]).
-    pub kriging_mean: gleaner_kriging::Mean,
+    /// The reconstruction's model-based estimator (the `kriged` metrics): kriging of changes
+    /// (the default of `reconstruct`) or of levels.
+    pub estimator: crate::reconstruct::Estimator,
     /// Runs in parallel (threads; 0 = rayon's default).
     pub jobs: usize,
     /// Provenance time stamped on missions, seconds.
@@ -412,6 +412,8 @@ pub struct CampaignResult {
     pub period_s: i64,
     /// The field model fitted on the history.
     pub covariance: Covariance,
+    /// The model of changes fitted on the history (`None` in results written before it).
+    pub changes: Option<IncrementModel>,
     /// Events that became available during the campaign.
     pub events: Vec<TruthEvent>,
     /// One per (strategy, seed, budget), in that order.
@@ -438,6 +440,8 @@ struct Shared<'a> {
     class_series: BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
     events: Vec<TruthEvent>,
     model: FieldModel,
+    /// The model of changes fitted on the history.
+    changes: IncrementModel,
     step_s: i64,
     /// The store every run starts from (the history ingested, the utility state built),
     /// copied for each run.
@@ -566,13 +570,22 @@ pub fn run_campaign(
                     .map_err(|e| AppError::core("field model", e))?,
                 means: Vec::new(),
             },
+            changes: {
+                let none = gleaner_kriging::Variogram {
+                    nugget: 0.0,
+                    partial: 0.0,
+                    scale_s: 1.0,
+                };
+                IncrementModel::new(none, 1.0, none)
+                    .map_err(|e| AppError::core("model of changes", e))?
+            },
             step_s: 1,
             template: None,
         };
         new_run_project(&shared0, request.settings.clone())?
     };
     let modality = target_modality(&probe, request.modality.as_deref())?;
-    let (model, step_s) = fit_model(&probe, &modality, request.history_until)?;
+    let (model, changes, step_s) = fit_models(&probe, &modality, request.history_until)?;
     let names: Vec<String> = probe
         .store()
         .modalities()?
@@ -636,6 +649,7 @@ pub fn run_campaign(
         class_series,
         events,
         model,
+        changes,
         step_s,
         template: Some(std::sync::Mutex::new(template)),
     };
@@ -671,6 +685,7 @@ pub fn run_campaign(
         modality: shared.modality.to_string(),
         period_s: truth.period_s,
         covariance: shared.model.covariance,
+        changes: Some(shared.changes),
         events: shared.events,
         runs,
     })
@@ -827,10 +842,10 @@ fn run_one(
             let estimates = estimate(
                 project,
                 &shared.modality,
-                &shared.model,
+                (&shared.model, &shared.changes),
                 target,
                 lookback,
-                (request.neighbours, request.kriging_mean),
+                (request.neighbours, request.estimator),
             )?;
             Ok(reconstruction_errors(&estimates, &shared.series, target))
         };

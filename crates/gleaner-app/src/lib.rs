@@ -77,7 +77,7 @@ pub use plan::{
 pub use progress::{Progress, Silent};
 pub use project::{Project, database};
 pub use reconstruct::{
-    DEFAULT_NEIGHBOURS, ReconstructRequest, Reconstruction, SensorEstimate, reconstruct,
+    DEFAULT_NEIGHBOURS, Estimator, ReconstructRequest, Reconstruction, SensorEstimate, reconstruct,
 };
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};

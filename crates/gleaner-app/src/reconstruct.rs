@@ -1,11 +1,17 @@
 //! Reconstruction (SPEC §7): every sensor's current value of one modality estimated from what
-//! is known — its last collected value carried forward, and a space-time kriging estimate
-//! (Gaussian conditional mean, with its variance) from every sensor's latest known reading.
+//! is known — its last collected value carried forward, and a model-based estimate with its
+//! variance: by default kriging of changes ([`Estimator::Changes`]: the last value plus the
+//! change since, estimated from the neighbours' known changes over the same interval), or
+//! space-time kriging of levels from every sensor's latest known reading
+//! ([`Estimator::Levels`]).
 
 use std::collections::HashMap;
 
 use gleaner_field::{LatLon, Modality, SensorId, UnixSeconds};
-use gleaner_kriging::{FieldModel, FitOptions, Mean, Observation, SensorSeries, fit, krige_with};
+use gleaner_kriging::{
+    Change, FieldModel, FitOptions, IncrementFitOptions, IncrementModel, Mean, Observation,
+    SensorSeries, estimate_change, fit, fit_increments, krige_with,
+};
 use gleaner_store::{ReadingBatch, Store};
 
 use crate::error::{AppError, Result};
@@ -24,9 +30,22 @@ pub struct ReconstructRequest {
     pub modality: Option<String>,
     /// Observations per estimate [default: [`DEFAULT_NEIGHBOURS`]].
     pub neighbours: Option<usize>,
-    /// Simple kriging towards the sensors' long-run means instead of ordinary kriging (the
-    /// default, [`Mean::Unknown`]: the field's current level is estimated from the data).
-    pub simple: bool,
+    /// The model-based estimator [default: [`Estimator::Changes`]].
+    pub estimator: Estimator,
+}
+
+/// The model-based estimate of a reconstruction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Estimator {
+    /// Kriging of changes ([`gleaner_kriging::estimate_change`]): each sensor's last known
+    /// reading plus its change since, estimated from the changes its neighbours are known to
+    /// have made over (part of) that interval; exactly the last value carried forward when no
+    /// neighbour's change is known. A sensor never read gets the kriging of levels (ordinary).
+    #[default]
+    Changes,
+    /// Space-time kriging of levels (residuals from each sensor's mean) from every sensor's
+    /// latest known reading: ordinary ([`Mean::Unknown`]) or simple ([`Mean::Known`]).
+    Levels(Mean),
 }
 
 /// One sensor's estimate.
@@ -40,9 +59,9 @@ pub struct SensorEstimate {
     pub last_time: Option<UnixSeconds>,
     /// Last value carried forward (its mean when never read), the modality's unit.
     pub carried: f64,
-    /// Kriging estimate, the modality's unit.
+    /// Model-based estimate ([`Estimator`]), the modality's unit.
     pub kriged: f64,
-    /// Kriging variance, the unit squared.
+    /// Its variance under the model, the unit squared.
     pub variance: f64,
 }
 
@@ -53,8 +72,12 @@ pub struct Reconstruction {
     pub at: UnixSeconds,
     /// The modality.
     pub modality: String,
-    /// The field model used (means and covariance).
+    /// The field model (means and covariance of levels).
     pub model: FieldModel,
+    /// The model of changes.
+    pub changes: IncrementModel,
+    /// The estimator used.
+    pub estimator: Estimator,
     /// Sampling step of the modality's readings, seconds.
     pub step_s: i64,
     /// One per sensor, sorted by id.
@@ -85,8 +108,11 @@ pub(crate) fn target_modality<S: Store>(
     Modality::new(&name).map_err(|e| AppError::Invalid(format!("modality {name:?}: {e}")))
 }
 
+/// Per sensor: the times (seconds, ascending) and values of its readings.
+type Columns = Vec<(Vec<UnixSeconds>, Vec<f64>)>;
+
 /// Per project sensor (sorted by id): times and values of one batch's readings.
-fn per_sensor(ids: &[SensorId], batch: &ReadingBatch) -> Vec<(Vec<UnixSeconds>, Vec<f64>)> {
+fn per_sensor(ids: &[SensorId], batch: &ReadingBatch) -> Columns {
     let index: HashMap<&SensorId, usize> = ids.iter().enumerate().map(|(k, s)| (s, k)).collect();
     let mut out = vec![(Vec::new(), Vec::new()); ids.len()];
     for r in &batch.rows {
@@ -114,12 +140,34 @@ fn per_sensor(ids: &[SensorId], batch: &ReadingBatch) -> Vec<(Vec<UnixSeconds>, 
 /// campaign (a 14-day fit saw only the slow seasonal part and gave a time scale of months).
 pub const FIT_LAG_DAYS: i64 = 28;
 
-/// Fits the field model of `modality` on everything known at or before `at` (seconds).
+/// Fits the field model of `modality` on everything known at or before `at` (seconds); also
+/// returns the sampling step, seconds.
 pub(crate) fn fit_model<S: Store>(
     project: &Project<S>,
     modality: &Modality,
     at: UnixSeconds,
 ) -> Result<(FieldModel, i64)> {
+    fit_inner(project, modality, at, false).map(|(m, _, step)| (m, step))
+}
+
+/// Fits the field model of `modality` and its model of changes on everything known at or
+/// before `at` (seconds); also returns the sampling step, seconds.
+pub(crate) fn fit_models<S: Store>(
+    project: &Project<S>,
+    modality: &Modality,
+    at: UnixSeconds,
+) -> Result<(FieldModel, IncrementModel, i64)> {
+    let (model, changes, step) = fit_inner(project, modality, at, true)?;
+    let changes = changes.ok_or_else(|| AppError::Invalid("no model of changes".into()))?;
+    Ok((model, changes, step))
+}
+
+fn fit_inner<S: Store>(
+    project: &Project<S>,
+    modality: &Modality,
+    at: UnixSeconds,
+    with_changes: bool,
+) -> Result<(FieldModel, Option<IncrementModel>, i64)> {
     let sensors = project.sensors()?;
     let (_, field) = project.field()?;
     let ids: Vec<SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
@@ -148,8 +196,31 @@ pub(crate) fn fit_model<S: Store>(
     };
     let model = fit(&series, &options)
         .map_err(|e| AppError::core("field model", format!("{modality}: {e}")))?;
-    Ok((model, step))
+    if !with_changes {
+        return Ok((model, None, step));
+    }
+    let changes = fit_increments(
+        &series,
+        &IncrementFitOptions {
+            step_s: step,
+            lags_steps: CHANGE_LAG_DAYS
+                .iter()
+                .map(|d| (d * 86_400 / step).max(1))
+                .collect(),
+            ..IncrementFitOptions::default()
+        },
+    )
+    .map_err(|e| AppError::core("model of changes", format!("{modality}: {e}")))?;
+    Ok((model, Some(changes), step))
 }
+
+/// Lags of the fit of the model of changes, days (up to the two months readings can age
+/// between visits in a campaign).
+pub const CHANGE_LAG_DAYS: [i64; 11] = [1, 2, 3, 5, 7, 10, 14, 21, 28, 42, 56];
+
+/// How far before the stalest sensor's last reading the kriging of changes reads, seconds (a
+/// neighbour missing that day is taken from its latest reading before it).
+pub const CHANGE_MARGIN_S: i64 = 8 * 86_400;
 
 /// Sensor positions in the field's local frame, east/north metres.
 fn positions(sensors: &[gleaner_field::Sensor], field: &gleaner_field::Field) -> Vec<[f64; 2]> {
@@ -167,15 +238,18 @@ fn positions(sensors: &[gleaner_field::Sensor], field: &gleaner_field::Field) ->
 /// read covers 8 times the previous stretch.
 const RECENT_S: i64 = 8 * 86_400;
 
-/// Estimates every sensor's `modality` value at `at` with a fitted model, from each sensor's
-/// latest known reading within `lookback_s` before `at`, by kriging with `mean`.
+/// Estimates every sensor's `modality` value at `at` with the fitted models, from each
+/// sensor's latest known reading within `lookback_s` before `at` (and, for
+/// [`Estimator::Changes`], every known reading from [`CHANGE_MARGIN_S`] before the stalest
+/// sensor's latest one), with
+/// `estimator` and at most `neighbours` observations per estimate.
 pub(crate) fn estimate<S: Store>(
     project: &Project<S>,
     modality: &Modality,
-    model: &FieldModel,
+    (model, changes): (&FieldModel, &IncrementModel),
     at: UnixSeconds,
     lookback_s: i64,
-    (neighbours, mean): (usize, Mean),
+    (neighbours, estimator): (usize, Estimator),
 ) -> Result<Vec<SensorEstimate>> {
     let sensors = project.sensors()?;
     let (_, field) = project.field()?;
@@ -193,12 +267,17 @@ pub(crate) fn estimate<S: Store>(
     // readings as one read of the whole look-back, at a fraction of the rows when most
     // sensors were read lately.
     let mut latest: Vec<Option<(UnixSeconds, f64)>> = vec![None; ids.len()];
+    let mut recent: Option<(UnixSeconds, Columns)> = None;
     let (mut end, mut span) = (at, RECENT_S);
     loop {
         let start = end.saturating_sub(span).max(from);
         let batch = project.store().readings_for(Some(modality), start..=end)?;
-        for (l, (t, v)) in latest.iter_mut().zip(per_sensor(&ids, &batch)) {
+        let columns = per_sensor(&ids, &batch);
+        for (l, (t, v)) in latest.iter_mut().zip(&columns) {
             *l = l.or(t.last().copied().zip(v.last().copied()));
+        }
+        if recent.is_none() {
+            recent = Some((start, columns));
         }
         if start <= from || latest.iter().all(Option::is_some) {
             break;
@@ -206,6 +285,28 @@ pub(crate) fn estimate<S: Store>(
         end = start - 1;
         span = span.saturating_mul(8);
     }
+    // The kriging of changes needs every sensor's readings from a little before the stalest
+    // sensor's last one: the first stretch when it reaches that far, else one more read.
+    let (first_start, first) = recent.unwrap_or((at, Vec::new()));
+    let series = match estimator {
+        Estimator::Levels(_) => Vec::new(),
+        Estimator::Changes => {
+            let needed = latest
+                .iter()
+                .flatten()
+                .map(|l| l.0)
+                .min()
+                .unwrap_or(at)
+                .saturating_sub(CHANGE_MARGIN_S)
+                .max(from);
+            if needed >= first_start {
+                first
+            } else {
+                let batch = project.store().readings_for(Some(modality), needed..=at)?;
+                per_sensor(&ids, &batch)
+            }
+        }
+    };
     let positions = positions(&sensors, &field);
     let observations: Vec<Observation> = latest
         .iter()
@@ -219,28 +320,113 @@ pub(crate) fn estimate<S: Store>(
             })
         })
         .collect();
+    let levels = |k: usize, mean: Mean| {
+        krige_with(
+            &model.covariance,
+            &observations,
+            positions[k],
+            neighbours,
+            mean,
+        )
+    };
     Ok(sensors
         .iter()
         .enumerate()
         .map(|(k, s)| {
-            let e = krige_with(
-                &model.covariance,
-                &observations,
-                positions[k],
-                neighbours,
-                mean,
-            );
+            let (kriged, variance) = match (estimator, latest[k]) {
+                (Estimator::Levels(_), _) | (Estimator::Changes, None) => {
+                    let mean = match estimator {
+                        Estimator::Levels(m) => m,
+                        Estimator::Changes => Mean::Unknown,
+                    };
+                    let e = levels(k, mean);
+                    (model.means[k] + e.residual, e.variance)
+                }
+                (Estimator::Changes, Some((t_k, v_k))) => {
+                    let known = neighbour_changes(
+                        &series,
+                        &positions,
+                        (k, t_k),
+                        at,
+                        CHANGE_CANDIDATES.max(4 * neighbours),
+                    );
+                    let e = estimate_change(
+                        changes,
+                        &known,
+                        positions[k],
+                        ((t_k - at) as f64, 0.0),
+                        neighbours,
+                    );
+                    (v_k + e.change, e.variance)
+                }
+            };
             SensorEstimate {
                 sensor: s.id.clone(),
                 position: s.position,
                 last_time: latest[k].map(|l| l.0),
                 carried: latest[k].map_or(model.means[k], |l| l.1),
-                kriged: model.means[k] + e.residual,
-                variance: e.variance,
+                kriged,
+                variance,
             }
         })
         .collect())
 }
+
+/// The changes known over the unseen interval of sensor `k` (last read at `t_k`, estimated
+/// at `at`), times in seconds relative to `at`: for the `max_candidates` sensors nearest to it
+/// among those read after `t_k`, the latest reading minus the reading at or just before `t_k`
+/// (the first reading in `series` when there is none by then). `series` per sensor,
+/// ascending; positions metres.
+fn neighbour_changes(
+    series: &[(Vec<UnixSeconds>, Vec<f64>)],
+    positions: &[[f64; 2]],
+    (k, t_k): (usize, UnixSeconds),
+    at: UnixSeconds,
+    max_candidates: usize,
+) -> Vec<Change> {
+    let p = positions[k];
+    // Squared distance and index of every sensor read after t_k.
+    let mut candidates: Vec<(f64, usize)> = series
+        .iter()
+        .enumerate()
+        .filter(|(j, (times, _))| *j != k && times.last().is_some_and(|&b| b > t_k))
+        .map(|(j, _)| {
+            let q = positions[j];
+            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2), j)
+        })
+        .collect();
+    let m = max_candidates.max(1);
+    if candidates.len() > m {
+        candidates.select_nth_unstable_by(m - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        candidates.truncate(m);
+    }
+    candidates.sort_by_key(|c| c.1);
+    let mut out = Vec::with_capacity(candidates.len());
+    for (_, j) in candidates {
+        let (times, values) = &series[j];
+        let (Some(&b), Some(&vb)) = (times.last(), values.last()) else {
+            continue;
+        };
+        // Readings at or before t_k: the latest of them, else the first reading.
+        let i = times.partition_point(|&t| t <= t_k).saturating_sub(1);
+        let (a, va) = (times[i], values[i]);
+        if a >= b {
+            continue;
+        }
+        out.push(Change {
+            position: positions[j],
+            from_s: (a - at) as f64,
+            to_s: (b - at) as f64,
+            change: vb - va,
+        });
+    }
+    out
+}
+
+/// Fewest candidate neighbours (the nearest read after the target) the kriging of changes
+/// weighs for each estimate, before choosing the most informative of them; at least 4 times
+/// the neighbours asked for. Bounds the cost on large networks.
+pub const CHANGE_CANDIDATES: usize = 64;
 
 /// The use case: fits the field model of the modality on everything known at `at` and
 /// estimates every sensor's value then. Writes nothing.
@@ -262,28 +448,72 @@ pub fn reconstruct<S: Store>(
                 AppError::Invalid(format!("no {modality} readings to reconstruct from"))
             })?,
     };
-    let (model, step_s) = fit_model(project, &modality, at)?;
+    let (model, changes, step_s) = fit_models(project, &modality, at)?;
     let neighbours = request.neighbours.unwrap_or(DEFAULT_NEIGHBOURS).max(1);
     let sensors = estimate(
         project,
         &modality,
-        &model,
+        (&model, &changes),
         at,
         UnixSeconds::MAX / 4,
-        (
-            neighbours,
-            if request.simple {
-                Mean::Known
-            } else {
-                Mean::Unknown
-            },
-        ),
+        (neighbours, request.estimator),
     )?;
     Ok(Reconstruction {
         at,
         modality: modality.to_string(),
         model,
+        changes,
+        estimator: request.estimator,
         step_s,
         sensors,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DAY: i64 = 86_400;
+
+    #[test]
+    fn neighbour_changes_cover_the_targets_unseen_interval() {
+        let at = 100 * DAY;
+        let series = vec![
+            // 0: the target, last read on day 90.
+            (vec![89 * DAY, 90 * DAY], vec![0.20, 0.21]),
+            // 1: read daily to day 99: change from day 90 to day 99.
+            (
+                (85..100).map(|d| d * DAY).collect(),
+                (85..100).map(|d| 0.30 + 0.01 * (d - 85) as f64).collect(),
+            ),
+            // 2: last read on day 90 too: nothing known after the target's last reading.
+            (vec![88 * DAY, 90 * DAY], vec![0.1, 0.4]),
+            // 3: missing on day 90: from day 87 (the latest before) to day 95.
+            (vec![87 * DAY, 95 * DAY], vec![0.10, 0.15]),
+            // 4: first read after day 90 (day 92) and again on day 96.
+            (vec![92 * DAY, 96 * DAY], vec![0.50, 0.45]),
+            // 5: never read.
+            (vec![], vec![]),
+        ];
+        let positions: Vec<[f64; 2]> = (0..6).map(|k| [10.0 * k as f64, 0.0]).collect();
+        let c = neighbour_changes(&series, &positions, (0, 90 * DAY), at, 64);
+        // Only the nearest 2 candidates: sensors 1 and 3 (sensor 2 knows nothing newer).
+        let near = neighbour_changes(&series, &positions, (0, 90 * DAY), at, 2);
+        assert_eq!(near.len(), 2, "{near:?}");
+        assert_eq!(
+            (near[0].position, near[1].position),
+            ([10.0, 0.0], [30.0, 0.0])
+        );
+        assert_eq!(c.len(), 3, "{c:?}");
+        let rel = |d: i64| ((d * DAY) - at) as f64;
+        assert_eq!((c[0].from_s, c[0].to_s), (rel(90), rel(99)));
+        assert!((c[0].change - 0.09).abs() < 1e-12);
+        assert_eq!(c[0].position, [10.0, 0.0]);
+        assert_eq!((c[1].from_s, c[1].to_s), (rel(87), rel(95)));
+        assert!((c[1].change - 0.05).abs() < 1e-12);
+        assert_eq!((c[2].from_s, c[2].to_s), (rel(92), rel(96)));
+        assert!((c[2].change + 0.05).abs() < 1e-12);
+        // A target read after everyone else: no neighbour knows more.
+        assert!(neighbour_changes(&series, &positions, (1, 99 * DAY), at, 64).is_empty());
+    }
 }

@@ -304,7 +304,8 @@ enum Command {
         after_help = "Each run is its own in-memory project: it starts with the history (readings available by
 --history-until) and knows only what its flights bring back; a reading stamped t is
 available from t + period on. After each mission every sensor's value is reconstructed
-(last value carried forward, and kriging) and compared with the truth.
+(last value carried forward, and kriging of changes: --level-kriging / --simple-kriging for
+kriging of levels) and compared with the truth.
 
 Examples:
   gleaner simulate --dataset caf-daily --out sims/caf
@@ -320,11 +321,16 @@ Examples:
         dir: PathBuf,
     },
     /// Estimate every sensor's current value of a modality from what is known: last value
-    /// carried forward, and kriging (Gaussian conditional mean) with its standard deviation.
+    /// carried forward, and a model-based estimate (kriging of changes by default) with its
+    /// standard deviation.
     #[command(
-        after_help = "The field model (each sensor's mean; a separable exponential space-time covariance
-with a temporal nugget) is fitted on the readings known at --at; estimates are ordinary kriging
-(the field's current level estimated from the data) unless --simple.
+        after_help = "Models are fitted on the readings known at --at. The \"kriged\" column is by default
+kriging of changes: each sensor's last known reading plus its change since, estimated from
+the changes its neighbours read later are known to have made over that interval (a model of
+changes: a spatially correlated field-wide part plus each sensor's own part; exactly the
+carried value when no neighbour knows more). --levels: ordinary kriging of levels (each
+sensor's mean; a separable exponential space-time covariance with a temporal nugget; the
+field's current level estimated from the data); --simple: simple kriging of levels.
 
 Example:
   gleaner reconstruct --project caf --at 2014-03-01 --modality vw@30cm"
@@ -341,9 +347,14 @@ Example:
         /// Observations per estimate.
         #[arg(long, default_value_t = app::DEFAULT_NEIGHBOURS)]
         neighbours: usize,
-        /// Simple kriging towards each sensor's long-run mean instead of ordinary kriging.
-        #[arg(long)]
+        /// Simple kriging of levels towards each sensor's long-run mean instead of kriging
+        /// of changes.
+        #[arg(long, conflicts_with = "levels")]
         simple: bool,
+        /// Ordinary kriging of levels (from every sensor's latest reading) instead of kriging
+        /// of changes.
+        #[arg(long)]
+        levels: bool,
     },
 }
 
@@ -862,6 +873,7 @@ fn run(cli: Cli) -> Result<()> {
             modality,
             neighbours,
             simple,
+            levels,
         } => {
             let p = project.open()?;
             let r = app::reconstruct(
@@ -870,7 +882,13 @@ fn run(cli: Cli) -> Result<()> {
                     at,
                     modality,
                     neighbours: Some(neighbours),
-                    simple,
+                    estimator: if simple {
+                        app::Estimator::Levels(gleaner_kriging::Mean::Known)
+                    } else if levels {
+                        app::Estimator::Levels(gleaner_kriging::Mean::Unknown)
+                    } else {
+                        app::Estimator::Changes
+                    },
                 },
             )?;
             print!("{}", reconstruct::table(&r));

@@ -981,10 +981,14 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     ok(&["ingest", "--project", s(&p), s(&farm.join("readings.csv"))]);
     let out = ok(&["reconstruct", "--project", s(&p), "--modality", "vw@30cm"]);
     assert!(
-        out.contains("vw@30cm at") && out.contains("kriged"),
+        out.contains("vw@30cm at")
+            && out.contains("model of changes")
+            && out.contains("kriging of changes")
+            && out.contains("kriged"),
         "{out}"
     );
-    assert_eq!(out.lines().count(), 2 + 12, "{out}");
+    // Three lines of models and estimator, the header, one line per sensor.
+    assert_eq!(out.lines().count(), 4 + 12, "{out}");
 }
 
 #[test]

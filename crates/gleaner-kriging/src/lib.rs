@@ -18,6 +18,10 @@
 //!   [`Mean::Unknown`] is ordinary kriging (the field's current level is estimated from the
 //!   observations, weights sum to 1), which does not pull a wet winter back towards the
 //!   sensors' long-run means;
+//! - [`estimate_change`] is kriging of changes: a sensor's value now is its last known
+//!   reading plus its change since, estimated from its neighbours' known changes over the
+//!   same interval with a model of changes ([`IncrementModel`], fitted by [`fit_increments`]);
+//!   without an informative change it is exactly the last value carried forward;
 //! - [`variance_reduction`] is the expected reduction of the field's posterior variance from
 //!   visiting cells, picked greedily on the (submodular) marginal gain.
 //!
@@ -39,6 +43,12 @@
 #![deny(missing_docs)]
 
 use thiserror::Error;
+
+mod increments;
+pub use increments::{
+    Change, ChangeEstimate, IncrementFitOptions, IncrementModel, Variogram, estimate_change,
+    fit_increments,
+};
 
 /// Invalid arguments to the field models.
 #[derive(Debug, Error, Clone, PartialEq)]

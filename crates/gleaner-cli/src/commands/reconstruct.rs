@@ -2,7 +2,8 @@
 
 use std::fmt::Write as _;
 
-use gleaner_app::{Reconstruction, format_rfc3339};
+use gleaner_app::{Estimator, Reconstruction, format_rfc3339};
+use gleaner_kriging::Mean;
 
 /// The reconstruction as a text table (values in the modality's unit, sd its square root).
 pub fn table(r: &Reconstruction) -> String {
@@ -17,6 +18,28 @@ pub fn table(r: &Reconstruction) -> String {
         c.nugget,
         c.range_m,
         c.time_scale_s / 86_400.0
+    );
+    let m = r.changes;
+    let _ = writeln!(
+        out,
+        "model of changes: shared variogram {:.3e} + {:.3e}·(1 − exp(−h/{:.1} d)), range {:.0} m; \
+         own {:.3e} + {:.3e}·(1 − exp(−h/{:.1} d))",
+        m.shared.nugget,
+        m.shared.partial,
+        m.shared.scale_s / 86_400.0,
+        m.range_m,
+        m.own.nugget,
+        m.own.partial,
+        m.own.scale_s / 86_400.0
+    );
+    let _ = writeln!(
+        out,
+        "estimate (\"kriged\"): {}",
+        match r.estimator {
+            Estimator::Changes => "kriging of changes (last value + neighbours' known changes)",
+            Estimator::Levels(Mean::Unknown) => "ordinary kriging of levels",
+            Estimator::Levels(Mean::Known) => "simple kriging of levels",
+        }
     );
     let _ = writeln!(
         out,

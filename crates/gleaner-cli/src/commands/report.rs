@@ -12,7 +12,7 @@ use gleaner_app::campaign::{
 };
 use gleaner_app::format_rfc3339;
 use gleaner_field::SensorId;
-use gleaner_kriging::Covariance;
+use gleaner_kriging::{Covariance, IncrementModel, Variogram};
 use gleaner_render::{
     IntervalChart, IntervalRow, Line, LineChart, XAxis, interval_chart_svg, line_chart_svg,
 };
@@ -34,15 +34,18 @@ fn write(path: &Path, text: &str) -> Result<()> {
 
 /// Writes the campaigns' results as CSV files into `dir`, with the command that made them.
 pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> Result<()> {
-    let mut campaign =
-        String::from("label,modality,period_s,sill,nugget,range_m,time_scale_s,temporal_share\n");
+    let mut campaign = String::from(
+        "label,modality,period_s,sill,nugget,range_m,time_scale_s,temporal_share,\
+        changes_shared_nugget,changes_shared_partial,changes_shared_scale_s,changes_range_m,\
+        changes_own_nugget,changes_own_partial,changes_own_scale_s\n",
+    );
     let mut missions = format!("{MISSIONS_HEADER}\n");
     let mut events = String::from("label,event,sensors,start,end\n");
     let mut catches = String::from("label,strategy,seed,budget,event,caught_at\n");
     let mut visits = String::from("label,strategy,seed,budget,index,cell,age_days,f,a,u,r,s\n");
     for r in results {
         let c = r.covariance;
-        writeln!(
+        write!(
             campaign,
             "{},{},{},{},{},{},{},{}",
             r.label,
@@ -54,6 +57,21 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
             c.time_scale_s,
             c.temporal_share
         )?;
+        // The model of changes: 7 more columns (empty when unknown).
+        match r.changes {
+            Some(m) => writeln!(
+                campaign,
+                ",{},{},{},{},{},{},{}",
+                m.shared.nugget,
+                m.shared.partial,
+                m.shared.scale_s,
+                m.range_m,
+                m.own.nugget,
+                m.own.partial,
+                m.own.scale_s
+            )?,
+            None => writeln!(campaign, ",,,,,,,")?,
+        }
         for e in &r.events {
             let ids: Vec<&str> = e.sensors.iter().map(SensorId::as_str).collect();
             writeln!(
@@ -168,8 +186,9 @@ fn num<T: std::str::FromStr>(path: &Path, line: usize, column: &str, v: &str) ->
 pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
     let mut results: Vec<CampaignResult> = Vec::new();
     let p = dir.join(CAMPAIGN);
-    // Files written before the temporal nugget have 7 columns (temporal share 1).
-    let campaign_rows = rows(&p, 8).or_else(|_| rows(&p, 7))?;
+    // Files written before the temporal nugget have 7 columns (temporal share 1), before the
+    // model of changes 8.
+    let campaign_rows = rows_of(&p, &[15, 8, 7])?;
     for (line, c) in campaign_rows {
         let share = match c.get(7) {
             Some(v) => num(&p, line, "temporal_share", v)?,
@@ -183,11 +202,28 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
         )
         .and_then(|c| c.with_temporal_share(share))
         .with_context(|| format!("{}:{line}", p.display()))?;
+        let changes = if c.len() == 15 && !c[8].is_empty() {
+            let f = |k: usize, what: &str| num::<f64>(&p, line, what, &c[k]);
+            let v = |k: usize| -> Result<Variogram> {
+                Ok(Variogram {
+                    nugget: f(k, "changes nugget")?,
+                    partial: f(k + 1, "changes partial")?,
+                    scale_s: f(k + 2, "changes scale_s")?,
+                })
+            };
+            Some(
+                IncrementModel::new(v(8)?, f(11, "changes_range_m")?, v(12)?)
+                    .with_context(|| format!("{}:{line}", p.display()))?,
+            )
+        } else {
+            None
+        };
         results.push(CampaignResult {
             label: c[0].clone(),
             modality: c[1].clone(),
             period_s: num(&p, line, "period_s", &c[2])?,
             covariance: cov,
+            changes,
             events: Vec::new(),
             runs: Vec::new(),
         });
@@ -475,6 +511,27 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         100.0 * c.temporal_share,
         100.0 * (1.0 - c.temporal_share)
     )?;
+    if let Some(m) = first.changes {
+        // Root mean square changes over a day and a week, the unit ×1000.
+        let rms = |v: &Variogram, days: f64| 1000.0 * v.at(days * 86_400.0).sqrt();
+        writeln!(
+            md,
+            "- Model of changes fitted on the history: field-wide part {:.2} / {:.2} ×10⁻³ {unit} \
+             r.m.s. over 1 / 7 days, correlated in space with range {:.0} m; each sensor's own \
+             part {:.2} / {:.2}; a neighbour's change over the same week explains {:.0}% of \
+             the variance of a sensor's 100 m away.",
+            rms(&m.shared, 1.0),
+            rms(&m.shared, 7.0),
+            m.range_m,
+            rms(&m.own, 1.0),
+            rms(&m.own, 7.0),
+            {
+                let week = 7.0 * 86_400.0;
+                let k = (-100.0 / m.range_m).exp() * m.shared.at(week);
+                100.0 * k * k / (m.carried_variance(week) * m.carried_variance(week))
+            }
+        )?;
+    }
     let n_events: usize = results.iter().map(|r| r.events.len()).sum();
     writeln!(
         md,
@@ -700,6 +757,28 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         }
     }
     writeln!(md, "## Definitions\n")?;
+    // The model-based estimate ("kriging" columns) the simulation used.
+    let model_based = if command.contains("--simple-kriging") || command.contains("--level-kriging")
+    {
+        format!(
+            "kriging = {} kriging of levels (residuals from each sensor's history mean) with a \
+             separable exponential space-time covariance and a temporal nugget fitted on the \
+             history, from the 16 most correlated latest readings",
+            if command.contains("--simple-kriging") {
+                "simple"
+            } else {
+                "ordinary"
+            }
+        )
+    } else {
+        "kriging = kriging of changes: each sensor's last collected value plus its change since, \
+         estimated by simple kriging from the changes its neighbours are known to have made over \
+         (part of) that interval (a model of changes fitted on the history: a field-wide part \
+         correlated in space, each sensor's own part; exponential variograms with a nugget), \
+         from the 16 most informative changes; with no neighbour collected since, exactly the \
+         carried value"
+            .to_string()
+    };
     writeln!(
         md,
         "- Every run is its own project (an in-memory store) driven through gleaner's score, plan, \
@@ -713,10 +792,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
          insertion; exhaustive = every cell, as many sorties as it takes; no-X = gleaner without \
          term X.\n\
          - Reconstruction at mission T (after its flights): each sensor's value stamped T − period; \
-         carried = its last collected value; kriging = ordinary kriging (simple kriging with \
-         `--simple-kriging`) of residuals from each sensor's history mean with a separable \
-         exponential space-time covariance and a temporal nugget fitted on the history, from \
-         the 16 most correlated latest readings.\n\
+         carried = its last collected value; {model_based}.\n\
          - An event is caught at the first mission that collects one of its sensors (with an \
          event reading still in the buffer) once its first reading is available; delay = catch \
          time − (start + period).\n\

@@ -94,13 +94,18 @@ pub struct SimulateArgs {
     /// takes.
     #[arg(long, default_value_t = 1, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=20))]
     pub sorties: usize,
-    /// Observations per kriging estimate.
+    /// Observations (changes, or readings for kriging of levels) per model-based estimate.
     #[arg(long, default_value_t = app::DEFAULT_NEIGHBOURS)]
     pub neighbours: usize,
-    /// Reconstruct by simple kriging towards each sensor's long-run mean instead of ordinary
-    /// kriging (the field's current level estimated from the data).
-    #[arg(long)]
+    /// Model-based estimate by simple kriging of levels towards each sensor's long-run mean
+    /// instead of kriging of changes (the default: the last value plus the change since,
+    /// estimated from the neighbours' known changes).
+    #[arg(long, conflicts_with = "level_kriging")]
     pub simple_kriging: bool,
+    /// Model-based estimate by ordinary kriging of levels (the field's current level
+    /// estimated from every sensor's latest reading) instead of kriging of changes.
+    #[arg(long)]
+    pub level_kriging: bool,
     /// Runs in parallel.
     #[arg(long, default_value_t = 2)]
     pub jobs: usize,
@@ -223,10 +228,12 @@ fn prepare(
             planner_iterations: args.planner_iterations,
             sorties: args.sorties,
             neighbours: args.neighbours,
-            kriging_mean: if args.simple_kriging {
-                gleaner_kriging::Mean::Known
+            estimator: if args.simple_kriging {
+                app::Estimator::Levels(gleaner_kriging::Mean::Known)
+            } else if args.level_kriging {
+                app::Estimator::Levels(gleaner_kriging::Mean::Unknown)
             } else {
-                gleaner_kriging::Mean::Unknown
+                app::Estimator::Changes
             },
             jobs: args.jobs,
             clock_now: crate::clock_now(),
