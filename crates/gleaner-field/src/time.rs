@@ -110,3 +110,47 @@ mod tests {
         }
     }
 }
+
+/// The most common phase of `times` on a grid of `step_s` seconds, in `0..step_s` (ties: the
+/// smallest; 0 without times or with `step_s <= 0`). A series logged on the hour with a few
+/// readings at :15 (Hubbard Brook's first days) has phase 0: gridding from the first reading
+/// would leave every later one off the grid.
+pub fn grid_phase(times: impl IntoIterator<Item = UnixSeconds>, step_s: i64) -> UnixSeconds {
+    if step_s <= 0 {
+        return 0;
+    }
+    let mut counts: std::collections::HashMap<i64, usize> = std::collections::HashMap::new();
+    for t in times {
+        *counts.entry(t.rem_euclid(step_s)).or_default() += 1;
+    }
+    counts
+        .into_iter()
+        .max_by_key(|&(phase, n)| (n, std::cmp::Reverse(phase)))
+        .map_or(0, |(phase, _)| phase)
+}
+
+/// The latest time on the grid of `step_s` seconds with `phase` at or before `t`.
+pub fn grid_floor(t: UnixSeconds, step_s: i64, phase: UnixSeconds) -> UnixSeconds {
+    if step_s <= 0 {
+        return t;
+    }
+    t - (t - phase).rem_euclid(step_s)
+}
+
+#[cfg(test)]
+mod grid_tests {
+    use super::*;
+
+    #[test]
+    fn the_grid_follows_most_readings() {
+        // Two readings at :15, then on the hour.
+        let times = [900, 4_500, 7_200, 10_800, 14_400];
+        assert_eq!(grid_phase(times, 3_600), 0);
+        assert_eq!(grid_floor(900, 3_600, 0), 0);
+        assert_eq!(grid_floor(-900, 3_600, 0), -3_600);
+        assert_eq!(grid_floor(7_200, 3_600, 0), 7_200);
+        assert_eq!(grid_phase([5, 5, 7, 7], 10), 5);
+        assert_eq!(grid_phase([], 10), 0);
+        assert_eq!(grid_phase([5], 0), 0);
+    }
+}

@@ -274,12 +274,17 @@ impl Default for IncrementFitOptions {
 
 /// A sensor's series as a dense grid of values (NaN where missing) from a common origin.
 fn grid(series: &[super::SensorSeries<'_>], step: i64) -> (Vec<Vec<f64>>, usize) {
-    let t0 = series
+    // The grid most readings share (a logger's first readings at :15 before it settles on the
+    // hour are left out instead of every other sensor's).
+    let phase =
+        gleaner_field::time::grid_phase(series.iter().flat_map(|s| s.times.iter().copied()), step);
+    let first = series
         .iter()
         .filter_map(|s| s.times.first())
         .min()
         .copied()
         .unwrap_or(0);
+    let t0 = gleaner_field::time::grid_floor(first, step, phase);
     let t1 = series
         .iter()
         .filter_map(|s| s.times.last())

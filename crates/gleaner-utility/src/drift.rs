@@ -24,8 +24,8 @@ use gleaner_field::UnixSeconds;
 /// `step_s` seconds: entry k − 1 is the mean of (x(t + k·step) − x(t))² over every pair of
 /// points exactly k steps apart, or `None` with fewer than `min_pairs` pairs (value unit²).
 ///
-/// `times` must be ascending (seconds); points off the grid of `times[0]` + n·`step_s` are
-/// ignored, as are non-finite values; with `step_s <= 0` every lag is `None`.
+/// `times` must be ascending (seconds); points off the grid most of them share (phase
+/// [`gleaner_field::time::grid_phase`]) are ignored, as are non-finite values; with `step_s <= 0` every lag is `None`.
 pub fn mean_squared_change(
     times: &[UnixSeconds],
     values: &[f64],
@@ -34,9 +34,13 @@ pub fn mean_squared_change(
     min_pairs: usize,
 ) -> Vec<Option<f64>> {
     let mut out = vec![None; max_lag];
-    let (Some(&t0), true) = (times.first(), step_s > 0) else {
+    let (Some(&first), true) = (times.first(), step_s > 0) else {
         return out;
     };
+    // The grid of most readings (a few off it, e.g. a logger's first readings at :15 before it
+    // settles on the hour, are left out instead of all the others).
+    let phase = gleaner_field::time::grid_phase(times.iter().copied(), step_s);
+    let t0 = gleaner_field::time::grid_floor(first, step_s, phase);
     // The series as grid slots (index from t0), only exact grid points with finite values.
     let mut slots: Vec<(i64, f64)> = times
         .iter()
@@ -160,6 +164,15 @@ mod tests {
         assert!((staleness_index(&sat, 3.0) - (3.0 * 1.75 - (0.5 + 1.25 + 1.625))).abs() < 1e-12);
         assert_eq!(staleness_index(&d, 0.0), 0.0);
         assert_eq!(staleness_index(&[], 5.0), 0.0);
+    }
+
+    #[test]
+    fn a_first_reading_off_the_grid_does_not_hide_the_rest() {
+        // Hourly on the hour after one reading at :15: the lag-1 change is that of the rest.
+        let times = [900, 3_600, 7_200, 10_800, 14_400];
+        let values = [9.0, 1.0, 2.0, 3.0, 4.0];
+        let d = mean_squared_change(&times, &values, 3_600, 2, 1);
+        assert_eq!(d, vec![Some(1.0), Some(4.0)]);
     }
 
     proptest! {
