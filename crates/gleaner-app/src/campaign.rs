@@ -291,6 +291,10 @@ pub struct CampaignRequest {
     pub event_z: f64,
     /// Planner iteration cap (results independent of the machine's speed).
     pub planner_iterations: u64,
+    /// Sorties per mission of the planned strategies (battery swaps, each within the budget,
+    /// planned together by `plan`'s team solver), in 1..=[`crate::plan::MAX_SORTIES`];
+    /// exhaustive collection flies as many as it takes whatever this says.
+    pub sorties: usize,
     /// Observations per kriging estimate.
     pub neighbours: usize,
     /// The reconstruction's model-based estimator (the `kriged` metrics): kriging of changes
@@ -539,6 +543,13 @@ pub fn run_campaign(
         return Err(AppError::Invalid(
             "budgets must be positive fractions".into(),
         ));
+    }
+    if !(1..=crate::plan::MAX_SORTIES).contains(&request.sorties) {
+        return Err(AppError::Invalid(format!(
+            "sorties = {}: allowed 1..={}",
+            request.sorties,
+            crate::plan::MAX_SORTIES
+        )));
     }
     let mut history = truth.available_by(request.history_until);
     if let Some(from) = request.history_from {
@@ -863,6 +874,7 @@ fn run_one(
                     cell_scores: given,
                     max_iterations: Some(request.planner_iterations),
                     time_limit_s: Some(3_600.0),
+                    sorties: Some(request.sorties),
                     ..PlanRequest::default()
                 },
                 request.clock_now,
@@ -871,6 +883,12 @@ fn run_one(
             budget_j = planned.mission.energy.budget_j;
             if !planned.mission.stops.is_empty() {
                 flown.extend(planned.id);
+            }
+            for extra in &planned.extra_sorties {
+                if !extra.mission.stops.is_empty() {
+                    energy_j += extra.mission.energy.total_j;
+                    flown.extend(extra.id);
+                }
             }
         }
         let mut visited: HashSet<SensorId> = HashSet::new();

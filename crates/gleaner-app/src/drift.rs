@@ -2,7 +2,9 @@
 //! of each cell's carried-forward values, from each sensor's own drift.
 //!
 //! Per sensor, the mean squared change D(h) of the condition modality at lags of 1..=90 grid
-//! steps is estimated on its collected readings of the last `drift_window_days`
+//! steps — of its deviation from the field's mean at the same time (the field-wide change is
+//! what the reconstruction recovers from the neighbours; the sensor's own change is what only a
+//! visit brings) — is estimated on its collected readings of the last `drift_window_days`
 //! ([`gleaner_utility::mean_squared_change`], at least 10 pairs per lag), then shrunk halfway
 //! to the field: lag by lag the geometric mean of the sensor's and the field's median (the
 //! median alone where the sensor has too few pairs). Its staleness index
@@ -49,6 +51,7 @@ pub fn drift_index<S: Store>(
     for v in series.values_mut() {
         v.sort_by_key(|p| p.0);
     }
+    remove_field_mean(&mut series);
     // The sampling step: the median gap between a sensor's consecutive readings.
     let step_s = crate::knowledge::sampling_step(
         &series
@@ -100,6 +103,37 @@ pub fn drift_index<S: Store>(
         .collect())
 }
 
+/// Subtracts from every reading the mean of all sensors' readings at the same time, keeping only
+/// times read by at least [`MIN_SENSORS_FOR_FIELD_MEAN`] sensors (unchanged when fewer sensors
+/// have readings at all): what is left drifts as the sensor's own part. The field-wide part of
+/// a stale sensor's change is what the reconstruction recovers from the neighbours' known
+/// changes (kriging of changes), so the error a visit removes is the own part's.
+fn remove_field_mean<K: std::hash::Hash + Eq>(series: &mut HashMap<K, Vec<(UnixSeconds, f64)>>) {
+    if series.len() < MIN_SENSORS_FOR_FIELD_MEAN {
+        return;
+    }
+    let mut field: HashMap<UnixSeconds, (f64, usize)> = HashMap::new();
+    for v in series.values() {
+        for &(t, x) in v {
+            let e = field.entry(t).or_default();
+            e.0 += x;
+            e.1 += 1;
+        }
+    }
+    for v in series.values_mut() {
+        v.retain_mut(|(t, x)| match field.get(t) {
+            Some(&(sum, n)) if n >= MIN_SENSORS_FOR_FIELD_MEAN => {
+                *x -= sum / n as f64;
+                true
+            }
+            _ => false,
+        });
+    }
+}
+
+/// Fewest sensors read at one time for the field's mean then to be removed.
+const MIN_SENSORS_FOR_FIELD_MEAN: usize = 3;
+
 /// Replaces every cell's F by its drift index divided by the largest (in [0, 1]) and
 /// recomputes S with `config`. `index` in field order, one per term.
 pub fn apply(
@@ -146,6 +180,38 @@ mod tests {
             a_by_modality: Vec::new(),
             probabilities: Vec::new(),
         }
+    }
+
+    #[test]
+    fn the_field_mean_is_removed_at_times_enough_sensors_share() {
+        let mut s: HashMap<&str, Vec<(UnixSeconds, f64)>> = HashMap::new();
+        s.insert("a", vec![(0, 1.0), (1, 2.0), (2, 5.0)]);
+        s.insert("b", vec![(0, 3.0), (1, 4.0)]);
+        s.insert("c", vec![(0, 5.0), (1, 9.0)]);
+        remove_field_mean(&mut s);
+        // t = 0: mean 3; t = 1: mean 5; t = 2: one sensor only, dropped.
+        assert_eq!(s["a"], vec![(0, -2.0), (1, -3.0)]);
+        assert_eq!(s["b"], vec![(0, 0.0), (1, -1.0)]);
+        assert_eq!(s["c"], vec![(0, 2.0), (1, 4.0)]);
+        // A common change leaves no drift.
+        let mut common: HashMap<u8, Vec<(UnixSeconds, f64)>> = (0..4u8)
+            .map(|k| {
+                (
+                    k,
+                    (0..5).map(|t| (t, f64::from(k) + 0.3 * t as f64)).collect(),
+                )
+            })
+            .collect();
+        remove_field_mean(&mut common);
+        for v in common.values() {
+            assert!(v.windows(2).all(|w| (w[1].1 - w[0].1).abs() < 1e-12));
+        }
+        // Fewer than three sensors: unchanged.
+        let mut two: HashMap<u8, Vec<(UnixSeconds, f64)>> =
+            (0..2u8).map(|k| (k, vec![(0, f64::from(k))])).collect();
+        let before = two.clone();
+        remove_field_mean(&mut two);
+        assert_eq!(two, before);
     }
 
     #[test]

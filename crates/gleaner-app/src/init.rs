@@ -5,7 +5,9 @@ use std::path::{Component, Path, PathBuf};
 use gleaner_field::{
     Field, LatLon, LocalPoint, Sensor, TransverseMercator, cell_size_from_half_angle,
 };
-use gleaner_ingest::{SensorsOptions, read_hubbard_brook_sensors, read_sensors_csv};
+use gleaner_ingest::{
+    SensorsOptions, hubbard_brook_main_water_depth, read_hubbard_brook_sensors, read_sensors_csv,
+};
 use gleaner_store::{
     AnyStore, CellRecord, ReplaceCellsStats, SensorRecord, Store, StoreWrite, UpsertStats,
 };
@@ -135,6 +137,13 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
             .unwrap_or_else(|| "gleaner".into())
     });
     let defaults = gleaner_field::FieldConfig::default();
+    // Hubbard Brook's probes sit at many depths, few at 30 cm: its condition (and evaluated)
+    // modality is the soil moisture at the depth most of its water-content probes share.
+    let mut utility = crate::settings::UtilitySection::default();
+    if request.hubbard_brook {
+        utility.condition_modality =
+            hubbard_brook_main_water_depth(&request.sensors)?.map(|depth| format!("vw@{depth}cm"));
+    }
     let settings = Settings {
         project: ProjectSection {
             name,
@@ -153,7 +162,7 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
             utm_zone: request.utm_zone.clone(),
         },
         ingest: IngestSection::default(),
-        utility: Default::default(),
+        utility,
         energy: Default::default(),
         planner: Default::default(),
     };

@@ -195,7 +195,9 @@ pub struct UtilitySection {
     /// What F measures: `half-life` (the paper's: 1 − 2^(−age/half-life), the same for every
     /// cell) or `drift` (gleaner's: the expected error of the cell's carried-forward values,
     /// the staleness index a·D(a) − ∫₀ᵃ D of each sensor's own mean squared change D of the
-    /// condition modality over the last `drift_window_days` of collected readings, shrunk
+    /// condition modality, less the field's mean at each time (the field-wide change is what
+    /// the reconstruction recovers from neighbours), over the last `drift_window_days` of
+    /// collected readings, shrunk
     /// halfway to the field's median, summed over the cell's sensors and divided by the
     /// largest cell's: in [0, 1]; see docs/method-improvement.md).
     pub freshness_form: String,

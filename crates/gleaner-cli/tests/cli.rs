@@ -684,6 +684,9 @@ fn hubbard_brook_project_from_real_data() {
         "hubbard-brook",
     ]);
     assert!(init.contains("sensors: 77 (77 new"), "{init}");
+    // Most water-content probes are at 50 cm (two at 30 cm): that is the condition modality.
+    let toml = std::fs::read_to_string(dir.path().join("gleaner.toml")).expect("settings");
+    assert!(toml.contains("condition_modality = \"vw@50cm\""), "{toml}");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&d)
         .expect("dir")
         .map(|e| e.expect("entry").path())

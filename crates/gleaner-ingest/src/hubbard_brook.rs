@@ -29,8 +29,9 @@ pub struct HubbardBrookMetadata {
     depths: HashMap<String, u32>,
 }
 
-/// One probe row of the metadata: line, sensor id, latitude and longitude (degrees), depth (cm).
-type ProbeRow = (u64, String, f64, f64, u32);
+/// One probe row of the metadata: line, sensor id, latitude and longitude (degrees), depth (cm),
+/// and what the probe measures (the optional `meas` column: `vwc`, `matric`, ...).
+type ProbeRow = (u64, String, f64, f64, u32, Option<String>);
 
 fn metadata_rows(path: &Path) -> Result<Vec<ProbeRow>, IngestError> {
     let bytes = read_file(path)?;
@@ -40,6 +41,7 @@ fn metadata_rows(path: &Path) -> Result<Vec<ProbeRow>, IngestError> {
     let c_lat = table.require(&["lat"])?;
     let c_lon = table.require(&["lon"])?;
     let c_depth = table.require(&["depth_cm"])?;
+    let c_meas = table.find(&["meas"]);
     let names = table.header.clone();
     let mut out = Vec::new();
     let mut report = IngestReport::default();
@@ -68,9 +70,29 @@ fn metadata_rows(path: &Path) -> Result<Vec<ProbeRow>, IngestError> {
         let depth: u32 = field(c_depth)
             .parse()
             .map_err(|_| bad(c_depth, Problem::NotANumber))?;
-        out.push((line, id, lat, lon, depth));
+        let meas = c_meas.map(field);
+        out.push((line, id, lat, lon, depth, meas));
     }
     Ok(out)
+}
+
+/// The depth (cm) at which `sensor_metadata.csv` has the most water-content probes (`meas` =
+/// `vwc`; ties go to the shallower depth), `None` without any: the network's main soil-moisture
+/// modality is `vw@<depth>cm`. Hubbard Brook's sites have probes at many depths (10-90 cm)
+/// but nearly all at 50 cm (22 probes) and 15 cm (12); only two at 30 cm.
+pub fn hubbard_brook_main_water_depth(path: &Path) -> Result<Option<u32>, IngestError> {
+    let mut counts: std::collections::BTreeMap<u32, usize> = Default::default();
+    for (_, _, _, _, depth, meas) in metadata_rows(path)? {
+        if meas.is_some_and(|m| m.eq_ignore_ascii_case("vwc")) {
+            *counts.entry(depth).or_default() += 1;
+        }
+    }
+    // BTreeMap iterates shallow to deep; `max_by_key` keeps the last maximum, so reverse.
+    Ok(counts
+        .into_iter()
+        .rev()
+        .max_by_key(|&(_, n)| n)
+        .map(|(d, _)| d))
 }
 
 impl HubbardBrookMetadata {
@@ -79,7 +101,7 @@ impl HubbardBrookMetadata {
         Ok(Self {
             depths: metadata_rows(path)?
                 .into_iter()
-                .map(|(_, id, _, _, d)| (id, d))
+                .map(|(_, id, _, _, d, _)| (id, d))
                 .collect(),
         })
     }
@@ -97,7 +119,7 @@ pub fn read_hubbard_brook_sensors(
         rows_read: rows.len() as u64,
         ..Default::default()
     };
-    for (line, id, lat, lon, _) in rows {
+    for (line, id, lat, lon, _, _) in rows {
         let field_err = |value: String, problem| IngestError::Field {
             path: path.to_path_buf(),
             line,

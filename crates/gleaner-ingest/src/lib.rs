@@ -42,8 +42,8 @@ pub mod time;
 
 pub use error::{IngestError, Problem, SHOWN_CHARS, number, quoted, shorten};
 pub use hubbard_brook::{
-    HUBBARD_BROOK_UTC_OFFSET_S, HubbardBrookMetadata, read_hubbard_brook_logger,
-    read_hubbard_brook_sensors,
+    HUBBARD_BROOK_UTC_OFFSET_S, HubbardBrookMetadata, hubbard_brook_main_water_depth,
+    read_hubbard_brook_logger, read_hubbard_brook_sensors,
 };
 pub use readers::{
     SensorInput, SensorsOptions, WideOptions, read_caf_daily, read_long_csv, read_sensors_csv,

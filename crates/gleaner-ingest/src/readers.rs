@@ -144,7 +144,7 @@ impl<'a> Table<'a> {
     }
 
     /// Index of the first column whose name matches one of `names` (case-insensitive).
-    fn find(&self, names: &[&str]) -> Option<usize> {
+    pub(crate) fn find(&self, names: &[&str]) -> Option<usize> {
         names
             .iter()
             .find_map(|n| self.header.iter().position(|h| h.eq_ignore_ascii_case(n)))

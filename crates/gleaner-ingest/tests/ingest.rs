@@ -350,6 +350,34 @@ fn hubbard_brook_network_ingests() {
     );
 }
 
+/// Hubbard Brook's main soil-moisture depth is 50 cm (22 water-content probes; 15 cm has 12,
+/// 30 cm two); ties go to the shallower depth; a file without `meas` has none.
+#[test]
+fn hubbard_brook_main_water_depth_counts_water_content_probes() {
+    use gleaner_ingest::hubbard_brook_main_water_depth;
+    let real = shared_data().join("hubbard_brook/sensor_metadata.csv");
+    assert_eq!(hubbard_brook_main_water_depth(&real).unwrap(), Some(50));
+    let dir = tempfile::tempdir().unwrap();
+    let header = "siteID,lat,lon,logger,port,model,meas,depth_cm";
+    let tie = dir.path().join("tie.csv");
+    std::fs::write(
+        &tie,
+        format!(
+            "{header}\nA,43.9,-71.7,z,1,T12,vwc,60\nA,43.9,-71.7,z,2,T12,vwc,20\n\
+             A,43.9,-71.7,z,3,T21,matric,60\n"
+        ),
+    )
+    .unwrap();
+    assert_eq!(hubbard_brook_main_water_depth(&tie).unwrap(), Some(20));
+    let none = dir.path().join("none.csv");
+    std::fs::write(
+        &none,
+        "siteID,lat,lon,logger,port,depth_cm\nA,43.9,-71.7,z,1,15\n",
+    )
+    .unwrap();
+    assert_eq!(hubbard_brook_main_water_depth(&none).unwrap(), None);
+}
+
 /// Line numbers count physical lines whatever the line ending: a bad value on line 4 of a file
 /// with CRLF (or bare CR) line endings is reported at line 4, as with LF.
 #[test]

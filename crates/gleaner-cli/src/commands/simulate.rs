@@ -89,6 +89,11 @@ pub struct SimulateArgs {
     /// Planner iteration cap per mission (results independent of the machine's speed).
     #[arg(long, default_value_t = 300)]
     pub planner_iterations: u64,
+    /// Sorties per mission (battery swaps; each within the budget, planned together by the
+    /// team solver, as `plan --sorties`), 1..=20; exhaustive collection flies as many as it
+    /// takes.
+    #[arg(long, default_value_t = 1, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=20))]
+    pub sorties: usize,
     /// Observations (changes, or readings for kriging of levels) per model-based estimate.
     #[arg(long, default_value_t = app::DEFAULT_NEIGHBOURS)]
     pub neighbours: usize,
@@ -221,6 +226,7 @@ fn prepare(
             events,
             event_z: args.event_z,
             planner_iterations: args.planner_iterations,
+            sorties: args.sorties,
             neighbours: args.neighbours,
             estimator: if args.simple_kriging {
                 app::Estimator::Levels(gleaner_kriging::Mean::Known)
