@@ -383,8 +383,9 @@ fn fit_variogram(points: &[(f64, f64)], step: f64) -> Variogram {
 /// Fits the model of changes from sensor series on a regular grid.
 ///
 /// For every lag `h`: the pooled mean square of all sensors' `h`-step changes, `D(h)`, and for
-/// every pair of sensors (an even subsample of at most `max_pair_sensors` sensors) the mean
-/// product of their simultaneous `h`-step changes. The range is the one whose
+/// every pair of sensors (beyond `max_pair_sensors` sensors: every pair of an even subsample of
+/// that many, and each of them with its 8 nearest sensors) the mean product of their
+/// simultaneous `h`-step changes. The range is the one whose
 /// `exp(−d/range) · S(h)` (with `S(h)` the least-squares factor per lag) fits the pairs' mean
 /// products best relative to `D(h)`; `S(h)`, clamped to `[0, D(h)]`, is the field-wide part's
 /// variogram, `D(h) − S(h)` the sensors' own; each is then fitted by [`Variogram`]'s form.
@@ -406,6 +407,31 @@ pub fn fit_increments(
         .div_ceil(options.max_pair_sensors.max(2))
         .max(1);
     let paired: Vec<usize> = (0..series.len()).step_by(stride).collect();
+    // The pairs: every pair of the subsample, and each subsampled sensor with its nearest
+    // `NEAR_PAIRS` sensors of all (on a large network an even subsample alone has no near
+    // pairs, and the short-range correlation would go unseen).
+    const NEAR_PAIRS: usize = 8;
+    let mut pair_list: Vec<(usize, usize)> = Vec::new();
+    for (x, &i) in paired.iter().enumerate() {
+        for &j in &paired[x + 1..] {
+            pair_list.push((i, j));
+        }
+    }
+    if stride > 1 {
+        for &i in &paired {
+            let mut near: Vec<(f64, usize)> = (0..series.len())
+                .filter(|&j| j != i)
+                .map(|j| (distance(series[i].position, series[j].position), j))
+                .collect();
+            let m = NEAR_PAIRS.min(near.len());
+            if m > 0 && near.len() > m {
+                near.select_nth_unstable_by(m - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            }
+            pair_list.extend(near[..m].iter().map(|&(_, j)| (i.min(j), i.max(j))));
+        }
+        pair_list.sort_unstable();
+        pair_list.dedup();
+    }
     let (lo, hi) = options.range_bounds_m;
     // Range candidates, metres (log grid).
     let mut ranges = Vec::new();
@@ -438,19 +464,17 @@ pub fn fit_increments(
             continue;
         }
         let mut pairs = Vec::new();
-        for (x, &i) in paired.iter().enumerate() {
-            for &j in &paired[x + 1..] {
-                let (mut s, mut m) = (0.0, 0usize);
-                for (a, b) in changes[i].iter().zip(&changes[j]) {
-                    if a.is_finite() && b.is_finite() {
-                        s += a * b;
-                        m += 1;
-                    }
+        for &(i, j) in &pair_list {
+            let (mut s, mut m) = (0.0, 0usize);
+            for (a, b) in changes[i].iter().zip(&changes[j]) {
+                if a.is_finite() && b.is_finite() {
+                    s += a * b;
+                    m += 1;
                 }
-                let d = distance(series[i].position, series[j].position);
-                if m >= options.min_overlap && d > 0.0 {
-                    pairs.push((d, s / m as f64));
-                }
+            }
+            let d = distance(series[i].position, series[j].position);
+            if m >= options.min_overlap && d > 0.0 {
+                pairs.push((d, s / m as f64));
             }
         }
         lags.push(((h as i64 * step) as f64, ss / n as f64, pairs));
@@ -637,6 +661,55 @@ mod tests {
         let e = estimate_change(&m, &[c], [0.0, 0.0], (0.0, h), 16);
         assert!(e.variance < 0.5 * e.carried_variance, "{e:?}");
         assert!(fit_increments(&series[..1], &IncrementFitOptions::default()).is_err());
+    }
+
+    #[test]
+    fn fit_sees_near_pairs_on_a_subsampled_network() {
+        // Six clusters 50 km apart, two sensors 5 m apart in each sharing the cluster's walk:
+        // an even subsample of 3 sensors has only far pairs; the near pairs show the sharing.
+        let day = 86_400;
+        let n = 300;
+        let times: Vec<i64> = (0..n).map(|d| d * day).collect();
+        // Independent uniform noise in [-0.5, 0.5) per (step, stream): an integer hash.
+        let noise = |k: i64, s: f64| {
+            let mut x = (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                ^ (s as u64).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            x ^= x >> 31;
+            x = x.wrapping_mul(0x94D0_49BB_1331_11EB);
+            x ^= x >> 29;
+            (x >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let values: Vec<Vec<f64>> = (0..12)
+            .map(|s| {
+                let cluster = (s / 2) as f64;
+                let mut walk = 0.0;
+                (0..n)
+                    .map(|k| {
+                        walk = 0.97 * walk + 0.01 * noise(k, cluster + 100.0);
+                        0.3 + walk + 0.001 * noise(k, s as f64)
+                    })
+                    .collect()
+            })
+            .collect();
+        let series: Vec<SensorSeries<'_>> = values
+            .iter()
+            .enumerate()
+            .map(|(s, v)| SensorSeries {
+                position: [50_000.0 * (s / 2) as f64, 5.0 * (s % 2) as f64],
+                times: &times,
+                values: v,
+            })
+            .collect();
+        let options = IncrementFitOptions {
+            max_pair_sensors: 3,
+            ..IncrementFitOptions::default()
+        };
+        let m = fit_increments(&series, &options).unwrap();
+        let h = 14.0 * DAY;
+        assert!(m.shared.at(h) > 3.0 * m.own.at(h), "{m:?}");
+        // Correlated at 5 m, not across clusters.
+        assert!((-5.0 / m.range_m).exp() > 0.9, "{m:?}");
+        assert!((-50_000.0 / m.range_m).exp() < 0.1, "{m:?}");
     }
 
     proptest! {
