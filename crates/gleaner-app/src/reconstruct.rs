@@ -162,11 +162,6 @@ fn positions(sensors: &[gleaner_field::Sensor], field: &gleaner_field::Field) ->
         .collect()
 }
 
-/// How far back from the estimate's time the first read of [`estimate`] looks, s (a week and
-/// a day: every sensor of a network visited at least weekly is found in it); each further
-/// read covers 8 times the previous stretch.
-const RECENT_S: i64 = 8 * 86_400;
-
 /// Estimates every sensor's `modality` value at `at` with a fitted model, from each sensor's
 /// latest known reading within `lookback_s` before `at`, by kriging with `mean`.
 pub(crate) fn estimate<S: Store>(
@@ -188,23 +183,13 @@ pub(crate) fn estimate<S: Store>(
     }
     let ids: Vec<SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
     let from = at.saturating_sub(lookback_s.max(0));
-    // The latest reading per sensor: from the most recent readings first, then from ever
-    // longer stretches before them (×8 each time) for the sensors not found yet: the same
-    // readings as one read of the whole look-back, at a fraction of the rows when most
-    // sensors were read lately.
+    // The latest reading per sensor within the look-back: one index seek per sensor.
+    let index: HashMap<&SensorId, usize> = ids.iter().enumerate().map(|(k, s)| (s, k)).collect();
     let mut latest: Vec<Option<(UnixSeconds, f64)>> = vec![None; ids.len()];
-    let (mut end, mut span) = (at, RECENT_S);
-    loop {
-        let start = end.saturating_sub(span).max(from);
-        let batch = project.store().readings_for(Some(modality), start..=end)?;
-        for (l, (t, v)) in latest.iter_mut().zip(per_sensor(&ids, &batch)) {
-            *l = l.or(t.last().copied().zip(v.last().copied()));
+    for (sensor, t, v) in project.store().latest_readings(modality, from..=at)? {
+        if let Some(&k) = index.get(&sensor) {
+            latest[k] = Some((t, v));
         }
-        if start <= from || latest.iter().all(Option::is_some) {
-            break;
-        }
-        end = start - 1;
-        span = span.saturating_mul(8);
     }
     let positions = positions(&sensors, &field);
     let observations: Vec<Observation> = latest

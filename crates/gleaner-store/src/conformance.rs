@@ -52,6 +52,7 @@ pub fn run_all<S: Store>(mut fresh: impl FnMut() -> S) {
         bad_batches_are_rejected_whole,
         a_failure_deep_in_a_big_insert_leaves_the_exact_pre_state,
         readings_for_filters_and_orders,
+        latest_readings_are_the_last_rows_of_readings_for,
         readings_of_sensors_selects_and_orders,
         a_failed_write_closure_rolls_everything_back,
         a_failed_method_undoes_only_itself,
@@ -592,6 +593,73 @@ pub fn a_failure_deep_in_a_big_insert_leaves_the_exact_pre_state<S: Store>(store
     assert!(matches!(err, StoreError::Conflicts(_)), "{err}");
     assert_eq!(dump(store), before);
     assert_eq!(store.reading_count().unwrap(), 2);
+}
+
+/// `latest_readings` gives, per sensor with a reading of the modality in the range, the last
+/// row of `readings_for` over the same range, sorted by sensor id; also inside a transaction.
+pub fn latest_readings_are_the_last_rows_of_readings_for<S: Store>(store: &mut S) {
+    network(store);
+    assert!(
+        store
+            .latest_readings(&md("vw@30cm"), i64::MIN..=i64::MAX)
+            .unwrap()
+            .is_empty()
+    );
+    insert(
+        store,
+        &batch(&[
+            ("c", "vw@30cm", T0, 3.0),
+            ("a", "vw@30cm", T0 + DAY, 2.0),
+            ("a", "vw@30cm", T0, 1.0),
+            ("a", "t@30cm", T0 + 5 * DAY, 9.0),
+            ("b", "vw@30cm", T0 + 2 * DAY, 5.0),
+            ("b", "vw@30cm", T0 + 3 * DAY, 6.0),
+        ]),
+        ConflictPolicy::Fail,
+    )
+    .unwrap();
+    let naive = |store: &S, m: &str, range: std::ops::RangeInclusive<i64>| {
+        let got = store.readings_for(Some(&md(m)), range).unwrap();
+        let mut last: Vec<(SensorId, i64, f64)> = Vec::new();
+        for r in &got.rows {
+            let s = got.sensors[r.sensor as usize].clone();
+            match last.last_mut() {
+                Some(l) if l.0 == s => *l = (s, r.t, r.value),
+                _ => last.push((s, r.t, r.value)),
+            }
+        }
+        last
+    };
+    let ranges = [
+        i64::MIN..=i64::MAX,
+        T0..=T0,
+        T0..=T0 + 2 * DAY,
+        T0 + DAY..=T0 + 2 * DAY,
+        T0 + 4 * DAY..=T0 + 9 * DAY,
+        std::ops::RangeInclusive::new(T0 + 9 * DAY, T0), // empty: starts after it ends
+    ];
+    for m in ["vw@30cm", "t@30cm", "vw@60cm"] {
+        for range in &ranges {
+            let want = naive(store, m, range.clone());
+            assert_eq!(
+                store.latest_readings(&md(m), range.clone()).unwrap(),
+                want,
+                "{m} {range:?}"
+            );
+        }
+    }
+    assert_eq!(
+        store
+            .latest_readings(&md("vw@30cm"), T0..=T0 + 2 * DAY)
+            .unwrap(),
+        vec![
+            (sid("a"), T0 + DAY, 2.0),
+            (sid("b"), T0 + 2 * DAY, 5.0),
+            (sid("c"), T0, 3.0)
+        ]
+    );
+    let in_tx = w(store, |tx| tx.latest_readings(&md("vw@30cm"), T0..=T0)).unwrap();
+    assert_eq!(in_tx, vec![(sid("a"), T0, 1.0), (sid("c"), T0, 3.0)]);
 }
 
 /// `readings_for` filters by modality and inclusive time range and orders by sensor, modality,
