@@ -62,6 +62,7 @@ pub fn run_all<S: Store>(mut fresh: impl FnMut() -> S) {
         blobs_round_trip,
         sensors_collected_never_move_back,
         cell_metadata_round_trips_and_upserts_by_key,
+        metadata_child_rows_hold_the_last_values_written,
         cell_metadata_scalars_are_the_rows_without_children,
         replace_cells_keeps_or_deletes_metadata,
         missions_round_trip_with_stops,
@@ -1038,6 +1039,45 @@ pub fn cell_metadata_round_trips_and_upserts_by_key<S: Store>(store: &mut S) {
     let twice = [CellMetadata::new(x0), CellMetadata::new(x0)];
     assert!(w(store, |tx| tx.upsert_cell_metadata(&twice)).is_err());
     assert_eq!(store.cell_metadata().unwrap(), before);
+}
+
+/// Rewriting a cell's summaries and correlations with the same values leaves them as they
+/// are; changed values replace them; a row listed twice in one write holds the last values
+/// given, whether those equal the stored ones or not.
+pub fn metadata_child_rows_hold_the_last_values_written<S: Store>(store: &mut S) {
+    network(store);
+    w(store, |tx| {
+        tx.replace_cells(&[cell(0, 0, &["a", "b"]), cell(1, 0, &["c"])])
+    })
+    .unwrap();
+    let (x0, x1) = (CellIndex { i: 0, j: 0 }, CellIndex { i: 1, j: 0 });
+    let full = full_metadata(x0, x1);
+    let put = |store: &mut S, m: &CellMetadata| {
+        w(store, |tx| tx.upsert_cell_metadata(std::slice::from_ref(m))).unwrap();
+        store.cell_metadata().unwrap()[0].clone()
+    };
+    assert_eq!(put(store, &full), full);
+    assert_eq!(put(store, &full), full);
+    let mut changed = full.clone();
+    changed.summaries[0].stats.count += 1;
+    changed.summaries[0].stats.mean += 0.25;
+    changed.correlations[0].correlation = -changed.correlations[0].correlation / 2.0;
+    changed.correlations[0].overlap += 1;
+    assert_eq!(put(store, &changed), changed);
+    // Listed twice: stored values last (the first entry differs from them), then changed
+    // values last (the first entry equals the stored ones).
+    let mut twice = changed.clone();
+    twice.summaries.push(full.summaries[0].clone());
+    twice.correlations.push(full.correlations[0].clone());
+    let got = put(store, &twice);
+    assert_eq!(got.summaries, full.summaries);
+    assert_eq!(got.correlations, full.correlations);
+    let mut twice = full.clone();
+    twice.summaries.push(changed.summaries[0].clone());
+    twice.correlations.push(changed.correlations[0].clone());
+    let got = put(store, &twice);
+    assert_eq!(got.summaries, changed.summaries);
+    assert_eq!(got.correlations, changed.correlations);
 }
 
 /// `cell_metadata_scalars` gives what `cell_metadata` gives with the child lists emptied, in
