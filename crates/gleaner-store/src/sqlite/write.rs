@@ -469,49 +469,11 @@ type SummaryRow = (i64, f64, Option<f64>, f64, f64, i64, f64);
 /// upserts that leave a row untouched when its values are already stored, instead of
 /// `INSERT OR REPLACE`, which deletes and reinserts each row with its index entries and
 /// foreign-key checks; summaries and correlations already stored with the same values (the
-/// common case: a rescoring rewrites every cell's rows, most unchanged) are found by one scan
-/// of each table first and not written at all. The table contents are the same either way.
+/// common case: a rescoring rewrites every cell's rows, most unchanged) are found first (one
+/// primary-key range read per written cell and table) and not written at all. The table contents are the same either way.
 fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
     let cell_keys = cell_ids(c)?;
     let modality_keys = modality_ids(c)?;
-    let mut stored_summaries: HashMap<(i64, i64), SummaryRow> = {
-        let mut stmt = c
-            .prepare_cached(
-                "SELECT cell, modality, count, mean, std, min, max, latest_t, latest_value
-                 FROM cell_summaries",
-            )
-            .db()?;
-        stmt.query_map([], |r| {
-            Ok((
-                (r.get(0)?, r.get(1)?),
-                (
-                    r.get(2)?,
-                    r.get(3)?,
-                    r.get(4)?,
-                    r.get(5)?,
-                    r.get(6)?,
-                    r.get(7)?,
-                    r.get(8)?,
-                ),
-            ))
-        })
-        .db()?
-        .collect::<rusqlite::Result<_>>()
-        .db()?
-    };
-    let mut stored_correlations: HashMap<(i64, i64, i64), (f64, i64)> = {
-        let mut stmt = c
-            .prepare_cached(
-                "SELECT cell, neighbour, modality, correlation, overlap FROM cell_correlations",
-            )
-            .db()?;
-        stmt.query_map([], |r| {
-            Ok(((r.get(0)?, r.get(1)?, r.get(2)?), (r.get(3)?, r.get(4)?)))
-        })
-        .db()?
-        .collect::<rusqlite::Result<_>>()
-        .db()?
-    };
     let cell_key = |c: &CellIndex| {
         cell_keys
             .get(&c.to_string())
@@ -527,6 +489,53 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
             .copied()
             .ok_or_else(|| StoreError::UnknownModality(m.clone()))
     };
+    // The stored child rows of the cells this write gives summaries or correlations for.
+    let mut stored_summaries: HashMap<(i64, i64), SummaryRow> = HashMap::new();
+    let mut stored_correlations: HashMap<(i64, i64, i64), (f64, i64)> = HashMap::new();
+    {
+        let mut summaries = c
+            .prepare_cached(
+                "SELECT modality, count, mean, std, min, max, latest_t, latest_value
+                 FROM cell_summaries WHERE cell = ?1",
+            )
+            .db()?;
+        let mut correlations = c
+            .prepare_cached(
+                "SELECT neighbour, modality, correlation, overlap FROM cell_correlations
+                 WHERE cell = ?1",
+            )
+            .db()?;
+        for md in metadata {
+            if !md.summaries.is_empty() {
+                let ck = cell_key(&md.cell)?;
+                let mut rows = summaries.query([ck]).db()?;
+                while let Some(r) = rows.next().db()? {
+                    stored_summaries.insert(
+                        (ck, r.get(0).db()?),
+                        (
+                            r.get(1).db()?,
+                            r.get(2).db()?,
+                            r.get(3).db()?,
+                            r.get(4).db()?,
+                            r.get(5).db()?,
+                            r.get(6).db()?,
+                            r.get(7).db()?,
+                        ),
+                    );
+                }
+            }
+            if !md.correlations.is_empty() {
+                let ck = cell_key(&md.cell)?;
+                let mut rows = correlations.query([ck]).db()?;
+                while let Some(r) = rows.next().db()? {
+                    stored_correlations.insert(
+                        (ck, r.get(0).db()?, r.get(1).db()?),
+                        (r.get(2).db()?, r.get(3).db()?),
+                    );
+                }
+            }
+        }
+    }
     let mut row = c
         .prepare_cached(
             "INSERT OR REPLACE INTO cell_metadata (cell, last_collected, pending_bytes,
