@@ -139,9 +139,6 @@ macro_rules! store_read_methods {
         ) -> Result<Vec<(SensorId, UnixSeconds, f64)>> {
             self.read(|c| read::latest_readings(c, modality, range))
         }
-        fn reading_count(&self) -> Result<u64> {
-            self.read(read::reading_count)
-        }
         fn ingests(&self) -> Result<Vec<IngestRecord>> {
             self.read(read::ingests)
         }
