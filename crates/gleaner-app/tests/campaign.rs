@@ -122,7 +122,7 @@ fn no_strategy_sees_the_future() {
     }
 }
 
-fn caf_campaign() -> CampaignResult {
+fn caf_campaign(jobs: usize) -> CampaignResult {
     let data = shared_data();
     let tmp = tempfile::tempdir().unwrap();
     let files = caf_files(&data.join("caf/Daily"), &tmp.path().join("in"), 2014..=2014);
@@ -160,12 +160,49 @@ fn caf_campaign() -> CampaignResult {
     );
     // One season of history keeps the test quick.
     req.history_from = Some(app::parse_timestamp("2014-01-01").unwrap());
+    req.jobs = jobs;
     run_campaign(&req, &truth, &Silent).unwrap()
+}
+
+/// Runs are scheduled longest first on a shared queue: the results come back in the keys'
+/// order and equal, to the bit, those of one thread running them in order.
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let (one, two) = (caf_campaign(1), caf_campaign(2));
+    assert_eq!(one.runs.len(), two.runs.len());
+    for (a, b) in one.runs.iter().zip(&two.runs) {
+        // Debug text: equal for equal bits, NaN included (NaN != NaN).
+        assert_eq!(a.key, b.key);
+        assert_eq!(
+            format!("{:?}", a.missions),
+            format!("{:?}", b.missions),
+            "{:?}",
+            a.key
+        );
+        assert_eq!(
+            format!("{:?}", a.visits),
+            format!("{:?}", b.visits),
+            "{:?}",
+            a.key
+        );
+        assert_eq!(a.caught, b.caught, "{:?}", a.key);
+    }
+    let order: Vec<Strategy> = two.runs.iter().map(|r| r.key.strategy).collect();
+    assert_eq!(
+        order,
+        vec![
+            Strategy::Gleaner,
+            Strategy::Nearest,
+            Strategy::Exhaustive,
+            Strategy::Variance,
+            Strategy::Gated,
+        ]
+    );
 }
 
 #[test]
 fn caf_campaign_end_to_end() {
-    let result = caf_campaign();
+    let result = caf_campaign(2);
     assert_eq!(result.modality, "vw@30cm");
     assert_eq!(result.runs.len(), 5);
     let c = result.covariance;
