@@ -19,13 +19,12 @@ use gleaner_ingest::{IngestReport, Readings};
 use gleaner_kriging::{Covariance, FieldModel, IncrementModel, variance_reduction};
 use gleaner_mission::Planner;
 use gleaner_store::{SqliteStore, Store, StoreRead};
-use rayon::prelude::*;
 
 use crate::error::{AppError, Result};
 use crate::explore::{ExploreRequest, explore};
 use crate::ingest::{Format, IngestRequest, Parsed, ingest_parsed};
 use crate::init::{InitRequest, init_store};
-use crate::plan::{PlanRequest, plan};
+use crate::plan::{PlanRequest, plan_scored};
 use crate::progress::{Progress, Silent};
 use crate::project::Project;
 use crate::reconstruct::{estimate, fit_models, target_modality};
@@ -152,6 +151,20 @@ impl Strategy {
             _ => {}
         }
         s
+    }
+
+    /// A rough rank of a run's cost (higher: longer), for scheduling the longest runs first:
+    /// exhaustive flies several sorties per mission and records each; the drift freshness
+    /// reads and scores its window at every scoring; given scores skip the utility engine's
+    /// second scoring. Only the order of the runs depends on it, never a result.
+    fn expected_cost(self) -> u8 {
+        match self {
+            Strategy::Exhaustive => 4,
+            Strategy::Gleaner | Strategy::Without(_) => 3,
+            Strategy::Freshness | Strategy::Gated | Strategy::Paper => 2,
+            Strategy::Variance | Strategy::RoundRobin | Strategy::Random => 1,
+            Strategy::Nearest => 0,
+        }
     }
 
     fn planner(self) -> Planner {
@@ -673,13 +686,37 @@ pub fn run_campaign(
         .num_threads(request.jobs)
         .build()
         .map_err(|e| AppError::Invalid(format!("cannot start {} threads: {e}", request.jobs)))?;
-    let runs: Vec<Result<RunResult>> = pool.install(|| {
-        keys.par_iter()
-            .map(|key| run_one(&shared, key.clone(), progress))
-            .collect()
+    // Longest runs first (LPT): each worker takes the next run off one queue, so the last runs
+    // to start are short ones and the workers finish together. Results keep the keys' order.
+    let mut order: Vec<usize> = (0..keys.len()).collect();
+    order.sort_by_key(|&k| std::cmp::Reverse(keys[k].strategy.expected_cost()));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let slots: Vec<std::sync::Mutex<Option<Result<RunResult>>>> =
+        keys.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    pool.scope(|scope| {
+        for _ in 0..pool.current_num_threads() {
+            scope.spawn(|_| {
+                loop {
+                    let n = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(&k) = order.get(n) else { break };
+                    let result = run_one(&shared, keys[k].clone(), progress);
+                    if let Ok(mut slot) = slots[k].lock() {
+                        *slot = Some(result);
+                    }
+                }
+            });
+        }
     });
     progress.finish();
-    let runs = runs.into_iter().collect::<Result<Vec<_>>>()?;
+    let runs = slots
+        .into_iter()
+        .map(|slot| {
+            slot.into_inner()
+                .ok()
+                .flatten()
+                .unwrap_or_else(|| Err(AppError::Invalid("a campaign run panicked".into())))
+        })
+        .collect::<Result<Vec<_>>>()?;
     Ok(CampaignResult {
         label: request.label.clone(),
         modality: shared.modality.to_string(),
@@ -826,15 +863,6 @@ fn run_one(
             _ => None,
         };
         let accuracy = classifier_accuracy(&scoring, &cells, &shared.class_series, t - period);
-        let terms_of: HashMap<CellIndex, (usize, &gleaner_utility::CellTerms)> = scoring
-            .knowledge
-            .field
-            .cells()
-            .iter()
-            .zip(&scoring.terms)
-            .enumerate()
-            .map(|(k, (c, terms))| (c.index, (k, terms)))
-            .collect();
         // Reconstruction of every sensor's value stamped T − period from what was known
         // before the flights.
         let target = t - period;
@@ -852,6 +880,9 @@ fn run_one(
         let before = errors_now(&project)?;
         let mut flown = Vec::new();
         let (mut energy_j, mut budget_j) = (0.0, 0.0);
+        // The pre-flight scoring, handed to the planner when it scores by the utility engine
+        // (the same store, the same time: what `plan` would compute again) and taken back.
+        let mut scoring = Some(scoring);
         if key.strategy == Strategy::Exhaustive {
             let plan = explore(
                 &mut project,
@@ -867,7 +898,12 @@ fn run_one(
                 flown.extend(*id);
             }
         } else {
-            let planned = plan(
+            let scored = if given.is_none() {
+                scoring.take()
+            } else {
+                None
+            };
+            let mut planned = plan_scored(
                 &mut project,
                 &PlanRequest {
                     at: Some(t),
@@ -877,8 +913,13 @@ fn run_one(
                     sorties: Some(request.sorties),
                     ..PlanRequest::default()
                 },
+                None,
+                scored,
                 request.clock_now,
             )?;
+            if scoring.is_none() {
+                scoring = planned.scoring.take();
+            }
             energy_j = planned.mission.energy.total_j;
             budget_j = planned.mission.energy.budget_j;
             if !planned.mission.stops.is_empty() {
@@ -891,6 +932,18 @@ fn run_one(
                 }
             }
         }
+        let scoring = scoring.ok_or_else(|| {
+            AppError::Invalid("the planner did not give back the mission's scoring".into())
+        })?;
+        let terms_of: HashMap<CellIndex, (usize, &gleaner_utility::CellTerms)> = scoring
+            .knowledge
+            .field
+            .cells()
+            .iter()
+            .zip(&scoring.terms)
+            .enumerate()
+            .map(|(k, (c, terms))| (c.index, (k, terms)))
+            .collect();
         let mut visited: HashSet<SensorId> = HashSet::new();
         let mut cells_visited = 0;
         let mut lost_readings = 0;

@@ -108,13 +108,16 @@ pub fn drift_index<S: Store>(
 /// have readings at all): what is left drifts as the sensor's own part. The field-wide part of
 /// a stale sensor's change is what the reconstruction recovers from the neighbours' known
 /// changes (kriging of changes), so the error a visit removes is the own part's.
-fn remove_field_mean<K: std::hash::Hash + Eq>(series: &mut HashMap<K, Vec<(UnixSeconds, f64)>>) {
+fn remove_field_mean<K: std::hash::Hash + Ord>(series: &mut HashMap<K, Vec<(UnixSeconds, f64)>>) {
     if series.len() < MIN_SENSORS_FOR_FIELD_MEAN {
         return;
     }
+    // Sums in the sensors' order, not the map's (seeded per map): the same bits every run.
+    let mut keys: Vec<&K> = series.keys().collect();
+    keys.sort_unstable();
     let mut field: HashMap<UnixSeconds, (f64, usize)> = HashMap::new();
-    for v in series.values() {
-        for &(t, x) in v {
+    for k in keys {
+        for &(t, x) in &series[k] {
             let e = field.entry(t).or_default();
             e.0 += x;
             e.1 += 1;

@@ -250,6 +250,29 @@ pub fn plan_with_preset<S: Store>(
     energy_preset: Option<&str>,
     clock_now: UnixSeconds,
 ) -> Result<PlannedMission> {
+    plan_scored(project, request, energy_preset, None, clock_now)
+}
+
+/// [`plan_with_preset`] with the utility engine's scoring already computed: `scoring` must be
+/// what [`score::compute`] returns for this project's store as it is now, at `request.at`,
+/// with `request.history` and no user probabilities (a campaign's pre-flight scoring of the
+/// same mission), so planning with it equals planning without it; refused when its time is not
+/// `request.at`. Ignored when the request gives its own scores.
+pub(crate) fn plan_scored<S: Store>(
+    project: &mut Project<S>,
+    request: &PlanRequest,
+    energy_preset: Option<&str>,
+    scored: Option<Scoring>,
+    clock_now: UnixSeconds,
+) -> Result<PlannedMission> {
+    if let Some(s) = &scored
+        && request.at.is_some_and(|at| at != s.t)
+    {
+        return Err(AppError::Invalid(format!(
+            "a scoring at {} given to plan a mission at {:?}",
+            s.t, request.at
+        )));
+    }
     let settings = project.settings().clone();
     let planner = match request.planner {
         Some(p) => p,
@@ -291,16 +314,18 @@ pub fn plan_with_preset<S: Store>(
             (Some(k), None, s, t, form.to_string(), [0.0; 4])
         }
         None => {
-            let scoring = score::compute(
-                project,
-                &ScoreRequest {
-                    at: request.at,
-                    history: request.history,
-                    probabilities: None,
-                    dry_run: true,
-                },
-            )?;
-            let mut scoring = scoring;
+            let mut scoring = match scored {
+                Some(scoring) => scoring,
+                None => score::compute(
+                    project,
+                    &ScoreRequest {
+                        at: request.at,
+                        history: request.history,
+                        probabilities: None,
+                        dry_run: true,
+                    },
+                )?,
+            };
             let mut scores: Vec<f64> = scoring.terms.iter().map(|c| c.s).collect();
             let mut form = scoring.anomaly_form.clone();
             let eta = settings.utility.variance_weight;

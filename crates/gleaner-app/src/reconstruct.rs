@@ -233,11 +233,6 @@ fn positions(sensors: &[gleaner_field::Sensor], field: &gleaner_field::Field) ->
         .collect()
 }
 
-/// How far back from the estimate's time the first read of [`estimate`] looks, s (a week and
-/// a day: every sensor of a network visited at least weekly is found in it); each further
-/// read covers 8 times the previous stretch.
-const RECENT_S: i64 = 8 * 86_400;
-
 /// Estimates every sensor's `modality` value at `at` with the fitted models, from each
 /// sensor's latest known reading within `lookback_s` before `at` (and, for
 /// [`Estimator::Changes`], every known reading from [`CHANGE_MARGIN_S`] before the stalest
@@ -262,32 +257,16 @@ pub(crate) fn estimate<S: Store>(
     }
     let ids: Vec<SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
     let from = at.saturating_sub(lookback_s.max(0));
-    // The latest reading per sensor: from the most recent readings first, then from ever
-    // longer stretches before them (×8 each time) for the sensors not found yet: the same
-    // readings as one read of the whole look-back, at a fraction of the rows when most
-    // sensors were read lately.
+    // The latest reading per sensor within the look-back: one index seek per sensor.
+    let index: HashMap<&SensorId, usize> = ids.iter().enumerate().map(|(k, s)| (s, k)).collect();
     let mut latest: Vec<Option<(UnixSeconds, f64)>> = vec![None; ids.len()];
-    let mut recent: Option<(UnixSeconds, Columns)> = None;
-    let (mut end, mut span) = (at, RECENT_S);
-    loop {
-        let start = end.saturating_sub(span).max(from);
-        let batch = project.store().readings_for(Some(modality), start..=end)?;
-        let columns = per_sensor(&ids, &batch);
-        for (l, (t, v)) in latest.iter_mut().zip(&columns) {
-            *l = l.or(t.last().copied().zip(v.last().copied()));
+    for (sensor, t, v) in project.store().latest_readings(modality, from..=at)? {
+        if let Some(&k) = index.get(&sensor) {
+            latest[k] = Some((t, v));
         }
-        if recent.is_none() {
-            recent = Some((start, columns));
-        }
-        if start <= from || latest.iter().all(Option::is_some) {
-            break;
-        }
-        end = start - 1;
-        span = span.saturating_mul(8);
     }
     // The kriging of changes needs every sensor's readings from a little before the stalest
-    // sensor's last one: the first stretch when it reaches that far, else one more read.
-    let (first_start, first) = recent.unwrap_or((at, Vec::new()));
+    // sensor's last one: one read.
     let series = match estimator {
         Estimator::Levels(_) => Vec::new(),
         Estimator::Changes => {
@@ -299,12 +278,8 @@ pub(crate) fn estimate<S: Store>(
                 .unwrap_or(at)
                 .saturating_sub(CHANGE_MARGIN_S)
                 .max(from);
-            if needed >= first_start {
-                first
-            } else {
-                let batch = project.store().readings_for(Some(modality), needed..=at)?;
-                per_sensor(&ids, &batch)
-            }
+            let batch = project.store().readings_for(Some(modality), needed..=at)?;
+            per_sensor(&ids, &batch)
         }
     };
     let positions = positions(&sensors, &field);

@@ -123,7 +123,7 @@ fn no_strategy_sees_the_future() {
     }
 }
 
-fn caf_campaign() -> CampaignResult {
+fn caf_campaign(jobs: usize) -> CampaignResult {
     caf_campaign_with(
         vec![
             Strategy::Gleaner,
@@ -133,6 +133,7 @@ fn caf_campaign() -> CampaignResult {
             Strategy::Gated,
         ],
         1,
+        jobs,
     )
 }
 
@@ -149,8 +150,8 @@ fn caf_project(dir: &std::path::Path) -> (app::InitRequest, app::Project<app::An
 }
 
 /// Three daily CAF missions from 2014-04-01 (history: that season) with `strategies`, each
-/// mission flying `sorties` batteries.
-fn caf_campaign_with(strategies: Vec<Strategy>, sorties: usize) -> CampaignResult {
+/// mission flying `sorties` batteries, `jobs` runs in parallel.
+fn caf_campaign_with(strategies: Vec<Strategy>, sorties: usize, jobs: usize) -> CampaignResult {
     let data = shared_data();
     let tmp = tempfile::tempdir().unwrap();
     let files = caf_files(&data.join("caf/Daily"), &tmp.path().join("in"), 2014..=2014);
@@ -177,12 +178,49 @@ fn caf_campaign_with(strategies: Vec<Strategy>, sorties: usize) -> CampaignResul
     req.sorties = sorties;
     // One season of history keeps the test quick.
     req.history_from = Some(app::parse_timestamp("2014-01-01").unwrap());
+    req.jobs = jobs;
     run_campaign(&req, &truth, &Silent).unwrap()
+}
+
+/// Runs are scheduled longest first on a shared queue: the results come back in the keys'
+/// order and equal, to the bit, those of one thread running them in order.
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let (one, two) = (caf_campaign(1), caf_campaign(2));
+    assert_eq!(one.runs.len(), two.runs.len());
+    for (a, b) in one.runs.iter().zip(&two.runs) {
+        // Debug text: equal for equal bits, NaN included (NaN != NaN).
+        assert_eq!(a.key, b.key);
+        assert_eq!(
+            format!("{:?}", a.missions),
+            format!("{:?}", b.missions),
+            "{:?}",
+            a.key
+        );
+        assert_eq!(
+            format!("{:?}", a.visits),
+            format!("{:?}", b.visits),
+            "{:?}",
+            a.key
+        );
+        assert_eq!(a.caught, b.caught, "{:?}", a.key);
+    }
+    let order: Vec<Strategy> = two.runs.iter().map(|r| r.key.strategy).collect();
+    assert_eq!(
+        order,
+        vec![
+            Strategy::Gleaner,
+            Strategy::Nearest,
+            Strategy::Exhaustive,
+            Strategy::Variance,
+            Strategy::Gated,
+        ]
+    );
 }
 
 #[test]
 fn caf_campaign_end_to_end() {
-    let result = caf_campaign();
+    let result = caf_campaign(2);
     assert_eq!(result.modality, "vw@30cm");
     assert_eq!(result.runs.len(), 5);
     let c = result.covariance;
@@ -267,8 +305,8 @@ fn caf_campaign_end_to_end() {
 /// battery) and its error after the flights is lower.
 #[test]
 fn campaign_missions_fly_several_sorties() {
-    let one = caf_campaign_with(vec![Strategy::Gleaner], 1);
-    let two = caf_campaign_with(vec![Strategy::Gleaner], 2);
+    let one = caf_campaign_with(vec![Strategy::Gleaner], 1, 2);
+    let two = caf_campaign_with(vec![Strategy::Gleaner], 2, 2);
     let (one, two) = (&one.runs[0].missions, &two.runs[0].missions);
     assert_eq!(one.len(), two.len());
     for (a, b) in one.iter().zip(two) {

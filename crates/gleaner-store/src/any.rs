@@ -179,6 +179,7 @@ any_read! {
     modalities() -> Vec<ModalityRecord>;
     readings_for(modality: Option<&Modality>, range: RangeInclusive<UnixSeconds>) -> ReadingBatch;
     readings_of_sensors(sensors: &[SensorId], range: RangeInclusive<UnixSeconds>) -> ReadingBatch;
+    latest_readings(modality: &Modality, range: RangeInclusive<UnixSeconds>) -> Vec<(SensorId, UnixSeconds, f64)>;
     reading_count() -> u64;
     ingests() -> Vec<IngestRecord>;
     cells() -> Vec<CellRecord>;

@@ -52,6 +52,7 @@ pub fn run_all<S: Store>(mut fresh: impl FnMut() -> S) {
         bad_batches_are_rejected_whole,
         a_failure_deep_in_a_big_insert_leaves_the_exact_pre_state,
         readings_for_filters_and_orders,
+        latest_readings_are_the_last_rows_of_readings_for,
         readings_of_sensors_selects_and_orders,
         a_failed_write_closure_rolls_everything_back,
         a_failed_method_undoes_only_itself,
@@ -61,6 +62,7 @@ pub fn run_all<S: Store>(mut fresh: impl FnMut() -> S) {
         blobs_round_trip,
         sensors_collected_never_move_back,
         cell_metadata_round_trips_and_upserts_by_key,
+        metadata_child_rows_hold_the_last_values_written,
         cell_metadata_scalars_are_the_rows_without_children,
         replace_cells_keeps_or_deletes_metadata,
         missions_round_trip_with_stops,
@@ -594,6 +596,73 @@ pub fn a_failure_deep_in_a_big_insert_leaves_the_exact_pre_state<S: Store>(store
     assert_eq!(store.reading_count().unwrap(), 2);
 }
 
+/// `latest_readings` gives, per sensor with a reading of the modality in the range, the last
+/// row of `readings_for` over the same range, sorted by sensor id; also inside a transaction.
+pub fn latest_readings_are_the_last_rows_of_readings_for<S: Store>(store: &mut S) {
+    network(store);
+    assert!(
+        store
+            .latest_readings(&md("vw@30cm"), i64::MIN..=i64::MAX)
+            .unwrap()
+            .is_empty()
+    );
+    insert(
+        store,
+        &batch(&[
+            ("c", "vw@30cm", T0, 3.0),
+            ("a", "vw@30cm", T0 + DAY, 2.0),
+            ("a", "vw@30cm", T0, 1.0),
+            ("a", "t@30cm", T0 + 5 * DAY, 9.0),
+            ("b", "vw@30cm", T0 + 2 * DAY, 5.0),
+            ("b", "vw@30cm", T0 + 3 * DAY, 6.0),
+        ]),
+        ConflictPolicy::Fail,
+    )
+    .unwrap();
+    let naive = |store: &S, m: &str, range: std::ops::RangeInclusive<i64>| {
+        let got = store.readings_for(Some(&md(m)), range).unwrap();
+        let mut last: Vec<(SensorId, i64, f64)> = Vec::new();
+        for r in &got.rows {
+            let s = got.sensors[r.sensor as usize].clone();
+            match last.last_mut() {
+                Some(l) if l.0 == s => *l = (s, r.t, r.value),
+                _ => last.push((s, r.t, r.value)),
+            }
+        }
+        last
+    };
+    let ranges = [
+        i64::MIN..=i64::MAX,
+        T0..=T0,
+        T0..=T0 + 2 * DAY,
+        T0 + DAY..=T0 + 2 * DAY,
+        T0 + 4 * DAY..=T0 + 9 * DAY,
+        std::ops::RangeInclusive::new(T0 + 9 * DAY, T0), // empty: starts after it ends
+    ];
+    for m in ["vw@30cm", "t@30cm", "vw@60cm"] {
+        for range in &ranges {
+            let want = naive(store, m, range.clone());
+            assert_eq!(
+                store.latest_readings(&md(m), range.clone()).unwrap(),
+                want,
+                "{m} {range:?}"
+            );
+        }
+    }
+    assert_eq!(
+        store
+            .latest_readings(&md("vw@30cm"), T0..=T0 + 2 * DAY)
+            .unwrap(),
+        vec![
+            (sid("a"), T0 + DAY, 2.0),
+            (sid("b"), T0 + 2 * DAY, 5.0),
+            (sid("c"), T0, 3.0)
+        ]
+    );
+    let in_tx = w(store, |tx| tx.latest_readings(&md("vw@30cm"), T0..=T0)).unwrap();
+    assert_eq!(in_tx, vec![(sid("a"), T0, 1.0), (sid("c"), T0, 3.0)]);
+}
+
 /// `readings_for` filters by modality and inclusive time range and orders by sensor, modality,
 /// time; the batch lists only the sensors and modalities it uses.
 pub fn readings_for_filters_and_orders<S: Store>(store: &mut S) {
@@ -970,6 +1039,45 @@ pub fn cell_metadata_round_trips_and_upserts_by_key<S: Store>(store: &mut S) {
     let twice = [CellMetadata::new(x0), CellMetadata::new(x0)];
     assert!(w(store, |tx| tx.upsert_cell_metadata(&twice)).is_err());
     assert_eq!(store.cell_metadata().unwrap(), before);
+}
+
+/// Rewriting a cell's summaries and correlations with the same values leaves them as they
+/// are; changed values replace them; a row listed twice in one write holds the last values
+/// given, whether those equal the stored ones or not.
+pub fn metadata_child_rows_hold_the_last_values_written<S: Store>(store: &mut S) {
+    network(store);
+    w(store, |tx| {
+        tx.replace_cells(&[cell(0, 0, &["a", "b"]), cell(1, 0, &["c"])])
+    })
+    .unwrap();
+    let (x0, x1) = (CellIndex { i: 0, j: 0 }, CellIndex { i: 1, j: 0 });
+    let full = full_metadata(x0, x1);
+    let put = |store: &mut S, m: &CellMetadata| {
+        w(store, |tx| tx.upsert_cell_metadata(std::slice::from_ref(m))).unwrap();
+        store.cell_metadata().unwrap()[0].clone()
+    };
+    assert_eq!(put(store, &full), full);
+    assert_eq!(put(store, &full), full);
+    let mut changed = full.clone();
+    changed.summaries[0].stats.count += 1;
+    changed.summaries[0].stats.mean += 0.25;
+    changed.correlations[0].correlation = -changed.correlations[0].correlation / 2.0;
+    changed.correlations[0].overlap += 1;
+    assert_eq!(put(store, &changed), changed);
+    // Listed twice: stored values last (the first entry differs from them), then changed
+    // values last (the first entry equals the stored ones).
+    let mut twice = changed.clone();
+    twice.summaries.push(full.summaries[0].clone());
+    twice.correlations.push(full.correlations[0].clone());
+    let got = put(store, &twice);
+    assert_eq!(got.summaries, full.summaries);
+    assert_eq!(got.correlations, full.correlations);
+    let mut twice = full.clone();
+    twice.summaries.push(changed.summaries[0].clone());
+    twice.correlations.push(changed.correlations[0].clone());
+    let got = put(store, &twice);
+    assert_eq!(got.summaries, changed.summaries);
+    assert_eq!(got.correlations, changed.correlations);
 }
 
 /// `cell_metadata_scalars` gives what `cell_metadata` gives with the child lists emptied, in

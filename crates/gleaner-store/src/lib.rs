@@ -132,8 +132,12 @@ macro_rules! store_read_methods {
         ) -> Result<ReadingBatch> {
             self.read(|c| read::readings_of_sensors(c, sensors, range))
         }
-        fn reading_count(&self) -> Result<u64> {
-            self.read(read::reading_count)
+        fn latest_readings(
+            &self,
+            modality: &Modality,
+            range: RangeInclusive<UnixSeconds>,
+        ) -> Result<Vec<(SensorId, UnixSeconds, f64)>> {
+            self.read(|c| read::latest_readings(c, modality, range))
         }
         fn ingests(&self) -> Result<Vec<IngestRecord>> {
             self.read(read::ingests)

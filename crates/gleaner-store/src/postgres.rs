@@ -365,10 +365,16 @@ impl PgTx<'_> {
 
 impl StoreRead for PgStore {
     store_read_methods!();
+    fn reading_count(&self) -> Result<u64> {
+        self.read(read::reading_count)
+    }
 }
 
 impl StoreRead for PgTx<'_> {
     store_read_methods!();
+    fn reading_count(&self) -> Result<u64> {
+        self.read(read::reading_count)
+    }
 }
 
 impl StoreWrite for PgTx<'_> {

@@ -13,6 +13,7 @@ mod dump;
 mod read;
 mod write;
 
+use std::cell::Cell;
 use std::ops::RangeInclusive;
 use std::path::Path;
 use std::time::Duration;
@@ -64,6 +65,11 @@ impl<T> Db<T> for rusqlite::Result<T> {
 #[derive(Debug)]
 pub struct SqliteStore {
     conn: Connection,
+    /// The number of stored readings as `(PRAGMA data_version, count)`: valid while the
+    /// version is unchanged (no other connection has committed since) — this connection's
+    /// own commits set it from their transaction's count. `COUNT(*)` scans the whole table,
+    /// and use cases check the count at every scoring and write.
+    count: Cell<Option<(i64, u64)>>,
 }
 
 /// An open write transaction of a [`SqliteStore`] (see [`Store::write`]).
@@ -77,6 +83,9 @@ pub struct SqliteStore {
 #[derive(Debug)]
 pub struct SqliteTx<'a> {
     tx: Transaction<'a>,
+    /// The number of readings the transaction sees, when known (the store's valid count at
+    /// its start plus what its inserts added).
+    count: Cell<Option<u64>>,
 }
 
 impl SqliteStore {
@@ -142,7 +151,10 @@ impl SqliteStore {
         ))
         .db()?;
         schema::migrate(&mut conn)?;
-        Ok(Self { conn })
+        Ok(Self {
+            conn,
+            count: Cell::new(None),
+        })
     }
 
     /// SQLite's own checks of the file: `PRAGMA integrity_check` (b-trees, indexes, pages)
@@ -226,12 +238,38 @@ impl SqliteTx<'_> {
     }
 }
 
+/// `PRAGMA data_version`: changes when another connection commits to the database.
+fn data_version(c: &Connection) -> Result<i64> {
+    c.query_row("PRAGMA data_version", [], |r| r.get(0)).db()
+}
+
 impl StoreRead for SqliteStore {
     store_read_methods!();
+    fn reading_count(&self) -> Result<u64> {
+        self.read(|c| {
+            let version = data_version(c)?;
+            if let Some((v, n)) = self.count.get()
+                && v == version
+            {
+                return Ok(n);
+            }
+            let n = read::reading_count(c)?;
+            self.count.set(Some((version, n)));
+            Ok(n)
+        })
+    }
 }
 
 impl StoreRead for SqliteTx<'_> {
     store_read_methods!();
+    fn reading_count(&self) -> Result<u64> {
+        if let Some(n) = self.count.get() {
+            return Ok(n);
+        }
+        let n = read::reading_count(&self.tx)?;
+        self.count.set(Some(n));
+        Ok(n)
+    }
 }
 
 impl StoreWrite for SqliteTx<'_> {
@@ -249,7 +287,10 @@ impl StoreWrite for SqliteTx<'_> {
         policy: ConflictPolicy,
     ) -> Result<InsertStats> {
         // No savepoint: the insert refuses a batch before its first write (see the module doc).
-        write::insert_readings(&self.tx, batch, policy)
+        let before = self.count.take();
+        let stats = write::insert_readings(&self.tx, batch, policy)?;
+        self.count.set(before.map(|n| n + stats.inserted));
+        Ok(stats)
     }
 
     fn record_ingest(&mut self, ingest: &IngestRecord) -> Result<i64> {
@@ -321,12 +362,28 @@ impl Store for SqliteStore {
                     StoreError::Backend(e.to_string())
                 }
             })?;
-        let mut tx = SqliteTx { tx };
+        // The write lock is held: no other connection commits until this one ends.
+        let version = data_version(&tx)?;
+        let count = self
+            .count
+            .get()
+            .filter(|(v, _)| *v == version)
+            .map(|(_, n)| n);
+        let mut tx = SqliteTx {
+            tx,
+            count: Cell::new(count),
+        };
         // On an error (or a panic) `tx` is dropped unfinished, which rolls it back.
         let out = f(&mut tx)?;
         crate::failpoint::step();
-        tx.tx.commit().db()?;
+        let SqliteTx { tx, count } = tx;
+        let count = count.get();
+        // Until the commit is known to have succeeded the kept count may be wrong.
+        self.count.set(None);
+        tx.commit().db()?;
         crate::failpoint::committed();
+        // This connection's own commit leaves its data_version as it was at the start.
+        self.count.set(count.map(|n| (version, n)));
         Ok(out)
     }
 }

@@ -44,6 +44,15 @@ pub trait StoreRead {
         sensors: &[SensorId],
         range: RangeInclusive<UnixSeconds>,
     ) -> Result<ReadingBatch>;
+    /// Each sensor's latest reading of `modality` with `t` in `range` (seconds, inclusive), as
+    /// `(sensor, t, value)` sorted by sensor id; sensors without one in the range are left
+    /// out. The last row per sensor of [`readings_for`](Self::readings_for) over the same
+    /// range, at the cost of one index seek per sensor.
+    fn latest_readings(
+        &self,
+        modality: &Modality,
+        range: RangeInclusive<UnixSeconds>,
+    ) -> Result<Vec<(SensorId, UnixSeconds, f64)>>;
     /// Number of stored readings.
     fn reading_count(&self) -> Result<u64>;
     /// All ingest records, oldest first.

@@ -50,6 +50,57 @@ fn an_in_memory_copy_is_equal_and_independent() {
     assert_eq!(count(&store, "SELECT COUNT(*) FROM sensors"), 3);
 }
 
+/// The kept reading count follows this connection's commits (not its rolled-back writes)
+/// and another connection's commits to the same file, inside transactions and out.
+#[test]
+fn the_kept_reading_count_follows_every_commit() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("g.db");
+    let mut a = SqliteStore::open(&path).unwrap();
+    store_with_network(&mut a);
+    let mut b = SqliteStore::open(&path).unwrap();
+    let real = |s: &SqliteStore| count(s, "SELECT COUNT(*) FROM readings") as u64;
+    assert_eq!(a.reading_count().unwrap(), 0);
+    a.write(|tx| {
+        assert_eq!(tx.reading_count()?, 0);
+        let stats = tx.insert_readings(
+            &batch(&[("a", "vw@30cm", T0, 0.3), ("b", "vw@30cm", T0, 0.2)]),
+            ConflictPolicy::Fail,
+        )?;
+        assert_eq!(stats.inserted, 2);
+        assert_eq!(tx.reading_count()?, 2);
+        // The same again: nothing new.
+        tx.insert_readings(&batch(&[("a", "vw@30cm", T0, 0.3)]), ConflictPolicy::Fail)?;
+        assert_eq!(tx.reading_count()?, 2);
+        Ok::<_, StoreError>(())
+    })
+    .unwrap();
+    assert_eq!((a.reading_count().unwrap(), real(&a)), (2, 2));
+    // A rolled-back write leaves it.
+    let failed: std::result::Result<(), StoreError> = a.write(|tx| {
+        tx.insert_readings(&batch(&[("c", "vw@30cm", T0, 0.1)]), ConflictPolicy::Fail)?;
+        assert_eq!(tx.reading_count()?, 3);
+        Err(StoreError::Backend("give up".into()))
+    });
+    assert!(failed.is_err());
+    assert_eq!((a.reading_count().unwrap(), real(&a)), (2, 2));
+    // Another connection's commit.
+    assert_eq!(b.reading_count().unwrap(), 2);
+    b.write(|tx| tx.insert_readings(&batch(&[("c", "t@30cm", T0, 9.0)]), ConflictPolicy::Fail))
+        .unwrap();
+    assert_eq!((a.reading_count().unwrap(), real(&a)), (3, 3));
+    a.write(|tx| {
+        assert_eq!(tx.reading_count()?, 3);
+        tx.insert_readings(
+            &batch(&[("c", "t@30cm", T0 + 86_400, 8.0)]),
+            ConflictPolicy::Fail,
+        )
+    })
+    .unwrap();
+    assert_eq!(a.reading_count().unwrap(), 4);
+    assert_eq!(b.reading_count().unwrap(), 4);
+}
+
 #[test]
 fn conformance_in_memory() {
     conformance::run_all(|| SqliteStore::open_in_memory().unwrap());

@@ -39,6 +39,9 @@ use crate::codec::{Reader, Writer};
 use crate::{DAY_S, Series, UtilityError};
 use gleaner_field::UnixSeconds;
 
+/// Design rows per [`ConditionModel::softmax_block`].
+const BLOCK: usize = 8;
+
 /// Number of features before the threshold distances.
 const BASE: usize = 9;
 
@@ -538,10 +541,43 @@ impl ConditionModel {
     fn softmax(&self, w: &[f64], z: &[f64], out: &mut [f64]) {
         let k = self.n_classes;
         let stride = self.stride();
-        let mut max = f64::NEG_INFINITY;
         for c in 0..k {
-            let s: f64 = (0..stride).map(|f| w[c * stride + f] * z[f]).sum();
-            out[c] = s;
+            out[c] = (0..stride).map(|f| w[c * stride + f] * z[f]).sum();
+        }
+        Self::normalise(k, out);
+    }
+
+    /// [`softmax`](Self::softmax) of [`BLOCK`] consecutive design rows (`zs`, stride values
+    /// each) into `out` (K per row): the same operations in the same order per row (each
+    /// logit summed from −0.0, as `Iterator::sum` does, in feature order; then
+    /// [`normalise`](Self::normalise)), so the same bits; the rows' independent sums are
+    /// interleaved, which the processor overlaps (one row's sums are a chain of dependent
+    /// additions).
+    fn softmax_block(&self, w: &[f64], zs: &[f64], out: &mut [f64]) {
+        let k = self.n_classes;
+        let stride = self.stride();
+        for c in 0..k {
+            let wc = &w[c * stride..(c + 1) * stride];
+            let mut acc = [-0.0f64; BLOCK];
+            for (f, &wf) in wc.iter().enumerate() {
+                for (b, a) in acc.iter_mut().enumerate() {
+                    *a += wf * zs[b * stride + f];
+                }
+            }
+            for (b, a) in acc.iter().enumerate() {
+                out[b * k + c] = *a;
+            }
+        }
+        for p in out.chunks_exact_mut(k) {
+            Self::normalise(k, p);
+        }
+    }
+
+    /// Logits (the first `k` of `out`) to probabilities: shifted by their maximum,
+    /// exponentiated, divided by their sum.
+    fn normalise(k: usize, out: &mut [f64]) {
+        let mut max = f64::NEG_INFINITY;
+        for &s in out.iter().take(k) {
             max = max.max(s);
         }
         let mut total = 0.0;
@@ -559,19 +595,34 @@ impl ConditionModel {
     }
 
     /// Mean negative log-likelihood plus the L2 penalty; `rows` are design rows (bias and
-    /// standardised features), [`stride`](Self::stride) values each.
+    /// standardised features), [`stride`](Self::stride) values each. Every row's class
+    /// probabilities at `w` are left in `probs` (K per row, row order), for Newton's next
+    /// step when `w` is accepted.
     fn objective(
         &self,
         w: &[f64],
         rows: &[f64],
         labels: &[usize],
         config: &ConditionConfig,
+        probs: &mut [f64],
     ) -> f64 {
         let stride = self.stride();
-        let mut p = vec![0.0; self.n_classes];
+        let k = self.n_classes;
+        let whole = labels.len() / BLOCK * BLOCK;
+        for (zs, ps) in rows[..whole * stride]
+            .chunks_exact(BLOCK * stride)
+            .zip(probs[..whole * k].chunks_exact_mut(BLOCK * k))
+        {
+            self.softmax_block(w, zs, ps);
+        }
+        for (z, p) in rows[whole * stride..]
+            .chunks_exact(stride)
+            .zip(probs[whole * k..].chunks_exact_mut(k))
+        {
+            self.softmax(w, z, p);
+        }
         let mut nll = 0.0;
-        for (z, &y) in rows.chunks_exact(stride).zip(labels) {
-            self.softmax(w, z, &mut p);
+        for (p, &y) in probs.chunks_exact(k).zip(labels) {
             nll -= p[y].max(1e-300).ln();
         }
         let reg: f64 = w
@@ -596,15 +647,21 @@ impl ConditionModel {
         let tri = stride * (stride + 1) / 2;
         let pairs: Vec<(usize, usize)> =
             (0..k).flat_map(|c| (c..k).map(move |c2| (c, c2))).collect();
-        let mut p = vec![0.0; k];
         let mut zz = vec![0.0; tri];
         let mut acc = vec![0.0; pairs.len() * tri];
-        let mut current = self.objective(&self.weights, rows, labels, config);
+        // Every row's probabilities at the current weights (from the objective's evaluation
+        // that accepted them: the same softmax, so the same bits), and a scratch for trials.
+        let mut probs = vec![0.0; labels.len() * k];
+        let mut trial_probs = vec![0.0; labels.len() * k];
+        let mut current = self.objective(&self.weights, rows, labels, config, &mut probs);
         for _ in 0..config.max_iterations {
             let mut grad = vec![0.0; p_len];
             acc.iter_mut().for_each(|a| *a = 0.0);
-            for (z, &y) in rows.chunks_exact(stride).zip(labels) {
-                self.softmax(&self.weights, z, &mut p);
+            for ((z, &y), p) in rows
+                .chunks_exact(stride)
+                .zip(labels)
+                .zip(probs.chunks_exact(k))
+            {
                 for c in 0..k {
                     let r = p[c] - if c == y { 1.0 } else { 0.0 };
                     for (g, zf) in grad[c * stride..(c + 1) * stride].iter_mut().zip(z) {
@@ -667,10 +724,11 @@ impl ConditionModel {
                     .zip(&step)
                     .map(|(w, s)| w - t * s)
                     .collect();
-                let value = self.objective(&trial, rows, labels, config);
+                let value = self.objective(&trial, rows, labels, config, &mut trial_probs);
                 if value <= current {
                     improved = value < current;
                     self.weights = trial;
+                    std::mem::swap(&mut probs, &mut trial_probs);
                     current = value;
                     break;
                 }
@@ -684,7 +742,7 @@ impl ConditionModel {
                 let trial = self.gradient(&full, rows, labels, config);
                 if max_abs(&trial) < max_abs(&grad) {
                     self.weights = full;
-                    current = self.objective(&self.weights, rows, labels, config);
+                    current = self.objective(&self.weights, rows, labels, config, &mut probs);
                     continue;
                 }
                 break;
@@ -1224,6 +1282,72 @@ mod tests {
                     let _ = m.predict_proba(&cells, &neighbours, 500 * 86_400);
                 }
             }
+        }
+    }
+
+    /// A model of `k` classes with the given weights (standardisation irrelevant here).
+    fn bare_model(k: usize, weights: Vec<f64>) -> ConditionModel {
+        let d = BASE + k - 1;
+        ConditionModel {
+            thresholds: vec![0.0; k - 1],
+            n_classes: k,
+            config: ConditionConfig {
+                n_classes: k,
+                ..ConditionConfig::default()
+            },
+            mean: vec![0.0; d],
+            scale: vec![1.0; d],
+            weights,
+            prior: vec![1.0 / k as f64; k],
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::test_runner::Config::with_cases(64))]
+        /// The objective's blocked softmax gives every row the bits the one-row softmax gives
+        /// (the Newton step reuses them), and the objective the value of the one-row loop.
+        #[test]
+        fn blocked_softmax_is_the_row_softmax_to_the_bit(
+            k in 2usize..=4,
+            n in 0usize..40,
+            seed in proptest::num::u64::ANY,
+        ) {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let d = BASE + k - 1;
+            let stride = d + 1;
+            let pick = |rng: &mut ChaCha8Rng| -> f64 {
+                match rng.random_range(0..8) {
+                    0 => 0.0,
+                    1 => -0.0,
+                    2 => rng.random_range(-1e3..1e3),
+                    _ => rng.random_range(-3.0..3.0),
+                }
+            };
+            let weights: Vec<f64> = (0..k * stride).map(|_| pick(&mut rng)).collect();
+            let model = bare_model(k, weights.clone());
+            let rows: Vec<f64> = (0..n * stride)
+                .map(|i| if i % stride == 0 { 1.0 } else { pick(&mut rng) })
+                .collect();
+            let labels: Vec<usize> = (0..n).map(|_| rng.random_range(0..k)).collect();
+            let config = model.config.clone();
+            let mut probs = vec![f64::NAN; n * k];
+            let value = model.objective(&weights, &rows, &labels, &config, &mut probs);
+            let mut p = vec![0.0; k];
+            let mut nll = 0.0;
+            for (r, (z, &y)) in rows.chunks_exact(stride).zip(&labels).enumerate() {
+                model.softmax(&weights, z, &mut p);
+                for c in 0..k {
+                    proptest::prop_assert_eq!(probs[r * k + c].to_bits(), p[c].to_bits());
+                }
+                nll -= p[y].max(1e-300).ln();
+            }
+            let reg: f64 = weights
+                .iter()
+                .enumerate()
+                .map(|(i, v)| 0.5 * ConditionModel::penalty(&config, i % stride) * v * v)
+                .sum();
+            let want = nll / labels.len() as f64 + reg;
+            proptest::prop_assert_eq!(value.to_bits(), want.to_bits());
         }
     }
 

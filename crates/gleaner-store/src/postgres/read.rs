@@ -166,6 +166,39 @@ pub(super) fn readings_of_sensors(
     collect_readings(c, &wanted, &modalities, range)
 }
 
+/// Each sensor's latest `modality` reading in `range`, sorted by sensor name: one query, the
+/// server's `DISTINCT ON` taking the newest row of each sensor's primary-key range.
+pub(super) fn latest_readings(
+    c: &mut Transaction<'_>,
+    modality: &Modality,
+    range: RangeInclusive<UnixSeconds>,
+) -> Result<Vec<(SensorId, UnixSeconds, f64)>> {
+    let Some(&mkey) = modality_ids(c)?.get(modality.as_str()) else {
+        return Ok(Vec::new());
+    };
+    let names: HashMap<i64, String> = sensor_ids(c)?.into_iter().map(|(n, k)| (k, n)).collect();
+    let rows = c
+        .query(
+            "SELECT DISTINCT ON (sensor) sensor, t, value FROM readings
+             WHERE modality = $1 AND t BETWEEN $2 AND $3
+             ORDER BY sensor, t DESC",
+            &[&mkey, range.start(), range.end()],
+        )
+        .db()?;
+    let mut out = Vec::with_capacity(rows.len());
+    for r in &rows {
+        let key: i64 = r.get(0);
+        let Some(name) = names.get(&key) else {
+            continue;
+        };
+        out.push((name.clone(), r.get::<_, i64>(1), r.get::<_, f64>(2)));
+    }
+    out.sort_by(|a, b| a.0.cmp(&b.0));
+    out.into_iter()
+        .map(|(n, t, v)| Ok((parse_sensor("sensors", n)?, t, v)))
+        .collect()
+}
+
 /// The readings of `sensors` x `modalities` (both sorted by name) in `range`, in that order
 /// and by time. One query, ordered by the primary key (sensor key, modality key, t) so the
 /// server streams an index range; the rows are then regrouped by name order in Rust (keys

@@ -165,6 +165,38 @@ pub(super) fn readings_of_sensors(
     collect_readings(c, &wanted, &modalities, range)
 }
 
+/// Each sensor's latest `modality` reading in `range`, sorted by sensor name: one
+/// primary-key seek per sensor (descending from the range's end), one row each.
+pub(super) fn latest_readings(
+    c: &Connection,
+    modality: &Modality,
+    range: RangeInclusive<UnixSeconds>,
+) -> Result<Vec<(SensorId, UnixSeconds, f64)>> {
+    let Some(&mkey) = modality_ids(c)?.get(modality.as_str()) else {
+        return Ok(Vec::new());
+    };
+    let mut stmt = c
+        .prepare_cached(
+            "SELECT t, value FROM readings
+             WHERE sensor = ?1 AND modality = ?2 AND t BETWEEN ?3 AND ?4
+             ORDER BY t DESC LIMIT 1",
+        )
+        .db()?;
+    let mut out = Vec::new();
+    for (sname, skey) in sorted(sensor_ids(c)?) {
+        let row: Option<(UnixSeconds, f64)> = stmt
+            .query_row(params![skey, mkey, range.start(), range.end()], |r| {
+                Ok((r.get(0)?, r.get(1)?))
+            })
+            .optional()
+            .db()?;
+        if let Some((t, v)) = row {
+            out.push((parse_sensor("sensors", sname)?, t, v));
+        }
+    }
+    Ok(out)
+}
+
 /// The readings of `sensors` x `modalities` (both sorted by name) in `range`, in that order
 /// and by time: one primary-key range seek per (sensor, modality), so the cost is the rows
 /// returned plus one B-tree descent per pair.

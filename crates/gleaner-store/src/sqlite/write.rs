@@ -462,7 +462,15 @@ pub(super) fn upsert_cell_metadata(c: &Connection, metadata: &[CellMetadata]) ->
     write_metadata(c, metadata)
 }
 
-/// Writes validated metadata.
+/// A stored summary row's values: count, mean, std, min, max, latest t, latest value.
+type SummaryRow = (i64, f64, Option<f64>, f64, f64, i64, f64);
+
+/// Writes validated metadata. The child rows (summaries, correlations, anomalies) are
+/// upserts that leave a row untouched when its values are already stored, instead of
+/// `INSERT OR REPLACE`, which deletes and reinserts each row with its index entries and
+/// foreign-key checks; summaries and correlations already stored with the same values (the
+/// common case: a rescoring rewrites every cell's rows, most unchanged) are found first (one
+/// primary-key range read per written cell and table) and not written at all. The table contents are the same either way.
 fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
     let cell_keys = cell_ids(c)?;
     let modality_keys = modality_ids(c)?;
@@ -481,6 +489,53 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
             .copied()
             .ok_or_else(|| StoreError::UnknownModality(m.clone()))
     };
+    // The stored child rows of the cells this write gives summaries or correlations for.
+    let mut stored_summaries: HashMap<(i64, i64), SummaryRow> = HashMap::new();
+    let mut stored_correlations: HashMap<(i64, i64, i64), (f64, i64)> = HashMap::new();
+    {
+        let mut summaries = c
+            .prepare_cached(
+                "SELECT modality, count, mean, std, min, max, latest_t, latest_value
+                 FROM cell_summaries WHERE cell = ?1",
+            )
+            .db()?;
+        let mut correlations = c
+            .prepare_cached(
+                "SELECT neighbour, modality, correlation, overlap FROM cell_correlations
+                 WHERE cell = ?1",
+            )
+            .db()?;
+        for md in metadata {
+            if !md.summaries.is_empty() {
+                let ck = cell_key(&md.cell)?;
+                let mut rows = summaries.query([ck]).db()?;
+                while let Some(r) = rows.next().db()? {
+                    stored_summaries.insert(
+                        (ck, r.get(0).db()?),
+                        (
+                            r.get(1).db()?,
+                            r.get(2).db()?,
+                            r.get(3).db()?,
+                            r.get(4).db()?,
+                            r.get(5).db()?,
+                            r.get(6).db()?,
+                            r.get(7).db()?,
+                        ),
+                    );
+                }
+            }
+            if !md.correlations.is_empty() {
+                let ck = cell_key(&md.cell)?;
+                let mut rows = correlations.query([ck]).db()?;
+                while let Some(r) = rows.next().db()? {
+                    stored_correlations.insert(
+                        (ck, r.get(0).db()?, r.get(1).db()?),
+                        (r.get(2).db()?, r.get(3).db()?),
+                    );
+                }
+            }
+        }
+    }
     let mut row = c
         .prepare_cached(
             "INSERT OR REPLACE INTO cell_metadata (cell, last_collected, pending_bytes,
@@ -496,19 +551,33 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
     ).db()?;
     let mut summary = c
         .prepare_cached(
-            "INSERT OR REPLACE INTO cell_summaries (cell, modality, count, mean, std, min, max,
+            "INSERT INTO cell_summaries (cell, modality, count, mean, std, min, max,
              latest_t, latest_value)
-         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)
+         ON CONFLICT (cell, modality) DO UPDATE SET count = excluded.count,
+             mean = excluded.mean, std = excluded.std, min = excluded.min, max = excluded.max,
+             latest_t = excluded.latest_t, latest_value = excluded.latest_value
+         WHERE count IS NOT excluded.count OR mean IS NOT excluded.mean
+             OR std IS NOT excluded.std OR min IS NOT excluded.min OR max IS NOT excluded.max
+             OR latest_t IS NOT excluded.latest_t OR latest_value IS NOT excluded.latest_value",
         )
         .db()?;
-    let mut correlation = c.prepare_cached(
-        "INSERT OR REPLACE INTO cell_correlations (cell, neighbour, modality, correlation, overlap)
-         VALUES (?1, ?2, ?3, ?4, ?5)",
-    ).db()?;
+    let mut correlation = c
+        .prepare_cached(
+            "INSERT INTO cell_correlations (cell, neighbour, modality, correlation, overlap)
+         VALUES (?1, ?2, ?3, ?4, ?5)
+         ON CONFLICT (cell, neighbour, modality) DO UPDATE SET
+             correlation = excluded.correlation, overlap = excluded.overlap
+         WHERE correlation IS NOT excluded.correlation OR overlap IS NOT excluded.overlap",
+        )
+        .db()?;
     let mut anomaly = c
         .prepare_cached(
-            "INSERT OR REPLACE INTO cell_anomalies (cell, modality, t, anomaly, flagged)
-         VALUES (?1, ?2, ?3, ?4, ?5)",
+            "INSERT INTO cell_anomalies (cell, modality, t, anomaly, flagged)
+         VALUES (?1, ?2, ?3, ?4, ?5)
+         ON CONFLICT (cell, modality, t) DO UPDATE SET
+             anomaly = excluded.anomaly, flagged = excluded.flagged
+         WHERE anomaly IS NOT excluded.anomaly OR flagged IS NOT excluded.flagged",
         )
         .db()?;
     for md in metadata {
@@ -536,10 +605,23 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
         }
         for su in &md.summaries {
             let st = &su.stats;
+            let mk = modality_key(&su.modality)?;
+            let row: SummaryRow = (
+                as_i64(st.count),
+                st.mean,
+                st.std,
+                st.min,
+                st.max,
+                st.latest_t,
+                st.latest_value,
+            );
+            if stored_summaries.get(&(ck, mk)) == Some(&row) {
+                continue;
+            }
             summary
                 .execute(params![
                     ck,
-                    modality_key(&su.modality)?,
+                    mk,
                     as_i64(st.count),
                     st.mean,
                     st.std,
@@ -549,17 +631,24 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
                     st.latest_value
                 ])
                 .db()?;
+            // What is stored now (a key listed twice in one call: the last values win).
+            stored_summaries.insert((ck, mk), row);
         }
         for co in &md.correlations {
+            let key = (ck, cell_key(&co.neighbour)?, modality_key(&co.modality)?);
+            if stored_correlations.get(&key) == Some(&(co.correlation, as_i64(co.overlap))) {
+                continue;
+            }
             correlation
                 .execute(params![
-                    ck,
-                    cell_key(&co.neighbour)?,
-                    modality_key(&co.modality)?,
+                    key.0,
+                    key.1,
+                    key.2,
                     co.correlation,
                     as_i64(co.overlap)
                 ])
                 .db()?;
+            stored_correlations.insert(key, (co.correlation, as_i64(co.overlap)));
         }
         for a in &md.anomalies {
             anomaly
