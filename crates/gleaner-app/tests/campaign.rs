@@ -123,18 +123,17 @@ fn no_strategy_sees_the_future() {
     }
 }
 
+/// The strategies of the CAF campaign test, in their keys' order.
+const CAF_STRATEGIES: [Strategy; 5] = [
+    Strategy::Gleaner,
+    Strategy::Nearest,
+    Strategy::Exhaustive,
+    Strategy::Variance,
+    Strategy::Gated,
+];
+
 fn caf_campaign(jobs: usize) -> CampaignResult {
-    caf_campaign_with(
-        vec![
-            Strategy::Gleaner,
-            Strategy::Nearest,
-            Strategy::Exhaustive,
-            Strategy::Variance,
-            Strategy::Gated,
-        ],
-        1,
-        jobs,
-    )
+    caf_campaign_with(CAF_STRATEGIES.to_vec(), 1, jobs)
 }
 
 /// A new CAF project (its sensors, no readings) in `dir`/caf, and the request that made it.
@@ -206,16 +205,7 @@ fn results_do_not_depend_on_the_thread_count() {
         assert_eq!(a.caught, b.caught, "{:?}", a.key);
     }
     let order: Vec<Strategy> = two.runs.iter().map(|r| r.key.strategy).collect();
-    assert_eq!(
-        order,
-        vec![
-            Strategy::Gleaner,
-            Strategy::Nearest,
-            Strategy::Exhaustive,
-            Strategy::Variance,
-            Strategy::Gated,
-        ]
-    );
+    assert_eq!(order, CAF_STRATEGIES.to_vec());
 }
 
 #[test]
