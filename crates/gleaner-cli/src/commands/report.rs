@@ -784,13 +784,16 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         "- Every run is its own project (an in-memory store) driven through gleaner's score, plan, \
          explore and record use cases; the planner knows only the history and what its flights \
          brought back; a reading stamped t is available from t + period on.\n\
-         - Strategies: gleaner = gleaner's method (gated S = αF·max(0, 1 + βA + γU − δR), \
-         14-day freshness half-life, bounded anomaly; project weights) + the default planner; \
-         paper = the paper's S (SPEC §2 at its values) + the paper's greedy; variance = greedy expected reduction of the kriging posterior variance, \
-         routed by the default planner; freshness = S with F only; round-robin = days since the \
-         last collection; random = seeded uniform scores; nearest = equal scores with greedy \
-         insertion; exhaustive = every cell, as many sorties as it takes; no-X = gleaner without \
-         term X.\n\
+         - Strategies: gleaner = gleaner's method (gated S = αF·max(0, 1 + βA), F from each \
+         sensor's own drift — the staleness index of its mean squared change, less the field's \
+         mean, over the last year of collected readings —, bounded anomaly, γ = δ = 0) + the \
+         default planner; gated = gleaner's first method (gated S with a 14-day freshness \
+         half-life and the project's γ, δ); paper = the paper's S (SPEC §2 at its values) + the \
+         paper's greedy; variance = greedy expected reduction of the level kriging's posterior \
+         variance, routed by the default planner; freshness = S with F only; round-robin = days \
+         since the last collection; random = seeded uniform scores; nearest = equal scores with \
+         greedy insertion; exhaustive = every cell, as many sorties as it takes; no-X = gleaner \
+         without term X.\n\
          - Reconstruction at mission T (after its flights): each sensor's value stamped T − period; \
          carried = its last collected value; {model_based}.\n\
          - An event is caught at the first mission that collects one of its sensors (with an \
