@@ -295,14 +295,10 @@ pub(crate) fn estimate<S: Store>(
             })
         })
         .collect();
-    let levels = |k: usize, mean: Mean| {
-        krige_with(
-            &model.covariance,
-            &observations,
-            positions[k],
-            neighbours,
-            mean,
-        )
+    // Kriging of levels: the estimator itself, or for a sensor never read, ordinary.
+    let level_mean = match estimator {
+        Estimator::Levels(mean) => mean,
+        Estimator::Changes => Mean::Unknown,
     };
     Ok(sensors
         .iter()
@@ -310,11 +306,13 @@ pub(crate) fn estimate<S: Store>(
         .map(|(k, s)| {
             let (kriged, variance) = match (estimator, latest[k]) {
                 (Estimator::Levels(_), _) | (Estimator::Changes, None) => {
-                    let mean = match estimator {
-                        Estimator::Levels(m) => m,
-                        Estimator::Changes => Mean::Unknown,
-                    };
-                    let e = levels(k, mean);
+                    let e = krige_with(
+                        &model.covariance,
+                        &observations,
+                        positions[k],
+                        neighbours,
+                        level_mean,
+                    );
                     (model.means[k] + e.residual, e.variance)
                 }
                 (Estimator::Changes, Some((t_k, v_k))) => {
