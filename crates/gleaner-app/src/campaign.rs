@@ -173,6 +173,52 @@ impl Strategy {
             _ => Planner::Default,
         }
     }
+
+    /// How a run of this strategy chooses its cells besides its settings: the strategy itself
+    /// when [`run_one`] gives the planner its own per-cell scores or explores (exhaustive);
+    /// `None` when the utility engine scores by the run's settings alone. Two runs with the
+    /// same selection and the same settings ([`run_settings`]) compute the same results.
+    fn selection(self) -> Option<Strategy> {
+        match self {
+            Strategy::Exhaustive
+            | Strategy::RoundRobin
+            | Strategy::Random
+            | Strategy::Nearest
+            | Strategy::Variance => Some(self),
+            Strategy::Freshness
+            | Strategy::Paper
+            | Strategy::Gleaner
+            | Strategy::Without(_)
+            | Strategy::Gated => None,
+        }
+    }
+}
+
+/// A run's settings: the strategy's ([`Strategy::settings`]) with the run's budget, planner
+/// and seed.
+fn run_settings(request: &CampaignRequest, key: &RunKey) -> Result<Settings> {
+    let mut settings = key.strategy.settings(&request.settings);
+    let battery = settings.energy.to_core()?.battery.capacity_j;
+    settings.energy.battery_j = Some(battery * key.budget);
+    settings.planner.solver = key.strategy.planner().name().to_string();
+    settings.planner.seed = key.seed;
+    Ok(settings)
+}
+
+/// Everything a run's results depend on besides what every run shares: the strategy's
+/// selection ([`Strategy::selection`]), the seed, the budget (bits) and the run's settings
+/// (their `Debug` text: every field, floats to the last bit and signed zeros distinct).
+/// Runs with equal signatures are the same deterministic computation, so a campaign runs
+/// one of them and gives its results to the others (e.g. gleaner's method has γ = δ = 0, so
+/// its `no-uncertainty` and `no-redundancy` ablations are gleaner's run itself).
+fn run_signature(request: &CampaignRequest, key: &RunKey) -> Result<String> {
+    let settings = run_settings(request, key)?;
+    Ok(format!(
+        "{:?} {} {:016x} {settings:?}",
+        key.strategy.selection(),
+        key.seed,
+        key.budget.to_bits()
+    ))
 }
 
 /// An anomaly event to catch: sensors, and the readings' times it covers.
@@ -686,9 +732,12 @@ pub fn run_campaign(
         .num_threads(request.jobs)
         .build()
         .map_err(|e| AppError::Invalid(format!("cannot start {} threads: {e}", request.jobs)))?;
+    // Runs that are the same computation ([`run_signature`]) run once: `same[k]` is the first
+    // key with k's signature, whose results k takes.
+    let same = same_runs(request, &keys)?;
     // Longest runs first (LPT): each worker takes the next run off one queue, so the last runs
     // to start are short ones and the workers finish together. Results keep the keys' order.
-    let mut order: Vec<usize> = (0..keys.len()).collect();
+    let mut order: Vec<usize> = (0..keys.len()).filter(|&k| same[k] == k).collect();
     order.sort_by_key(|&k| std::cmp::Reverse(keys[k].strategy.expected_cost()));
     let next = std::sync::atomic::AtomicUsize::new(0);
     let slots: Vec<std::sync::Mutex<Option<Result<RunResult>>>> =
@@ -700,6 +749,8 @@ pub fn run_campaign(
                     let n = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     let Some(&k) = order.get(n) else { break };
                     let result = run_one(&shared, keys[k].clone(), progress);
+                    let copies = same.iter().enumerate().filter(|&(j, &r)| r == k && j != k);
+                    progress.advance((copies.count() * request.schedule.len()) as u64);
                     if let Ok(mut slot) = slots[k].lock() {
                         *slot = Some(result);
                     }
@@ -708,15 +759,35 @@ pub fn run_campaign(
         }
     });
     progress.finish();
-    let runs = slots
+    let mut done: Vec<Option<Result<RunResult>>> = slots
         .into_iter()
-        .map(|slot| {
-            slot.into_inner()
-                .ok()
-                .flatten()
-                .unwrap_or_else(|| Err(AppError::Invalid("a campaign run panicked".into())))
-        })
-        .collect::<Result<Vec<_>>>()?;
+        .map(|slot| slot.into_inner().ok().flatten())
+        .collect();
+    // Last key first: a copy comes after the run it copies, which is taken after it.
+    let mut runs = Vec::with_capacity(keys.len());
+    for (k, key) in keys.iter().enumerate().rev() {
+        let result = if same[k] == k {
+            done[k].take()
+        } else {
+            match &done[same[k]] {
+                Some(Ok(run)) => Some(Ok(RunResult {
+                    key: key.clone(),
+                    ..run.clone()
+                })),
+                Some(Err(e)) => Some(Err(AppError::Invalid(format!(
+                    "run {} seed {} budget {}: {e}",
+                    keys[same[k]].strategy.name(),
+                    keys[same[k]].seed,
+                    keys[same[k]].budget
+                )))),
+                None => None,
+            }
+        };
+        runs.push(
+            result.unwrap_or_else(|| Err(AppError::Invalid("a campaign run panicked".into()))),
+        );
+    }
+    let runs = runs.into_iter().rev().collect::<Result<Vec<_>>>()?;
     Ok(CampaignResult {
         label: request.label.clone(),
         modality: shared.modality.to_string(),
@@ -726,6 +797,15 @@ pub fn run_campaign(
         events: shared.events,
         runs,
     })
+}
+
+/// For every key, the first key with the same [`run_signature`] (itself when none before).
+fn same_runs(request: &CampaignRequest, keys: &[RunKey]) -> Result<Vec<usize>> {
+    let mut first: HashMap<String, usize> = HashMap::new();
+    keys.iter()
+        .enumerate()
+        .map(|(k, key)| Ok(*first.entry(run_signature(request, key)?).or_insert(k)))
+        .collect()
 }
 
 /// The predicted (argmax) and true class of every cell, as a share right.
@@ -774,11 +854,7 @@ fn run_one(
     let request = shared.request;
     let truth = shared.truth;
     let period = truth.period_s;
-    let mut settings = key.strategy.settings(&request.settings);
-    let battery = settings.energy.to_core()?.battery.capacity_j;
-    settings.energy.battery_j = Some(battery * key.budget);
-    settings.planner.solver = key.strategy.planner().name().to_string();
-    settings.planner.seed = key.seed;
+    let settings = run_settings(request, &key)?;
     let mut project = new_run_project(shared, settings)?;
     let cells: Vec<(CellIndex, Vec<SensorId>)> = project
         .store()
@@ -833,8 +909,8 @@ fn run_one(
                 ..ScoreRequest::default()
             },
         )?;
-        let given: Option<Vec<f64>> = match key.strategy {
-            Strategy::RoundRobin => {
+        let given: Option<Vec<f64>> = match key.strategy.selection() {
+            Some(Strategy::RoundRobin) => {
                 let ages: Vec<Option<f64>> = (0..centres.len()).map(cell_age).collect();
                 let oldest = ages.iter().flatten().fold(0.0f64, |a, b| a.max(*b));
                 Some(
@@ -843,7 +919,7 @@ fn run_one(
                         .collect(),
                 )
             }
-            Strategy::Random => Some(
+            Some(Strategy::Random) => Some(
                 (0..centres.len())
                     .map(|c| {
                         let x = splitmix(key.seed ^ splitmix(index as u64 ^ ((c as u64) << 32)));
@@ -851,8 +927,8 @@ fn run_one(
                     })
                     .collect(),
             ),
-            Strategy::Nearest => Some(vec![1.0; centres.len()]),
-            Strategy::Variance => {
+            Some(Strategy::Nearest) => Some(vec![1.0; centres.len()]),
+            Some(Strategy::Variance) => {
                 let ages: Vec<Option<f64>> = (0..centres.len()).map(cell_age).collect();
                 let weights: Vec<f64> = cell_sensor_ids.iter().map(|s| s.len() as f64).collect();
                 Some(
@@ -883,7 +959,7 @@ fn run_one(
         // The pre-flight scoring, handed to the planner when it scores by the utility engine
         // (the same store, the same time: what `plan` would compute again) and taken back.
         let mut scoring = Some(scoring);
-        if key.strategy == Strategy::Exhaustive {
+        if key.strategy.selection() == Some(Strategy::Exhaustive) {
             let plan = explore(
                 &mut project,
                 &ExploreRequest {
@@ -1434,5 +1510,90 @@ mod tests {
         );
         let fresh = Strategy::Freshness.settings(&base).utility;
         assert_eq!((fresh.beta, fresh.variance_weight), (0.0, 0.0));
+    }
+
+    /// Only runs that are the same computation share one: gleaner's γ = δ = 0 makes its
+    /// U and R ablations gleaner itself; every other strategy, seed and budget runs alone.
+    #[test]
+    fn only_identical_runs_share_a_run() {
+        let settings = crate::settings::Settings::parse(
+            "[project]\nname = \"p\"\ndatabase = \"g.db\"\n[field]\nbase_lat = 38.7\n\
+             base_lon = -117.1\ncell_size_m = 40.0\n[sensors]\nfile = \"s.csv\"\n",
+        )
+        .unwrap();
+        let mut request = CampaignRequest {
+            label: "t".into(),
+            init: crate::init::InitRequest::default(),
+            settings,
+            history_until: 0,
+            history_from: None,
+            schedule: vec![86_400],
+            strategies: Strategy::ALL.to_vec(),
+            seeds: vec![1, 2],
+            budgets: vec![1.0, 0.5],
+            modality: None,
+            events: None,
+            event_z: 3.0,
+            planner_iterations: 100,
+            sorties: 1,
+            neighbours: 16,
+            estimator: crate::reconstruct::Estimator::Changes,
+            jobs: 1,
+            clock_now: 0,
+        };
+        let keys = |r: &CampaignRequest| -> Vec<RunKey> {
+            let mut keys = Vec::new();
+            for &strategy in &r.strategies {
+                for &seed in &r.seeds {
+                    for &budget in &r.budgets {
+                        keys.push(RunKey {
+                            strategy,
+                            seed,
+                            budget,
+                        });
+                    }
+                }
+            }
+            keys
+        };
+        let all = keys(&request);
+        let same = same_runs(&request, &all).unwrap();
+        for (k, key) in all.iter().enumerate() {
+            let first = &all[same[k]];
+            assert!(same[k] <= k);
+            assert_eq!((first.seed, first.budget), (key.seed, key.budget));
+            let expected = match key.strategy {
+                Strategy::Without(Term::Uncertainty) | Strategy::Without(Term::Redundancy) => {
+                    Strategy::Gleaner
+                }
+                s => s,
+            };
+            assert_eq!(first.strategy, expected, "{key:?}");
+        }
+        // With γ and δ set in the project, gleaner's method zeroes them itself: still one
+        // run (keys 40..44 are no-uncertainty's, 0..4 gleaner's); the gated strategy keeps
+        // the project's γ and δ, so a changed γ is seen in its signature.
+        let gated_before = run_signature(&request, &all[48]).unwrap();
+        request.settings.utility.gamma = 0.5;
+        request.settings.utility.delta = 0.5;
+        assert_eq!(same_runs(&request, &all).unwrap(), same);
+        assert_eq!(
+            (all[40].strategy, same[40]),
+            (Strategy::Without(Term::Uncertainty), 0)
+        );
+        assert_eq!(all[48].strategy, Strategy::Gated);
+        assert_ne!(run_signature(&request, &all[48]).unwrap(), gated_before);
+        // Given scores never share a run with the utility engine's, even with equal settings.
+        assert_ne!(
+            run_signature(&request, &all[0]).unwrap(),
+            run_signature(
+                &request,
+                &RunKey {
+                    strategy: Strategy::Random,
+                    ..all[0].clone()
+                }
+            )
+            .unwrap()
+        );
     }
 }

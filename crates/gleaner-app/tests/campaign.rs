@@ -320,3 +320,31 @@ fn campaign_missions_fly_several_sorties() {
     let err = run_campaign(&req, &empty, &Silent).unwrap_err();
     assert!(err.to_string().contains("sorties = 0"), "{err}");
 }
+
+/// Runs that are the same computation run once and share their results (gleaner's method
+/// has γ = δ = 0, so its U and R ablations are gleaner's run): the shared results equal, to
+/// the bit, those of the ablation run on its own; other strategies still run their own.
+#[test]
+fn identical_runs_share_results_equal_to_their_own_runs() {
+    use gleaner_app::campaign::Term;
+    let together = caf_campaign_with(
+        vec![
+            Strategy::Gleaner,
+            Strategy::Without(Term::Redundancy),
+            Strategy::Gated,
+        ],
+        1,
+        2,
+    );
+    let alone = caf_campaign_with(vec![Strategy::Without(Term::Redundancy)], 1, 1);
+    let text = |r: &gleaner_app::campaign::RunResult| {
+        format!("{:?} {:?} {:?}", r.missions, r.visits, r.caught)
+    };
+    assert_eq!(
+        together.runs[1].key.strategy,
+        Strategy::Without(Term::Redundancy)
+    );
+    assert_eq!(text(&together.runs[1]), text(&alone.runs[0]));
+    assert_eq!(text(&together.runs[0]), text(&alone.runs[0]));
+    assert_ne!(text(&together.runs[2]), text(&together.runs[0]));
+}
