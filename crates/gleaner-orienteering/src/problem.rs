@@ -34,8 +34,20 @@ impl Metric {
 #[derive(Debug, Clone)]
 enum Costs {
     Dense(Vec<f64>),
-    /// Points, metric, cost per unit of distance (1 for [`Problem::from_points`]).
-    Points(Vec<[f64; 2]>, Metric, f64),
+    /// Points, metric, cost per unit of distance (1 for [`Problem::from_points`]), and for
+    /// up to [`TABULATED_NODES`] nodes every pair's cost computed once (row-major): the same
+    /// expression's value, so the same bits as evaluating it on demand.
+    Points(Vec<[f64; 2]>, Metric, f64, Option<Vec<f64>>),
+}
+
+/// Largest number of nodes whose point costs are tabulated (n² values: 8 MiB at 1,024).
+const TABULATED_NODES: usize = 1_024;
+
+/// `scale · metric.distance(p_i, p_j)`: the cost of a points problem, the one expression
+/// both the table and the on-demand evaluation use.
+#[inline]
+fn point_cost(points: &[[f64; 2]], metric: Metric, scale: f64, i: usize, j: usize) -> f64 {
+    scale * metric.distance(points[i], points[j])
 }
 
 /// A validated (team) orienteering problem.
@@ -147,7 +159,8 @@ impl Problem {
     /// Builds a problem like [`Problem::from_points`] whose travel cost is `cost_per_unit`
     /// times the metric distance (e.g. joules per metre of flight when the coordinates are
     /// metres and the budget is in joules): the cost from `i` to `j` is exactly
-    /// `cost_per_unit * metric.distance(p_i, p_j)`, evaluated on demand.
+    /// `cost_per_unit * metric.distance(p_i, p_j)`: tabulated once for up to 1,024 nodes,
+    /// evaluated on demand above (the same value either way, to the bit).
     ///
     /// Errors: as [`Problem::from_points`], and [`ProblemError::BadCostScale`] for a
     /// `cost_per_unit` that is negative or not finite.
@@ -178,9 +191,15 @@ impl Problem {
         if points.is_empty() {
             return Err(ProblemError::Empty);
         }
+        let n = points.len();
+        let table = (n <= TABULATED_NODES).then(|| {
+            (0..n * n)
+                .map(|ij| point_cost(points, metric, cost_per_unit, ij / n, ij % n))
+                .collect()
+        });
         Problem::assemble(
-            points.len(),
-            Costs::Points(points.to_vec(), metric, cost_per_unit),
+            n,
+            Costs::Points(points.to_vec(), metric, cost_per_unit, table),
             rewards,
             budget,
         )
@@ -283,7 +302,8 @@ impl Problem {
     pub fn cost(&self, i: usize, j: usize) -> f64 {
         match &self.cost {
             Costs::Dense(m) => m[i * self.n + j],
-            Costs::Points(p, metric, scale) => *scale * metric.distance(p[i], p[j]),
+            Costs::Points(_, _, _, Some(table)) => table[i * self.n + j],
+            Costs::Points(p, metric, scale, None) => point_cost(p, *metric, *scale, i, j),
         }
     }
 
@@ -292,7 +312,7 @@ impl Problem {
     pub fn points(&self) -> Option<(&[[f64; 2]], Metric)> {
         match &self.cost {
             Costs::Dense(_) => None,
-            Costs::Points(p, m, _) => Some((p, *m)),
+            Costs::Points(p, m, _, _) => Some((p, *m)),
         }
     }
 
@@ -301,7 +321,7 @@ impl Problem {
     pub fn cost_per_unit(&self) -> Option<f64> {
         match &self.cost {
             Costs::Dense(_) => None,
-            Costs::Points(_, _, scale) => Some(*scale),
+            Costs::Points(_, _, scale, _) => Some(*scale),
         }
     }
 
@@ -549,5 +569,42 @@ mod tests {
         assert_eq!(Metric::Euclidean.distance(a, b), 5.0);
         assert_eq!(Metric::Manhattan.distance(a, b), 7.0);
         assert_eq!(Metric::Chebyshev.distance(a, b), 4.0);
+    }
+
+    proptest::proptest! {
+        /// A tabulated points problem's costs are the on-demand expression's, to the bit,
+        /// for every pair and metric.
+        #[test]
+        fn tabulated_costs_are_the_on_demand_costs(
+            pts in proptest::collection::vec((-1e4f64..1e4, -1e4f64..1e4), 1..30),
+            scale in 0.0f64..50.0,
+            metric in 0usize..3,
+        ) {
+            let points: Vec<[f64; 2]> = pts.iter().map(|&(x, y)| [x, y]).collect();
+            let metric = [Metric::Euclidean, Metric::Manhattan, Metric::Chebyshev][metric];
+            let n = points.len();
+            let p = Problem::from_scaled_points(&points, metric, scale, vec![1.0; n], 1e9)
+                .unwrap();
+            proptest::prop_assert!(matches!(p.cost, Costs::Points(_, _, _, Some(_))));
+            for i in 0..n {
+                for j in 0..n {
+                    let direct = scale * metric.distance(points[i], points[j]);
+                    proptest::prop_assert_eq!(p.cost(i, j).to_bits(), direct.to_bits());
+                }
+            }
+        }
+    }
+
+    /// Above the table's size the costs are evaluated on demand (no n² matrix).
+    #[test]
+    fn large_points_problems_are_not_tabulated() {
+        let n = TABULATED_NODES + 1;
+        let points: Vec<[f64; 2]> = (0..n).map(|i| [i as f64, 0.5 * i as f64]).collect();
+        let p = Problem::from_points(&points, Metric::Euclidean, vec![1.0; n], 1e9).unwrap();
+        assert!(matches!(p.cost, Costs::Points(_, _, _, None)));
+        assert_eq!(
+            p.cost(3, 7),
+            Metric::Euclidean.distance(points[3], points[7])
+        );
     }
 }
