@@ -35,6 +35,12 @@ pub const BUSY_TIMEOUT: Duration = Duration::from_secs(60);
 /// Page cache of a connection, KiB (negative `cache_size` in SQLite's terms).
 const CACHE_KIB: i64 = 64 * 1024;
 
+/// Prepared statements kept per connection (least recently used dropped first): more than
+/// the store's distinct cached statements (26), so a use case that cycles through more than
+/// rusqlite's default of 16 (a scoring's metadata write, a flight's record) does not parse
+/// its SQL again each time.
+const STATEMENT_CACHE: usize = 64;
+
 /// Converts SQLite's errors into [`StoreError::Backend`], so that no rusqlite type appears in
 /// the public interface (not even as a `From` impl).
 pub(crate) trait Db<T> {
@@ -123,6 +129,7 @@ impl SqliteStore {
 
     fn setup(mut conn: Connection) -> Result<Self> {
         conn.busy_timeout(BUSY_TIMEOUT).db()?;
+        conn.set_prepared_statement_cache_capacity(STATEMENT_CACHE);
         let foreign: Vec<String> = conn
             .prepare(
                 "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'
