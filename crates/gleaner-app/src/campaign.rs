@@ -21,7 +21,7 @@ use gleaner_mission::Planner;
 use gleaner_store::{SqliteStore, Store, StoreRead};
 
 use crate::error::{AppError, Result};
-use crate::explore::{ExploreRequest, explore};
+use crate::explore::{ExplorationMemo, ExploreRequest, explore, explore_with};
 use crate::ingest::{Format, IngestRequest, Parsed, ingest_parsed};
 use crate::init::{InitRequest, init_store};
 use crate::plan::{PlanRequest, plan_scored};
@@ -890,6 +890,7 @@ fn run_one(
         }
     }
     let mut caught: Vec<Option<UnixSeconds>> = vec![None; shared.events.len()];
+    let mut exploration_memo = ExplorationMemo::default();
     let mut missions = Vec::with_capacity(request.schedule.len());
     let mut visits = Vec::new();
     for (index, &t) in request.schedule.iter().enumerate() {
@@ -960,13 +961,14 @@ fn run_one(
         // (the same store, the same time: what `plan` would compute again) and taken back.
         let mut scoring = Some(scoring);
         if key.strategy.selection() == Some(Strategy::Exhaustive) {
-            let plan = explore(
+            let plan = explore_with(
                 &mut project,
                 &ExploreRequest {
                     at: Some(t),
                     dry_run: false,
                 },
                 request.clock_now,
+                &mut exploration_memo,
             )?;
             for (id, m) in &plan.sorties {
                 energy_j += m.energy.total_j;

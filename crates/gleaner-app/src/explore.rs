@@ -3,8 +3,11 @@
 //! its energy breakdown, all stored in one transaction.
 
 use gleaner_energy::CellVisit;
+use gleaner_energy::MissionEnergyModel;
 use gleaner_field::{LocalPoint, UnixSeconds};
-use gleaner_mission::exploration::{ExplorationOptions, plan_exploration};
+use gleaner_mission::exploration::{
+    ExplorationError, ExplorationOptions, ExplorationPlan, plan_exploration,
+};
 use gleaner_store::{MissionId, MissionKind, NewMission, Store, StoreWrite};
 
 use crate::error::{AppError, Result};
@@ -45,6 +48,56 @@ pub fn explore<S: Store>(
     request: &ExploreRequest,
     clock_now: UnixSeconds,
 ) -> Result<Exploration> {
+    explore_with(project, request, clock_now, &mut ExplorationMemo::default())
+}
+
+/// The last exploration plan and the exact inputs it was planned from. The plan is a pure
+/// function of the energy model, the base, the cell centres, the cells' service energies and
+/// the options, so a memo with the same inputs (compared bit for bit; the model and options
+/// by their `Debug` text, every float to the last bit) gives the plan the planner would
+/// compute again. A campaign's exhaustive run keeps one: once every sensor is collected
+/// daily, the service energies repeat and so does the tour.
+#[derive(Debug, Default)]
+pub(crate) struct ExplorationMemo {
+    last: Option<(String, Vec<u64>, ExplorationPlan)>,
+}
+
+impl ExplorationMemo {
+    /// `plan_exploration` of these inputs: the kept plan when they equal the last ones.
+    fn plan(
+        &mut self,
+        model: &MissionEnergyModel,
+        base: LocalPoint,
+        centres: &[LocalPoint],
+        service_j: &[f64],
+        options: &ExplorationOptions,
+    ) -> std::result::Result<ExplorationPlan, ExplorationError> {
+        let text = format!("{model:?} {options:?}");
+        let bits: Vec<u64> = [base.e, base.n]
+            .into_iter()
+            .chain(centres.iter().flat_map(|c| [c.e, c.n]))
+            .chain(service_j.iter().copied())
+            .map(f64::to_bits)
+            .collect();
+        if let Some((t, b, plan)) = &self.last
+            && *t == text
+            && *b == bits
+        {
+            return Ok(plan.clone());
+        }
+        let plan = plan_exploration(model, base, centres, service_j, options)?;
+        self.last = Some((text, bits, plan.clone()));
+        Ok(plan)
+    }
+}
+
+/// [`explore`] with a memo of the last plan (see [`ExplorationMemo`]): the same result.
+pub(crate) fn explore_with<S: Store>(
+    project: &mut Project<S>,
+    request: &ExploreRequest,
+    clock_now: UnixSeconds,
+    memo: &mut ExplorationMemo,
+) -> Result<Exploration> {
     let k = crate::state::collection_knowledge(project, request.at, History::default())?;
     let t = request.at.or(k.latest).unwrap_or(clock_now);
     let model = energy_model(project)?;
@@ -53,14 +106,15 @@ pub fn explore<S: Store>(
     let centres: Vec<LocalPoint> = k.field.cells().iter().map(|c| c.centre).collect();
     let service_j: Vec<f64> = svc.iter().map(|s| s.energy_j).collect();
     let base = LocalPoint::new(0.0, 0.0);
-    let plan = plan_exploration(
-        &model,
-        base,
-        &centres,
-        &service_j,
-        &ExplorationOptions::default(),
-    )
-    .map_err(|e| AppError::core("exploration", e))?;
+    let plan = memo
+        .plan(
+            &model,
+            base,
+            &centres,
+            &service_j,
+            &ExplorationOptions::default(),
+        )
+        .map_err(|e| AppError::core("exploration", e))?;
     let zeros = vec![0.0; centres.len()];
     let mut sorties = Vec::with_capacity(plan.sorties.len());
     for s in &plan.sorties {
@@ -126,4 +180,46 @@ pub fn explore<S: Store>(
         total_energy_j: plan.total_energy_j,
         sorties,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gleaner_energy::EnergyConfig;
+
+    /// The memo gives what the planner computes, for repeated and for changed inputs (one
+    /// service energy one ulp larger is already a new plan's inputs).
+    #[test]
+    fn memo_plans_are_the_planners_plans() {
+        let model = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+        let centres: Vec<LocalPoint> = (0..30)
+            .map(|i| LocalPoint::new(40.0 * (i % 6) as f64 - 90.0, 35.0 * (i / 6) as f64))
+            .collect();
+        let mut service: Vec<f64> = (0..30).map(|i| 150.0 + 7.0 * (i % 5) as f64).collect();
+        let base = LocalPoint::new(0.0, 0.0);
+        let options = ExplorationOptions::default();
+        let mut memo = ExplorationMemo::default();
+        let direct = plan_exploration(&model, base, &centres, &service, &options).unwrap();
+        for _ in 0..2 {
+            let memo_plan = memo
+                .plan(&model, base, &centres, &service, &options)
+                .unwrap();
+            assert_eq!(memo_plan, direct);
+        }
+        service[7] = f64::from_bits(service[7].to_bits() + 1);
+        let changed = plan_exploration(&model, base, &centres, &service, &options).unwrap();
+        let memo_plan = memo
+            .plan(&model, base, &centres, &service, &options)
+            .unwrap();
+        assert_eq!(memo_plan, changed);
+        let (_, bits, _) = memo.last.as_ref().unwrap();
+        assert_eq!(bits[2 + 60 + 7], service[7].to_bits(), "planned again");
+        service[7] += 50.0;
+        let changed = plan_exploration(&model, base, &centres, &service, &options).unwrap();
+        let memo_plan = memo
+            .plan(&model, base, &centres, &service, &options)
+            .unwrap();
+        assert_eq!(memo_plan, changed);
+        assert_ne!(changed.total_energy_j, direct.total_energy_j);
+    }
 }
