@@ -27,7 +27,7 @@ use crate::init::{InitRequest, init_store};
 use crate::plan::{PlanRequest, plan_scored};
 use crate::progress::{Progress, Silent};
 use crate::project::Project;
-use crate::reconstruct::{estimate, fit_models, target_modality};
+use crate::reconstruct::{EstimateReads, estimate_with, fit_models, target_modality};
 use crate::score::{ScoreRequest, compute, score};
 use crate::settings::Settings;
 use crate::simulate::{Truth, fly_buffered};
@@ -891,6 +891,7 @@ fn run_one(
     }
     let mut caught: Vec<Option<UnixSeconds>> = vec![None; shared.events.len()];
     let mut exploration_memo = ExplorationMemo::default();
+    let mut estimate_reads = EstimateReads::default();
     let mut missions = Vec::with_capacity(request.schedule.len());
     let mut visits = Vec::new();
     for (index, &t) in request.schedule.iter().enumerate() {
@@ -943,18 +944,23 @@ fn run_one(
         // Reconstruction of every sensor's value stamped T − period from what was known
         // before the flights.
         let target = t - period;
-        let errors_now = |project: &Project<SqliteStore>| -> Result<Errors> {
-            let estimates = estimate(
+        // `reuse`: nothing was written since the last estimate (the previous mission's, after
+        // its flights, which brought back only readings stamped at or before its target).
+        let errors_now = |project: &Project<SqliteStore>,
+                          reads: &mut EstimateReads,
+                          reuse: bool|
+         -> Result<Errors> {
+            let estimates = estimate_with(
                 project,
                 &shared.modality,
                 (&shared.model, &shared.changes),
-                target,
-                lookback,
+                (target, lookback),
                 (request.neighbours, request.estimator),
+                (reads, reuse),
             )?;
             Ok(reconstruction_errors(&estimates, &shared.series, target))
         };
-        let before = errors_now(&project)?;
+        let before = errors_now(&project, &mut estimate_reads, true)?;
         let mut flown = Vec::new();
         let (mut energy_j, mut budget_j) = (0.0, 0.0);
         // The pre-flight scoring, handed to the planner when it scores by the utility engine
@@ -1066,7 +1072,7 @@ fn run_one(
             }
         }
         // Reconstruction of every sensor's value stamped T − period, after the flights.
-        let after = errors_now(&project)?;
+        let after = errors_now(&project, &mut estimate_reads, false)?;
         for s in &visited {
             last.insert(s.clone(), t);
         }

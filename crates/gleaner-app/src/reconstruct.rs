@@ -246,6 +246,53 @@ pub(crate) fn estimate<S: Store>(
     lookback_s: i64,
     (neighbours, estimator): (usize, Estimator),
 ) -> Result<Vec<SensorEstimate>> {
+    estimate_with(
+        project,
+        modality,
+        (model, changes),
+        (at, lookback_s),
+        (neighbours, estimator),
+        (&mut EstimateReads::default(), false),
+    )
+}
+
+/// The store reads of the last estimate ([`estimate_with`]): every sensor's latest reading in
+/// [`from`, `at`] and, for the kriging of changes, every sensor's readings in [`needed`, `at`]
+/// (seconds), with the store's reading count when read.
+#[derive(Debug, Default)]
+pub(crate) struct EstimateReads {
+    kept: Option<KeptReads>,
+    /// Estimates that used kept reads instead of reading the store.
+    reused: usize,
+}
+
+#[derive(Debug)]
+struct KeptReads {
+    modality: Modality,
+    readings: u64,
+    from: UnixSeconds,
+    at: UnixSeconds,
+    latest: Vec<Option<(UnixSeconds, f64)>>,
+    needed: Option<UnixSeconds>,
+    series: Columns,
+}
+
+/// [`estimate`] at `at` with look-back `lookback_s` (seconds), keeping its reads in `reads`.
+/// With `reuse`, the caller vouches that the store holds no reading stamped after the kept
+/// estimate's time and that no stored reading was replaced since (a campaign between one
+/// mission's estimate after its flights and the next mission's before them: a flight at T
+/// brings back only readings stamped at or before T − period, the last estimate's time);
+/// then, when the store's reading count is the kept one and the windows nest (this estimate's
+/// look-back and change window start no earlier than the kept ones), the kept reads
+/// restricted to this estimate's windows are what the store would return, and are used.
+pub(crate) fn estimate_with<S: Store>(
+    project: &Project<S>,
+    modality: &Modality,
+    (model, changes): (&FieldModel, &IncrementModel),
+    (at, lookback_s): (UnixSeconds, i64),
+    (neighbours, estimator): (usize, Estimator),
+    (reads, reuse): (&mut EstimateReads, bool),
+) -> Result<Vec<SensorEstimate>> {
     let sensors = project.sensors()?;
     let (_, field) = project.field()?;
     if model.means.len() != sensors.len() {
@@ -257,18 +304,36 @@ pub(crate) fn estimate<S: Store>(
     }
     let ids: Vec<SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
     let from = at.saturating_sub(lookback_s.max(0));
-    // The latest reading per sensor within the look-back: one index seek per sensor.
-    let index: HashMap<&SensorId, usize> = ids.iter().enumerate().map(|(k, s)| (s, k)).collect();
-    let mut latest: Vec<Option<(UnixSeconds, f64)>> = vec![None; ids.len()];
-    for (sensor, t, v) in project.store().latest_readings(modality, from..=at)? {
-        if let Some(&k) = index.get(&sensor) {
-            latest[k] = Some((t, v));
+    let readings = project.store().reading_count()?;
+    let kept = reads.kept.take().filter(|k| {
+        reuse
+            && k.modality == *modality
+            && k.readings == readings
+            && k.latest.len() == ids.len()
+            && k.at <= at
+            && k.from <= from
+    });
+    reads.reused += usize::from(kept.is_some());
+    // The latest reading per sensor within the look-back: one index seek per sensor (or the
+    // kept latest, when still within the look-back: nothing newer is stored).
+    let latest: Vec<Option<(UnixSeconds, f64)>> = match &kept {
+        Some(k) => k.latest.iter().map(|l| l.filter(|l| l.0 >= from)).collect(),
+        None => {
+            let index: HashMap<&SensorId, usize> =
+                ids.iter().enumerate().map(|(k, s)| (s, k)).collect();
+            let mut latest = vec![None; ids.len()];
+            for (sensor, t, v) in project.store().latest_readings(modality, from..=at)? {
+                if let Some(&k) = index.get(&sensor) {
+                    latest[k] = Some((t, v));
+                }
+            }
+            latest
         }
-    }
+    };
     // The kriging of changes needs every sensor's readings from a little before the stalest
-    // sensor's last one: one read.
-    let series = match estimator {
-        Estimator::Levels(_) => Vec::new(),
+    // sensor's last one: one read (or the kept readings from then on).
+    let (needed, series) = match estimator {
+        Estimator::Levels(_) => (None, Vec::new()),
         Estimator::Changes => {
             let needed = latest
                 .iter()
@@ -278,8 +343,24 @@ pub(crate) fn estimate<S: Store>(
                 .unwrap_or(at)
                 .saturating_sub(CHANGE_MARGIN_S)
                 .max(from);
-            let batch = project.store().readings_for(Some(modality), needed..=at)?;
-            per_sensor(&ids, &batch)
+            let series = match &kept {
+                Some(KeptReads {
+                    needed: Some(was),
+                    series,
+                    ..
+                }) if *was <= needed => series
+                    .iter()
+                    .map(|(times, values)| {
+                        let first = times.partition_point(|&t| t < needed);
+                        (times[first..].to_vec(), values[first..].to_vec())
+                    })
+                    .collect(),
+                _ => {
+                    let batch = project.store().readings_for(Some(modality), needed..=at)?;
+                    per_sensor(&ids, &batch)
+                }
+            };
+            (Some(needed), series)
         }
     };
     let positions = positions(&sensors, &field);
@@ -300,7 +381,7 @@ pub(crate) fn estimate<S: Store>(
         Estimator::Levels(mean) => mean,
         Estimator::Changes => Mean::Unknown,
     };
-    Ok(sensors
+    let estimates = sensors
         .iter()
         .enumerate()
         .map(|(k, s)| {
@@ -342,7 +423,17 @@ pub(crate) fn estimate<S: Store>(
                 variance,
             }
         })
-        .collect())
+        .collect();
+    reads.kept = Some(KeptReads {
+        modality: modality.clone(),
+        readings,
+        from,
+        at,
+        latest,
+        needed,
+        series,
+    });
+    Ok(estimates)
 }
 
 /// The changes known over the unseen interval of sensor `k` (last read at `t_k`, estimated
@@ -447,6 +538,111 @@ mod tests {
     use super::*;
 
     const DAY: i64 = 86_400;
+
+    /// Estimates reusing the previous estimate's reads (nothing stored after its time, at
+    /// later times with the same look-back) equal, to the bit, estimates reading the store;
+    /// some sensors stop reporting, so their latest readings leave the look-back on the way.
+    #[test]
+    fn estimates_from_kept_reads_are_the_store_estimates() {
+        use gleaner_store::StoreRead;
+        use gleaner_synth::{SynthConfig, generate, write_readings_csv, write_sensors_csv};
+        let farm = generate(&SynthConfig {
+            seed: 5,
+            sensor_count: 18,
+            days: 60,
+            vw_depths_cm: vec![30],
+            t_depths_cm: vec![30],
+            ..SynthConfig::default()
+        })
+        .unwrap();
+        let tmp = tempfile::tempdir().unwrap();
+        let sensors = tmp.path().join("sensors.csv");
+        write_sensors_csv(&farm, &mut std::fs::File::create(&sensors).unwrap()).unwrap();
+        let readings = tmp.path().join("readings.csv");
+        write_readings_csv(&farm, &mut std::fs::File::create(&readings).unwrap()).unwrap();
+        let init = crate::init::InitRequest {
+            dir: tmp.path().join("farm"),
+            sensors,
+            base: Some(farm.base()),
+            ..Default::default()
+        };
+        let (mut project, _) = crate::init::init(&init).unwrap();
+        let truth = crate::simulate::Truth::from_files(
+            &project,
+            &crate::ingest::IngestRequest {
+                files: vec![readings],
+                ..Default::default()
+            },
+            DAY,
+            &crate::Silent,
+        )
+        .unwrap();
+        let cut = farm.times()[0] + 45 * DAY;
+        let mut known = truth.available_by(cut);
+        // Every third sensor stops 10 days before the cut.
+        known
+            .rows
+            .retain(|r| r.sensor % 3 != 0 || r.t <= cut - 10 * DAY);
+        let report = gleaner_ingest::IngestReport {
+            rows_read: known.rows.len() as u64,
+            readings: known.rows.len() as u64,
+            ..Default::default()
+        };
+        crate::ingest::ingest_parsed(
+            &mut project,
+            crate::ingest::Parsed {
+                files: vec![(
+                    "known".into(),
+                    crate::ingest::Format::Long,
+                    known,
+                    report.clone(),
+                )],
+                report,
+            },
+            &crate::ingest::IngestRequest::default(),
+            0,
+            &crate::Silent,
+        )
+        .unwrap();
+        let modality = Modality::new("vw@30cm").unwrap();
+        let last = project
+            .store()
+            .latest_readings(&modality, 0..=cut)
+            .unwrap()
+            .into_iter()
+            .map(|r| r.1)
+            .max()
+            .unwrap();
+        let (model, changes, _) = fit_models(&project, &modality, last).unwrap();
+        let mut reads = EstimateReads::default();
+        for day in 0..12 {
+            let at = last + day * DAY;
+            let options = (8, Estimator::Changes);
+            let fresh = estimate(
+                &project,
+                &modality,
+                (&model, &changes),
+                at,
+                14 * DAY,
+                options,
+            )
+            .unwrap();
+            let kept = estimate_with(
+                &project,
+                &modality,
+                (&model, &changes),
+                (at, 14 * DAY),
+                options,
+                (&mut reads, true),
+            )
+            .unwrap();
+            assert_eq!(format!("{fresh:?}"), format!("{kept:?}"), "day {day}");
+            if day == 6 {
+                assert!(fresh.iter().any(|e| e.last_time.is_none()), "stale sensors");
+            }
+        }
+        assert_eq!(reads.reused, 11);
+    }
 
     #[test]
     fn neighbour_changes_cover_the_targets_unseen_interval() {
