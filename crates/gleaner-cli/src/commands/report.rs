@@ -796,7 +796,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         "- Every run is its own project (an in-memory store) driven through gleaner's score, plan, \
          explore and record use cases; the planner knows only the history and what its flights \
          brought back; a reading stamped t is available from t + period on.\n\
-         - Strategies: gleaner = gleaner's method (gated S = αF·max(0, 1 + βA), F from each \
+         - Strategies: gleaner = gleaner's method (gated S = αF·max(0, 1 + 4A), F from each \
          sensor's own drift — the staleness index of its mean squared change, less the field's \
          mean, over the last year of collected readings —, bounded anomaly, γ = δ = 0) + the \
          default planner; gated = gleaner's first method (gated S with a 14-day freshness \
