@@ -27,7 +27,9 @@ use crate::init::{InitRequest, init_store};
 use crate::plan::{PlanRequest, plan_scored};
 use crate::progress::{Progress, Silent};
 use crate::project::Project;
-use crate::reconstruct::{EstimateReads, estimate_with, fit_models, target_modality};
+use crate::reconstruct::{
+    EstimateReads, SensorEstimate, estimate_with, fit_models, target_modality,
+};
 use crate::score::{ScoreRequest, compute, score};
 use crate::settings::Settings;
 use crate::simulate::{Truth, fly_buffered};
@@ -76,6 +78,13 @@ pub enum Strategy {
     /// 14-day freshness half-life and the bounded anomaly, the project's γ and δ), the
     /// default planner.
     Gated,
+    /// A clairvoyant yardstick, not a strategy a UAV could fly: each cell is worth the squared
+    /// error its sensors' pre-flight model-based estimates have against the values the flight
+    /// will bring back (the truth stamped T − period, (m³/m³)² ×10⁶ for soil water), routed by
+    /// the default planner. What choosing cells could buy at the budget if one knew the
+    /// answer (up to the planner, and to the neighbours' estimates a visit also improves); never
+    /// among [`Strategy::ALL`] nor counted as a same-energy competitor.
+    Oracle,
 }
 
 impl Strategy {
@@ -96,6 +105,14 @@ impl Strategy {
         Strategy::Gated,
     ];
 
+    /// Yardsticks run only when named: they see the truth (see [`Strategy::Oracle`]).
+    pub const YARDSTICKS: [Strategy; 1] = [Strategy::Oracle];
+
+    /// Whether the strategy sees the truth (a yardstick, not a competitor).
+    pub fn is_yardstick(self) -> bool {
+        Self::YARDSTICKS.contains(&self)
+    }
+
     /// The strategy's name in outputs and on the command line.
     pub fn name(self) -> &'static str {
         match self {
@@ -112,6 +129,7 @@ impl Strategy {
             Strategy::Without(Term::Redundancy) => "no-redundancy",
             Strategy::Variance => "variance",
             Strategy::Gated => "gated",
+            Strategy::Oracle => "oracle",
         }
     }
 
@@ -119,12 +137,14 @@ impl Strategy {
     pub fn parse(name: &str) -> Result<Self> {
         Self::ALL
             .iter()
+            .chain(&Self::YARDSTICKS)
             .copied()
             .find(|s| s.name() == name)
             .ok_or_else(|| {
                 AppError::Invalid(format!(
-                    "unknown strategy {name:?}: expected one of {}",
-                    Self::ALL.map(Strategy::name).join(", ")
+                    "unknown strategy {name:?}: expected one of {}, or the yardstick {}",
+                    Self::ALL.map(Strategy::name).join(", "),
+                    Self::YARDSTICKS.map(Strategy::name).join(", ")
                 ))
             })
     }
@@ -162,7 +182,7 @@ impl Strategy {
             Strategy::Exhaustive => 4,
             Strategy::Gleaner | Strategy::Without(_) => 3,
             Strategy::Freshness | Strategy::Gated | Strategy::Paper => 2,
-            Strategy::Variance | Strategy::RoundRobin | Strategy::Random => 1,
+            Strategy::Variance | Strategy::RoundRobin | Strategy::Random | Strategy::Oracle => 1,
             Strategy::Nearest => 0,
         }
     }
@@ -184,7 +204,8 @@ impl Strategy {
             | Strategy::RoundRobin
             | Strategy::Random
             | Strategy::Nearest
-            | Strategy::Variance => Some(self),
+            | Strategy::Variance
+            | Strategy::Oracle => Some(self),
             Strategy::Freshness
             | Strategy::Paper
             | Strategy::Gleaner
@@ -911,6 +932,29 @@ fn run_one(
                 ..ScoreRequest::default()
             },
         )?;
+        // Reconstruction of every sensor's value stamped T − period from what was known
+        // before the flights. `reuse`: nothing was written since the last estimate (the
+        // previous mission's, after its flights, which brought back only readings stamped at
+        // or before its target).
+        let target = t - period;
+        let errors_now = |project: &Project<SqliteStore>,
+                          reads: &mut EstimateReads,
+                          reuse: bool|
+         -> Result<(Errors, Vec<SensorEstimate>)> {
+            let estimates = estimate_with(
+                project,
+                &shared.modality,
+                (&shared.model, &shared.changes),
+                (target, lookback),
+                (request.neighbours, request.estimator),
+                (reads, reuse),
+            )?;
+            Ok((
+                reconstruction_errors(&estimates, &shared.series, target),
+                estimates,
+            ))
+        };
+        let (before, before_estimates) = errors_now(&project, &mut estimate_reads, true)?;
         let given: Option<Vec<f64>> = match key.strategy.selection() {
             Some(Strategy::RoundRobin) => {
                 let ages: Vec<Option<f64>> = (0..centres.len()).map(cell_age).collect();
@@ -930,6 +974,12 @@ fn run_one(
                     .collect(),
             ),
             Some(Strategy::Nearest) => Some(vec![1.0; centres.len()]),
+            Some(Strategy::Oracle) => Some(oracle_scores(
+                &before_estimates,
+                &cell_sensor_ids,
+                &shared.series,
+                target,
+            )),
             Some(Strategy::Variance) => {
                 let ages: Vec<Option<f64>> = (0..centres.len()).map(cell_age).collect();
                 let weights: Vec<f64> = cell_sensor_ids.iter().map(|s| s.len() as f64).collect();
@@ -941,26 +991,6 @@ fn run_one(
             _ => None,
         };
         let accuracy = classifier_accuracy(&scoring, &cells, &shared.class_series, t - period);
-        // Reconstruction of every sensor's value stamped T − period from what was known
-        // before the flights.
-        let target = t - period;
-        // `reuse`: nothing was written since the last estimate (the previous mission's, after
-        // its flights, which brought back only readings stamped at or before its target).
-        let errors_now = |project: &Project<SqliteStore>,
-                          reads: &mut EstimateReads,
-                          reuse: bool|
-         -> Result<Errors> {
-            let estimates = estimate_with(
-                project,
-                &shared.modality,
-                (&shared.model, &shared.changes),
-                (target, lookback),
-                (request.neighbours, request.estimator),
-                (reads, reuse),
-            )?;
-            Ok(reconstruction_errors(&estimates, &shared.series, target))
-        };
-        let before = errors_now(&project, &mut estimate_reads, true)?;
         let mut flown = Vec::new();
         let (mut energy_j, mut budget_j) = (0.0, 0.0);
         // The pre-flight scoring, handed to the planner when it scores by the utility engine
@@ -1072,7 +1102,7 @@ fn run_one(
             }
         }
         // Reconstruction of every sensor's value stamped T − period, after the flights.
-        let after = errors_now(&project, &mut estimate_reads, false)?;
+        let (after, _) = errors_now(&project, &mut estimate_reads, false)?;
         for s in &visited {
             last.insert(s.clone(), t);
         }
@@ -1114,6 +1144,28 @@ fn run_one(
     })
 }
 
+/// [`Strategy::Oracle`]'s scores in field order: per cell, the squared error of its sensors'
+/// model-based estimates against the true values stamped `target`, ×10⁶ (the unit squared:
+/// (m³/m³)² ×10⁶ for soil water), plus 10⁻⁹ so that a cell with nothing to correct still
+/// counts as a place (the planner's scores are positive).
+fn oracle_scores(
+    estimates: &[SensorEstimate],
+    cell_sensor_ids: &[Vec<SensorId>],
+    series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
+    target: UnixSeconds,
+) -> Vec<f64> {
+    let error: HashMap<&SensorId, f64> = estimates
+        .iter()
+        .filter_map(|e| {
+            value_at(series, &e.sensor, target).map(|v| (&e.sensor, (e.kriged - v).powi(2)))
+        })
+        .collect();
+    cell_sensor_ids
+        .iter()
+        .map(|ids| 1e-9 + 1e6 * ids.iter().filter_map(|s| error.get(s)).sum::<f64>())
+        .collect()
+}
+
 /// The errors of one reconstruction against the truth (see [`MissionMetrics`]).
 struct Errors {
     rmse_carried: f64,
@@ -1127,7 +1179,7 @@ struct Errors {
 /// Errors of `estimates` against the true values stamped `target` (sensors without one are
 /// left out; 0 when none has one).
 fn reconstruction_errors(
-    estimates: &[crate::reconstruct::SensorEstimate],
+    estimates: &[SensorEstimate],
     series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
     target: UnixSeconds,
 ) -> Errors {
@@ -1466,6 +1518,35 @@ mod tests {
     use super::*;
 
     const DAY: i64 = 86_400;
+
+    #[test]
+    fn oracle_scores_are_the_cells_squared_errors() {
+        let id = |s: &str| SensorId::new(s).unwrap();
+        let est = |s: &str, kriged: f64| SensorEstimate {
+            sensor: id(s),
+            position: gleaner_field::LatLon::new(0.0, 0.0).unwrap(),
+            last_time: Some(0),
+            carried: 0.0,
+            kriged,
+            variance: 1.0,
+        };
+        let estimates = [est("a", 0.10), est("b", 0.20), est("c", 0.30)];
+        let mut series = BTreeMap::new();
+        series.insert(id("a"), (vec![0, DAY], vec![0.0, 0.13]));
+        series.insert(id("b"), (vec![0, DAY], vec![0.0, 0.20]));
+        // c has no true value at the target: it adds nothing.
+        series.insert(id("c"), (vec![0], vec![0.5]));
+        let cells = vec![vec![id("a"), id("b")], vec![id("c")], vec![]];
+        let s = oracle_scores(&estimates, &cells, &series, DAY);
+        assert!(
+            (s[0] - (1e-9 + 1e6 * 0.03f64.powi(2))).abs() < 1e-9,
+            "{s:?}"
+        );
+        assert_eq!(s[1], 1e-9);
+        assert_eq!(s[2], 1e-9);
+        assert!(Strategy::Oracle.is_yardstick() && !Strategy::ALL.contains(&Strategy::Oracle));
+        assert_eq!(Strategy::parse("oracle").unwrap(), Strategy::Oracle);
+    }
 
     #[test]
     fn blocks_are_seven_days_of_missions_averaged_over_runs() {

@@ -80,13 +80,16 @@ fn no_strategy_sees_the_future() {
     let t0 = farm.times()[0];
     let history_until = t0 + 50 * DAY;
     let schedule = every(history_until, history_until + 2 * DAY, DAY).unwrap();
+    // The oracle yardstick too: it sees what every sensor's buffer holds at T, never later.
+    let mut strategies = Strategy::ALL.to_vec();
+    strategies.extend(Strategy::YARDSTICKS);
     let mut req = request(
         "synthetic",
         &project,
         init,
         history_until,
         schedule.clone(),
-        Strategy::ALL.to_vec(),
+        strategies,
     );
     req.events = Some(Vec::new());
     let before = run_campaign(&req, &truth, &Silent).unwrap();
@@ -288,6 +291,30 @@ fn caf_campaign_end_to_end() {
             .filter(|s| s.strategy != Strategy::Gleaner)
             .all(|s| s.rmse_vs_reference.is_some())
     );
+}
+
+/// The oracle yardstick (each cell worth its sensors' squared pre-flight error against what
+/// the flight brings back) leaves less error after the flights than round-robin at the same
+/// budget: its scores are the quantity the error after the flights sums.
+#[test]
+fn the_oracle_bounds_the_error_a_choice_of_cells_leaves() {
+    let result = caf_campaign_with(vec![Strategy::RoundRobin, Strategy::Oracle], 1, 2);
+    let run = |s: Strategy| {
+        &result
+            .runs
+            .iter()
+            .find(|r| r.key.strategy == s)
+            .unwrap()
+            .missions
+    };
+    let (rr, oracle) = (run(Strategy::RoundRobin), run(Strategy::Oracle));
+    let sq = |m: &[gleaner_app::campaign::MissionMetrics]| -> f64 {
+        m.iter().map(|m| m.rmse_kriged.powi(2)).sum()
+    };
+    for m in oracle {
+        assert!(m.energy_j <= m.budget_j && m.sorties == 1, "{m:?}");
+    }
+    assert!(sq(oracle) < sq(rr), "{} vs {}", sq(oracle), sq(rr));
 }
 
 /// `--sorties 2`: every mission of a planned strategy flies two disjoint batteries, each within

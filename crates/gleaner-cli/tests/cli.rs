@@ -907,20 +907,22 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
             "--farm-events",
             "2",
             "--strategies",
-            "gleaner,nearest,exhaustive",
+            "gleaner,nearest,exhaustive,oracle",
             "--planner-iterations",
             "50",
         ],
     ));
-    assert!(out.contains("1 campaign(s), 3 runs"), "{out}");
+    assert!(out.contains("1 campaign(s), 4 runs"), "{out}");
     let missions = std::fs::read_to_string(sim.join("missions.csv")).expect("missions.csv");
-    // A header, then 3 strategies x 3 missions.
-    assert_eq!(missions.lines().count(), 10, "{missions}");
+    // A header, then 4 strategies x 3 missions.
+    assert_eq!(missions.lines().count(), 13, "{missions}");
     let report = std::fs::read_to_string(sim.join("report.md")).expect("report.md");
     assert!(report.contains("| gleaner | 1 |"), "{report}");
     assert!(
         report.contains("## Against exhaustive collection")
-            && report.contains("| exhaustive | 1.00 |"),
+            && report.contains("| exhaustive | 1 | 1.00 |")
+            && report.contains("| oracle | 1 |")
+            && report.contains("oracle (when run) = a clairvoyant yardstick"),
         "{report}"
     );
     // Results files of the version before the pre-flight errors still make a report
@@ -957,7 +959,7 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     )
     .expect("write");
     let err = fail(&["report", s(&sim)]);
-    assert!(err.contains("missions.csv:11"), "{err}");
+    assert!(err.contains("missions.csv:14"), "{err}");
 
     // reconstruct on a project of its own.
     let farm = dir.path().join("farm");

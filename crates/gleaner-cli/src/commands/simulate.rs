@@ -64,7 +64,9 @@ pub struct SimulateArgs {
     /// round-robin, random, nearest, exhaustive). Names: gleaner, paper, variance,
     /// freshness, round-robin, random, nearest, exhaustive, no-freshness, no-anomaly,
     /// no-uncertainty, no-redundancy, gated (gleaner's earlier method: the gated S with a
-    /// 14-day freshness half-life).
+    /// 14-day freshness half-life). The yardstick `oracle` runs only when named: it sees the
+    /// values each flight will bring back (each cell worth its sensors' squared estimation
+    /// error), so it bounds what any choice of cells could buy; it is not a flyable strategy.
     #[arg(long, value_delimiter = ',', default_value = "main")]
     pub strategies: Vec<String>,
     /// Replicate seeds (planner and random choices).
