@@ -733,18 +733,7 @@ pub fn run_campaign(
         step_s,
         template: Some(std::sync::Mutex::new(template)),
     };
-    let mut keys = Vec::new();
-    for &strategy in &request.strategies {
-        for &seed in &request.seeds {
-            for &budget in &request.budgets {
-                keys.push(RunKey {
-                    strategy,
-                    seed,
-                    budget,
-                });
-            }
-        }
-    }
+    let keys = run_keys(request);
     progress.start(
         &format!("{}: missions", request.label),
         Some((keys.len() * request.schedule.len()) as u64),
@@ -865,6 +854,23 @@ fn classifier_accuracy(
         right += usize::from(predicted == true_class);
     }
     (total > 0).then(|| right as f64 / total as f64)
+}
+
+/// Every run of `request`: strategies, then seeds, then budgets, in the request's order.
+fn run_keys(request: &CampaignRequest) -> Vec<RunKey> {
+    let mut keys = Vec::new();
+    for &strategy in &request.strategies {
+        for &seed in &request.seeds {
+            for &budget in &request.budgets {
+                keys.push(RunKey {
+                    strategy,
+                    seed,
+                    budget,
+                });
+            }
+        }
+    }
+    keys
 }
 
 fn run_one(
@@ -1630,22 +1636,7 @@ mod tests {
             jobs: 1,
             clock_now: 0,
         };
-        let keys = |r: &CampaignRequest| -> Vec<RunKey> {
-            let mut keys = Vec::new();
-            for &strategy in &r.strategies {
-                for &seed in &r.seeds {
-                    for &budget in &r.budgets {
-                        keys.push(RunKey {
-                            strategy,
-                            seed,
-                            budget,
-                        });
-                    }
-                }
-            }
-            keys
-        };
-        let all = keys(&request);
+        let all = run_keys(&request);
         let same = same_runs(&request, &all).unwrap();
         for (k, key) in all.iter().enumerate() {
             let first = &all[same[k]];
