@@ -5,9 +5,10 @@
 //! steps — of its deviation from the field's mean at the same time (the field-wide change is
 //! what the reconstruction recovers from the neighbours; the sensor's own change is what only a
 //! visit brings) — is estimated on its collected readings of the last `drift_window_days`
-//! ([`gleaner_utility::mean_squared_change`], at least 10 pairs per lag), then shrunk halfway
-//! to the field: lag by lag the geometric mean of the sensor's and the field's median (the
-//! median alone where the sensor has too few pairs). Its staleness index
+//! ([`gleaner_utility::mean_squared_change`], at least 10 pairs per lag), then shrunk to the
+//! field: lag by lag `own^(1 − w) · median^w` with `w = drift_shrink` (default ½: the
+//! geometric mean of the sensor's and the field's median; the median alone where the sensor
+//! has too few pairs). Its staleness index
 //! ([`gleaner_utility::staleness_index`]) at the time since the sensor was last collected,
 //! summed over the cell's sensors and divided by the largest cell's, is the cell's F in [0, 1]
 //! (all 0 when no cell has drifted). Why: on CAF the one-day change of the 30 cm soil moisture
@@ -82,13 +83,14 @@ pub fn drift_index<S: Store>(
         })
         .collect();
     let step = step_s.max(1) as f64;
+    let shrink = project.settings().utility.drift_shrink;
     let index_of_sensor = |p: usize| -> f64 {
         let id = &k.sensors[p].id;
         let d: Vec<f64> = median
             .iter()
             .enumerate()
             .map(|(lag, m)| match own.get(id).and_then(|d| d[lag]) {
-                Some(x) => (x * m).sqrt(),
+                Some(x) => shrunk(x, *m, shrink),
                 None => *m,
             })
             .collect();
@@ -101,6 +103,25 @@ pub fn drift_index<S: Store>(
         .iter()
         .map(|c| c.sensors.iter().map(|&p| index_of_sensor(p)).sum())
         .collect())
+}
+
+/// A sensor's mean squared change `own` shrunk to the field's median `median` by weight
+/// `w` in [0, 1]: `own^(1 − w) · median^w` (the unit squared).
+fn shrunk(own: f64, median: f64, w: f64) -> f64 {
+    if w == 0.5 {
+        // The default's exact former arithmetic (the same bits as before the setting existed).
+        (own * median).sqrt()
+    } else if own <= 0.0 || median <= 0.0 {
+        if w >= 1.0 {
+            median
+        } else if w <= 0.0 {
+            own
+        } else {
+            0.0
+        }
+    } else {
+        own.powf(1.0 - w) * median.powf(w)
+    }
 }
 
 /// Subtracts from every reading the mean of all sensors' readings at the same time, keeping only
@@ -215,6 +236,16 @@ mod tests {
         let before = two.clone();
         remove_field_mean(&mut two);
         assert_eq!(two, before);
+    }
+
+    #[test]
+    fn shrinking_moves_a_sensor_from_its_own_drift_to_the_fields() {
+        assert_eq!(shrunk(4.0, 1.0, 0.5), 2.0);
+        assert_eq!(shrunk(4.0, 1.0, 0.0), 4.0);
+        assert_eq!(shrunk(4.0, 1.0, 1.0), 1.0);
+        assert!((shrunk(16.0, 1.0, 0.75) - 2.0).abs() < 1e-12);
+        assert_eq!(shrunk(0.0, 3.0, 1.0), 3.0);
+        assert_eq!(shrunk(0.0, 3.0, 0.25), 0.0);
     }
 
     #[test]

@@ -204,6 +204,11 @@ pub struct UtilitySection {
     /// `drift` only: days of collected readings each sensor's drift is estimated on
     /// (default 365).
     pub drift_window_days: f64,
+    /// `drift` only: how far each sensor's mean squared change is shrunk to the field's
+    /// median, in [0, 1]: lag by lag `own^(1 − w) · median^w` (default 0.5, the geometric
+    /// mean; 0 = each sensor's own, 1 = the field's median for every sensor, so F depends on
+    /// age alone).
+    pub drift_shrink: f64,
 }
 
 /// gleaner's own freshness half-life, seconds (14 days): F grows about linearly with age
@@ -256,12 +261,17 @@ impl Default for UtilitySection {
             variance_weight: 0.0,
             freshness_form: "half-life".into(),
             drift_window_days: DEFAULT_DRIFT_WINDOW_DAYS,
+            drift_shrink: DEFAULT_DRIFT_SHRINK,
         }
     }
 }
 
 /// Default of [`UtilitySection::drift_window_days`], days.
 pub const DEFAULT_DRIFT_WINDOW_DAYS: f64 = 365.0;
+
+/// Default of [`UtilitySection::drift_shrink`]: the geometric mean of a sensor's own mean
+/// squared change and the field's median.
+pub const DEFAULT_DRIFT_SHRINK: f64 = 0.5;
 
 /// Default of [`UtilitySection::condition_refit_growth`]: refit the persisted condition model
 /// once the class modality has grown by 5% since the last fit.
@@ -641,7 +651,7 @@ impl Settings {
         let u = &self.utility;
         let e = &self.energy;
         let p = &self.planner;
-        let values: [(&str, Option<f64>); 35] = [
+        let values: [(&str, Option<f64>); 36] = [
             ("field.base_alt_m", Some(f.base_alt_m)),
             ("field.cell_size_m", Some(f.cell_size_m)),
             ("field.neighbour_k", Some(f.neighbour_k as f64)),
@@ -675,6 +685,7 @@ impl Settings {
             ),
             ("utility.variance_weight", Some(u.variance_weight)),
             ("utility.drift_window_days", Some(u.drift_window_days)),
+            ("utility.drift_shrink", Some(u.drift_shrink)),
             ("energy.battery_j", e.battery_j),
             ("energy.reserve_fraction", e.reserve_fraction),
             ("energy.altitude_m", e.altitude_m),
@@ -803,6 +814,7 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ("utility.condition_refit_growth", 0.0, 10.0, false, ""),
     ("utility.variance_weight", 0.0, 1e6, false, ""),
     ("utility.drift_window_days", 1.0, 36_500.0, false, "days"),
+    ("utility.drift_shrink", 0.0, 1.0, false, ""),
     ("energy.battery_j", 0.0, 1e9, true, "J"),
     ("energy.reserve_fraction", 0.0, 0.99, false, ""),
     ("energy.altitude_m", 0.0, 120.0, true, "m"),
