@@ -332,8 +332,12 @@ carried value when no neighbour knows more). --levels: ordinary kriging of level
 sensor's mean; a separable exponential space-time covariance with a temporal nugget; the
 field's current level estimated from the data); --simple: simple kriging of levels.
 
-Example:
-  gleaner reconstruct --project caf --at 2014-03-01 --modality vw@30cm"
+--json: the `gleaner.reconstruction` document (as GET /api/v1/reconstruct): sd = the model's
+standard deviation, positions WGS84 [lon, lat].
+
+Examples:
+  gleaner reconstruct --project caf --at 2014-03-01 --modality vw@30cm
+  gleaner reconstruct --project caf --at 2014-03-01 --json"
     )]
     Reconstruct {
         #[command(flatten)]
@@ -355,6 +359,10 @@ Example:
         /// of changes.
         #[arg(long)]
         levels: bool,
+        /// Print the `gleaner.reconstruction` JSON document (as `GET /api/v1/reconstruct`)
+        /// instead of the table.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -874,6 +882,7 @@ fn run(cli: Cli) -> Result<()> {
             neighbours,
             simple,
             levels,
+            json,
         } => {
             let p = project.open()?;
             let r = app::reconstruct(
@@ -891,7 +900,12 @@ fn run(cli: Cli) -> Result<()> {
                     },
                 },
             )?;
-            print!("{}", reconstruct::table(&r));
+            emit(
+                json,
+                &gleaner_wire::convert::reconstruction(&r),
+                "reconstruction",
+                || reconstruct::table(&r),
+            )?;
         }
         Command::CrashTest(args) => {
             let (report, ok) = crash::run(&args)?;

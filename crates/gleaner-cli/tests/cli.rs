@@ -991,6 +991,42 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     );
     // Three lines of models and estimator, the header, one line per sensor.
     assert_eq!(out.lines().count(), 4 + 12, "{out}");
+    // The same estimates as a `gleaner.reconstruction` document: every sensor once, by id,
+    // the table's values (4 decimals) and sd.
+    let doc: serde_json::Value = serde_json::from_str(&ok(&[
+        "reconstruct",
+        "--project",
+        s(&p),
+        "--modality",
+        "vw@30cm",
+        "--json",
+    ]))
+    .expect("JSON");
+    assert_eq!(doc["format"], "gleaner.reconstruction");
+    assert_eq!(doc["modality"], "vw@30cm");
+    assert_eq!(doc["estimator"], "changes");
+    assert!(doc["model"]["changes_range_m"].as_f64().unwrap() > 0.0);
+    let sensors = doc["sensors"].as_array().unwrap();
+    assert_eq!(sensors.len(), 12);
+    let ids: Vec<&str> = sensors
+        .iter()
+        .map(|x| x["sensor"].as_str().unwrap())
+        .collect();
+    let mut sorted = ids.clone();
+    sorted.sort_unstable();
+    sorted.dedup();
+    assert_eq!(ids, sorted);
+    for (row, line) in sensors.iter().zip(out.lines().skip(4)) {
+        let cols: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(cols[0], row["sensor"].as_str().unwrap());
+        let table = |k: usize| cols[cols.len() - 3 + k].parse::<f64>().unwrap();
+        let json = |k: &str| row[k].as_f64().unwrap();
+        assert!((table(0) - json("carried")).abs() <= 5e-5, "{line}");
+        assert!((table(1) - json("estimate")).abs() <= 5e-5, "{line}");
+        assert!((table(2) - json("sd")).abs() <= 5e-5, "{line}");
+        let ll = row["lon_lat"].as_array().unwrap();
+        assert!(ll[0].as_f64().unwrap().abs() <= 180.0 && ll[1].as_f64().unwrap().abs() <= 90.0);
+    }
 }
 
 #[test]

@@ -10,7 +10,7 @@ use axum::extract::{Multipart, Path, Query, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use gleaner_app::{self as app, MissionId, StoreRead};
-use gleaner_wire::docs::{CellRowDoc, ExplorationDoc, ScoringDoc};
+use gleaner_wire::docs::{CellRowDoc, ExplorationDoc, ReconstructionDoc, ScoringDoc};
 use gleaner_wire::{FieldDoc, MissionDoc};
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
@@ -258,6 +258,69 @@ pub async fn score(
         .await?;
     Ok(Json(doc))
 }
+
+/// What to reconstruct (as `gleaner reconstruct`).
+#[derive(Debug, Deserialize, IntoParams)]
+#[into_params(parameter_in = Query)]
+#[serde(deny_unknown_fields)]
+pub struct ReconstructQuery {
+    /// Estimation time, RFC 3339 UTC or a date [default: the latest known reading].
+    pub at: Option<String>,
+    /// Modality, e.g. `vw@30cm` [default: `vw@30cm`, else the first `vw@...`].
+    pub modality: Option<String>,
+    /// Observations per estimate, 1..=256 [default: 16].
+    pub neighbours: Option<usize>,
+    /// `changes` (default: kriging of changes), `levels` (ordinary kriging of levels) or
+    /// `simple` (simple kriging of levels).
+    pub estimator: Option<String>,
+}
+
+/// Every sensor's estimated value and standard deviation of one modality at one time, from
+/// the readings known then (`gleaner.reconstruction`, as `gleaner reconstruct --json`).
+/// Reads only.
+#[utoipa::path(get, path = "/api/v1/reconstruct", tag = "data", params(ReconstructQuery),
+    responses((status = 200, body = ReconstructionDoc), (status = 400, body = ErrorBody),
+        (status = 500, body = ErrorBody)))]
+pub async fn reconstruct(
+    State(s): State<AppState>,
+    q: Result<Query<ReconstructQuery>, QueryRejection>,
+) -> ApiResult<Json<ReconstructionDoc>> {
+    let q = query(q)?;
+    let estimator = match q.estimator.as_deref() {
+        None => app::Estimator::Changes,
+        Some(name) => gleaner_wire::convert::estimator_from_name(name).ok_or_else(|| {
+            ApiError::bad_request(
+                Some("estimator"),
+                format!("expected changes, levels or simple, got {name:?}"),
+            )
+        })?,
+    };
+    if let Some(n) = q.neighbours
+        && !(1..=MAX_NEIGHBOURS).contains(&n)
+    {
+        return Err(ApiError::bad_request(
+            Some("neighbours"),
+            format!("expected 1..={MAX_NEIGHBOURS}, got {n}"),
+        ));
+    }
+    let request = app::ReconstructRequest {
+        at: parse_time("at", q.at.as_deref())?,
+        modality: q.modality,
+        neighbours: q.neighbours,
+        estimator,
+    };
+    let doc = s
+        .run(move |p| {
+            Ok(gleaner_wire::convert::reconstruction(&app::reconstruct(
+                p, &request,
+            )?))
+        })
+        .await?;
+    Ok(Json(doc))
+}
+
+/// Most observations per estimate a request may ask for (the kriging system is this size).
+const MAX_NEIGHBOURS: usize = 256;
 
 /// All missions (planned and flown), oldest first (`gleaner.mission` documents).
 #[utoipa::path(get, path = "/api/v1/missions", tag = "missions",

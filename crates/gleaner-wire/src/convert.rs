@@ -1,18 +1,18 @@
 //! Explicit conversions from the application layer's data to the documents.
 
 use gleaner_app::{
-    CellView, Exploration, FieldView, MissionId, MissionKind, MissionRecord, MissionStatus,
-    NewMission, PlannedMission, Scoring, driver,
+    CellView, Estimator, Exploration, FieldView, MissionId, MissionKind, MissionRecord,
+    MissionStatus, NewMission, PlannedMission, Reconstruction, Scoring, driver,
 };
 use gleaner_ingest::time::format_rfc3339;
 
 use crate::docs::{
-    CellRowDoc, CellScoresDoc, ConditionDoc, CorrelationDoc, ExplorationDoc, ScoreRowDoc,
-    ScoringDoc, SummaryDoc,
+    CellRowDoc, CellScoresDoc, ConditionDoc, CorrelationDoc, ExplorationDoc, ReconstructionDoc,
+    ReconstructionModelDoc, ScoreRowDoc, ScoringDoc, SensorEstimateDoc, SummaryDoc, VariogramDoc,
 };
 use crate::{
     BaselineDoc, CellDoc, EnergyDoc, FIELD_FORMAT, FieldDoc, MISSION_FORMAT, MissionDoc,
-    ProfileDoc, ScoresDoc, SensorDoc, StopDoc, VERSION,
+    ProfileDoc, RECONSTRUCTION_FORMAT, ScoresDoc, SensorDoc, StopDoc, VERSION,
 };
 
 fn lon_lat(p: gleaner_field::LatLon) -> [f64; 2] {
@@ -278,6 +278,65 @@ pub fn scoring(s: &Scoring) -> ScoringDoc {
         }),
         warnings: s.warnings.clone(),
         cells,
+    }
+}
+
+/// The name of a reconstruction's estimator in documents and queries: `changes`, `levels`
+/// (ordinary kriging of levels) or `simple` (simple kriging of levels).
+pub fn estimator_name(e: Estimator) -> &'static str {
+    match e {
+        Estimator::Changes => "changes",
+        Estimator::Levels(gleaner_kriging::Mean::Unknown) => "levels",
+        Estimator::Levels(gleaner_kriging::Mean::Known) => "simple",
+    }
+}
+
+/// The estimator named by [`estimator_name`], if any.
+pub fn estimator_from_name(name: &str) -> Option<Estimator> {
+    match name {
+        "changes" => Some(Estimator::Changes),
+        "levels" => Some(Estimator::Levels(gleaner_kriging::Mean::Unknown)),
+        "simple" => Some(Estimator::Levels(gleaner_kriging::Mean::Known)),
+        _ => None,
+    }
+}
+
+/// A reconstruction: every sensor's estimate (sd = √variance), sensors by id.
+pub fn reconstruction(r: &Reconstruction) -> ReconstructionDoc {
+    let variogram = |v: gleaner_kriging::Variogram| VariogramDoc {
+        nugget: v.nugget,
+        partial: v.partial,
+        scale_s: v.scale_s,
+    };
+    let c = r.model.covariance;
+    ReconstructionDoc {
+        format: RECONSTRUCTION_FORMAT.into(),
+        version: VERSION,
+        at: format_rfc3339(r.at),
+        modality: r.modality.clone(),
+        estimator: estimator_name(r.estimator).into(),
+        step_s: r.step_s,
+        model: ReconstructionModelDoc {
+            levels_sill: c.sill,
+            levels_nugget: c.nugget,
+            levels_range_m: c.range_m,
+            levels_time_scale_s: c.time_scale_s,
+            changes_shared: variogram(r.changes.shared),
+            changes_range_m: r.changes.range_m,
+            changes_own: variogram(r.changes.own),
+        },
+        sensors: r
+            .sensors
+            .iter()
+            .map(|s| SensorEstimateDoc {
+                sensor: s.sensor.as_str().to_string(),
+                lon_lat: lon_lat(s.position),
+                last_reading: s.last_time.map(format_rfc3339),
+                carried: s.carried,
+                estimate: s.kriged,
+                sd: s.variance.max(0.0).sqrt(),
+            })
+            .collect(),
     }
 }
 

@@ -169,3 +169,78 @@ pub struct ExplorationDoc {
     /// The sorties.
     pub sorties: Vec<crate::MissionDoc>,
 }
+
+/// A temporal variogram of changes, `nugget + partial · (1 − exp(−h / scale_s))` at lag
+/// h > 0, the modality's unit squared.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct VariogramDoc {
+    /// Jump at any positive lag, the unit squared.
+    pub nugget: f64,
+    /// Further growth up to the sill, the unit squared.
+    pub partial: f64,
+    /// E-folding time of that growth, s.
+    pub scale_s: f64,
+}
+
+/// The models a reconstruction was made with, fitted on the known readings.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ReconstructionModelDoc {
+    /// Levels: residual sill, the unit squared.
+    pub levels_sill: f64,
+    /// Levels: nugget, the unit squared.
+    pub levels_nugget: f64,
+    /// Levels: spatial range, m.
+    pub levels_range_m: f64,
+    /// Levels: time scale, s.
+    pub levels_time_scale_s: f64,
+    /// Changes: the field-wide part's temporal variogram.
+    pub changes_shared: VariogramDoc,
+    /// Changes: spatial e-folding distance of the field-wide part, m.
+    pub changes_range_m: f64,
+    /// Changes: each sensor's own part's temporal variogram.
+    pub changes_own: VariogramDoc,
+}
+
+/// One sensor's estimated value.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct SensorEstimateDoc {
+    /// Sensor id.
+    pub sensor: String,
+    /// Position, WGS84 [lon, lat] degrees.
+    pub lon_lat: [f64; 2],
+    /// Its latest known reading's time, RFC 3339 UTC (none: never read).
+    pub last_reading: Option<String>,
+    /// Last value carried forward (its mean when never read), the modality's unit.
+    pub carried: f64,
+    /// Model-based estimate, the modality's unit.
+    pub estimate: f64,
+    /// Its standard deviation under the model, the modality's unit.
+    pub sd: f64,
+}
+
+/// Every sensor's estimated value of one modality at one time from what is known
+/// (`gleaner reconstruct --json`, `GET /api/v1/reconstruct`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ReconstructionDoc {
+    /// Always [`crate::RECONSTRUCTION_FORMAT`].
+    pub format: String,
+    /// Always [`crate::VERSION`] when written by this build.
+    pub version: u32,
+    /// Estimation time, RFC 3339 UTC.
+    pub at: String,
+    /// The modality (e.g. `vw@30cm`).
+    pub modality: String,
+    /// `changes` (kriging of changes: last value plus the neighbours' known changes since),
+    /// `levels` (ordinary kriging of levels) or `simple` (simple kriging of levels).
+    pub estimator: String,
+    /// Sampling step of the modality's readings, s.
+    pub step_s: i64,
+    /// The fitted models.
+    pub model: ReconstructionModelDoc,
+    /// One per sensor, by id.
+    pub sensors: Vec<SensorEstimateDoc>,
+}

@@ -110,6 +110,8 @@ pub use geo::{
 pub const MISSION_FORMAT: &str = "gleaner.mission";
 /// Format name and version of [`FieldDoc`].
 pub const FIELD_FORMAT: &str = "gleaner.field";
+/// `format` of [`docs::ReconstructionDoc`].
+pub const RECONSTRUCTION_FORMAT: &str = "gleaner.reconstruction";
 /// The version of the documents this build writes.
 pub const VERSION: u32 = 1;
 

@@ -458,3 +458,63 @@ proptest! {
         let _ = geojson(&f, &m);
     }
 }
+
+/// A two-sensor reconstruction: one read at the estimation time, one never read.
+fn reconstruction_sample() -> gleaner_app::Reconstruction {
+    use gleaner_app::{Estimator, Reconstruction, SensorEstimate};
+    use gleaner_field::{LatLon, SensorId};
+    use gleaner_kriging::{Covariance, FieldModel, IncrementModel, Variogram};
+    let v = |nugget, partial, scale_s| Variogram {
+        nugget,
+        partial,
+        scale_s,
+    };
+    Reconstruction {
+        at: 1_393_632_000, // 2014-03-01
+        modality: "vw@30cm".into(),
+        model: FieldModel {
+            covariance: Covariance::new(3.3e-3, 9.6e-4, 9_946.0, 9.75e6).unwrap(),
+            means: vec![0.25, 0.30],
+        },
+        changes: IncrementModel::new(v(1e-5, 2e-4, 5e5), 97_369.0, v(2e-5, 3e-4, 4e5)).unwrap(),
+        estimator: Estimator::Changes,
+        step_s: 86_400,
+        sensors: vec![
+            SensorEstimate {
+                sensor: SensorId::new("CAF003").unwrap(),
+                position: LatLon::new(46.778784, -117.086666).unwrap(),
+                last_time: Some(1_393_632_000),
+                carried: 0.312,
+                kriged: 0.312,
+                variance: 0.0,
+            },
+            SensorEstimate {
+                sensor: SensorId::new("CAF007").unwrap(),
+                position: LatLon::new(46.778623, -117.084989).unwrap(),
+                last_time: None,
+                carried: 0.30,
+                kriged: 0.287,
+                variance: 4e-4,
+            },
+        ],
+    }
+}
+
+#[test]
+fn reconstruction_document() {
+    let doc = crate::convert::reconstruction(&reconstruction_sample());
+    assert_eq!(doc.format, RECONSTRUCTION_FORMAT);
+    // [lon, lat], sd = √variance, never read = no time.
+    assert_eq!(doc.sensors[0].lon_lat, [-117.086666, 46.778784]);
+    assert!((doc.sensors[1].sd - 0.02).abs() < 1e-15);
+    assert_eq!(doc.sensors[1].last_reading, None);
+    let text = serde_json::to_string_pretty(&doc).unwrap();
+    let back: docs::ReconstructionDoc = serde_json::from_str(&text).unwrap();
+    assert_eq!(back, doc);
+    insta::assert_snapshot!("reconstruction.json", text);
+    for name in ["changes", "levels", "simple"] {
+        let e = crate::convert::estimator_from_name(name).unwrap();
+        assert_eq!(crate::convert::estimator_name(e), name);
+    }
+    assert!(crate::convert::estimator_from_name("kriging").is_none());
+}

@@ -9,12 +9,13 @@ use gleaner_server::handlers::MISSION_FILES;
 use crate::common::{Server, TOKEN, caf_project, flight_csv};
 
 /// Every API route (method, path as in the OpenAPI document).
-const ROUTES: [(&str, &str); 15] = [
+const ROUTES: [(&str, &str); 16] = [
     ("get", "/api/v1/project"),
     ("get", "/api/v1/field"),
     ("get", "/api/v1/cells"),
     ("get", "/api/v1/cells/{cell}"),
     ("post", "/api/v1/score"),
+    ("get", "/api/v1/reconstruct"),
     ("get", "/api/v1/missions"),
     ("get", "/api/v1/missions/{id}"),
     ("post", "/api/v1/plan"),
@@ -86,6 +87,65 @@ fn openapi_lists_every_route_and_every_route_answers() {
                 "{method} {path} is not routed: {}",
                 r.text()
             );
+        }
+    }
+}
+
+#[test]
+fn reconstructs_every_sensor_and_refuses_bad_queries_naming_the_field() {
+    let server = Server::caf();
+    let doc = server.get_json("/api/v1/reconstruct?at=2013-12-01&estimator=changes");
+    assert_eq!(doc["format"], "gleaner.reconstruction");
+    assert_eq!(doc["version"], 1);
+    assert_eq!(doc["modality"], "vw@30cm");
+    assert_eq!(doc["estimator"], "changes");
+    assert_eq!(doc["at"], "2013-12-01T00:00:00Z");
+    assert_eq!(doc["step_s"], 86_400);
+    let sensors = doc["sensors"].as_array().unwrap();
+    assert_eq!(sensors.len(), 42);
+    // Soil moisture, m³/m³: every estimate a water content, every sd finite and >= 0, nothing
+    // read after `at`; a sensor read at `at` itself has no change to estimate: its estimate
+    // is its reading, with no variance.
+    let mut read_at_t = 0;
+    for x in sensors {
+        let v = x["estimate"].as_f64().unwrap();
+        assert!((0.0..=0.7).contains(&v), "{x}");
+        assert!(x["sd"].as_f64().unwrap() >= 0.0, "{x}");
+        let last = x["last_reading"].as_str().unwrap();
+        assert!(last <= "2013-12-01T00:00:00Z", "{x}");
+        if last == "2013-12-01T00:00:00Z" {
+            read_at_t += 1;
+            assert_eq!(x["estimate"], x["carried"], "{x}");
+            assert_eq!(x["sd"], 0.0, "{x}");
+        }
+    }
+    assert!(read_at_t > 0);
+    // The estimators differ; the default is kriging of changes.
+    let default = server.get_json("/api/v1/reconstruct?at=2013-12-01");
+    assert_eq!(default, doc);
+    let levels = server.get_json("/api/v1/reconstruct?at=2013-12-01&estimator=levels&neighbours=8");
+    assert_eq!(levels["estimator"], "levels");
+    assert_eq!(levels["sensors"].as_array().unwrap().len(), 42);
+    assert_ne!(levels["sensors"], doc["sensors"]);
+
+    let mut c = server.client();
+    for (query, field) in [
+        ("estimator=best", Some("estimator")),
+        ("at=yesterday", Some("at")),
+        ("neighbours=0", Some("neighbours")),
+        ("neighbours=-1", None),
+        ("colour=red", None),
+        ("modality=vw@", None),
+    ] {
+        let r = c
+            .request("GET", &format!("/api/v1/reconstruct?{query}"), &[], None)
+            .unwrap();
+        assert_eq!(r.status, 400, "{query}: {}", r.text());
+        let (code, f, reason) = error(&r);
+        assert_eq!(code, "bad_request", "{query}");
+        assert!(!reason.is_empty());
+        if field.is_some() {
+            assert_eq!(f.as_deref(), field, "{query}: {reason}");
         }
     }
 }
