@@ -418,7 +418,94 @@ fn exhaustive_section(md: &mut String, summaries: &[Summary], main_budget: f64) 
         )?;
     }
     writeln!(md)?;
+    // Where each strategy run at several budgets comes within 20% (kriging, before the flights).
+    let mut lines = Vec::new();
+    let mut seen: Vec<Strategy> = Vec::new();
+    for s in summaries {
+        if s.strategy == Strategy::Exhaustive || seen.contains(&s.strategy) {
+            continue;
+        }
+        seen.push(s.strategy);
+        let points: Vec<(f64, f64)> = summaries
+            .iter()
+            .filter(|x| x.strategy == s.strategy)
+            .map(|x| {
+                (
+                    mean(x, "energy_kj") / ex_energy,
+                    mean(x, "rmse_kriged_before") / ex_kriged,
+                )
+            })
+            .collect();
+        if points.len() < 2 {
+            continue;
+        }
+        let text = match energy_at_ratio(&points, WITHIN) {
+            Crossing::Between(e) => format!("≈ {e:.2} (linear between the budgets run)"),
+            Crossing::AtLeast(e) => format!("≤ {e:.2} (already at the smallest budget run)"),
+            Crossing::Beyond { energy, ratio } => {
+                format!("beyond the budgets run (best: {ratio:.2}× at {energy:.2})")
+            }
+        };
+        lines.push(format!("| {} | {text} |", s.strategy.name()));
+    }
+    if !lines.is_empty() {
+        writeln!(
+            md,
+            "Energy (as a share of exhaustive collection's) at which each strategy's error before \
+             the flights comes within {:.0}% of exhaustive collection's (kriging):\n\n\
+             | strategy | energy / exhaustive at {WITHIN}× |\n|---|---|",
+            (WITHIN - 1.0) * 100.0
+        )?;
+        for l in lines {
+            writeln!(md, "{l}")?;
+        }
+        writeln!(md)?;
+    }
     Ok(())
+}
+
+/// The method's target ratio to exhaustive collection's error.
+const WITHIN: f64 = 1.2;
+
+/// Where a strategy's error ratio reaches a target, along its budgets.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Crossing {
+    /// Reached between two budgets run: the energy ratio interpolated linearly.
+    Between(f64),
+    /// Already reached at the smallest energy run (this one).
+    AtLeast(f64),
+    /// Never reached: the smallest ratio and its energy.
+    Beyond { energy: f64, ratio: f64 },
+}
+
+/// The smallest energy ratio at which `points` ((energy ratio, error ratio) pairs, any order;
+/// at least one) reach `target` or less, walking up in energy: linear between the last run
+/// above the target and the first at or below it.
+fn energy_at_ratio(points: &[(f64, f64)], target: f64) -> Crossing {
+    let mut p: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|(e, r)| e.is_finite() && r.is_finite())
+        .collect();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for (k, &(e, r)) in p.iter().enumerate() {
+        if r <= target {
+            if k == 0 {
+                return Crossing::AtLeast(e);
+            }
+            let (e0, r0) = p[k - 1];
+            return Crossing::Between(e0 + (e - e0) * (r0 - target) / (r0 - r));
+        }
+    }
+    let best = p
+        .iter()
+        .copied()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap_or((f64::NAN, f64::NAN));
+    Crossing::Beyond {
+        energy: best.0,
+        ratio: best.1,
+    }
 }
 
 /// What a metric is, for tables and chart labels: (title, unit label, scale, decimals).
@@ -820,4 +907,35 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
     let path = dir.join("report.md");
     write(&path, &md)?;
     Ok(path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn energy_at_ratio_interpolates_between_the_budgets_around_the_target() {
+        // caf-daily-energy's gleaner: 1.48 at 0.35, 1.24 at 0.49, 1.16 at 0.61 (any order).
+        let p = [(0.61, 1.16), (0.35, 1.48), (0.49, 1.24), (0.74, 1.07)];
+        let Crossing::Between(e) = energy_at_ratio(&p, 1.2) else {
+            panic!("expected a crossing")
+        };
+        assert!((e - 0.55).abs() < 1e-12, "{e}");
+        assert_eq!(
+            energy_at_ratio(&[(0.3, 1.1), (0.5, 1.0)], 1.2),
+            Crossing::AtLeast(0.3)
+        );
+        assert_eq!(
+            energy_at_ratio(&[(0.3, 1.9), (0.5, 1.4), (0.7, 1.5)], 1.2),
+            Crossing::Beyond {
+                energy: 0.5,
+                ratio: 1.4
+            }
+        );
+        // Exactly at the target counts; non-finite points are ignored.
+        assert_eq!(
+            energy_at_ratio(&[(f64::NAN, 1.0), (0.4, 1.3), (0.6, 1.2)], 1.2),
+            Crossing::Between(0.6)
+        );
+    }
 }
