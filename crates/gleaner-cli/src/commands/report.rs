@@ -464,6 +464,43 @@ fn exhaustive_section(md: &mut String, summaries: &[Summary], main_budget: f64) 
     Ok(())
 }
 
+/// Strategies whose every run (each campaign, seed and budget) has exactly the results of an
+/// earlier strategy's run (in the summaries' order), mission by mission and event by event:
+/// (the strategy, the earlier one). Floats compare by their printed value (NaN equals NaN).
+fn same_runs(results: &[CampaignResult], summaries: &[Summary]) -> Vec<(Strategy, Strategy)> {
+    let mut order: Vec<Strategy> = Vec::new();
+    for s in summaries {
+        if !order.contains(&s.strategy) {
+            order.push(s.strategy);
+        }
+    }
+    let same = |a: &RunResult, b: &RunResult| {
+        format!("{:?} {:?}", a.missions, a.caught) == format!("{:?} {:?}", b.missions, b.caught)
+    };
+    let mut out = Vec::new();
+    for (k, &b) in order.iter().enumerate() {
+        let earlier = order[..k].iter().copied().find(|&a| {
+            let mut any = false;
+            let all = results.iter().all(|c| {
+                c.runs.iter().filter(|r| r.key.strategy == b).all(|rb| {
+                    any = true;
+                    c.runs.iter().any(|ra| {
+                        ra.key.strategy == a
+                            && ra.key.seed == rb.key.seed
+                            && ra.key.budget == rb.key.budget
+                            && same(ra, rb)
+                    })
+                })
+            });
+            any && all
+        });
+        if let Some(a) = earlier {
+            out.push((b, a));
+        }
+    }
+    out
+}
+
 /// The method's target ratio to exhaustive collection's error.
 const WITHIN: f64 = 1.2;
 
@@ -701,6 +738,21 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         )?;
     }
     writeln!(md)?;
+    let shared = same_runs(&results, &summaries);
+    if !shared.is_empty() {
+        let text: Vec<String> = shared
+            .iter()
+            .map(|(b, a)| format!("`{}` = `{}`", b.name(), a.name()))
+            .collect();
+        writeln!(
+            md,
+            "Identical results mission by mission: {}. (Runs with the same settings are \
+             computed once: gleaner's method has γ = δ = 0, so its `no-uncertainty` and \
+             `no-redundancy` ablations are gleaner's run; different strategies can also choose \
+             the same cells at every mission.)\n",
+            text.join(", ")
+        )?;
+    }
     let rows: Vec<IntervalRow> = at_main
         .iter()
         .map(|s| {
