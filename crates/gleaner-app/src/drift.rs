@@ -22,7 +22,7 @@ use gleaner_utility::CellTerms;
 
 use crate::Store;
 use crate::error::{AppError, Result};
-use crate::knowledge::Knowledge;
+use crate::knowledge::{History, Knowledge};
 use crate::project::Project;
 
 /// Lags of the structure functions, grid steps.
@@ -31,21 +31,35 @@ pub const DRIFT_MAX_LAG: usize = 90;
 const MIN_PAIRS: usize = 10;
 
 /// Each cell's drift index (field order; value unit² × grid steps) at `t`, from the readings
-/// of `modality` in the store within `window_s` seconds before `t` (grid step: the median gap
-/// between a sensor's readings) and each sensor's last collection in `k`; see the module docs.
+/// of `modality` in the store within `window_s` seconds before `t` that the scoring knows
+/// (those of `history`, and later ones a recorded collection brought back: a sensor's
+/// readings up to the later of `history.until` and its last collection in `k`, as
+/// [`Knowledge`] keeps them; grid step: the median gap between a sensor's readings) and each
+/// sensor's last collection in `k`; see the module docs.
 pub fn drift_index<S: Store>(
     project: &Project<S>,
     k: &Knowledge,
     modality: &Modality,
     t: UnixSeconds,
     window_s: i64,
+    history: &History,
 ) -> Result<Vec<f64>> {
-    let batch = project
-        .store()
-        .readings_for(Some(modality), t.saturating_sub(window_s.max(0))..=t)?;
+    let from = t.saturating_sub(window_s.max(0)).max(history.from);
+    if from > t {
+        return Ok(vec![0.0; k.field.cells().len()]);
+    }
+    let batch = project.store().readings_for(Some(modality), from..=t)?;
+    let known_until: HashMap<&SensorId, UnixSeconds> = k
+        .sensors
+        .iter()
+        .zip(&k.last_collected)
+        .map(|(s, l)| (&s.id, history.until.max(l.unwrap_or(UnixSeconds::MIN))))
+        .collect();
     let mut series: HashMap<&SensorId, Vec<(UnixSeconds, f64)>> = HashMap::new();
     for r in &batch.rows {
-        if let Some(s) = batch.sensors.get(r.sensor as usize) {
+        if let Some(s) = batch.sensors.get(r.sensor as usize)
+            && known_until.get(s).is_none_or(|&u| r.t <= u)
+        {
             series.entry(s).or_default().push((r.t, r.value));
         }
     }

@@ -238,12 +238,16 @@ pub fn compute<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result
         Some(scoring) => scoring,
         None => compute_history(project, request)?,
     };
-    with_freshness_form(project, scoring)
+    with_freshness_form(project, scoring, &request.history)
 }
 
 /// F as `[utility] freshness_form` asks: the half-life's (as computed) or, with `drift`, each
-/// cell's drift freshness, S recomputed (`drift.rs`).
-fn with_freshness_form<S: Store>(project: &Project<S>, mut scoring: Scoring) -> Result<Scoring> {
+/// cell's drift freshness from the readings `history` knows, S recomputed (`drift.rs`).
+fn with_freshness_form<S: Store>(
+    project: &Project<S>,
+    mut scoring: Scoring,
+    history: &History,
+) -> Result<Scoring> {
     let u = &project.settings().utility;
     if u.freshness_form == "drift" {
         let k = &scoring.knowledge;
@@ -257,6 +261,7 @@ fn with_freshness_form<S: Store>(project: &Project<S>, mut scoring: Scoring) -> 
                     &modality,
                     scoring.t,
                     (u.drift_window_days * 86_400.0) as i64,
+                    history,
                 )?;
                 let config = u.to_core(&k.modalities)?;
                 crate::drift::apply(&mut scoring.terms, &index, &config)?;
@@ -275,7 +280,11 @@ fn with_freshness_form<S: Store>(project: &Project<S>, mut scoring: Scoring) -> 
 /// [`compute`] from the stored history, never from the persisted state: loads every reading
 /// known at t and refits the condition model. O(history).
 pub fn compute_full<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
-    with_freshness_form(project, compute_history(project, request)?)
+    with_freshness_form(
+        project,
+        compute_history(project, request)?,
+        &request.history,
+    )
 }
 
 /// [`compute_full`] before `[utility] freshness_form` is applied.

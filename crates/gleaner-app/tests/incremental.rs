@@ -497,3 +497,53 @@ fn drift_freshness_on_caf() {
     let low = fs.iter().copied().fold(1.0, f64::min);
     assert!(low < 0.4, "smallest F {low} of {fs:?}");
 }
+
+/// The drift freshness knows only what the scoring knows: a project holding 2012–2013 scored
+/// with history until the end of 2012 gets the F of a project holding 2012 alone (not the
+/// drift of the first half of 2013, which it has not been told about).
+#[test]
+fn drift_freshness_reads_only_the_scorings_history() {
+    let data = shared_data();
+    let daily = data.join("caf/Daily");
+    let tmp = tempfile::tempdir().unwrap();
+    let make = |name: &str, years: std::ops::RangeInclusive<i32>| {
+        let dir = tmp.path().join(name);
+        init_caf(&data, &dir);
+        let mut settings = app::Settings::load(&dir).unwrap();
+        settings.utility = settings.utility.gleaner();
+        settings.save(&dir).unwrap();
+        let mut project = app::Project::open(&dir).unwrap();
+        let files = caf_files(&daily, &tmp.path().join(format!("in-{name}")), years);
+        common::ingest_files(&mut project, files);
+        project
+    };
+    let both = make("both", 2012..=2013);
+    let first = make("first", 2012..=2012);
+    let t = app::parse_timestamp("2013-07-01").unwrap();
+    let request = |until: Option<i64>| app::ScoreRequest {
+        at: Some(t),
+        history: app::History {
+            until: until.unwrap_or(i64::MAX),
+            ..app::History::default()
+        },
+        dry_run: true,
+        ..Default::default()
+    };
+    let until_2012 = app::parse_timestamp("2012-12-31").unwrap();
+    let told = app::compute(&both, &request(Some(until_2012))).unwrap();
+    let alone = app::compute(&first, &request(None)).unwrap();
+    let everything = app::compute(&both, &request(None)).unwrap();
+    assert!(told.anomaly_form.ends_with("F drift"));
+    assert!(told.terms.iter().any(|c| c.f > 0.0));
+    for (a, b) in told.terms.iter().zip(&alone.terms) {
+        assert!((a.f - b.f).abs() <= 1e-12, "F {} against {}", a.f, b.f);
+    }
+    // Told everything, the same project's F differs (the comparison above can fail).
+    let moved = told
+        .terms
+        .iter()
+        .zip(&everything.terms)
+        .filter(|(a, b)| (a.f - b.f).abs() > 1e-6)
+        .count();
+    assert!(moved > 0);
+}
