@@ -49,16 +49,31 @@ pub fn drift_index<S: Store>(
         return Ok(vec![0.0; k.field.cells().len()]);
     }
     let batch = project.store().readings_for(Some(modality), from..=t)?;
-    let known_until: HashMap<&SensorId, UnixSeconds> = k
-        .sensors
-        .iter()
-        .zip(&k.last_collected)
-        .map(|(s, l)| (&s.id, history.until.max(l.unwrap_or(UnixSeconds::MIN))))
-        .collect();
+    // Per sensor of the batch: its latest known reading time (everything when the history
+    // is unbounded, the common case).
+    let known_until: Vec<UnixSeconds> = if history.until == UnixSeconds::MAX {
+        vec![UnixSeconds::MAX; batch.sensors.len()]
+    } else {
+        let collected: HashMap<&SensorId, Option<UnixSeconds>> = k
+            .sensors
+            .iter()
+            .zip(&k.last_collected)
+            .map(|(s, l)| (&s.id, *l))
+            .collect();
+        batch
+            .sensors
+            .iter()
+            .map(|s| {
+                let l = collected.get(s).copied().flatten();
+                history.until.max(l.unwrap_or(UnixSeconds::MIN))
+            })
+            .collect()
+    };
     let mut series: HashMap<&SensorId, Vec<(UnixSeconds, f64)>> = HashMap::new();
     for r in &batch.rows {
-        if let Some(s) = batch.sensors.get(r.sensor as usize)
-            && known_until.get(s).is_none_or(|&u| r.t <= u)
+        let k = r.sensor as usize;
+        if let Some(s) = batch.sensors.get(k)
+            && r.t <= known_until[k]
         {
             series.entry(s).or_default().push((r.t, r.value));
         }
