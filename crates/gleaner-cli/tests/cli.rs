@@ -897,6 +897,50 @@ fn small_farm_simulation<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
     args
 }
 
+/// The report names runs with identical results (gleaner's no-redundancy ablation is gleaner's
+/// run: γ = δ = 0) and, with several budgets, where each strategy comes within 20% of
+/// exhaustive collection.
+#[test]
+fn report_names_identical_runs_and_the_energy_within_20_percent() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sim = dir.path().join("sim");
+    ok(&small_farm_simulation(
+        &sim,
+        &[
+            "--farm-events",
+            "2",
+            "--strategies",
+            "gleaner,no-redundancy,nearest,exhaustive",
+            "--budgets",
+            "1,2",
+            "--planner-iterations",
+            "50",
+        ],
+    ));
+    let report = std::fs::read_to_string(sim.join("report.md")).expect("report.md");
+    assert!(
+        report.contains("Identical results mission by mission: `no-redundancy` = `gleaner`."),
+        "{report}"
+    );
+    assert!(!report.contains("`nearest` = "), "{report}");
+    assert!(
+        report.contains("| strategy | energy / exhaustive at 1.2× |"),
+        "{report}"
+    );
+    for name in ["gleaner", "no-redundancy", "nearest"] {
+        let row = report
+            .lines()
+            .find(|l| {
+                l.starts_with(&format!("| {name} | "))
+                    && (l.contains("linear between")
+                        || l.contains("smallest budget")
+                        || l.contains("beyond"))
+            })
+            .unwrap_or_else(|| panic!("no 1.2× row for {name}: {report}"));
+        assert!(!row.contains("NaN"), "{row}");
+    }
+}
+
 #[test]
 fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     let dir = tempfile::tempdir().expect("temp dir");
