@@ -22,7 +22,7 @@ use gleaner_utility::CellTerms;
 
 use crate::Store;
 use crate::error::{AppError, Result};
-use crate::knowledge::{History, Knowledge};
+use crate::knowledge::{History, Knowledge, known_until};
 use crate::project::Project;
 
 /// Lags of the structure functions, grid steps.
@@ -51,7 +51,7 @@ pub fn drift_index<S: Store>(
     let batch = project.store().readings_for(Some(modality), from..=t)?;
     // Per sensor of the batch: its latest known reading time (everything when the history
     // is unbounded, the common case).
-    let known_until: Vec<UnixSeconds> = if history.until == UnixSeconds::MAX {
+    let cutoff: Vec<UnixSeconds> = if history.until == UnixSeconds::MAX {
         vec![UnixSeconds::MAX; batch.sensors.len()]
     } else {
         let collected: HashMap<&SensorId, Option<UnixSeconds>> = k
@@ -63,17 +63,14 @@ pub fn drift_index<S: Store>(
         batch
             .sensors
             .iter()
-            .map(|s| {
-                let l = collected.get(s).copied().flatten();
-                history.until.max(l.unwrap_or(UnixSeconds::MIN))
-            })
+            .map(|s| known_until(t, history.until, collected.get(s).copied().flatten()))
             .collect()
     };
     let mut series: HashMap<&SensorId, Vec<(UnixSeconds, f64)>> = HashMap::new();
     for r in &batch.rows {
-        let k = r.sensor as usize;
-        if let Some(s) = batch.sensors.get(k)
-            && r.t <= known_until[k]
+        let j = r.sensor as usize;
+        if let Some(s) = batch.sensors.get(j)
+            && r.t <= cutoff[j]
         {
             series.entry(s).or_default().push((r.t, r.value));
         }
@@ -140,15 +137,8 @@ fn shrunk(own: f64, median: f64, w: f64) -> f64 {
     if w == 0.5 {
         // The default's exact former arithmetic (the same bits as before the setting existed).
         (own * median).sqrt()
-    } else if own <= 0.0 || median <= 0.0 {
-        if w >= 1.0 {
-            median
-        } else if w <= 0.0 {
-            own
-        } else {
-            0.0
-        }
     } else {
+        // 0^0 = 1: w = 0 gives `own`, w = 1 gives `median`, even where either is 0.
         own.powf(1.0 - w) * median.powf(w)
     }
 }

@@ -129,9 +129,20 @@ pub(crate) struct Columns {
     pub grid: TimeGrid,
 }
 
+/// The latest reading time a scoring at `t_max` knows of a sensor, seconds: the history's
+/// `until`, or later when a recorded collection (`collected`, seconds) brought readings
+/// back, never after `t_max`. [`columns`] and the drift freshness keep readings by it.
+pub(crate) fn known_until(
+    t_max: UnixSeconds,
+    until: UnixSeconds,
+    collected: Option<UnixSeconds>,
+) -> UnixSeconds {
+    t_max.min(until.max(collected.unwrap_or(UnixSeconds::MIN)))
+}
+
 /// Sorts `batch` into [`Columns`] for `sensors` (sorted by id). A reading is kept when its
-/// time is at or before `t_max` and at or before the later of `until` and its sensor's
-/// recorded collection (`collected`, seconds). `grid`: use this grid instead of deriving it.
+/// time is at or before [`known_until`] of its sensor's recorded collection
+/// (`collected`, seconds). `grid`: use this grid instead of deriving it.
 pub(crate) fn columns(
     sensors: &[Sensor],
     batch: &ReadingBatch,
@@ -170,7 +181,7 @@ pub(crate) fn columns(
             continue;
         };
         let own = collected.get(s).copied().flatten();
-        if r.t > t_max.min(until.max(own.unwrap_or(UnixSeconds::MIN))) {
+        if r.t > known_until(t_max, until, own) {
             continue;
         }
         let Some(&m) = mpos.get(r.modality as usize) else {

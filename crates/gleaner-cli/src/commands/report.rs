@@ -474,25 +474,34 @@ fn same_runs(results: &[CampaignResult], summaries: &[Summary]) -> Vec<(Strategy
             order.push(s.strategy);
         }
     }
-    let same = |a: &RunResult, b: &RunResult| {
-        format!("{:?} {:?}", a.missions, a.caught) == format!("{:?} {:?}", b.missions, b.caught)
-    };
+    // Each run once: (campaign, key, its results as text).
+    let runs: Vec<(usize, &RunKey, String)> = results
+        .iter()
+        .enumerate()
+        .flat_map(|(c, campaign)| {
+            campaign
+                .runs
+                .iter()
+                .map(move |r| (c, &r.key, format!("{:?} {:?}", r.missions, r.caught)))
+        })
+        .collect();
     let mut out = Vec::new();
     for (k, &b) in order.iter().enumerate() {
+        let of_b: Vec<&(usize, &RunKey, String)> =
+            runs.iter().filter(|r| r.1.strategy == b).collect();
+        if of_b.is_empty() {
+            continue;
+        }
         let earlier = order[..k].iter().copied().find(|&a| {
-            let mut any = false;
-            let all = results.iter().all(|c| {
-                c.runs.iter().filter(|r| r.key.strategy == b).all(|rb| {
-                    any = true;
-                    c.runs.iter().any(|ra| {
-                        ra.key.strategy == a
-                            && ra.key.seed == rb.key.seed
-                            && ra.key.budget == rb.key.budget
-                            && same(ra, rb)
-                    })
+            of_b.iter().all(|(c, kb, text)| {
+                runs.iter().any(|(ca, ka, ta)| {
+                    ca == c
+                        && ka.strategy == a
+                        && ka.seed == kb.seed
+                        && ka.budget == kb.budget
+                        && ta == text
                 })
-            });
-            any && all
+            })
         });
         if let Some(a) = earlier {
             out.push((b, a));
