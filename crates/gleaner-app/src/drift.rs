@@ -86,6 +86,12 @@ pub fn drift_index<S: Store>(
             .map(|v| v.iter().map(|p| p.0).collect())
             .collect::<Vec<Vec<UnixSeconds>>>(),
     );
+    let kappa = project.settings().utility.drift_spread;
+    let spread = (kappa > 0.0).then(|| KnownSpread::new(&series, step_s));
+    let last_known: HashMap<&SensorId, UnixSeconds> = series
+        .iter()
+        .filter_map(|(s, v)| v.last().map(|p| (*s, p.0)))
+        .collect();
     let own: HashMap<&SensorId, Vec<Option<f64>>> = series
         .into_iter()
         .map(|(s, v)| {
@@ -122,13 +128,96 @@ pub fn drift_index<S: Store>(
             .collect();
         // Never collected: as old as can matter (the index is flat past the last lag).
         let age_s = k.last_collected[p].map_or(f64::INFINITY, |l| (t - l).max(0) as f64);
-        gleaner_utility::staleness_index(&d, (age_s / step).min((2 * DRIFT_MAX_LAG) as f64))
+        let index =
+            gleaner_utility::staleness_index(&d, (age_s / step).min((2 * DRIFT_MAX_LAG) as f64));
+        match (&spread, last_known.get(id)) {
+            (Some(c), Some(&last)) => index * c.ratio(last, t).powf(kappa),
+            _ => index,
+        }
     };
     Ok(k.field
         .cells()
         .iter()
         .map(|c| c.sensors.iter().map(|&p| index_of_sensor(p)).sum())
         .collect())
+}
+
+/// How unusual the sensors' own one-step changes were at each time, from the readings the
+/// scoring knows (deviations from the field's mean): on a rain day the stations' jumps differ
+/// widely and the median squared own change is many times its usual size, which tells a
+/// scoring that a sensor not read since then most likely carries a large error its neighbours
+/// cannot explain. The median, not the mean: one station's glitch alone does not make a day
+/// unusual (it counts only through the field's mean it shifts).
+struct KnownSpread {
+    /// Times (s) with a known spread, ascending.
+    times: Vec<UnixSeconds>,
+    /// Running sums of (spread / usual − 1) over `times`: `excess[k]` sums the first k.
+    excess: Vec<f64>,
+    /// Grid step, s.
+    step_s: i64,
+}
+
+/// Fewest sensors whose one-step change is known at a time for its spread to count.
+const MIN_SENSORS_FOR_SPREAD: usize = 3;
+
+impl KnownSpread {
+    /// From each sensor's deviations (time in s, value) sorted by time; `step_s` the grid
+    /// step (a one-step change joins readings exactly one step apart).
+    fn new<K>(series: &HashMap<K, Vec<(UnixSeconds, f64)>>, step_s: i64) -> Self {
+        let mut squares: HashMap<UnixSeconds, Vec<f64>> = HashMap::new();
+        for v in series.values() {
+            for w in v.windows(2) {
+                if w[1].0 - w[0].0 == step_s {
+                    let d = w[1].1 - w[0].1;
+                    squares.entry(w[1].0).or_default().push(d * d);
+                }
+            }
+        }
+        // Sorted, so the bits never depend on a map's seed.
+        let mut spread: Vec<(UnixSeconds, f64)> = squares
+            .into_iter()
+            .filter(|(_, v)| v.len() >= MIN_SENSORS_FOR_SPREAD)
+            .map(|(t, mut v)| {
+                v.sort_by(f64::total_cmp);
+                let n = v.len();
+                let median = if n % 2 == 1 {
+                    v[n / 2]
+                } else {
+                    0.5 * (v[n / 2 - 1] + v[n / 2])
+                };
+                (t, median)
+            })
+            .collect();
+        spread.sort_by_key(|p| p.0);
+        let usual = spread.iter().map(|p| p.1).sum::<f64>() / spread.len().max(1) as f64;
+        if !(usual > 0.0 && usual.is_finite()) {
+            spread.clear();
+        }
+        let mut excess = Vec::with_capacity(spread.len() + 1);
+        excess.push(0.0);
+        for &(_, v) in &spread {
+            excess.push(excess[excess.len() - 1] + (v / usual - 1.0));
+        }
+        Self {
+            times: spread.into_iter().map(|p| p.0).collect(),
+            excess,
+            step_s: step_s.max(1),
+        }
+    }
+
+    /// The mean over the grid times strictly between `last` (a sensor's newest known reading,
+    /// s) and `t` (s) of the spread relative to its usual value, times nobody has reported
+    /// counting as usual: 1 when the window is empty or nothing of it is known.
+    fn ratio(&self, last: UnixSeconds, t: UnixSeconds) -> f64 {
+        let lo = self.times.partition_point(|&s| s <= last);
+        let hi = self.times.partition_point(|&s| s < t);
+        if hi <= lo {
+            return 1.0;
+        }
+        let steps = (t.saturating_sub(last) + self.step_s - 1) / self.step_s - 1;
+        let n = (steps.max(0) as usize).max(hi - lo);
+        (1.0 + (self.excess[hi] - self.excess[lo]) / n as f64).max(0.0)
+    }
 }
 
 /// A sensor's mean squared change `own` shrunk to the field's median `median` by weight
@@ -255,6 +344,49 @@ mod tests {
         let before = two.clone();
         remove_field_mean(&mut two);
         assert_eq!(two, before);
+    }
+
+    #[test]
+    fn a_window_holding_an_unusual_day_is_worth_more() {
+        let day = 86_400;
+        // Five sensors over ten days, each with its own small daily wobble; on day 6 three of
+        // them rise by 10 (a rain day of very different size between stations).
+        let mut series: HashMap<u8, Vec<(UnixSeconds, f64)>> = HashMap::new();
+        for k in 0..5u8 {
+            let mut x = 0.0;
+            let v = (0..10)
+                .map(|d| {
+                    x += if (d + i64::from(k)) % 2 == 0 {
+                        0.5
+                    } else {
+                        -0.5
+                    } * f64::from(k + 1);
+                    if d == 6 && k < 3 {
+                        x += 10.0;
+                    }
+                    (d * day, x)
+                })
+                .collect();
+            series.insert(k, v);
+        }
+        remove_field_mean(&mut series);
+        let spread = KnownSpread::new(&series, day);
+        // Unread since day 5, scored on day 7: the window is day 6 alone, the rain day.
+        let rain = spread.ratio(5 * day, 7 * day);
+        assert!(rain > 3.0, "{rain}");
+        // A window of quiet days only: less than usual (the usual includes the rain day).
+        assert!(spread.ratio(day, 5 * day) < 1.0);
+        // Nothing between the last reading and t, or nothing known of the window: usual.
+        assert_eq!(spread.ratio(7 * day, 8 * day), 1.0);
+        assert_eq!(spread.ratio(9 * day, 12 * day), 1.0);
+        // Quiet days in the window dilute the rain day; so do days nobody has reported yet.
+        let diluted = spread.ratio(5 * day, 10 * day);
+        assert!(diluted > 1.0 && diluted < rain, "{diluted}");
+        let unreported = spread.ratio(5 * day, 9 * day + 3 * day);
+        assert!(unreported > 1.0 && unreported < diluted, "{unreported}");
+        // Fewer than three sensors: nothing is known.
+        let two: HashMap<u8, _> = series.into_iter().filter(|(k, _)| *k < 2).collect();
+        assert_eq!(KnownSpread::new(&two, day).ratio(5 * day, 7 * day), 1.0);
     }
 
     #[test]
