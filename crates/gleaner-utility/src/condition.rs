@@ -654,28 +654,61 @@ impl ConditionModel {
         let mut probs = vec![0.0; labels.len() * k];
         let mut trial_probs = vec![0.0; labels.len() * k];
         let mut current = self.objective(&self.weights, rows, labels, config, &mut probs);
+        // Per block of ROWS rows: each row's z·zᵀ and pair weights, then every accumulator
+        // gains the rows' terms one row after another (the same additions in the same order
+        // as row by row, so the same bits) while it is held in a register.
+        const ROWS: usize = 4;
+        let mut zzs = vec![0.0; ROWS * tri];
+        let mut ws = vec![0.0; pairs.len() * ROWS];
         for _ in 0..config.max_iterations {
             let mut grad = vec![0.0; p_len];
             acc.iter_mut().for_each(|a| *a = 0.0);
-            for ((z, &y), p) in rows
-                .chunks_exact(stride)
-                .zip(labels)
-                .zip(probs.chunks_exact(k))
+            let whole = labels.len() / ROWS * ROWS;
+            for ((zb, yb), pb) in rows[..whole * stride]
+                .chunks_exact(ROWS * stride)
+                .zip(labels[..whole].chunks_exact(ROWS))
+                .zip(probs[..whole * k].chunks_exact(ROWS * k))
             {
-                for c in 0..k {
-                    let r = p[c] - if c == y { 1.0 } else { 0.0 };
-                    for (g, zf) in grad[c * stride..(c + 1) * stride].iter_mut().zip(z) {
-                        *g += r * zf;
+                for (j, ((z, &y), p)) in zb
+                    .chunks_exact(stride)
+                    .zip(yb)
+                    .zip(pb.chunks_exact(k))
+                    .enumerate()
+                {
+                    Self::add_gradient(&mut grad, z, y, p, k, stride);
+                    Self::outer_upper(z, &mut zzs[j * tri..(j + 1) * tri]);
+                    for (b, &(c, c2)) in pairs.iter().enumerate() {
+                        ws[b * ROWS + j] = p[c] * (if c == c2 { 1.0 } else { 0.0 } - p[c2]);
                     }
                 }
-                let mut o = 0;
-                for f in 0..stride {
-                    let zf = z[f];
-                    for (dst, zg) in zz[o..o + stride - f].iter_mut().zip(&z[f..]) {
-                        *dst = zf * zg;
+                let (z0, rest) = zzs.split_at(tri);
+                let (z1, rest) = rest.split_at(tri);
+                let (z2, z3) = rest.split_at(tri);
+                for (b, w) in ws.chunks_exact(ROWS).enumerate() {
+                    let (w0, w1, w2, w3) = (w[0], w[1], w[2], w[3]);
+                    for ((((a, v0), v1), v2), v3) in acc[b * tri..(b + 1) * tri]
+                        .iter_mut()
+                        .zip(z0)
+                        .zip(z1)
+                        .zip(z2)
+                        .zip(z3)
+                    {
+                        let mut x = *a;
+                        x += w0 * v0;
+                        x += w1 * v1;
+                        x += w2 * v2;
+                        x += w3 * v3;
+                        *a = x;
                     }
-                    o += stride - f;
                 }
+            }
+            for ((z, &y), p) in rows[whole * stride..]
+                .chunks_exact(stride)
+                .zip(&labels[whole..])
+                .zip(probs[whole * k..].chunks_exact(k))
+            {
+                Self::add_gradient(&mut grad, z, y, p, k, stride);
+                Self::outer_upper(z, &mut zz);
                 for (b, &(c, c2)) in pairs.iter().enumerate() {
                     let w = p[c] * (if c == c2 { 1.0 } else { 0.0 } - p[c2]);
                     for (a, v) in acc[b * tri..(b + 1) * tri].iter_mut().zip(&zz) {
@@ -747,6 +780,29 @@ impl ConditionModel {
                 }
                 break;
             }
+        }
+    }
+
+    /// Adds one row's gradient terms, (p_c − δ_cy)·z per class, to `grad`.
+    fn add_gradient(grad: &mut [f64], z: &[f64], y: usize, p: &[f64], k: usize, stride: usize) {
+        for c in 0..k {
+            let r = p[c] - if c == y { 1.0 } else { 0.0 };
+            for (g, zf) in grad[c * stride..(c + 1) * stride].iter_mut().zip(z) {
+                *g += r * zf;
+            }
+        }
+    }
+
+    /// The upper triangle of z·zᵀ, row by row, into `zz`.
+    fn outer_upper(z: &[f64], zz: &mut [f64]) {
+        let stride = z.len();
+        let mut o = 0;
+        for f in 0..stride {
+            let zf = z[f];
+            for (dst, zg) in zz[o..o + stride - f].iter_mut().zip(&z[f..]) {
+                *dst = zf * zg;
+            }
+            o += stride - f;
         }
     }
 
