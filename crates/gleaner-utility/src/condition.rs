@@ -547,21 +547,22 @@ impl ConditionModel {
         Self::normalise(k, out);
     }
 
-    /// [`softmax`](Self::softmax) of [`BLOCK`] consecutive design rows (`zs`, stride values
-    /// each) into `out` (K per row): the same operations in the same order per row (each
-    /// logit summed from −0.0, as `Iterator::sum` does, in feature order; then
+    /// [`softmax`](Self::softmax) of [`BLOCK`] consecutive design rows into `out` (K per
+    /// row), the rows given feature-major (`zt`: feature f of row b at f·BLOCK + b, see
+    /// [`transpose_blocks`](Self::transpose_blocks)): the same operations in the same order
+    /// per row (each logit summed from −0.0, as `Iterator::sum` does, in feature order; then
     /// [`normalise`](Self::normalise)), so the same bits; the rows' independent sums are
     /// interleaved, which the processor overlaps (one row's sums are a chain of dependent
-    /// additions).
-    fn softmax_block(&self, w: &[f64], zs: &[f64], out: &mut [f64]) {
+    /// additions), and read contiguously.
+    fn softmax_block(&self, w: &[f64], zt: &[f64], out: &mut [f64]) {
         let k = self.n_classes;
         let stride = self.stride();
         for c in 0..k {
             let wc = &w[c * stride..(c + 1) * stride];
             let mut acc = [-0.0f64; BLOCK];
-            for (f, &wf) in wc.iter().enumerate() {
-                for (b, a) in acc.iter_mut().enumerate() {
-                    *a += wf * zs[b * stride + f];
+            for (&wf, col) in wc.iter().zip(zt.chunks_exact(BLOCK)) {
+                for (a, &z) in acc.iter_mut().zip(col) {
+                    *a += wf * z;
                 }
             }
             for (b, a) in acc.iter().enumerate() {
@@ -571,6 +572,25 @@ impl ConditionModel {
         for p in out.chunks_exact_mut(k) {
             Self::normalise(k, p);
         }
+    }
+
+    /// The whole blocks of [`BLOCK`] design rows of `rows` (`stride` values each), each block
+    /// feature-major (feature f of the block's row b at f·BLOCK + b), for
+    /// [`softmax_block`](Self::softmax_block).
+    fn transpose_blocks(rows: &[f64], stride: usize) -> Vec<f64> {
+        let whole = rows.len() / stride / BLOCK * BLOCK;
+        let mut zt = vec![0.0; whole * stride];
+        for (src, dst) in rows[..whole * stride]
+            .chunks_exact(BLOCK * stride)
+            .zip(zt.chunks_exact_mut(BLOCK * stride))
+        {
+            for (b, z) in src.chunks_exact(stride).enumerate() {
+                for (f, &v) in z.iter().enumerate() {
+                    dst[f * BLOCK + b] = v;
+                }
+            }
+        }
+        zt
     }
 
     /// Logits (the first `k` of `out`) to probabilities: shifted by their maximum,
@@ -598,6 +618,7 @@ impl ConditionModel {
     /// standardised features), [`stride`](Self::stride) values each. Every row's class
     /// probabilities at `w` are left in `probs` (K per row, row order), for Newton's next
     /// step when `w` is accepted.
+    #[cfg(test)]
     fn objective(
         &self,
         w: &[f64],
@@ -606,10 +627,25 @@ impl ConditionModel {
         config: &ConditionConfig,
         probs: &mut [f64],
     ) -> f64 {
+        let zt = Self::transpose_blocks(rows, self.stride());
+        self.objective_with(w, rows, &zt, labels, config, probs)
+    }
+
+    /// [`objective`](Self::objective), given also the whole blocks of `rows` feature-major
+    /// (`zt`, from [`transpose_blocks`](Self::transpose_blocks)).
+    fn objective_with(
+        &self,
+        w: &[f64],
+        rows: &[f64],
+        zt: &[f64],
+        labels: &[usize],
+        config: &ConditionConfig,
+        probs: &mut [f64],
+    ) -> f64 {
         let stride = self.stride();
         let k = self.n_classes;
         let whole = labels.len() / BLOCK * BLOCK;
-        for (zs, ps) in rows[..whole * stride]
+        for (zs, ps) in zt[..whole * stride]
             .chunks_exact(BLOCK * stride)
             .zip(probs[..whole * k].chunks_exact_mut(BLOCK * k))
         {
@@ -653,7 +689,8 @@ impl ConditionModel {
         // that accepted them: the same softmax, so the same bits), and a scratch for trials.
         let mut probs = vec![0.0; labels.len() * k];
         let mut trial_probs = vec![0.0; labels.len() * k];
-        let mut current = self.objective(&self.weights, rows, labels, config, &mut probs);
+        let zt = Self::transpose_blocks(rows, stride);
+        let mut current = self.objective_with(&self.weights, rows, &zt, labels, config, &mut probs);
         // Per block of ROWS rows: each row's z·zᵀ and pair weights, then every accumulator
         // gains the rows' terms one row after another (the same additions in the same order
         // as row by row, so the same bits) while it is held in a register.
@@ -757,7 +794,8 @@ impl ConditionModel {
                     .zip(&step)
                     .map(|(w, s)| w - t * s)
                     .collect();
-                let value = self.objective(&trial, rows, labels, config, &mut trial_probs);
+                let value =
+                    self.objective_with(&trial, rows, &zt, labels, config, &mut trial_probs);
                 if value <= current {
                     improved = value < current;
                     self.weights = trial;
@@ -775,7 +813,8 @@ impl ConditionModel {
                 let trial = self.gradient(&full, rows, labels, config);
                 if max_abs(&trial) < max_abs(&grad) {
                     self.weights = full;
-                    current = self.objective(&self.weights, rows, labels, config, &mut probs);
+                    current =
+                        self.objective_with(&self.weights, rows, &zt, labels, config, &mut probs);
                     continue;
                 }
                 break;
