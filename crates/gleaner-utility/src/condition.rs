@@ -488,7 +488,7 @@ impl ConditionModel {
         let stride = model.stride();
         let mut rows = Vec::with_capacity(set.len() * stride);
         for x in &set.features {
-            rows.extend(model.design(x));
+            model.design_into(x, &mut rows);
         }
         model.newton(&rows, &set.labels, config);
         Ok(model)
@@ -531,6 +531,14 @@ impl ConditionModel {
             z[f + 1] = (x.get(f).copied().unwrap_or(*m) - m) / s;
         }
         z
+    }
+
+    /// [`design`](Self::design) of `x`, appended to `out`.
+    fn design_into(&self, x: &[f64], out: &mut Vec<f64>) {
+        out.push(1.0);
+        for (f, (m, s)) in self.mean.iter().zip(&self.scale).enumerate() {
+            out.push((x.get(f).copied().unwrap_or(*m) - m) / s);
+        }
     }
 
     /// Parameters per class (bias + features).
