@@ -177,13 +177,34 @@ fn neighbour_lists(p: &Problem, k: usize) -> Vec<u32> {
 }
 
 /// Routes under construction / search.
-#[derive(Clone)]
 pub(crate) struct State {
     pub routes: Vec<Vec<usize>>,
     pub cost: Vec<f64>,
     pub route_of: Vec<u32>,
     pub pos: Vec<u32>,
     pub reward: f64,
+}
+
+/// Field by field, so that `clone_from` reuses the target's buffers (the search copies its
+/// current solution every iteration).
+impl Clone for State {
+    fn clone(&self) -> State {
+        State {
+            routes: self.routes.clone(),
+            cost: self.cost.clone(),
+            route_of: self.route_of.clone(),
+            pos: self.pos.clone(),
+            reward: self.reward,
+        }
+    }
+
+    fn clone_from(&mut self, source: &State) {
+        self.routes.clone_from(&source.routes);
+        self.cost.clone_from(&source.cost);
+        self.route_of.clone_from(&source.route_of);
+        self.pos.clone_from(&source.pos);
+        self.reward = source.reward;
+    }
 }
 
 /// Cached cheapest insertion of a free node into one route: edge `(a, b)`, extra cost.

@@ -313,6 +313,8 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
     let mut stall: u64 = 0;
     let mut strength: usize = 1;
     let mut iter: u64 = 0;
+    // The iteration's candidate: a copy of `cur` into reused buffers.
+    let mut cand = cur.clone();
     loop {
         if options.max_iterations.is_some_and(|m| iter >= m)
             || options.max_stall.is_some_and(|m| stall >= m)
@@ -321,7 +323,7 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
             break;
         }
         iter += 1;
-        let mut cand = cur.clone();
+        cand.clone_from(&cur);
         let visited: usize = cand.routes.iter().map(|r| r.len() - 2).sum();
         // Perturbation: 30% shift toward a free region, else segment or random removal.
         if rng.random_bool(0.3) {
@@ -347,7 +349,7 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
             }
         }
         if better(&cand, &best, ctx.eps) {
-            best = cand.clone();
+            best.clone_from(&cand);
             elite.push(best.clone());
             if elite.len() > 8 {
                 elite.remove(0);
@@ -357,8 +359,8 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
             stall += 1;
         }
         if better(&cand, &run_best, ctx.eps) {
-            run_best = cand.clone();
-            cur = cand;
+            run_best.clone_from(&cand);
+            std::mem::swap(&mut cur, &mut cand);
             run_stall = 0;
             strength = 1;
             continue;
@@ -372,7 +374,7 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
         // Record-to-record acceptance: stay within a few percent of the run's best reward.
         let slack = if run_stall > run_len / 2 { 0.05 } else { 0.02 };
         if better(&cand, &cur, ctx.eps) || cand.reward >= run_best.reward * (1.0 - slack) {
-            cur = cand;
+            std::mem::swap(&mut cur, &mut cand);
         }
         if run_stall >= run_len {
             runs += 1;
@@ -403,7 +405,7 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
                     cur.local_search(&ctx, &mut rng, scan_all);
                 }
             }
-            run_best = cur.clone();
+            run_best.clone_from(&cur);
         }
     }
     let result = finish(problem, &best);

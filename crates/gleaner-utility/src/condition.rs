@@ -488,7 +488,7 @@ impl ConditionModel {
         let stride = model.stride();
         let mut rows = Vec::with_capacity(set.len() * stride);
         for x in &set.features {
-            rows.extend(model.design(x));
+            model.design_into(x, &mut rows);
         }
         model.newton(&rows, &set.labels, config);
         Ok(model)
@@ -533,6 +533,14 @@ impl ConditionModel {
         z
     }
 
+    /// [`design`](Self::design) of `x`, appended to `out`.
+    fn design_into(&self, x: &[f64], out: &mut Vec<f64>) {
+        out.push(1.0);
+        for (f, (m, s)) in self.mean.iter().zip(&self.scale).enumerate() {
+            out.push((x.get(f).copied().unwrap_or(*m) - m) / s);
+        }
+    }
+
     /// Parameters per class (bias + features).
     fn stride(&self) -> usize {
         self.mean.len() + 1
@@ -547,21 +555,22 @@ impl ConditionModel {
         Self::normalise(k, out);
     }
 
-    /// [`softmax`](Self::softmax) of [`BLOCK`] consecutive design rows (`zs`, stride values
-    /// each) into `out` (K per row): the same operations in the same order per row (each
-    /// logit summed from −0.0, as `Iterator::sum` does, in feature order; then
+    /// [`softmax`](Self::softmax) of [`BLOCK`] consecutive design rows into `out` (K per
+    /// row), the rows given feature-major (`zt`: feature f of row b at f·BLOCK + b, see
+    /// [`transpose_blocks`](Self::transpose_blocks)): the same operations in the same order
+    /// per row (each logit summed from −0.0, as `Iterator::sum` does, in feature order; then
     /// [`normalise`](Self::normalise)), so the same bits; the rows' independent sums are
     /// interleaved, which the processor overlaps (one row's sums are a chain of dependent
-    /// additions).
-    fn softmax_block(&self, w: &[f64], zs: &[f64], out: &mut [f64]) {
+    /// additions), and read contiguously.
+    fn softmax_block(&self, w: &[f64], zt: &[f64], out: &mut [f64]) {
         let k = self.n_classes;
         let stride = self.stride();
         for c in 0..k {
             let wc = &w[c * stride..(c + 1) * stride];
             let mut acc = [-0.0f64; BLOCK];
-            for (f, &wf) in wc.iter().enumerate() {
-                for (b, a) in acc.iter_mut().enumerate() {
-                    *a += wf * zs[b * stride + f];
+            for (&wf, col) in wc.iter().zip(zt.chunks_exact(BLOCK)) {
+                for (a, &z) in acc.iter_mut().zip(col) {
+                    *a += wf * z;
                 }
             }
             for (b, a) in acc.iter().enumerate() {
@@ -571,6 +580,25 @@ impl ConditionModel {
         for p in out.chunks_exact_mut(k) {
             Self::normalise(k, p);
         }
+    }
+
+    /// The whole blocks of [`BLOCK`] design rows of `rows` (`stride` values each), each block
+    /// feature-major (feature f of the block's row b at f·BLOCK + b), for
+    /// [`softmax_block`](Self::softmax_block).
+    fn transpose_blocks(rows: &[f64], stride: usize) -> Vec<f64> {
+        let whole = rows.len() / stride / BLOCK * BLOCK;
+        let mut zt = vec![0.0; whole * stride];
+        for (src, dst) in rows[..whole * stride]
+            .chunks_exact(BLOCK * stride)
+            .zip(zt.chunks_exact_mut(BLOCK * stride))
+        {
+            for (b, z) in src.chunks_exact(stride).enumerate() {
+                for (f, &v) in z.iter().enumerate() {
+                    dst[f * BLOCK + b] = v;
+                }
+            }
+        }
+        zt
     }
 
     /// Logits (the first `k` of `out`) to probabilities: shifted by their maximum,
@@ -598,6 +626,7 @@ impl ConditionModel {
     /// standardised features), [`stride`](Self::stride) values each. Every row's class
     /// probabilities at `w` are left in `probs` (K per row, row order), for Newton's next
     /// step when `w` is accepted.
+    #[cfg(test)]
     fn objective(
         &self,
         w: &[f64],
@@ -606,10 +635,25 @@ impl ConditionModel {
         config: &ConditionConfig,
         probs: &mut [f64],
     ) -> f64 {
+        let zt = Self::transpose_blocks(rows, self.stride());
+        self.objective_with(w, rows, &zt, labels, config, probs)
+    }
+
+    /// [`objective`](Self::objective), given also the whole blocks of `rows` feature-major
+    /// (`zt`, from [`transpose_blocks`](Self::transpose_blocks)).
+    fn objective_with(
+        &self,
+        w: &[f64],
+        rows: &[f64],
+        zt: &[f64],
+        labels: &[usize],
+        config: &ConditionConfig,
+        probs: &mut [f64],
+    ) -> f64 {
         let stride = self.stride();
         let k = self.n_classes;
         let whole = labels.len() / BLOCK * BLOCK;
-        for (zs, ps) in rows[..whole * stride]
+        for (zs, ps) in zt[..whole * stride]
             .chunks_exact(BLOCK * stride)
             .zip(probs[..whole * k].chunks_exact_mut(BLOCK * k))
         {
@@ -653,29 +697,63 @@ impl ConditionModel {
         // that accepted them: the same softmax, so the same bits), and a scratch for trials.
         let mut probs = vec![0.0; labels.len() * k];
         let mut trial_probs = vec![0.0; labels.len() * k];
-        let mut current = self.objective(&self.weights, rows, labels, config, &mut probs);
+        let zt = Self::transpose_blocks(rows, stride);
+        let mut current = self.objective_with(&self.weights, rows, &zt, labels, config, &mut probs);
+        // Per block of ROWS rows: each row's z·zᵀ and pair weights, then every accumulator
+        // gains the rows' terms one row after another (the same additions in the same order
+        // as row by row, so the same bits) while it is held in a register.
+        const ROWS: usize = 4;
+        let mut zzs = vec![0.0; ROWS * tri];
+        let mut ws = vec![0.0; pairs.len() * ROWS];
         for _ in 0..config.max_iterations {
             let mut grad = vec![0.0; p_len];
             acc.iter_mut().for_each(|a| *a = 0.0);
-            for ((z, &y), p) in rows
-                .chunks_exact(stride)
-                .zip(labels)
-                .zip(probs.chunks_exact(k))
+            let whole = labels.len() / ROWS * ROWS;
+            for ((zb, yb), pb) in rows[..whole * stride]
+                .chunks_exact(ROWS * stride)
+                .zip(labels[..whole].chunks_exact(ROWS))
+                .zip(probs[..whole * k].chunks_exact(ROWS * k))
             {
-                for c in 0..k {
-                    let r = p[c] - if c == y { 1.0 } else { 0.0 };
-                    for (g, zf) in grad[c * stride..(c + 1) * stride].iter_mut().zip(z) {
-                        *g += r * zf;
+                for (j, ((z, &y), p)) in zb
+                    .chunks_exact(stride)
+                    .zip(yb)
+                    .zip(pb.chunks_exact(k))
+                    .enumerate()
+                {
+                    Self::add_gradient(&mut grad, z, y, p, k, stride);
+                    Self::outer_upper(z, &mut zzs[j * tri..(j + 1) * tri]);
+                    for (b, &(c, c2)) in pairs.iter().enumerate() {
+                        ws[b * ROWS + j] = p[c] * (if c == c2 { 1.0 } else { 0.0 } - p[c2]);
                     }
                 }
-                let mut o = 0;
-                for f in 0..stride {
-                    let zf = z[f];
-                    for (dst, zg) in zz[o..o + stride - f].iter_mut().zip(&z[f..]) {
-                        *dst = zf * zg;
+                let (z0, rest) = zzs.split_at(tri);
+                let (z1, rest) = rest.split_at(tri);
+                let (z2, z3) = rest.split_at(tri);
+                for (b, w) in ws.chunks_exact(ROWS).enumerate() {
+                    let (w0, w1, w2, w3) = (w[0], w[1], w[2], w[3]);
+                    for ((((a, v0), v1), v2), v3) in acc[b * tri..(b + 1) * tri]
+                        .iter_mut()
+                        .zip(z0)
+                        .zip(z1)
+                        .zip(z2)
+                        .zip(z3)
+                    {
+                        let mut x = *a;
+                        x += w0 * v0;
+                        x += w1 * v1;
+                        x += w2 * v2;
+                        x += w3 * v3;
+                        *a = x;
                     }
-                    o += stride - f;
                 }
+            }
+            for ((z, &y), p) in rows[whole * stride..]
+                .chunks_exact(stride)
+                .zip(&labels[whole..])
+                .zip(probs[whole * k..].chunks_exact(k))
+            {
+                Self::add_gradient(&mut grad, z, y, p, k, stride);
+                Self::outer_upper(z, &mut zz);
                 for (b, &(c, c2)) in pairs.iter().enumerate() {
                     let w = p[c] * (if c == c2 { 1.0 } else { 0.0 } - p[c2]);
                     for (a, v) in acc[b * tri..(b + 1) * tri].iter_mut().zip(&zz) {
@@ -724,7 +802,8 @@ impl ConditionModel {
                     .zip(&step)
                     .map(|(w, s)| w - t * s)
                     .collect();
-                let value = self.objective(&trial, rows, labels, config, &mut trial_probs);
+                let value =
+                    self.objective_with(&trial, rows, &zt, labels, config, &mut trial_probs);
                 if value <= current {
                     improved = value < current;
                     self.weights = trial;
@@ -742,11 +821,35 @@ impl ConditionModel {
                 let trial = self.gradient(&full, rows, labels, config);
                 if max_abs(&trial) < max_abs(&grad) {
                     self.weights = full;
-                    current = self.objective(&self.weights, rows, labels, config, &mut probs);
+                    current =
+                        self.objective_with(&self.weights, rows, &zt, labels, config, &mut probs);
                     continue;
                 }
                 break;
             }
+        }
+    }
+
+    /// Adds one row's gradient terms, (p_c − δ_cy)·z per class, to `grad`.
+    fn add_gradient(grad: &mut [f64], z: &[f64], y: usize, p: &[f64], k: usize, stride: usize) {
+        for c in 0..k {
+            let r = p[c] - if c == y { 1.0 } else { 0.0 };
+            for (g, zf) in grad[c * stride..(c + 1) * stride].iter_mut().zip(z) {
+                *g += r * zf;
+            }
+        }
+    }
+
+    /// The upper triangle of z·zᵀ, row by row, into `zz`.
+    fn outer_upper(z: &[f64], zz: &mut [f64]) {
+        let stride = z.len();
+        let mut o = 0;
+        for f in 0..stride {
+            let zf = z[f];
+            for (dst, zg) in zz[o..o + stride - f].iter_mut().zip(&z[f..]) {
+                *dst = zf * zg;
+            }
+            o += stride - f;
         }
     }
 
