@@ -9,11 +9,14 @@
 //! field: lag by lag `own^(1 − w) · median^w` with `w = drift_shrink` (default ½: the
 //! geometric mean of the sensor's and the field's median; the median alone where the sensor
 //! has too few pairs). Its staleness index
-//! ([`gleaner_utility::staleness_index`]) at the time since the sensor was last collected,
-//! summed over the cell's sensors and divided by the largest cell's, is the cell's F in [0, 1]
-//! (all 0 when no cell has drifted). Why: on CAF the one-day change of the 30 cm soil moisture
-//! differs 95-fold in variance between stations, so equal freshness spends visits on cells
-//! that hardly moved (docs/method-improvement.md).
+//! ([`gleaner_utility::staleness_index`]) at the time since the sensor was last collected
+//! — multiplied by how unusual the days the sensor has not reported were, to the power
+//! `drift_spread` (`KnownSpread`: a rain day seen at the cells visited since makes it
+//! larger) — summed over the cell's sensors and divided by the largest cell's, is the cell's F
+//! in [0, 1] (all 0 when no cell has drifted). Why: on CAF the one-day change of the 30 cm
+//! soil moisture differs 95-fold in variance between stations, so equal freshness spends
+//! visits on cells that hardly moved, and the error between visits is made of a few rain days
+//! (docs/method-improvement.md).
 
 use std::collections::HashMap;
 
