@@ -182,13 +182,7 @@ impl KnownSpread {
             .filter(|(_, v)| v.len() >= MIN_SENSORS_FOR_SPREAD)
             .map(|(t, mut v)| {
                 v.sort_by(f64::total_cmp);
-                let n = v.len();
-                let median = if n % 2 == 1 {
-                    v[n / 2]
-                } else {
-                    0.5 * (v[n / 2 - 1] + v[n / 2])
-                };
-                (t, median)
+                (t, gleaner_utility::median_of_sorted(&v))
             })
             .collect();
         spread.sort_by_key(|p| p.0);

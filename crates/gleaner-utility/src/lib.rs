@@ -86,6 +86,6 @@ pub use incremental::{IncrementalState, PairStats, Reading, RunningStats, Series
 pub use probabilities::{PROBABILITY_SUM_TOLERANCE, validate_probabilities};
 pub use series::{OwnedSeries, Series, TimeGrid, cell_series};
 pub use terms::{
-    anomaly, freshness, neighbour_anomaly, neighbour_residuals, pearson, redundancy, score,
-    series_correlation, uncertainty,
+    anomaly, freshness, median_of_sorted, neighbour_anomaly, neighbour_residuals, pearson,
+    redundancy, score, series_correlation, uncertainty,
 };

@@ -283,12 +283,7 @@ pub fn neighbour_residuals(
             continue;
         }
         buf.sort_by(f64::total_cmp);
-        let k = buf.len();
-        let median = if k % 2 == 1 {
-            buf[k / 2]
-        } else {
-            0.5 * (buf[k / 2 - 1] + buf[k / 2])
-        };
+        let median = median_of_sorted(&buf);
         times.push(t);
         residuals.push(x - median);
     }
@@ -348,6 +343,17 @@ pub fn uncertainty(probabilities: &[f64]) -> f64 {
     (h / (k as f64).ln()).clamp(0.0, 1.0)
 }
 
+/// The median of values sorted ascending (the mean of the two middle ones for an even count;
+/// NaN for none), in their unit.
+pub fn median_of_sorted(sorted: &[f64]) -> f64 {
+    let n = sorted.len();
+    match n {
+        0 => f64::NAN,
+        _ if n % 2 == 1 => sorted[n / 2],
+        _ => 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]),
+    }
+}
+
 /// The score S_i = alpha·F + beta·A + gamma·U − delta·R (SPEC §2) with the weights of
 /// `config`; `a` is the anomaly in the form the configuration uses (raw or bounded).
 ///
@@ -374,6 +380,14 @@ pub fn score(f: f64, a: f64, u: f64, r: f64, config: &UtilityConfig) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn median_of_sorted_values() {
+        assert!(median_of_sorted(&[]).is_nan());
+        assert_eq!(median_of_sorted(&[2.0]), 2.0);
+        assert_eq!(median_of_sorted(&[1.0, 2.0, 9.0]), 2.0);
+        assert_eq!(median_of_sorted(&[1.0, 2.0, 4.0, 9.0]), 3.0);
+    }
     use proptest::prelude::*;
 
     const DAY: i64 = 86_400;
