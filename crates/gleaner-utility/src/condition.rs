@@ -526,10 +526,8 @@ impl ConditionModel {
 
     /// Bias term and standardised features.
     fn design(&self, x: &[f64]) -> Vec<f64> {
-        let mut z = vec![1.0; self.mean.len() + 1];
-        for (f, (m, s)) in self.mean.iter().zip(&self.scale).enumerate() {
-            z[f + 1] = (x.get(f).copied().unwrap_or(*m) - m) / s;
-        }
+        let mut z = Vec::with_capacity(self.stride());
+        self.design_into(x, &mut z);
         z
     }
 
