@@ -14,7 +14,7 @@
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::PathBuf;
 
-use gleaner_field::{CellIndex, Modality, SensorId, UnixSeconds};
+use gleaner_field::{CellIndex, Modality, Sensor, SensorId, UnixSeconds};
 use gleaner_ingest::{IngestReport, Readings};
 use gleaner_kriging::{Covariance, FieldModel, IncrementModel, variance_reduction};
 use gleaner_mission::Planner;
@@ -23,7 +23,7 @@ use gleaner_store::{SqliteStore, Store, StoreRead};
 use crate::error::{AppError, Result};
 use crate::explore::{ExplorationMemo, ExploreRequest, explore, explore_with};
 use crate::ingest::{Format, IngestRequest, Parsed, ingest_parsed};
-use crate::init::{InitRequest, init_store};
+use crate::init::{InitRequest, init_store, init_store_with};
 use crate::plan::{PlanRequest, plan_scored};
 use crate::progress::{Progress, Silent};
 use crate::project::Project;
@@ -348,6 +348,9 @@ pub struct CampaignRequest {
     pub label: String,
     /// The sensors (as for `init`; its directory is not used).
     pub init: InitRequest,
+    /// The sensors themselves (e.g. a project's own, `simulate --project`), used instead of
+    /// reading `init.sensors` when given.
+    pub sensors: Option<Vec<Sensor>>,
     /// The settings every run starts from (grid, utility, energy at 100% budget, planner).
     pub settings: Settings,
     /// Readings available by this time (t + period <= it) are the history every run starts
@@ -560,7 +563,10 @@ fn new_run_project(shared: &Shared<'_>, settings: Settings) -> Result<Project<Sq
     let store = SqliteStore::open_in_memory()?;
     let dir = request.init.dir.clone();
     let mut project = Project::new(&dir, settings, store);
-    init_store(&mut project, &request.init)?;
+    match &request.sensors {
+        Some(sensors) => init_store_with(&mut project, sensors, &request.label)?,
+        None => init_store(&mut project, &request.init)?,
+    };
     let report = IngestReport {
         rows_read: shared.history.rows.len() as u64,
         readings: shared.history.rows.len() as u64,
@@ -1619,6 +1625,7 @@ mod tests {
         let mut request = CampaignRequest {
             label: "t".into(),
             init: crate::init::InitRequest::default(),
+            sensors: None,
             settings,
             history_until: 0,
             history_from: None,

@@ -230,23 +230,36 @@ pub fn init_store<S: Store>(
     request: &InitRequest,
 ) -> Result<InitOutcome> {
     let sensors = read_sensors(request)?;
-    let settings = project.settings().clone();
-    let field = Field::build(&sensors, settings.base()?, &settings.field_config())
-        .map_err(|e| AppError::core("cell grid", e))?;
     let source = request
         .sensors
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    init_store_with(project, &sensors, &source)
+}
+
+/// [`init_store`] with the sensors already read (e.g. another project's own), `source` the
+/// provenance stored with each.
+pub fn init_store_with<S: Store>(
+    project: &mut Project<S>,
+    sensors: &[Sensor],
+    source: &str,
+) -> Result<InitOutcome> {
+    if sensors.is_empty() {
+        return Err(AppError::Invalid("no sensors".into()));
+    }
+    let settings = project.settings().clone();
+    let field = Field::build(sensors, settings.base()?, &settings.field_config())
+        .map_err(|e| AppError::core("cell grid", e))?;
     let records: Vec<SensorRecord> = sensors
         .iter()
         .map(|s| SensorRecord {
             id: s.id.clone(),
             position: s.position,
             elevation_m: s.elevation_m,
-            source: source.clone(),
+            source: source.to_string(),
         })
         .collect();
-    let cells = cell_records(&sensors, &field);
+    let cells = cell_records(sensors, &field);
     let (upsert, replaced) = project.store_mut().write(|tx| {
         let upsert = tx.upsert_sensors(&records)?;
         let replaced = tx.replace_cells(&cells)?;

@@ -67,7 +67,9 @@ pub use cell_detail::{CellDetail, Contributions, SeriesPoint, cell_detail};
 pub use error::{AppError, Result};
 pub use explore::{Exploration, ExploreRequest, explore};
 pub use ingest::{Format, IngestOutcome, IngestRequest, batch_of, detect, ingest};
-pub use init::{DEFAULT_CELL_SIZE_M, InitOutcome, InitRequest, init, init_store, relative_to};
+pub use init::{
+    DEFAULT_CELL_SIZE_M, InitOutcome, InitRequest, init, init_store, init_store_with, relative_to,
+};
 pub use knowledge::{History, Knowledge, knowledge};
 pub use migrate::{MigrateOutcome, migrate};
 pub use plan::{
@@ -82,7 +84,7 @@ pub use reconstruct::{
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};
 pub use settings::Settings;
-pub use simulate::{Truth, fly, fly_buffered};
+pub use simulate::{ProjectRecord, REPLAY_DEFAULT_DAYS, Truth, fly, fly_buffered};
 pub use summaries::{pending_bytes, series_summary};
 pub use view::{
     CellView, FieldView, MissionExport, check_flyable, export, field_view, mission, missions,

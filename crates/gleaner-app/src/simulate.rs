@@ -6,7 +6,7 @@ use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
 
 use gleaner_field::{SensorId, UnixSeconds};
-use gleaner_ingest::{IngestReport, Readings, Row};
+use gleaner_ingest::{IngestReport, ModalityInfo, Readings, Row};
 use gleaner_store::{MissionId, Store};
 
 use crate::error::{AppError, Result};
@@ -28,6 +28,48 @@ pub struct Truth {
     /// Per sensor of `readings` (by its index there): (time in s, row index) of its rows,
     /// in time order, so a flight finds what it brings back without scanning every row.
     by_sensor: Vec<Vec<(UnixSeconds, usize)>>,
+}
+
+/// Days of missions a project replay runs by default: the last 30 days of its record.
+pub const REPLAY_DEFAULT_DAYS: i64 = 30;
+
+/// A project's own record as a campaign's dataset (`gleaner simulate --project`): its sensors
+/// and settings as they are, every stored reading as the truth, and the default period: the
+/// last [`REPLAY_DEFAULT_DAYS`] days of the record as missions, everything before as history.
+/// The project itself is only read: each run of the campaign is its own in-memory project.
+pub struct ProjectRecord {
+    /// The project's name (the campaign's label).
+    pub name: String,
+    /// The project's sensors, WGS84.
+    pub sensors: Vec<gleaner_field::Sensor>,
+    /// The project's settings (grid, base, energy, planner; the strategies set the utility).
+    pub settings: crate::settings::Settings,
+    /// Every stored reading; its period is the sampling step.
+    pub truth: Truth,
+    /// Default end of the history and first mission, s: the last reading's availability
+    /// minus [`REPLAY_DEFAULT_DAYS`] days.
+    pub history_until: UnixSeconds,
+    /// Default last mission, s: when the last reading becomes available (its time plus the
+    /// period).
+    pub end: UnixSeconds,
+}
+
+impl ProjectRecord {
+    /// Reads `project`'s sensors, settings and readings.
+    pub fn read<S: Store>(project: &Project<S>) -> Result<Self> {
+        let (sensors, _) = project.field()?;
+        let truth = Truth::from_store(project)?;
+        let (_, last) = truth.span().unwrap_or((0, 0));
+        let end = last.saturating_add(truth.period_s);
+        Ok(Self {
+            name: project.settings().project.name.clone(),
+            sensors,
+            settings: project.settings().clone(),
+            history_until: end.saturating_sub(REPLAY_DEFAULT_DAYS * 86_400),
+            end,
+            truth,
+        })
+    }
 }
 
 /// [`Truth::by_sensor`] of `readings`.
@@ -88,6 +130,59 @@ impl Truth {
             period_s,
             buffer_readings: None,
         })
+    }
+
+    /// A project's whole record as the ground truth of a replay (`simulate --project`): every
+    /// stored reading, the logging period the sampling step (the median gap between a
+    /// series' consecutive readings, s; a day when no series has two readings). Reads the
+    /// store only.
+    pub fn from_store<S: Store>(project: &Project<S>) -> Result<Self> {
+        let store = project.store();
+        let units: HashMap<String, Option<String>> = store
+            .modalities()?
+            .into_iter()
+            .map(|m| (m.modality.as_str().to_string(), m.unit))
+            .collect();
+        let batch = store.readings_for(None, UnixSeconds::MIN..=UnixSeconds::MAX)?;
+        if batch.rows.is_empty() {
+            return Err(AppError::Invalid(
+                "the project holds no readings to replay (run `gleaner ingest`)".into(),
+            ));
+        }
+        let mut series: HashMap<(u32, u32), Vec<UnixSeconds>> = HashMap::new();
+        for r in &batch.rows {
+            series.entry((r.sensor, r.modality)).or_default().push(r.t);
+        }
+        let mut times: Vec<(_, Vec<UnixSeconds>)> = series.into_iter().collect();
+        times.sort_by_key(|p| p.0);
+        for (_, t) in &mut times {
+            t.sort_unstable();
+        }
+        let period_s =
+            crate::knowledge::sampling_step(&times.into_iter().map(|p| p.1).collect::<Vec<_>>());
+        let readings = Readings {
+            modalities: batch
+                .modalities
+                .iter()
+                .map(|m| ModalityInfo {
+                    unit: units.get(m.as_str()).cloned().flatten(),
+                    modality: m.clone(),
+                })
+                .collect(),
+            sensors: batch.sensors,
+            rows: batch
+                .rows
+                .iter()
+                .map(|r| Row {
+                    sensor: r.sensor,
+                    modality: r.modality,
+                    t: r.t,
+                    value: r.value,
+                    line: 0,
+                })
+                .collect(),
+        };
+        Self::from_readings(readings, period_s)
     }
 
     /// Every reading, whether collected or not.

@@ -24,6 +24,7 @@ fn request(
     CampaignRequest {
         label: label.into(),
         init,
+        sensors: None,
         settings: project.settings().clone(),
         history_until,
         history_from: None,

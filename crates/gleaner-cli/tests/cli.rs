@@ -1087,3 +1087,147 @@ fn simulate_refuses_up_front_a_budget_exhaustive_collection_cannot_fly() {
     );
     assert!(!sim.join("missions.csv").exists());
 }
+
+/// `simulate --project` replays a project's own record: on a project made from a synthetic
+/// farm's files it flies exactly the missions the `synthetic` dataset flies from the same
+/// files (same history, schedule and settings; the project's record ends one period later, so
+/// it has one mission more), and it leaves the project's database as it was.
+#[test]
+fn simulate_replays_a_projects_own_record() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let farm = dir.path().join("farm");
+    ok(&[
+        "synth",
+        "--out",
+        s(&farm),
+        "--seed",
+        "5",
+        "--sensors",
+        "12",
+        "--days",
+        "36",
+    ]);
+    let project = dir.path().join("p");
+    ok(&[
+        "init",
+        "--dir",
+        s(&project),
+        "--sensors",
+        s(&farm.join("sensors.csv")),
+        "--name",
+        "north-field",
+    ]);
+    ok(&[
+        "ingest",
+        "--project",
+        s(&project),
+        s(&farm.join("readings.csv")),
+    ]);
+    let db_before = std::fs::read(project.join("gleaner.db")).expect("database");
+    let common = [
+        "--strategies",
+        "gleaner,round-robin",
+        "--planner-iterations",
+        "50",
+    ];
+    let replay = dir.path().join("replay");
+    let mut args = vec![
+        "simulate",
+        "--project",
+        s(&project),
+        "--out",
+        s(&replay),
+        "--start",
+        "2014-01-31",
+    ];
+    args.extend_from_slice(&common);
+    let out = ok(&args);
+    assert!(out.contains("1 campaign(s), 2 runs"), "{out}");
+    let dataset = dir.path().join("dataset");
+    let mut args = vec![
+        "simulate",
+        "--dataset",
+        "synthetic",
+        "--out",
+        s(&dataset),
+        "--farm-seeds",
+        "5",
+        "--farm-sensors",
+        "12",
+        "--farm-days",
+        "36",
+        "--farm-history-days",
+        "30",
+    ];
+    args.extend_from_slice(&common);
+    ok(&args);
+    // Every column but the label and the events caught (the dataset has ground-truth events,
+    // the project the real-data rule's).
+    let rows = |p: &Path| -> Vec<Vec<String>> {
+        let text = std::fs::read_to_string(p.join("missions.csv")).expect("missions.csv");
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+        let skip = |k: usize| header[k] == "label" || header[k] == "events_caught";
+        lines
+            .map(|l| {
+                l.split(',')
+                    .enumerate()
+                    .filter(|(k, _)| !skip(*k))
+                    .map(|(_, v)| v.to_string())
+                    .collect()
+            })
+            .collect()
+    };
+    let (from_project, from_files) = (rows(&replay), rows(&dataset));
+    assert_eq!(from_files.len(), 2 * 6, "six missions per strategy");
+    assert_eq!(from_project.len(), 2 * 7, "and one more from the project");
+    for strategy in ["gleaner", "round-robin"] {
+        let of = |r: &[Vec<String>]| -> Vec<Vec<String>> {
+            r.iter()
+                .filter(|x| x[0] == strategy)
+                .take(6)
+                .cloned()
+                .collect()
+        };
+        assert_eq!(of(&from_project), of(&from_files), "{strategy}");
+    }
+    let report = std::fs::read_to_string(replay.join("report.md")).expect("report.md");
+    assert!(
+        report.starts_with("# Campaign report: north-field"),
+        "{report}"
+    );
+    assert!(report.contains("simulate --project"), "{report}");
+    assert_eq!(
+        std::fs::read(project.join("gleaner.db")).expect("database"),
+        db_before,
+        "the replayed project is only read"
+    );
+    // Nothing to replay: a clear error, not a panic.
+    let empty = dir.path().join("empty");
+    ok(&[
+        "init",
+        "--dir",
+        s(&empty),
+        "--sensors",
+        s(&farm.join("sensors.csv")),
+    ]);
+    let err = fail(&[
+        "simulate",
+        "--project",
+        s(&empty),
+        "--out",
+        s(&dir.path().join("nothing")),
+    ]);
+    assert!(err.contains("no readings to replay"), "{err}");
+    // A dataset and a project at once: refused by the parser.
+    let err = fail(&[
+        "simulate",
+        "--project",
+        s(&project),
+        "--dataset",
+        "caf-daily",
+        "--out",
+        s(&dir.path().join("both")),
+    ]);
+    assert!(err.contains("cannot be used with"), "{err}");
+}

@@ -33,8 +33,15 @@ pub enum Dataset {
 #[derive(clap::Args)]
 pub struct SimulateArgs {
     /// The dataset to replay.
-    #[arg(long, value_enum)]
-    pub dataset: Dataset,
+    #[arg(long, value_enum, required_unless_present = "project")]
+    pub dataset: Option<Dataset>,
+    /// Replay this project's own record instead of a dataset: its sensors, settings (grid,
+    /// base, energy) and every stored reading as the truth, sampled at its median step. By
+    /// default the last 30 days are the missions and everything before is the history. The
+    /// project is only read. With --start (and no --history-until) the history runs to the
+    /// first mission.
+    #[arg(long, conflicts_with_all = ["dataset", "cell_size"])]
+    pub project: Option<PathBuf>,
     /// Output directory (missions.csv, events.csv, catches.csv, campaign.csv, report.md).
     #[arg(long)]
     pub out: PathBuf,
@@ -200,7 +207,61 @@ fn prepare(
         .clone()
         .unwrap_or_else(|| preset.to_string());
     settings.validate()?;
-    let mut truth = Truth::from_files(&project, &readings, period_s, &app::Silent)?;
+    let truth = Truth::from_files(&project, &readings, period_s, &app::Silent)?;
+    prepared(
+        args,
+        label,
+        InitRequest {
+            dir: project_dir.to_path_buf(),
+            ..init
+        },
+        None,
+        settings,
+        truth,
+        defaults,
+        events,
+    )
+}
+
+/// A project's own record (`--project`): its settings (the energy preset replaced when
+/// given), sensors and readings.
+fn project_record(args: &SimulateArgs, dir: &Path) -> Result<Prepared> {
+    let project = Project::open(dir)?;
+    let record = app::ProjectRecord::read(&project)?;
+    let mut settings = record.settings;
+    if let Some(preset) = &args.energy_preset {
+        settings.energy.preset = preset.clone();
+    }
+    settings.validate()?;
+    prepared(
+        args,
+        &record.name,
+        InitRequest {
+            dir: dir.to_path_buf(),
+            ..InitRequest::default()
+        },
+        Some(record.sensors),
+        settings,
+        record.truth,
+        // The history runs to the first mission when that is given.
+        (args.start.unwrap_or(record.history_until), None, record.end),
+        None,
+    )
+}
+
+/// The campaign request the arguments make of a dataset's parts: `defaults` are the
+/// dataset's (history until, history from, last mission), s.
+#[allow(clippy::too_many_arguments)]
+fn prepared(
+    args: &SimulateArgs,
+    label: &str,
+    init: InitRequest,
+    sensors: Option<Vec<gleaner_field::Sensor>>,
+    settings: app::Settings,
+    mut truth: Truth,
+    defaults: (i64, Option<i64>, i64),
+    events: Option<Vec<TruthEvent>>,
+) -> Result<Prepared> {
     truth.buffer_readings = args.buffer;
     let (until, from, end) = defaults;
     let history_until = args.history_until.unwrap_or(until);
@@ -213,10 +274,8 @@ fn prepare(
     Ok(Prepared {
         request: CampaignRequest {
             label: label.to_string(),
-            init: InitRequest {
-                dir: project_dir.to_path_buf(),
-                ..init
-            },
+            init,
+            sensors,
             settings,
             history_until,
             history_from: args.history_from.or(from),
@@ -315,8 +374,16 @@ pub fn run(
         Ok(())
     };
     let project_dir = args.out.join("project");
-    match args.dataset {
-        Dataset::CafDaily => run_one(prepare(
+    let dataset = match (&args.project, args.dataset) {
+        (Some(dir), _) => {
+            run_one(project_record(args, dir)?)?;
+            None
+        }
+        (None, dataset) => dataset,
+    };
+    match dataset {
+        None => {}
+        Some(Dataset::CafDaily) => run_one(prepare(
             args,
             "caf-daily",
             &project_dir,
@@ -339,7 +406,7 @@ pub fn run(
             "paper",
             None,
         )?)?,
-        Dataset::CafHourly => run_one(prepare(
+        Some(Dataset::CafHourly) => run_one(prepare(
             args,
             "caf-hourly",
             &project_dir,
@@ -360,7 +427,7 @@ pub fn run(
             "paper",
             None,
         )?)?,
-        Dataset::HubbardBrook => {
+        Some(Dataset::HubbardBrook) => {
             let dir = data.join("hubbard_brook");
             run_one(prepare(
                 args,
@@ -382,7 +449,7 @@ pub fn run(
                 None,
             )?)?
         }
-        Dataset::Synthetic => {
+        Some(Dataset::Synthetic) => {
             for &seed in &args.farm_seeds {
                 run_one(synthetic(args, seed, &args.out)?)?;
             }
