@@ -298,8 +298,9 @@ enum Command {
         after_help = "Binds 127.0.0.1:8080 by default. Writes (saving a plan, scoring, uploads) need\n`Authorization: Bearer <token>`: the token comes from --token-file or GLEANER_TOKEN, or on\nloopback is drawn at start-up and printed once in the dashboard's address. Binding any other\naddress needs a token. Request log on standard error (GLEANER_LOG=debug for more).\n\nExamples:\n  gleaner serve --project caf\n  GLEANER_TOKEN=$(cat token) gleaner serve --project caf --addr 0.0.0.0:8080"
     )]
     Serve(serve::ServeArgs),
-    /// Replay a dataset as a campaign of missions, one run per strategy, seed and budget,
-    /// through the same score, plan and record use cases; writes CSV results and a report.
+    /// Replay a dataset (or a project's own record) as a campaign of missions, one run per
+    /// strategy, seed and budget, through the same score, plan and record use cases; writes CSV
+    /// results and a report.
     #[command(
         after_help = "Each run is its own in-memory project: it starts with the history (readings available by
 --history-until) and knows only what its flights bring back; a reading stamped t is
@@ -311,9 +312,10 @@ Examples:
   gleaner simulate --dataset caf-daily --out sims/caf
   gleaner simulate --dataset caf-daily --out sims/caf --strategies all --budgets 0.25,0.5,1,1.5,2
   gleaner simulate --dataset synthetic --out sims/synth --farm-seeds 1,2,3,4,5,6,7,8,9,10
-  gleaner simulate --dataset hubbard-brook --out sims/hb   (large-pack battery)"
+  gleaner simulate --dataset hubbard-brook --out sims/hb   (large-pack battery)
+  gleaner simulate --project farm --out sims/farm   (the farm's last 30 days)"
     )]
-    Simulate(simulate::SimulateArgs),
+    Simulate(Box<simulate::SimulateArgs>),
     /// Write report.md (tables with 95% intervals, SVG charts) from a simulation directory.
     #[command(after_help = "Example:\n  gleaner report sims/caf")]
     Report {
