@@ -149,6 +149,25 @@ impl Strategy {
             })
     }
 
+    /// Strategies by name, in order, duplicates next to each other dropped: `all` is
+    /// [`Strategy::ALL`], `main` its first eight (gleaner, paper, variance, freshness,
+    /// round-robin, random, nearest, exhaustive).
+    pub fn parse_list<S: AsRef<str>>(names: &[S]) -> Result<Vec<Self>> {
+        let mut out = Vec::new();
+        for n in names {
+            match n.as_ref() {
+                "all" => out.extend(Self::ALL),
+                "main" => out.extend(&Self::ALL[..8]),
+                other => out.push(Self::parse(other)?),
+            }
+        }
+        out.dedup();
+        if out.is_empty() {
+            return Err(AppError::Invalid("no strategy named".into()));
+        }
+        Ok(out)
+    }
+
     /// The run's settings: the campaign's with this strategy's weights and planner.
     fn settings(self, base: &Settings) -> Settings {
         let mut s = base.clone();
@@ -387,6 +406,157 @@ pub struct CampaignRequest {
     pub jobs: usize,
     /// Provenance time stamped on missions, seconds.
     pub clock_now: UnixSeconds,
+}
+
+/// A dataset as a campaign takes it: the truth, the sensors, the settings, and the dataset's
+/// own defaults for the period.
+pub struct DatasetParts {
+    /// The dataset's name in outputs.
+    pub label: String,
+    /// The sensors file (as for `init`; its directory is the runs' project directory).
+    pub init: InitRequest,
+    /// The sensors themselves, used instead of reading `init.sensors` when given.
+    pub sensors: Option<Vec<Sensor>>,
+    /// The settings every run starts from.
+    pub settings: Settings,
+    /// Everything the sensors logged.
+    pub truth: Truth,
+    /// Default end of the history, s.
+    pub history_until: UnixSeconds,
+    /// Default start of the history, s (`None`: all of it).
+    pub history_from: Option<UnixSeconds>,
+    /// Default last mission, s.
+    pub end: UnixSeconds,
+    /// Whether a first mission given without an end of the history moves the history's end
+    /// there too (a project's own record: the history is everything before the missions).
+    pub history_follows_start: bool,
+    /// Ground-truth events (synthetic farms) [default: the real-data rule].
+    pub events: Option<Vec<TruthEvent>>,
+}
+
+/// What a replay asks of a dataset beyond its parts: the period, the strategies and the
+/// options of `gleaner simulate` and `POST /api/v1/simulate` (times in s).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReplayOptions {
+    /// End of the history [default: the dataset's].
+    pub history_until: Option<UnixSeconds>,
+    /// Start of the history [default: the dataset's].
+    pub history_from: Option<UnixSeconds>,
+    /// First mission [default: the end of the history].
+    pub start: Option<UnixSeconds>,
+    /// Last mission at or before this time [default: the dataset's].
+    pub end: Option<UnixSeconds>,
+    /// Seconds between missions.
+    pub every_s: i64,
+    /// Mission times instead of a period.
+    pub times: Option<Vec<UnixSeconds>>,
+    /// Strategies.
+    pub strategies: Vec<Strategy>,
+    /// Replicate seeds.
+    pub seeds: Vec<u64>,
+    /// Battery capacities as fractions of the settings'.
+    pub budgets: Vec<f64>,
+    /// The evaluated modality [default: the condition modality].
+    pub modality: Option<String>,
+    /// |z| threshold of the real-data event rule.
+    pub event_z: f64,
+    /// Planner iteration cap per mission.
+    pub planner_iterations: u64,
+    /// Sorties per mission of the planned strategies.
+    pub sorties: usize,
+    /// Observations per model-based estimate.
+    pub neighbours: usize,
+    /// The model-based estimator.
+    pub estimator: crate::reconstruct::Estimator,
+    /// Sensor buffers' capacity in readings per modality [default: unlimited].
+    pub buffer: Option<usize>,
+    /// Runs in parallel (0 = rayon's default).
+    pub jobs: usize,
+    /// Energy preset (`paper`, `large-pack`) instead of the dataset's settings'.
+    pub energy_preset: Option<String>,
+}
+
+impl Default for ReplayOptions {
+    fn default() -> Self {
+        Self {
+            history_until: None,
+            history_from: None,
+            start: None,
+            end: None,
+            every_s: 86_400,
+            times: None,
+            strategies: Strategy::ALL[..8].to_vec(),
+            seeds: vec![1],
+            budgets: vec![1.0],
+            modality: None,
+            event_z: 3.0,
+            planner_iterations: 300,
+            sorties: 1,
+            neighbours: crate::reconstruct::DEFAULT_NEIGHBOURS,
+            estimator: crate::reconstruct::Estimator::Changes,
+            buffer: None,
+            jobs: 2,
+            energy_preset: None,
+        }
+    }
+}
+
+/// A campaign ready to run: its request and its truth.
+pub struct Replay {
+    /// The request.
+    pub request: CampaignRequest,
+    /// Everything the sensors logged (with the options' buffer).
+    pub truth: Truth,
+}
+
+/// The campaign `options` make of `dataset`, missions stamped with `clock_now` (s).
+pub fn replay(
+    dataset: DatasetParts,
+    options: &ReplayOptions,
+    clock_now: UnixSeconds,
+) -> Result<Replay> {
+    let mut truth = dataset.truth;
+    truth.buffer_readings = options.buffer;
+    let mut settings = dataset.settings;
+    if let Some(preset) = &options.energy_preset {
+        settings.energy.preset = preset.clone();
+    }
+    settings.validate()?;
+    let history_until = match (options.history_until, options.start) {
+        (Some(t), _) => t,
+        (None, Some(start)) if dataset.history_follows_start => start,
+        (None, _) => dataset.history_until,
+    };
+    let start = options.start.unwrap_or(history_until);
+    let end = options.end.unwrap_or(dataset.end);
+    let schedule = match &options.times {
+        Some(t) => t.clone(),
+        None => every(start, end, options.every_s)?,
+    };
+    Ok(Replay {
+        request: CampaignRequest {
+            label: dataset.label,
+            init: dataset.init,
+            sensors: dataset.sensors,
+            settings,
+            history_until,
+            history_from: options.history_from.or(dataset.history_from),
+            schedule,
+            strategies: options.strategies.clone(),
+            seeds: options.seeds.clone(),
+            budgets: options.budgets.clone(),
+            modality: options.modality.clone(),
+            events: dataset.events,
+            event_z: options.event_z,
+            planner_iterations: options.planner_iterations,
+            sorties: options.sorties,
+            neighbours: options.neighbours,
+            estimator: options.estimator,
+            jobs: options.jobs,
+            clock_now,
+        },
+        truth,
+    })
 }
 
 /// One mission's metrics (after its flights were recorded).

@@ -55,6 +55,27 @@ pub struct ProjectRecord {
 }
 
 impl ProjectRecord {
+    /// The record as a campaign's dataset, the runs' project directory `dir` (the project's:
+    /// nothing is written there). A first mission given without an end of the history moves
+    /// the history's end there.
+    pub fn into_parts(self, dir: &std::path::Path) -> crate::campaign::DatasetParts {
+        crate::campaign::DatasetParts {
+            label: self.name,
+            init: crate::init::InitRequest {
+                dir: dir.to_path_buf(),
+                ..crate::init::InitRequest::default()
+            },
+            sensors: Some(self.sensors),
+            settings: self.settings,
+            truth: self.truth,
+            history_until: self.history_until,
+            history_from: None,
+            end: self.end,
+            history_follows_start: true,
+            events: None,
+        }
+    }
+
     /// Reads `project`'s sensors, settings and readings.
     pub fn read<S: Store>(project: &Project<S>) -> Result<Self> {
         let (sensors, _) = project.field()?;

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use gleaner_app::campaign::{
-    CampaignRequest, CampaignResult, Strategy, TruthEvent, every, run_campaign,
+    CampaignResult, DatasetParts, Replay, ReplayOptions, Strategy, TruthEvent, replay, run_campaign,
 };
 use gleaner_app::{self as app, Format, IngestRequest, InitRequest, Project, Truth};
 
@@ -141,28 +141,8 @@ pub struct SimulateArgs {
     pub farm_scale_extent: bool,
 }
 
-/// The strategies named on the command line.
-pub fn strategies(names: &[String]) -> Result<Vec<Strategy>> {
-    let mut out = Vec::new();
-    for n in names {
-        match n.as_str() {
-            "all" => out.extend(Strategy::ALL),
-            "main" => out.extend(&Strategy::ALL[..8]),
-            other => out.push(Strategy::parse(other)?),
-        }
-    }
-    out.dedup();
-    Ok(out)
-}
-
 fn day(s: &str) -> i64 {
     app::parse_timestamp(s).unwrap_or(0)
-}
-
-/// One campaign's inputs: the request and its truth.
-struct Prepared {
-    request: CampaignRequest,
-    truth: Truth,
 }
 
 fn files_in(dir: &Path, keep: impl Fn(&str) -> bool) -> Result<Vec<PathBuf>> {
@@ -189,7 +169,7 @@ fn prepare(
     defaults: (i64, Option<i64>, i64),
     preset: &str,
     events: Option<Vec<TruthEvent>>,
-) -> Result<Prepared> {
+) -> Result<Replay> {
     let (project, _) = if project_dir.join("gleaner.toml").exists() {
         (Project::open(project_dir)?, ())
     } else {
@@ -202,109 +182,67 @@ fn prepare(
         (p, ())
     };
     let mut settings = project.settings().clone();
-    settings.energy.preset = args
-        .energy_preset
-        .clone()
-        .unwrap_or_else(|| preset.to_string());
-    settings.validate()?;
+    settings.energy.preset = preset.to_string();
     let truth = Truth::from_files(&project, &readings, period_s, &app::Silent)?;
-    prepared(
-        args,
-        label,
-        InitRequest {
+    let (history_until, history_from, end) = defaults;
+    let parts = DatasetParts {
+        label: label.to_string(),
+        init: InitRequest {
             dir: project_dir.to_path_buf(),
             ..init
         },
-        None,
+        sensors: None,
         settings,
         truth,
-        defaults,
+        history_until,
+        history_from,
+        end,
+        history_follows_start: false,
         events,
-    )
-}
-
-/// A project's own record (`--project`): its settings (the energy preset replaced when
-/// given), sensors and readings.
-fn project_record(args: &SimulateArgs, dir: &Path) -> Result<Prepared> {
-    let project = Project::open(dir)?;
-    let record = app::ProjectRecord::read(&project)?;
-    let mut settings = record.settings;
-    if let Some(preset) = &args.energy_preset {
-        settings.energy.preset = preset.clone();
-    }
-    settings.validate()?;
-    prepared(
-        args,
-        &record.name,
-        InitRequest {
-            dir: dir.to_path_buf(),
-            ..InitRequest::default()
-        },
-        Some(record.sensors),
-        settings,
-        record.truth,
-        // The history runs to the first mission when that is given.
-        (args.start.unwrap_or(record.history_until), None, record.end),
-        None,
-    )
-}
-
-/// The campaign request the arguments make of a dataset's parts: `defaults` are the
-/// dataset's (history until, history from, last mission), s.
-#[allow(clippy::too_many_arguments)]
-fn prepared(
-    args: &SimulateArgs,
-    label: &str,
-    init: InitRequest,
-    sensors: Option<Vec<gleaner_field::Sensor>>,
-    settings: app::Settings,
-    mut truth: Truth,
-    defaults: (i64, Option<i64>, i64),
-    events: Option<Vec<TruthEvent>>,
-) -> Result<Prepared> {
-    truth.buffer_readings = args.buffer;
-    let (until, from, end) = defaults;
-    let history_until = args.history_until.unwrap_or(until);
-    let start = args.start.unwrap_or(history_until);
-    let end = args.end.unwrap_or(end);
-    let schedule = match &args.times {
-        Some(t) => t.clone(),
-        None => every(start, end, (args.every_hours * 3600.0).round() as i64)?,
     };
-    Ok(Prepared {
-        request: CampaignRequest {
-            label: label.to_string(),
-            init,
-            sensors,
-            settings,
-            history_until,
-            history_from: args.history_from.or(from),
-            schedule,
-            strategies: strategies(&args.strategies)?,
-            seeds: args.seeds.clone(),
-            budgets: args.budgets.clone(),
-            modality: args.modality.clone(),
-            events,
-            event_z: args.event_z,
-            planner_iterations: args.planner_iterations,
-            sorties: args.sorties,
-            neighbours: args.neighbours,
-            estimator: if args.simple_kriging {
-                app::Estimator::Levels(gleaner_kriging::Mean::Known)
-            } else if args.level_kriging {
-                app::Estimator::Levels(gleaner_kriging::Mean::Unknown)
-            } else {
-                app::Estimator::Changes
-            },
-            jobs: args.jobs,
-            clock_now: crate::clock_now(),
+    Ok(replay(parts, &options(args)?, crate::clock_now())?)
+}
+
+/// A project's own record (`--project`): its settings, sensors and readings; the project is
+/// only read.
+fn project_record(args: &SimulateArgs, dir: &Path) -> Result<Replay> {
+    let project = Project::open(dir)?;
+    let parts = app::ProjectRecord::read(&project)?.into_parts(dir);
+    Ok(replay(parts, &options(args)?, crate::clock_now())?)
+}
+
+/// The replay options the arguments give.
+fn options(args: &SimulateArgs) -> Result<ReplayOptions> {
+    Ok(ReplayOptions {
+        history_until: args.history_until,
+        history_from: args.history_from,
+        start: args.start,
+        end: args.end,
+        every_s: (args.every_hours * 3600.0).round() as i64,
+        times: args.times.clone(),
+        strategies: Strategy::parse_list(&args.strategies)?,
+        seeds: args.seeds.clone(),
+        budgets: args.budgets.clone(),
+        modality: args.modality.clone(),
+        event_z: args.event_z,
+        planner_iterations: args.planner_iterations,
+        sorties: args.sorties,
+        neighbours: args.neighbours,
+        estimator: if args.simple_kriging {
+            app::Estimator::Levels(gleaner_kriging::Mean::Known)
+        } else if args.level_kriging {
+            app::Estimator::Levels(gleaner_kriging::Mean::Unknown)
+        } else {
+            app::Estimator::Changes
         },
-        truth,
+        buffer: args.buffer,
+        jobs: args.jobs,
+        energy_preset: args.energy_preset.clone(),
     })
 }
 
 /// The synthetic farm of one seed: written (small files) under `dir`, with its events.
-fn synthetic(args: &SimulateArgs, seed: u64, dir: &Path) -> Result<Prepared> {
+fn synthetic(args: &SimulateArgs, seed: u64, dir: &Path) -> Result<Replay> {
     let farm_dir = dir.join(format!("farm-{seed}"));
     let (farm, files) = synth::run(&SynthArgs {
         out: farm_dir.clone(),
@@ -368,7 +306,7 @@ pub fn run(
         .with_context(|| format!("{}: cannot create", args.out.display()))?;
     let data = &args.data_dir;
     let mut results: Vec<CampaignResult> = Vec::new();
-    let mut run_one = |p: Prepared| -> Result<()> {
+    let mut run_one = |p: Replay| -> Result<()> {
         let r = run_campaign(&p.request, &p.truth, progress)?;
         results.push(r);
         Ok(())
