@@ -1592,6 +1592,62 @@ pub struct Summary {
     pub delay_vs_reference: Option<Interval>,
 }
 
+/// What one campaign found, per strategy and budget: what `POST /api/v1/simulate` answers.
+#[derive(Debug, Clone)]
+pub struct CampaignSummary {
+    /// The dataset's name.
+    pub label: String,
+    /// The evaluated modality.
+    pub modality: String,
+    /// The logging period, s.
+    pub period_s: i64,
+    /// End of the history, s.
+    pub history_until: UnixSeconds,
+    /// Mission times, s.
+    pub schedule: Vec<UnixSeconds>,
+    /// Events that became available during the campaign.
+    pub events: usize,
+    /// The strategy the differences are taken against (gleaner when it ran, else the
+    /// first).
+    pub reference: Strategy,
+    /// Per (strategy, budget), in the request's order.
+    pub summaries: Vec<Summary>,
+}
+
+impl CampaignRequest {
+    /// Missions the campaign flies in all: missions × strategies × seeds × budgets.
+    pub fn mission_runs(&self) -> usize {
+        self.schedule
+            .len()
+            .saturating_mul(self.strategies.len())
+            .saturating_mul(self.seeds.len())
+            .saturating_mul(self.budgets.len())
+    }
+}
+
+/// [`summarise`] of one campaign, against gleaner when it ran.
+pub fn campaign_summary(request: &CampaignRequest, result: &CampaignResult) -> CampaignSummary {
+    let reference = if request.strategies.contains(&Strategy::Gleaner) {
+        Strategy::Gleaner
+    } else {
+        request
+            .strategies
+            .first()
+            .copied()
+            .unwrap_or(Strategy::Gleaner)
+    };
+    CampaignSummary {
+        label: result.label.clone(),
+        modality: result.modality.clone(),
+        period_s: result.period_s,
+        history_until: request.history_until,
+        schedule: request.schedule.clone(),
+        events: result.events.len(),
+        reference,
+        summaries: summarise(std::slice::from_ref(result), reference),
+    }
+}
+
 /// Summaries of every (strategy, budget) over the given campaigns (e.g. one per synthetic
 /// seed), with paired RMSE differences against `reference`.
 pub fn summarise(results: &[CampaignResult], reference: Strategy) -> Vec<Summary> {

@@ -93,6 +93,36 @@ pub struct PlanBody {
     pub sorties: Option<usize>,
 }
 
+/// A replay of the served project's own record (`gleaner simulate --project`): which
+/// strategies would have served this farm best over its recent past.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SimulateBody {
+    /// Strategies (`gleaner`, `paper`, `variance`, `freshness`, `round-robin`, `random`,
+    /// `nearest`, `exhaustive`, the ablations, `gated`, `oracle`; or `main`, `all`)
+    /// [default: `gleaner`, `round-robin`, `freshness`].
+    pub strategies: Option<Vec<String>>,
+    /// First mission, RFC 3339 or `YYYY-MM-DD` (UTC) [default: 30 days before the last
+    /// reading becomes available]; the history runs to it unless `history_until` says.
+    pub start: Option<String>,
+    /// Last mission at or before this time [default: when the last reading becomes
+    /// available].
+    pub end: Option<String>,
+    /// End of the history every run starts with [default: the first mission].
+    pub history_until: Option<String>,
+    /// Hours between missions, (0, 8760] [default: 24].
+    pub every_hours: Option<f64>,
+    /// Replicate seeds (planner and random choices), at most 10 [default: [1]].
+    pub seeds: Option<Vec<u64>>,
+    /// Battery capacities as fractions of the preset's, each in (0, 10], at most 10
+    /// [default: [1]].
+    pub budgets: Option<Vec<f64>>,
+    /// Battery budget preset: `paper` or `large-pack` [default: the project's `[energy]`].
+    pub energy_preset: Option<String>,
+    /// Planner iteration cap per mission, 1..=10000 [default: 300].
+    pub planner_iterations: Option<u64>,
+}
+
 /// An exploration request (`gleaner explore`).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]

@@ -10,15 +10,15 @@ use axum::extract::{Multipart, Path, Query, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use gleaner_app::{self as app, MissionId, StoreRead};
-use gleaner_wire::docs::{CellRowDoc, ExplorationDoc, ReconstructionDoc, ScoringDoc};
+use gleaner_wire::docs::{CampaignDoc, CellRowDoc, ExplorationDoc, ReconstructionDoc, ScoringDoc};
 use gleaner_wire::{FieldDoc, MissionDoc};
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 use utoipa::{IntoParams, OpenApi};
 
 use crate::api::{
-    CellDetailDoc, ExploreBody, IngestDoc, PlanBody, ProjectDoc, RecordDoc, ScoreBody, history,
-    parse_time,
+    CellDetailDoc, ExploreBody, IngestDoc, PlanBody, ProjectDoc, RecordDoc, ScoreBody,
+    SimulateBody, history, parse_time,
 };
 use crate::auth::authorize;
 use crate::error::{ApiError, ApiResult, ErrorBody};
@@ -314,6 +314,110 @@ pub async fn reconstruct(
             Ok(gleaner_wire::convert::reconstruction(&app::reconstruct(
                 p, &request,
             )?))
+        })
+        .await?;
+    Ok(Json(doc))
+}
+
+/// Most missions one simulation request may fly in all (missions × strategies × seeds ×
+/// budgets): about a minute of CPU on CAF-sized farms.
+pub const MAX_SIMULATED_MISSIONS: usize = 5_000;
+
+/// Replays the served project's own record as a campaign (`gleaner simulate --project`):
+/// each strategy flies the same missions from the same history, each run its own in-memory
+/// copy; the answer compares them (error after the flights, events caught and how soon,
+/// energy, with 95% intervals when the campaign spans 10 weeks or more). Reads only; one
+/// simulation or planning search at a time.
+#[utoipa::path(post, path = "/api/v1/simulate", tag = "data", request_body = SimulateBody,
+    responses((status = 200, body = CampaignDoc), (status = 400, body = ErrorBody),
+        (status = 413, body = ErrorBody)))]
+pub async fn simulate(
+    State(s): State<AppState>,
+    body: Result<Bytes, BytesRejection>,
+) -> ApiResult<Json<CampaignDoc>> {
+    let b: SimulateBody = json_body(body)?;
+    let names = b.strategies.unwrap_or_else(|| {
+        ["gleaner", "round-robin", "freshness"]
+            .map(String::from)
+            .to_vec()
+    });
+    let strategies = app::campaign::Strategy::parse_list(&names)
+        .map_err(|e| ApiError::from(e).in_field("strategies"))?;
+    let every_hours = b.every_hours.unwrap_or(24.0);
+    if !(every_hours > 0.0 && every_hours <= 8_760.0) {
+        return Err(ApiError::bad_request(
+            Some("every_hours"),
+            format!("expected hours in (0, 8760], got {every_hours}"),
+        ));
+    }
+    let seeds = b.seeds.unwrap_or_else(|| vec![1]);
+    if seeds.is_empty() || seeds.len() > 10 {
+        return Err(ApiError::bad_request(
+            Some("seeds"),
+            format!("expected 1 to 10 seeds, got {}", seeds.len()),
+        ));
+    }
+    let budgets = b.budgets.unwrap_or_else(|| vec![1.0]);
+    if budgets.is_empty() || budgets.len() > 10 || !budgets.iter().all(|&x| x > 0.0 && x <= 10.0) {
+        return Err(ApiError::bad_request(
+            Some("budgets"),
+            "expected 1 to 10 budgets, each in (0, 10]",
+        ));
+    }
+    let planner_iterations = b.planner_iterations.unwrap_or(300);
+    if !(1..=10_000).contains(&planner_iterations) {
+        return Err(ApiError::bad_request(
+            Some("planner_iterations"),
+            format!("expected 1..=10000, got {planner_iterations}"),
+        ));
+    }
+    let energy_preset = match b.energy_preset.as_deref() {
+        None | Some("") => None,
+        Some(p @ ("paper" | "large-pack")) => Some(p.to_string()),
+        Some(other) => {
+            return Err(ApiError::bad_request(
+                Some("energy_preset"),
+                format!("energy preset {other:?}: expected paper or large-pack"),
+            ));
+        }
+    };
+    let options = app::campaign::ReplayOptions {
+        history_until: parse_time("history_until", b.history_until.as_deref())?,
+        start: parse_time("start", b.start.as_deref())?,
+        end: parse_time("end", b.end.as_deref())?,
+        every_s: (every_hours * 3_600.0).round() as i64,
+        strategies,
+        seeds,
+        budgets,
+        planner_iterations,
+        energy_preset,
+        ..app::campaign::ReplayOptions::default()
+    };
+    let _slot =
+        s.0.planning
+            .acquire()
+            .await
+            .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    let doc = s
+        .run(move |p| {
+            let parts = app::ProjectRecord::read(p)?.into_parts(p.dir());
+            let replay = app::campaign::replay(parts, &options, clock_now())?;
+            let missions = replay.request.mission_runs();
+            if missions > MAX_SIMULATED_MISSIONS {
+                return Err(ApiError::bad_request(
+                    Some("start"),
+                    format!(
+                        "{missions} missions in all (missions × strategies × seeds × budgets): \
+                         at most {MAX_SIMULATED_MISSIONS} per request; shorten the period or \
+                         name fewer strategies (the CLI's `gleaner simulate --project` has no \
+                         limit)"
+                    ),
+                ));
+            }
+            let result = app::campaign::run_campaign(&replay.request, &replay.truth, &app::Silent)?;
+            Ok(gleaner_wire::convert::campaign(
+                &app::campaign::campaign_summary(&replay.request, &result),
+            ))
         })
         .await?;
     Ok(Json(doc))

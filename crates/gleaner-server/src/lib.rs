@@ -183,6 +183,7 @@ fn api_routes(max_upload_bytes: usize) -> (Router<AppState>, utoipa::openapi::Op
         .routes(routes!(handlers::cell))
         .routes(routes!(handlers::score))
         .routes(routes!(handlers::reconstruct))
+        .routes(routes!(handlers::simulate))
         .routes(routes!(handlers::missions))
         .routes(routes!(handlers::mission))
         .routes(routes!(handlers::plan))

@@ -244,3 +244,80 @@ pub struct ReconstructionDoc {
     /// One per sensor, by id.
     pub sensors: Vec<SensorEstimateDoc>,
 }
+
+/// A mean with its 95% interval; `null` where undefined (no value, or too few blocks for an
+/// interval: then `low` = `high` = `null` and `mean` stands alone).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct IntervalDoc {
+    /// The mean.
+    pub mean: Option<f64>,
+    /// Lower end of the 95% interval.
+    pub low: Option<f64>,
+    /// Upper end of the 95% interval.
+    pub high: Option<f64>,
+    /// Independent values the interval rests on (7-day blocks of missions, or events).
+    pub n: usize,
+}
+
+/// One strategy at one battery budget over a campaign.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct StrategySummaryDoc {
+    /// Strategy (`gleaner`, `round-robin`, ...).
+    pub strategy: String,
+    /// Battery capacity as a fraction of the settings' preset.
+    pub budget: f64,
+    /// Runs pooled (seeds).
+    pub runs: usize,
+    /// Per mission, means over 7-day blocks with 95% intervals: `rmse_kriged`,
+    /// `rmse_carried`, `mae_kriged`, `mae_carried` (after the flights; the modality's unit),
+    /// `rmse_kriged_before`, `rmse_carried_before` (before them), `mean_sd` (the
+    /// model's standard deviation, the modality's unit), `staleness_mean_days`,
+    /// `staleness_max_days` (d), `energy_kj` (kJ per mission), `utilisation` (energy /
+    /// budget), `cells`, `classifier_accuracy` (fraction), `lost_readings`.
+    pub metrics: BTreeMap<String, IntervalDoc>,
+    /// Events caught.
+    pub events_caught: usize,
+    /// Events available during the campaign (pooled over runs).
+    pub events: usize,
+    /// Delay from an event's first available reading to its catch, days (caught events).
+    pub delay_days: IntervalDoc,
+    /// Kriging RMSE minus the reference strategy's, paired by mission (the modality's unit);
+    /// `null` for the reference itself.
+    pub rmse_vs_reference: Option<IntervalDoc>,
+    /// Catch delay minus the reference strategy's over the events both caught, days;
+    /// `null` for the reference itself.
+    pub delay_vs_reference: Option<IntervalDoc>,
+}
+
+/// What a campaign found (`POST /api/v1/simulate`: the served project's own record
+/// replayed, as `gleaner simulate --project`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct CampaignDoc {
+    /// Always [`crate::CAMPAIGN_FORMAT`].
+    pub format: String,
+    /// Always [`crate::VERSION`] when written by this build.
+    pub version: u32,
+    /// The dataset's (project's) name.
+    pub label: String,
+    /// The evaluated modality (e.g. `vw@30cm`).
+    pub modality: String,
+    /// The readings' logging period, s.
+    pub period_s: i64,
+    /// End of the history every run starts with, RFC 3339 UTC.
+    pub history_until: String,
+    /// Missions per run.
+    pub missions: usize,
+    /// First mission, RFC 3339 UTC (`null` without missions).
+    pub first_mission: Option<String>,
+    /// Last mission, RFC 3339 UTC.
+    pub last_mission: Option<String>,
+    /// Anomaly events that became available during the campaign (the real-data rule).
+    pub events: usize,
+    /// The strategy the differences are taken against.
+    pub reference: String,
+    /// Per strategy and budget, in the request's order.
+    pub strategies: Vec<StrategySummaryDoc>,
+}

@@ -9,13 +9,14 @@ use gleaner_server::handlers::MISSION_FILES;
 use crate::common::{Server, TOKEN, caf_project, flight_csv};
 
 /// Every API route (method, path as in the OpenAPI document).
-const ROUTES: [(&str, &str); 16] = [
+const ROUTES: [(&str, &str); 17] = [
     ("get", "/api/v1/project"),
     ("get", "/api/v1/field"),
     ("get", "/api/v1/cells"),
     ("get", "/api/v1/cells/{cell}"),
     ("post", "/api/v1/score"),
     ("get", "/api/v1/reconstruct"),
+    ("post", "/api/v1/simulate"),
     ("get", "/api/v1/missions"),
     ("get", "/api/v1/missions/{id}"),
     ("post", "/api/v1/plan"),
@@ -147,6 +148,89 @@ fn reconstructs_every_sensor_and_refuses_bad_queries_naming_the_field() {
         if field.is_some() {
             assert_eq!(f.as_deref(), field, "{query}: {reason}");
         }
+    }
+}
+
+/// `POST /api/v1/simulate` replays the served project's own record: the same missions for
+/// every strategy, deterministic, the project only read; bad requests name their field.
+#[test]
+fn simulates_the_projects_recent_past_and_refuses_bad_requests_naming_the_field() {
+    let server = Server::caf();
+    let before = server.get_json("/api/v1/project");
+    let mut c = server.client();
+    let body = json!({
+        "strategies": ["gleaner", "round-robin"],
+        "start": "2013-12-25",
+        "planner_iterations": 50
+    });
+    let post = |c: &mut gleaner_server::client::Client, body: &Value| {
+        c.request(
+            "POST",
+            "/api/v1/simulate",
+            &[("content-type", "application/json")],
+            Some(body.to_string().as_bytes()),
+        )
+        .unwrap()
+    };
+    let r = post(&mut c, &body);
+    assert_eq!(r.status, 200, "{}", r.text());
+    let doc: Value = r.json().unwrap();
+    assert_eq!(doc["format"], "gleaner.campaign");
+    assert_eq!(doc["label"], "caf");
+    assert_eq!(doc["modality"], "vw@30cm");
+    assert_eq!(doc["period_s"], 86_400);
+    // The history runs to the first mission; the last is when the last reading (stamped
+    // 2013-12-31) becomes available.
+    assert_eq!(doc["history_until"], "2013-12-25T00:00:00Z");
+    assert_eq!(doc["first_mission"], "2013-12-25T00:00:00Z");
+    assert_eq!(doc["last_mission"], "2014-01-01T00:00:00Z");
+    assert_eq!(doc["missions"], 8);
+    assert_eq!(doc["reference"], "gleaner");
+    let strategies = doc["strategies"].as_array().unwrap();
+    assert_eq!(strategies.len(), 2);
+    for (x, name) in strategies.iter().zip(["gleaner", "round-robin"]) {
+        assert_eq!(x["strategy"], name);
+        assert_eq!(x["budget"], 1.0);
+        // m³/m³ after the flights; the paper's battery: 66.5 kJ usable per mission.
+        let rmse = x["metrics"]["rmse_kriged"]["mean"].as_f64().unwrap();
+        assert!(rmse > 0.0 && rmse < 0.05, "{x}");
+        let energy = x["metrics"]["energy_kj"]["mean"].as_f64().unwrap();
+        assert!(energy > 30.0 && energy <= 66.5, "{x}");
+        assert!(x["events_caught"].as_u64().unwrap() <= x["events"].as_u64().unwrap());
+    }
+    assert_eq!(strategies[0]["rmse_vs_reference"], Value::Null);
+    assert!(strategies[1]["rmse_vs_reference"]["mean"].is_f64());
+    // Deterministic, and the project is only read.
+    let again: Value = post(&mut c, &body).json().unwrap();
+    assert_eq!(again, doc);
+    let after = server.get_json("/api/v1/project");
+    assert_eq!(after["readings"], before["readings"]);
+    assert_eq!(
+        server.get_json("/api/v1/missions"),
+        json!([]),
+        "no mission stored"
+    );
+
+    for (bad, field) in [
+        (json!({"strategies": ["best"]}), Some("strategies")),
+        (json!({"every_hours": 0}), Some("every_hours")),
+        (json!({"seeds": []}), Some("seeds")),
+        (json!({"budgets": [0.0]}), Some("budgets")),
+        (json!({"planner_iterations": 0}), Some("planner_iterations")),
+        (json!({"energy_preset": "huge"}), Some("energy_preset")),
+        (json!({"start": "soon"}), Some("start")),
+        (
+            json!({"strategies": ["all"], "start": "2012-01-01"}),
+            Some("start"),
+        ),
+        (json!({"colour": "red"}), Some("colour")),
+    ] {
+        let r = post(&mut c, &bad);
+        assert_eq!(r.status, 400, "{bad}: {}", r.text());
+        let (code, f, reason) = error(&r);
+        assert_eq!(code, "bad_request", "{bad}");
+        assert!(!reason.is_empty());
+        assert_eq!(f.as_deref(), field, "{bad}: {reason}");
     }
 }
 
