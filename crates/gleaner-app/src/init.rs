@@ -48,6 +48,10 @@ pub struct InitRequest {
     /// Where to keep the data: an SQLite file relative to the project directory, or a
     /// `postgres://...[#project]` URL [default: `gleaner.db`].
     pub database: Option<String>,
+    /// Write gleaner's method as the project's `[utility]` (the gated score with each sensor's
+    /// drift as F and the bounded anomaly, [`crate::settings::UtilitySection::gleaner`])
+    /// instead of the paper's S (SPEC §2, the default).
+    pub gleaner_method: bool,
 }
 
 /// What `init` did.
@@ -143,6 +147,9 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
     if request.hubbard_brook {
         utility.condition_modality =
             hubbard_brook_main_water_depth(&request.sensors)?.map(|depth| format!("vw@{depth}cm"));
+    }
+    if request.gleaner_method {
+        utility = utility.gleaner();
     }
     let settings = Settings {
         project: ProjectSection {

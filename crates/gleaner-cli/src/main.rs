@@ -35,7 +35,7 @@ struct Cli {
 enum Command {
     /// Create a project from a sensors file: settings, database, sensors and the cell grid.
     #[command(
-        after_help = "Examples:\n  gleaner init --dir farm --sensors sensors.csv --cell-size 40\n  gleaner init --dir caf --sensors ../shared/data/caf/sensors/CAF_sensor_locations.csv --utm-zone 11N"
+        after_help = "Examples:\n  gleaner init --dir farm --sensors sensors.csv --cell-size 40\n  gleaner init --dir caf --sensors ../shared/data/caf/sensors/CAF_sensor_locations.csv --utm-zone 11N\n  gleaner init --dir farm --sensors sensors.csv --method gleaner   (plan by gleaner's method)"
     )]
     Init {
         /// Project directory (created if missing).
@@ -80,6 +80,12 @@ enum Command {
         /// per project, named after `#` or after the project name) [default: gleaner.db].
         #[arg(long, value_name = "FILE_OR_URL")]
         database: Option<String>,
+        /// The score the project plans by: `paper` (the paper's S, SPEC §2) or `gleaner`
+        /// (gleaner's method: the gated score with each sensor's drift as freshness and the
+        /// bounded anomaly, β = 4, γ = δ = 0; less error and sooner catches than coverage on
+        /// held-out CAF, docs/method-improvement.md). Written into `[utility]`.
+        #[arg(long, value_enum, default_value_t = MethodArg::Paper)]
+        method: MethodArg,
     },
     /// Ingest readings files into the project, all or nothing; re-ingesting changes nothing.
     #[command(
@@ -458,6 +464,12 @@ enum FormatArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum MethodArg {
+    Paper,
+    Gleaner,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum SensorsFormatArg {
     Generic,
     HubbardBrook,
@@ -627,6 +639,7 @@ fn run(cli: Cli) -> Result<()> {
             name,
             force,
             database,
+            method,
         } => {
             let base = base
                 .map(|(lat, lon)| gleaner_field::LatLon::new(lat, lon).context("--base"))
@@ -643,6 +656,7 @@ fn run(cli: Cli) -> Result<()> {
                 name,
                 force,
                 database,
+                gleaner_method: matches!(method, MethodArg::Gleaner),
             })?;
             println!("{}", init_line(&outcome, &dir));
         }

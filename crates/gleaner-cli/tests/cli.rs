@@ -1231,3 +1231,54 @@ fn simulate_replays_a_projects_own_record() {
     ]);
     assert!(err.contains("cannot be used with"), "{err}");
 }
+
+/// `init --method gleaner` writes gleaner's method into `[utility]`: the scoring then reports
+/// its weights (β = 4, γ = δ = 0) and bounded anomaly, where a default project scores by the
+/// paper's S.
+#[test]
+fn init_method_gleaner_scores_by_gleaners_method() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scoring = |method: &str| -> serde_json::Value {
+        let p = dir.path().join(method);
+        ok(&[
+            "init",
+            "--dir",
+            s(&p),
+            "--sensors",
+            s(&data("sensors.csv")),
+            "--base",
+            "46.7800,-117.0805",
+            "--method",
+            method,
+        ]);
+        let toml = std::fs::read_to_string(p.join("gleaner.toml")).expect("gleaner.toml");
+        assert_eq!(
+            toml.contains("freshness_form = \"drift\""),
+            method == "gleaner",
+            "{toml}"
+        );
+        ok(&["ingest", "--project", s(&p), s(&data("readings.csv"))]);
+        let json = ok(&["score", "--project", s(&p), "--at", "2014-01-25", "--json"]);
+        serde_json::from_str(&json).expect("json")
+    };
+    let (paper, gleaner) = (scoring("paper"), scoring("gleaner"));
+    assert_eq!(paper["weights"], serde_json::json!([1.0, 1.0, 1.0, 1.0]));
+    assert_eq!(paper["anomaly_form"], "raw");
+    assert_eq!(gleaner["weights"], serde_json::json!([1.0, 4.0, 0.0, 0.0]));
+    // The form line names the bounded anomaly and the drift freshness.
+    assert_eq!(gleaner["anomaly_form"], "bounded(kappa=3); F drift");
+    for c in gleaner["cells"].as_array().expect("cells") {
+        let f = c["f"].as_f64().expect("f");
+        assert!((0.0..=1.0).contains(&f), "F = {f}");
+    }
+    let err = fail(&[
+        "init",
+        "--dir",
+        s(&dir.path().join("other")),
+        "--sensors",
+        s(&data("sensors.csv")),
+        "--method",
+        "best",
+    ]);
+    assert!(err.contains("invalid value 'best'"), "{err}");
+}
