@@ -47,6 +47,18 @@ fn clock_now() -> i64 {
         .map_or(0, |d| d.as_secs() as i64)
 }
 
+/// A request's `energy_preset`: none (empty = none), `paper` or `large-pack`.
+fn energy_preset(value: Option<&str>) -> ApiResult<Option<String>> {
+    match value {
+        None | Some("") => Ok(None),
+        Some(p @ ("paper" | "large-pack")) => Ok(Some(p.to_string())),
+        Some(other) => Err(ApiError::bad_request(
+            Some("energy_preset"),
+            format!("energy preset {other:?}: expected paper or large-pack"),
+        )),
+    }
+}
+
 /// A JSON body (empty = `{}`), refusing unknown fields; errors name the field at fault.
 fn json_body<T: DeserializeOwned>(body: Result<Bytes, BytesRejection>) -> ApiResult<T> {
     let bytes = body.map_err(|r| {
@@ -371,16 +383,7 @@ pub async fn simulate(
             format!("expected 1..=10000, got {planner_iterations}"),
         ));
     }
-    let energy_preset = match b.energy_preset.as_deref() {
-        None | Some("") => None,
-        Some(p @ ("paper" | "large-pack")) => Some(p.to_string()),
-        Some(other) => {
-            return Err(ApiError::bad_request(
-                Some("energy_preset"),
-                format!("energy preset {other:?}: expected paper or large-pack"),
-            ));
-        }
-    };
+    let energy_preset = energy_preset(b.energy_preset.as_deref())?;
     let options = app::campaign::ReplayOptions {
         history_until: parse_time("history_until", b.history_until.as_deref())?,
         start: parse_time("start", b.start.as_deref())?,
@@ -545,16 +548,7 @@ async fn plan_request(
             .acquire()
             .await
             .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
-    let preset = match b.energy_preset.as_deref() {
-        None | Some("") => None,
-        Some(p @ ("paper" | "large-pack")) => Some(p.to_string()),
-        Some(other) => {
-            return Err(ApiError::bad_request(
-                Some("energy_preset"),
-                format!("energy preset {other:?}: expected paper or large-pack"),
-            ));
-        }
-    };
+    let preset = energy_preset(b.energy_preset.as_deref())?;
     s.run_write(request.dry_run, move |p| {
         let planned = app::plan_with_preset(p, &request, preset.as_deref(), clock_now())?;
         let mut docs = vec![gleaner_wire::convert::planned_mission(&planned)];
