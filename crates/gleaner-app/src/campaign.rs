@@ -105,6 +105,10 @@ impl Strategy {
         Strategy::Gated,
     ];
 
+    /// The main strategies (`main`): gleaner, paper, variance, freshness, round-robin,
+    /// random, nearest, exhaustive — the first eight of [`Strategy::ALL`], no ablations.
+    pub const MAIN: &'static [Strategy] = Self::ALL.as_slice().split_at(8).0;
+
     /// Yardsticks run only when named: they see the truth (see [`Strategy::Oracle`]).
     pub const YARDSTICKS: [Strategy; 1] = [Strategy::Oracle];
 
@@ -150,14 +154,13 @@ impl Strategy {
     }
 
     /// Strategies by name, in order, duplicates next to each other dropped: `all` is
-    /// [`Strategy::ALL`], `main` its first eight (gleaner, paper, variance, freshness,
-    /// round-robin, random, nearest, exhaustive).
+    /// [`Strategy::ALL`], `main` [`Strategy::MAIN`].
     pub fn parse_list<S: AsRef<str>>(names: &[S]) -> Result<Vec<Self>> {
         let mut out = Vec::new();
         for n in names {
             match n.as_ref() {
                 "all" => out.extend(Self::ALL),
-                "main" => out.extend(&Self::ALL[..8]),
+                "main" => out.extend_from_slice(Self::MAIN),
                 other => out.push(Self::parse(other)?),
             }
         }
@@ -485,7 +488,7 @@ impl Default for ReplayOptions {
             end: None,
             every_s: 86_400,
             times: None,
-            strategies: Strategy::ALL[..8].to_vec(),
+            strategies: Strategy::MAIN.to_vec(),
             seeds: vec![1],
             budgets: vec![1.0],
             modality: None,

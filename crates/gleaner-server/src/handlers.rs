@@ -348,6 +348,7 @@ pub async fn simulate(
     body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<Json<CampaignDoc>> {
     let b: SimulateBody = json_body(body)?;
+    let defaults = app::campaign::ReplayOptions::default();
     let names = b.strategies.unwrap_or_else(|| {
         ["gleaner", "round-robin", "freshness"]
             .map(String::from)
@@ -355,28 +356,28 @@ pub async fn simulate(
     });
     let strategies = app::campaign::Strategy::parse_list(&names)
         .map_err(|e| ApiError::from(e).in_field("strategies"))?;
-    let every_hours = b.every_hours.unwrap_or(24.0);
+    let every_hours = b.every_hours.unwrap_or(defaults.every_s as f64 / 3_600.0);
     if !(every_hours > 0.0 && every_hours <= 8_760.0) {
         return Err(ApiError::bad_request(
             Some("every_hours"),
             format!("expected hours in (0, 8760], got {every_hours}"),
         ));
     }
-    let seeds = b.seeds.unwrap_or_else(|| vec![1]);
+    let seeds = b.seeds.unwrap_or_else(|| defaults.seeds.clone());
     if seeds.is_empty() || seeds.len() > 10 {
         return Err(ApiError::bad_request(
             Some("seeds"),
             format!("expected 1 to 10 seeds, got {}", seeds.len()),
         ));
     }
-    let budgets = b.budgets.unwrap_or_else(|| vec![1.0]);
+    let budgets = b.budgets.unwrap_or_else(|| defaults.budgets.clone());
     if budgets.is_empty() || budgets.len() > 10 || !budgets.iter().all(|&x| x > 0.0 && x <= 10.0) {
         return Err(ApiError::bad_request(
             Some("budgets"),
             "expected 1 to 10 budgets, each in (0, 10]",
         ));
     }
-    let planner_iterations = b.planner_iterations.unwrap_or(300);
+    let planner_iterations = b.planner_iterations.unwrap_or(defaults.planner_iterations);
     if !(1..=10_000).contains(&planner_iterations) {
         return Err(ApiError::bad_request(
             Some("planner_iterations"),
@@ -394,13 +395,9 @@ pub async fn simulate(
         budgets,
         planner_iterations,
         energy_preset,
-        ..app::campaign::ReplayOptions::default()
+        ..defaults
     };
-    let _slot =
-        s.0.planning
-            .acquire()
-            .await
-            .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    let _slot = s.planning_slot().await?;
     let doc = s
         .run(move |p| {
             let parts = app::ProjectRecord::read(p)?.into_parts(p.dir());
@@ -543,11 +540,7 @@ async fn plan_request(
         dry_run: b.dry_run,
         sorties: b.sorties,
     };
-    let _slot =
-        s.0.planning
-            .acquire()
-            .await
-            .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    let _slot = s.planning_slot().await?;
     let preset = energy_preset(b.energy_preset.as_deref())?;
     s.run_write(request.dry_run, move |p| {
         let planned = app::plan_with_preset(p, &request, preset.as_deref(), clock_now())?;
@@ -584,11 +577,7 @@ pub async fn explore(
         at: parse_time("at", b.at.as_deref())?,
         dry_run: b.dry_run,
     };
-    let _slot =
-        s.0.planning
-            .acquire()
-            .await
-            .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+    let _slot = s.planning_slot().await?;
     let doc = s
         .run_write(request.dry_run, move |p| {
             Ok(gleaner_wire::convert::exploration(&app::explore(

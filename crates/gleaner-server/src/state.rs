@@ -76,6 +76,16 @@ impl AppState {
         })))
     }
 
+    /// Waits for the one slot planning, exploration and simulation searches share; held
+    /// until the returned permit is dropped.
+    pub async fn planning_slot(&self) -> ApiResult<tokio::sync::SemaphorePermit<'_>> {
+        self.0
+            .planning
+            .acquire()
+            .await
+            .map_err(|_| ApiError::unavailable("the server is shutting down"))
+    }
+
     fn take(&self) -> ApiResult<Opened> {
         let pooled = self.0.pool.lock().map_or(None, |mut p| p.pop());
         match pooled {
