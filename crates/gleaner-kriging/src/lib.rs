@@ -22,6 +22,10 @@
 //!   reading plus its change since, estimated from its neighbours' known changes over the
 //!   same interval with a model of changes ([`IncrementModel`], fitted by [`fit_increments`]);
 //!   without an informative change it is exactly the last value carried forward;
+//! - [`DynamicModel`] (fitted by [`fit_dynamic`], run by [`FieldFilter`]) is the field model
+//!   over sensors × time: a learned, shrunk covariance of levels between sensors and AR(1)
+//!   dynamics of the deviations, as a Kalman filter — the Gaussian conditional of levels for
+//!   sensors not read for long, the last value and its inferred change for those read lately;
 //! - [`variance_reduction`] is the expected reduction of the field's posterior variance from
 //!   visiting cells, picked greedily on the (submodular) marginal gain.
 //!
@@ -44,7 +48,11 @@
 
 use thiserror::Error;
 
+mod dynamic;
 mod increments;
+pub use dynamic::{
+    DynamicFitOptions, DynamicModel, FieldFilter, MAX_DYNAMIC_SENSORS, Shrinkage, fit_dynamic,
+};
 pub use increments::{
     Change, ChangeEstimate, IncrementFitOptions, IncrementModel, Variogram, estimate_change,
     fit_increments,

@@ -1,0 +1,796 @@
+//! The dynamic field model: every sensor's value as a Gaussian process over sensors × time,
+//! with a cross-sensor covariance of *levels* learned from history and first-order
+//! autoregressive dynamics of the deviations from each sensor's mean, run as a Kalman filter.
+//!
+//! Model ([`DynamicModel`]): `x_i(t) = μ_i + d_i(t)`, the deviations `d(t)` stationary with
+//! covariance `Σ` (sensors × sensors) and `d(t + Δ) = a(Δ)·d(t) + w`, `a(Δ) = φ^(Δ/step)`,
+//! `w ~ N(0, (1 − a²)·Σ)`; a reading is `x_i(t) + ε`, `ε ~ N(0, noise)`. So
+//! `cov(x_i(t), x_j(t')) = Σ_ij · φ^(|t − t'|/step)` (separable), which joins the two
+//! classical estimates: a sensor read a moment ago is known from its own reading (the last
+//! value carried forward, with its change since inferred from the sensors read since), one
+//! not read for a long time from the sensors read now (the Gaussian conditional of levels,
+//! `μ_u + Σ_us Σ_ss⁻¹ (x_s − μ_s)`), and everything in between is weighed by the model.
+//!
+//! - [`fit_dynamic`] learns `μ`, `Σ` and `φ` from sensor series with missing values:
+//!   pairwise-complete covariances, shrunk towards their diagonal (Schäfer & Strimmer's
+//!   intensity for the correlations, with the effective sample size of autocorrelated
+//!   series; raised further until `Σ` is positive definite), `φ` from the pooled
+//!   autocorrelation of the deviations.
+//! - [`FieldFilter`] is the Kalman filter: [`FieldFilter::advance`] in time,
+//!   [`FieldFilter::observe`] a reading, [`FieldFilter::estimate`] any sensor's posterior
+//!   mean and variance; O(n²) per step and per reading, no refit per query.
+//!
+//! Units: times and steps seconds; values and means in the modality's unit, variances in
+//! its square.
+
+use crate::{KrigingError, SensorSeries, cholesky, paired};
+
+/// Largest number of sensors of a [`DynamicModel`] (a dense sensors × sensors covariance and
+/// O(n²) work per reading).
+pub const MAX_DYNAMIC_SENSORS: usize = 2_000;
+
+/// How the sample correlations are shrunk towards 0 (the covariance towards its diagonal).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shrinkage {
+    /// Schäfer & Strimmer's estimated intensity, `Σ var(r_ij) / Σ r_ij²` over pairs, with
+    /// `var(r_ij) ≈ (1 − r_ij²)² / (n_eff − 1)` and `n_eff = n_ij · (1 − φ) / (1 + φ)`
+    /// (the effective sample size of two AR(1) series).
+    Auto,
+    /// A given intensity in [0, 1] (0: the sample correlations).
+    Fixed(f64),
+}
+
+/// Options of [`fit_dynamic`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DynamicFitOptions {
+    /// Sampling step of the series, seconds (the unit of `φ`).
+    pub step_s: i64,
+    /// Largest lag of the autocorrelation fit of `φ`, seconds.
+    pub max_lag_s: i64,
+    /// Fewest common points for a pair's covariance to count (fewer: 0).
+    pub min_overlap: usize,
+    /// Shrinkage of the correlations.
+    pub shrinkage: Shrinkage,
+    /// Reading noise variance as a share of the mean sensor variance (the nugget that keeps
+    /// the filter well conditioned; readings are nearly exact).
+    pub noise_share: f64,
+}
+
+impl Default for DynamicFitOptions {
+    /// Daily step, lags up to 14 days, 10 common points, automatic shrinkage, noise 0.1% of
+    /// the variance.
+    fn default() -> Self {
+        Self {
+            step_s: 86_400,
+            max_lag_s: 14 * 86_400,
+            min_overlap: 10,
+            shrinkage: Shrinkage::Auto,
+            noise_share: 1e-3,
+        }
+    }
+}
+
+/// A fitted dynamic field model (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DynamicModel {
+    means: Vec<f64>,
+    cov: Vec<f64>,
+    phi: f64,
+    step_s: f64,
+    noise: f64,
+    shrinkage: f64,
+}
+
+impl DynamicModel {
+    /// A model from its parts: per-sensor means (unit), the stationary covariance of the
+    /// deviations (row-major n × n, unit², symmetric positive definite), the lag-one
+    /// autocorrelation `phi` per `step_s` seconds (in [0, 1]) and the reading noise variance
+    /// (unit², ≥ 0).
+    ///
+    /// Errors: lengths that do not match, a non-finite entry, an asymmetric or not positive
+    /// definite covariance, `phi` outside [0, 1], a non-positive step, a negative noise.
+    pub fn new(
+        means: Vec<f64>,
+        cov: Vec<f64>,
+        phi: f64,
+        step_s: f64,
+        noise: f64,
+    ) -> Result<Self, KrigingError> {
+        let n = means.len();
+        if n > MAX_DYNAMIC_SENSORS {
+            return Err(KrigingError::Fit(format!(
+                "{n} sensors: the dynamic model handles at most {MAX_DYNAMIC_SENSORS}"
+            )));
+        }
+        if cov.len() != n * n {
+            return Err(KrigingError::Length {
+                what: "covariance entries",
+                got: cov.len(),
+                expected: n * n,
+            });
+        }
+        check("phi", phi, (0.0..=1.0).contains(&phi), "in [0, 1]")?;
+        check("step_s", step_s, step_s > 0.0 && step_s.is_finite(), "> 0")?;
+        check("noise", noise, noise >= 0.0 && noise.is_finite(), ">= 0")?;
+        for &m in &means {
+            check("mean", m, m.is_finite(), "finite")?;
+        }
+        for i in 0..n {
+            for j in 0..n {
+                let (a, b) = (cov[i * n + j], cov[j * n + i]);
+                check("covariance", a, a.is_finite(), "finite")?;
+                let tol = 1e-9 * (cov[i * n + i].abs() + cov[j * n + j].abs()).max(1e-300);
+                check("covariance", a - b, (a - b).abs() <= tol, "symmetric")?;
+            }
+        }
+        let mut l = cov.clone();
+        if n > 0 && !cholesky(&mut l, n) {
+            return Err(KrigingError::Fit(
+                "the covariance is not positive definite".into(),
+            ));
+        }
+        Ok(Self {
+            means,
+            cov,
+            phi,
+            step_s,
+            noise,
+            shrinkage: 0.0,
+        })
+    }
+
+    /// Number of sensors.
+    pub fn len(&self) -> usize {
+        self.means.len()
+    }
+
+    /// Whether the model has no sensors.
+    pub fn is_empty(&self) -> bool {
+        self.means.is_empty()
+    }
+
+    /// Per-sensor means, the modality's unit.
+    pub fn means(&self) -> &[f64] {
+        &self.means
+    }
+
+    /// The stationary covariance of the deviations, row-major n × n, unit².
+    pub fn covariance(&self) -> &[f64] {
+        &self.cov
+    }
+
+    /// Lag-one autocorrelation of the deviations per [`Self::step_s`].
+    pub fn phi(&self) -> f64 {
+        self.phi
+    }
+
+    /// The step `phi` is given for, seconds.
+    pub fn step_s(&self) -> f64 {
+        self.step_s
+    }
+
+    /// Reading noise variance, unit².
+    pub fn noise(&self) -> f64 {
+        self.noise
+    }
+
+    /// The shrinkage intensity the fit used (0 for a model built with [`Self::new`]).
+    pub fn shrinkage(&self) -> f64 {
+        self.shrinkage
+    }
+
+    /// Correlation of a deviation with itself `lag_s` seconds later: `φ^(|lag|/step)`.
+    pub fn persistence(&self, lag_s: f64) -> f64 {
+        if self.phi <= 0.0 {
+            return if lag_s == 0.0 { 1.0 } else { 0.0 };
+        }
+        (self.phi.ln() * lag_s.abs() / self.step_s).exp()
+    }
+
+    /// A filter at time `time_s` (seconds) holding the stationary prior (nothing known yet).
+    pub fn filter(&self, time_s: f64) -> FieldFilter<'_> {
+        FieldFilter {
+            model: self,
+            time_s,
+            mean: vec![0.0; self.len()],
+            cov: self.cov.clone(),
+        }
+    }
+
+    /// The Gaussian conditional of levels at one time: every sensor's posterior mean and
+    /// variance given readings `(sensor, value)` taken at that time (no dynamics).
+    pub fn conditional(&self, readings: &[(usize, f64)]) -> Vec<(f64, f64)> {
+        let mut f = self.filter(0.0);
+        for &(i, v) in readings {
+            f.observe(i, v);
+        }
+        (0..self.len()).map(|i| f.estimate(i)).collect()
+    }
+
+    /// Sum over all sensors of the posterior variance (unit²) given exact-up-to-noise
+    /// readings of `sensors` at one time, from the stationary prior: what a visit to them
+    /// leaves unknown. Lower is better; the prior total minus this is the information a
+    /// visit brings.
+    pub fn remaining_variance(&self, sensors: &[usize]) -> f64 {
+        let mut f = self.filter(0.0);
+        for &i in sensors {
+            f.observe_variance_only(i);
+        }
+        f.total_variance()
+    }
+}
+
+fn check(
+    what: &'static str,
+    value: f64,
+    ok: bool,
+    expected: &'static str,
+) -> Result<(), KrigingError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(KrigingError::Parameter {
+            what,
+            value,
+            expected,
+        })
+    }
+}
+
+/// The Kalman filter of a [`DynamicModel`]: the posterior of every sensor's deviation given
+/// the readings observed so far, at [`FieldFilter::time_s`].
+#[derive(Debug, Clone)]
+pub struct FieldFilter<'m> {
+    model: &'m DynamicModel,
+    time_s: f64,
+    mean: Vec<f64>,
+    cov: Vec<f64>,
+}
+
+impl FieldFilter<'_> {
+    /// The filter's current time, seconds.
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    /// Moves the filter to `time_s` (seconds): deviations decay by `a = φ^(Δ/step)` and the
+    /// covariance relaxes towards the prior, `P ← a²·P + (1 − a²)·Σ`. A time not after the
+    /// current one leaves the filter as it is (readings are taken in time order).
+    pub fn advance(&mut self, time_s: f64) {
+        let dt = time_s - self.time_s;
+        if dt.is_nan() || dt <= 0.0 {
+            return;
+        }
+        self.time_s = time_s;
+        let a = self.model.persistence(dt);
+        if a == 1.0 {
+            return;
+        }
+        let a2 = a * a;
+        for m in &mut self.mean {
+            *m *= a;
+        }
+        for (p, s) in self.cov.iter_mut().zip(&self.model.cov) {
+            *p = a2 * *p + (1.0 - a2) * s;
+        }
+    }
+
+    /// Takes a reading `value` (the modality's unit) of `sensor` at the filter's time.
+    /// Out-of-range sensors and non-finite values are ignored.
+    pub fn observe(&mut self, sensor: usize, value: f64) {
+        let n = self.model.len();
+        if sensor >= n || !value.is_finite() {
+            return;
+        }
+        let innovation = value - self.model.means[sensor] - self.mean[sensor];
+        if let Some(gain) = self.update(sensor) {
+            for (m, g) in self.mean.iter_mut().zip(&gain) {
+                *m += g * innovation;
+            }
+        }
+    }
+
+    /// The covariance part of [`Self::observe`] only (the variance a reading leaves does not
+    /// depend on its value).
+    fn observe_variance_only(&mut self, sensor: usize) {
+        if sensor < self.model.len() {
+            self.update(sensor);
+        }
+    }
+
+    /// Rank-one covariance update for a reading of `sensor`; the gain, or None when the
+    /// reading carries no information (its variance is already at the noise floor).
+    fn update(&mut self, sensor: usize) -> Option<Vec<f64>> {
+        let n = self.model.len();
+        let s = self.cov[sensor * n + sensor] + self.model.noise;
+        let floor = 1e-12 * self.model.cov[sensor * n + sensor].max(1e-300);
+        if !(s > floor) {
+            return None;
+        }
+        let col: Vec<f64> = (0..n).map(|j| self.cov[j * n + sensor]).collect();
+        let gain: Vec<f64> = col.iter().map(|c| c / s).collect();
+        for i in 0..n {
+            let gi = gain[i];
+            if gi == 0.0 {
+                continue;
+            }
+            let row = &mut self.cov[i * n..(i + 1) * n];
+            for (p, c) in row.iter_mut().zip(&col) {
+                *p -= gi * c;
+            }
+        }
+        // Keep the diagonal non-negative against rounding.
+        for i in 0..n {
+            let d = &mut self.cov[i * n + i];
+            if *d < 0.0 {
+                *d = 0.0;
+            }
+        }
+        Some(gain)
+    }
+
+    /// Posterior mean (unit) and variance (unit²) of `sensor`'s value at the filter's time,
+    /// without the reading noise. Out of range: NaN.
+    pub fn estimate(&self, sensor: usize) -> (f64, f64) {
+        let n = self.model.len();
+        if sensor >= n {
+            return (f64::NAN, f64::NAN);
+        }
+        (
+            self.model.means[sensor] + self.mean[sensor],
+            self.cov[sensor * n + sensor].max(0.0),
+        )
+    }
+
+    /// Sum of every sensor's posterior variance, unit².
+    pub fn total_variance(&self) -> f64 {
+        let n = self.model.len();
+        (0..n).map(|i| self.cov[i * n + i].max(0.0)).sum()
+    }
+}
+
+/// Fits a [`DynamicModel`] from sensor series (positions are not used: the covariance is
+/// learned, not assumed to follow distance).
+///
+/// Means are each sensor's mean reading (the mean of all sensors for one without readings,
+/// whose variance is then the mean variance and its correlations 0). Covariances are over
+/// the times both sensors have readings, of the deviations from those means, 0 for pairs with
+/// fewer than `min_overlap` common times. `φ` is `exp(Σ k ln ρ_k / Σ k²)` over the pooled
+/// lag-k autocorrelations `ρ_k > 0.05` of the deviations (k steps up to `max_lag_s`, at most
+/// 64 lags spread geometrically), clamped to [0, 0.999999].
+///
+/// Errors: no sensors, more than [`MAX_DYNAMIC_SENSORS`], no sensor with two readings, a
+/// non-positive step.
+pub fn fit_dynamic(
+    series: &[SensorSeries<'_>],
+    options: &DynamicFitOptions,
+) -> Result<DynamicModel, KrigingError> {
+    let n = series.len();
+    if n == 0 {
+        return Err(KrigingError::Fit("no sensors".into()));
+    }
+    if n > MAX_DYNAMIC_SENSORS {
+        return Err(KrigingError::Fit(format!(
+            "{n} sensors: the dynamic model handles at most {MAX_DYNAMIC_SENSORS}"
+        )));
+    }
+    if options.step_s <= 0 {
+        return Err(KrigingError::Parameter {
+            what: "step_s",
+            value: options.step_s as f64,
+            expected: "> 0",
+        });
+    }
+    // Finite readings only, per sensor.
+    let clean: Vec<(Vec<i64>, Vec<f64>)> = series
+        .iter()
+        .map(|s| {
+            s.times
+                .iter()
+                .zip(s.values)
+                .filter(|(_, v)| v.is_finite())
+                .map(|(&t, &v)| (t, v))
+                .unzip()
+        })
+        .collect();
+    let means_opt: Vec<Option<f64>> = clean
+        .iter()
+        .map(|(_, v)| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64))
+        .collect();
+    let known: Vec<f64> = means_opt.iter().flatten().copied().collect();
+    if known.is_empty() {
+        return Err(KrigingError::Fit("no sensor has readings".into()));
+    }
+    let global = known.iter().sum::<f64>() / known.len() as f64;
+    let means: Vec<f64> = means_opt.iter().map(|m| m.unwrap_or(global)).collect();
+    let dev: Vec<Vec<f64>> = clean
+        .iter()
+        .zip(&means)
+        .map(|((_, v), m)| v.iter().map(|x| x - m).collect())
+        .collect();
+    let vars: Vec<Option<f64>> = dev
+        .iter()
+        .map(|d| (d.len() >= 2).then(|| d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64))
+        .collect();
+    let known_vars: Vec<f64> = vars
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|v| *v > 0.0)
+        .collect();
+    if known_vars.is_empty() {
+        return Err(KrigingError::Fit(
+            "no sensor has two different readings".into(),
+        ));
+    }
+    let mean_var = known_vars.iter().sum::<f64>() / known_vars.len() as f64;
+    let var: Vec<f64> = vars
+        .iter()
+        .map(|v| match v {
+            Some(v) if *v > 0.0 => *v,
+            _ => mean_var,
+        })
+        .collect();
+
+    // φ from the pooled autocorrelation of the deviations.
+    let step = options.step_s;
+    let max_k = (options.max_lag_s / step).max(1);
+    let mut lags: Vec<i64> = Vec::new();
+    let mut k = 1i64;
+    while k <= max_k && lags.len() < 64 {
+        lags.push(k);
+        k = (k + 1).max((k as f64 * 1.15).ceil() as i64);
+    }
+    let (mut skl, mut skk) = (0.0, 0.0);
+    for &k in &lags {
+        let (mut sab, mut saa, mut sbb, mut cnt) = (0.0, 0.0, 0.0, 0usize);
+        for ((t, _), d) in clean.iter().zip(&dev) {
+            let (a, b, c, m) = paired(t, d, t, d, k * step);
+            sab += a;
+            saa += b;
+            sbb += c;
+            cnt += m;
+        }
+        if cnt >= options.min_overlap && saa > 0.0 && sbb > 0.0 {
+            let rho = sab / (saa * sbb).sqrt();
+            if rho > 0.05 {
+                let kf = k as f64;
+                skl += kf * rho.ln();
+                skk += kf * kf;
+            }
+        }
+    }
+    let phi = if skk > 0.0 {
+        (skl / skk).exp().clamp(0.0, 0.999_999)
+    } else {
+        0.0
+    };
+
+    // Pairwise-complete correlations.
+    let mut corr = vec![0.0; n * n];
+    let mut count = vec![0usize; n * n];
+    for i in 0..n {
+        corr[i * n + i] = 1.0;
+        for j in i + 1..n {
+            let (ti, tj) = (&clean[i].0, &clean[j].0);
+            let (sab, _, _, cnt) = paired(ti, &dev[i], tj, &dev[j], 0);
+            if cnt >= options.min_overlap.max(2) {
+                let r = (sab / cnt as f64 / (var[i] * var[j]).sqrt()).clamp(-1.0, 1.0);
+                corr[i * n + j] = r;
+                corr[j * n + i] = r;
+                count[i * n + j] = cnt;
+            }
+        }
+    }
+    let mut lambda = match options.shrinkage {
+        Shrinkage::Fixed(l) => {
+            if !(0.0..=1.0).contains(&l) {
+                return Err(KrigingError::Parameter {
+                    what: "shrinkage",
+                    value: l,
+                    expected: "in [0, 1]",
+                });
+            }
+            l
+        }
+        Shrinkage::Auto => {
+            let factor = if phi < 1.0 {
+                (1.0 - phi) / (1.0 + phi)
+            } else {
+                0.0
+            };
+            let (mut num, mut den) = (0.0, 0.0);
+            for i in 0..n {
+                for j in i + 1..n {
+                    let cnt = count[i * n + j];
+                    if cnt == 0 {
+                        continue;
+                    }
+                    let r = corr[i * n + j];
+                    let n_eff = (cnt as f64 * factor).max(2.0);
+                    num += (1.0 - r * r).powi(2) / (n_eff - 1.0).max(1.0);
+                    den += r * r;
+                }
+            }
+            if den > 0.0 {
+                (num / den).clamp(0.0, 1.0)
+            } else {
+                1.0
+            }
+        }
+    };
+    let build = |lambda: f64| -> Vec<f64> {
+        let mut c = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                let r = if i == j {
+                    1.0
+                } else {
+                    (1.0 - lambda) * corr[i * n + j]
+                };
+                c[i * n + j] = r * (var[i] * var[j]).sqrt();
+            }
+        }
+        c
+    };
+    // Raise the intensity until the covariance is positive definite (pairwise-complete
+    // correlations need not be).
+    let mut cov = build(lambda);
+    loop {
+        let mut l = cov.clone();
+        if positive_definite(&mut l, n) || lambda >= 1.0 {
+            break;
+        }
+        lambda = (lambda + (1.0 - lambda) * 0.25 + 1e-3).min(1.0);
+        cov = build(lambda);
+    }
+    let noise = options.noise_share.max(0.0) * mean_var;
+    let mut model = DynamicModel::new(means, cov, phi, step as f64, noise)?;
+    model.shrinkage = lambda;
+    Ok(model)
+}
+
+/// Strict Cholesky test (no jitter): whether the matrix is numerically positive definite
+/// with a margin.
+fn positive_definite(a: &mut [f64], n: usize) -> bool {
+    for j in 0..n {
+        let mut d = a[j * n + j];
+        for k in 0..j {
+            d -= a[j * n + k] * a[j * n + k];
+        }
+        if !(d > 1e-10 * a[j * n + j].abs().max(1e-300)) {
+            return false;
+        }
+        let d = d.sqrt();
+        a[j * n + j] = d;
+        for i in j + 1..n {
+            let mut s = a[i * n + j];
+            for k in 0..j {
+                s -= a[i * n + k] * a[j * n + k];
+            }
+            a[i * n + j] = s / d;
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn two_sensor(rho: f64, phi: f64) -> DynamicModel {
+        DynamicModel::new(
+            vec![0.3, 0.2],
+            vec![1e-4, rho * 1e-4, rho * 1e-4, 1e-4],
+            phi,
+            3600.0,
+            0.0,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn conditional_of_levels_is_the_textbook_formula() {
+        let m = two_sensor(0.8, 0.9);
+        let est = m.conditional(&[(0, 0.31)]);
+        // μ_u + Σ_us/Σ_ss (x_s − μ_s), variance Σ_uu (1 − ρ²).
+        assert!((est[1].0 - (0.2 + 0.8 * 0.01)).abs() < 1e-12);
+        assert!((est[1].1 - 1e-4 * (1.0 - 0.64)).abs() < 1e-12);
+        assert!(est[0].1.abs() < 1e-15);
+        assert!((est[0].0 - 0.31).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_fresh_own_reading_beats_the_neighbours_and_decays_to_the_conditional() {
+        let m = two_sensor(0.5, 0.99);
+        let mut f = m.filter(0.0);
+        f.observe(0, 0.35);
+        f.observe(1, 0.25);
+        // One hour later sensor 1 is close to its own reading, far later to the conditional
+        // given sensor 0's new reading alone.
+        let mut soon = f.clone();
+        soon.advance(3600.0);
+        soon.observe(0, 0.35);
+        let (m1, v1) = soon.estimate(1);
+        assert!((m1 - 0.25).abs() < 0.002, "{m1}");
+        assert!(v1 < 0.05 * 1e-4);
+        let mut late = f.clone();
+        late.advance(3600.0 * 10_000.0);
+        late.observe(0, 0.35);
+        let cond = m.conditional(&[(0, 0.35)]);
+        let (m2, v2) = late.estimate(1);
+        assert!((m2 - cond[1].0).abs() < 1e-9 && (v2 - cond[1].1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn advance_matches_the_closed_form_of_the_separable_covariance() {
+        // Observe sensor 0 at t = 0, predict sensor 1 at t = h: mean ρ φ^h x0', var Σ(1 − ρ²φ^2h).
+        let m = two_sensor(0.7, 0.95);
+        let mut f = m.filter(0.0);
+        f.observe(0, 0.32);
+        f.advance(5.0 * 3600.0);
+        let a = 0.95f64.powi(5);
+        let (mu, var) = f.estimate(1);
+        assert!((mu - (0.2 + 0.7 * a * 0.02)).abs() < 1e-12);
+        assert!((var - 1e-4 * (1.0 - 0.49 * a * a)).abs() < 1e-12);
+        // Going back in time changes nothing.
+        let before = f.estimate(1);
+        f.advance(0.0);
+        assert_eq!(f.estimate(1), before);
+    }
+
+    #[test]
+    fn bad_parts_are_refused() {
+        assert!(DynamicModel::new(vec![0.0; 2], vec![1.0; 3], 0.5, 1.0, 0.0).is_err());
+        assert!(DynamicModel::new(vec![0.0; 2], vec![1.0, 2.0, 2.0, 1.0], 0.5, 1.0, 0.0).is_err());
+        assert!(DynamicModel::new(vec![0.0], vec![1.0], 1.5, 1.0, 0.0).is_err());
+        assert!(DynamicModel::new(vec![0.0], vec![1.0], 0.5, 0.0, 0.0).is_err());
+        assert!(DynamicModel::new(vec![0.0], vec![f64::NAN], 0.5, 1.0, 0.0).is_err());
+        assert!(fit_dynamic(&[], &DynamicFitOptions::default()).is_err());
+    }
+
+    /// A seeded AR(1) pair with correlated innovations (an LCG's uniform sums as noise).
+    fn simulate(n_steps: usize, phi: f64, rho: f64) -> (Vec<i64>, Vec<f64>, Vec<f64>) {
+        let mut state = 12345u64;
+        let mut gauss = || {
+            let mut s = 0.0;
+            for _ in 0..12 {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                s += (state >> 11) as f64 / (1u64 << 53) as f64;
+            }
+            s - 6.0
+        };
+        let (mut a, mut b) = (0.0, 0.0);
+        let (mut xs, mut ys, mut ts) = (Vec::new(), Vec::new(), Vec::new());
+        let q = (1.0 - phi * phi).sqrt();
+        for t in 0..n_steps {
+            let (e1, e2) = (gauss(), gauss());
+            let e2 = rho * e1 + (1.0 - rho * rho).sqrt() * e2;
+            a = phi * a + q * e1;
+            b = phi * b + q * e2;
+            ts.push(t as i64 * 60);
+            xs.push(1.0 + 0.1 * a);
+            ys.push(2.0 + 0.2 * b);
+        }
+        (ts, xs, ys)
+    }
+
+    #[test]
+    fn fit_recovers_a_simulated_process() {
+        let (t, x, y) = simulate(20_000, 0.9, 0.6);
+        let series = [
+            SensorSeries {
+                position: [0.0, 0.0],
+                times: &t,
+                values: &x,
+            },
+            SensorSeries {
+                position: [0.0, 0.0],
+                times: &t,
+                values: &y,
+            },
+        ];
+        let opts = DynamicFitOptions {
+            step_s: 60,
+            max_lag_s: 600,
+            shrinkage: Shrinkage::Fixed(0.0),
+            ..DynamicFitOptions::default()
+        };
+        let m = fit_dynamic(&series, &opts).unwrap();
+        assert!((m.phi() - 0.9).abs() < 0.02, "phi {}", m.phi());
+        let c = m.covariance();
+        let r = c[1] / (c[0] * c[3]).sqrt();
+        assert!((r - 0.6).abs() < 0.05, "rho {r}");
+        assert!((m.means()[0] - 1.0).abs() < 0.02 && (m.means()[1] - 2.0).abs() < 0.04);
+        let auto = fit_dynamic(
+            &series,
+            &DynamicFitOptions {
+                shrinkage: Shrinkage::Auto,
+                ..opts
+            },
+        )
+        .unwrap();
+        assert!(
+            auto.shrinkage() > 0.0 && auto.shrinkage() < 0.1,
+            "{}",
+            auto.shrinkage()
+        );
+    }
+
+    #[test]
+    fn missing_values_and_constant_sensors_do_not_break_the_fit() {
+        let t: Vec<i64> = (0..50).map(|i| i * 86_400).collect();
+        let x: Vec<f64> = (0..50)
+            .map(|i| {
+                if i % 7 == 3 {
+                    f64::NAN
+                } else {
+                    (i as f64 * 0.3).sin()
+                }
+            })
+            .collect();
+        let y = vec![0.5; 50];
+        let z: Vec<f64> = x.iter().map(|v| -v).collect();
+        let series = [
+            SensorSeries {
+                position: [0.0, 0.0],
+                times: &t,
+                values: &x,
+            },
+            SensorSeries {
+                position: [0.0, 0.0],
+                times: &t,
+                values: &y,
+            },
+            SensorSeries {
+                position: [0.0, 0.0],
+                times: &t,
+                values: &z,
+            },
+            SensorSeries {
+                position: [0.0, 0.0],
+                times: &[],
+                values: &[],
+            },
+        ];
+        let m = fit_dynamic(&series, &DynamicFitOptions::default()).unwrap();
+        assert_eq!(m.len(), 4);
+        // Perfectly anti-correlated sensors need shrinkage to be positive definite.
+        assert!(m.shrinkage() > 0.0);
+        let est = m.conditional(&[(0, 0.5)]);
+        assert!(est[2].0 < m.means()[2]);
+        assert!(
+            est.iter()
+                .all(|(mu, v)| mu.is_finite() && v.is_finite() && *v >= 0.0)
+        );
+    }
+
+    proptest! {
+        #[test]
+        fn readings_never_raise_a_variance(
+            rho in -0.9f64..0.9, phi in 0.0f64..1.0, dt in 0.0f64..1e6,
+            picks in proptest::collection::vec((0usize..3, -1.0f64..1.0), 0..8),
+        ) {
+            let cov = vec![1.0, rho, 0.0, rho, 1.0, rho * 0.5, 0.0, rho * 0.5, 1.0];
+            let m = DynamicModel::new(vec![0.0; 3], cov, phi, 3600.0, 1e-6).unwrap();
+            let mut f = m.filter(0.0);
+            for (k, &(s, v)) in picks.iter().enumerate() {
+                let before: Vec<f64> = (0..3).map(|i| f.estimate(i).1).collect();
+                f.observe(s, v);
+                for (i, b) in before.iter().enumerate() {
+                    prop_assert!(f.estimate(i).1 <= b + 1e-12);
+                    prop_assert!(f.estimate(i).1 >= 0.0);
+                }
+                f.advance(dt * (k + 1) as f64);
+                for i in 0..3 {
+                    prop_assert!(f.estimate(i).1 <= 1.0 + 1e-12);
+                }
+            }
+            let sum = m.remaining_variance(&picks.iter().map(|p| p.0).collect::<Vec<_>>());
+            prop_assert!(sum <= 3.0 + 1e-12 && sum >= 0.0);
+        }
+    }
+}
