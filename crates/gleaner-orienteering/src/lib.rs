@@ -16,6 +16,8 @@
 //!   exchange moves applied to routes whose node set is already chosen (e.g. a tour through
 //!   every node, or routes split from one), making them shorter without changing what they
 //!   visit.
+//! - [`solve_marginal`] with [`MarginalOptions`] — orienteering with a set-function value
+//!   `f(visited)` (non-additive rewards: marginal-gain insertion and exchange search).
 //! - [`time_limit_from_secs`] — a checked conversion of a user's time limit in seconds.
 //!
 //! ```
@@ -111,6 +113,7 @@ mod engine;
 mod error;
 mod exact;
 mod improve;
+mod marginal;
 mod problem;
 mod solution;
 mod solve;
@@ -118,6 +121,7 @@ mod solve;
 pub use error::{ProblemError, SolutionError, SolveError};
 pub use exact::{EXACT_MAX_NODES, EXACT_MAX_NODES_TEAM, exact};
 pub use improve::{ImproveOptions, improve_routes};
+pub use marginal::{MarginalOptions, MarginalSolution, solve_marginal};
 pub use problem::{Metric, Problem};
 pub use solution::{Solution, evaluate, route_cost};
 pub use solve::{SolveOptions, SolverKind, greedy, solve, solve_default, time_limit_from_secs};
