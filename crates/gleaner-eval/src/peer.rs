@@ -1,0 +1,1042 @@
+//! The peer study's one-shot selection protocol on CAF (see the crate docs).
+//!
+//! Inputs: the layouts file (`layout,node,label,x_m,y_m`, one row per sensor and a `Depot`
+//! row), the peer's results (`experiment,data,method,map,capacity_J,n_selected,tour_len_m,
+//! energy_J,mse_sum_over_unvisited,tour`) and a readings matrix of the sensors (rows = times).
+//!
+//! Protocol ([`Protocol`]): rows `train` give the means, covariances and dynamics; at every
+//! row of `test` the chosen sensors' values are known, the others are estimated; the error is
+//! the sum over unvisited sensors of the squared error, averaged over the test rows. A tour's
+//! energy is `per_metre_j · length + per_visit_j · (n − free_visits)` (the peer's accounting:
+//! one visit free), closed from the depot, within the capacity.
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use gleaner_kriging::{DynamicFitOptions, DynamicModel, FieldFilter, SensorSeries, Shrinkage};
+use gleaner_orienteering::{
+    MarginalOptions, Metric, Problem, SolveOptions, SolverKind, solve, solve_marginal,
+};
+
+use crate::EvalError;
+
+/// One sensor layout: positions in metres, depot at the origin.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layout {
+    /// Its name (`map_1` ..).
+    pub name: String,
+    /// Sensor labels (CAF ids), in the layout's node order.
+    pub labels: Vec<String>,
+    /// East/north metres, same order.
+    pub positions: Vec<[f64; 2]>,
+}
+
+/// One row of the peer's results.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PeerResult {
+    /// Their method (`mysolu`, `baseline_ml`, `baseline_fs`).
+    pub method: String,
+    /// Layout name.
+    pub layout: String,
+    /// Energy capacity, J.
+    pub capacity_j: f64,
+    /// Sensors visited.
+    pub n_selected: usize,
+    /// Energy used, J.
+    pub energy_j: f64,
+    /// Sum over unvisited sensors of the squared error, averaged over the test rows (unit²;
+    /// infinite when nothing was visited).
+    pub mse: f64,
+}
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> EvalError + '_ {
+    move |source| EvalError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+fn bad(path: &Path, line: u64, field: &str, message: impl Into<String>) -> EvalError {
+    EvalError::Bad {
+        path: path.to_path_buf(),
+        line,
+        field: field.to_string(),
+        message: message.into(),
+    }
+}
+
+/// Reads a CSV file with a header into (header, rows with their 1-based line).
+fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<(u64, Vec<String>)>), EvalError> {
+    let text = std::fs::read_to_string(path).map_err(io(path))?;
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .flexible(false)
+        .from_reader(text.as_bytes());
+    let header: Vec<String> = reader
+        .headers()
+        .map_err(|e| bad(path, 1, "header", e.to_string()))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let mut rows = Vec::new();
+    for rec in reader.records() {
+        let rec = rec.map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line());
+            bad(path, line, "row", e.to_string())
+        })?;
+        let line = rec.position().map_or(0, |p| p.line());
+        rows.push((line, rec.iter().map(str::to_string).collect()));
+    }
+    Ok((header, rows))
+}
+
+fn column(path: &Path, header: &[String], name: &str) -> Result<usize, EvalError> {
+    header
+        .iter()
+        .position(|h| h == name)
+        .ok_or_else(|| bad(path, 1, name, "missing column"))
+}
+
+fn number(path: &Path, line: u64, field: &str, text: &str) -> Result<f64, EvalError> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| bad(path, line, field, format!("not a number: {:.40}", text)))?;
+    if v.is_nan() {
+        return Err(bad(path, line, field, "not a number"));
+    }
+    Ok(v)
+}
+
+/// Reads the layouts file. The `Depot` rows must be at (0, 0) (the protocol's tours start
+/// there); every other row is a sensor.
+pub fn read_layouts(path: &Path) -> Result<Vec<Layout>, EvalError> {
+    let (header, rows) = read_csv(path)?;
+    let [c_layout, c_label, c_x, c_y] =
+        ["layout", "label", "x_m", "y_m"].map(|n| column(path, &header, n));
+    let (c_layout, c_label, c_x, c_y) = (c_layout?, c_label?, c_x?, c_y?);
+    let mut layouts: Vec<Layout> = Vec::new();
+    for (line, row) in rows {
+        let (name, label) = (&row[c_layout], &row[c_label]);
+        let x = number(path, line, "x_m", &row[c_x])?;
+        let y = number(path, line, "y_m", &row[c_y])?;
+        if !(x.is_finite() && y.is_finite()) {
+            return Err(bad(path, line, "x_m", "not finite"));
+        }
+        let idx = match layouts.iter().position(|l| &l.name == name) {
+            Some(i) => i,
+            None => {
+                layouts.push(Layout {
+                    name: name.clone(),
+                    labels: Vec::new(),
+                    positions: Vec::new(),
+                });
+                layouts.len() - 1
+            }
+        };
+        if label == "Depot" {
+            if x != 0.0 || y != 0.0 {
+                return Err(bad(path, line, "x_m", "the depot must be at (0, 0)"));
+            }
+            continue;
+        }
+        let l = &mut layouts[idx];
+        if l.labels.contains(label) {
+            return Err(bad(path, line, "label", format!("{label} twice in {name}")));
+        }
+        l.labels.push(label.clone());
+        l.positions.push([x, y]);
+    }
+    if layouts.is_empty() {
+        return Err(bad(path, 0, "layout", "no layouts"));
+    }
+    Ok(layouts)
+}
+
+/// Reads the peer's results file.
+pub fn read_results(path: &Path) -> Result<Vec<PeerResult>, EvalError> {
+    let (header, rows) = read_csv(path)?;
+    let c = |n: &str| column(path, &header, n);
+    let (cm, cl, cc, cn, ce, cr) = (
+        c("method")?,
+        c("map")?,
+        c("capacity_J")?,
+        c("n_selected")?,
+        c("energy_J")?,
+        c("mse_sum_over_unvisited")?,
+    );
+    let mut out = Vec::new();
+    for (line, row) in rows {
+        let n = number(path, line, "n_selected", &row[cn])?;
+        if !(n >= 0.0 && n.fract() == 0.0 && n < 1e6) {
+            return Err(bad(path, line, "n_selected", "not a count"));
+        }
+        out.push(PeerResult {
+            method: row[cm].clone(),
+            layout: row[cl].clone(),
+            capacity_j: number(path, line, "capacity_J", &row[cc])?,
+            n_selected: n as usize,
+            energy_j: number(path, line, "energy_J", &row[ce])?,
+            mse: number(path, line, "mse_sum_over_unvisited", &row[cr])?,
+        });
+    }
+    Ok(out)
+}
+
+/// Readings of the protocol's sensors on a common time grid: `values[t * n + i]`, NaN where
+/// sensor i has no reading at `times[t]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Matrix {
+    /// Sensor labels (columns).
+    pub labels: Vec<String>,
+    /// Row times, seconds since the epoch, ascending.
+    pub times: Vec<i64>,
+    /// Row-major values, the modality's unit.
+    pub values: Vec<f64>,
+}
+
+impl Matrix {
+    /// The matrix of `labels` × every time any of them has a reading of `modality`, from
+    /// one or more batches of readings (e.g. one file per station).
+    ///
+    /// Errors: a label without any reading.
+    pub fn from_readings(
+        batches: &[gleaner_ingest::Readings],
+        modality: &str,
+        labels: &[String],
+    ) -> Result<Matrix, EvalError> {
+        let col: HashMap<&str, usize> = labels
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (l.as_str(), i))
+            .collect();
+        // (time, column, value) of every wanted reading.
+        let mut cells: Vec<(i64, usize, f64)> = Vec::new();
+        for readings in batches {
+            let Some(m) = readings
+                .modalities
+                .iter()
+                .position(|x| x.modality.as_str() == modality)
+            else {
+                continue;
+            };
+            let sensor_col: Vec<Option<usize>> = readings
+                .sensors
+                .iter()
+                .map(|s| col.get(s.as_str()).copied())
+                .collect();
+            for r in &readings.rows {
+                if r.modality as usize == m
+                    && let Some(i) = sensor_col[r.sensor as usize]
+                {
+                    cells.push((r.t, i, r.value));
+                }
+            }
+        }
+        let mut times: Vec<i64> = cells.iter().map(|c| c.0).collect();
+        times.sort_unstable();
+        times.dedup();
+        let n = labels.len();
+        let mut values = vec![f64::NAN; times.len() * n];
+        let mut seen = vec![false; n];
+        for (t, i, v) in cells {
+            if let Ok(k) = times.binary_search(&t) {
+                values[k * n + i] = v;
+                seen[i] = true;
+            }
+        }
+        if let Some(i) = seen.iter().position(|s| !s) {
+            return Err(EvalError::Data(format!(
+                "sensor {} has no reading of {modality}",
+                labels[i]
+            )));
+        }
+        Ok(Matrix {
+            labels: labels.to_vec(),
+            times,
+            values,
+        })
+    }
+
+    /// The index range of the rows with `from <= time < to` (seconds).
+    pub fn rows_between(&self, from: i64, to: i64) -> Range<usize> {
+        let a = self.times.partition_point(|&t| t < from);
+        let b = self.times.partition_point(|&t| t < to);
+        a..b
+    }
+
+    /// Only the rows where every sensor has a value (the peer's complete-case rows).
+    pub fn complete_rows(&self) -> Matrix {
+        let n = self.labels.len();
+        let mut out = Matrix {
+            labels: self.labels.clone(),
+            times: Vec::new(),
+            values: Vec::new(),
+        };
+        for (t, row) in self.times.iter().zip(self.values.chunks(n.max(1))) {
+            if row.iter().all(|v| v.is_finite()) {
+                out.times.push(*t);
+                out.values.extend_from_slice(row);
+            }
+        }
+        out
+    }
+
+    /// The columns in the order of `labels` (every label must be a column).
+    pub fn reorder(&self, labels: &[String]) -> Result<Matrix, EvalError> {
+        let n = self.labels.len();
+        let idx: Vec<usize> = labels
+            .iter()
+            .map(|l| {
+                self.labels
+                    .iter()
+                    .position(|x| x == l)
+                    .ok_or_else(|| EvalError::Data(format!("sensor {l} is not in the readings")))
+            })
+            .collect::<Result<_, _>>()?;
+        let mut values = Vec::with_capacity(self.times.len() * labels.len());
+        for row in self.values.chunks(n.max(1)) {
+            values.extend(idx.iter().map(|&i| row[i]));
+        }
+        Ok(Matrix {
+            labels: labels.to_vec(),
+            times: self.times.clone(),
+            values,
+        })
+    }
+
+    fn row(&self, t: usize) -> &[f64] {
+        let n = self.labels.len();
+        &self.values[t * n..(t + 1) * n]
+    }
+}
+
+/// How the unvisited sensors are estimated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Estimator {
+    /// The last training value carried forward.
+    Carried,
+    /// The Gaussian conditional of levels given the visited sensors now, mean and covariance
+    /// from the training rows without shrinkage (the peer's estimator).
+    Levels,
+    /// gleaner's dynamic field model (shrunk covariance of levels, AR(1) dynamics, Kalman
+    /// filter over every reading known).
+    Dynamic,
+}
+
+impl Estimator {
+    /// All, in report order.
+    pub const ALL: [Estimator; 3] = [Estimator::Carried, Estimator::Levels, Estimator::Dynamic];
+
+    /// Its name in results files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Estimator::Carried => "carried",
+            Estimator::Levels => "levels",
+            Estimator::Dynamic => "dynamic",
+        }
+    }
+}
+
+/// How the sensors are chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Planner {
+    /// gleaner: the tour whose readings leave the least posterior variance over all sensors
+    /// under the dynamic model (information, non-additive), [`solve_marginal`].
+    Information,
+    /// The tour that visits the most sensors (every sensor worth 1), gleaner's default
+    /// orienteering solver.
+    Count,
+}
+
+impl Planner {
+    /// Its name in results files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Planner::Information => "information",
+            Planner::Count => "count",
+        }
+    }
+}
+
+/// The protocol's settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Protocol {
+    /// Training rows (indices into the matrix).
+    pub train: Range<usize>,
+    /// Test rows.
+    pub test: Range<usize>,
+    /// Energy per metre flown, J/m.
+    pub per_metre_j: f64,
+    /// Energy per sensor visited, J.
+    pub per_visit_j: f64,
+    /// Visits not charged.
+    pub free_visits: usize,
+    /// The dynamic model's fit.
+    pub fit: DynamicFitOptions,
+    /// Seed of the orienteering search (count planner).
+    pub seed: u64,
+}
+
+impl Protocol {
+    /// The peer's protocol on hourly data: train rows 0..=1000, test rows 1001..=1500,
+    /// 10 J/m, 70 J per visit, one visit free; the dynamic model with an hourly step.
+    pub fn peer_hourly(fit: DynamicFitOptions) -> Protocol {
+        Protocol {
+            train: 0..1001,
+            test: 1001..1501,
+            per_metre_j: 10.0,
+            per_visit_j: 70.0,
+            free_visits: 1,
+            fit,
+            seed: 1,
+        }
+    }
+}
+
+/// The outcome of one (layout, capacity, planner).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outcome {
+    /// Layout name.
+    pub layout: String,
+    /// Capacity, J.
+    pub capacity_j: f64,
+    /// Planner.
+    pub planner: Planner,
+    /// Visited sensors (layout indices) in tour order.
+    pub tour: Vec<usize>,
+    /// Tour length, m.
+    pub tour_m: f64,
+    /// Energy by the protocol's accounting, J.
+    pub energy_j: f64,
+    /// Per estimator: the error (sum over unvisited sensors of squared error, averaged over
+    /// the test rows; unit²), or infinite when nothing was visited (the peer's convention).
+    pub mse: Vec<(Estimator, f64)>,
+    /// Share of the unvisited sensors' test values inside the dynamic model's 90% interval.
+    pub coverage90: f64,
+}
+
+/// A fitted protocol over one readings matrix (columns in a layout's label order).
+pub struct Fitted {
+    matrix: Matrix,
+    protocol: Protocol,
+    dynamic: DynamicModel,
+    peer: DynamicModel,
+}
+
+fn series(matrix: &Matrix, rows: Range<usize>) -> (Vec<Vec<i64>>, Vec<Vec<f64>>) {
+    let n = matrix.labels.len();
+    let mut times = vec![Vec::new(); n];
+    let mut values = vec![Vec::new(); n];
+    for t in rows {
+        for (i, v) in matrix.row(t).iter().enumerate() {
+            if v.is_finite() {
+                times[i].push(matrix.times[t]);
+                values[i].push(*v);
+            }
+        }
+    }
+    (times, values)
+}
+
+impl Fitted {
+    /// Fits the dynamic model and the peer's Gaussian model on the training rows.
+    ///
+    /// Errors: training or test rows out of the matrix, or a model that cannot be fitted.
+    pub fn new(matrix: Matrix, protocol: Protocol) -> Result<Fitted, EvalError> {
+        let rows = matrix.times.len();
+        if protocol.train.end > rows || protocol.test.end > rows || protocol.train.is_empty() {
+            return Err(EvalError::Data(format!(
+                "{rows} rows: the protocol needs train rows {:?} and test rows {:?}",
+                protocol.train, protocol.test
+            )));
+        }
+        let (times, values) = series(&matrix, protocol.train.clone());
+        let input: Vec<SensorSeries<'_>> = times
+            .iter()
+            .zip(&values)
+            .map(|(t, v)| SensorSeries {
+                position: [0.0, 0.0],
+                times: t,
+                values: v,
+            })
+            .collect();
+        let fit = |o: &DynamicFitOptions| {
+            gleaner_kriging::fit_dynamic(&input, o).map_err(|e| EvalError::Data(e.to_string()))
+        };
+        let dynamic = fit(&protocol.fit)?;
+        let peer = fit(&DynamicFitOptions {
+            shrinkage: Shrinkage::Fixed(0.0),
+            noise_share: 1e-9,
+            ..protocol.fit
+        })?;
+        Ok(Fitted {
+            matrix,
+            protocol,
+            dynamic,
+            peer,
+        })
+    }
+
+    /// The dynamic model fitted on the training rows.
+    pub fn model(&self) -> &DynamicModel {
+        &self.dynamic
+    }
+
+    /// The filter after every training reading.
+    fn trained_filter(&self) -> FieldFilter<'_> {
+        let n = self.matrix.labels.len();
+        let first = self.protocol.train.start;
+        let mut f = self.dynamic.filter(self.matrix.times[first] as f64);
+        for t in self.protocol.train.clone() {
+            f.advance(self.matrix.times[t] as f64);
+            for i in 0..n {
+                f.observe(i, self.matrix.row(t)[i]);
+            }
+        }
+        f
+    }
+
+    /// Chooses the tour for `layout` positions at `capacity_j` with `planner`.
+    pub fn plan(
+        &self,
+        positions: &[[f64; 2]],
+        capacity_j: f64,
+        planner: Planner,
+    ) -> Result<(Vec<usize>, f64), EvalError> {
+        let n = positions.len();
+        let p = &self.protocol;
+        let mut points = Vec::with_capacity(n + 1);
+        points.push([0.0, 0.0]);
+        points.extend_from_slice(positions);
+        let mut rewards = vec![1.0; n + 1];
+        rewards[0] = 0.0;
+        let mut service = vec![p.per_visit_j; n + 1];
+        service[0] = 0.0;
+        let budget = capacity_j + p.per_visit_j * p.free_visits as f64;
+        let problem =
+            Problem::from_scaled_points(&points, Metric::Euclidean, p.per_metre_j, rewards, budget)
+                .and_then(|q| q.with_service_costs(service))
+                .map_err(|e| EvalError::Data(format!("capacity {capacity_j} J: {e}")))?;
+        let route = match planner {
+            Planner::Information => {
+                let model = &self.dynamic;
+                let prior: f64 = (0..n).map(|i| model.covariance()[i * n + i]).sum();
+                let value = |visited: &[usize]| {
+                    let sensors: Vec<usize> = visited.iter().map(|v| v - 1).collect();
+                    prior - model.remaining_variance(&sensors)
+                };
+                solve_marginal(&problem, value, &MarginalOptions::default())
+                    .solution
+                    .routes
+                    .remove(0)
+            }
+            Planner::Count => {
+                let options = SolveOptions::default()
+                    .with_seed(p.seed)
+                    .with_iterations(2_000);
+                solve(&problem, SolverKind::Default, &options)
+                    .map_err(|e| EvalError::Data(e.to_string()))?
+                    .routes
+                    .remove(0)
+            }
+        };
+        let length: f64 = route
+            .windows(2)
+            .map(|w| {
+                let (a, b) = (points[w[0]], points[w[1]]);
+                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+            })
+            .sum();
+        let tour: Vec<usize> = route[1..route.len() - 1].iter().map(|v| v - 1).collect();
+        Ok((tour, length))
+    }
+
+    /// Scores a choice of visited sensors with every estimator.
+    pub fn score(&self, visited: &[usize]) -> (Vec<(Estimator, f64)>, f64) {
+        let n = self.matrix.labels.len();
+        let mut is_visited = vec![false; n];
+        for &v in visited {
+            if v < n {
+                is_visited[v] = true;
+            }
+        }
+        let unvisited: Vec<usize> = (0..n).filter(|&i| !is_visited[i]).collect();
+        let test = self.protocol.test.clone();
+        let rows = test.len().max(1) as f64;
+        if visited.is_empty() {
+            let inf = Estimator::ALL.map(|e| (e, f64::INFINITY)).to_vec();
+            return (inf, f64::NAN);
+        }
+        // Last training value of each sensor.
+        let mut last = vec![f64::NAN; n];
+        for t in self.protocol.train.clone() {
+            for (i, v) in self.matrix.row(t).iter().enumerate() {
+                if v.is_finite() {
+                    last[i] = *v;
+                }
+            }
+        }
+        let mut sums = [0.0f64; 3];
+        let (mut inside, mut judged) = (0usize, 0usize);
+        let mut filter = self.trained_filter();
+        let z90 = 1.644_853_626_951_472_2;
+        for t in test {
+            let row = self.matrix.row(t);
+            let readings: Vec<(usize, f64)> = visited
+                .iter()
+                .filter(|&&v| row[v].is_finite())
+                .map(|&v| (v, row[v]))
+                .collect();
+            let levels = self.peer.conditional(&readings);
+            filter.advance(self.matrix.times[t] as f64);
+            for &(i, v) in &readings {
+                filter.observe(i, v);
+            }
+            for &u in &unvisited {
+                let truth = row[u];
+                if !truth.is_finite() {
+                    continue;
+                }
+                let carried = if last[u].is_finite() {
+                    last[u]
+                } else {
+                    self.dynamic.means()[u]
+                };
+                let (mean, var) = filter.estimate(u);
+                sums[0] += (carried - truth).powi(2);
+                sums[1] += (levels[u].0 - truth).powi(2);
+                sums[2] += (mean - truth).powi(2);
+                judged += 1;
+                let half = z90 * (var + self.dynamic.noise()).sqrt();
+                if (truth - mean).abs() <= half {
+                    inside += 1;
+                }
+            }
+        }
+        let mse = Estimator::ALL
+            .iter()
+            .zip(sums)
+            .map(|(&e, s)| (e, s / rows))
+            .collect();
+        let coverage = if judged > 0 {
+            inside as f64 / judged as f64
+        } else {
+            f64::NAN
+        };
+        (mse, coverage)
+    }
+
+    /// Plans and scores one (layout, capacity, planner).
+    pub fn run(
+        &self,
+        layout: &Layout,
+        capacity_j: f64,
+        planner: Planner,
+    ) -> Result<Outcome, EvalError> {
+        let (tour, tour_m) = self.plan(&layout.positions, capacity_j, planner)?;
+        let p = &self.protocol;
+        let charged = tour.len().saturating_sub(p.free_visits) as f64;
+        let energy_j = p.per_metre_j * tour_m + p.per_visit_j * charged;
+        let (mse, coverage90) = self.score(&tour);
+        Ok(Outcome {
+            layout: layout.name.clone(),
+            capacity_j,
+            planner,
+            tour,
+            tour_m,
+            energy_j,
+            mse,
+            coverage90,
+        })
+    }
+}
+
+/// Every outcome of a protocol run, with the peer's results beside them.
+#[derive(Debug, Clone, Default)]
+pub struct Report {
+    /// gleaner's outcomes.
+    pub outcomes: Vec<Outcome>,
+    /// The peer's results (for the layouts run).
+    pub peer: Vec<PeerResult>,
+    /// A line on the data and the model fitted on each layout's columns.
+    pub notes: Vec<String>,
+}
+
+/// Runs the protocol for every layout, at every capacity the peer reports for it (for a
+/// layout the peer has no results for, at `default_capacities`), with each planner.
+pub fn run_protocol(
+    matrix: &Matrix,
+    layouts: &[Layout],
+    peer: &[PeerResult],
+    protocol: &Protocol,
+    default_capacities: &[f64],
+    planners: &[Planner],
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Report, EvalError> {
+    let mut report = Report::default();
+    let total = layouts.len();
+    for (k, layout) in layouts.iter().enumerate() {
+        progress(k, total);
+        let m = matrix.reorder(&layout.labels)?;
+        let fitted = Fitted::new(m, protocol.clone())?;
+        let model = fitted.model();
+        report.notes.push(format!(
+            "{}: {} sensors, phi {:.6} per {} s, shrinkage {:.3}",
+            layout.name,
+            layout.labels.len(),
+            model.phi(),
+            model.step_s(),
+            model.shrinkage()
+        ));
+        let mut caps: Vec<f64> = peer
+            .iter()
+            .filter(|r| r.layout == layout.name)
+            .map(|r| r.capacity_j)
+            .collect();
+        caps.sort_by(f64::total_cmp);
+        caps.dedup();
+        if caps.is_empty() {
+            caps = default_capacities.to_vec();
+        }
+        for &cap in &caps {
+            for &planner in planners {
+                report.outcomes.push(fitted.run(layout, cap, planner)?);
+            }
+        }
+        report
+            .peer
+            .extend(peer.iter().filter(|r| r.layout == layout.name).cloned());
+    }
+    progress(total, total);
+    Ok(report)
+}
+
+impl Report {
+    /// The outcomes as CSV: one row per (layout, capacity, planner, estimator).
+    pub fn outcomes_csv(&self) -> String {
+        let mut s = String::from(
+            "layout,capacity_J,planner,estimator,n_selected,tour_len_m,energy_J,mse_sum_over_unvisited,coverage90,tour\n",
+        );
+        for o in &self.outcomes {
+            let tour: Vec<String> = o.tour.iter().map(|v| v.to_string()).collect();
+            for (e, mse) in &o.mse {
+                let _ = writeln!(
+                    s,
+                    "{},{},{},{},{},{:.3},{:.3},{},{:.4},{}",
+                    o.layout,
+                    o.capacity_j,
+                    o.planner.name(),
+                    e.name(),
+                    o.tour.len(),
+                    o.tour_m,
+                    o.energy_j,
+                    mse,
+                    o.coverage90,
+                    tour.join(" ")
+                );
+            }
+        }
+        s
+    }
+
+    fn mse(&self, layout: &str, cap: f64, planner: Planner, e: Estimator) -> Option<f64> {
+        self.outcomes
+            .iter()
+            .find(|o| o.layout == layout && o.capacity_j == cap && o.planner == planner)
+            .and_then(|o| o.mse.iter().find(|(x, _)| *x == e).map(|(_, v)| *v))
+    }
+
+    fn peer_mse(&self, layout: &str, cap: f64, method: &str) -> Option<f64> {
+        self.peer
+            .iter()
+            .find(|r| r.layout == layout && r.capacity_j == cap && r.method == method)
+            .map(|r| r.mse)
+    }
+
+    /// A Markdown summary: per capacity, the mean over the layouts the peer reports of each
+    /// (planner, estimator) error and of the peer's methods; the share of (layout, capacity)
+    /// pairs where gleaner's pipeline (`planner`, `estimator`) is at or below the peer's
+    /// `mysolu`; coverage of the 90% intervals.
+    pub fn summary(&self, planner: Planner, estimator: Estimator) -> String {
+        let mut s = String::new();
+        let layouts: Vec<String> = {
+            let mut v: Vec<String> = self.peer.iter().map(|r| r.layout.clone()).collect();
+            v.sort();
+            v.dedup();
+            v
+        };
+        let mut caps: Vec<f64> = self.peer.iter().map(|r| r.capacity_j).collect();
+        caps.sort_by(f64::total_cmp);
+        caps.dedup();
+        let methods = ["mysolu", "baseline_ml", "baseline_fs"];
+        let _ = writeln!(
+            s,
+            "Mean over {} layouts of the summed squared error over unvisited sensors, ×10⁻³ (m³/m³)²; gleaner = planner `{}`, columns = its estimators:\n",
+            layouts.len(),
+            planner.name()
+        );
+        let mut head = String::from("| capacity kJ |");
+        for e in Estimator::ALL {
+            let _ = write!(head, " gleaner {} |", e.name());
+        }
+        for m in methods {
+            let _ = write!(head, " peer {m} |");
+        }
+        let _ = writeln!(s, "{head}");
+        let _ = writeln!(
+            s,
+            "|{}",
+            "---|".repeat(1 + Estimator::ALL.len() + methods.len())
+        );
+        let (mut wins, mut pairs) = (0usize, 0usize);
+        for &cap in &caps {
+            let mean = |f: &dyn Fn(&str) -> Option<f64>| -> Option<f64> {
+                let v: Vec<f64> = layouts.iter().filter_map(|l| f(l)).collect();
+                (v.len() == layouts.len() && v.iter().all(|x| x.is_finite()))
+                    .then(|| v.iter().sum::<f64>() / v.len() as f64)
+            };
+            let fmt = |v: Option<f64>| v.map_or("–".to_string(), |x| format!("{:.3}", x * 1e3));
+            let mut line = format!("| {:.0} |", cap / 1e3);
+            for e in Estimator::ALL {
+                let v = mean(&|l: &str| self.mse(l, cap, planner, e));
+                let _ = write!(line, " {} |", fmt(v));
+            }
+            for m in methods {
+                let v = mean(&|l: &str| self.peer_mse(l, cap, m));
+                let _ = write!(line, " {} |", fmt(v));
+            }
+            let _ = writeln!(s, "{line}");
+            for l in &layouts {
+                if let (Some(g), Some(p)) = (
+                    self.mse(l, cap, planner, estimator),
+                    self.peer_mse(l, cap, "mysolu"),
+                ) && p.is_finite()
+                {
+                    pairs += 1;
+                    if g <= p {
+                        wins += 1;
+                    }
+                }
+            }
+        }
+        let _ = writeln!(
+            s,
+            "\ngleaner (`{}` + `{}`) at or below the peer's `mysolu` at {wins} of {pairs} (layout, capacity) pairs where the peer visits a sensor ({:.0}%).",
+            planner.name(),
+            estimator.name(),
+            100.0 * wins as f64 / pairs.max(1) as f64
+        );
+        let cov: Vec<f64> = self
+            .outcomes
+            .iter()
+            .filter(|o| o.planner == planner && o.coverage90.is_finite())
+            .map(|o| o.coverage90)
+            .collect();
+        if !cov.is_empty() {
+            let mut c = cov.clone();
+            c.sort_by(f64::total_cmp);
+            let _ = writeln!(
+                s,
+                "Coverage of the dynamic model's 90% intervals over unvisited test values: median {:.1}% (min {:.1}%, max {:.1}%) over {} runs.",
+                100.0 * c[c.len() / 2],
+                100.0 * c[0],
+                100.0 * c[c.len() - 1],
+                c.len()
+            );
+        }
+        for n in &self.notes {
+            let _ = writeln!(s, "- {n}");
+        }
+        s
+    }
+}
+
+/// Files of the peer protocol under a data directory: (layouts, results, hourly readings).
+pub fn peer_files(data: &Path) -> (PathBuf, PathBuf, PathBuf) {
+    (
+        data.join("peers/taoxu-caf/peer_taoxu_caf_maps.csv"),
+        data.join("peers/taoxu-caf/peer_taoxu_caf_results.csv"),
+        data.join("caf/derived/water_content_2015_Jan_April_32_sensors.csv"),
+    )
+}
+
+/// Which data a protocol run uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dataset {
+    /// The peer's own: hourly VW at 30 cm, Jan–Apr 2015, complete-case rows, train rows
+    /// 0..=1000, test rows 1001..=1500 (a hold-out: never tuned on).
+    Hourly2015,
+    /// Tuning data with the same layouts and capacities: CAF daily VW at 30 cm of the same
+    /// sensors, train 2012, test the first 250 days of 2013 (every reading, gaps kept).
+    TuningDaily,
+}
+
+/// The frozen settings of gleaner's pipeline on this protocol, chosen on
+/// [`Dataset::TuningDaily`] only (see the evaluation page in the docs): the dynamic model
+/// with automatic shrinkage, reading noise 0.1% of the variance, lags up to 14 days; the
+/// tour that visits the most sensors.
+pub const FROZEN_PLANNER: Planner = Planner::Count;
+/// The frozen estimator (see [`FROZEN_PLANNER`]).
+pub const FROZEN_ESTIMATOR: Estimator = Estimator::Dynamic;
+
+/// Loads a protocol's data under `data` (the shared data directory): the matrix, the five
+/// random layouts and the real CAF layout, the peer's results, the protocol.
+pub fn load(
+    data: &Path,
+    dataset: Dataset,
+) -> Result<(Matrix, Vec<Layout>, Vec<PeerResult>, Protocol), EvalError> {
+    use gleaner_ingest::{IngestOptions, OnError, WideOptions, read_caf_daily, read_wide_csv};
+    let (maps, results, hourly) = peer_files(data);
+    let layouts = read_layouts(&maps)?;
+    let peer = read_results(&results)?;
+    let labels = layouts[0].labels.clone();
+    let fit = DynamicFitOptions {
+        max_lag_s: 14 * 86_400,
+        shrinkage: Shrinkage::Auto,
+        noise_share: 1e-3,
+        ..DynamicFitOptions::default()
+    };
+    let vw30 =
+        gleaner_field::Modality::new("vw@30cm").map_err(|e| EvalError::Data(e.to_string()))?;
+    match dataset {
+        Dataset::Hourly2015 => {
+            let (r, _) =
+                read_wide_csv(&hourly, &WideOptions::new(vw30), &IngestOptions::default())?;
+            let m = Matrix::from_readings(&[r], "vw@30cm", &labels)?.complete_rows();
+            let protocol = Protocol::peer_hourly(DynamicFitOptions {
+                step_s: 3_600,
+                ..fit
+            });
+            Ok((m, layouts, peer, protocol))
+        }
+        Dataset::TuningDaily => {
+            let options = IngestOptions {
+                on_error: OnError::Skip,
+                ..IngestOptions::default()
+            };
+            let mut batches = Vec::new();
+            for l in &labels {
+                let (r, _) = read_caf_daily(&data.join(format!("caf/Daily/{l}.txt")), &options)?;
+                batches.push(r);
+            }
+            let m = Matrix::from_readings(&batches, "vw@30cm", &labels)?;
+            // 2012-01-01 and 2013-01-01, 00:00 UTC.
+            let (y2012, y2013) = (1_325_376_000, 1_356_998_400);
+            let protocol = Protocol {
+                train: m.rows_between(y2012, y2013),
+                test: m.rows_between(y2013, y2013 + 250 * 86_400),
+                ..Protocol::peer_hourly(DynamicFitOptions {
+                    step_s: 86_400,
+                    ..fit
+                })
+            };
+            Ok((m, layouts, peer, protocol))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn toy_matrix() -> Matrix {
+        // Three sensors: 0 and 1 move together (1 with a small part of its own), 2 on its own.
+        let n = 3;
+        let mut values = Vec::new();
+        let mut times = Vec::new();
+        for t in 0..400 {
+            let a = (t as f64 / 20.0).sin() * 0.02;
+            let b = (t as f64 / 7.0).cos() * 0.01;
+            let own = (t as f64 / 3.0).sin() * 0.003;
+            values.extend_from_slice(&[0.3 + a, 0.25 + 0.9 * a + own, 0.2 + b]);
+            times.push(t as i64 * 3600);
+        }
+        assert_eq!(values.len(), 400 * n);
+        Matrix {
+            labels: vec!["A".into(), "B".into(), "C".into()],
+            times,
+            values,
+        }
+    }
+
+    fn protocol() -> Protocol {
+        Protocol {
+            train: 0..200,
+            test: 200..400,
+            fit: DynamicFitOptions {
+                step_s: 3600,
+                max_lag_s: 48 * 3600,
+                shrinkage: Shrinkage::Fixed(0.0),
+                ..DynamicFitOptions::default()
+            },
+            ..Protocol::peer_hourly(DynamicFitOptions::default())
+        }
+    }
+
+    #[test]
+    fn a_correlated_visit_explains_its_partner() {
+        let fitted = Fitted::new(toy_matrix(), protocol()).unwrap();
+        let (with_a, _) = fitted.score(&[0]);
+        let (with_c, _) = fitted.score(&[2]);
+        let get = |v: &[(Estimator, f64)], e| v.iter().find(|x| x.0 == e).unwrap().1;
+        // Visiting A tells B (levels and dynamic beat carried forward); visiting C does not.
+        assert!(get(&with_a, Estimator::Levels) < 0.5 * get(&with_a, Estimator::Carried));
+        assert!(get(&with_a, Estimator::Dynamic) < 0.5 * get(&with_a, Estimator::Carried));
+        assert!(get(&with_c, Estimator::Dynamic) > get(&with_a, Estimator::Dynamic));
+        let (none, _) = fitted.score(&[]);
+        assert!(none.iter().all(|(_, v)| v.is_infinite()));
+    }
+
+    #[test]
+    fn tours_respect_the_protocols_energy() {
+        let fitted = Fitted::new(toy_matrix(), protocol()).unwrap();
+        let layout = Layout {
+            name: "t".into(),
+            labels: vec!["A".into(), "B".into(), "C".into()],
+            positions: vec![[100.0, 0.0], [100.0, 10.0], [0.0, 300.0]],
+        };
+        for planner in [Planner::Information, Planner::Count] {
+            for cap in [0.0, 1_000.0, 2_100.0, 8_000.0] {
+                let o = fitted.run(&layout, cap, planner).unwrap();
+                assert!(
+                    o.energy_j <= cap + 1e-6,
+                    "{planner:?} {cap}: {}",
+                    o.energy_j
+                );
+            }
+        }
+        // 7,250 J fits C with A (7,230 J) or B (7,143 J), not all three (7,308 J): information
+        // takes C and one of the correlated pair.
+        let o = fitted.run(&layout, 7_250.0, Planner::Information).unwrap();
+        assert!(o.tour.contains(&2), "{:?}", o.tour);
+    }
+
+    #[test]
+    fn layouts_and_results_files_are_read_and_bad_ones_named() {
+        let dir = std::env::temp_dir().join(format!("gleaner-eval-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let maps = dir.join("maps.csv");
+        std::fs::write(
+            &maps,
+            "layout,node,label,x_m,y_m\nm,0,A,1,2\nm,1,B,3,4\nm,Depot,Depot,0,0\n",
+        )
+        .unwrap();
+        let l = read_layouts(&maps).unwrap();
+        assert_eq!(l[0].labels, ["A", "B"]);
+        std::fs::write(&maps, "layout,node,label,x_m,y_m\nm,0,A,x,2\n").unwrap();
+        let e = read_layouts(&maps).unwrap_err().to_string();
+        assert!(e.contains(":2: field `x_m`"), "{e}");
+        let res = dir.join("res.csv");
+        std::fs::write(
+            &res,
+            "experiment,data,method,map,capacity_J,n_selected,tour_len_m,energy_J,mse_sum_over_unvisited,tour\ne,d,mysolu,m,0,0,0.0,0.0,inf,\n",
+        )
+        .unwrap();
+        let r = read_results(&res).unwrap();
+        assert!(r[0].mse.is_infinite());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
