@@ -698,6 +698,8 @@ struct Shared<'a> {
     model: FieldModel,
     /// The model of changes fitted on the history.
     changes: IncrementModel,
+    /// The dynamic field model fitted on the history (None when it cannot be fitted).
+    dynamic: Option<gleaner_kriging::DynamicModel>,
     step_s: i64,
     /// The store every run starts from (the history ingested, the utility state built),
     /// copied for each run.
@@ -838,13 +840,19 @@ pub fn run_campaign(
                 IncrementModel::new(none, 1.0, none)
                     .map_err(|e| AppError::core("model of changes", e))?
             },
+            dynamic: None,
             step_s: 1,
             template: None,
         };
         new_run_project(&shared0, request.settings.clone())?
     };
     let modality = target_modality(&probe, request.modality.as_deref())?;
-    let (model, changes, step_s) = fit_models(&probe, &modality, request.history_until)?;
+    let crate::reconstruct::Models {
+        levels: model,
+        changes,
+        dynamic,
+        step_s,
+    } = fit_models(&probe, &modality, request.history_until)?;
     let names: Vec<String> = probe
         .store()
         .modalities()?
@@ -909,6 +917,7 @@ pub fn run_campaign(
         events,
         model,
         changes,
+        dynamic,
         step_s,
         template: Some(std::sync::Mutex::new(template)),
     };
@@ -1129,7 +1138,7 @@ fn run_one(
             let estimates = estimate_with(
                 project,
                 &shared.modality,
-                (&shared.model, &shared.changes),
+                (&shared.model, &shared.changes, shared.dynamic.as_ref()),
                 (target, lookback),
                 (request.neighbours, request.estimator),
                 (reads, reuse),

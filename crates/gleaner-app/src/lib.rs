@@ -79,7 +79,9 @@ pub use plan::{
 pub use progress::{Progress, Silent};
 pub use project::{Project, database};
 pub use reconstruct::{
-    DEFAULT_NEIGHBOURS, Estimator, ReconstructRequest, Reconstruction, SensorEstimate, reconstruct,
+    DEFAULT_NEIGHBOURS, Estimator, MAX_SERIES_TIMES, ReconstructRequest, ReconstructSeriesRequest,
+    Reconstruction, ReconstructionSeries, SensorEstimate, dynamic_fit_options, dynamic_window_s,
+    reconstruct, reconstruct_series,
 };
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};

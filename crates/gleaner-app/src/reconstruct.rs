@@ -9,8 +9,9 @@ use std::collections::HashMap;
 
 use gleaner_field::{LatLon, Modality, SensorId, UnixSeconds};
 use gleaner_kriging::{
-    Change, FieldModel, FitOptions, IncrementFitOptions, IncrementModel, Mean, Observation,
-    SensorSeries, estimate_change, fit, fit_increments, krige_with,
+    Change, DynamicFitOptions, DynamicModel, FieldModel, FitOptions, IncrementFitOptions,
+    IncrementModel, Mean, Observation, SensorSeries, Shrinkage, estimate_change, fit, fit_dynamic,
+    fit_increments, krige_with,
 };
 use gleaner_store::{ReadingBatch, Store};
 
@@ -46,6 +47,27 @@ pub enum Estimator {
     /// Space-time kriging of levels (residuals from each sensor's mean) from every sensor's
     /// latest known reading: ordinary ([`Mean::Unknown`]) or simple ([`Mean::Known`]).
     Levels(Mean),
+    /// The dynamic field model ([`gleaner_kriging::DynamicModel`]): a learned, shrunk
+    /// covariance of levels between sensors with AR(1) dynamics of the deviations, run as a
+    /// Kalman filter over every reading known in the window [`dynamic_window_s`] before the
+    /// estimation time.
+    Dynamic,
+}
+
+impl std::str::FromStr for Estimator {
+    type Err = AppError;
+    /// `changes`, `levels` (ordinary kriging), `simple` (simple kriging) or `dynamic`.
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "changes" => Ok(Estimator::Changes),
+            "levels" => Ok(Estimator::Levels(Mean::Unknown)),
+            "simple" => Ok(Estimator::Levels(Mean::Known)),
+            "dynamic" => Ok(Estimator::Dynamic),
+            other => Err(AppError::Invalid(format!(
+                "estimator {other:?}: expected changes, levels, simple or dynamic"
+            ))),
+        }
+    }
 }
 
 /// One sensor's estimate.
@@ -76,6 +98,9 @@ pub struct Reconstruction {
     pub model: FieldModel,
     /// The model of changes.
     pub changes: IncrementModel,
+    /// The dynamic field model (None when it cannot be fitted, e.g. over
+    /// [`gleaner_kriging::MAX_DYNAMIC_SENSORS`] sensors).
+    pub dynamic: Option<DynamicModel>,
     /// The estimator used.
     pub estimator: Estimator,
     /// Sampling step of the modality's readings, seconds.
@@ -156,10 +181,121 @@ pub(crate) fn fit_models<S: Store>(
     project: &Project<S>,
     modality: &Modality,
     at: UnixSeconds,
-) -> Result<(FieldModel, IncrementModel, i64)> {
-    let (model, changes, step) = fit_inner(project, modality, at, true)?;
+) -> Result<Models> {
+    let (levels, changes, step_s) = fit_inner(project, modality, at, true)?;
     let changes = changes.ok_or_else(|| AppError::Invalid("no model of changes".into()))?;
-    Ok((model, changes, step))
+    let dynamic = fit_dynamic_model(project, modality, at, step_s)?;
+    Ok(Models {
+        levels,
+        changes,
+        dynamic,
+        step_s,
+    })
+}
+
+/// The fitted models of one modality.
+#[derive(Debug, Clone)]
+pub(crate) struct Models {
+    /// Means and the parametric covariance of levels.
+    pub levels: FieldModel,
+    /// The model of changes.
+    pub changes: IncrementModel,
+    /// The dynamic model (None when it cannot be fitted).
+    pub dynamic: Option<DynamicModel>,
+    /// Sampling step, seconds.
+    pub step_s: i64,
+}
+
+/// Largest lag of the dynamic model's persistence fit, days.
+pub const DYNAMIC_LAG_DAYS: i64 = 14;
+
+/// The dynamic model's fit options at sampling step `step_s` (seconds): automatic
+/// shrinkage, reading noise 0.1% of the variance, lags up to [`DYNAMIC_LAG_DAYS`].
+pub fn dynamic_fit_options(step_s: i64) -> DynamicFitOptions {
+    DynamicFitOptions {
+        step_s: step_s.max(1),
+        max_lag_s: DYNAMIC_LAG_DAYS * 86_400,
+        shrinkage: Shrinkage::Auto,
+        noise_share: 1e-3,
+        ..DynamicFitOptions::default()
+    }
+}
+
+/// Fits the dynamic model of `modality` on every reading stamped at or before `at`
+/// (seconds); None when the network is too large for it or has no two distinct readings.
+fn fit_dynamic_model<S: Store>(
+    project: &Project<S>,
+    modality: &Modality,
+    at: UnixSeconds,
+    step_s: i64,
+) -> Result<Option<DynamicModel>> {
+    let sensors = project.sensors()?;
+    if sensors.len() > gleaner_kriging::MAX_DYNAMIC_SENSORS {
+        return Ok(None);
+    }
+    let ids: Vec<SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
+    let batch = project
+        .store()
+        .readings_for(Some(modality), UnixSeconds::MIN..=at)?;
+    let columns = per_sensor(&ids, &batch);
+    let series: Vec<SensorSeries<'_>> = columns
+        .iter()
+        .map(|(t, v)| SensorSeries {
+            position: [0.0, 0.0],
+            times: t,
+            values: v,
+        })
+        .collect();
+    Ok(fit_dynamic(&series, &dynamic_fit_options(step_s)).ok())
+}
+
+/// How far back the dynamic estimator reads, seconds: three persistence times
+/// (`−3·step/ln φ`), between 14 and 180 days. Readings older than that have decayed to a
+/// few percent of their weight; the filter starts from the stationary prior there.
+pub fn dynamic_window_s(model: &DynamicModel) -> i64 {
+    let (lo, hi) = (14 * 86_400, 180 * 86_400);
+    let phi = model.phi();
+    if !(phi > 0.0 && phi < 1.0) {
+        return if phi >= 1.0 { hi } else { lo };
+    }
+    let tau = -model.step_s() / phi.ln();
+    ((3.0 * tau) as i64).clamp(lo, hi)
+}
+
+/// Runs `model`'s Kalman filter over `columns` (per sensor, times ascending, seconds) from
+/// the stationary prior at `start`, stopping at each of `stops` (ascending, seconds) to call
+/// `emit` with the filter; readings stamped after the last stop are not used.
+pub(crate) fn run_filter(
+    model: &DynamicModel,
+    columns: &[(Vec<UnixSeconds>, Vec<f64>)],
+    start: UnixSeconds,
+    stops: &[UnixSeconds],
+    mut emit: impl FnMut(usize, &gleaner_kriging::FieldFilter<'_>),
+) {
+    let mut events: Vec<(UnixSeconds, usize, f64)> = Vec::new();
+    let end = stops.last().copied().unwrap_or(start);
+    for (k, (times, values)) in columns.iter().enumerate() {
+        for (&t, &v) in times.iter().zip(values) {
+            if t >= start && t <= end {
+                events.push((t, k, v));
+            }
+        }
+    }
+    events.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut filter = model.filter(start as f64);
+    let mut next = events.iter().peekable();
+    for (i, &stop) in stops.iter().enumerate() {
+        while let Some(&&(t, k, v)) = next.peek() {
+            if t > stop {
+                break;
+            }
+            filter.advance(t as f64);
+            filter.observe(k, v);
+            next.next();
+        }
+        filter.advance(stop as f64);
+        emit(i, &filter);
+    }
 }
 
 fn fit_inner<S: Store>(
@@ -241,7 +377,7 @@ fn positions(sensors: &[gleaner_field::Sensor], field: &gleaner_field::Field) ->
 pub(crate) fn estimate<S: Store>(
     project: &Project<S>,
     modality: &Modality,
-    (model, changes): (&FieldModel, &IncrementModel),
+    (model, changes, dynamic): (&FieldModel, &IncrementModel, Option<&DynamicModel>),
     at: UnixSeconds,
     lookback_s: i64,
     (neighbours, estimator): (usize, Estimator),
@@ -249,7 +385,7 @@ pub(crate) fn estimate<S: Store>(
     estimate_with(
         project,
         modality,
-        (model, changes),
+        (model, changes, dynamic),
         (at, lookback_s),
         (neighbours, estimator),
         (&mut EstimateReads::default(), false),
@@ -288,7 +424,7 @@ struct KeptReads {
 pub(crate) fn estimate_with<S: Store>(
     project: &Project<S>,
     modality: &Modality,
-    (model, changes): (&FieldModel, &IncrementModel),
+    (model, changes, dynamic): (&FieldModel, &IncrementModel, Option<&DynamicModel>),
     (at, lookback_s): (UnixSeconds, i64),
     (neighbours, estimator): (usize, Estimator),
     (reads, reuse): (&mut EstimateReads, bool),
@@ -334,6 +470,17 @@ pub(crate) fn estimate_with<S: Store>(
     // sensor's last one: one read (or the kept readings from then on).
     let (needed, series) = match estimator {
         Estimator::Levels(_) => (None, Vec::new()),
+        Estimator::Dynamic => {
+            let model = dynamic.ok_or_else(|| {
+                AppError::Invalid(format!(
+                    "the dynamic field model cannot be fitted on {modality} here (more than {} sensors, or no two distinct readings): use another estimator",
+                    gleaner_kriging::MAX_DYNAMIC_SENSORS
+                ))
+            })?;
+            let start = at.saturating_sub(dynamic_window_s(model)).max(from);
+            let batch = project.store().readings_for(Some(modality), start..=at)?;
+            (None, per_sensor(&ids, &batch))
+        }
         Estimator::Changes => {
             let needed = latest
                 .iter()
@@ -379,14 +526,23 @@ pub(crate) fn estimate_with<S: Store>(
     // Kriging of levels: the estimator itself, or for a sensor never read, ordinary.
     let level_mean = match estimator {
         Estimator::Levels(mean) => mean,
-        Estimator::Changes => Mean::Unknown,
+        Estimator::Changes | Estimator::Dynamic => Mean::Unknown,
     };
+    // The dynamic model: one filter pass over the window's readings.
+    let mut filtered: Vec<(f64, f64)> = Vec::new();
+    if let (Estimator::Dynamic, Some(model)) = (estimator, dynamic) {
+        let start = at.saturating_sub(dynamic_window_s(model)).max(from);
+        run_filter(model, &series, start, &[at], |_, f| {
+            filtered = (0..ids.len()).map(|k| f.estimate(k)).collect();
+        });
+    }
     let estimates = sensors
         .iter()
         .enumerate()
         .map(|(k, s)| {
             let (kriged, variance) = match (estimator, latest[k]) {
-                (Estimator::Levels(_), _) | (Estimator::Changes, None) => {
+                (Estimator::Dynamic, _) if k < filtered.len() => filtered[k],
+                (Estimator::Levels(_) | Estimator::Dynamic, _) | (Estimator::Changes, None) => {
                     let e = krige_with(
                         &model.covariance,
                         &observations,
@@ -512,12 +668,17 @@ pub fn reconstruct<S: Store>(
                 AppError::Invalid(format!("no {modality} readings to reconstruct from"))
             })?,
     };
-    let (model, changes, step_s) = fit_models(project, &modality, at)?;
+    let Models {
+        levels: model,
+        changes,
+        dynamic,
+        step_s,
+    } = fit_models(project, &modality, at)?;
     let neighbours = request.neighbours.unwrap_or(DEFAULT_NEIGHBOURS).max(1);
     let sensors = estimate(
         project,
         &modality,
-        (&model, &changes),
+        (&model, &changes, dynamic.as_ref()),
         at,
         UnixSeconds::MAX / 4,
         (neighbours, request.estimator),
@@ -527,9 +688,124 @@ pub fn reconstruct<S: Store>(
         modality: modality.to_string(),
         model,
         changes,
+        dynamic,
         estimator: request.estimator,
         step_s,
         sensors,
+    })
+}
+
+/// What to reconstruct over a range of times (one fit, one filter pass).
+#[derive(Debug, Clone, Default)]
+pub struct ReconstructSeriesRequest {
+    /// First estimation time, seconds.
+    pub from: UnixSeconds,
+    /// Last estimation time, seconds (at or after `from`).
+    pub to: UnixSeconds,
+    /// Spacing of the estimation times, seconds (> 0).
+    pub every_s: i64,
+    /// The modality [default: the condition modality].
+    pub modality: Option<String>,
+}
+
+/// Most estimation times one series request may ask for.
+pub const MAX_SERIES_TIMES: usize = 200_000;
+
+/// Every sensor's dynamic-model estimate at a grid of times.
+#[derive(Debug, Clone)]
+pub struct ReconstructionSeries {
+    /// The modality.
+    pub modality: String,
+    /// Estimation times, seconds, ascending.
+    pub times: Vec<UnixSeconds>,
+    /// The sensors (columns), by id, with their WGS84 positions.
+    pub sensors: Vec<(SensorId, LatLon)>,
+    /// Posterior means, `times × sensors` row-major, the modality's unit.
+    pub mean: Vec<f64>,
+    /// Posterior variances, same layout, the unit squared (without the reading noise).
+    pub variance: Vec<f64>,
+    /// The dynamic model (fitted on every reading stamped at or before `to`).
+    pub model: DynamicModel,
+}
+
+impl ReconstructionSeries {
+    /// The 90% interval `mean ± 1.645·sd` of entry (time index, sensor index).
+    pub fn interval90(&self, t: usize, s: usize) -> (f64, f64) {
+        let k = t * self.sensors.len() + s;
+        let half = 1.644_853_626_951_472_2 * (self.variance[k] + self.model.noise()).sqrt();
+        (self.mean[k] - half, self.mean[k] + half)
+    }
+}
+
+/// The use case: every sensor's posterior mean and variance of the modality at each time
+/// `from, from + every, .., ≤ to`, by the dynamic field model. The model's parameters are
+/// fitted once, on every reading stamped at or before `to`; each time's estimate uses only
+/// the readings stamped at or before it. Writes nothing.
+///
+/// Errors: `to` before `from`, a non-positive step, more than [`MAX_SERIES_TIMES`] times,
+/// no readings of the modality, a network the dynamic model cannot take.
+pub fn reconstruct_series<S: Store>(
+    project: &Project<S>,
+    request: &ReconstructSeriesRequest,
+) -> Result<ReconstructionSeries> {
+    if request.to < request.from {
+        return Err(AppError::Invalid(
+            "the range ends before it starts (--to before --from)".into(),
+        ));
+    }
+    if request.every_s <= 0 {
+        return Err(AppError::Invalid(format!(
+            "the step must be positive, got {} s",
+            request.every_s
+        )));
+    }
+    let count = (request.to - request.from) / request.every_s + 1;
+    if count > MAX_SERIES_TIMES as i64 {
+        return Err(AppError::Invalid(format!(
+            "{count} estimation times: at most {MAX_SERIES_TIMES} (a longer step, or a shorter range)"
+        )));
+    }
+    let times: Vec<UnixSeconds> = (0..count)
+        .map(|k| request.from + k * request.every_s)
+        .collect();
+    let modality = target_modality(project, request.modality.as_deref())?;
+    let sensors = project.sensors()?;
+    let ids: Vec<SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
+    let batch = project
+        .store()
+        .readings_for(Some(&modality), UnixSeconds::MIN..=request.to)?;
+    let columns = per_sensor(&ids, &batch);
+    if columns.iter().all(|c| c.0.is_empty()) {
+        return Err(AppError::Invalid(format!(
+            "no {modality} readings at or before the range's end"
+        )));
+    }
+    let all_times: Vec<Vec<UnixSeconds>> = columns.iter().map(|c| c.0.clone()).collect();
+    let step = sampling_step(&all_times).max(1);
+    let model = fit_dynamic_model(project, &modality, request.to, step)?.ok_or_else(|| {
+        AppError::Invalid(format!(
+            "the dynamic field model cannot be fitted on {modality} here (more than {} sensors, or no two distinct readings)",
+            gleaner_kriging::MAX_DYNAMIC_SENSORS
+        ))
+    })?;
+    let start = request.from.saturating_sub(dynamic_window_s(&model));
+    let n = ids.len();
+    let mut mean = vec![0.0; times.len() * n];
+    let mut variance = vec![0.0; times.len() * n];
+    run_filter(&model, &columns, start, &times, |i, f| {
+        for k in 0..n {
+            let (m, v) = f.estimate(k);
+            mean[i * n + k] = m;
+            variance[i * n + k] = v;
+        }
+    });
+    Ok(ReconstructionSeries {
+        modality: modality.to_string(),
+        times,
+        sensors: sensors.iter().map(|s| (s.id.clone(), s.position)).collect(),
+        mean,
+        variance,
+        model,
     })
 }
 
@@ -613,7 +889,10 @@ mod tests {
             .map(|r| r.1)
             .max()
             .unwrap();
-        let (model, changes, _) = fit_models(&project, &modality, last).unwrap();
+        let models = fit_models(&project, &modality, last).unwrap();
+        let (model, changes) = (&models.levels, &models.changes);
+        let dynamic = models.dynamic.as_ref();
+        assert!(dynamic.is_some(), "the dynamic model fits a synthetic farm");
         let mut reads = EstimateReads::default();
         for day in 0..12 {
             let at = last + day * DAY;
@@ -621,7 +900,7 @@ mod tests {
             let fresh = estimate(
                 &project,
                 &modality,
-                (&model, &changes),
+                (model, changes, dynamic),
                 at,
                 14 * DAY,
                 options,
@@ -630,7 +909,7 @@ mod tests {
             let kept = estimate_with(
                 &project,
                 &modality,
-                (&model, &changes),
+                (model, changes, dynamic),
                 (at, 14 * DAY),
                 options,
                 (&mut reads, true),
@@ -642,6 +921,33 @@ mod tests {
             }
         }
         assert_eq!(reads.reused, 11);
+        // The dynamic estimator: a sensor read at the estimation time is known to the
+        // reading noise; one not read lately has a larger variance, within the prior.
+        let dyn_est = estimate(
+            &project,
+            &modality,
+            (model, changes, dynamic),
+            last,
+            UnixSeconds::MAX / 4,
+            (8, Estimator::Dynamic),
+        )
+        .unwrap();
+        let m = dynamic.unwrap();
+        let n = m.len();
+        for (k, e) in dyn_est.iter().enumerate() {
+            let prior = m.covariance()[k * n + k];
+            assert!(
+                e.kriged.is_finite() && e.variance >= 0.0 && e.variance <= prior * (1.0 + 1e-9)
+            );
+            if e.last_time == Some(last) {
+                assert!((e.kriged - e.carried).abs() < 0.1 * prior.sqrt(), "{e:?}");
+                assert!(e.variance < 0.01 * prior, "{e:?}");
+            }
+        }
+        assert!(dyn_est.iter().enumerate().any(|(k, e)| {
+            e.last_time.is_some_and(|t| t < last - 5 * DAY)
+                && e.variance > 0.01 * m.covariance()[k * n + k]
+        }));
     }
 
     #[test]
@@ -684,5 +990,95 @@ mod tests {
         assert!((c[2].change + 0.05).abs() < 1e-12);
         // A target read after everyone else: no neighbour knows more.
         assert!(neighbour_changes(&series, &positions, (1, 99 * DAY), at, 64).is_empty());
+    }
+
+    /// A series over a range: one row per time, every sensor's mean close to its own
+    /// reading at a time it reported, variances within the prior; bad ranges refused.
+    #[test]
+    fn series_over_a_range() {
+        use gleaner_synth::{SynthConfig, generate, write_readings_csv, write_sensors_csv};
+        let farm = generate(&SynthConfig {
+            seed: 7,
+            sensor_count: 12,
+            days: 50,
+            vw_depths_cm: vec![30],
+            t_depths_cm: vec![],
+            ..SynthConfig::default()
+        })
+        .unwrap();
+        let tmp = tempfile::tempdir().unwrap();
+        let sensors = tmp.path().join("sensors.csv");
+        write_sensors_csv(&farm, &mut std::fs::File::create(&sensors).unwrap()).unwrap();
+        let readings = tmp.path().join("readings.csv");
+        write_readings_csv(&farm, &mut std::fs::File::create(&readings).unwrap()).unwrap();
+        let (mut project, _) = crate::init::init(&crate::init::InitRequest {
+            dir: tmp.path().join("farm"),
+            sensors,
+            base: Some(farm.base()),
+            ..Default::default()
+        })
+        .unwrap();
+        crate::ingest::ingest(
+            &mut project,
+            &crate::ingest::IngestRequest {
+                files: vec![readings],
+                ..Default::default()
+            },
+            UnixSeconds::MAX / 4,
+            &crate::Silent,
+        )
+        .unwrap();
+        let t0 = farm.times()[0];
+        let request = ReconstructSeriesRequest {
+            from: t0 + 30 * DAY,
+            to: t0 + 40 * DAY,
+            every_s: DAY,
+            modality: Some("vw@30cm".into()),
+        };
+        let series = reconstruct_series(&project, &request).unwrap();
+        let n = series.sensors.len();
+        assert_eq!(series.times.len(), 11);
+        assert_eq!(series.mean.len(), 11 * n);
+        let model = &series.model;
+        let batch = project
+            .store()
+            .readings_for(
+                Some(&Modality::new("vw@30cm").unwrap()),
+                request.from..=request.from,
+            )
+            .unwrap();
+        assert!(!batch.rows.is_empty());
+        for r in &batch.rows {
+            let id = &batch.sensors[r.sensor as usize];
+            let k = series.sensors.iter().position(|s| &s.0 == id).unwrap();
+            let prior = model.covariance()[k * n + k];
+            assert!((series.mean[k] - r.value).abs() < 0.2 * prior.sqrt());
+            let (lo, hi) = series.interval90(0, k);
+            assert!(lo <= r.value && r.value <= hi);
+        }
+        for (k, v) in series.variance.iter().enumerate() {
+            let s = k % n;
+            assert!(*v >= 0.0 && *v <= model.covariance()[s * n + s] * (1.0 + 1e-9));
+        }
+        for bad in [
+            ReconstructSeriesRequest {
+                to: request.from - 1,
+                ..request.clone()
+            },
+            ReconstructSeriesRequest {
+                every_s: 0,
+                ..request.clone()
+            },
+            ReconstructSeriesRequest {
+                every_s: 1,
+                to: request.from + 10_000_000,
+                ..request.clone()
+            },
+        ] {
+            assert!(matches!(
+                reconstruct_series(&project, &bad),
+                Err(AppError::Invalid(_))
+            ));
+        }
     }
 }

@@ -16,9 +16,23 @@ use gleaner_app as app;
 use gleaner_app::{MissionId, Project};
 
 use commands::{
-    bench, cells, crash, demo, export, migrate, plan, reconstruct, report, score, serve, simulate,
-    synth,
+    bench, cells, crash, demo, evaluate, export, migrate, plan, reconstruct, report, score, serve,
+    simulate, synth,
 };
+
+/// Evaluation protocols.
+#[derive(Debug, Subcommand)]
+enum EvaluateCommand {
+    /// The peer study's one-shot selection protocol on CAF: 5 random layouts of 32 sensors
+    /// and the real one, capacities 0-42 kJ (10 J/m + 70 J per visit, one free), the visited
+    /// sensors known at every test hour, the others estimated (carried forward, the Gaussian
+    /// conditional of levels, gleaner's dynamic field model); writes outcomes.csv and
+    /// summary.md beside the peer's published errors.
+    #[command(
+        after_help = "The frozen settings and the tuning behind them: docs/evaluation/.\n\nExamples:\n  gleaner evaluate peer --out eval/peer\n  gleaner evaluate peer --on tuning --out eval/peer-tuning"
+    )]
+    Peer(evaluate::PeerArgs),
+}
 
 /// Utility-driven UAV data collection for farm sensor networks.
 ///
@@ -80,11 +94,12 @@ enum Command {
         /// per project, named after `#` or after the project name) [default: gleaner.db].
         #[arg(long, value_name = "FILE_OR_URL")]
         database: Option<String>,
-        /// The score the project plans by: `paper` (the paper's S, SPEC §2) or `gleaner`
-        /// (gleaner's method: the gated score with each sensor's drift as freshness and the
-        /// bounded anomaly, β = 4, γ = δ = 0; less error and sooner catches than coverage on
-        /// held-out CAF, docs/method-improvement.md). Written into `[utility]`.
-        #[arg(long, value_enum, default_value_t = MethodArg::Paper)]
+        /// The score the project plans by: `gleaner` (gleaner's method, the default: the gated
+        /// score with each sensor's drift as freshness and the bounded anomaly, β = 4,
+        /// γ = δ = 0; less error and sooner catches than coverage and far less than the
+        /// paper's S on CAF, docs/method-improvement.md) or `paper` (the paper's S exactly,
+        /// which loses to random sampling on CAF 2014). Written into `[utility]`.
+        #[arg(long, value_enum, default_value_t = MethodArg::Gleaner)]
         method: MethodArg,
     },
     /// Ingest readings files into the project, all or nothing; re-ingesting changes nothing.
@@ -322,6 +337,9 @@ Examples:
   gleaner simulate --project farm --out sims/farm   (the farm's last 30 days)"
     )]
     Simulate(Box<simulate::SimulateArgs>),
+    /// Run a published evaluation protocol and compare gleaner with the published results.
+    #[command(subcommand)]
+    Evaluate(EvaluateCommand),
     /// Write report.md (tables with 95% intervals, SVG charts) from a simulation directory.
     #[command(after_help = "Example:\n  gleaner report sims/caf")]
     Report {
@@ -338,14 +356,24 @@ the changes its neighbours read later are known to have made over that interval 
 changes: a spatially correlated field-wide part plus each sensor's own part; exactly the
 carried value when no neighbour knows more). --levels: ordinary kriging of levels (each
 sensor's mean; a separable exponential space-time covariance with a temporal nugget; the
-field's current level estimated from the data); --simple: simple kriging of levels.
+field's current level estimated from the data); --simple: simple kriging of levels;
+--dynamic: the dynamic field model (each sensor's mean, a covariance of levels between
+sensors learned from history and shrunk, AR(1) persistence of the deviations; a Kalman filter
+over the readings known, so a sensor read lately is known from its own reading and one not
+read for long from the sensors read now).
+
+--from/--to/--every-hours: every sensor's dynamic-model mean, sd and 90% interval at each
+time of a range (one fit on the readings up to --to; each time uses only readings stamped at
+or before it) as CSV (time,sensor,mean,sd,lo90,hi90), or with --json the
+`gleaner.reconstruction-series` document.
 
 --json: the `gleaner.reconstruction` document (as GET /api/v1/reconstruct): sd = the model's
 standard deviation, positions WGS84 [lon, lat].
 
 Examples:
   gleaner reconstruct --project caf --at 2014-03-01 --modality vw@30cm
-  gleaner reconstruct --project caf --at 2014-03-01 --json"
+  gleaner reconstruct --project caf --at 2014-03-01 --json
+  gleaner reconstruct --project caf --from 2015-02-11 --to 2015-03-04 --every-hours 1 --out vw30.csv"
     )]
     Reconstruct {
         #[command(flatten)]
@@ -365,8 +393,27 @@ Examples:
         simple: bool,
         /// Ordinary kriging of levels (from every sensor's latest reading) instead of kriging
         /// of changes.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "simple")]
         levels: bool,
+        /// The dynamic field model (a learned, shrunk covariance of levels between sensors
+        /// with AR(1) dynamics, a Kalman filter over the readings known) instead of kriging
+        /// of changes.
+        #[arg(long, conflicts_with_all = ["simple", "levels"])]
+        dynamic: bool,
+        /// Reconstruct over a range instead of at one time, by the dynamic field model: the
+        /// first estimation time (RFC 3339 or date; needs --to).
+        #[arg(long, value_parser = parse_time, requires = "to", conflicts_with_all = ["at", "simple", "levels"])]
+        from: Option<i64>,
+        /// The range's last estimation time (RFC 3339 or date).
+        #[arg(long, value_parser = parse_time, requires = "from")]
+        to: Option<i64>,
+        /// Spacing of the range's estimation times, hours.
+        #[arg(long, default_value_t = 24.0, requires = "from")]
+        every_hours: f64,
+        /// Write the range's CSV (time, sensor, mean, sd, lo90, hi90) to this file instead of
+        /// standard output (`-`: standard output).
+        #[arg(long, requires = "from")]
+        out: Option<PathBuf>,
         /// Print the `gleaner.reconstruction` JSON document (as `GET /api/v1/reconstruct`)
         /// instead of the table.
         #[arg(long)]
@@ -463,7 +510,7 @@ enum FormatArg {
     HubbardBrook,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum MethodArg {
     Paper,
     Gleaner,
@@ -888,6 +935,7 @@ fn run(cli: Cli) -> Result<()> {
             let command = format!("gleaner {}", line.join(" "));
             print!("{}", simulate::run(&args, &command, &progress)?);
         }
+        Command::Evaluate(EvaluateCommand::Peer(args)) => print!("{}", evaluate::run_peer(&args)?),
         Command::Report { dir } => {
             println!("{}", report::write_report(&dir)?.display());
         }
@@ -898,16 +946,59 @@ fn run(cli: Cli) -> Result<()> {
             neighbours,
             simple,
             levels,
+            dynamic,
+            from,
+            to,
+            every_hours,
+            out,
             json,
         } => {
             let p = project.open()?;
+            if let (Some(from), Some(to)) = (from, to) {
+                if !(every_hours.is_finite() && every_hours > 0.0 && every_hours <= 24.0 * 3660.0) {
+                    anyhow::bail!(
+                        "--every-hours must be a positive number of hours (at most 10 years)"
+                    );
+                }
+                let r = app::reconstruct_series(
+                    &p,
+                    &app::ReconstructSeriesRequest {
+                        from,
+                        to,
+                        every_s: ((every_hours * 3600.0).round() as i64).max(1),
+                        modality,
+                    },
+                )?;
+                if json {
+                    let doc = gleaner_wire::convert::reconstruction_series(&r);
+                    println!("{}", serde_json::to_string_pretty(&doc)?);
+                    return Ok(());
+                }
+                let csv = reconstruct::series_csv(&r);
+                match out.as_deref() {
+                    Some(path) if path != Path::new("-") => {
+                        std::fs::write(path, csv)
+                            .with_context(|| format!("cannot write {}", path.display()))?;
+                        println!(
+                            "{}: {} times × {} sensors",
+                            path.display(),
+                            r.times.len(),
+                            r.sensors.len()
+                        );
+                    }
+                    _ => print!("{csv}"),
+                }
+                return Ok(());
+            }
             let r = app::reconstruct(
                 &p,
                 &app::ReconstructRequest {
                     at,
                     modality,
                     neighbours: Some(neighbours),
-                    estimator: if simple {
+                    estimator: if dynamic {
+                        app::Estimator::Dynamic
+                    } else if simple {
                         app::Estimator::Levels(gleaner_kriging::Mean::Known)
                     } else if levels {
                         app::Estimator::Levels(gleaner_kriging::Mean::Unknown)

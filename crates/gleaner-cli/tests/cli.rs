@@ -54,6 +54,9 @@ fn small_project() -> tempfile::TempDir {
         s(&sensors),
         "--base",
         "46.7800,-117.0805",
+        // These tests check the paper's formulas; gleaner's method is the default.
+        "--method",
+        "paper",
     ]);
     dir
 }
@@ -1232,9 +1235,9 @@ fn simulate_replays_a_projects_own_record() {
     assert!(err.contains("cannot be used with"), "{err}");
 }
 
-/// `init --method gleaner` writes gleaner's method into `[utility]`: the scoring then reports
-/// its weights (β = 4, γ = δ = 0) and bounded anomaly, where a default project scores by the
-/// paper's S.
+/// `init --method gleaner` (the default) writes gleaner's method into `[utility]`: the
+/// scoring then reports its weights (β = 4, γ = δ = 0) and bounded anomaly; `--method paper`
+/// scores by the paper's S.
 #[test]
 fn init_method_gleaner_scores_by_gleaners_method() {
     let dir = tempfile::tempdir().expect("temp dir");

@@ -67,8 +67,11 @@ fn bad(path: &Path, line: u64, field: &str, message: impl Into<String>) -> EvalE
     }
 }
 
+/// A CSV file's header and its rows, each with its 1-based line.
+type CsvTable = (Vec<String>, Vec<(u64, Vec<String>)>);
+
 /// Reads a CSV file with a header into (header, rows with their 1-based line).
-fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<(u64, Vec<String>)>), EvalError> {
+fn read_csv(path: &Path) -> Result<CsvTable, EvalError> {
     let text = std::fs::read_to_string(path).map_err(io(path))?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
@@ -862,6 +865,13 @@ pub fn peer_files(data: &Path) -> (PathBuf, PathBuf, PathBuf) {
         data.join("caf/derived/water_content_2015_Jan_April_32_sensors.csv"),
     )
 }
+
+/// The capacities the peer reports, J (0 to 42 kJ by 2 kJ): also used for the real CAF
+/// layout, which the peer has no results for.
+pub const PEER_CAPACITIES_J: [f64; 22] = [
+    0.0, 2e3, 4e3, 6e3, 8e3, 10e3, 12e3, 14e3, 16e3, 18e3, 20e3, 22e3, 24e3, 26e3, 28e3, 30e3,
+    32e3, 34e3, 36e3, 38e3, 40e3, 42e3,
+];
 
 /// Which data a protocol run uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -304,13 +304,12 @@ impl FieldFilter<'_> {
         let n = self.model.len();
         let s = self.cov[sensor * n + sensor] + self.model.noise;
         let floor = 1e-12 * self.model.cov[sensor * n + sensor].max(1e-300);
-        if !(s > floor) {
+        if s.is_nan() || s <= floor {
             return None;
         }
         let col: Vec<f64> = (0..n).map(|j| self.cov[j * n + sensor]).collect();
         let gain: Vec<f64> = col.iter().map(|c| c / s).collect();
-        for i in 0..n {
-            let gi = gain[i];
+        for (i, &gi) in gain.iter().enumerate() {
             if gi == 0.0 {
                 continue;
             }
@@ -558,7 +557,8 @@ fn positive_definite(a: &mut [f64], n: usize) -> bool {
         for k in 0..j {
             d -= a[j * n + k] * a[j * n + k];
         }
-        if !(d > 1e-10 * a[j * n + j].abs().max(1e-300)) {
+        let margin = 1e-10 * a[j * n + j].abs().max(1e-300);
+        if d.is_nan() || d <= margin {
             return false;
         }
         let d = d.sqrt();
@@ -771,7 +771,7 @@ mod tests {
     proptest! {
         #[test]
         fn readings_never_raise_a_variance(
-            rho in -0.9f64..0.9, phi in 0.0f64..1.0, dt in 0.0f64..1e6,
+            rho in -0.85f64..0.85, phi in 0.0f64..1.0, dt in 0.0f64..1e6,
             picks in proptest::collection::vec((0usize..3, -1.0f64..1.0), 0..8),
         ) {
             let cov = vec![1.0, rho, 0.0, rho, 1.0, rho * 0.5, 0.0, rho * 0.5, 1.0];
@@ -790,7 +790,7 @@ mod tests {
                 }
             }
             let sum = m.remaining_variance(&picks.iter().map(|p| p.0).collect::<Vec<_>>());
-            prop_assert!(sum <= 3.0 + 1e-12 && sum >= 0.0);
+            prop_assert!((0.0..=3.0 + 1e-12).contains(&sum));
         }
     }
 }

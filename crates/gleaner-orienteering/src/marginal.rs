@@ -58,7 +58,10 @@ pub fn solve_marginal<F: FnMut(&[usize]) -> f64>(
         grow(problem, &mut route, &reachable, &mut f, by_ratio, options);
         exchange(problem, &mut route, &reachable, &mut f, options);
         let value = f(interior(&route));
-        if best.as_ref().is_none_or(|(_, v)| value > *v + 1e-12 * v.abs()) {
+        if best
+            .as_ref()
+            .is_none_or(|(_, v)| value > *v + 1e-12 * v.abs())
+        {
             best = Some((route, value));
         }
     }
@@ -130,7 +133,7 @@ fn grow<F: FnMut(&[usize]) -> f64>(
             trial.extend_from_slice(route);
             trial.insert(pos, v);
             let gain = f(interior(&trial)) - base;
-            if !(gain > 0.0) {
+            if gain.is_nan() || gain <= 0.0 {
                 continue;
             }
             let score = if by_ratio {
@@ -209,12 +212,23 @@ mod tests {
                 [30.0 * a.cos() + i as f64, 30.0 * a.sin()]
             })
             .collect();
-        let rewards: Vec<f64> = (0..12).map(|i| if i == 0 { 0.0 } else { 1.0 + (i % 4) as f64 }).collect();
+        let rewards: Vec<f64> = (0..12)
+            .map(|i| if i == 0 { 0.0 } else { 1.0 + (i % 4) as f64 })
+            .collect();
         let p = Problem::from_points(&points, Metric::Euclidean, rewards.clone(), 120.0).unwrap();
         let exact = crate::exact(&p).unwrap();
-        let got = solve_marginal(&p, |s| s.iter().map(|&v| rewards[v]).sum(), &MarginalOptions::default());
+        let got = solve_marginal(
+            &p,
+            |s| s.iter().map(|&v| rewards[v]).sum(),
+            &MarginalOptions::default(),
+        );
         assert!(got.solution.costs[0] <= 120.0 + 1e-9);
-        assert!((got.value - exact.reward).abs() < 1e-9, "{} vs {}", got.value, exact.reward);
+        assert!(
+            (got.value - exact.reward).abs() < 1e-9,
+            "{} vs {}",
+            got.value,
+            exact.reward
+        );
     }
 
     #[test]

@@ -303,7 +303,7 @@ pub async fn reconstruct(
         Some(name) => gleaner_wire::convert::estimator_from_name(name).ok_or_else(|| {
             ApiError::bad_request(
                 Some("estimator"),
-                format!("expected changes, levels or simple, got {name:?}"),
+                format!("expected changes, levels, simple or dynamic, got {name:?}"),
             )
         })?,
     };

@@ -2,7 +2,8 @@
 
 use gleaner_app::{
     CellView, Estimator, Exploration, FieldView, MissionId, MissionKind, MissionRecord,
-    MissionStatus, NewMission, PlannedMission, Reconstruction, Scoring, driver,
+    MissionStatus, NewMission, PlannedMission, Reconstruction, ReconstructionSeries, Scoring,
+    driver,
 };
 use gleaner_ingest::time::format_rfc3339;
 
@@ -283,10 +284,12 @@ pub fn scoring(s: &Scoring) -> ScoringDoc {
 }
 
 /// The name of a reconstruction's estimator in documents and queries: `changes`, `levels`
-/// (ordinary kriging of levels) or `simple` (simple kriging of levels).
+/// (ordinary kriging of levels), `simple` (simple kriging of levels) or `dynamic` (the
+/// dynamic field model).
 pub fn estimator_name(e: Estimator) -> &'static str {
     match e {
         Estimator::Changes => "changes",
+        Estimator::Dynamic => "dynamic",
         Estimator::Levels(gleaner_kriging::Mean::Unknown) => "levels",
         Estimator::Levels(gleaner_kriging::Mean::Known) => "simple",
     }
@@ -298,7 +301,43 @@ pub fn estimator_from_name(name: &str) -> Option<Estimator> {
         "changes" => Some(Estimator::Changes),
         "levels" => Some(Estimator::Levels(gleaner_kriging::Mean::Unknown)),
         "simple" => Some(Estimator::Levels(gleaner_kriging::Mean::Known)),
+        "dynamic" => Some(Estimator::Dynamic),
         _ => None,
+    }
+}
+
+/// A reconstruction over a range: every sensor's mean, sd and 90% interval at each time.
+pub fn reconstruction_series(r: &ReconstructionSeries) -> crate::docs::ReconstructionSeriesDoc {
+    let n = r.sensors.len();
+    let grid = |f: &dyn Fn(usize, usize) -> f64| -> Vec<Vec<f64>> {
+        (0..r.times.len())
+            .map(|t| (0..n).map(|s| f(t, s)).collect())
+            .collect()
+    };
+    crate::docs::ReconstructionSeriesDoc {
+        format: crate::RECONSTRUCTION_SERIES_FORMAT.into(),
+        version: VERSION,
+        modality: r.modality.clone(),
+        estimator: estimator_name(Estimator::Dynamic).into(),
+        model: crate::docs::DynamicModelDoc {
+            phi: r.model.phi(),
+            step_s: r.model.step_s(),
+            shrinkage: r.model.shrinkage(),
+            noise: r.model.noise(),
+        },
+        times: r.times.iter().map(|&t| format_rfc3339(t)).collect(),
+        sensors: r
+            .sensors
+            .iter()
+            .map(|(id, p)| crate::docs::SeriesSensorDoc {
+                sensor: id.as_str().to_string(),
+                lon_lat: lon_lat(*p),
+            })
+            .collect(),
+        mean: grid(&|t, s| r.mean[t * n + s]),
+        sd: grid(&|t, s| r.variance[t * n + s].sqrt()),
+        lo90: grid(&|t, s| r.interval90(t, s).0),
+        hi90: grid(&|t, s| r.interval90(t, s).1),
     }
 }
 

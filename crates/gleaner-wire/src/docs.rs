@@ -245,6 +245,60 @@ pub struct ReconstructionDoc {
     pub sensors: Vec<SensorEstimateDoc>,
 }
 
+/// Every sensor's dynamic-model estimate over a range of times (`gleaner reconstruct
+/// --from .. --to .. --json`): rows are times, columns the sensors in `sensors`' order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ReconstructionSeriesDoc {
+    /// Always [`crate::RECONSTRUCTION_SERIES_FORMAT`].
+    pub format: String,
+    /// Always [`crate::VERSION`] when written by this build.
+    pub version: u32,
+    /// The modality (e.g. `vw@30cm`).
+    pub modality: String,
+    /// Always `dynamic` (the dynamic field model).
+    pub estimator: String,
+    /// The model: lag-one persistence per step, the step (s), the shrinkage intensity of
+    /// the correlations, the reading noise variance (unit²).
+    pub model: DynamicModelDoc,
+    /// Estimation times, RFC 3339 UTC.
+    pub times: Vec<String>,
+    /// Sensor ids and WGS84 positions [lon, lat].
+    pub sensors: Vec<SeriesSensorDoc>,
+    /// Posterior means, `[time][sensor]`, the modality's unit.
+    pub mean: Vec<Vec<f64>>,
+    /// Posterior standard deviations, same layout, the unit.
+    pub sd: Vec<Vec<f64>>,
+    /// Lower ends of the 90% intervals, same layout.
+    pub lo90: Vec<Vec<f64>>,
+    /// Upper ends of the 90% intervals, same layout.
+    pub hi90: Vec<Vec<f64>>,
+}
+
+/// The dynamic field model's parameters in a [`ReconstructionSeriesDoc`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct DynamicModelDoc {
+    /// Lag-one autocorrelation of the deviations per `step_s`.
+    pub phi: f64,
+    /// The step of `phi`, s.
+    pub step_s: f64,
+    /// Shrinkage intensity of the correlations, [0, 1].
+    pub shrinkage: f64,
+    /// Reading noise variance, the unit squared.
+    pub noise: f64,
+}
+
+/// A sensor of a [`ReconstructionSeriesDoc`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct SeriesSensorDoc {
+    /// Sensor id.
+    pub sensor: String,
+    /// WGS84 [lon, lat].
+    pub lon_lat: [f64; 2],
+}
+
 /// A mean with its 95% interval; `null` where undefined (no value, or too few blocks for an
 /// interval: then `low` = `high` = `null` and `mean` stands alone).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

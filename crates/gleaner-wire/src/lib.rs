@@ -112,6 +112,8 @@ pub const MISSION_FORMAT: &str = "gleaner.mission";
 pub const FIELD_FORMAT: &str = "gleaner.field";
 /// `format` of [`docs::ReconstructionDoc`].
 pub const RECONSTRUCTION_FORMAT: &str = "gleaner.reconstruction";
+/// `format` of [`docs::ReconstructionSeriesDoc`].
+pub const RECONSTRUCTION_SERIES_FORMAT: &str = "gleaner.reconstruction-series";
 /// `format` of [`docs::CampaignDoc`].
 pub const CAMPAIGN_FORMAT: &str = "gleaner.campaign";
 /// The version of the documents this build writes.

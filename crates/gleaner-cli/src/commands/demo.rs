@@ -20,6 +20,9 @@ pub struct DemoArgs {
     /// Working directory; the files the demo writes there are replaced.
     #[arg(long, default_value = "gleaner-demo")]
     pub dir: PathBuf,
+    /// The score the demo's project plans by (`gleaner`, the default, or the paper's S).
+    #[arg(long, value_enum, default_value_t = crate::MethodArg::Gleaner)]
+    pub method: crate::MethodArg,
     /// Seed of the synthetic farm.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -262,6 +265,7 @@ fn synthetic(
             cell_size_m: Some(app::DEFAULT_CELL_SIZE_M),
             name: Some("demo".into()),
             force: true,
+            gleaner_method: matches!(args.method, crate::MethodArg::Gleaner),
             ..Default::default()
         },
         vec![files.readings.clone()],
@@ -332,6 +336,7 @@ fn caf(
             utm_zone: Some("11N".into()),
             name: Some("caf-demo".into()),
             force: true,
+            gleaner_method: matches!(args.method, crate::MethodArg::Gleaner),
             ..Default::default()
         },
         daily.clone(),

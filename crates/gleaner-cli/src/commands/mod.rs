@@ -5,6 +5,7 @@ pub mod bench;
 pub mod cells;
 pub mod crash;
 pub mod demo;
+pub mod evaluate;
 pub mod export;
 pub mod migrate;
 pub mod plan;

@@ -2,7 +2,7 @@
 
 use std::fmt::Write as _;
 
-use gleaner_app::{Estimator, Reconstruction, format_rfc3339};
+use gleaner_app::{Estimator, Reconstruction, ReconstructionSeries, format_rfc3339};
 use gleaner_kriging::Mean;
 
 /// The reconstruction as a text table (values in the modality's unit, sd its square root).
@@ -39,6 +39,8 @@ pub fn table(r: &Reconstruction) -> String {
             Estimator::Changes => "kriging of changes (last value + neighbours' known changes)",
             Estimator::Levels(Mean::Unknown) => "ordinary kriging of levels",
             Estimator::Levels(Mean::Known) => "simple kriging of levels",
+            Estimator::Dynamic =>
+                "dynamic field model (learned covariance of levels, AR(1) dynamics, Kalman filter)",
         }
     );
     let _ = writeln!(
@@ -56,6 +58,30 @@ pub fn table(r: &Reconstruction) -> String {
             s.kriged,
             s.variance.sqrt()
         );
+    }
+    out
+}
+
+/// A range reconstruction as CSV: `time,sensor,mean,sd,lo90,hi90` (RFC 3339 times; the
+/// modality's unit), one row per time and sensor.
+pub fn series_csv(r: &ReconstructionSeries) -> String {
+    let mut out = String::from("time,sensor,mean,sd,lo90,hi90\n");
+    let n = r.sensors.len();
+    for (t, &time) in r.times.iter().enumerate() {
+        let stamp = format_rfc3339(time);
+        for (s, (id, _)) in r.sensors.iter().enumerate() {
+            let k = t * n + s;
+            let (lo, hi) = r.interval90(t, s);
+            let _ = writeln!(
+                out,
+                "{stamp},{},{:.6},{:.6},{:.6},{:.6}",
+                id.as_str(),
+                r.mean[k],
+                r.variance[k].sqrt(),
+                lo,
+                hi
+            );
+        }
     }
     out
 }

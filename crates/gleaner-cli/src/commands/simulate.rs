@@ -113,8 +113,13 @@ pub struct SimulateArgs {
     pub simple_kriging: bool,
     /// Model-based estimate by ordinary kriging of levels (the field's current level
     /// estimated from every sensor's latest reading) instead of kriging of changes.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "simple_kriging")]
     pub level_kriging: bool,
+    /// Model-based estimate by the dynamic field model (a learned, shrunk covariance of
+    /// levels between sensors with AR(1) dynamics, run as a Kalman filter over the readings
+    /// known) instead of kriging of changes.
+    #[arg(long, conflicts_with_all = ["simple_kriging", "level_kriging"])]
+    pub dynamic_model: bool,
     /// Runs in parallel.
     #[arg(long, default_value_t = 2)]
     pub jobs: usize,
@@ -228,7 +233,9 @@ fn options(args: &SimulateArgs) -> Result<ReplayOptions> {
         planner_iterations: args.planner_iterations,
         sorties: args.sorties,
         neighbours: args.neighbours,
-        estimator: if args.simple_kriging {
+        estimator: if args.dynamic_model {
+            app::Estimator::Dynamic
+        } else if args.simple_kriging {
             app::Estimator::Levels(gleaner_kriging::Mean::Known)
         } else if args.level_kriging {
             app::Estimator::Levels(gleaner_kriging::Mean::Unknown)
