@@ -402,8 +402,8 @@ pub struct CampaignRequest {
     pub sorties: usize,
     /// Observations per kriging estimate.
     pub neighbours: usize,
-    /// The reconstruction's model-based estimator (the `kriged` metrics): kriging of changes
-    /// (the default of `reconstruct`) or of levels.
+    /// The reconstruction's model-based estimator (the `kriged` metrics): the dynamic field
+    /// model (the default), kriging of changes or of levels.
     pub estimator: crate::reconstruct::Estimator,
     /// Runs in parallel (threads; 0 = rayon's default).
     pub jobs: usize,
@@ -496,7 +496,7 @@ impl Default for ReplayOptions {
             planner_iterations: 300,
             sorties: 1,
             neighbours: crate::reconstruct::DEFAULT_NEIGHBOURS,
-            estimator: crate::reconstruct::Estimator::Changes,
+            estimator: crate::reconstruct::Estimator::default(),
             buffer: None,
             jobs: 2,
             energy_preset: None,
@@ -700,6 +700,8 @@ struct Shared<'a> {
     changes: IncrementModel,
     /// The dynamic field model fitted on the history (None when it cannot be fitted).
     dynamic: Option<gleaner_kriging::DynamicModel>,
+    /// The request's estimator, resolved against the models ([`crate::Estimator::resolve`]).
+    estimator: crate::reconstruct::Estimator,
     step_s: i64,
     /// The store every run starts from (the history ingested, the utility state built),
     /// copied for each run.
@@ -841,6 +843,7 @@ pub fn run_campaign(
                     .map_err(|e| AppError::core("model of changes", e))?
             },
             dynamic: None,
+            estimator: request.estimator,
             step_s: 1,
             template: None,
         };
@@ -917,6 +920,7 @@ pub fn run_campaign(
         events,
         model,
         changes,
+        estimator: request.estimator.resolve(dynamic.as_ref()),
         dynamic,
         step_s,
         template: Some(std::sync::Mutex::new(template)),
@@ -1140,7 +1144,7 @@ fn run_one(
                 &shared.modality,
                 (&shared.model, &shared.changes, shared.dynamic.as_ref()),
                 (target, lookback),
-                (request.neighbours, request.estimator),
+                (request.neighbours, shared.estimator),
                 (reads, reuse),
             )?;
             Ok((

@@ -1,9 +1,11 @@
 //! Reconstruction (SPEC §7): every sensor's current value of one modality estimated from what
 //! is known — its last collected value carried forward, and a model-based estimate with its
-//! variance: by default kriging of changes ([`Estimator::Changes`]: the last value plus the
-//! change since, estimated from the neighbours' known changes over the same interval), or
-//! space-time kriging of levels from every sensor's latest known reading
-//! ([`Estimator::Levels`]).
+//! variance: by default the dynamic field model ([`Estimator::Dynamic`]: a learned covariance
+//! of levels between sensors with AR(1) dynamics, a Kalman filter over the readings known),
+//! or kriging of changes ([`Estimator::Changes`]: the last value plus the change since,
+//! estimated from the neighbours' known changes over the same interval), or space-time
+//! kriging of levels from every sensor's latest known reading ([`Estimator::Levels`]).
+//! [`reconstruct_series`] gives the dynamic model's estimates over a range of times.
 
 use std::collections::HashMap;
 
@@ -31,7 +33,7 @@ pub struct ReconstructRequest {
     pub modality: Option<String>,
     /// Observations per estimate [default: [`DEFAULT_NEIGHBOURS`]].
     pub neighbours: Option<usize>,
-    /// The model-based estimator [default: [`Estimator::Changes`]].
+    /// The model-based estimator [default: [`Estimator::Dynamic`]].
     pub estimator: Estimator,
 }
 
@@ -42,7 +44,6 @@ pub enum Estimator {
     /// reading plus its change since, estimated from the changes its neighbours are known to
     /// have made over (part of) that interval; exactly the last value carried forward when no
     /// neighbour's change is known. A sensor never read gets the kriging of levels (ordinary).
-    #[default]
     Changes,
     /// Space-time kriging of levels (residuals from each sensor's mean) from every sensor's
     /// latest known reading: ordinary ([`Mean::Unknown`]) or simple ([`Mean::Known`]).
@@ -50,8 +51,21 @@ pub enum Estimator {
     /// The dynamic field model ([`gleaner_kriging::DynamicModel`]): a learned, shrunk
     /// covariance of levels between sensors with AR(1) dynamics of the deviations, run as a
     /// Kalman filter over every reading known in the window [`dynamic_window_s`] before the
-    /// estimation time.
+    /// estimation time. The default (chosen on CAF 2013, docs/evaluation/); where the model
+    /// cannot be fitted ([`Estimator::resolve`]) kriging of changes answers instead.
+    #[default]
     Dynamic,
+}
+
+impl Estimator {
+    /// The estimator that can answer with `dynamic` (the fitted dynamic model, if any): this
+    /// one, or kriging of changes in place of [`Estimator::Dynamic`] without a model.
+    pub fn resolve(self, dynamic: Option<&DynamicModel>) -> Estimator {
+        match (self, dynamic) {
+            (Estimator::Dynamic, None) => Estimator::Changes,
+            (e, _) => e,
+        }
+    }
 }
 
 impl std::str::FromStr for Estimator {
@@ -675,13 +689,14 @@ pub fn reconstruct<S: Store>(
         step_s,
     } = fit_models(project, &modality, at)?;
     let neighbours = request.neighbours.unwrap_or(DEFAULT_NEIGHBOURS).max(1);
+    let estimator = request.estimator.resolve(dynamic.as_ref());
     let sensors = estimate(
         project,
         &modality,
         (&model, &changes, dynamic.as_ref()),
         at,
         UnixSeconds::MAX / 4,
-        (neighbours, request.estimator),
+        (neighbours, estimator),
     )?;
     Ok(Reconstruction {
         at,
@@ -689,7 +704,7 @@ pub fn reconstruct<S: Store>(
         model,
         changes,
         dynamic,
-        estimator: request.estimator,
+        estimator,
         step_s,
         sensors,
     })

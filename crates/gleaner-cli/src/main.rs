@@ -347,20 +347,19 @@ Examples:
         dir: PathBuf,
     },
     /// Estimate every sensor's current value of a modality from what is known: last value
-    /// carried forward, and a model-based estimate (kriging of changes by default) with its
+    /// carried forward, and a model-based estimate (the dynamic field model by default) with its
     /// standard deviation.
     #[command(
-        after_help = "Models are fitted on the readings known at --at. The \"kriged\" column is by default
-kriging of changes: each sensor's last known reading plus its change since, estimated from
-the changes its neighbours read later are known to have made over that interval (a model of
-changes: a spatially correlated field-wide part plus each sensor's own part; exactly the
-carried value when no neighbour knows more). --levels: ordinary kriging of levels (each
-sensor's mean; a separable exponential space-time covariance with a temporal nugget; the
-field's current level estimated from the data); --simple: simple kriging of levels;
---dynamic: the dynamic field model (each sensor's mean, a covariance of levels between
-sensors learned from history and shrunk, AR(1) persistence of the deviations; a Kalman filter
-over the readings known, so a sensor read lately is known from its own reading and one not
-read for long from the sensors read now).
+        after_help = "Models are fitted on the readings known at --at. The \"kriged\" column is by default the
+dynamic field model: each sensor's mean, a covariance of levels between sensors learned from
+history and shrunk, AR(1) persistence of the deviations, and a Kalman filter over the
+readings known, so a sensor read lately is known from its own reading and one not read for
+long from the sensors read now (docs/method.md §7; it falls back to kriging of changes on
+networks over 2,000 sensors). --changes: kriging of changes (each sensor's last known reading
+plus its change since, estimated from the changes its neighbours read later made over that
+interval); --levels: ordinary kriging of levels (a separable exponential space-time
+covariance with a temporal nugget; the field's current level estimated from the data);
+--simple: simple kriging of levels.
 
 --from/--to/--every-hours: every sensor's dynamic-model mean, sd and 90% interval at each
 time of a range (one fit on the readings up to --to; each time uses only readings stamped at
@@ -395,11 +394,10 @@ Examples:
         /// of changes.
         #[arg(long, conflicts_with = "simple")]
         levels: bool,
-        /// The dynamic field model (a learned, shrunk covariance of levels between sensors
-        /// with AR(1) dynamics, a Kalman filter over the readings known) instead of kriging
-        /// of changes.
+        /// Kriging of changes (the last value plus the neighbours' known changes since) instead
+        /// of the dynamic field model.
         #[arg(long, conflicts_with_all = ["simple", "levels"])]
-        dynamic: bool,
+        changes: bool,
         /// Reconstruct over a range instead of at one time, by the dynamic field model: the
         /// first estimation time (RFC 3339 or date; needs --to).
         #[arg(long, value_parser = parse_time, requires = "to", conflicts_with_all = ["at", "simple", "levels"])]
@@ -946,7 +944,7 @@ fn run(cli: Cli) -> Result<()> {
             neighbours,
             simple,
             levels,
-            dynamic,
+            changes,
             from,
             to,
             every_hours,
@@ -996,14 +994,14 @@ fn run(cli: Cli) -> Result<()> {
                     at,
                     modality,
                     neighbours: Some(neighbours),
-                    estimator: if dynamic {
-                        app::Estimator::Dynamic
+                    estimator: if changes {
+                        app::Estimator::Changes
                     } else if simple {
                         app::Estimator::Levels(gleaner_kriging::Mean::Known)
                     } else if levels {
                         app::Estimator::Levels(gleaner_kriging::Mean::Unknown)
                     } else {
-                        app::Estimator::Changes
+                        app::Estimator::Dynamic
                     },
                 },
             )?;

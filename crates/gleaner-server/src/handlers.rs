@@ -299,7 +299,7 @@ pub async fn reconstruct(
 ) -> ApiResult<Json<ReconstructionDoc>> {
     let q = query(q)?;
     let estimator = match q.estimator.as_deref() {
-        None => app::Estimator::Changes,
+        None => app::Estimator::default(),
         Some(name) => gleaner_wire::convert::estimator_from_name(name).ok_or_else(|| {
             ApiError::bad_request(
                 Some("estimator"),

@@ -918,18 +918,29 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
     }
     writeln!(md, "## Definitions\n")?;
     // The model-based estimate ("kriging" columns) the simulation used.
-    let model_based = if command.contains("--simple-kriging") || command.contains("--level-kriging")
+    let named = |e: &str| command.contains(&format!("--estimator {e}")) || command.contains(&format!("--estimator={e}"));
+    let model_based = if command.contains("--simple-kriging")
+        || command.contains("--level-kriging")
+        || named("levels")
+        || named("simple")
     {
         format!(
             "kriging = {} kriging of levels (residuals from each sensor's history mean) with a \
              separable exponential space-time covariance and a temporal nugget fitted on the \
              history, from the 16 most correlated latest readings",
-            if command.contains("--simple-kriging") {
+            if command.contains("--simple-kriging") || named("simple") {
                 "simple"
             } else {
                 "ordinary"
             }
         )
+    } else if !named("changes") {
+        "kriging = the dynamic field model: each sensor's mean and a covariance of levels between \
+         sensors learned from the history (shrunk), AR(1) persistence of the deviations, a Kalman \
+         filter over the readings known in the window before the estimate (docs/method.md §7): \
+         a sensor read lately is known from its own reading, one not read for long from the \
+         sensors read since"
+            .to_string()
     } else {
         "kriging = kriging of changes: each sensor's last collected value plus its change since, \
          estimated by simple kriging from the changes its neighbours are known to have made over \

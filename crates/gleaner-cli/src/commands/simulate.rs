@@ -115,11 +115,12 @@ pub struct SimulateArgs {
     /// estimated from every sensor's latest reading) instead of kriging of changes.
     #[arg(long, conflicts_with = "simple_kriging")]
     pub level_kriging: bool,
-    /// Model-based estimate by the dynamic field model (a learned, shrunk covariance of
-    /// levels between sensors with AR(1) dynamics, run as a Kalman filter over the readings
-    /// known) instead of kriging of changes.
-    #[arg(long, conflicts_with_all = ["simple_kriging", "level_kriging"])]
-    pub dynamic_model: bool,
+    /// The model-based estimate every strategy is judged by: `dynamic` (the dynamic field
+    /// model: a learned, shrunk covariance of levels between sensors with AR(1) dynamics, a
+    /// Kalman filter over the readings known; chosen on CAF 2013), `changes` (kriging of
+    /// changes), `levels` or `simple` (kriging of levels).
+    #[arg(long, default_value = "dynamic", conflicts_with_all = ["simple_kriging", "level_kriging"])]
+    pub estimator: app::Estimator,
     /// Runs in parallel.
     #[arg(long, default_value_t = 2)]
     pub jobs: usize,
@@ -233,14 +234,12 @@ fn options(args: &SimulateArgs) -> Result<ReplayOptions> {
         planner_iterations: args.planner_iterations,
         sorties: args.sorties,
         neighbours: args.neighbours,
-        estimator: if args.dynamic_model {
-            app::Estimator::Dynamic
-        } else if args.simple_kriging {
+        estimator: if args.simple_kriging {
             app::Estimator::Levels(gleaner_kriging::Mean::Known)
         } else if args.level_kriging {
             app::Estimator::Levels(gleaner_kriging::Mean::Unknown)
         } else {
-            app::Estimator::Changes
+            args.estimator
         },
         buffer: args.buffer,
         jobs: args.jobs,
