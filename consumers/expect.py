@@ -57,11 +57,16 @@ def close(a, b, rel=1e-6):
     return a == b or abs(a - b) <= rel * max(abs(a), abs(b))
 
 
+HOLD_STEP_S = 0.25
+
+
 def check_hold(hold, hover_s, what):
-    """A hold (s) covers the planned hover and exceeds it by less than the 0.1 s rounding."""
+    """A hold (s) covers the planned hover, exceeds it by less than the 0.25 s rounding and is
+    a multiple of 0.25 s (exact as a float32)."""
     need(hold >= hover_s, f"{what}: hold {hold} s < planned hover {hover_s} s")
-    need(f32(hold) >= hover_s, f"{what}: hold {hold} s as float32 < planned hover {hover_s} s")
-    need(hold < hover_s + 0.1 + 1e-6, f"{what}: hold {hold} s >= hover {hover_s} s + 0.1 s")
+    need(f32(hold) == hold, f"{what}: hold {hold} s is not exact as a float32")
+    need(hold < hover_s + HOLD_STEP_S, f"{what}: hold {hold} s >= hover {hover_s} s + 0.25 s")
+    need(hold / HOLD_STEP_S == int(hold / HOLD_STEP_S), f"{what}: hold {hold} s not on 0.25 s")
 
 
 def expected_sequence(mission):

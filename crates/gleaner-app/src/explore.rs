@@ -12,7 +12,7 @@ use gleaner_store::{MissionId, MissionKind, NewMission, Store, StoreWrite};
 
 use crate::error::{AppError, Result};
 use crate::knowledge::History;
-use crate::plan::{breakdown, energy_model, flight_profile, services, stops};
+use crate::plan::{FlightPoints, breakdown, energy_model, flight_profile, services, stops};
 use crate::project::Project;
 
 /// What to explore.
@@ -103,14 +103,15 @@ pub(crate) fn explore_with<S: Store>(
     let model = energy_model(project)?;
     let profile = flight_profile(project, &model)?;
     let svc = services(&model, &k, t)?;
-    let centres: Vec<LocalPoint> = k.field.cells().iter().map(|c| c.centre).collect();
+    let points = FlightPoints::of(&k.field);
+    let centres = &points.centres;
     let service_j: Vec<f64> = svc.iter().map(|s| s.energy_j).collect();
-    let base = LocalPoint::new(0.0, 0.0);
+    let base = points.base;
     let plan = memo
         .plan(
             &model,
             base,
-            &centres,
+            centres,
             &service_j,
             &ExplorationOptions::default(),
         )
@@ -156,7 +157,7 @@ pub(crate) fn explore_with<S: Store>(
                 } else {
                     energy.legs.last().map_or(0.0, |l| l.distance_m)
                 },
-                stops: stops(&k, &s.cells, &energy, &svc, &zeros, None),
+                stops: stops(&k, &points, &s.cells, &energy, &svc, &zeros, None),
             },
         ));
     }

@@ -3,8 +3,10 @@
 
 use std::path::{Path, PathBuf};
 
-use gleaner_energy::{CellService, MissionEnergy, MissionEnergyModel};
-use gleaner_field::{LocalPoint, UnixSeconds};
+use gleaner_energy::{
+    CellService, MissionEnergy, MissionEnergyModel, flight_point, flight_position,
+};
+use gleaner_field::{LatLon, LocalPoint, UnixSeconds};
 use gleaner_mission::{Candidate, MissionPlan, PlanOptions, Planner, plan_mission, plan_sorties};
 use gleaner_store::{
     EnergyBreakdown, FlightProfile, MissionId, MissionKind, NewMission, StopRecord, Store,
@@ -144,10 +146,50 @@ enum Given<'a> {
     Values(&'a Vec<f64>),
 }
 
-/// The energy model of the project's `[energy]` settings.
+/// The energy model of the project's `[energy]` settings, flying the speed the flight files
+/// command (the cruise speed rounded to `gleaner_energy::SPEED_STEP_MPS`): every plan prices
+/// the values the files will carry.
 pub fn energy_model<S: Store>(project: &Project<S>) -> Result<MissionEnergyModel> {
-    MissionEnergyModel::new(&project.settings().energy.to_core()?)
-        .map_err(|e| AppError::core("[energy] settings", e))
+    flight_model(&project.settings().energy, "[energy] settings")
+}
+
+/// The flight-file model (see [`energy_model`]) of an `[energy]` section.
+pub(crate) fn flight_model(
+    energy: &crate::settings::EnergySection,
+    context: &'static str,
+) -> Result<MissionEnergyModel> {
+    MissionEnergyModel::new(&energy.to_core()?)
+        .and_then(|m| m.for_flight())
+        .map_err(|e| AppError::core(context, e))
+}
+
+/// Where the flight files put the base and each cell's centre: the positions rounded to the
+/// files' 1e-7 degrees (`gleaner_energy::flight_position`), WGS84, and the same points in
+/// the field's local frame (m), which the planner prices.
+pub(crate) struct FlightPoints {
+    /// The base (home) in the local frame, m.
+    pub base: LocalPoint,
+    /// Each cell's rounded centre, WGS84, in field order.
+    pub positions: Vec<LatLon>,
+    /// Each cell's rounded centre in the local frame, m, in field order.
+    pub centres: Vec<LocalPoint>,
+}
+
+impl FlightPoints {
+    /// The rounded base and cell centres of `field`.
+    pub(crate) fn of(field: &gleaner_field::Field) -> Self {
+        let frame = field.frame();
+        let positions: Vec<LatLon> = field
+            .cells()
+            .iter()
+            .map(|c| flight_position(frame.inverse(c.centre)))
+            .collect();
+        Self {
+            base: flight_point(frame, field.base()),
+            centres: positions.iter().map(|&p| frame.forward(p)).collect(),
+            positions,
+        }
+    }
 }
 
 /// How the aircraft flies missions of this project: base, altitudes, cruise speed.
@@ -178,14 +220,21 @@ pub(crate) fn services(
             (t - since).max(0) as f64
         })
         .collect();
-    model
+    let services = model
         .field_services(&k.field, &elapsed)
-        .map_err(|e| AppError::core("collection times", e))
+        .map_err(|e| AppError::core("collection times", e))?;
+    // Hover for the hold the files command (rounded up): the planner prices that.
+    Ok(services
+        .into_iter()
+        .map(|s| model.flight_service(s))
+        .collect())
 }
 
-/// The stops of a route with the energy model's breakdown.
+/// The stops of a route with the energy model's breakdown; each stop's centre is where the
+/// files put it (`points.positions`).
 pub(crate) fn stops(
     k: &Knowledge,
+    points: &FlightPoints,
     order: &[usize],
     energy: &MissionEnergy,
     services: &[CellService],
@@ -200,7 +249,7 @@ pub(crate) fn stops(
             StopRecord {
                 order: n as u32,
                 cell: cell.index,
-                centre: k.field.frame().inverse(cell.centre),
+                centre: points.positions[c],
                 score: scores.get(c).copied().unwrap_or(0.0),
                 terms: terms.map(|t| [t[c].f, t[c].r, t[c].a, t[c].u]),
                 leg_distance_m: energy.legs[n].distance_m,
@@ -355,20 +404,19 @@ pub(crate) fn plan_scored<S: Store>(
         Some(preset) => {
             let mut energy = settings.energy.clone();
             energy.preset = preset.to_string();
-            MissionEnergyModel::new(&energy.to_core()?)
-                .map_err(|e| AppError::core("energy preset", e))?
+            flight_model(&energy, "energy preset")?
         }
     };
     let profile = flight_profile(project, &model)?;
     let services = services(&model, k, t)?;
-    let candidates: Vec<Candidate> = k
-        .field
-        .cells()
+    let points = FlightPoints::of(&k.field);
+    let candidates: Vec<Candidate> = points
+        .centres
         .iter()
         .zip(&scores)
         .zip(&services)
-        .map(|((c, &score), svc)| Candidate {
-            centre: c.centre,
+        .map(|((&centre, &score), svc)| Candidate {
+            centre,
             score,
             hover_s: svc.hover_s,
         })
@@ -381,7 +429,7 @@ pub(crate) fn plan_scored<S: Store>(
     }
     .with_time_limit_secs(time_limit_s)
     .map_err(|e| AppError::core("planner", e))?;
-    let base = LocalPoint::new(0.0, 0.0);
+    let base = points.base;
     let sorties = request.sorties.unwrap_or(1);
     if !(1..=MAX_SORTIES).contains(&sorties) {
         return Err(AppError::Invalid(format!(
@@ -422,7 +470,15 @@ pub(crate) fn plan_scored<S: Store>(
         } else {
             plan.energy.legs.last().map_or(0.0, |l| l.distance_m)
         },
-        stops: stops(k, &plan.order, &plan.energy, &services, &scores, terms),
+        stops: stops(
+            k,
+            &points,
+            &plan.order,
+            &plan.energy,
+            &services,
+            &scores,
+            terms,
+        ),
     };
     let mission = new_mission(&plan);
     let extra_sorties: Vec<ExtraSortie> = plans

@@ -2,6 +2,7 @@
 
 use std::collections::HashMap;
 
+use gleaner_energy::FlightEnergyModel;
 use gleaner_field::{CellId, CellIndex, LatLon, SensorId};
 use gleaner_store::{CellMetadata, MissionId, MissionRecord, Store};
 
@@ -105,19 +106,64 @@ pub struct MissionExport {
     pub field: FieldView,
     /// The mission.
     pub mission: MissionRecord,
+    /// The energy model every flight-file writer prices the values it writes with (the
+    /// project's aircraft, with the battery the mission was planned against).
+    pub energy: FlightEnergyModel,
 }
 
 /// The use case behind every export: the mission and its field, checked safe to fly — the
 /// planned energy within the budget it was planned against, a finite positive cruise speed,
-/// an altitude in (0, 120] m, finite non-negative hover times. A mission failing any check is
-/// refused: no flight file is ever written for a route the battery cannot carry.
+/// an altitude in (0, 120] m, finite non-negative hover times — and the energy model the
+/// writers recompute the commanded energy with ([`export_energy_model`]). A mission failing
+/// any check is refused: no flight file is ever written for a route the battery cannot carry.
 pub fn export<S: Store>(project: &Project<S>, id: MissionId) -> Result<MissionExport> {
     let mission = mission(project, id)?;
     check_flyable(&mission)?;
+    let energy = export_energy_model(project, &mission)?;
     Ok(MissionExport {
         field: field_view(project)?,
         mission,
+        energy,
     })
+}
+
+/// The energy presets a mission may have been planned with (`plan --energy-preset`).
+const ENERGY_PRESETS: [&str; 2] = ["paper", "large-pack"];
+
+/// The energy model a mission's files are priced with: the project's `[energy]` settings as
+/// they are now (the aircraft that will fly), with the battery the mission was planned
+/// against — the settings' own preset, or the preset (`paper`, `large-pack`, fields set in
+/// `[energy]` still overriding) whose usable budget (J) is the mission's.
+///
+/// # Errors
+/// [`AppError::Invalid`] when no such model gives the mission's usable budget (the battery
+/// settings changed since it was planned: re-plan it); invalid `[energy]` settings.
+pub fn export_energy_model<S: Store>(
+    project: &Project<S>,
+    m: &MissionRecord,
+) -> Result<FlightEnergyModel> {
+    let budget_j = m.mission.energy.budget_j;
+    let own = project.settings().energy.clone();
+    let model = crate::plan::flight_model(&own, "[energy] settings")?;
+    if model.usable_budget_j() == budget_j {
+        return Ok(model.flight_energy_model());
+    }
+    for preset in ENERGY_PRESETS {
+        let mut energy = own.clone();
+        energy.preset = preset.to_string();
+        if let Ok(m) = crate::plan::flight_model(&energy, "energy preset")
+            && m.usable_budget_j() == budget_j
+        {
+            return Ok(m.flight_energy_model());
+        }
+    }
+    Err(AppError::Invalid(format!(
+        "mission #{} cannot be exported for flight: it was planned against a usable budget of \
+         {budget_j:.1} J, but the project's [energy] settings give {:.1} J (and no energy preset \
+         gives {budget_j:.1} J): the battery settings changed since it was planned; re-plan it",
+        m.id,
+        model.usable_budget_j()
+    )))
 }
 
 /// The safety checks of [`export`].

@@ -36,6 +36,7 @@
 
 mod config;
 mod error;
+pub mod flight;
 mod link;
 pub mod minimise;
 mod mission;
@@ -46,6 +47,10 @@ pub use config::{
     VerticalConfig,
 };
 pub use error::EnergyError;
+pub use flight::{
+    COORDINATE_STEP_DEG, CommandedFlight, FlightEnergyModel, HOLD_STEP_S, SPEED_STEP_MPS,
+    flight_degrees, flight_hold_s, flight_point, flight_position, flight_speed_mps,
+};
 pub use link::{DataLogging, HoverConfig, LinkConfig, SensorBacklog};
 pub use mission::{
     CellEnergy, CellService, CellVisit, LegEnergy, MissionEnergy, MissionEnergyModel,

@@ -3,7 +3,7 @@
 
 use gleaner_field::{CellId, Field, LocalPoint};
 
-use crate::config::{CruiseSpeed, EnergyConfig};
+use crate::config::{CruiseSpeed, EnergyConfig, LinearEnergy, VerticalConfig};
 use crate::error::{EnergyError, finite, non_negative};
 use crate::link::{DataLogging, HoverConfig, LinkConfig, SensorBacklog};
 use crate::propulsion::PowerModel;
@@ -174,6 +174,10 @@ pub struct MissionEnergyModel {
     vertical_s: f64,
     /// The linear model's energy per cell visited, J (`None`: the physical model).
     per_cell_j: Option<f64>,
+    /// The linear model as configured (`None`: the physical model).
+    linear: Option<LinearEnergy>,
+    /// Climb and descent as configured (`None`: not modelled).
+    vertical: Option<VerticalConfig>,
     link: LinkConfig,
     logging: DataLogging,
     hover: HoverConfig,
@@ -218,6 +222,8 @@ impl MissionEnergyModel {
                 .linear
                 .map_or(cruise_power_w / cruise_speed_mps, |l| l.j_per_m),
             per_cell_j: config.linear.map(|l| l.j_per_cell),
+            linear: config.linear,
+            vertical: config.vertical,
             hover_power_w,
             rx_power_w: config.rx_power_w,
             budget_j: config.battery.usable_j(),
@@ -227,6 +233,33 @@ impl MissionEnergyModel {
             logging: config.logging,
             hover: config.hover,
         })
+    }
+
+    /// This model at another cruise speed `speed_mps` (m/s, > 0): the cruise power and the
+    /// energy per metre recomputed as [`MissionEnergyModel::new`] computes them (the linear
+    /// model keeps its energy per metre).
+    ///
+    /// # Errors
+    /// [`EnergyError::InvalidParameter`] for a speed that is not finite and > 0.
+    pub fn with_cruise_speed(&self, speed_mps: f64) -> Result<Self, EnergyError> {
+        crate::error::positive("cruise speed (m/s)", speed_mps)?;
+        let mut m = self.clone();
+        m.cruise_speed_mps = speed_mps;
+        m.cruise_power_w = m.power.power_w(speed_mps);
+        m.energy_per_metre_j = self
+            .linear
+            .map_or(m.cruise_power_w / speed_mps, |l| l.j_per_m);
+        Ok(m)
+    }
+
+    /// The linear model in place of the physical one, if configured.
+    pub fn linear(&self) -> Option<LinearEnergy> {
+        self.linear
+    }
+
+    /// Climb and descent rates, if their energy is modelled.
+    pub fn vertical(&self) -> Option<VerticalConfig> {
+        self.vertical
     }
 
     /// The propulsion power curve.

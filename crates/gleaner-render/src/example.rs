@@ -201,6 +201,7 @@ fn mission_doc(
         },
         candidates: None,
         greedy_baseline: None,
+        energy_model: None,
     }
 }
 

@@ -637,7 +637,7 @@ pub async fn mission_file(
     let bytes = s
         .run(move |p| {
             let export = app::export(p, id)?;
-            let doc = gleaner_wire::convert::stored_mission(&export.mission);
+            let doc = gleaner_wire::convert::export_mission(&export);
             let field = gleaner_wire::convert::field(&export.field);
             let export_err =
                 |e: gleaner_wire::ExportError| ApiError::bad_request(None, e.to_string());

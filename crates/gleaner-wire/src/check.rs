@@ -13,7 +13,7 @@ pub const MAX_HOVER_S: f64 = 86_400.0;
 /// Rounds a WGS84 coordinate to 1e-7 degrees (at most 5.6 mm off), the resolution autopilots
 /// store (MAVLink `int32` degE7).
 pub(crate) fn deg7(x: f64) -> f64 {
-    (x * 1e7).round() / 1e7
+    gleaner_energy::flight_degrees(x)
 }
 
 /// Checks a `[lon, lat]` position: finite, lon in [-180, 180], lat in [-90, 90] degrees.

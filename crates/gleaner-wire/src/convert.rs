@@ -1,9 +1,9 @@
 //! Explicit conversions from the application layer's data to the documents.
 
 use gleaner_app::{
-    CellView, Estimator, Exploration, FieldView, MissionId, MissionKind, MissionRecord,
-    MissionStatus, NewMission, PlannedMission, Reconstruction, ReconstructionSeries, Scoring,
-    driver,
+    CellView, Estimator, Exploration, FieldView, MissionExport, MissionId, MissionKind,
+    MissionRecord, MissionStatus, NewMission, PlannedMission, Reconstruction,
+    ReconstructionSeries, Scoring, driver,
 };
 use gleaner_ingest::time::format_rfc3339;
 
@@ -84,6 +84,7 @@ pub fn mission_doc(
         total_score: m.total_score,
         candidates: None,
         greedy_baseline: None,
+        energy_model: None,
     }
 }
 
@@ -94,6 +95,14 @@ pub fn stored_mission(m: &MissionRecord) -> MissionDoc {
         MissionStatus::Flown => "flown",
     };
     mission_doc(Some(m.id), &m.mission, status, m.flown_at)
+}
+
+/// A stored mission ready for the flight-file writers: [`stored_mission`] with the energy
+/// model the writers price what they write with.
+pub fn export_mission(e: &MissionExport) -> MissionDoc {
+    let mut doc = stored_mission(&e.mission);
+    doc.energy_model = Some(e.energy.into());
+    doc
 }
 
 /// A mission just planned (with the candidates and the greedy baseline).

@@ -92,6 +92,35 @@ pub enum ExportError {
         /// The stop's cell id.
         cell: String,
     },
+    /// The energy recomputed from the values a file commands exceeds the usable budget.
+    #[error(
+        "{file}: the flight it commands needs {commanded_j:.1} J (recomputed from its holds, speed and positions; planned {planned_j:.1} J) but {budget_j:.1} J are usable: refusing to write it"
+    )]
+    CommandedOverBudget {
+        /// The file (`mission.plan`, `mission.waypoints`, ...).
+        file: String,
+        /// Energy of the flight the file commands, J.
+        commanded_j: f64,
+        /// The mission's planned total, J.
+        planned_j: f64,
+        /// Usable budget, J.
+        budget_j: f64,
+    },
+    /// The document carries no energy model, so what a file commands cannot be priced.
+    #[error(
+        "the mission document has no energy_model: a flight file's energy cannot be recomputed (export the mission through the export use case)"
+    )]
+    NoEnergyModel,
+    /// A value of a flight file cannot be read back or priced.
+    #[error("{file} line {line}: {reason}")]
+    FileValue {
+        /// The file.
+        file: String,
+        /// The line (1-based; the `.plan`: the item number; 0: the file as a whole).
+        line: usize,
+        /// What is wrong.
+        reason: String,
+    },
     /// Serialising the file failed.
     #[error("cannot serialise: {0}")]
     Json(#[from] serde_json::Error),

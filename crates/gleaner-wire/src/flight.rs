@@ -5,6 +5,9 @@ use std::fmt::Write as _;
 
 use serde::{Deserialize, Serialize};
 
+use gleaner_energy::{CommandedFlight, flight_speed_mps};
+use gleaner_field::LatLon;
+
 use crate::check::{check_flyable, deg7};
 use crate::{EnergyDoc, ExportError, MissionDoc};
 
@@ -31,25 +34,14 @@ pub const THROTTLE_UNCHANGED: f64 = -1.0;
 pub const YAW_NOTE: &str = "param4 (yaw) of take-off and waypoints is NaN (null in .plan, nan in WPL): \
      the autopilot keeps its own yaw behaviour; 0 would command a north heading";
 /// How hold times are derived, in every file's metadata.
-pub const HOLD_NOTE: &str =
-    "param1 (hold, s) of each waypoint is the stop's hover_s rounded up to 0.1 s";
+pub const HOLD_NOTE: &str = "param1 (hold, s) of each waypoint is the stop's hover_s rounded up to 0.25 s, \
+     the hold the mission was planned with; the speed is rounded to 0.25 m/s and positions to 1e-7 degrees \
+     before planning, and the writer recomputes the energy from the values in the file";
 
-/// The hold written for a hover of `hover_s` seconds: the smallest multiple of 0.1 s that is
-/// at least `hover_s`, also when stored as a MAVLink `float32`.
+/// The hold written for a hover of `hover_s` seconds, s: rounded up to
+/// `gleaner_energy::HOLD_STEP_S` (exact in `f64` and as a MAVLink `float32`).
 pub(crate) fn hold_s(hover_s: f64) -> f64 {
-    let mut k = (hover_s * 10.0).ceil();
-    if (k - 1.0) / 10.0 >= hover_s {
-        k -= 1.0;
-    }
-    // At most one or two steps: the f32 rounding error at <= 1 day is ~1e-3 s.
-    for _ in 0..4 {
-        let hold = k / 10.0;
-        if hold >= hover_s && f64::from(hold as f32) >= hover_s {
-            return hold;
-        }
-        k += 1.0;
-    }
-    k / 10.0
+    gleaner_energy::flight_hold_s(hover_s)
 }
 
 /// One MAVLink mission item after the home position.
@@ -81,7 +73,7 @@ fn items(m: &MissionDoc) -> Result<Vec<Item>, ExportError> {
         frame: MAV_FRAME_MISSION,
         params: [
             SPEED_TYPE_GROUND,
-            p.cruise_speed_mps,
+            flight_speed_mps(p.cruise_speed_mps),
             THROTTLE_UNCHANGED,
             0.0,
             0.0,
@@ -324,8 +316,8 @@ pub fn qgc_plan_doc(m: &MissionDoc) -> Result<QgcPlan, ExportError> {
             version: 2,
             firmware_type: 12,
             vehicle_type: 2,
-            cruise_speed: p.cruise_speed_mps,
-            hover_speed: p.cruise_speed_mps,
+            cruise_speed: flight_speed_mps(p.cruise_speed_mps),
+            hover_speed: flight_speed_mps(p.cruise_speed_mps),
             global_plan_altitude_mode: 1,
             planned_home_position: [deg7(lat), deg7(lon), p.base_alt_m],
             items,
@@ -354,7 +346,228 @@ pub fn qgc_plan_doc(m: &MissionDoc) -> Result<QgcPlan, ExportError> {
 pub fn qgc_plan(m: &MissionDoc) -> Result<String, ExportError> {
     let mut text = serde_json::to_string_pretty(&qgc_plan_doc(m)?)?;
     text.push('\n');
+    check_commanded(m, PLAN_FILE, &parse_qgc_plan(&text)?)?;
     Ok(text)
+}
+
+/// The name the `.plan` goes by in errors.
+pub const PLAN_FILE: &str = "mission.plan";
+/// The name the WPL file goes by in errors.
+pub const WPL_FILE: &str = "mission.waypoints";
+
+/// The flight a mission's files command: the values [`qgc_plan`] and [`wpl`] write (speed,
+/// holds and positions rounded as `gleaner_energy::flight` rounds them), before any text is
+/// written.
+///
+/// # Errors
+/// [`check_flyable`]'s refusals.
+pub fn commanded_flight(m: &MissionDoc) -> Result<CommandedFlight, ExportError> {
+    let items = items(m)?;
+    let [lon, lat] = m.profile.base_lon_lat;
+    let home = latlon("home", deg7(lat), deg7(lon))?;
+    flight_of_items(
+        "mission document",
+        home,
+        items.iter().map(|it| (0, it.command, it.params)),
+    )
+}
+
+fn latlon(what: &str, lat: f64, lon: f64) -> Result<LatLon, ExportError> {
+    LatLon::new(lat, lon).map_err(|_| ExportError::Coordinate {
+        what: what.to_string(),
+        lon,
+        lat,
+    })
+}
+
+/// The flight that MAVLink items command, read the way an autopilot flies them: take-off
+/// altitude, the last `DO_CHANGE_SPEED` ground speed, one waypoint per `NAV_WAYPOINT` (all at
+/// the take-off altitude), return to launch last. `items` are (line, command, params).
+fn flight_of_items(
+    file: &str,
+    home: LatLon,
+    items: impl Iterator<Item = (usize, u16, [f64; 7])>,
+) -> Result<CommandedFlight, ExportError> {
+    let bad = |line: usize, reason: String| ExportError::FileValue {
+        file: file.to_string(),
+        line,
+        reason,
+    };
+    let mut altitude_m = None;
+    let mut speed_mps = None;
+    let mut waypoints = Vec::new();
+    let mut returned = false;
+    for (line, command, p) in items {
+        if returned {
+            return Err(bad(
+                line,
+                format!("command {command} after return to launch"),
+            ));
+        }
+        match command {
+            MAV_CMD_NAV_TAKEOFF => altitude_m = Some(p[6]),
+            MAV_CMD_DO_CHANGE_SPEED => {
+                if p[0] != SPEED_TYPE_GROUND {
+                    return Err(bad(
+                        line,
+                        format!("speed type {} is not ground speed", p[0]),
+                    ));
+                }
+                speed_mps = Some(p[1]);
+            }
+            MAV_CMD_NAV_WAYPOINT => {
+                let Some(alt) = altitude_m else {
+                    return Err(bad(line, "a waypoint before take-off".into()));
+                };
+                if speed_mps.is_none() {
+                    return Err(bad(line, "a waypoint before the speed is set".into()));
+                }
+                if p[6] != alt {
+                    return Err(bad(
+                        line,
+                        format!(
+                            "waypoint altitude {} m differs from take-off's {alt} m",
+                            p[6]
+                        ),
+                    ));
+                }
+                waypoints.push((latlon(&format!("{file} line {line}"), p[4], p[5])?, p[0]));
+            }
+            MAV_CMD_NAV_RETURN_TO_LAUNCH => returned = true,
+            other => return Err(bad(line, format!("unexpected command {other}"))),
+        }
+    }
+    match (altitude_m, speed_mps, returned) {
+        (Some(altitude_m), Some(speed_mps), true) => Ok(CommandedFlight {
+            home,
+            altitude_m,
+            speed_mps,
+            waypoints,
+        }),
+        _ => Err(bad(
+            0,
+            "needs a take-off, a speed and a return to launch".into(),
+        )),
+    }
+}
+
+/// Reads back the flight a `.plan` written by [`qgc_plan`] commands: home from
+/// `plannedHomePosition` (`[lat, lon, alt]`), the items as [`commanded_flight`] reads them.
+/// `hoverSpeed` must be the commanded speed.
+///
+/// # Errors
+/// [`ExportError::FileValue`] (or [`ExportError::Json`]) naming what cannot be read.
+pub fn parse_qgc_plan(text: &str) -> Result<CommandedFlight, ExportError> {
+    let plan: QgcPlan = serde_json::from_str(text)?;
+    let [lat, lon, _] = plan.mission.planned_home_position;
+    let home = latlon("plannedHomePosition", lat, lon)?;
+    let flight = flight_of_items(
+        PLAN_FILE,
+        home,
+        plan.mission
+            .items
+            .iter()
+            .enumerate()
+            .map(|(k, it)| (k + 1, it.command, it.params.map(|x| x.unwrap_or(f64::NAN)))),
+    )?;
+    if plan.mission.hover_speed != flight.speed_mps {
+        return Err(ExportError::FileValue {
+            file: PLAN_FILE.to_string(),
+            line: 0,
+            reason: format!(
+                "hoverSpeed {} m/s differs from the commanded {} m/s",
+                plan.mission.hover_speed, flight.speed_mps
+            ),
+        });
+    }
+    Ok(flight)
+}
+
+/// Reads back the flight a `QGC WPL 110` file written by [`wpl`] commands: line 0 is home,
+/// the rest as [`commanded_flight`] reads them. Fields are parsed as Rust parses decimals
+/// (correctly rounded), `nan` included.
+///
+/// # Errors
+/// [`ExportError::FileValue`] naming the line and what cannot be read.
+pub fn parse_wpl(text: &str) -> Result<CommandedFlight, ExportError> {
+    let bad = |line: usize, reason: String| ExportError::FileValue {
+        file: WPL_FILE.to_string(),
+        line,
+        reason,
+    };
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, "QGC WPL 110")) => {}
+        _ => return Err(bad(1, "the first line is not `QGC WPL 110`".into())),
+    }
+    let mut rows = Vec::new();
+    for (k, line) in lines {
+        let n = k + 1;
+        let fields: Vec<&str> = line.split('\t').collect();
+        if fields.len() != 12 {
+            return Err(bad(n, format!("{} fields, expected 12", fields.len())));
+        }
+        let num = |i: usize| -> Result<f64, ExportError> {
+            fields[i].parse::<f64>().map_err(|_| {
+                bad(
+                    n,
+                    format!("field {} = {:?} is not a number", i + 1, fields[i]),
+                )
+            })
+        };
+        let command: u16 = fields[3]
+            .parse()
+            .map_err(|_| bad(n, format!("command {:?} is not a number", fields[3])))?;
+        let mut p = [0.0; 7];
+        for (i, x) in p.iter_mut().enumerate() {
+            *x = num(4 + i)?;
+        }
+        rows.push((n, command, p));
+    }
+    let Some(((_, home_command, home), rest)) = rows.split_first() else {
+        return Err(bad(2, "no home line".into()));
+    };
+    if *home_command != MAV_CMD_NAV_WAYPOINT {
+        return Err(bad(2, format!("home line has command {home_command}")));
+    }
+    let home = latlon("WPL home", home[4], home[5])?;
+    flight_of_items(WPL_FILE, home, rest.iter().copied())
+}
+
+/// Prices `flight` — what `file` commands — with the mission's energy model and refuses it
+/// above the usable budget (the smaller of the model's and the mission's). Returns the
+/// commanded energy, J.
+///
+/// # Errors
+/// [`ExportError::NoEnergyModel`] for a document without one;
+/// [`ExportError::CommandedOverBudget`] above the budget; [`ExportError::FileValue`] for a
+/// value the energy model refuses.
+pub fn check_commanded(
+    m: &MissionDoc,
+    file: &str,
+    flight: &CommandedFlight,
+) -> Result<f64, ExportError> {
+    let model = m.energy_model.ok_or(ExportError::NoEnergyModel)?;
+    let [lon, lat] = m.profile.base_lon_lat;
+    let origin = latlon("base", lat, lon)?;
+    let energy = model
+        .to_core()
+        .energy(origin, flight)
+        .map_err(|e| ExportError::FileValue {
+            file: file.to_string(),
+            line: 0,
+            reason: e.to_string(),
+        })?;
+    let budget_j = model.usable_budget_j.min(m.energy.budget_j);
+    if !(energy.total_j.is_finite() && energy.total_j <= budget_j) {
+        return Err(ExportError::CommandedOverBudget {
+            file: file.to_string(),
+            commanded_j: energy.total_j,
+            planned_j: m.energy.total_j,
+            budget_j,
+        });
+    }
+    Ok(energy.total_j)
 }
 
 /// A WPL number: shortest round-trip decimal, `nan` for NaN (as QGroundControl writes it).
@@ -379,6 +592,12 @@ fn num(x: f64) -> String {
 /// # Errors
 /// [`check_flyable`]'s refusals.
 pub fn wpl(m: &MissionDoc) -> Result<String, ExportError> {
+    let text = wpl_text(m)?;
+    check_commanded(m, WPL_FILE, &parse_wpl(&text)?)?;
+    Ok(text)
+}
+
+fn wpl_text(m: &MissionDoc) -> Result<String, ExportError> {
     let items = items(m)?;
     let p = &m.profile;
     let [lon, lat] = p.base_lon_lat;
@@ -421,6 +640,7 @@ pub fn wpl(m: &MissionDoc) -> Result<String, ExportError> {
 /// [`check_flyable`]'s refusals: notes are written only for a flyable mission.
 pub fn flight_notes(m: &MissionDoc) -> Result<String, ExportError> {
     check_flyable(m)?;
+    let commanded_j = check_commanded(m, "flight notes", &commanded_flight(m)?)?;
     let meta = FlightMeta::of(m);
     let e = &meta.energy;
     let id = meta
@@ -445,7 +665,7 @@ pub fn flight_notes(m: &MissionDoc) -> Result<String, ExportError> {
     let _ = writeln!(
         out,
         "cruise ground speed: {} m/s (DO_CHANGE_SPEED after take-off)",
-        meta.cruise_speed_mps
+        flight_speed_mps(meta.cruise_speed_mps)
     );
     let _ = writeln!(out, "stops: {}; {}", meta.stops, meta.hold_rule);
     let _ = writeln!(out, "yaw: {}", meta.yaw);
@@ -459,6 +679,11 @@ pub fn flight_notes(m: &MissionDoc) -> Result<String, ExportError> {
         e.hover_j,
         e.comm_j,
         e.return_j
+    );
+    let _ = writeln!(
+        out,
+        "commanded energy: {commanded_j:.1} J of {:.1} J usable, recomputed from the files' holds, speed and positions",
+        e.budget_j
     );
     let _ = writeln!(
         out,

@@ -18,6 +18,17 @@
 //! times not finite and >= 0, positions out of range. Exploration sorties are missions like
 //! any other.
 //!
+//! Then each autopilot writer reads its own text back ([`parse_qgc_plan`], [`parse_wpl`]:
+//! home, altitude, commanded speed, every waypoint and hold), prices that flight with the
+//! document's [`EnergyModelDoc`] ([`check_commanded`]) and refuses it above the usable budget
+//! ([`ExportError::CommandedOverBudget`], naming the file): the energy checked is the energy of
+//! the values in the file, not of the plan. The planner plans with those values already
+//! (`gleaner_energy::flight`: holds rounded up to 0.25 s, the speed to 0.25 m/s, positions to
+//! 1e-7 degrees, all before planning), so for a mission planned by this build the commanded
+//! energy is the planned energy, to the last bit; a mission planned under other rounding is
+//! checked all the same. A document without an energy model (one not made by
+//! [`convert::export_mission`]) is refused ([`ExportError::NoEnergyModel`]).
+//!
 //! | function | file | order of coordinates |
 //! | --- | --- | --- |
 //! | [`qgc_plan`] | QGroundControl `.plan` (JSON, fileType Plan v1, mission v2) | `params` and `plannedHomePosition`: **lat, lon**, alt |
@@ -33,13 +44,14 @@
 //! 2. `NAV_TAKEOFF` (22), frame 3 (`GLOBAL_RELATIVE_ALT`), at the base, to
 //!    `profile.altitude_m` m above home.
 //! 3. `DO_CHANGE_SPEED` (178), frame 2: param1 = 1 (ground speed), param2 =
-//!    `profile.cruise_speed_mps` m/s, param3 = -1 (throttle unchanged). The energy model
-//!    assumed this speed; an autopilot left at its default speed may run out of battery. The
-//!    `.plan`'s `cruiseSpeed` and `hoverSpeed` are the same speed.
+//!    `profile.cruise_speed_mps` m/s rounded to 0.25 m/s (what the planner priced), param3 =
+//!    -1 (throttle unchanged). An autopilot left at its default speed may run out of battery.
+//!    The `.plan`'s `cruiseSpeed` and `hoverSpeed` are the same speed.
 //! 4. One `NAV_WAYPOINT` (16) per stop in visiting order, frame 3, at the cell centre (lat/lon
 //!    rounded to 1e-7 degrees, i.e. within 6 mm), `profile.altitude_m` m above home; param1 =
-//!    hold time, s = the stop's `hover_s` rounded **up** to 0.1 s (also as a MAVLink
-//!    `float32`), so the aircraft hovers at least as long as planned.
+//!    hold time, s = the stop's `hover_s` rounded **up** to 0.25 s (exact as a MAVLink
+//!    `float32`), so the aircraft hovers at least as long as the collection needs; the
+//!    planner planned with that hold.
 //! 5. `NAV_RETURN_TO_LAUNCH` (20), frame 2.
 //!
 //! Yaw: param4 of take-off and waypoints is NaN — `null` in the `.plan` (as QGroundControl
@@ -63,14 +75,17 @@
 //! feature's `properties.kind` says which (`cell`, `route`, `stop`, `base`, `sensor`).
 //!
 //! ```
-//! use gleaner_wire::{check_flyable, qgc_plan, samples, wpl, ExportError};
+//! use gleaner_wire::{check_commanded, check_flyable, parse_wpl, qgc_plan, samples, wpl, ExportError};
 //!
 //! let mission = samples::adaptive_mission();
 //! check_flyable(&mission)?;
 //! let plan = qgc_plan(&mission)?; // JSON text for mission.plan
 //! let waypoints = wpl(&mission)?; // text for mission.waypoints
-//! assert!(waypoints.lines().any(|l| l.starts_with("2\t0\t2\t178\t1\t10.21\t-1\t")));
-//! assert!(plan.contains("\"hoverSpeed\": 10.21"));
+//! assert!(waypoints.lines().any(|l| l.starts_with("2\t0\t2\t178\t1\t10.25\t-1\t")));
+//! assert!(plan.contains("\"hoverSpeed\": 10.25"));
+//! // The energy of what the file commands, recomputed from its text:
+//! let commanded_j = check_commanded(&mission, "mission.waypoints", &parse_wpl(&waypoints)?)?;
+//! assert!(commanded_j <= mission.energy.budget_j);
 //!
 //! let mut over = mission.clone();
 //! over.energy.total_j = 87_000.0; // e.g. flown at the autopilot's default 5 m/s
@@ -98,8 +113,9 @@ pub use error::ExportError;
 pub use flight::{
     FlightMeta, HOLD_NOTE, MAV_CMD_DO_CHANGE_SPEED, MAV_CMD_NAV_RETURN_TO_LAUNCH,
     MAV_CMD_NAV_TAKEOFF, MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL, MAV_FRAME_GLOBAL_RELATIVE_ALT,
-    MAV_FRAME_MISSION, QgcGeoFence, QgcItem, QgcMission, QgcPlan, QgcRallyPoints,
-    SPEED_TYPE_GROUND, THROTTLE_UNCHANGED, YAW_NOTE, flight_notes, qgc_plan, qgc_plan_doc, wpl,
+    MAV_FRAME_MISSION, PLAN_FILE, QgcGeoFence, QgcItem, QgcMission, QgcPlan, QgcRallyPoints,
+    SPEED_TYPE_GROUND, THROTTLE_UNCHANGED, WPL_FILE, YAW_NOTE, check_commanded, commanded_flight,
+    flight_notes, parse_qgc_plan, parse_wpl, qgc_plan, qgc_plan_doc, wpl,
 };
 pub use geo::{
     BaseProperties, CellProperties, RouteProperties, SensorProperties, StopProperties, geojson,
@@ -243,6 +259,103 @@ pub struct MissionDoc {
     /// The paper's greedy on the same instance (plan output only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub greedy_baseline: Option<BaselineDoc>,
+    /// The energy model the flight-file writers price the values they write with (present in
+    /// documents made for export, [`convert::export_mission`]); a writer refuses a document
+    /// without it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub energy_model: Option<EnergyModelDoc>,
+}
+
+/// The parameters that price what a flight file commands (`gleaner_energy::FlightEnergyModel`):
+/// the power curve, the receiver power, the optional linear and climb/descent models and the
+/// usable budget. Speed, altitude, positions and holds are read from the file itself.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct EnergyModelDoc {
+    /// Blade profile power in hover P0, W.
+    pub blade_profile_power_w: f64,
+    /// Induced power in hover Pi, W.
+    pub induced_power_w: f64,
+    /// Mean rotor induced velocity in hover v0, m/s.
+    pub mean_induced_velocity_mps: f64,
+    /// Rotor blade tip speed U_tip, m/s.
+    pub tip_speed_mps: f64,
+    /// Parasite drag factor d0·rho·s·A, kg/m.
+    pub parasite_drag_factor_kg_m: f64,
+    /// Aircraft weight W, N.
+    pub weight_n: f64,
+    /// Receiver power while hovering, W.
+    pub rx_power_w: f64,
+    /// The linear model's energy per metre, J/m (with `linear_j_per_cell`; absent: the
+    /// physical model).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub linear_j_per_m: Option<f64>,
+    /// The linear model's energy per cell visited, J.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub linear_j_per_cell: Option<f64>,
+    /// Climb rate after take-off, m/s (with `descent_speed_mps`; absent: not modelled).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub climb_speed_mps: Option<f64>,
+    /// Descent rate before landing, m/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub descent_speed_mps: Option<f64>,
+    /// Usable battery energy, J.
+    pub usable_budget_j: f64,
+}
+
+impl From<gleaner_energy::FlightEnergyModel> for EnergyModelDoc {
+    fn from(m: gleaner_energy::FlightEnergyModel) -> Self {
+        let p = m.power;
+        Self {
+            blade_profile_power_w: p.blade_profile_power_w,
+            induced_power_w: p.induced_power_w,
+            mean_induced_velocity_mps: p.mean_induced_velocity_mps,
+            tip_speed_mps: p.tip_speed_mps,
+            parasite_drag_factor_kg_m: p.parasite_drag_factor_kg_m,
+            weight_n: p.weight_n,
+            rx_power_w: m.rx_power_w,
+            linear_j_per_m: m.linear.map(|l| l.j_per_m),
+            linear_j_per_cell: m.linear.map(|l| l.j_per_cell),
+            climb_speed_mps: m.vertical.map(|v| v.climb_speed_mps),
+            descent_speed_mps: m.vertical.map(|v| v.descent_speed_mps),
+            usable_budget_j: m.usable_budget_j,
+        }
+    }
+}
+
+impl EnergyModelDoc {
+    /// The core model (a linear or climb/descent model needs both of its fields).
+    #[must_use]
+    pub fn to_core(&self) -> gleaner_energy::FlightEnergyModel {
+        gleaner_energy::FlightEnergyModel {
+            power: gleaner_energy::PowerParameters {
+                blade_profile_power_w: self.blade_profile_power_w,
+                induced_power_w: self.induced_power_w,
+                mean_induced_velocity_mps: self.mean_induced_velocity_mps,
+                tip_speed_mps: self.tip_speed_mps,
+                parasite_drag_factor_kg_m: self.parasite_drag_factor_kg_m,
+                weight_n: self.weight_n,
+            },
+            rx_power_w: self.rx_power_w,
+            linear: match (self.linear_j_per_m, self.linear_j_per_cell) {
+                (Some(j_per_m), Some(j_per_cell)) => Some(gleaner_energy::LinearEnergy {
+                    j_per_m,
+                    j_per_cell,
+                }),
+                _ => None,
+            },
+            vertical: match (self.climb_speed_mps, self.descent_speed_mps) {
+                (Some(climb_speed_mps), Some(descent_speed_mps)) => {
+                    Some(gleaner_energy::VerticalConfig {
+                        climb_speed_mps,
+                        descent_speed_mps,
+                    })
+                }
+                _ => None,
+            },
+            usable_budget_j: self.usable_budget_j,
+        }
+    }
 }
 
 /// A cell's latest utility terms.

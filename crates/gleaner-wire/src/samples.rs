@@ -3,8 +3,8 @@
 //! exploration sortie. Numbers are plausible, not computed by the planner.
 
 use crate::{
-    CellDoc, EnergyDoc, FIELD_FORMAT, FieldDoc, MISSION_FORMAT, MissionDoc, ProfileDoc, ScoresDoc,
-    SensorDoc, StopDoc, VERSION,
+    CellDoc, EnergyDoc, EnergyModelDoc, FIELD_FORMAT, FieldDoc, MISSION_FORMAT, MissionDoc,
+    ProfileDoc, ScoresDoc, SensorDoc, StopDoc, VERSION,
 };
 
 /// Base station `[lon, lat]`, WGS84 degrees.
@@ -102,12 +102,24 @@ pub fn field() -> FieldDoc {
     }
 }
 
+/// The paper's energy model (what the writers price the files with).
+fn paper_model() -> EnergyModelDoc {
+    gleaner_energy::FlightEnergyModel {
+        power: gleaner_energy::PowerParameters::default(),
+        rx_power_w: 0.5,
+        linear: None,
+        vertical: None,
+        usable_budget_j: 66_500.0,
+    }
+    .into()
+}
+
 fn profile() -> ProfileDoc {
     ProfileDoc {
         base_lon_lat: BASE_LON_LAT,
         base_alt_m: BASE_ALT_M,
         altitude_m: 30.0,
-        cruise_speed_mps: 10.21,
+        cruise_speed_mps: 10.25,
     }
 }
 
@@ -152,12 +164,12 @@ fn energy(stops: &[StopDoc], return_m: f64) -> EnergyDoc {
         budget_j: 66_500.0,
         utilisation: total_j / 66_500.0,
         distance_m,
-        flight_time_s: distance_m / 10.21 + stops.iter().map(|s| s.hover_s).sum::<f64>(),
+        flight_time_s: distance_m / 10.25 + stops.iter().map(|s| s.hover_s).sum::<f64>(),
     }
 }
 
 /// An adaptive mission (id 7) visiting `x2y1`, `x0y0`, `x1y1`; hover times 30, 34.27 and
-/// 30.05 s (holds 30, 34.3 and 30.1 s).
+/// 30.05 s (holds 30, 34.5 and 30.25 s: rounded up to 0.25 s).
 #[must_use]
 pub fn adaptive_mission() -> MissionDoc {
     let stops = vec![
@@ -187,6 +199,7 @@ pub fn adaptive_mission() -> MissionDoc {
         total_score,
         candidates: Some(5),
         greedy_baseline: None,
+        energy_model: Some(paper_model()),
     }
 }
 
@@ -221,5 +234,6 @@ pub fn exploration_sortie() -> MissionDoc {
         total_score: 0.0,
         candidates: None,
         greedy_baseline: None,
+        energy_model: Some(paper_model()),
     }
 }

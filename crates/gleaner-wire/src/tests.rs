@@ -6,6 +6,7 @@ use serde_json::Value;
 use crate::flight::hold_s;
 use crate::samples::{adaptive_mission, exploration_sortie, field};
 use crate::*;
+use gleaner_energy::{HOLD_STEP_S, flight_speed_mps};
 
 /// Great-circle distance between two `[lon, lat]`, m (haversine, mean Earth radius).
 fn dist_m(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -23,7 +24,7 @@ fn close(a: f64, b: f64) -> bool {
 }
 
 /// (command, frame, params) of every WPL line after the header, params 1..7 as f64.
-fn parse_wpl(text: &str) -> Vec<(u16, u8, [f64; 7])> {
+fn wpl_items(text: &str) -> Vec<(u16, u8, [f64; 7])> {
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("QGC WPL 110"));
     lines
@@ -43,7 +44,7 @@ fn parse_wpl(text: &str) -> Vec<(u16, u8, [f64; 7])> {
 }
 
 /// (command, frame, params with null = NaN) of every .plan item.
-fn parse_plan(text: &str) -> (Value, Vec<(u16, u8, [f64; 7])>) {
+fn plan_items(text: &str) -> (Value, Vec<(u16, u8, [f64; 7])>) {
     let v: Value = serde_json::from_str(text).unwrap();
     let items = v["mission"]["items"]
         .as_array()
@@ -81,7 +82,7 @@ fn check_items(m: &MissionDoc, items: &[(u16, u8, [f64; 7])]) {
         [s[0], s[2], s[3], s[4], s[5], s[6]],
         [1.0, -1.0, 0.0, 0.0, 0.0, 0.0]
     );
-    assert!(close(s[1], p.cruise_speed_mps));
+    assert_eq!(s[1], flight_speed_mps(p.cruise_speed_mps));
     for (stop, &(c, f, w)) in m.stops.iter().zip(&items[2..]) {
         assert_eq!(
             (c, f),
@@ -95,10 +96,11 @@ fn check_items(m: &MissionDoc, items: &[(u16, u8, [f64; 7])]) {
             w[0],
             stop.hover_s
         );
-        assert!(f64::from(w[0] as f32) >= stop.hover_s);
-        // Rounded up to 0.1 s, one more 0.1 s when float32 storage would fall short.
+        // Exact as a MAVLink float32 too.
+        assert_eq!(f64::from(w[0] as f32), w[0]);
+        // Rounded up to 0.25 s.
         assert!(
-            w[0] < stop.hover_s + 0.2 + 1e-9,
+            w[0] < stop.hover_s + HOLD_STEP_S,
             "hold {} for {}",
             w[0],
             stop.hover_s
@@ -115,18 +117,18 @@ fn check_items(m: &MissionDoc, items: &[(u16, u8, [f64; 7])]) {
 }
 
 fn check_files(m: &MissionDoc) {
-    let w = parse_wpl(&wpl(m).unwrap());
+    let w = wpl_items(&wpl(m).unwrap());
     let (home_c, home_f, home) = w[0];
     assert_eq!((home_c, home_f), (MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL));
     assert!(dist_m([home[5], home[4]], m.profile.base_lon_lat) < 0.1);
     assert!(close(home[6], m.profile.base_alt_m));
     check_items(m, &w[1..]);
-    let (v, items) = parse_plan(&qgc_plan(m).unwrap());
+    let (v, items) = plan_items(&qgc_plan(m).unwrap());
     check_items(m, &items);
     let mission = &v["mission"];
-    let speed = m.profile.cruise_speed_mps;
-    assert!(close(mission["cruiseSpeed"].as_f64().unwrap(), speed));
-    assert!(close(mission["hoverSpeed"].as_f64().unwrap(), speed));
+    let speed = flight_speed_mps(m.profile.cruise_speed_mps);
+    assert_eq!(mission["cruiseSpeed"].as_f64().unwrap(), speed);
+    assert_eq!(mission["hoverSpeed"].as_f64().unwrap(), speed);
     let home = mission["plannedHomePosition"].as_array().unwrap();
     assert!(close(home[2].as_f64().unwrap(), m.profile.base_alt_m));
     assert!(
@@ -144,18 +146,18 @@ fn both_files_command_the_plan() {
 }
 
 #[test]
-fn holds_round_up_to_a_tenth() {
+fn holds_round_up_to_a_quarter_second() {
     assert_eq!(hold_s(30.0), 30.0);
-    assert_eq!(hold_s(34.27), 34.3);
-    assert_eq!(hold_s(30.05), 30.1);
-    assert_eq!(hold_s(30.1), 30.1);
+    assert_eq!(hold_s(34.27), 34.5);
+    assert_eq!(hold_s(30.05), 30.25);
+    assert_eq!(hold_s(30.25), 30.25);
     assert_eq!(hold_s(0.0), 0.0);
-    assert_eq!(hold_s(1e-12), 0.1);
+    assert_eq!(hold_s(1e-12), 0.25);
     for k in 0..10_000 {
         let h = f64::from(k) * 0.01;
         let x = hold_s(h);
         assert!(
-            x >= h && f64::from(x as f32) >= h && x < h + 0.1 + 1e-9,
+            x >= h && f64::from(x as f32) == x && x < h + HOLD_STEP_S,
             "{h} -> {x}"
         );
     }
@@ -168,7 +170,7 @@ fn plan_metadata_states_the_assumptions() {
     assert_eq!(plan.gleaner, FlightMeta::of(&m));
     assert_eq!(plan.gleaner.mission_id, Some(7));
     assert_eq!(plan.gleaner.energy.total_j, m.energy.total_j);
-    assert_eq!(plan.gleaner.cruise_speed_mps, 10.21);
+    assert_eq!(plan.gleaner.cruise_speed_mps, 10.25);
     let text = qgc_plan(&m).unwrap();
     let v: Value = serde_json::from_str(&text).unwrap();
     assert_eq!(v["gleaner"]["energy"]["budget_j"].as_f64(), Some(66_500.0));
@@ -176,7 +178,8 @@ fn plan_metadata_states_the_assumptions() {
     assert_eq!(v["rallyPoints"]["version"], 2);
     let notes = flight_notes(&m).unwrap();
     assert!(notes.contains("mission #7"), "{notes}");
-    assert!(notes.contains("10.21 m/s"), "{notes}");
+    assert!(notes.contains("10.25 m/s"), "{notes}");
+    assert!(notes.contains("commanded energy: "), "{notes}");
 }
 
 #[test]
@@ -270,6 +273,112 @@ fn refuses_over_budget_and_non_finite_energy() {
     m.energy.total_j = 87_000.0;
     let e = wpl(&m).unwrap_err();
     assert!(e.to_string().contains("87000 J exceeds"), "{e}");
+}
+
+/// The energy of what the files command, J, with a battery too large to refuse it.
+fn commanded_j(m: &MissionDoc) -> f64 {
+    let mut big = m.clone();
+    big.energy.budget_j = 1e12;
+    if let Some(model) = &mut big.energy_model {
+        model.usable_budget_j = 1e12;
+    }
+    check_commanded(&big, "test", &commanded_flight(&big).unwrap()).unwrap()
+}
+
+/// A mission planned within the budget whose files would command more is refused by every
+/// writer, naming the file and both energies; at the budget exactly it is written.
+#[test]
+fn refuses_files_that_command_more_than_the_budget() {
+    let m = adaptive_mission();
+    let commanded = commanded_j(&m);
+    // The holds are rounded up (34.27 -> 34.5 s, 30.05 -> 30.25 s): more than the hovers.
+    let hovers: f64 = m.stops.iter().map(|s| s.hover_s).sum();
+    let holds: f64 = m.stops.iter().map(|s| hold_s(s.hover_s)).sum();
+    assert!(holds - hovers > 0.4, "{hovers} {holds}");
+    let mut tight = m.clone();
+    tight.energy.total_j = commanded - 50.0;
+    tight.energy.budget_j = commanded - 0.001;
+    assert!(check_flyable(&tight).is_ok());
+    for (file, r) in [(PLAN_FILE, qgc_plan(&tight)), (WPL_FILE, wpl(&tight))] {
+        let e = r.unwrap_err();
+        assert!(
+            matches!(&e, ExportError::CommandedOverBudget { file: f, .. } if f == file),
+            "{e}"
+        );
+        let text = e.to_string();
+        assert!(
+            text.starts_with(file) && text.contains("recomputed"),
+            "{text}"
+        );
+    }
+    assert!(flight_notes(&tight).is_err());
+    // The model's own budget counts too.
+    let mut tight = m.clone();
+    if let Some(model) = &mut tight.energy_model {
+        model.usable_budget_j = commanded - 0.001;
+    }
+    assert!(matches!(
+        wpl(&tight),
+        Err(ExportError::CommandedOverBudget { .. })
+    ));
+    // At the budget exactly: written.
+    let mut exact = m.clone();
+    exact.energy.budget_j = commanded;
+    exact.energy.total_j = commanded;
+    assert!(qgc_plan(&exact).is_ok() && wpl(&exact).is_ok());
+    // Without an energy model nothing can be priced: refused.
+    let mut none = m;
+    none.energy_model = None;
+    for r in [qgc_plan(&none), wpl(&none), flight_notes(&none)] {
+        assert!(matches!(r, Err(ExportError::NoEnergyModel)));
+    }
+}
+
+/// What the files command is the rounded plan: speed 10.25 m/s, holds on 0.25 s, positions
+/// on 1e-7 degrees, read back identically from both files.
+#[test]
+fn files_read_back_as_commanded() {
+    for m in [adaptive_mission(), exploration_sortie()] {
+        let c = commanded_flight(&m).unwrap();
+        assert_eq!(c.speed_mps, 10.25);
+        assert_eq!(c.altitude_m, 30.0);
+        for ((p, hold), s) in c.waypoints.iter().zip(&m.stops) {
+            assert_eq!(*hold, hold_s(s.hover_s));
+            assert_eq!(p.lat(), gleaner_energy::flight_degrees(s.centre_lon_lat[1]));
+        }
+        assert_eq!(parse_qgc_plan(&qgc_plan(&m).unwrap()).unwrap(), c);
+        assert_eq!(parse_wpl(&wpl(&m).unwrap()).unwrap(), c);
+    }
+}
+
+/// Broken files are errors naming the file and line, never panics.
+#[test]
+fn unreadable_files_are_errors() {
+    let text = wpl(&adaptive_mission()).unwrap();
+    for (broken, says) in [
+        (String::new(), "QGC WPL 110"),
+        ("QGC WPL 110\n".to_string(), "no home line"),
+        (text.replace("\t178\t1\t", "\t178\t0\t"), "ground speed"),
+        (text.replace("\t20\t", "\t21\t"), "unexpected command 21"),
+        (
+            text.replacen("\t30\t1\n", "\t31\t1\n", 2),
+            "differs from take-off",
+        ),
+        (text.replace("nan", "x"), "is not a number"),
+        (
+            text.lines().take(4).collect::<Vec<_>>().join("\n"),
+            "return to launch",
+        ),
+    ] {
+        let e = parse_wpl(&broken).unwrap_err().to_string();
+        assert!(e.contains(WPL_FILE) && e.contains(says), "{says}: {e}");
+    }
+    assert!(parse_qgc_plan("{").is_err());
+    let plan = qgc_plan(&adaptive_mission()).unwrap();
+    let e = parse_qgc_plan(&plan.replace("\"hoverSpeed\": 10.25", "\"hoverSpeed\": 5.0"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("hoverSpeed"), "{e}");
 }
 
 #[test]
@@ -383,6 +492,11 @@ fn arb_mission() -> impl Strategy<Value = MissionDoc> {
     )
         .prop_map(|((lon, lat), stops, alt, speed, base_alt)| {
             let mut m = adaptive_mission();
+            // A battery for any of these flights: this test is about positions and holds.
+            m.energy.budget_j = 1e12;
+            if let Some(model) = &mut m.energy_model {
+                model.usable_budget_j = 1e12;
+            }
             m.profile.base_lon_lat = [lon, lat];
             m.profile.altitude_m = alt;
             m.profile.cruise_speed_mps = speed;
@@ -431,6 +545,24 @@ proptest! {
         check_files(&m);
     }
 
+    /// Reading back any text never panics.
+    #[test]
+    fn reading_any_text_never_panics(text in ".{0,400}", cut in 0usize..2_000) {
+        let _ = parse_wpl(&text);
+        let _ = parse_qgc_plan(&text);
+        let w = wpl(&adaptive_mission()).unwrap();
+        // ASCII: any cut is a char boundary.
+        let _ = parse_wpl(&w[..cut.min(w.len())]);
+    }
+
+    /// Both files read back exactly what the writer commands, for any flyable mission.
+    #[test]
+    fn files_read_back_what_is_commanded(m in arb_mission()) {
+        let c = commanded_flight(&m).unwrap();
+        prop_assert_eq!(parse_qgc_plan(&qgc_plan(&m).unwrap()).unwrap(), c.clone());
+        prop_assert_eq!(parse_wpl(&wpl(&m).unwrap()).unwrap(), c);
+    }
+
     /// No input panics: every writer returns a file or an error, and a file only for a mission
     /// that passes the checks.
     #[test]
@@ -447,11 +579,19 @@ proptest! {
         m.energy.total_j = total;
         m.energy.budget_j = budget;
         let ok = check_flyable(&m).is_ok();
-        prop_assert_eq!(qgc_plan(&m).is_ok(), ok);
-        prop_assert_eq!(wpl(&m).is_ok(), ok);
-        prop_assert_eq!(flight_notes(&m).is_ok(), ok);
-        if ok {
-            check_files(&m);
+        // A file only for a mission that passes the checks; the three writers agree; a
+        // checked mission is refused only for what its files command.
+        let plan = qgc_plan(&m);
+        prop_assert!(ok || plan.is_err());
+        prop_assert_eq!(wpl(&m).is_ok(), plan.is_ok());
+        prop_assert_eq!(flight_notes(&m).is_ok(), plan.is_ok());
+        match plan {
+            Ok(_) => check_files(&m),
+            Err(e) if ok => prop_assert!(
+                matches!(e, ExportError::CommandedOverBudget { .. } | ExportError::FileValue { .. }),
+                "{e}"
+            ),
+            Err(_) => {}
         }
         let mut f = field();
         f.cells[0].ring_lon_lat[1] = [lon, lat];
