@@ -1282,3 +1282,34 @@ fn init_method_gleaner_scores_by_gleaners_method() {
     ]);
     assert!(err.contains("invalid value 'best'"), "{err}");
 }
+
+#[test]
+fn a_reader_does_not_wait_for_another_process_writing() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    let mut store = gleaner_store::SqliteStore::open(&dir.path().join("gleaner.db")).expect("open");
+    // This process holds the write lock while the commands run: they only read, and opening
+    // the project must not wait for the lock (it did, for the 60 s busy timeout, and then
+    // failed with SQLite's raw "database is locked"). A writer's message past the timeout is
+    // tested in gleaner-store.
+    use gleaner_store::{Store, StoreRead};
+    store
+        .write(|tx| {
+            tx.reading_count()?;
+            for args in [
+                vec!["cells", "--project", p],
+                vec!["missions", "--project", p],
+                vec!["reconstruct", "--project", p],
+            ] {
+                let out = gleaner(&args);
+                assert!(
+                    out.status.success(),
+                    "{args:?}: {}",
+                    String::from_utf8_lossy(&out.stderr)
+                );
+            }
+            Ok::<_, gleaner_store::StoreError>(())
+        })
+        .expect("write");
+}
