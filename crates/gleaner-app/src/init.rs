@@ -9,7 +9,8 @@ use gleaner_ingest::{
     SensorsOptions, hubbard_brook_main_water_depth, read_hubbard_brook_sensors, read_sensors_csv,
 };
 use gleaner_store::{
-    AnyStore, CellRecord, ReplaceCellsStats, SensorRecord, Store, StoreWrite, UpsertStats,
+    AnyStore, CellRecord, ReplaceCellsStats, SensorRecord, Store, StoreRead, StoreWrite,
+    UpsertStats,
 };
 
 use crate::error::{AppError, Result};
@@ -270,6 +271,15 @@ pub fn init_store_with<S: Store>(
     let (upsert, replaced) = project.store_mut().write(|tx| {
         let upsert = tx.upsert_sensors(&records)?;
         let replaced = tx.replace_cells(&cells)?;
+        if replaced.added > 0 && tx.reading_count()? > 0 {
+            // A re-grid of a project with readings: the new cells are described at once (their
+            // summaries, last collections and pending volumes at the newest reading, as an
+            // ingest describes them), not only after a scoring.
+            let now = latest_reading(&*tx)?;
+            let ids: Vec<gleaner_field::SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
+            crate::summaries::refresh_cells(tx, &ids, now, &settings)?;
+            crate::summaries::invalidate_cache(tx)?;
+        }
         Ok::<_, AppError>((upsert, replaced))
     })?;
     Ok(InitOutcome {
@@ -279,6 +289,20 @@ pub fn init_store_with<S: Store>(
         cells: replaced,
         n_cells: field.cells().len(),
     })
+}
+
+/// The newest stored reading's time, s (0 without readings).
+fn latest_reading<R: gleaner_store::StoreRead>(store: &R) -> Result<gleaner_field::UnixSeconds> {
+    Ok(store
+        .readings_for(
+            None,
+            gleaner_field::UnixSeconds::MIN..=gleaner_field::UnixSeconds::MAX,
+        )?
+        .rows
+        .iter()
+        .map(|r| r.t)
+        .max()
+        .unwrap_or(0))
 }
 
 /// The store's view of the field's cells.

@@ -87,7 +87,8 @@ pub use settings::Settings;
 pub use simulate::{ProjectRecord, REPLAY_DEFAULT_DAYS, Truth, fly, fly_buffered};
 pub use summaries::{pending_bytes, series_summary};
 pub use view::{
-    CellView, FieldView, MissionExport, check_flyable, export, field_view, mission, missions,
+    CellView, FieldView, MissionExport, cell_reading_counts, check_flyable, export, field_view,
+    mission, missions,
 };
 
 /// Re-exported so adapters name one crate for the lifecycle's data.

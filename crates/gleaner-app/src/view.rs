@@ -82,6 +82,26 @@ pub fn field_view<S: Store>(project: &Project<S>) -> Result<FieldView> {
     })
 }
 
+/// The number of stored readings of each cell's sensors, every modality, by grid index (the
+/// cell table's `readings`; a cell series' summary counts its points, which are means over
+/// the cell's sensors). From the stored grid: true whatever has been scored.
+pub fn cell_reading_counts<S: Store>(project: &Project<S>) -> Result<HashMap<CellIndex, u64>> {
+    let per_sensor: HashMap<SensorId, u64> = project
+        .store()
+        .sensor_reading_counts()?
+        .into_iter()
+        .collect();
+    Ok(project
+        .store()
+        .cells()?
+        .into_iter()
+        .map(|c| {
+            let n = c.sensors.iter().filter_map(|s| per_sensor.get(s)).sum();
+            (c.index, n)
+        })
+        .collect())
+}
+
 /// All missions with their stops and visits, oldest first.
 pub fn missions<S: Store>(project: &Project<S>) -> Result<Vec<MissionRecord>> {
     Ok(project.store().missions()?)

@@ -704,7 +704,12 @@ fn run(cli: Cli) -> Result<()> {
                 .map(|c| gleaner_wire::convert::cell_row(c, view.cell_size_m))
                 .collect();
             cells::sort(&mut rows, sort);
-            json.emit(&rows, "serialising cells", || cells::table(&rows))?;
+            if json.json {
+                json.emit(&rows, "serialising cells", String::new)?;
+            } else {
+                let counts = app::cell_reading_counts(&p)?;
+                json.emit(&rows, "serialising cells", || cells::table(&rows, &counts))?;
+            }
         }
         Command::Score {
             project,

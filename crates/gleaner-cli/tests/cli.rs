@@ -1313,3 +1313,56 @@ fn a_reader_does_not_wait_for_another_process_writing() {
         })
         .expect("write");
 }
+
+/// The cell table's readings: every stored reading of the cell's sensors, right after the
+/// ingest and right after a re-grid, before any scoring.
+#[test]
+fn cells_show_the_true_reading_count_before_any_scoring() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    let counts = |table: &str| -> Vec<(String, u64)> {
+        table
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let f: Vec<&str> = l.split_whitespace().collect();
+                (f[0].to_string(), f[4].parse().expect("readings"))
+            })
+            .collect()
+    };
+    let before = counts(&ok(&["cells", "--project", p]));
+    // x0y0 holds two sensors: 2 sensors x 2 modalities x 20 days.
+    assert_eq!(
+        before,
+        [
+            ("x0y0".into(), 80),
+            ("x2y0".into(), 40),
+            ("x2y1".into(), 40)
+        ]
+    );
+    ok(&[
+        "init",
+        "--dir",
+        p,
+        "--sensors",
+        s(&data("sensors.csv")),
+        "--base",
+        "46.7800,-117.0805",
+        "--cell-size",
+        "20",
+        "--force",
+    ]);
+    let regridded = counts(&ok(&["cells", "--project", p]));
+    assert_eq!(
+        regridded.iter().map(|c| c.1).sum::<u64>(),
+        160,
+        "{regridded:?}"
+    );
+    assert!(regridded.iter().all(|c| c.1 > 0), "{regridded:?}");
+    let json = ok(&["cells", "--project", p, "--json"]);
+    assert!(
+        json.contains("\"count\": 20"),
+        "summaries missing after the re-grid: {json}"
+    );
+}

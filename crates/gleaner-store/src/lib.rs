@@ -154,6 +154,9 @@ macro_rules! store_read_methods {
         fn sensor_last_collected(&self) -> Result<Vec<(SensorId, UnixSeconds)>> {
             self.read(read::sensor_last_collected)
         }
+        fn sensor_reading_counts(&self) -> Result<Vec<(SensorId, u64)>> {
+            self.read(read::sensor_reading_counts)
+        }
         fn missions(&self) -> Result<Vec<MissionRecord>> {
             self.read(|c| read::missions(c, None))
         }

@@ -70,6 +70,9 @@ pub trait StoreRead {
     fn cell_metadata_scalars(&self) -> Result<Vec<CellMetadata>>;
     /// Last collection time per sensor (collected sensors only), sorted by sensor id.
     fn sensor_last_collected(&self) -> Result<Vec<(SensorId, UnixSeconds)>>;
+    /// The number of stored readings per sensor (sensors with readings only), sorted by
+    /// sensor id.
+    fn sensor_reading_counts(&self) -> Result<Vec<(SensorId, u64)>>;
 
     /// All missions with their stops and visits, oldest first.
     fn missions(&self) -> Result<Vec<MissionRecord>>;
