@@ -1214,6 +1214,7 @@ fn run_one(
                 },
                 None,
                 scored,
+                false,
                 request.clock_now,
             )?;
             if scoring.is_none() {

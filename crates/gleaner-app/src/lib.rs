@@ -62,6 +62,7 @@ mod state;
 mod summaries;
 mod value;
 mod view;
+mod when;
 
 pub use cell_detail::{CellDetail, Contributions, SeriesPoint, cell_detail};
 pub use error::{AppError, Result};

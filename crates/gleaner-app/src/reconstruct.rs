@@ -498,6 +498,7 @@ pub fn reconstruct<S: Store>(
     project: &Project<S>,
     request: &ReconstructRequest,
 ) -> Result<Reconstruction> {
+    crate::when::check("estimation time", request.at)?;
     let modality = target_modality(project, request.modality.as_deref())?;
     let at = match request.at {
         Some(t) => t,

@@ -1366,3 +1366,53 @@ fn cells_show_the_true_reading_count_before_any_scoring() {
         "summaries missing after the re-grid: {json}"
     );
 }
+
+#[test]
+fn a_changed_cell_size_is_refused_with_how_to_regrid() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    let toml_path = dir.path().join("gleaner.toml");
+    let toml = std::fs::read_to_string(&toml_path).expect("toml");
+    assert!(toml.contains("cell_size_m = 40.0"), "{toml}");
+    std::fs::write(
+        &toml_path,
+        toml.replace("cell_size_m = 40.0", "cell_size_m = 20.0"),
+    )
+    .expect("write");
+    let before = gleaner_store::SqliteStore::open(&dir.path().join("gleaner.db"))
+        .and_then(|st| st.dump())
+        .expect("dump");
+    for args in [
+        vec!["score", "--project", p],
+        vec!["plan", "--project", p],
+        vec!["explore", "--project", p],
+    ] {
+        let err = fail(&args);
+        assert!(
+            err.contains("the grid of [field] (cell_size_m = 20 m")
+                && err.contains("Re-grid with `gleaner init --dir")
+                && err.contains("--cell-size 20 --force`"),
+            "{args:?}: {err}"
+        );
+        let after = gleaner_store::SqliteStore::open(&dir.path().join("gleaner.db"))
+            .and_then(|st| st.dump())
+            .expect("dump");
+        assert_eq!(after, before, "{args:?} wrote");
+    }
+    // Following the hint re-grids the project, and scoring works again.
+    let sensors = data("sensors.csv");
+    ok(&[
+        "init",
+        "--dir",
+        p,
+        "--sensors",
+        s(&sensors),
+        "--base",
+        "46.7800,-117.0805",
+        "--cell-size",
+        "20",
+        "--force",
+    ]);
+    ok(&["score", "--project", p]);
+}
