@@ -211,7 +211,7 @@ enum Command {
     /// Export a planned mission for flying and mapping: GeoJSON (cells with their scores, the
     /// route, the base), a QGroundControl .plan, a QGC WPL 110 waypoint file and an SVG map.
     #[command(
-        after_help = "Waypoints: take-off, one NAV_WAYPOINT (16) per cell at the cell centre holding for the\nplanned hover time (param 1), return-to-launch (20); altitude from [energy] altitude_m.\n\nExamples:\n  gleaner export --project farm --mission 1\n  gleaner export --project farm --mission 1 --out flight1"
+        after_help = "Waypoints: take-off, the cruise speed the energy model assumed (MAV_CMD_DO_CHANGE_SPEED,\n178), one NAV_WAYPOINT (16) per cell at the cell centre holding for the planned hover time\n(param 1, rounded up to 0.1 s), return-to-launch (20); altitude from [energy] altitude_m.\nA mission the battery cannot carry, or out of range, is refused and nothing is written.\n\nExamples:\n  gleaner export --project farm --mission 1\n  gleaner export --project farm --mission 1 --out flight1"
     )]
     Export {
         #[command(flatten)]
@@ -496,14 +496,31 @@ fn emit<T: serde::Serialize>(
     table: impl FnOnce() -> String,
 ) -> Result<()> {
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(value).with_context(|| what.to_string())?
-        );
+        let mut text = serde_json::to_string_pretty(value).with_context(|| what.to_string())?;
+        text.push('\n');
+        out(&text)
     } else {
-        print!("{}", table());
+        out(&table())
     }
-    Ok(())
+}
+
+/// Writes `text` to standard output. A reader that closes the pipe early (`gleaner cells
+/// --json | head`) has what it wanted: the rest is dropped quietly, not a panic or an error.
+fn out(text: &str) -> Result<()> {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    match stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+    {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        r => r.context("writing to standard output"),
+    }
+}
+
+/// [`out`] with a newline.
+fn outln(text: &str) -> Result<()> {
+    out(&format!("{text}\n"))
 }
 
 fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
@@ -658,7 +675,7 @@ fn run(cli: Cli) -> Result<()> {
                 database,
                 gleaner_method: matches!(method, MethodArg::Gleaner),
             })?;
-            println!("{}", init_line(&outcome, &dir));
+            outln(&init_line(&outcome, &dir))?;
         }
         Command::Ingest {
             files,
@@ -689,7 +706,7 @@ fn run(cli: Cli) -> Result<()> {
                 clock_now(),
                 &progress,
             )?;
-            println!("{}", ingest_line(&outcome));
+            outln(&ingest_line(&outcome))?;
         }
         Command::Cells {
             project,
@@ -772,12 +789,15 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 let mut docs = vec![doc];
                 docs.extend(planned.extra_sorties.iter().map(|e| {
-                    gleaner_wire::convert::mission_doc(
+                    let mut doc = gleaner_wire::convert::mission_doc(
                         e.id,
                         &e.mission,
                         if e.id.is_some() { "planned" } else { "dry-run" },
                         None,
-                    )
+                    );
+                    // The sorties of one day are chosen together from the same cells.
+                    doc.candidates = Some(planned.candidates);
+                    doc
                 }));
                 json.emit(&docs, "serialising the sorties", || {
                     plan::sorties_table(&docs)
@@ -811,13 +831,13 @@ fn run(cli: Cli) -> Result<()> {
                 .iter()
                 .map(|f| f.display().to_string())
                 .collect();
-            println!("wrote {}", names.join(", "));
+            outln(&format!("wrote {}", names.join(", ")))?;
         }
         Command::MapExploration { project, out } => {
             let p = project.open()?;
             let dir = out.unwrap_or_else(|| project.dir.join("missions"));
             let files = export::write_exploration_map(&p, &dir)?;
-            println!("wrote {}", files.join(", "));
+            outln(&format!("wrote {}", files.join(", ")))?;
         }
         Command::Record {
             project,
@@ -843,7 +863,7 @@ fn run(cli: Cli) -> Result<()> {
                 clock_now(),
                 &progress,
             )?;
-            println!("{}", record_line(&outcome));
+            outln(&record_line(&outcome))?;
         }
         Command::Missions {
             project,
@@ -869,12 +889,12 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Bench(BenchCommand::Op(args)) => {
             let (_, table) = bench::run(&args)?;
-            print!("{table}");
+            out(&table)?;
         }
         Command::Synth(args) => {
             let sensors = args.sensors;
             let (farm, files) = synth::run(&args)?;
-            println!(
+            outln(&format!(
                 "wrote {} sensors, {} readings, {} events to {}",
                 sensors,
                 farm.reading_count(),
@@ -883,18 +903,18 @@ fn run(cli: Cli) -> Result<()> {
                     .sensors
                     .parent()
                     .map_or(String::new(), |p| p.display().to_string())
-            );
+            ))?;
         }
-        Command::Demo(args) => print!("{}", demo::run(&args)?),
-        Command::Migrate(args) => println!("{}", migrate::run(&args, &progress)?),
+        Command::Demo(args) => out(&demo::run(&args)?)?,
+        Command::Migrate(args) => outln(&migrate::run(&args, &progress)?)?,
         Command::Serve(args) => serve::run(args)?,
         Command::Simulate(args) => {
             let line: Vec<String> = std::env::args().skip(1).collect();
             let command = format!("gleaner {}", line.join(" "));
-            print!("{}", simulate::run(&args, &command, &progress)?);
+            out(&simulate::run(&args, &command, &progress)?)?;
         }
         Command::Report { dir } => {
-            println!("{}", report::write_report(&dir)?.display());
+            outln(&report::write_report(&dir)?.display().to_string())?;
         }
         Command::Reconstruct {
             project,
@@ -930,7 +950,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::CrashTest(args) => {
             let (report, ok) = crash::run(&args)?;
-            print!("{report}");
+            out(&report)?;
             if !ok {
                 anyhow::bail!("crash-safety failures (listed above)");
             }

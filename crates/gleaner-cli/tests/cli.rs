@@ -385,6 +385,9 @@ fn plan_several_sorties() {
     ]);
     let summary = &out[out.find("2 sorties:").expect("summary")..];
     insta::assert_snapshot!("plan_two_sorties", summary);
+    // Both sorties were chosen from the same candidate cells, and each says how many.
+    assert_eq!(out.matches(" of 3 candidate cells").count(), 2, "{out}");
+    assert!(!out.contains('?'), "{out}");
     // Each sortie is its own stored mission, exportable on its own.
     ok(&[
         "export",
@@ -1415,4 +1418,41 @@ fn a_changed_cell_size_is_refused_with_how_to_regrid() {
         "--force",
     ]);
     ok(&["score", "--project", p]);
+}
+
+/// Runs `gleaner args` with its standard output a pipe whose reader is already closed, as
+/// `gleaner cells --json | head -c0` gives.
+fn with_closed_stdout(args: &[&str]) -> Output {
+    let (reader, writer) = std::io::pipe().expect("pipe");
+    drop(reader);
+    Command::new(env!("CARGO_BIN_EXE_gleaner"))
+        .args(args)
+        .stdout(writer)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .expect("run gleaner")
+}
+
+#[test]
+fn a_closed_output_pipe_ends_the_output_quietly() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    for args in [
+        vec!["cells", "--project", p, "--json"],
+        vec!["cells", "--project", p],
+        vec!["missions", "--project", p, "--json"],
+        vec!["score", "--project", p, "--json"],
+    ] {
+        let out = with_closed_stdout(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {err}");
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn export_help_names_the_speed_command() {
+    let help = ok(&["export", "--help"]);
+    assert!(help.contains("MAV_CMD_DO_CHANGE_SPEED"), "{help}");
 }
