@@ -1456,3 +1456,30 @@ fn export_help_names_the_speed_command() {
     let help = ok(&["export", "--help"]);
     assert!(help.contains("MAV_CMD_DO_CHANGE_SPEED"), "{help}");
 }
+
+#[test]
+fn synth_takes_an_empty_depth_list_as_none() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("farm");
+    ok(&[
+        "synth",
+        "--out",
+        s(&out),
+        "--sensors",
+        "4",
+        "--days",
+        "3",
+        "--seed",
+        "1",
+        "--t-depths",
+        "",
+    ]);
+    let readings = std::fs::read_to_string(out.join("readings.csv")).expect("readings");
+    assert!(readings.contains(",vw@30cm,"), "no soil moisture");
+    assert!(!readings.contains(",t@"), "temperature written");
+    let err = fail(&["synth", "--out", s(&out), "--t-depths", "30,x"]);
+    assert!(
+        err.contains("depth \"x\": expected whole centimetres"),
+        "{err}"
+    );
+}
