@@ -130,6 +130,9 @@ impl Parsed {
 /// Decides a file's format from its first line.
 pub fn detect(path: &Path) -> Result<Format> {
     use std::io::Read;
+    if gleaner_ingest::is_stdin(path) {
+        return Err(AppError::io(path, gleaner_ingest::STDIN_NOT_READ));
+    }
     let meta = std::fs::metadata(path).map_err(|e| AppError::io(path, e))?;
     if !meta.is_file() {
         return Err(AppError::io(

@@ -704,3 +704,30 @@ fn an_empty_mission_is_neither_stored_nor_recordable() {
     ]);
     assert_eq!(dump(p), before);
 }
+
+/// `-` (standard input) is refused with a clear message by every file argument.
+#[test]
+fn standard_input_as_dash_is_refused_clearly() {
+    let bases = bases();
+    let project = farm_copy(&bases);
+    let p = s(project.path());
+    let scratch = tempfile::tempdir().expect("temp dir");
+    let new = scratch.path().join("new");
+    for args in [
+        vec!["ingest", "--project", p, "-"],
+        vec!["ingest", "--project", p, "--format", "long-csv", "-"],
+        vec!["record", "--project", p, "--mission", "1", "-"],
+        vec!["score", "--project", p, "--probabilities", "-"],
+        vec!["plan", "--project", p, "--scores", "-"],
+        vec!["init", "--dir", s(&new), "--sensors", "-"],
+    ] {
+        let out = gleaner(&args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("standard input (`-`) is not read: save the data to a file"),
+            "{args:?}: {err}"
+        );
+        assert!(!new.exists());
+    }
+}
