@@ -189,7 +189,7 @@ pub(crate) fn parse_files(
     if !(request.utc_offset_h.is_finite() && request.utc_offset_h.abs() <= 14.0) {
         return Err(AppError::Invalid(format!(
             "UTC offset {} h: expected hours in [-14, 14]",
-            request.utc_offset_h
+            gleaner_ingest::number(request.utc_offset_h)
         )));
     }
     let options = IngestOptions {

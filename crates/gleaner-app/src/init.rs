@@ -40,6 +40,10 @@ pub struct InitRequest {
     pub base_alt_m: Option<f64>,
     /// Cell side, metres [default 40].
     pub cell_size_m: Option<f64>,
+    /// Neighbour fallback radius, metres (`[field] neighbour_radius_m`: cells within it count
+    /// as neighbours of a cell with fewer than `neighbour_k` adjacent ones), at most 100 cell
+    /// sides [default: 200 m, or 100 cell sides when the cells are smaller than 2 m].
+    pub neighbour_radius_m: Option<f64>,
     /// UAV altitude (m) and antenna half-angle (degrees) to derive the cell side.
     pub coverage: Option<(f64, f64)>,
     /// Project name [default: the directory's name].
@@ -163,7 +167,12 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
             base_alt_m: request.base_alt_m.unwrap_or(0.0),
             cell_size_m,
             neighbour_k: defaults.fallback_k,
-            neighbour_radius_m: defaults.fallback_radius_m,
+            neighbour_radius_m: request.neighbour_radius_m.unwrap_or(
+                // The default radius, within the 100 cell sides allowed for small cells.
+                defaults
+                    .fallback_radius_m
+                    .min(crate::settings::MAX_RADIUS_CELLS * cell_size_m),
+            ),
         },
         sensors: SensorsSection {
             file: relative_to(&request.sensors, &request.dir),
@@ -196,11 +205,12 @@ fn check_grid_size(sensors: &[Sensor], base: LatLon, settings: &Settings) -> Res
     let reach = (settings.field.neighbour_radius_m / side).powi(2);
     if extent_cells > 1e8 || reach * sensors.len() as f64 > 1e8 {
         return Err(AppError::Invalid(format!(
-            "cell side {side} m over sensors spread {:.0} m x {:.0} m (neighbour radius {} m) \
+            "cell side {} m over sensors spread {:.0} m x {:.0} m (neighbour radius {} m) \
              makes a grid too large to build; use larger cells",
+            gleaner_ingest::number(side),
             e1 - e0,
             n1 - n0,
-            settings.field.neighbour_radius_m
+            gleaner_ingest::number(settings.field.neighbour_radius_m)
         )));
     }
     Ok(())

@@ -291,7 +291,8 @@ pub(crate) fn plan_scored<S: Store>(
         .unwrap_or(settings.planner.time_limit_s);
     if !(time_limit_s.is_finite() && (0.0..=86_400.0).contains(&time_limit_s)) {
         return Err(AppError::Invalid(format!(
-            "time limit {time_limit_s} s: expected a number of seconds in [0, 86400]"
+            "time limit {} s: expected a number of seconds in [0, 86400]",
+            gleaner_ingest::number(time_limit_s)
         )));
     }
     let seed = request.seed.unwrap_or(settings.planner.seed);

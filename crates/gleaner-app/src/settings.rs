@@ -608,13 +608,10 @@ impl Settings {
                 self.field.cell_size_m
             );
         }
-        if !(self.field.neighbour_radius_m.is_finite()
-            && self.field.neighbour_radius_m >= 0.0
-            && self.field.neighbour_radius_m <= 100.0 * self.field.cell_size_m.max(1.0))
-        {
+        if !(self.field.neighbour_radius_m.is_finite() && self.field.neighbour_radius_m >= 0.0) {
             bail!(
-                "field.neighbour_radius_m = {} must be between 0 and 100 cell sides",
-                self.field.neighbour_radius_m
+                "field.neighbour_radius_m = {} must be a number of metres >= 0",
+                gleaner_ingest::number(self.field.neighbour_radius_m)
             );
         }
         if self.field.neighbour_k > 64 {
@@ -734,12 +731,14 @@ impl Settings {
                 u.freshness_form
             );
         }
-        if f.neighbour_radius_m > 100.0 * f.cell_size_m.max(1.0) {
+        let max_radius = MAX_RADIUS_CELLS * f.cell_size_m;
+        if f.neighbour_radius_m > max_radius {
             bail!(
-                "field.neighbour_radius_m = {}: allowed 0..=100 cell sides ({} m with cell_size_m = {})",
-                f.neighbour_radius_m,
-                100.0 * f.cell_size_m.max(1.0),
-                f.cell_size_m
+                "field.neighbour_radius_m = {}: allowed 0..={MAX_RADIUS_CELLS} cell sides ({} m \
+                 with cell_size_m = {}); set a smaller neighbour radius (init: --neighbour-radius)",
+                gleaner_ingest::number(f.neighbour_radius_m),
+                gleaner_ingest::number(max_radius),
+                gleaner_ingest::number(f.cell_size_m)
             );
         }
         for (name, map) in [
@@ -748,7 +747,10 @@ impl Settings {
         ] {
             for (m, &w) in map.iter().flatten() {
                 if !(w.is_finite() && (0.0..=1e6).contains(&w)) {
-                    bail!("{name}.{m} = {w}: allowed 0..=1e6");
+                    bail!(
+                        "{name}.{m} = {}: allowed 0..=1e6",
+                        gleaner_ingest::number(w)
+                    );
                 }
             }
         }
@@ -765,7 +767,11 @@ impl Settings {
                 || t.windows(2).any(|w| w[0] >= w[1])
             {
                 bail!(
-                    "utility.condition_thresholds = {t:?}: need finite numbers within ±1e9, strictly increasing"
+                    "utility.condition_thresholds = [{}]: need finite numbers within ±1e9, strictly increasing",
+                    t.iter()
+                        .map(|x| gleaner_ingest::number(*x))
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 );
             }
         }
@@ -791,6 +797,10 @@ impl Settings {
         }
     }
 }
+
+/// Largest neighbour fallback radius, in cell sides (the neighbour search grows with its
+/// square).
+pub const MAX_RADIUS_CELLS: f64 = 100.0;
 
 /// The allowed range of every numeric setting of `gleaner.toml`, inclusive unless marked, with
 /// its unit: (key, min, max, min exclusive, unit). Values outside are refused with the key, the

@@ -60,9 +60,14 @@ enum Command {
         /// altitude) [default: 0].
         #[arg(long, allow_hyphen_values = true)]
         base_alt: Option<f64>,
-        /// Cell side in metres (the UAV's ground coverage) [default: 40].
+        /// Cell side in metres (the UAV's ground coverage), at least 0.5 [default: 40].
         #[arg(long)]
         cell_size: Option<f64>,
+        /// Neighbour fallback radius in metres: a cell with fewer than `neighbour_k` adjacent
+        /// cells takes the cells within it as neighbours; at most 100 cell sides [default:
+        /// 200, or 100 cell sides for cells under 2 m].
+        #[arg(long)]
+        neighbour_radius: Option<f64>,
         /// UAV altitude, metres; with --half-angle derives the cell side (r = h·tan θ, side = r·√2).
         #[arg(long, requires = "half_angle")]
         altitude: Option<f64>,
@@ -651,6 +656,7 @@ fn run(cli: Cli) -> Result<()> {
             base,
             base_alt,
             cell_size,
+            neighbour_radius,
             altitude,
             half_angle,
             name,
@@ -669,6 +675,7 @@ fn run(cli: Cli) -> Result<()> {
                 base,
                 base_alt_m: base_alt,
                 cell_size_m: cell_size,
+                neighbour_radius_m: neighbour_radius,
                 coverage: altitude.zip(half_angle),
                 name,
                 force,

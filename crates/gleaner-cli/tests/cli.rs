@@ -1483,3 +1483,55 @@ fn synth_takes_an_empty_depth_list_as_none() {
         "{err}"
     );
 }
+
+#[test]
+fn init_makes_cells_under_two_metres_and_checks_the_neighbour_radius() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sensors = data("sensors.csv");
+    let small = dir.path().join("small");
+    let out = ok(&[
+        "init",
+        "--dir",
+        s(&small),
+        "--sensors",
+        s(&sensors),
+        "--cell-size",
+        "1",
+    ]);
+    assert!(out.contains("non-empty cells of 1 m"), "{out}");
+    let toml = std::fs::read_to_string(small.join("gleaner.toml")).expect("toml");
+    assert!(toml.contains("neighbour_radius_m = 100.0"), "{toml}");
+    let explicit = dir.path().join("explicit");
+    ok(&[
+        "init",
+        "--dir",
+        s(&explicit),
+        "--sensors",
+        s(&sensors),
+        "--cell-size",
+        "1.5",
+        "--neighbour-radius",
+        "20",
+    ]);
+    let toml = std::fs::read_to_string(explicit.join("gleaner.toml")).expect("toml");
+    assert!(toml.contains("neighbour_radius_m = 20.0"), "{toml}");
+    let refused = dir.path().join("refused");
+    let err = fail(&[
+        "init",
+        "--dir",
+        s(&refused),
+        "--sensors",
+        s(&sensors),
+        "--cell-size",
+        "0.5",
+        "--neighbour-radius",
+        "60",
+    ]);
+    assert!(
+        err.contains(
+            "field.neighbour_radius_m = 60: allowed 0..=100 cell sides (50 m with cell_size_m = 0.5)"
+        ),
+        "{err}"
+    );
+    assert!(!refused.exists());
+}

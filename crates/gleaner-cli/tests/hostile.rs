@@ -731,3 +731,141 @@ fn standard_input_as_dash_is_refused_clearly() {
         assert!(!new.exists());
     }
 }
+
+/// Numbers far out of range are echoed short (1e300, not 301 digits), whatever the option.
+#[test]
+fn out_of_range_numbers_are_not_echoed_in_full() {
+    let bases = bases();
+    let project = farm_copy(&bases);
+    let p = s(project.path());
+    let sensors = corpus().join("../sensors.csv");
+    let readings = corpus().join("../readings.csv");
+    let scratch = tempfile::tempdir().expect("temp dir");
+    let new = scratch.path().join("new");
+    let big = "1e300";
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["plan", "--project", p, "--time-limit", big],
+        vec![
+            "init",
+            "--dir",
+            s(&new),
+            "--sensors",
+            s(&sensors),
+            "--cell-size",
+            big,
+        ],
+        vec![
+            "init",
+            "--dir",
+            s(&new),
+            "--sensors",
+            s(&sensors),
+            "--base-alt",
+            big,
+        ],
+        vec![
+            "init",
+            "--dir",
+            s(&new),
+            "--sensors",
+            s(&sensors),
+            "--base",
+            "1e300,0",
+        ],
+        vec![
+            "init",
+            "--dir",
+            s(&new),
+            "--sensors",
+            s(&sensors),
+            "--neighbour-radius",
+            big,
+        ],
+        vec![
+            "init",
+            "--dir",
+            s(&new),
+            "--sensors",
+            s(&sensors),
+            "--altitude",
+            big,
+            "--half-angle",
+            "30",
+        ],
+        vec![
+            "ingest",
+            "--project",
+            p,
+            "--modality",
+            "vw@30cm",
+            "--utc-offset",
+            big,
+            s(&readings),
+        ],
+    ];
+    for args in &cases {
+        let out = gleaner(args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = String::from_utf8_lossy(&out.stderr);
+        let longest = err
+            .split(|c: char| !c.is_ascii_digit())
+            .map(str::len)
+            .max()
+            .unwrap_or(0);
+        assert!(longest < 30, "{args:?}: {err}");
+        assert!(!new.exists());
+    }
+    // A setting edited into gleaner.toml, the same.
+    let toml = std::fs::read_to_string(project.path().join("gleaner.toml")).expect("toml");
+    for (section, line) in [
+        ("[utility]", "redundancy_weights = { vw = 1e300 }"),
+        ("[utility]", "condition_thresholds = [0.1, 1e300]"),
+        ("[field]", "neighbour_radius_m = 1e300"),
+        ("[field]", "cell_size_m = 1e300"),
+    ] {
+        let edited = set_setting(&toml, section, line);
+        std::fs::write(project.path().join("gleaner.toml"), &edited).expect("write");
+        let out = gleaner(&["score", "--project", p]);
+        assert!(!out.status.success(), "{line} accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("0000000000"), "{line}: {err}");
+    }
+}
+
+/// `toml` with `line` (`key = value`) in `section`: replacing the key's line, else added
+/// at the top of the section.
+fn set_setting(toml: &str, section: &str, line: &str) -> String {
+    let key = line.split('=').next().expect("key").trim();
+    let mut out = Vec::new();
+    let (mut in_section, mut done) = (false, false);
+    for l in toml.lines() {
+        if l.starts_with('[') {
+            in_section = l.trim() == section;
+            out.push(l.to_string());
+            if in_section && !done && !toml_has_key(toml, section, key) {
+                out.push(line.to_string());
+                done = true;
+            }
+            continue;
+        }
+        if in_section && l.split('=').next().map(str::trim) == Some(key) {
+            out.push(line.to_string());
+            done = true;
+        } else {
+            out.push(l.to_string());
+        }
+    }
+    assert!(done, "no section {section}");
+    out.join("\n") + "\n"
+}
+
+fn toml_has_key(toml: &str, section: &str, key: &str) -> bool {
+    let mut in_section = false;
+    toml.lines().any(|l| {
+        if l.starts_with('[') {
+            in_section = l.trim() == section;
+            return false;
+        }
+        in_section && l.split('=').next().map(str::trim) == Some(key)
+    })
+}

@@ -30,7 +30,7 @@ mod projection;
 mod sensor;
 pub mod time;
 
-pub use error::FieldError;
+pub use error::{FieldError, Short};
 pub use grid::{
     Cell, CellId, CellIndex, Field, FieldConfig, Neighbours, cell_size_from_half_angle,
     cell_size_from_link_range,
