@@ -84,7 +84,7 @@ pub use reconstruct::{
 };
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};
-pub use settings::Settings;
+pub use settings::{EnergyPreset, Settings};
 pub use simulate::{ProjectRecord, REPLAY_DEFAULT_DAYS, Truth, fly, fly_buffered};
 pub use summaries::{pending_bytes, series_summary};
 pub use view::{

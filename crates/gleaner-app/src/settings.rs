@@ -292,6 +292,52 @@ pub const DEFAULT_DRIFT_SPREAD: f64 = 0.5;
 /// once the class modality has grown by 5% since the last fit.
 pub const DEFAULT_CONDITION_REFIT_GROWTH: f64 = 0.05;
 
+/// A battery and airframe preset (`[energy] preset`, `plan --energy-preset`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EnergyPreset {
+    /// The paper's: 70 kJ, 5% reserve (66.5 kJ usable).
+    Paper,
+    /// A large pack: 77 Wh, 20% reserve (sites kilometres apart).
+    LargePack,
+}
+
+impl EnergyPreset {
+    /// Every preset, in the order they are listed.
+    pub const ALL: [Self; 2] = [Self::Paper, Self::LargePack];
+
+    /// Its name in `gleaner.toml` and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Paper => "paper",
+            Self::LargePack => "large-pack",
+        }
+    }
+
+    /// The core energy configuration of the preset.
+    pub fn config(self) -> gleaner_energy::EnergyConfig {
+        match self {
+            Self::Paper => gleaner_energy::EnergyConfig::paper(),
+            Self::LargePack => gleaner_energy::EnergyConfig::large_pack(),
+        }
+    }
+}
+
+impl std::str::FromStr for EnergyPreset {
+    type Err = AppError;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| {
+                AppError::Invalid(format!(
+                    "energy preset {:?}: expected paper or large-pack",
+                    gleaner_ingest::shorten(s)
+                ))
+            })
+    }
+}
+
 /// `[energy]`: the UAV energy model (SPEC §3). Every field left out takes the preset's value.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -495,11 +541,13 @@ impl UtilitySection {
 impl EnergySection {
     /// The core energy configuration: the preset with every given field overridden.
     pub fn to_core(&self) -> Result<gleaner_energy::EnergyConfig> {
-        use gleaner_energy::{CruiseSpeed, EnergyConfig};
-        let mut c = match self.preset.as_str() {
-            "paper" => EnergyConfig::paper(),
-            "large-pack" => EnergyConfig::large_pack(),
-            other => bail!("energy.preset = {other:?}: expected \"paper\" or \"large-pack\""),
+        use gleaner_energy::CruiseSpeed;
+        let mut c = match self.preset.parse::<EnergyPreset>() {
+            Ok(preset) => preset.config(),
+            Err(_) => bail!(
+                "energy.preset = {:?}: expected \"paper\" or \"large-pack\"",
+                self.preset
+            ),
         };
         c.cruise = match self.cruise.as_str() {
             "max-endurance" => CruiseSpeed::MaxEndurance,

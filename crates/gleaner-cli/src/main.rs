@@ -195,6 +195,10 @@ enum Command {
         /// mission (export/record each by its id). With K > 1, --json prints an array.
         #[arg(long, default_value_t = 1)]
         sorties: usize,
+        /// Plan with this energy preset's battery instead of `[energy] preset` (`paper`,
+        /// `large-pack`); fields set in `[energy]` still override the preset's values.
+        #[arg(long, value_parser = parse_energy_preset)]
+        energy_preset: Option<app::EnergyPreset>,
     },
     /// Plan the exploration phase: as few sorties as possible, each within the battery, that
     /// together visit every cell; each sortie is stored as an exploration mission.
@@ -543,6 +547,10 @@ fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
     Ok((lat, lon))
 }
 
+fn parse_energy_preset(s: &str) -> Result<app::EnergyPreset, String> {
+    s.parse().map_err(|e: app::AppError| e.to_string())
+}
+
 pub(crate) fn parse_time(s: &str) -> Result<i64, String> {
     gleaner_app::parse_timestamp(s).ok_or_else(|| {
         format!("expected RFC 3339 (2014-03-01T12:00:00Z) or a date (2014-03-01), got {s:?}")
@@ -769,9 +777,10 @@ fn run(cli: Cli) -> Result<()> {
             json,
             dry_run,
             sorties,
+            energy_preset,
         } => {
             let mut p = project.open()?;
-            let planned = app::plan(
+            let planned = app::plan_with_preset(
                 &mut p,
                 &app::PlanRequest {
                     at: when.at,
@@ -785,6 +794,7 @@ fn run(cli: Cli) -> Result<()> {
                     dry_run,
                     sorties: Some(sorties),
                 },
+                energy_preset.map(app::EnergyPreset::name),
                 clock_now(),
             )?;
             if let Some(s) = &planned.scoring {
