@@ -1,4 +1,4 @@
-//! Exploration (SPEC §5 step 3): as few sorties as possible, each within the battery, that
+//! Exploration (docs/method.md §5 step 3): as few sorties as possible, each within the battery, that
 //! together visit every cell; each sortie is a mission like any other, with typed stops and
 //! its energy breakdown, all stored in one transaction.
 

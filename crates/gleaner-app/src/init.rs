@@ -55,7 +55,7 @@ pub struct InitRequest {
     pub database: Option<String>,
     /// Write gleaner's method as the project's `[utility]` (the gated score with each sensor's
     /// drift as F and the bounded anomaly, [`crate::settings::UtilitySection::gleaner`])
-    /// instead of the paper's S (SPEC §2, the default).
+    /// instead of the paper's S (docs/method.md §2, the default).
     pub gleaner_method: bool,
 }
 

@@ -1,5 +1,5 @@
 //! Planning: scores (from the utility engine, or a file) + the energy model -> a route and the
-//! mission of SPEC §6, stored with its stops and energy breakdown in one transaction.
+//! mission of docs/method.md §6, stored with its stops and energy breakdown in one transaction.
 
 use std::path::{Path, PathBuf};
 

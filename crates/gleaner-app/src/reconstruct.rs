@@ -1,4 +1,4 @@
-//! Reconstruction (SPEC §7): every sensor's current value of one modality estimated from what
+//! Reconstruction (docs/method.md §7): every sensor's current value of one modality estimated from what
 //! is known — its last collected value carried forward, and a model-based estimate with its
 //! variance: by default kriging of changes ([`Estimator::Changes`]: the last value plus the
 //! change since, estimated from the neighbours' known changes over the same interval), or

@@ -1,4 +1,4 @@
-//! Recording a flight (SPEC §5 step 5): the cells actually visited, when, and the readings
+//! Recording a flight (docs/method.md §5 step 5): the cells actually visited, when, and the readings
 //! brought home — one transaction.
 
 use std::collections::{HashMap, HashSet};

@@ -1,5 +1,5 @@
 //! Scoring: the utility terms F, R, A, U and the score S of every cell at a mission time
-//! (SPEC §2), and the cell metadata they become (SPEC §5).
+//! (docs/method.md §2), and the cell metadata they become (docs/method.md §5).
 
 use std::collections::HashMap;
 use std::path::PathBuf;

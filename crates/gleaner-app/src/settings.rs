@@ -132,7 +132,7 @@ impl Default for IngestSection {
     }
 }
 
-/// `[utility]`: the score S = alpha·F + beta·A + gamma·U − delta·R (SPEC §2).
+/// `[utility]`: the score S = alpha·F + beta·A + gamma·U − delta·R (docs/method.md §2).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct UtilitySection {
@@ -338,7 +338,7 @@ impl std::str::FromStr for EnergyPreset {
     }
 }
 
-/// `[energy]`: the UAV energy model (SPEC §3). Every field left out takes the preset's value.
+/// `[energy]`: the UAV energy model (docs/method.md §3). Every field left out takes the preset's value.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct EnergySection {
@@ -453,7 +453,7 @@ impl UtilitySection {
         }
     }
 
-    /// The paper's score (SPEC §2 exactly): this section with the weights, the freshness
+    /// The paper's score (docs/method.md §2 exactly): this section with the weights, the freshness
     /// half-life and the anomaly's form and reference at the paper's values (the core
     /// defaults: alpha = beta = gamma = delta = 1, 3 days, raw, own history) and no variance
     /// term; the history window, `min_overlap`, epsilon, modality weights and the condition

@@ -8,7 +8,7 @@ use gleaner_store::{CellMetadata, MissionId, MissionRecord, Store};
 use crate::error::{AppError, Result};
 use crate::project::Project;
 
-/// One cell with its metadata (SPEC §5).
+/// One cell with its metadata (docs/method.md §5).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CellView {
     /// Grid index (`x12y-3`).

@@ -85,7 +85,7 @@ enum Command {
         /// per project, named after `#` or after the project name) [default: gleaner.db].
         #[arg(long, value_name = "FILE_OR_URL")]
         database: Option<String>,
-        /// The score the project plans by: `paper` (the paper's S, SPEC §2) or `gleaner`
+        /// The score the project plans by: `paper` (the paper's S, docs/method.md §2) or `gleaner`
         /// (gleaner's method: the gated score with each sensor's drift as freshness and the
         /// bounded anomaly, β = 4, γ = δ = 0; less error and sooner catches than coverage on
         /// held-out CAF, docs/method-improvement.md). Written into `[utility]`.

@@ -1,4 +1,4 @@
-//! The square cell grid over the field, the non-empty cells and their neighbours (SPEC §1).
+//! The square cell grid over the field, the non-empty cells and their neighbours (docs/method.md §1).
 
 use std::collections::HashMap;
 use std::fmt;
@@ -63,7 +63,7 @@ pub struct FieldConfig {
     /// Side of a square cell, metres (the UAV's ground coverage).
     pub cell_size_m: f64,
     /// For a cell with no non-empty 8-neighbour: how many nearest non-empty cells to use
-    /// instead (SPEC §1; default 3).
+    /// instead (docs/method.md §1; default 3).
     pub fallback_k: usize,
     /// ... and within what centre-to-centre distance, metres (default 200 m).
     pub fallback_radius_m: f64,
@@ -235,7 +235,7 @@ impl Field {
     pub fn cell_at(&self, index: CellIndex) -> Option<CellId> {
         self.by_index.get(&index).copied()
     }
-    /// The neighbours of `cell` (SPEC §1), ascending.
+    /// The neighbours of `cell` (docs/method.md §1), ascending.
     pub fn neighbours(&self, cell: CellId) -> &[CellId] {
         &self.neighbours[cell.index()]
     }

@@ -10,7 +10,7 @@
 //!   the local east/north frame, in metres, centred on a reference point, that all planning uses.
 //! - [`Sensor`], [`SensorId`] and [`Modality`] describe the network.
 //! - [`Field`] cuts the plane into square cells of a given side, keeps the non-empty ones and
-//!   their neighbours (SPEC §1).
+//!   their neighbours (docs/method.md §1).
 //!
 //! ```
 //! use gleaner_field::{Field, FieldConfig, LatLon, Sensor, SensorId};

@@ -145,7 +145,7 @@ pub trait StoreWrite: StoreRead {
 }
 
 /// Persistent state of a gleaner project: sensors, readings, cells, the cell metadata table
-/// (SPEC §5), missions and settings.
+/// (docs/method.md §5), missions and settings.
 ///
 /// Every write goes through [`Store::write`]: the closure's writes are one transaction, kept
 /// when it returns `Ok`, all discarded when it returns `Err` (or panics, or the process dies).

@@ -36,7 +36,7 @@ pub fn sorties_table(docs: &[MissionDoc]) -> String {
     out
 }
 
-/// A mission summary (SPEC §6) as a readable table.
+/// A mission summary (docs/method.md §6) as a readable table.
 pub fn table(m: &MissionDoc) -> String {
     let mut out = format!(
         "mission{} ({}) planned for {} with the {} planner: {}, total S = {:.3}\n",
