@@ -1,4 +1,4 @@
-//! Campaign simulation (SPEC §7): a dataset replayed as a campaign of missions, one run per
+//! Campaign simulation (docs/method.md §7): a dataset replayed as a campaign of missions, one run per
 //! strategy, seed and budget, each against its own real store and through the same use cases
 //! the CLI calls (`score`/`compute`, `plan`, `explore`, `fly` → `record`).
 //!
@@ -60,7 +60,7 @@ pub enum Strategy {
     Random,
     /// Every cell worth the same, the paper's greedy insertion: the nearest cells first.
     Nearest,
-    /// The paper's method: its S (SPEC §2 at the paper's values,
+    /// The paper's method: its S (docs/method.md §2 at the paper's values,
     /// [`crate::settings::UtilitySection::paper`], whatever the project's), its greedy planner.
     Paper,
     /// gleaner's method: the project's utility settings made gleaner's
@@ -1227,6 +1227,7 @@ fn run_one(
                 },
                 None,
                 scored,
+                false,
                 request.clock_now,
             )?;
             if scoring.is_none() {

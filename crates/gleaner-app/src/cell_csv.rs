@@ -20,6 +20,9 @@ pub struct CellRow {
 /// header naming a column twice and bytes that are not UTF-8. Only regular files are read (a
 /// FIFO would block). Blank lines are skipped; a UTF-8 BOM and CRLF are accepted.
 pub fn read(path: &Path) -> Result<Vec<CellRow>> {
+    if gleaner_ingest::is_stdin(path) {
+        return Err(AppError::io(path, gleaner_ingest::STDIN_NOT_READ));
+    }
     let meta = std::fs::metadata(path).map_err(|e| AppError::io(path, e))?;
     if !meta.is_file() {
         return Err(AppError::io(

@@ -1,4 +1,4 @@
-//! Exploration (SPEC §5 step 3): as few sorties as possible, each within the battery, that
+//! Exploration (docs/method.md §5 step 3): as few sorties as possible, each within the battery, that
 //! together visit every cell; each sortie is a mission like any other, with typed stops and
 //! its energy breakdown, all stored in one transaction.
 
@@ -18,7 +18,7 @@ use crate::project::Project;
 /// What to explore.
 #[derive(Debug, Clone, Default)]
 pub struct ExploreRequest {
-    /// Planning time, seconds [default: the latest reading, else the clock].
+    /// Planning time, seconds [default: the latest reading; refused without either].
     pub at: Option<UnixSeconds>,
     /// Plan only; write nothing.
     pub dry_run: bool,
@@ -99,7 +99,7 @@ pub(crate) fn explore_with<S: Store>(
     memo: &mut ExplorationMemo,
 ) -> Result<Exploration> {
     let k = crate::state::collection_knowledge(project, request.at, History::default())?;
-    let t = request.at.or(k.latest).unwrap_or(clock_now);
+    let t = crate::when::mission_time(request.at, k.latest)?;
     let model = energy_model(project)?;
     let profile = flight_profile(project, &model)?;
     let svc = services(&model, &k, t)?;
@@ -162,6 +162,7 @@ pub(crate) fn explore_with<S: Store>(
         ));
     }
     if !request.dry_run {
+        project.check_stored_grid(&k.field)?;
         let ids = project.store_mut().write(|tx| {
             sorties
                 .iter()

@@ -130,6 +130,9 @@ impl Parsed {
 /// Decides a file's format from its first line.
 pub fn detect(path: &Path) -> Result<Format> {
     use std::io::Read;
+    if gleaner_ingest::is_stdin(path) {
+        return Err(AppError::io(path, gleaner_ingest::STDIN_NOT_READ));
+    }
     let meta = std::fs::metadata(path).map_err(|e| AppError::io(path, e))?;
     if !meta.is_file() {
         return Err(AppError::io(
@@ -186,7 +189,7 @@ pub(crate) fn parse_files(
     if !(request.utc_offset_h.is_finite() && request.utc_offset_h.abs() <= 14.0) {
         return Err(AppError::Invalid(format!(
             "UTC offset {} h: expected hours in [-14, 14]",
-            request.utc_offset_h
+            gleaner_ingest::number(request.utc_offset_h)
         )));
     }
     let options = IngestOptions {

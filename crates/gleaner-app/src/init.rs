@@ -9,7 +9,8 @@ use gleaner_ingest::{
     SensorsOptions, hubbard_brook_main_water_depth, read_hubbard_brook_sensors, read_sensors_csv,
 };
 use gleaner_store::{
-    AnyStore, CellRecord, ReplaceCellsStats, SensorRecord, Store, StoreWrite, UpsertStats,
+    AnyStore, CellRecord, ReplaceCellsStats, SensorRecord, Store, StoreRead, StoreWrite,
+    UpsertStats,
 };
 
 use crate::error::{AppError, Result};
@@ -39,6 +40,10 @@ pub struct InitRequest {
     pub base_alt_m: Option<f64>,
     /// Cell side, metres [default 40].
     pub cell_size_m: Option<f64>,
+    /// Neighbour fallback radius, metres (`[field] neighbour_radius_m`: cells within it count
+    /// as neighbours of a cell with fewer than `neighbour_k` adjacent ones), at most 100 cell
+    /// sides [default: 200 m, or 100 cell sides when the cells are smaller than 2 m].
+    pub neighbour_radius_m: Option<f64>,
     /// UAV altitude (m) and antenna half-angle (degrees) to derive the cell side.
     pub coverage: Option<(f64, f64)>,
     /// Project name [default: the directory's name].
@@ -50,7 +55,7 @@ pub struct InitRequest {
     pub database: Option<String>,
     /// Write gleaner's method as the project's `[utility]` (the gated score with each sensor's
     /// drift as F and the bounded anomaly, [`crate::settings::UtilitySection::gleaner`])
-    /// instead of the paper's S (SPEC §2, the default).
+    /// instead of the paper's S (docs/method.md §2, the default).
     pub gleaner_method: bool,
 }
 
@@ -162,7 +167,12 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
             base_alt_m: request.base_alt_m.unwrap_or(0.0),
             cell_size_m,
             neighbour_k: defaults.fallback_k,
-            neighbour_radius_m: defaults.fallback_radius_m,
+            neighbour_radius_m: request.neighbour_radius_m.unwrap_or(
+                // The default radius, within the 100 cell sides allowed for small cells.
+                defaults
+                    .fallback_radius_m
+                    .min(crate::settings::MAX_RADIUS_CELLS * cell_size_m),
+            ),
         },
         sensors: SensorsSection {
             file: relative_to(&request.sensors, &request.dir),
@@ -195,11 +205,12 @@ fn check_grid_size(sensors: &[Sensor], base: LatLon, settings: &Settings) -> Res
     let reach = (settings.field.neighbour_radius_m / side).powi(2);
     if extent_cells > 1e8 || reach * sensors.len() as f64 > 1e8 {
         return Err(AppError::Invalid(format!(
-            "cell side {side} m over sensors spread {:.0} m x {:.0} m (neighbour radius {} m) \
+            "cell side {} m over sensors spread {:.0} m x {:.0} m (neighbour radius {} m) \
              makes a grid too large to build; use larger cells",
+            gleaner_ingest::number(side),
             e1 - e0,
             n1 - n0,
-            settings.field.neighbour_radius_m
+            gleaner_ingest::number(settings.field.neighbour_radius_m)
         )));
     }
     Ok(())
@@ -270,6 +281,15 @@ pub fn init_store_with<S: Store>(
     let (upsert, replaced) = project.store_mut().write(|tx| {
         let upsert = tx.upsert_sensors(&records)?;
         let replaced = tx.replace_cells(&cells)?;
+        if replaced.added > 0 && tx.reading_count()? > 0 {
+            // A re-grid of a project with readings: the new cells are described at once (their
+            // summaries, last collections and pending volumes at the newest reading, as an
+            // ingest describes them), not only after a scoring.
+            let now = latest_reading(&*tx)?;
+            let ids: Vec<gleaner_field::SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
+            crate::summaries::refresh_cells(tx, &ids, now, &settings)?;
+            crate::summaries::invalidate_cache(tx)?;
+        }
         Ok::<_, AppError>((upsert, replaced))
     })?;
     Ok(InitOutcome {
@@ -279,6 +299,20 @@ pub fn init_store_with<S: Store>(
         cells: replaced,
         n_cells: field.cells().len(),
     })
+}
+
+/// The newest stored reading's time, s (0 without readings).
+fn latest_reading<R: gleaner_store::StoreRead>(store: &R) -> Result<gleaner_field::UnixSeconds> {
+    Ok(store
+        .readings_for(
+            None,
+            gleaner_field::UnixSeconds::MIN..=gleaner_field::UnixSeconds::MAX,
+        )?
+        .rows
+        .iter()
+        .map(|r| r.t)
+        .max()
+        .unwrap_or(0))
 }
 
 /// The store's view of the field's cells.

@@ -62,6 +62,7 @@ mod state;
 mod summaries;
 mod value;
 mod view;
+mod when;
 
 pub use cell_detail::{CellDetail, Contributions, SeriesPoint, cell_detail};
 pub use error::{AppError, Result};
@@ -85,11 +86,12 @@ pub use reconstruct::{
 };
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};
-pub use settings::Settings;
+pub use settings::{EnergyPreset, Settings};
 pub use simulate::{ProjectRecord, REPLAY_DEFAULT_DAYS, Truth, fly, fly_buffered};
 pub use summaries::{pending_bytes, series_summary};
 pub use view::{
-    CellView, FieldView, MissionExport, check_flyable, export, export_energy_model, field_view,
+    CellView, FieldView, MissionExport, cell_reading_counts, check_flyable, export,
+    export_energy_model, field_view,
     mission, missions,
 };
 

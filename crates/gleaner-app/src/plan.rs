@@ -1,5 +1,5 @@
 //! Planning: scores (from the utility engine, or a file) + the energy model -> a route and the
-//! mission of SPEC §6, stored with its stops and energy breakdown in one transaction.
+//! mission of docs/method.md §6, stored with its stops and energy breakdown in one transaction.
 
 use std::path::{Path, PathBuf};
 
@@ -299,7 +299,7 @@ pub fn plan_with_preset<S: Store>(
     energy_preset: Option<&str>,
     clock_now: UnixSeconds,
 ) -> Result<PlannedMission> {
-    plan_scored(project, request, energy_preset, None, clock_now)
+    plan_scored(project, request, energy_preset, None, true, clock_now)
 }
 
 /// [`plan_with_preset`] with the utility engine's scoring already computed: `scoring` must be
@@ -307,13 +307,21 @@ pub fn plan_with_preset<S: Store>(
 /// with `request.history` and no user probabilities (a campaign's pre-flight scoring of the
 /// same mission), so planning with it equals planning without it; refused when its time is not
 /// `request.at`. Ignored when the request gives its own scores.
+///
+/// A sortie that visits no cell is never stored: sorties 2..=K the day does not need are
+/// left out of the result, and a plan in which no sortie visits a cell (every S <= 0, or no
+/// cell within the battery's reach) is refused unless a dry run — or, with `!refuse_empty`
+/// (a campaign's mission day), stores only the scoring and returns the empty mission
+/// without an id.
 pub(crate) fn plan_scored<S: Store>(
     project: &mut Project<S>,
     request: &PlanRequest,
     energy_preset: Option<&str>,
     scored: Option<Scoring>,
+    refuse_empty: bool,
     clock_now: UnixSeconds,
 ) -> Result<PlannedMission> {
+    crate::when::check("mission time", request.at)?;
     if let Some(s) = &scored
         && request.at.is_some_and(|at| at != s.t)
     {
@@ -332,7 +340,8 @@ pub(crate) fn plan_scored<S: Store>(
         .unwrap_or(settings.planner.time_limit_s);
     if !(time_limit_s.is_finite() && (0.0..=86_400.0).contains(&time_limit_s)) {
         return Err(AppError::Invalid(format!(
-            "time limit {time_limit_s} s: expected a number of seconds in [0, 86400]"
+            "time limit {} s: expected a number of seconds in [0, 86400]",
+            gleaner_ingest::number(time_limit_s)
         )));
     }
     let seed = request.seed.unwrap_or(settings.planner.seed);
@@ -344,9 +353,7 @@ pub(crate) fn plan_scored<S: Store>(
     let (file_knowledge, scoring, scores, t, anomaly_form, weights) = match given {
         Some(given) => {
             let k = crate::state::collection_knowledge(project, request.at, request.history)?;
-            let t = request.at.or(k.latest).ok_or_else(|| {
-                AppError::Invalid("no readings and no mission time: cannot tell the time".into())
-            })?;
+            let t = crate::when::mission_time(request.at, k.latest)?;
             let (s, form) = match given {
                 Given::File(path) => (read_scores(path, &k)?, "n/a (scores from file)"),
                 Given::Values(v) => {
@@ -436,9 +443,26 @@ pub(crate) fn plan_scored<S: Store>(
             "sorties = {sorties}: allowed 1..={MAX_SORTIES}"
         )));
     }
-    let mut plans = plan_sorties(&model, base, &candidates, &options, sorties)
-        .map_err(|e| AppError::core("planner", e))?;
-    let plan = plans.remove(0);
+    let (mut plans, empty): (Vec<MissionPlan>, Vec<MissionPlan>) =
+        plan_sorties(&model, base, &candidates, &options, sorties)
+            .map_err(|e| AppError::core("planner", e))?
+            .into_iter()
+            .partition(|p| !p.order.is_empty());
+    let plan = if plans.is_empty() {
+        if refuse_empty && !request.dry_run {
+            return Err(AppError::Invalid(format!(
+                "no cell to visit: of {} cells none scores S > 0 within the battery's reach; \
+                 nothing was stored (a dry run shows the empty plan)",
+                k.field.cells().len()
+            )));
+        }
+        empty
+            .into_iter()
+            .next()
+            .ok_or_else(|| AppError::Invalid("the planner returned no sortie".into()))?
+    } else {
+        plans.remove(0)
+    };
     let greedy = plan_mission(
         &model,
         base,
@@ -504,6 +528,13 @@ pub(crate) fn plan_scored<S: Store>(
         extra_sorties,
     };
     if !request.dry_run {
+        let known = planned
+            .scoring
+            .as_ref()
+            .map(|s| &s.knowledge)
+            .or(file_knowledge.as_ref())
+            .ok_or_else(|| AppError::Invalid("nothing known at the mission time".into()))?;
+        project.check_stored_grid(&known.field)?;
         let rows = match &planned.scoring {
             Some(s) => {
                 let energy: Vec<f64> = services.iter().map(|svc| svc.energy_j).collect();
@@ -518,14 +549,18 @@ pub(crate) fn plan_scored<S: Store>(
             if !rows.is_empty() {
                 score::write_scoring(tx, rows)?;
             }
-            let id = tx.create_mission(mission)?;
+            let id = if mission.stops.is_empty() {
+                None
+            } else {
+                Some(tx.create_mission(mission)?)
+            };
             let mut extra_ids = Vec::with_capacity(extra.len());
             for e in extra {
                 extra_ids.push(tx.create_mission(&e.mission)?);
             }
             Ok::<_, AppError>((id, extra_ids))
         })?;
-        planned.id = Some(id);
+        planned.id = id;
         for (e, id) in planned.extra_sorties.iter_mut().zip(extra_ids) {
             e.id = Some(id);
         }

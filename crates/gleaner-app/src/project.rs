@@ -94,6 +94,40 @@ impl<S: Store> Project<S> {
         sensors_of(&self.store)
     }
 
+    /// Refuses a write when `field` (the grid the settings describe) is not the grid the store
+    /// holds — `[field] cell_size_m` or the base edited in `gleaner.toml` after `init` — with
+    /// the command that re-grids the project.
+    pub(crate) fn check_stored_grid(&self, field: &Field) -> Result<()> {
+        let stored: std::collections::BTreeSet<gleaner_field::CellIndex> =
+            self.store.cells()?.into_iter().map(|c| c.index).collect();
+        let missing = field
+            .cells()
+            .iter()
+            .map(|c| c.index)
+            .find(|i| !stored.contains(i));
+        if missing.is_none() && stored.len() == field.cells().len() {
+            return Ok(());
+        }
+        let f = &self.settings.field;
+        Err(AppError::Invalid(format!(
+            "{}: the grid of [field] (cell_size_m = {} m, base {}, {}) has {} cells{}, but the \
+             project's stored grid has {}: the settings changed after `gleaner init`. Re-grid \
+             with `gleaner init --dir {} --sensors {} --cell-size {} --force` (gleaner.toml is \
+             rewritten from init's options; the readings are kept), or restore the setting; \
+             nothing was written",
+            self.dir.join(crate::settings::CONFIG_FILE).display(),
+            gleaner_ingest::number(f.cell_size_m),
+            gleaner_ingest::number(f.base_lat),
+            gleaner_ingest::number(f.base_lon),
+            field.cells().len(),
+            missing.map_or(String::new(), |i| format!(" ({i} is not stored)")),
+            stored.len(),
+            self.dir.display(),
+            self.dir.join(&self.settings.sensors.file).display(),
+            gleaner_ingest::number(f.cell_size_m),
+        )))
+    }
+
     /// The field (grid and neighbours) built from the stored sensors and the settings.
     pub fn field(&self) -> Result<(Vec<Sensor>, Field)> {
         let sensors = self.sensors()?;

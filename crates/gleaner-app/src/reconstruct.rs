@@ -1,4 +1,4 @@
-//! Reconstruction (SPEC §7): every sensor's current value of one modality estimated from what
+//! Reconstruction (docs/method.md §7): every sensor's current value of one modality estimated from what
 //! is known — its last collected value carried forward, and a model-based estimate with its
 //! variance: by default the dynamic field model ([`Estimator::Dynamic`]: a learned covariance
 //! of levels between sensors with AR(1) dynamics, a Kalman filter over the readings known),
@@ -668,6 +668,7 @@ pub fn reconstruct<S: Store>(
     project: &Project<S>,
     request: &ReconstructRequest,
 ) -> Result<Reconstruction> {
+    crate::when::check("estimation time", request.at)?;
     let modality = target_modality(project, request.modality.as_deref())?;
     let at = match request.at {
         Some(t) => t,

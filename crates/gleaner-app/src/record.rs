@@ -1,4 +1,4 @@
-//! Recording a flight (SPEC §5 step 5): the cells actually visited, when, and the readings
+//! Recording a flight (docs/method.md §5 step 5): the cells actually visited, when, and the readings
 //! brought home — one transaction.
 
 use std::collections::{HashMap, HashSet};
@@ -18,9 +18,11 @@ use crate::summaries;
 pub struct RecordRequest {
     /// The planned mission.
     pub mission: MissionId,
-    /// When the data was collected, seconds [default: the mission's planned time].
+    /// When the data was collected, seconds [default: the mission's planned time]; not before
+    /// it.
     pub at: Option<UnixSeconds>,
-    /// Cells actually visited, in order (ids like `x3y-1`) [default: the planned stops].
+    /// Cells actually visited, in order (ids like `x3y-1`), each one of the mission's stops
+    /// [default: the planned stops].
     pub cells: Option<Vec<String>>,
     /// The readings brought back (files and how to read them), if any.
     pub readings: Option<IngestRequest>,
@@ -50,8 +52,10 @@ pub struct RecordOutcome {
 /// The use case: checks the flight against the plan and the grid, then in one transaction
 /// stores the readings brought back, marks the visited cells' sensors collected at `at`,
 /// records the visits and refreshes those cells' summaries. Refused, writing nothing: an
-/// unknown mission or cell; a mission already recorded (unless `amend`); a reading from a
-/// sensor outside the visited cells, or dated after the collection time.
+/// unknown mission or cell; a mission without stops; a visited cell that is not one of the
+/// mission's stops; a collection time outside 1900..=2199 or before the mission's planned
+/// time; a mission already recorded (unless `amend`); a reading from a sensor outside the
+/// visited cells, or dated after the collection time.
 pub fn record_flight<S: Store>(
     project: &mut Project<S>,
     request: &RecordRequest,
@@ -93,7 +97,24 @@ pub(crate) fn record_parsed<S: Store>(
                 .map_or(String::new(), |t| format!(" at {}", format_rfc3339(t)))
         )));
     }
-    let at = request.at.unwrap_or(mission.mission.planned_at);
+    crate::when::check("collection time", request.at)?;
+    let planned_at = mission.mission.planned_at;
+    let at = request.at.unwrap_or(planned_at);
+    if at < planned_at {
+        return Err(AppError::Invalid(format!(
+            "collection time {} is before mission #{}'s planned time {}: a mission is flown at \
+             or after the time it was planned for; nothing was recorded",
+            format_rfc3339(at),
+            request.mission,
+            format_rfc3339(planned_at)
+        )));
+    }
+    if mission.mission.stops.is_empty() {
+        return Err(AppError::Invalid(format!(
+            "mission #{} has no stops: there is no flight to record",
+            request.mission
+        )));
+    }
     let labels: Vec<String> = match &request.cells {
         Some(c) => c.clone(),
         None => mission
@@ -112,6 +133,18 @@ pub(crate) fn record_parsed<S: Store>(
             cell_of.insert(s.clone(), cell.index);
         }
     }
+    let planned: HashSet<CellIndex> = mission.mission.stops.iter().map(|s| s.cell).collect();
+    let planned_labels: Vec<String> = mission
+        .mission
+        .stops
+        .iter()
+        .map(|s| s.cell.to_string())
+        .collect();
+    if labels.is_empty() {
+        return Err(AppError::Invalid(
+            "no cell visited: list the cells the flight visited".into(),
+        ));
+    }
     let mut seen = HashSet::new();
     for (order, label) in labels.iter().enumerate() {
         let index = CellIndex::parse(label.trim()).ok_or_else(|| {
@@ -128,6 +161,13 @@ pub(crate) fn record_parsed<S: Store>(
             })?;
         if !seen.insert(index) {
             return Err(AppError::Invalid(format!("cell {label} is listed twice")));
+        }
+        if !planned.contains(&index) {
+            return Err(AppError::Invalid(format!(
+                "cell {label} is not a stop of mission #{} (its stops: {}); nothing was recorded",
+                request.mission,
+                planned_labels.join(",")
+            )));
         }
         collected.extend(cell.sensors.iter().map(|s| (s.clone(), at)));
         visits.push(VisitRecord {

@@ -1,5 +1,5 @@
 //! Scoring: the utility terms F, R, A, U and the score S of every cell at a mission time
-//! (SPEC §2), and the cell metadata they become (SPEC §5).
+//! (docs/method.md §2), and the cell metadata they become (docs/method.md §5).
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -234,7 +234,25 @@ fn condition<S: Store>(
 /// cells' drift freshness and S recomputed (`drift.rs`; reads the condition modality's
 /// readings of the last `drift_window_days`).
 pub fn compute<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
+    crate::when::check("mission time", request.at)?;
     let scoring = match state::fast_scoring(project, request)? {
+        Some(scoring) => scoring,
+        None => compute_history(project, request)?,
+    };
+    with_freshness_form(project, scoring, &request.history)
+}
+
+/// [`compute`] from a state just rebuilt (not yet stored) instead of the stored one.
+fn compute_rebuilt<S: Store>(
+    project: &Project<S>,
+    request: &ScoreRequest,
+    rebuilt: Option<state::Persisted>,
+) -> Result<Scoring> {
+    let fast = match rebuilt {
+        Some(p) => state::fast_scoring_from(project, request, p)?,
+        None => None,
+    };
+    let scoring = match fast {
         Some(scoring) => scoring,
         None => compute_history(project, request)?,
     };
@@ -280,6 +298,7 @@ fn with_freshness_form<S: Store>(
 /// [`compute`] from the stored history, never from the persisted state: loads every reading
 /// known at t and refits the condition model. O(history).
 pub fn compute_full<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
+    crate::when::check("mission time", request.at)?;
     with_freshness_form(
         project,
         compute_history(project, request)?,
@@ -290,11 +309,7 @@ pub fn compute_full<S: Store>(project: &Project<S>, request: &ScoreRequest) -> R
 /// [`compute_full`] before `[utility] freshness_form` is applied.
 fn compute_history<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Result<Scoring> {
     let k = knowledge(project, request.at, request.history)?;
-    let Some(t) = request.at.or(k.latest) else {
-        return Err(AppError::Invalid(
-            "no readings: ingest some data first (or give the mission time)".into(),
-        ));
-    };
+    let t = crate::when::mission_time(request.at, k.latest)?;
     let settings = project.settings();
     let config = settings.utility.to_core(&k.modalities)?;
     let mut warnings = Vec::new();
@@ -354,21 +369,32 @@ fn compute_history<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Re
 ///
 /// A common request (all history, no user probabilities) whose persisted utility state is
 /// stale — after a bulk ingest, a change of grid settings, or a database from before the state
-/// existed — first rebuilds the state (its own transaction: a cache of the stored readings,
-/// idempotent), then scores from it: the condition model is fitted once, not once for this
-/// scoring and again for the state.
+/// existed — first rebuilds the state in memory, then scores from it (the condition model is
+/// fitted once, not once for this scoring and again for the state) and stores it with the
+/// scoring, in the same transaction: a refused scoring writes nothing, the state included.
 pub fn score<S: Store>(project: &mut Project<S>, request: &ScoreRequest) -> Result<Scoring> {
-    let common = request.probabilities.is_none() && request.history == History::default();
-    if !request.dry_run && common {
-        let settings = project.settings().clone();
-        project
-            .store_mut()
-            .write(|tx| state::refresh_if_stale(tx, &settings))?;
+    crate::when::check("mission time", request.at)?;
+    if !request.dry_run {
+        project.check_stored_grid(&project.field()?.1)?;
     }
-    let scoring = compute(project, request)?;
+    let common = request.probabilities.is_none() && request.history == History::default();
+    let mut rebuilt = if !request.dry_run && common {
+        state::rebuilt_if_stale(project.store(), project.settings())?
+    } else {
+        None
+    };
+    let scoring = match rebuilt.as_mut() {
+        Some(r) => compute_rebuilt(project, request, r.state.take())?,
+        None => compute(project, request)?,
+    };
     if !request.dry_run {
         let rows = metadata_rows(project, &scoring, None);
-        project.store_mut().write(|tx| write_scoring(tx, rows))?;
+        project.store_mut().write(|tx| {
+            if let Some(r) = &rebuilt {
+                state::keep_rebuilt(tx, r)?;
+            }
+            write_scoring(tx, rows)
+        })?;
     }
     Ok(scoring)
 }

@@ -132,7 +132,7 @@ impl Default for IngestSection {
     }
 }
 
-/// `[utility]`: the score S = alpha·F + beta·A + gamma·U − delta·R (SPEC §2).
+/// `[utility]`: the score S = alpha·F + beta·A + gamma·U − delta·R (docs/method.md §2).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct UtilitySection {
@@ -292,7 +292,53 @@ pub const DEFAULT_DRIFT_SPREAD: f64 = 0.5;
 /// once the class modality has grown by 5% since the last fit.
 pub const DEFAULT_CONDITION_REFIT_GROWTH: f64 = 0.05;
 
-/// `[energy]`: the UAV energy model (SPEC §3). Every field left out takes the preset's value.
+/// A battery and airframe preset (`[energy] preset`, `plan --energy-preset`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EnergyPreset {
+    /// The paper's: 70 kJ, 5% reserve (66.5 kJ usable).
+    Paper,
+    /// A large pack: 77 Wh, 20% reserve (sites kilometres apart).
+    LargePack,
+}
+
+impl EnergyPreset {
+    /// Every preset, in the order they are listed.
+    pub const ALL: [Self; 2] = [Self::Paper, Self::LargePack];
+
+    /// Its name in `gleaner.toml` and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Paper => "paper",
+            Self::LargePack => "large-pack",
+        }
+    }
+
+    /// The core energy configuration of the preset.
+    pub fn config(self) -> gleaner_energy::EnergyConfig {
+        match self {
+            Self::Paper => gleaner_energy::EnergyConfig::paper(),
+            Self::LargePack => gleaner_energy::EnergyConfig::large_pack(),
+        }
+    }
+}
+
+impl std::str::FromStr for EnergyPreset {
+    type Err = AppError;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| {
+                AppError::Invalid(format!(
+                    "energy preset {:?}: expected paper or large-pack",
+                    gleaner_ingest::shorten(s)
+                ))
+            })
+    }
+}
+
+/// `[energy]`: the UAV energy model (docs/method.md §3). Every field left out takes the preset's value.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct EnergySection {
@@ -407,7 +453,7 @@ impl UtilitySection {
         }
     }
 
-    /// The paper's score (SPEC §2 exactly): this section with the weights, the freshness
+    /// The paper's score (docs/method.md §2 exactly): this section with the weights, the freshness
     /// half-life and the anomaly's form and reference at the paper's values (the core
     /// defaults: alpha = beta = gamma = delta = 1, 3 days, raw, own history) and no variance
     /// term; the history window, `min_overlap`, epsilon, modality weights and the condition
@@ -495,11 +541,13 @@ impl UtilitySection {
 impl EnergySection {
     /// The core energy configuration: the preset with every given field overridden.
     pub fn to_core(&self) -> Result<gleaner_energy::EnergyConfig> {
-        use gleaner_energy::{CruiseSpeed, EnergyConfig};
-        let mut c = match self.preset.as_str() {
-            "paper" => EnergyConfig::paper(),
-            "large-pack" => EnergyConfig::large_pack(),
-            other => bail!("energy.preset = {other:?}: expected \"paper\" or \"large-pack\""),
+        use gleaner_energy::CruiseSpeed;
+        let mut c = match self.preset.parse::<EnergyPreset>() {
+            Ok(preset) => preset.config(),
+            Err(_) => bail!(
+                "energy.preset = {:?}: expected \"paper\" or \"large-pack\"",
+                self.preset
+            ),
         };
         c.cruise = match self.cruise.as_str() {
             "max-endurance" => CruiseSpeed::MaxEndurance,
@@ -608,13 +656,10 @@ impl Settings {
                 self.field.cell_size_m
             );
         }
-        if !(self.field.neighbour_radius_m.is_finite()
-            && self.field.neighbour_radius_m >= 0.0
-            && self.field.neighbour_radius_m <= 100.0 * self.field.cell_size_m.max(1.0))
-        {
+        if !(self.field.neighbour_radius_m.is_finite() && self.field.neighbour_radius_m >= 0.0) {
             bail!(
-                "field.neighbour_radius_m = {} must be between 0 and 100 cell sides",
-                self.field.neighbour_radius_m
+                "field.neighbour_radius_m = {} must be a number of metres >= 0",
+                gleaner_ingest::number(self.field.neighbour_radius_m)
             );
         }
         if self.field.neighbour_k > 64 {
@@ -734,12 +779,14 @@ impl Settings {
                 u.freshness_form
             );
         }
-        if f.neighbour_radius_m > 100.0 * f.cell_size_m.max(1.0) {
+        let max_radius = MAX_RADIUS_CELLS * f.cell_size_m;
+        if f.neighbour_radius_m > max_radius {
             bail!(
-                "field.neighbour_radius_m = {}: allowed 0..=100 cell sides ({} m with cell_size_m = {})",
-                f.neighbour_radius_m,
-                100.0 * f.cell_size_m.max(1.0),
-                f.cell_size_m
+                "field.neighbour_radius_m = {}: allowed 0..={MAX_RADIUS_CELLS} cell sides ({} m \
+                 with cell_size_m = {}); set a smaller neighbour radius (init: --neighbour-radius)",
+                gleaner_ingest::number(f.neighbour_radius_m),
+                gleaner_ingest::number(max_radius),
+                gleaner_ingest::number(f.cell_size_m)
             );
         }
         for (name, map) in [
@@ -748,7 +795,10 @@ impl Settings {
         ] {
             for (m, &w) in map.iter().flatten() {
                 if !(w.is_finite() && (0.0..=1e6).contains(&w)) {
-                    bail!("{name}.{m} = {w}: allowed 0..=1e6");
+                    bail!(
+                        "{name}.{m} = {}: allowed 0..=1e6",
+                        gleaner_ingest::number(w)
+                    );
                 }
             }
         }
@@ -765,7 +815,11 @@ impl Settings {
                 || t.windows(2).any(|w| w[0] >= w[1])
             {
                 bail!(
-                    "utility.condition_thresholds = {t:?}: need finite numbers within ±1e9, strictly increasing"
+                    "utility.condition_thresholds = [{}]: need finite numbers within ±1e9, strictly increasing",
+                    t.iter()
+                        .map(|x| gleaner_ingest::number(*x))
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 );
             }
         }
@@ -791,6 +845,10 @@ impl Settings {
         }
     }
 }
+
+/// Largest neighbour fallback radius, in cell sides (the neighbour search grows with its
+/// square).
+pub const MAX_RADIUS_CELLS: f64 = 100.0;
 
 /// The allowed range of every numeric setting of `gleaner.toml`, inclusive unless marked, with
 /// its unit: (key, min, max, min exclusive, unit). Values outside are refused with the key, the

@@ -792,20 +792,53 @@ fn is_current<R: StoreRead>(store: &R, p: &Persisted, settings: &Settings) -> Re
         && store.reading_count()? == p.reading_count)
 }
 
-/// Inside a write transaction: rebuilds the persisted state when it is missing or does not
-/// describe the store (e.g. after the grid settings changed, or a database written before the
-/// state existed). O(history) then; a few queries otherwise.
-pub(crate) fn refresh_if_stale<W: StoreWrite>(tx: &mut W, settings: &Settings) -> Result<()> {
-    let current = match tx
+/// The persisted state rebuilt from the store, not yet written back (see [`rebuilt_if_stale`]).
+pub(crate) struct Rebuilt {
+    /// The state (`None`: nothing to build it from, e.g. no readings).
+    pub(crate) state: Option<Persisted>,
+    /// Its encoding, as [`write_blob`] would store it.
+    bytes: Vec<u8>,
+    /// The store's reading count it describes.
+    reading_count: Option<u64>,
+}
+
+/// Outside any transaction: the state rebuilt from the store when the persisted one is
+/// missing or does not describe the store (e.g. after the grid settings changed, or a database
+/// written before the state existed), else `None`. O(history) then; a few queries otherwise. Written back by [`keep_rebuilt`]
+/// in the transaction of the use case that needed it, so a refused use case writes nothing.
+pub(crate) fn rebuilt_if_stale<R: StoreRead>(
+    store: &R,
+    settings: &Settings,
+) -> Result<Option<Rebuilt>> {
+    let current = match store
         .blob_get(BLOB_KEY)?
         .and_then(|b| Persisted::from_bytes(&b))
     {
-        Some(p) => is_current(&*tx, &p, settings)?,
+        Some(p) => is_current(store, &p, settings)?,
         None => false,
     };
-    if !current {
-        let p = rebuild(&*tx, settings)?;
-        write_blob(tx, p.as_ref())?;
+    if current {
+        return Ok(None);
+    }
+    let state = rebuild(store, settings)?;
+    let bytes = state.as_ref().map(Persisted::to_bytes).unwrap_or_default();
+    let reading_count = state.as_ref().map(|p| p.reading_count);
+    Ok(Some(Rebuilt {
+        state,
+        bytes,
+        reading_count,
+    }))
+}
+
+/// Inside the use case's write transaction: stores a state [`rebuilt_if_stale`] built, unless
+/// another process has changed the readings since (then the next scoring rebuilds it).
+pub(crate) fn keep_rebuilt<W: StoreWrite>(tx: &mut W, rebuilt: &Rebuilt) -> Result<()> {
+    let unchanged = match rebuilt.reading_count {
+        Some(n) => tx.reading_count()? == n,
+        None => true,
+    };
+    if unchanged {
+        tx.blob_put(BLOB_KEY, &rebuilt.bytes)?;
     }
     Ok(())
 }
@@ -967,13 +1000,26 @@ pub(crate) fn fast_scoring<S: Store>(
     if request.probabilities.is_some() || request.history != History::default() {
         return Ok(None);
     }
-    let store = project.store();
-    let Some(p) = store
+    let Some(p) = project
+        .store()
         .blob_get(BLOB_KEY)?
         .and_then(|b| Persisted::from_bytes(&b))
     else {
         return Ok(None);
     };
+    fast_scoring_from(project, request, p)
+}
+
+/// [`fast_scoring`] from the state `p` (the stored one, or one just rebuilt).
+pub(crate) fn fast_scoring_from<S: Store>(
+    project: &Project<S>,
+    request: &ScoreRequest,
+    p: Persisted,
+) -> Result<Option<Scoring>> {
+    if request.probabilities.is_some() || request.history != History::default() {
+        return Ok(None);
+    }
+    let store = project.store();
     let settings = project.settings();
     let Some(latest) = p.latest else {
         return Ok(None);

@@ -93,7 +93,7 @@ pub(crate) fn refresh_cells<W: StoreWrite>(
     let mut rows = Vec::with_capacity(cells.len());
     for cell in &cells {
         let batch = tx.readings_of_sensors(&cell.sensors, UnixSeconds::MIN..=UnixSeconds::MAX)?;
-        // Cell series per modality: mean over the cell's sensors at each t (SPEC §2).
+        // Cell series per modality: mean over the cell's sensors at each t (docs/method.md §2).
         let mut slots: BTreeMap<&Modality, BTreeMap<UnixSeconds, (f64, u32)>> = BTreeMap::new();
         // Per sensor and modality: (count, first t, last t). Ordered, so the pending volume
         // is summed in the same order by every process (a hash map's order varies per run

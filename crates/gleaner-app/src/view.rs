@@ -9,7 +9,7 @@ use gleaner_store::{CellMetadata, MissionId, MissionRecord, Store};
 use crate::error::{AppError, Result};
 use crate::project::Project;
 
-/// One cell with its metadata (SPEC §5).
+/// One cell with its metadata (docs/method.md §5).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CellView {
     /// Grid index (`x12y-3`).
@@ -81,6 +81,26 @@ pub fn field_view<S: Store>(project: &Project<S>) -> Result<FieldView> {
         cells,
         sensors: sensors.into_iter().map(|s| (s.id, s.position)).collect(),
     })
+}
+
+/// The number of stored readings of each cell's sensors, every modality, by grid index (the
+/// cell table's `readings`; a cell series' summary counts its points, which are means over
+/// the cell's sensors). From the stored grid: true whatever has been scored.
+pub fn cell_reading_counts<S: Store>(project: &Project<S>) -> Result<HashMap<CellIndex, u64>> {
+    let per_sensor: HashMap<SensorId, u64> = project
+        .store()
+        .sensor_reading_counts()?
+        .into_iter()
+        .collect();
+    Ok(project
+        .store()
+        .cells()?
+        .into_iter()
+        .map(|c| {
+            let n = c.sensors.iter().filter_map(|s| per_sensor.get(s)).sum();
+            (c.index, n)
+        })
+        .collect())
 }
 
 /// All missions with their stops and visits, oldest first.

@@ -74,9 +74,14 @@ enum Command {
         /// altitude) [default: 0].
         #[arg(long, allow_hyphen_values = true)]
         base_alt: Option<f64>,
-        /// Cell side in metres (the UAV's ground coverage) [default: 40].
+        /// Cell side in metres (the UAV's ground coverage), at least 0.5 [default: 40].
         #[arg(long)]
         cell_size: Option<f64>,
+        /// Neighbour fallback radius in metres: a cell with fewer than `neighbour_k` adjacent
+        /// cells takes the cells within it as neighbours; at most 100 cell sides [default:
+        /// 200, or 100 cell sides for cells under 2 m].
+        #[arg(long)]
+        neighbour_radius: Option<f64>,
         /// UAV altitude, metres; with --half-angle derives the cell side (r = h·tan θ, side = r·√2).
         #[arg(long, requires = "half_angle")]
         altitude: Option<f64>,
@@ -97,7 +102,7 @@ enum Command {
         /// The score the project plans by: `gleaner` (gleaner's method, the default: the gated
         /// score with each sensor's drift as freshness and the bounded anomaly, β = 4,
         /// γ = δ = 0; less error and sooner catches than coverage and far less than the
-        /// paper's S on CAF, docs/method-improvement.md) or `paper` (the paper's S exactly,
+        /// paper's S on CAF, docs/method.md §2, docs/method-improvement.md) or `paper` (the paper's S exactly,
         /// which loses to random sampling on CAF 2014). Written into `[utility]`.
         #[arg(long, value_enum, default_value_t = MethodArg::Gleaner)]
         method: MethodArg,
@@ -205,6 +210,10 @@ enum Command {
         /// mission (export/record each by its id). With K > 1, --json prints an array.
         #[arg(long, default_value_t = 1)]
         sorties: usize,
+        /// Plan with this energy preset's battery instead of `[energy] preset` (`paper`,
+        /// `large-pack`); fields set in `[energy]` still override the preset's values.
+        #[arg(long, value_parser = parse_energy_preset)]
+        energy_preset: Option<app::EnergyPreset>,
     },
     /// Plan the exploration phase: as few sorties as possible, each within the battery, that
     /// together visit every cell; each sortie is stored as an exploration mission.
@@ -226,7 +235,7 @@ enum Command {
     /// Export a planned mission for flying and mapping: GeoJSON (cells with their scores, the
     /// route, the base), a QGroundControl .plan, a QGC WPL 110 waypoint file and an SVG map.
     #[command(
-        after_help = "Waypoints: take-off, one NAV_WAYPOINT (16) per cell at the cell centre holding for the\nplanned hover time (param 1), return-to-launch (20); altitude from [energy] altitude_m.\n\nExamples:\n  gleaner export --project farm --mission 1\n  gleaner export --project farm --mission 1 --out flight1"
+        after_help = "Waypoints: take-off, the cruise speed the energy model assumed (MAV_CMD_DO_CHANGE_SPEED,\n178), one NAV_WAYPOINT (16) per cell at the cell centre holding for the planned hover time\n(param 1, rounded up to 0.1 s), return-to-launch (20); altitude from [energy] altitude_m.\nA mission the battery cannot carry, or out of range, is refused and nothing is written.\n\nExamples:\n  gleaner export --project farm --mission 1\n  gleaner export --project farm --mission 1 --out flight1"
     )]
     Export {
         #[command(flatten)]
@@ -541,14 +550,31 @@ fn emit<T: serde::Serialize>(
     table: impl FnOnce() -> String,
 ) -> Result<()> {
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(value).with_context(|| what.to_string())?
-        );
+        let mut text = serde_json::to_string_pretty(value).with_context(|| what.to_string())?;
+        text.push('\n');
+        out(&text)
     } else {
-        print!("{}", table());
+        out(&table())
     }
-    Ok(())
+}
+
+/// Writes `text` to standard output. A reader that closes the pipe early (`gleaner cells
+/// --json | head`) has what it wanted: the rest is dropped quietly, not a panic or an error.
+fn out(text: &str) -> Result<()> {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    match stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+    {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        r => r.context("writing to standard output"),
+    }
+}
+
+/// [`out`] with a newline.
+fn outln(text: &str) -> Result<()> {
+    out(&format!("{text}\n"))
 }
 
 fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
@@ -564,6 +590,10 @@ fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
         .parse()
         .map_err(|_| format!("bad longitude {b:?}"))?;
     Ok((lat, lon))
+}
+
+fn parse_energy_preset(s: &str) -> Result<app::EnergyPreset, String> {
+    s.parse().map_err(|e: app::AppError| e.to_string())
 }
 
 pub(crate) fn parse_time(s: &str) -> Result<i64, String> {
@@ -679,6 +709,7 @@ fn run(cli: Cli) -> Result<()> {
             base,
             base_alt,
             cell_size,
+            neighbour_radius,
             altitude,
             half_angle,
             name,
@@ -697,13 +728,14 @@ fn run(cli: Cli) -> Result<()> {
                 base,
                 base_alt_m: base_alt,
                 cell_size_m: cell_size,
+                neighbour_radius_m: neighbour_radius,
                 coverage: altitude.zip(half_angle),
                 name,
                 force,
                 database,
                 gleaner_method: matches!(method, MethodArg::Gleaner),
             })?;
-            println!("{}", init_line(&outcome, &dir));
+            outln(&init_line(&outcome, &dir))?;
         }
         Command::Ingest {
             files,
@@ -734,7 +766,7 @@ fn run(cli: Cli) -> Result<()> {
                 clock_now(),
                 &progress,
             )?;
-            println!("{}", ingest_line(&outcome));
+            outln(&ingest_line(&outcome))?;
         }
         Command::Cells {
             project,
@@ -749,7 +781,12 @@ fn run(cli: Cli) -> Result<()> {
                 .map(|c| gleaner_wire::convert::cell_row(c, view.cell_size_m))
                 .collect();
             cells::sort(&mut rows, sort);
-            json.emit(&rows, "serialising cells", || cells::table(&rows))?;
+            if json.json {
+                json.emit(&rows, "serialising cells", String::new)?;
+            } else {
+                let counts = app::cell_reading_counts(&p)?;
+                json.emit(&rows, "serialising cells", || cells::table(&rows, &counts))?;
+            }
         }
         Command::Score {
             project,
@@ -785,9 +822,10 @@ fn run(cli: Cli) -> Result<()> {
             json,
             dry_run,
             sorties,
+            energy_preset,
         } => {
             let mut p = project.open()?;
-            let planned = app::plan(
+            let planned = app::plan_with_preset(
                 &mut p,
                 &app::PlanRequest {
                     at: when.at,
@@ -801,6 +839,7 @@ fn run(cli: Cli) -> Result<()> {
                     dry_run,
                     sorties: Some(sorties),
                 },
+                energy_preset.map(app::EnergyPreset::name),
                 clock_now(),
             )?;
             if let Some(s) = &planned.scoring {
@@ -812,12 +851,15 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 let mut docs = vec![doc];
                 docs.extend(planned.extra_sorties.iter().map(|e| {
-                    gleaner_wire::convert::mission_doc(
+                    let mut doc = gleaner_wire::convert::mission_doc(
                         e.id,
                         &e.mission,
                         if e.id.is_some() { "planned" } else { "dry-run" },
                         None,
-                    )
+                    );
+                    // The sorties of one day are chosen together from the same cells.
+                    doc.candidates = Some(planned.candidates);
+                    doc
                 }));
                 json.emit(&docs, "serialising the sorties", || {
                     plan::sorties_table(&docs)
@@ -851,13 +893,13 @@ fn run(cli: Cli) -> Result<()> {
                 .iter()
                 .map(|f| f.display().to_string())
                 .collect();
-            println!("wrote {}", names.join(", "));
+            outln(&format!("wrote {}", names.join(", ")))?;
         }
         Command::MapExploration { project, out } => {
             let p = project.open()?;
             let dir = out.unwrap_or_else(|| project.dir.join("missions"));
             let files = export::write_exploration_map(&p, &dir)?;
-            println!("wrote {}", files.join(", "));
+            outln(&format!("wrote {}", files.join(", ")))?;
         }
         Command::Record {
             project,
@@ -883,7 +925,7 @@ fn run(cli: Cli) -> Result<()> {
                 clock_now(),
                 &progress,
             )?;
-            println!("{}", record_line(&outcome));
+            outln(&record_line(&outcome))?;
         }
         Command::Missions {
             project,
@@ -909,12 +951,12 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Bench(BenchCommand::Op(args)) => {
             let (_, table) = bench::run(&args)?;
-            print!("{table}");
+            out(&table)?;
         }
         Command::Synth(args) => {
             let sensors = args.sensors;
             let (farm, files) = synth::run(&args)?;
-            println!(
+            outln(&format!(
                 "wrote {} sensors, {} readings, {} events to {}",
                 sensors,
                 farm.reading_count(),
@@ -923,19 +965,19 @@ fn run(cli: Cli) -> Result<()> {
                     .sensors
                     .parent()
                     .map_or(String::new(), |p| p.display().to_string())
-            );
+            ))?;
         }
-        Command::Demo(args) => print!("{}", demo::run(&args)?),
-        Command::Migrate(args) => println!("{}", migrate::run(&args, &progress)?),
+        Command::Demo(args) => out(&demo::run(&args)?)?,
+        Command::Migrate(args) => outln(&migrate::run(&args, &progress)?)?,
         Command::Serve(args) => serve::run(args)?,
         Command::Simulate(args) => {
             let line: Vec<String> = std::env::args().skip(1).collect();
             let command = format!("gleaner {}", line.join(" "));
-            print!("{}", simulate::run(&args, &command, &progress)?);
+            out(&simulate::run(&args, &command, &progress)?)?;
         }
         Command::Evaluate(EvaluateCommand::Peer(args)) => print!("{}", evaluate::run_peer(&args)?),
         Command::Report { dir } => {
-            println!("{}", report::write_report(&dir)?.display());
+            outln(&report::write_report(&dir)?.display().to_string())?;
         }
         Command::Reconstruct {
             project,
@@ -1014,7 +1056,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::CrashTest(args) => {
             let (report, ok) = crash::run(&args)?;
-            print!("{report}");
+            out(&report)?;
             if !ok {
                 anyhow::bail!("crash-safety failures (listed above)");
             }

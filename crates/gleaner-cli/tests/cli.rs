@@ -388,6 +388,9 @@ fn plan_several_sorties() {
     ]);
     let summary = &out[out.find("2 sorties:").expect("summary")..];
     insta::assert_snapshot!("plan_two_sorties", summary);
+    // Both sorties were chosen from the same candidate cells, and each says how many.
+    assert_eq!(out.matches(" of 3 candidate cells").count(), 2, "{out}");
+    assert!(!out.contains('?'), "{out}");
     // Each sortie is its own stored mission, exportable on its own.
     ok(&[
         "export",
@@ -1284,4 +1287,283 @@ fn init_method_gleaner_scores_by_gleaners_method() {
         "best",
     ]);
     assert!(err.contains("invalid value 'best'"), "{err}");
+}
+
+/// Runs `gleaner args` with its standard output a pipe whose reader is already closed, as
+/// `gleaner cells --json | head -c0` gives.
+fn with_closed_stdout(args: &[&str]) -> Output {
+    let (reader, writer) = std::io::pipe().expect("pipe");
+    drop(reader);
+    Command::new(env!("CARGO_BIN_EXE_gleaner"))
+        .args(args)
+        .stdout(writer)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .expect("run gleaner")
+}
+
+#[test]
+fn a_closed_output_pipe_ends_the_output_quietly() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    for args in [
+        vec!["cells", "--project", p, "--json"],
+        vec!["cells", "--project", p],
+        vec!["missions", "--project", p, "--json"],
+        vec!["score", "--project", p, "--json"],
+    ] {
+        let out = with_closed_stdout(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {err}");
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn export_help_names_the_speed_command() {
+    let help = ok(&["export", "--help"]);
+    assert!(help.contains("MAV_CMD_DO_CHANGE_SPEED"), "{help}");
+}
+
+#[test]
+fn synth_takes_an_empty_depth_list_as_none() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("farm");
+    ok(&[
+        "synth",
+        "--out",
+        s(&out),
+        "--sensors",
+        "4",
+        "--days",
+        "3",
+        "--seed",
+        "1",
+        "--t-depths",
+        "",
+    ]);
+    let readings = std::fs::read_to_string(out.join("readings.csv")).expect("readings");
+    assert!(readings.contains(",vw@30cm,"), "no soil moisture");
+    assert!(!readings.contains(",t@"), "temperature written");
+    let err = fail(&["synth", "--out", s(&out), "--t-depths", "30,x"]);
+    assert!(
+        err.contains("depth \"x\": expected whole centimetres"),
+        "{err}"
+    );
+}
+
+#[test]
+fn init_makes_cells_under_two_metres_and_checks_the_neighbour_radius() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sensors = data("sensors.csv");
+    let small = dir.path().join("small");
+    let out = ok(&[
+        "init",
+        "--dir",
+        s(&small),
+        "--sensors",
+        s(&sensors),
+        "--cell-size",
+        "1",
+    ]);
+    assert!(out.contains("non-empty cells of 1 m"), "{out}");
+    let toml = std::fs::read_to_string(small.join("gleaner.toml")).expect("toml");
+    assert!(toml.contains("neighbour_radius_m = 100.0"), "{toml}");
+    let explicit = dir.path().join("explicit");
+    ok(&[
+        "init",
+        "--dir",
+        s(&explicit),
+        "--sensors",
+        s(&sensors),
+        "--cell-size",
+        "1.5",
+        "--neighbour-radius",
+        "20",
+    ]);
+    let toml = std::fs::read_to_string(explicit.join("gleaner.toml")).expect("toml");
+    assert!(toml.contains("neighbour_radius_m = 20.0"), "{toml}");
+    let refused = dir.path().join("refused");
+    let err = fail(&[
+        "init",
+        "--dir",
+        s(&refused),
+        "--sensors",
+        s(&sensors),
+        "--cell-size",
+        "0.5",
+        "--neighbour-radius",
+        "60",
+    ]);
+    assert!(
+        err.contains(
+            "field.neighbour_radius_m = 60: allowed 0..=100 cell sides (50 m with cell_size_m = 0.5)"
+        ),
+        "{err}"
+    );
+    assert!(!refused.exists());
+}
+
+#[test]
+fn a_changed_cell_size_is_refused_with_how_to_regrid() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    let toml_path = dir.path().join("gleaner.toml");
+    let toml = std::fs::read_to_string(&toml_path).expect("toml");
+    assert!(toml.contains("cell_size_m = 40.0"), "{toml}");
+    std::fs::write(
+        &toml_path,
+        toml.replace("cell_size_m = 40.0", "cell_size_m = 20.0"),
+    )
+    .expect("write");
+    let before = gleaner_store::SqliteStore::open(&dir.path().join("gleaner.db"))
+        .and_then(|st| st.dump())
+        .expect("dump");
+    for args in [
+        vec!["score", "--project", p],
+        vec!["plan", "--project", p],
+        vec!["explore", "--project", p],
+    ] {
+        let err = fail(&args);
+        assert!(
+            err.contains("the grid of [field] (cell_size_m = 20 m")
+                && err.contains("Re-grid with `gleaner init --dir")
+                && err.contains("--cell-size 20 --force`"),
+            "{args:?}: {err}"
+        );
+        let after = gleaner_store::SqliteStore::open(&dir.path().join("gleaner.db"))
+            .and_then(|st| st.dump())
+            .expect("dump");
+        assert_eq!(after, before, "{args:?} wrote");
+    }
+    // Following the hint re-grids the project, and scoring works again.
+    let sensors = data("sensors.csv");
+    ok(&[
+        "init",
+        "--dir",
+        p,
+        "--sensors",
+        s(&sensors),
+        "--base",
+        "46.7800,-117.0805",
+        "--cell-size",
+        "20",
+        "--force",
+    ]);
+    ok(&["score", "--project", p]);
+}
+
+#[test]
+fn a_reader_does_not_wait_for_another_process_writing() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    let mut store = gleaner_store::SqliteStore::open(&dir.path().join("gleaner.db")).expect("open");
+    // This process holds the write lock while the commands run: they only read, and opening
+    // the project must not wait for the lock (it did, for the 60 s busy timeout, and then
+    // failed with SQLite's raw "database is locked"). A writer's message past the timeout is
+    // tested in gleaner-store.
+    use gleaner_store::{Store, StoreRead};
+    store
+        .write(|tx| {
+            tx.reading_count()?;
+            for args in [
+                vec!["cells", "--project", p],
+                vec!["missions", "--project", p],
+                vec!["reconstruct", "--project", p],
+            ] {
+                let out = gleaner(&args);
+                assert!(
+                    out.status.success(),
+                    "{args:?}: {}",
+                    String::from_utf8_lossy(&out.stderr)
+                );
+            }
+            Ok::<_, gleaner_store::StoreError>(())
+        })
+        .expect("write");
+}
+
+#[test]
+fn plan_takes_an_energy_preset_as_the_api_does() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    let budget = |extra: &[&str]| {
+        let mut args = vec![
+            "plan",
+            "--project",
+            p,
+            "--dry-run",
+            "--json",
+            "--iterations",
+            "50",
+        ];
+        args.extend_from_slice(extra);
+        let doc: serde_json::Value = serde_json::from_str(&ok(&args)).expect("json");
+        doc["energy"]["budget_j"].as_f64().expect("budget")
+    };
+    assert_eq!(budget(&[]), 66_500.0);
+    assert_eq!(budget(&["--energy-preset", "paper"]), 66_500.0);
+    assert!(budget(&["--energy-preset", "large-pack"]) > 200_000.0);
+    let err = fail(&["plan", "--project", p, "--energy-preset", "huge"]);
+    assert!(
+        err.contains("energy preset \"huge\": expected paper or large-pack"),
+        "{err}"
+    );
+}
+
+/// The cell table's readings: every stored reading of the cell's sensors, right after the
+/// ingest and right after a re-grid, before any scoring.
+#[test]
+fn cells_show_the_true_reading_count_before_any_scoring() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    let counts = |table: &str| -> Vec<(String, u64)> {
+        table
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let f: Vec<&str> = l.split_whitespace().collect();
+                (f[0].to_string(), f[4].parse().expect("readings"))
+            })
+            .collect()
+    };
+    let before = counts(&ok(&["cells", "--project", p]));
+    // x0y0 holds two sensors: 2 sensors x 2 modalities x 20 days.
+    assert_eq!(
+        before,
+        [
+            ("x0y0".into(), 80),
+            ("x2y0".into(), 40),
+            ("x2y1".into(), 40)
+        ]
+    );
+    ok(&[
+        "init",
+        "--dir",
+        p,
+        "--sensors",
+        s(&data("sensors.csv")),
+        "--base",
+        "46.7800,-117.0805",
+        "--cell-size",
+        "20",
+        "--force",
+    ]);
+    let regridded = counts(&ok(&["cells", "--project", p]));
+    assert_eq!(
+        regridded.iter().map(|c| c.1).sum::<u64>(),
+        160,
+        "{regridded:?}"
+    );
+    assert!(regridded.iter().all(|c| c.1 > 0), "{regridded:?}");
+    let json = ok(&["cells", "--project", p, "--json"]);
+    assert!(
+        json.contains("\"count\": 20"),
+        "summaries missing after the re-grid: {json}"
+    );
 }

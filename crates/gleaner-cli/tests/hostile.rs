@@ -490,3 +490,382 @@ fn hostile_arguments_are_refused_and_write_nothing() {
         );
     }
 }
+
+/// A farm copy with a second mission that visits one cell only (x2y1, from a scores file):
+/// returns the copy and that mission's id.
+fn farm_with_a_one_cell_mission(bases: &Bases) -> (tempfile::TempDir, String) {
+    let project = farm_copy(bases);
+    let p = project.path();
+    let scores = p.join("scores.csv");
+    std::fs::write(&scores, "cell_id,score\nx2y1,1.0\n").expect("write");
+    let out = gleaner(&[
+        "plan",
+        "--project",
+        s(p),
+        "--scores",
+        s(&scores),
+        "--time-limit",
+        "0.2",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let stops: Vec<&str> = doc["stops"]
+        .as_array()
+        .expect("stops")
+        .iter()
+        .map(|s| s["cell"].as_str().expect("cell"))
+        .collect();
+    assert_eq!(stops, ["x2y1"]);
+    let id = doc["mission_id"].as_i64().expect("stored").to_string();
+    (project, id)
+}
+
+/// Recording a flight is checked against the mission: only its stops can be visited, at or
+/// after its planned time, at a plausible date; each refusal writes nothing.
+#[test]
+fn record_refuses_cells_outside_the_mission_and_implausible_times() {
+    let bases = bases();
+    let (project, id) = farm_with_a_one_cell_mission(&bases);
+    let p = s(project.path());
+    let readings = project.path().join("flight.csv");
+    // n1 is in x0y0, which the mission does not visit.
+    std::fs::write(
+        &readings,
+        "sensor_id,timestamp,modality,value\nn1,2014-01-20,vw@30cm,0.3\n",
+    )
+    .expect("write");
+    let not_a_stop = format!("cell x0y0 is not a stop of mission #{id} (its stops: x2y1)");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![
+                "record",
+                "--project",
+                p,
+                "--mission",
+                &id,
+                "--cells",
+                "x0y0",
+                s(&readings),
+            ],
+            &not_a_stop,
+        ),
+        (
+            vec![
+                "record",
+                "--project",
+                p,
+                "--mission",
+                &id,
+                "--cells",
+                "x2y1,x0y0",
+            ],
+            "cell x0y0 is not a stop of mission #",
+        ),
+        (
+            vec![
+                "record",
+                "--project",
+                p,
+                "--mission",
+                &id,
+                "--at",
+                "0001-01-01",
+            ],
+            "collection time 0001-01-01T00:00:00Z: outside the years 1900..=2199",
+        ),
+        (
+            vec![
+                "record",
+                "--project",
+                p,
+                "--mission",
+                &id,
+                "--at",
+                "9999-12-31",
+            ],
+            "collection time 9999-12-31T00:00:00Z: outside the years 1900..=2199",
+        ),
+        (
+            vec![
+                "record",
+                "--project",
+                p,
+                "--mission",
+                &id,
+                "--at",
+                "2014-01-19",
+            ],
+            "collection time 2014-01-19T00:00:00Z is before mission #",
+        ),
+        (
+            vec!["score", "--project", p, "--at", "0001-01-01"],
+            "mission time 0001-01-01T00:00:00Z: outside the years 1900..=2199",
+        ),
+        (
+            vec!["score", "--project", p, "--at", "9999-12-31"],
+            "mission time 9999-12-31T00:00:00Z: outside the years 1900..=2199",
+        ),
+        (
+            vec!["plan", "--project", p, "--at", "9999-12-31"],
+            "mission time 9999-12-31T00:00:00Z: outside the years",
+        ),
+        (
+            vec!["explore", "--project", p, "--at", "0001-01-01"],
+            "mission time 0001-01-01T00:00:00Z: outside the years",
+        ),
+    ];
+    let before = dump(project.path());
+    for (args, expected) in &cases {
+        let out = gleaner(args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expected), "{args:?}: {err}");
+        assert_eq!(dump(project.path()), before, "{args:?} wrote");
+    }
+    // The mission's own stop, at its planned time, is recorded.
+    ok(&[
+        "record",
+        "--project",
+        p,
+        "--mission",
+        &id,
+        "--cells",
+        "x2y1",
+    ]);
+}
+
+/// A scoring refused after the persisted utility state went stale (a bulk ingest) writes
+/// nothing: not the scores, not the rebuilt `utility.incremental` blob.
+#[test]
+fn a_refused_score_writes_nothing_not_even_the_utility_state() {
+    let bases = bases();
+    let project = farm_copy(&bases);
+    let p = project.path();
+    let more = p.join("more.csv");
+    std::fs::write(
+        &more,
+        "sensor_id,timestamp,modality,value\nn1,2014-01-21,vw@30cm,0.3\n",
+    )
+    .expect("write");
+    ok(&["ingest", "--project", s(p), s(&more)]);
+    let toml = std::fs::read_to_string(p.join("gleaner.toml")).expect("toml");
+    let edited = toml.replace(
+        "[utility]\n",
+        "[utility]\ncondition_modality = \"vw@99cm\"\n",
+    );
+    assert_ne!(edited, toml);
+    std::fs::write(p.join("gleaner.toml"), edited).expect("write");
+    let before = dump(p);
+    let out = gleaner(&["score", "--project", s(p)]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("utility.condition_modality = \"vw@99cm\" has no readings"),
+        "{err}"
+    );
+    assert_eq!(dump(p), before, "the refused score wrote");
+    // With the setting back, the same scoring stores the state and the scores.
+    std::fs::write(p.join("gleaner.toml"), toml).expect("write");
+    ok(&["score", "--project", s(p)]);
+    assert_ne!(dump(p), before);
+}
+
+/// A plan with no cell worth visiting is refused (nothing stored); a mission without stops
+/// cannot be recorded.
+#[test]
+fn an_empty_mission_is_neither_stored_nor_recordable() {
+    let bases = bases();
+    let project = farm_copy(&bases);
+    let p = project.path();
+    let scores = p.join("zero.csv");
+    std::fs::write(&scores, "cell_id,score\nx0y0,0\nx2y0,-1\n").expect("write");
+    let before = dump(p);
+    let out = gleaner(&["plan", "--project", s(p), "--scores", s(&scores)]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("no cell to visit: of 3 cells none scores S > 0"),
+        "{err}"
+    );
+    assert_eq!(dump(p), before);
+    // A dry run still shows the empty plan.
+    ok(&[
+        "plan",
+        "--project",
+        s(p),
+        "--scores",
+        s(&scores),
+        "--dry-run",
+    ]);
+    assert_eq!(dump(p), before);
+}
+
+/// `-` (standard input) is refused with a clear message by every file argument.
+#[test]
+fn standard_input_as_dash_is_refused_clearly() {
+    let bases = bases();
+    let project = farm_copy(&bases);
+    let p = s(project.path());
+    let scratch = tempfile::tempdir().expect("temp dir");
+    let new = scratch.path().join("new");
+    for args in [
+        vec!["ingest", "--project", p, "-"],
+        vec!["ingest", "--project", p, "--format", "long-csv", "-"],
+        vec!["record", "--project", p, "--mission", "1", "-"],
+        vec!["score", "--project", p, "--probabilities", "-"],
+        vec!["plan", "--project", p, "--scores", "-"],
+        vec!["init", "--dir", s(&new), "--sensors", "-"],
+    ] {
+        let out = gleaner(&args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("standard input (`-`) is not read: save the data to a file"),
+            "{args:?}: {err}"
+        );
+        assert!(!new.exists());
+    }
+}
+
+/// Numbers far out of range are echoed short (1e300, not 301 digits), whatever the option.
+#[test]
+fn out_of_range_numbers_are_not_echoed_in_full() {
+    let bases = bases();
+    let project = farm_copy(&bases);
+    let p = s(project.path());
+    let sensors = corpus().join("../sensors.csv");
+    let readings = corpus().join("../readings.csv");
+    let scratch = tempfile::tempdir().expect("temp dir");
+    let new = scratch.path().join("new");
+    let big = "1e300";
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["plan", "--project", p, "--time-limit", big],
+        vec![
+            "init",
+            "--dir",
+            s(&new),
+            "--sensors",
+            s(&sensors),
+            "--cell-size",
+            big,
+        ],
+        vec![
+            "init",
+            "--dir",
+            s(&new),
+            "--sensors",
+            s(&sensors),
+            "--base-alt",
+            big,
+        ],
+        vec![
+            "init",
+            "--dir",
+            s(&new),
+            "--sensors",
+            s(&sensors),
+            "--base",
+            "1e300,0",
+        ],
+        vec![
+            "init",
+            "--dir",
+            s(&new),
+            "--sensors",
+            s(&sensors),
+            "--neighbour-radius",
+            big,
+        ],
+        vec![
+            "init",
+            "--dir",
+            s(&new),
+            "--sensors",
+            s(&sensors),
+            "--altitude",
+            big,
+            "--half-angle",
+            "30",
+        ],
+        vec![
+            "ingest",
+            "--project",
+            p,
+            "--modality",
+            "vw@30cm",
+            "--utc-offset",
+            big,
+            s(&readings),
+        ],
+    ];
+    for args in &cases {
+        let out = gleaner(args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = String::from_utf8_lossy(&out.stderr);
+        let longest = err
+            .split(|c: char| !c.is_ascii_digit())
+            .map(str::len)
+            .max()
+            .unwrap_or(0);
+        assert!(longest < 30, "{args:?}: {err}");
+        assert!(!new.exists());
+    }
+    // A setting edited into gleaner.toml, the same.
+    let toml = std::fs::read_to_string(project.path().join("gleaner.toml")).expect("toml");
+    for (section, line) in [
+        ("[utility]", "redundancy_weights = { vw = 1e300 }"),
+        ("[utility]", "condition_thresholds = [0.1, 1e300]"),
+        ("[field]", "neighbour_radius_m = 1e300"),
+        ("[field]", "cell_size_m = 1e300"),
+    ] {
+        let edited = set_setting(&toml, section, line);
+        std::fs::write(project.path().join("gleaner.toml"), &edited).expect("write");
+        let out = gleaner(&["score", "--project", p]);
+        assert!(!out.status.success(), "{line} accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("0000000000"), "{line}: {err}");
+    }
+}
+
+/// `toml` with `line` (`key = value`) in `section`: replacing the key's line, else added
+/// at the top of the section.
+fn set_setting(toml: &str, section: &str, line: &str) -> String {
+    let key = line.split('=').next().expect("key").trim();
+    let mut out = Vec::new();
+    let (mut in_section, mut done) = (false, false);
+    for l in toml.lines() {
+        if l.starts_with('[') {
+            in_section = l.trim() == section;
+            out.push(l.to_string());
+            if in_section && !done && !toml_has_key(toml, section, key) {
+                out.push(line.to_string());
+                done = true;
+            }
+            continue;
+        }
+        if in_section && l.split('=').next().map(str::trim) == Some(key) {
+            out.push(line.to_string());
+            done = true;
+        } else {
+            out.push(l.to_string());
+        }
+    }
+    assert!(done, "no section {section}");
+    out.join("\n") + "\n"
+}
+
+fn toml_has_key(toml: &str, section: &str, key: &str) -> bool {
+    let mut in_section = false;
+    toml.lines().any(|l| {
+        if l.starts_with('[') {
+            in_section = l.trim() == section;
+            return false;
+        }
+        in_section && l.split('=').next().map(str::trim) == Some(key)
+    })
+}

@@ -95,7 +95,7 @@ impl Battery {
     }
 }
 
-/// Optional climb at take-off and descent at landing (SPEC §3: off by default).
+/// Optional climb at take-off and descent at landing (docs/method.md §3: off by default).
 ///
 /// A simple conservative model, not part of Zeng et al. 2019: climbing to the flight altitude h
 /// at vertical speed v_c costs (P(0) + W·v_c)·h/v_c = P(0)·h/v_c + W·h (hover power plus the
@@ -165,7 +165,7 @@ impl Default for EnergyConfig {
 }
 
 impl EnergyConfig {
-    /// The paper scenario (SPEC §3): Table I airframe, cruise at the maximum-endurance speed,
+    /// The paper scenario (docs/method.md §3): Table I airframe, cruise at the maximum-endurance speed,
     /// 70,000 J pack with 5% reserve (66,500 J usable), hover = max(30 s, 30 s + t_comm),
     /// altitude 30 m, P_rx 0.5 W, no climb/descent energy. Cells are [`PAPER_CELL_SIZE_M`].
     pub fn paper() -> Self {

@@ -1,4 +1,4 @@
-//! Energy model for gleaner (SPEC §3): how much battery a data-collection sortie costs.
+//! Energy model for gleaner (docs/method.md §3): how much battery a data-collection sortie costs.
 //!
 //! Pure: no IO. The main types:
 //!

@@ -1,5 +1,5 @@
 //! Data collection at a cell: OFDMA link rates, pending data volume, collection and hover time
-//! (SPEC §3).
+//! (docs/method.md §3).
 //!
 //! Channel model: log-distance path loss with a free-space reference gain at 1 m,
 //! SNR_j (dB) = P_tx (dBm) + g0 (dB) − 10·alpha·log10(d_j / 1 m) − N (dBm), where the
@@ -114,7 +114,7 @@ impl LinkConfig {
     }
 }
 
-/// How a sensor logs data between collections (SPEC §1).
+/// How a sensor logs data between collections (docs/method.md §1).
 ///
 /// Defaults: one reading every 900 s (15 min), 64 bytes per reading (timestamp, a few channels
 /// and framing), unbounded buffer.

@@ -1,5 +1,5 @@
 //! Mission energy: E_t, E_h, E_c, E_r of an ordered route from the base and back, its budget
-//! feasibility, and the additive costs an orienteering planner needs (SPEC §3).
+//! feasibility, and the additive costs an orienteering planner needs (docs/method.md §3).
 
 use gleaner_field::{CellId, Field, LocalPoint};
 

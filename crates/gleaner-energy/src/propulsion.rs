@@ -372,7 +372,7 @@ mod tests {
 
     #[test]
     fn paper_airframe_rounded_values() {
-        // SPEC §3 values, quoted to 2 decimals.
+        // docs/method.md §3 values, quoted to 2 decimals.
         let m = PowerModel::default();
         assert!((m.blade_profile_power_w() - 79.86).abs() < 0.005);
         assert!((m.induced_power_w() - 88.63).abs() < 0.005);

@@ -4,7 +4,11 @@ use thiserror::Error;
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum FieldError {
     /// Latitude outside [-90, 90] degrees or longitude outside [-180, 180] degrees, or not finite.
-    #[error("invalid WGS84 position: lat {lat} deg, lon {lon} deg (need -90..=90, -180..=180)")]
+    #[error(
+        "invalid WGS84 position: lat {} deg, lon {} deg (need -90..=90, -180..=180)",
+        Short(*.lat),
+        Short(*.lon)
+    )]
     InvalidLatLon {
         /// Latitude, degrees.
         lat: f64,
@@ -12,7 +16,7 @@ pub enum FieldError {
         lon: f64,
     },
     /// A cell size that is not a positive finite number of metres.
-    #[error("invalid cell size {0} m: must be positive and finite")]
+    #[error("invalid cell size {} m: must be positive and finite", Short(*.0))]
     InvalidCellSize(f64),
     /// A UTM zone outside 1..=60.
     #[error("invalid UTM zone {0}: must be 1..=60")]
@@ -36,4 +40,20 @@ pub enum FieldError {
     /// A derived cell size that cannot exist (e.g. altitude above the link range).
     #[error("cannot derive a cell size: {0}")]
     Coverage(String),
+}
+
+/// A number for a message: as Rust writes it when short, else in scientific notation (1e300,
+/// not 301 digits).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Short(pub f64);
+
+impl std::fmt::Display for Short {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let plain = self.0.to_string();
+        if plain.len() <= 24 {
+            f.write_str(&plain)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
 }

@@ -1,9 +1,9 @@
-//! The square cell grid over the field, the non-empty cells and their neighbours (SPEC §1).
+//! The square cell grid over the field, the non-empty cells and their neighbours (docs/method.md §1).
 
 use std::collections::HashMap;
 use std::fmt;
 
-use crate::{FieldError, LatLon, LocalPoint, Sensor, TransverseMercator};
+use crate::{FieldError, LatLon, LocalPoint, Sensor, Short, TransverseMercator};
 
 /// Index of a grid cell: `i` columns east and `j` rows north of the cell whose south-west
 /// corner is the base station.
@@ -63,7 +63,7 @@ pub struct FieldConfig {
     /// Side of a square cell, metres (the UAV's ground coverage).
     pub cell_size_m: f64,
     /// For a cell with no non-empty 8-neighbour: how many nearest non-empty cells to use
-    /// instead (SPEC §1; default 3).
+    /// instead (docs/method.md §1; default 3).
     pub fallback_k: usize,
     /// ... and within what centre-to-centre distance, metres (default 200 m).
     pub fallback_radius_m: f64,
@@ -92,7 +92,9 @@ impl Default for FieldConfig {
 pub fn cell_size_from_half_angle(altitude_m: f64, half_angle_deg: f64) -> Result<f64, FieldError> {
     if !(altitude_m > 0.0 && half_angle_deg > 0.0 && half_angle_deg < 90.0) {
         return Err(FieldError::Coverage(format!(
-            "need altitude > 0 m and 0 < half-angle < 90 deg, got {altitude_m} m, {half_angle_deg} deg"
+            "need altitude > 0 m and 0 < half-angle < 90 deg, got {} m, {} deg",
+            Short(altitude_m),
+            Short(half_angle_deg)
         )));
     }
     Ok(altitude_m * half_angle_deg.to_radians().tan() * std::f64::consts::SQRT_2)
@@ -103,7 +105,9 @@ pub fn cell_size_from_half_angle(altitude_m: f64, half_angle_deg: f64) -> Result
 pub fn cell_size_from_link_range(altitude_m: f64, range_m: f64) -> Result<f64, FieldError> {
     if !(altitude_m >= 0.0 && range_m > altitude_m && range_m.is_finite()) {
         return Err(FieldError::Coverage(format!(
-            "link range {range_m} m must exceed altitude {altitude_m} m"
+            "link range {} m must exceed altitude {} m",
+            Short(range_m),
+            Short(altitude_m)
         )));
     }
     Ok((range_m * range_m - altitude_m * altitude_m).sqrt() * std::f64::consts::SQRT_2)
@@ -231,7 +235,7 @@ impl Field {
     pub fn cell_at(&self, index: CellIndex) -> Option<CellId> {
         self.by_index.get(&index).copied()
     }
-    /// The neighbours of `cell` (SPEC §1), ascending.
+    /// The neighbours of `cell` (docs/method.md §1), ascending.
     pub fn neighbours(&self, cell: CellId) -> &[CellId] {
         &self.neighbours[cell.index()]
     }

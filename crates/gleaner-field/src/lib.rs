@@ -10,7 +10,7 @@
 //!   the local east/north frame, in metres, centred on a reference point, that all planning uses.
 //! - [`Sensor`], [`SensorId`] and [`Modality`] describe the network.
 //! - [`Field`] cuts the plane into square cells of a given side, keeps the non-empty ones and
-//!   their neighbours (SPEC §1).
+//!   their neighbours (docs/method.md §1).
 //!
 //! ```
 //! use gleaner_field::{Field, FieldConfig, LatLon, Sensor, SensorId};
@@ -30,7 +30,7 @@ mod projection;
 mod sensor;
 pub mod time;
 
-pub use error::FieldError;
+pub use error::{FieldError, Short};
 pub use grid::{
     Cell, CellId, CellIndex, Field, FieldConfig, Neighbours, cell_size_from_half_angle,
     cell_size_from_link_range,

@@ -3,7 +3,7 @@
 //! - `sensor_metadata.csv` maps (logger, port) to a site, WGS84 lat/lon and a depth. Every
 //!   probe (a logger port) is one gleaner sensor, id `<logger>:p<port>` (e.g. `z6-19506:p3`),
 //!   at its site's position: replicate probes at one site then share a cell, whose series
-//!   averages them (SPEC §2).
+//!   averages them (docs/method.md §2).
 //! - Each logger file `z6-NNNNN.csv` has a `timestamp` column (`YYYY-MM-DD HH:MM`, fixed
 //!   UTC−04:00) and columns `p<port>:<model>:<variable>:<unit>`; empty = missing. Variables
 //!   become quantities at the probe's depth: `Water_Content` -> `vw`, `Soil_Temperature` ->

@@ -46,8 +46,8 @@ pub use hubbard_brook::{
     read_hubbard_brook_logger, read_hubbard_brook_sensors,
 };
 pub use readers::{
-    SensorInput, SensorsOptions, WideOptions, read_caf_daily, read_long_csv, read_sensors_csv,
-    read_wide_csv,
+    STDIN_NOT_READ, SensorInput, SensorsOptions, WideOptions, is_stdin, read_caf_daily,
+    read_long_csv, read_sensors_csv, read_wide_csv,
 };
 pub use readings::{IngestOptions, IngestReport, ModalityInfo, OnError, Readings, Row, SkippedRow};
 

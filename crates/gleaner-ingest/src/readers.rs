@@ -12,10 +12,26 @@ use crate::readings::{Interner, Row, known};
 use crate::time::{format_rfc3339, parse_clock, parse_date, parse_timestamp, parse_us_date};
 use crate::{IngestError, IngestOptions, IngestReport, OnError, Problem, Readings, default_unit};
 
+/// Why `-` is refused as a file name (unless a file of that name exists).
+pub const STDIN_NOT_READ: &str = "standard input (`-`) is not read: save the data to a file \
+                                  and give its path (a file is read twice: to detect its \
+                                  format, then to parse it)";
+
+/// Whether `path` is `-` meaning standard input: no file of that name exists.
+pub fn is_stdin(path: &Path) -> bool {
+    path == Path::new("-") && !path.exists()
+}
+
 /// Reads the whole file, strips a UTF-8 byte-order mark. Only regular files are read: a pipe,
 /// FIFO or device is refused before it is opened (opening a FIFO blocks until a writer comes,
 /// and a pipe can be read once only, while detection and parsing read a file twice).
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, IngestError> {
+    if is_stdin(path) {
+        return Err(IngestError::Options {
+            path: path.to_path_buf(),
+            message: STDIN_NOT_READ.into(),
+        });
+    }
     let meta = std::fs::metadata(path).map_err(|source| IngestError::Io {
         path: path.to_path_buf(),
         source,

@@ -1,4 +1,4 @@
-//! Exploration phase (SPEC §5 step 3): visit every cell in as few budget-feasible sorties as
+//! Exploration phase (docs/method.md §5 step 3): visit every cell in as few budget-feasible sorties as
 //! possible.
 //!
 //! Route-first, cluster-second:

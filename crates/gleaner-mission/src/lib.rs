@@ -7,9 +7,9 @@
 //! budget is the usable battery energy less the fixed take-off/landing energy — solves it, and
 //! re-checks the chosen route with the energy model's own breakdown ([`MissionPlan::energy`]).
 //!
-//! Cells with S <= 0 are never worth a detour (SPEC §2) and are left out of the instance.
+//! Cells with S <= 0 are never worth a detour (docs/method.md §2) and are left out of the instance.
 //!
-//! [`exploration::plan_exploration`] plans the exploration phase (SPEC §5 step 3): the fewest
+//! [`exploration::plan_exploration`] plans the exploration phase (docs/method.md §5 step 3): the fewest
 //! budget-feasible sorties that together visit every cell.
 //!
 //! [`PlanOptions::with_time_limit_secs`] turns a user's time limit in seconds into the

@@ -49,7 +49,7 @@
 //!
 //! # Algorithm design
 //!
-//! - **Greedy** (SPEC §4, faithful to the paper): repeatedly insert the feasible node of
+//! - **Greedy** (docs/method.md §4, faithful to the paper): repeatedly insert the feasible node of
 //!   largest reward / extra cost at its cheapest insertion position (extra travel + service
 //!   cost). Cheapest positions are cached per node and route and updated incrementally
 //!   after each insertion (only the broken edge forces a rescan), so a whole construction

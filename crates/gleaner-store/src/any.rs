@@ -186,6 +186,7 @@ any_read! {
     cell_metadata() -> Vec<CellMetadata>;
     cell_metadata_scalars() -> Vec<CellMetadata>;
     sensor_last_collected() -> Vec<(SensorId, UnixSeconds)>;
+    sensor_reading_counts() -> Vec<(SensorId, u64)>;
     missions() -> Vec<MissionRecord>;
     mission(id: MissionId) -> Option<MissionRecord>;
     config_get(key: &str) -> Option<String>;

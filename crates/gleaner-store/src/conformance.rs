@@ -349,6 +349,7 @@ impl Rng {
 pub fn empty_store_reads_empty<S: Store>(store: &mut S) {
     assert!(store.schema_version().unwrap() >= 1);
     assert_eq!(store.reading_count().unwrap(), 0);
+    assert!(store.sensor_reading_counts().unwrap().is_empty());
     assert!(store.sensors().unwrap().is_empty());
     assert!(store.missions().unwrap().is_empty());
     assert_eq!(store.mission(MissionId(1)).unwrap(), None);
@@ -469,6 +470,10 @@ pub fn reinserting_readings_changes_nothing<S: Store>(store: &mut S) {
     let s = insert(store, &close, ConflictPolicy::Fail).unwrap();
     assert_eq!((s.inserted, s.unchanged), (0, 1));
     assert_eq!(store.reading_count().unwrap(), 3);
+    assert_eq!(
+        store.sensor_reading_counts().unwrap(),
+        vec![(sid("a"), 2), (sid("b"), 1)]
+    );
 }
 
 /// A conflicting reading under `Fail` writes nothing (not even the batch's new readings);

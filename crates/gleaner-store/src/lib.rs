@@ -9,7 +9,7 @@
 //!   foreign keys on, versioned migrations); its write transaction is [`SqliteTx`].
 //! - Values in and out are plain Rust types: [`SensorRecord`], [`ModalityRecord`], the columnar
 //!   [`ReadingBatch`] (built with [`ReadingBatchBuilder`]), [`CellRecord`], [`CellMetadata`]
-//!   (the SPEC §5 cell metadata table with [`ModalitySummary`], [`Correlation`],
+//!   (the docs/method.md §5 cell metadata table with [`ModalitySummary`], [`Correlation`],
 //!   [`AnomalyRecord`], [`ClassProbability`] and [`CellScores`]), [`NewMission`] (with its
 //!   [`FlightProfile`], [`EnergyBreakdown`] and [`StopRecord`]s), [`MissionRecord`] and
 //!   [`VisitRecord`]. No backend type appears in the interface: engine errors arrive as
@@ -84,7 +84,7 @@
 //! | `sensor_collection` | `sensor`, `last_collected` (s) | last time a UAV collected each sensor |
 //! | `cells` | `id`, `label` (`x12y-3`, unique), `i`, `j`, `lat`, `lon` (centre, deg), `cell_size_m` (m) | the current grid |
 //! | `cell_sensors` | `cell`, `sensor` (unique) | each sensor in at most one cell |
-//! | `cell_metadata` | `cell`, `last_collected` (s), `pending_bytes` (bytes), `expected_energy_j` (J), `freshness`, `redundancy`, `anomaly`, `uncertainty`, `score`, `computed_at` (s) | one row per cell (SPEC §5) |
+//! | `cell_metadata` | `cell`, `last_collected` (s), `pending_bytes` (bytes), `expected_energy_j` (J), `freshness`, `redundancy`, `anomaly`, `uncertainty`, `score`, `computed_at` (s) | one row per cell (docs/method.md §5) |
 //! | `cell_class_probabilities` | `cell`, `k`, `class`, `probability` | the distribution behind U |
 //! | `cell_summaries` | `cell`, `modality`, `count`, `mean`, `std` (sample), `min`, `max`, `latest_t` (s), `latest_value` | of the cell series, as computed by the caller |
 //! | `cell_correlations` | `cell`, `neighbour`, `modality`, `correlation`, `overlap` (points) | Pearson, per neighbour |
@@ -153,6 +153,9 @@ macro_rules! store_read_methods {
         }
         fn sensor_last_collected(&self) -> Result<Vec<(SensorId, UnixSeconds)>> {
             self.read(read::sensor_last_collected)
+        }
+        fn sensor_reading_counts(&self) -> Result<Vec<(SensorId, u64)>> {
+            self.read(read::sensor_reading_counts)
         }
         fn missions(&self) -> Result<Vec<MissionRecord>> {
             self.read(|c| read::missions(c, None))

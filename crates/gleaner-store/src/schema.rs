@@ -335,10 +335,22 @@ pub(crate) fn migrate_with(conn: &mut Connection, migrations: &[Migration]) -> R
     .db()?;
     let supported = migrations.len() as i64;
     let found = current_version(conn)?;
+    if found == supported {
+        // Up to date: no write transaction, so opening a project never waits for (or fails
+        // on) another process's write.
+        return Ok(found);
+    }
+    let path = conn.path().unwrap_or(":memory:").to_string();
     loop {
         let tx = conn
             .transaction_with_behavior(TransactionBehavior::Immediate)
-            .db()?;
+            .map_err(|e| {
+                if e.sqlite_error_code() == Some(rusqlite::ErrorCode::DatabaseBusy) {
+                    crate::sqlite::busy_error(&path, crate::sqlite::BUSY_TIMEOUT)
+                } else {
+                    StoreError::Backend(e.to_string())
+                }
+            })?;
         let version = current_version(&tx)?;
         if version > supported {
             return Err(StoreError::SchemaTooNew {

@@ -76,6 +76,17 @@ pub struct SqliteStore {
     /// own commits set it from their transaction's count. `COUNT(*)` scans the whole table,
     /// and use cases check the count at every scoring and write.
     count: Cell<Option<(i64, u64)>>,
+    /// How long a writer waits for another connection's write lock ([`BUSY_TIMEOUT`]).
+    busy_timeout: Duration,
+}
+
+/// The error of a writer that waited `timeout` for another connection's write lock on `path`.
+pub(crate) fn busy_error(path: &str, timeout: Duration) -> StoreError {
+    StoreError::Backend(format!(
+        "another gleaner process has been writing to {path} for more than {} s; try again when \
+         it has finished",
+        timeout.as_secs_f64()
+    ))
 }
 
 /// An open write transaction of a [`SqliteStore`] (see [`Store::write`]).
@@ -161,7 +172,16 @@ impl SqliteStore {
         Ok(Self {
             conn,
             count: Cell::new(None),
+            busy_timeout: BUSY_TIMEOUT,
         })
+    }
+
+    /// Sets how long a writer waits for another connection's write lock before failing with
+    /// "another gleaner process has been writing to ..." [default: [`BUSY_TIMEOUT`]].
+    pub fn set_busy_timeout(&mut self, timeout: Duration) -> Result<()> {
+        self.conn.busy_timeout(timeout).db()?;
+        self.busy_timeout = timeout;
+        Ok(())
     }
 
     /// SQLite's own checks of the file: `PRAGMA integrity_check` (b-trees, indexes, pages)
@@ -359,12 +379,7 @@ impl Store for SqliteStore {
             .transaction_with_behavior(TransactionBehavior::Immediate)
             .map_err(|e| {
                 if e.sqlite_error_code() == Some(rusqlite::ErrorCode::DatabaseBusy) {
-                    StoreError::Backend(format!(
-                        "another gleaner process has been writing to {} for more than {} s; \
-                         try again when it has finished",
-                        path,
-                        BUSY_TIMEOUT.as_secs()
-                    ))
+                    busy_error(&path, self.busy_timeout)
                 } else {
                     StoreError::Backend(e.to_string())
                 }

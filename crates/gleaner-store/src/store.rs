@@ -70,6 +70,9 @@ pub trait StoreRead {
     fn cell_metadata_scalars(&self) -> Result<Vec<CellMetadata>>;
     /// Last collection time per sensor (collected sensors only), sorted by sensor id.
     fn sensor_last_collected(&self) -> Result<Vec<(SensorId, UnixSeconds)>>;
+    /// The number of stored readings per sensor (sensors with readings only), sorted by
+    /// sensor id.
+    fn sensor_reading_counts(&self) -> Result<Vec<(SensorId, u64)>>;
 
     /// All missions with their stops and visits, oldest first.
     fn missions(&self) -> Result<Vec<MissionRecord>>;
@@ -142,7 +145,7 @@ pub trait StoreWrite: StoreRead {
 }
 
 /// Persistent state of a gleaner project: sensors, readings, cells, the cell metadata table
-/// (SPEC §5), missions and settings.
+/// (docs/method.md §5), missions and settings.
 ///
 /// Every write goes through [`Store::write`]: the closure's writes are one transaction, kept
 /// when it returns `Ok`, all discarded when it returns `Err` (or panics, or the process dies).

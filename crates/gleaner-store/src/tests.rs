@@ -557,6 +557,50 @@ fn a_second_writer_waits_for_the_first() {
     assert_eq!(second.reading_count().unwrap(), 2);
 }
 
+/// Past the busy timeout a second writer fails with the documented message, not SQLite's raw
+/// "database is locked"; opening the database and reading meanwhile do not wait for the lock.
+/// Explicit synchronisation: the first writer holds its transaction until the second is done.
+#[test]
+fn a_writer_past_the_busy_timeout_is_told_another_process_is_writing() {
+    use std::sync::mpsc::channel;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("g.db");
+    let mut first = SqliteStore::open(&path).unwrap();
+    store_with_network(&mut first);
+    let (held_tx, held_rx) = channel();
+    let (done_tx, done_rx) = channel::<()>();
+    let holder = std::thread::spawn(move || {
+        first
+            .write(|tx| {
+                tx.reading_count()?;
+                held_tx.send(()).unwrap();
+                done_rx.recv().unwrap();
+                Ok::<_, StoreError>(())
+            })
+            .unwrap();
+    });
+    held_rx.recv().unwrap();
+    let mut second = SqliteStore::open(&path).expect("opening does not wait for the writer");
+    second.reading_count().expect("reading does not wait");
+    second
+        .set_busy_timeout(std::time::Duration::from_millis(20))
+        .unwrap();
+    let err = second
+        .write(|tx| tx.reading_count().map(|_| ()))
+        .expect_err("the write lock is held")
+        .to_string();
+    done_tx.send(()).unwrap();
+    holder.join().unwrap();
+    assert!(
+        err.contains(&format!(
+            "another gleaner process has been writing to {} for more than 0.02 s",
+            path.display()
+        )),
+        "{err}"
+    );
+    assert!(!err.contains("database is locked"), "{err}");
+}
+
 /// Inserts ever new batches in separate transactions until killed (run as a child process by
 /// [`a_killed_writer_leaves_whole_transactions_only`]); a no-op in a normal test run.
 #[test]

@@ -242,7 +242,7 @@ pub struct CellRecord {
 }
 
 /// Summary of a cell's series of one modality (the cell series is the mean over the cell's
-/// sensors at each time, SPEC §2).
+/// sensors at each time, docs/method.md §2).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModalitySummary {
     /// Modality.
@@ -258,7 +258,7 @@ pub struct Correlation {
     pub neighbour: CellIndex,
     /// Modality.
     pub modality: Modality,
-    /// Correlation coefficient in [-1, 1] (0 when there is no evidence, SPEC §2).
+    /// Correlation coefficient in [-1, 1] (0 when there is no evidence, docs/method.md §2).
     pub correlation: f64,
     /// Number of common timestamps it was computed over.
     pub overlap: u64,
@@ -286,7 +286,7 @@ pub struct ClassProbability {
     pub probability: f64,
 }
 
-/// The latest utility terms of a cell (SPEC §2).
+/// The latest utility terms of a cell (docs/method.md §2).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CellScores {
     /// Freshness F in [0, 1].
@@ -303,7 +303,7 @@ pub struct CellScores {
     pub computed_at: UnixSeconds,
 }
 
-/// One row of the cell metadata table (SPEC §5) with its child records.
+/// One row of the cell metadata table (docs/method.md §5) with its child records.
 ///
 /// On [`crate::StoreWrite::upsert_cell_metadata`] the scalar fields, `scores` and
 /// `class_probabilities` replace what is stored for the cell; `summaries`, `correlations` and
@@ -351,9 +351,9 @@ impl CellMetadata {
 /// Whether a mission explores (visits every cell) or adapts (visits the best cells).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MissionKind {
-    /// An exploration sortie (SPEC §5 step 3).
+    /// An exploration sortie (docs/method.md §5 step 3).
     Exploration,
-    /// An adaptive mission (SPEC §5 step 4).
+    /// An adaptive mission (docs/method.md §5 step 4).
     Adaptive,
 }
 
@@ -412,7 +412,7 @@ impl fmt::Display for MissionId {
     }
 }
 
-/// The energy breakdown of a sortie B -> c_1 -> ... -> c_k -> B (SPEC §3).
+/// The energy breakdown of a sortie B -> c_1 -> ... -> c_k -> B (docs/method.md §3).
 ///
 /// `total_j = travel_j + hover_j + comm_j + return_j`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

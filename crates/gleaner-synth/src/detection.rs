@@ -1,5 +1,5 @@
 //! Event detection judged against ground truth (pure): the paper's own-history z-score
-//! (SPEC §2's anomaly A on a one-sensor cell) and a neighbour-relative z-score, flagged at
+//! (docs/method.md §2's anomaly A on a one-sensor cell) and a neighbour-relative z-score, flagged at
 //! |z| > threshold on every station-day, scored against the farm's known events.
 //!
 //! The neighbour-relative measure: each day, the station's residual `r_i(t) = x_i(t) -

@@ -324,7 +324,7 @@ pub fn missing_structure(modalities: &[&[Vec<f64>]]) -> (f64, f64) {
     (frac(missing, total), frac(partial, gap_days))
 }
 
-/// Fraction of station-days with an own-history z-score (SPEC §2's anomaly on a one-sensor
+/// Fraction of station-days with an own-history z-score (docs/method.md §2's anomaly on a one-sensor
 /// cell: the day's value against the mean and sd of all the sensor's earlier values) above
 /// `threshold` in magnitude, over station-days with at least `min_history` earlier values and
 /// not masked by `skip[sensor][day]` (an empty `skip` masks nothing).

@@ -1,4 +1,4 @@
-//! The agricultural-condition model behind the uncertainty term U (SPEC §2).
+//! The agricultural-condition model behind the uncertainty term U (docs/method.md §2).
 //!
 //! Classes come from one modality (by default soil moisture at 30 cm: K = 3, dry / adequate /
 //! wet) cut at thresholds given in the configuration or taken at the quantiles 1/K, 2/K, … of
@@ -83,7 +83,7 @@ pub struct ConditionConfig {
     pub lags_days: Vec<i64>,
     /// Points in the trend's least-squares fit (default 5, >= 2).
     pub trend_points: usize,
-    /// Use the season features (default true, as SPEC §2 lists them; with only a couple of
+    /// Use the season features (default true, as docs/method.md §2 lists them; with only a couple of
     /// training years they can learn one year's weather, see the crate's CAF evaluation).
     pub season: bool,
     /// L2 penalty on the standardised weights (default 1e-4; the bias gets 1e-6).

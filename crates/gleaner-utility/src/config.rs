@@ -1,4 +1,4 @@
-//! Configuration of the utility score (SPEC §2).
+//! Configuration of the utility score (docs/method.md §2).
 
 use crate::UtilityError;
 use gleaner_field::UnixSeconds;
@@ -125,7 +125,7 @@ impl AnomalyForm {
 /// How the four terms combine into S.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ScoreForm {
-    /// S = alpha·F + beta·A + gamma·U − delta·R (SPEC §2, the paper's; the default).
+    /// S = alpha·F + beta·A + gamma·U − delta·R (docs/method.md §2, the paper's; the default).
     #[default]
     Additive,
     /// S = alpha·F·max(0, 1 + beta·A + gamma·U − delta·R): freshness gated by the cell's
@@ -151,7 +151,7 @@ impl ScoreForm {
 /// What the anomaly A_i^m measures the latest value against.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum AnomalyReference {
-    /// The cell's own past: `|x̂(t*) − mu| / (sigma + epsilon)` over the cell series (SPEC §2,
+    /// The cell's own past: `|x̂(t*) − mu| / (sigma + epsilon)` over the cell series (docs/method.md §2,
     /// the paper's form; the default).
     #[default]
     OwnHistory,
@@ -181,7 +181,7 @@ impl AnomalyReference {
 
 /// Every parameter of S_i = alpha·F_i + beta·A_i + gamma·U_i − delta·R_i.
 ///
-/// Defaults (SPEC §2): all weights 1, freshness half-life 3 days (259,200 s), all history,
+/// Defaults (docs/method.md §2): all weights 1, freshness half-life 3 days (259,200 s), all history,
 /// `min_overlap` 10, `epsilon` 1e-6, equal modality weights, raw anomaly.
 #[derive(Debug, Clone, PartialEq)]
 pub struct UtilityConfig {

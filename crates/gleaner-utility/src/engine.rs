@@ -1,4 +1,4 @@
-//! Scoring every cell from scratch (SPEC §2): plain in-memory inputs in, terms out.
+//! Scoring every cell from scratch (docs/method.md §2): plain in-memory inputs in, terms out.
 
 use rayon::prelude::*;
 

@@ -53,7 +53,7 @@ pub enum UtilityError {
         /// Number of modalities configured.
         expected: usize,
     },
-    /// A cell has no sensors (only non-empty cells are candidates, SPEC §1).
+    /// A cell has no sensors (only non-empty cells are candidates, docs/method.md §1).
     #[error("cell {0} has no sensors")]
     NoSensors(usize),
     /// A neighbour index is out of range or the cell itself.

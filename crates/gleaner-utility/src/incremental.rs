@@ -1,4 +1,4 @@
-//! Statistics maintained as readings arrive (SPEC §5: the cell metadata), so that rescoring
+//! Statistics maintained as readings arrive (docs/method.md §5: the cell metadata), so that rescoring
 //! after a mission costs O(new readings × neighbours + cells × neighbours × modalities) instead
 //! of O(history).
 //!

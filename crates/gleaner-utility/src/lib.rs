@@ -1,4 +1,4 @@
-//! Cell utility engine for gleaner (SPEC §2). Pure: no IO, no database.
+//! Cell utility engine for gleaner (docs/method.md §2). Pure: no IO, no database.
 //!
 //! Each candidate cell gets a score S_i = alpha·F_i + beta·A_i + gamma·U_i − delta·R_i from
 //! four terms:
@@ -36,7 +36,7 @@
 //! assert!(terms[1].s > terms[0].s);
 //! ```
 //!
-//! # Decisions where SPEC §2 is silent
+//! # Decisions where docs/method.md §2 is silent
 //!
 //! - Scoring at time t uses only points at or before t (and inside the history window);
 //!   what a series contains is what has been collected: the caller passes collected data only.

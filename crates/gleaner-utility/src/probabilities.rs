@@ -1,4 +1,4 @@
-//! Validation of class probabilities supplied by the user's own model (SPEC §2: a file of
+//! Validation of class probabilities supplied by the user's own model (docs/method.md §2: a file of
 //! cell id -> p_1..p_K; parsing the file is the caller's job).
 
 use std::collections::HashMap;

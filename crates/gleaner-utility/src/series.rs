@@ -1,5 +1,5 @@
 //! Time series of a cell: borrowed views, owned series, the sampling grid and the cell mean
-//! over sensors (SPEC §2, x̂_i^m(t)).
+//! over sensors (docs/method.md §2, x̂_i^m(t)).
 
 use gleaner_field::UnixSeconds;
 
@@ -125,7 +125,7 @@ impl TimeGrid {
 }
 
 /// The cell series x̂_i^m: for each grid slot, the mean of the readings of the cell's sensors
-/// that fall in that slot (SPEC §2). Missing readings are absent and never count as zeros;
+/// that fall in that slot (docs/method.md §2). Missing readings are absent and never count as zeros;
 /// non-finite values (NaN, ±inf) are treated as missing. With at most one reading per sensor
 /// per slot (the usual case) this is exactly the mean over the sensors having a reading at t.
 ///

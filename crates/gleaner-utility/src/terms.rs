@@ -1,4 +1,4 @@
-//! The four terms of SPEC §2 as pure functions of plain values.
+//! The four terms of docs/method.md §2 as pure functions of plain values.
 
 use crate::{Series, UtilityConfig};
 use gleaner_field::UnixSeconds;
@@ -10,7 +10,7 @@ pub(crate) fn is_degenerate(m2: f64, n: f64, mean: f64) -> bool {
     m2.is_nan() || m2 <= 0.0 || m2 <= n * (1e-12 * mean).powi(2)
 }
 
-/// Freshness F_i = mean over the cell's sensors of 1 − exp(−lambda·(t − t_j^l)) (SPEC §2),
+/// Freshness F_i = mean over the cell's sensors of 1 − exp(−lambda·(t − t_j^l)) (docs/method.md §2),
 /// dimensionless in [0, 1].
 ///
 /// `t` is the mission time (s), `last_collected` the sensors' last collection times (s;
@@ -158,7 +158,7 @@ pub(crate) fn finish_pearson(
     Some((sxy / (sxx * syy).sqrt()).clamp(-1.0, 1.0))
 }
 
-/// Pearson correlation of two series over the timestamps where both have a value (SPEC §2):
+/// Pearson correlation of two series over the timestamps where both have a value (docs/method.md §2):
 /// 0 when there are fewer than `min_overlap` common timestamps or either side has zero
 /// variance (no evidence of redundancy). Dimensionless in [−1, 1].
 pub fn series_correlation(a: Series<'_>, b: Series<'_>, min_overlap: usize) -> f64 {
@@ -206,7 +206,7 @@ pub(crate) fn merged_correlation(
     pearson(&xs[..k], &ys[..k]).unwrap_or(0.0)
 }
 
-/// Redundancy of one modality R_i^m = (1/|N_i|)·Σ_j max(0, corr(x̂_i^m, x̂_j^m)) (SPEC §2),
+/// Redundancy of one modality R_i^m = (1/|N_i|)·Σ_j max(0, corr(x̂_i^m, x̂_j^m)) (docs/method.md §2),
 /// dimensionless in [0, 1]. `neighbours` holds the neighbours' series of modality m (an empty
 /// series for a neighbour lacking m: it contributes 0 but still counts in |N_i|). No neighbours
 /// gives 0. Window the series (e.g. with [`Series::between`]) before calling.
@@ -229,7 +229,7 @@ pub fn redundancy(cell: Series<'_>, neighbours: &[Series<'_>], min_overlap: usiz
     (total / neighbours.len() as f64).clamp(0.0, 1.0)
 }
 
-/// Anomaly of one modality A_i^m = |x̂(t*) − mu| / (sigma + epsilon) (SPEC §2), in standard
+/// Anomaly of one modality A_i^m = |x̂(t*) − mu| / (sigma + epsilon) (docs/method.md §2), in standard
 /// deviations, >= 0: t* is the series' last timestamp, mu and sigma the mean and the sample
 /// standard deviation (n − 1) of the points before t*. Fewer than 2 such points gives 0.
 /// `epsilon` is in the modality's unit. Window the series before calling.
@@ -321,7 +321,7 @@ pub(crate) fn anomaly_from_stats(latest: f64, mu: f64, variance: f64, epsilon: f
     (latest - mu).abs() / (variance.max(0.0).sqrt() + epsilon)
 }
 
-/// Model uncertainty U_i = −(1/ln K)·Σ_k p_k ln p_k, with 0·ln 0 = 0 (SPEC §2): the normalised
+/// Model uncertainty U_i = −(1/ln K)·Σ_k p_k ln p_k, with 0·ln 0 = 0 (docs/method.md §2): the normalised
 /// entropy of a class distribution, dimensionless in [0, 1]. Fewer than 2 classes gives 0.
 /// The probabilities are assumed valid (see [`validate_probabilities`](crate::validate_probabilities)).
 ///
@@ -354,7 +354,7 @@ pub fn median_of_sorted(sorted: &[f64]) -> f64 {
     }
 }
 
-/// The score S_i = alpha·F + beta·A + gamma·U − delta·R (SPEC §2) with the weights of
+/// The score S_i = alpha·F + beta·A + gamma·U − delta·R (docs/method.md §2) with the weights of
 /// `config`; `a` is the anomaly in the form the configuration uses (raw or bounded).
 ///
 /// ```

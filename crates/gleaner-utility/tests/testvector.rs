@@ -1,4 +1,4 @@
-//! Reproduces the shared test vector `testvectors/utility.json` (SPEC §2) to a relative 1e-9.
+//! Reproduces the shared test vector `testvectors/utility.json` (docs/method.md §2) to a relative 1e-9.
 
 use std::collections::BTreeMap;
 

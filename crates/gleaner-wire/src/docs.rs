@@ -58,7 +58,7 @@ pub struct CorrelationDoc {
     pub overlap: u64,
 }
 
-/// One row of the cell metadata table (SPEC §5). Positions `[lon, lat]`.
+/// One row of the cell metadata table (docs/method.md §5). Positions `[lon, lat]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct CellRowDoc {

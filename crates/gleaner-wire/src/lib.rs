@@ -177,7 +177,7 @@ pub struct StopDoc {
     pub comm_j: f64,
 }
 
-/// The energy breakdown of a sortie (SPEC §3).
+/// The energy breakdown of a sortie (docs/method.md §3).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct EnergyDoc {

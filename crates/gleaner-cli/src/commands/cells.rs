@@ -1,5 +1,8 @@
 //! `gleaner cells`: the cell table with its metadata, as text or JSON.
 
+use std::collections::HashMap;
+
+use gleaner_field::CellIndex;
 use gleaner_wire::docs::CellRowDoc;
 
 /// How to order the table.
@@ -38,8 +41,9 @@ pub fn sort(rows: &mut [CellRowDoc], key: SortKey) {
     }
 }
 
-/// The table as aligned text, one line per cell.
-pub fn table(rows: &[CellRowDoc]) -> String {
+/// The table as aligned text, one line per cell; `readings` is each cell's stored readings
+/// (every sensor and modality; a cell missing from it has none).
+pub fn table(rows: &[CellRowDoc], readings: &HashMap<CellIndex, u64>) -> String {
     let mut out = format!(
         "{:<10} {:>10} {:>11} {:>7} {:>8} {:>20} {:>10} {:>6} {:>6} {:>6} {:>6} {:>7}\n",
         "cell",
@@ -56,7 +60,9 @@ pub fn table(rows: &[CellRowDoc]) -> String {
         "S"
     );
     for r in rows {
-        let readings: u64 = r.summaries.iter().map(|s| s.count).sum();
+        let readings: u64 = CellIndex::parse(&r.cell)
+            .and_then(|c| readings.get(&c).copied())
+            .unwrap_or(0);
         let latest = r
             .summaries
             .iter()

@@ -243,8 +243,8 @@ fn synthetic(
         correlation_length_m: 500.0,
         no_faults: false,
         scale_extent: false,
-        vw_depths_cm: vec![30, 60, 90],
-        t_depths_cm: vec![30],
+        vw_depths_cm: synth::Depths(vec![30, 60, 90]),
+        t_depths_cm: synth::Depths(vec![30]),
     })?;
     writeln!(
         out,

@@ -36,16 +36,19 @@ pub fn sorties_table(docs: &[MissionDoc]) -> String {
     out
 }
 
-/// A mission summary (SPEC §6) as a readable table.
+/// A mission summary (docs/method.md §6) as a readable table.
 pub fn table(m: &MissionDoc) -> String {
     let mut out = format!(
-        "mission{} ({}) planned for {} with the {} planner: {} of {} candidate cells, total S = {:.3}\n",
+        "mission{} ({}) planned for {} with the {} planner: {}, total S = {:.3}\n",
         m.mission_id.map_or(String::new(), |id| format!(" #{id}")),
         m.status,
         m.planned_at,
         m.planner,
-        m.stops.len(),
-        m.candidates.map_or("?".to_string(), |c| c.to_string()),
+        match m.candidates {
+            Some(c) => format!("{} of {c} candidate cells", m.stops.len()),
+            // A stored mission does not keep how many cells it was chosen from.
+            None => format!("{} cells", m.stops.len()),
+        },
         m.total_score
     );
     out.push_str(&format!(

@@ -959,7 +959,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
          sensor's own drift — the staleness index of its mean squared change, less the field's \
          mean, over the last year of collected readings —, bounded anomaly, γ = δ = 0) + the \
          default planner; gated = gleaner's first method (gated S with a 14-day freshness \
-         half-life and the project's γ, δ); paper = the paper's S (SPEC §2 at its values) + the \
+         half-life and the project's γ, δ); paper = the paper's S (docs/method.md §2 at its values) + the \
          paper's greedy; variance = greedy expected reduction of the level kriging's posterior \
          variance, routed by the default planner; freshness = S with F only; round-robin = days \
          since the last collection; random = seeded uniform scores; nearest = equal scores with \

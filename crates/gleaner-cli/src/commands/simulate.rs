@@ -260,8 +260,8 @@ fn synthetic(args: &SimulateArgs, seed: u64, dir: &Path) -> Result<Replay> {
         correlation_length_m: 500.0,
         no_faults: false,
         scale_extent: args.farm_scale_extent,
-        vw_depths_cm: vec![30, 60, 90],
-        t_depths_cm: vec![30],
+        vw_depths_cm: synth::Depths(vec![30, 60, 90]),
+        t_depths_cm: synth::Depths(vec![30]),
     })?;
     let events: Vec<TruthEvent> = farm
         .events()

@@ -66,12 +66,32 @@ pub struct SynthArgs {
     /// Grow the field with the sensor count to keep CAF's sensor density.
     #[arg(long)]
     pub scale_extent: bool,
-    /// Soil-moisture depths, cm (modalities vw@<d>cm); empty for none.
-    #[arg(long = "vw-depths", value_delimiter = ',', default_value = "30,60,90")]
-    pub vw_depths_cm: Vec<u32>,
-    /// Soil-temperature depths, cm (modalities t@<d>cm); empty for none.
-    #[arg(long = "t-depths", value_delimiter = ',', default_value = "30")]
-    pub t_depths_cm: Vec<u32>,
+    /// Soil-moisture depths, cm, comma-separated (modalities vw@<d>cm); empty ('') for none.
+    #[arg(long = "vw-depths", value_parser = parse_depths, default_value = "30,60,90")]
+    pub vw_depths_cm: Depths,
+    /// Soil-temperature depths, cm, comma-separated (modalities t@<d>cm); empty ('') for none.
+    #[arg(long = "t-depths", value_parser = parse_depths, default_value = "30")]
+    pub t_depths_cm: Depths,
+}
+
+/// A list of depths, cm (`--vw-depths`, `--t-depths`): possibly empty.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Depths(pub Vec<u32>);
+
+/// `30,60,90` -> [30, 60, 90]; an empty (or blank) list means no depth.
+fn parse_depths(s: &str) -> Result<Depths, String> {
+    if s.trim().is_empty() {
+        return Ok(Depths(Vec::new()));
+    }
+    s.split(',')
+        .map(|d| {
+            d.trim().parse::<u32>().map_err(|_| {
+                let d: String = d.chars().take(20).collect();
+                format!("depth {d:?}: expected whole centimetres, e.g. 30,60,90 (or '' for none)")
+            })
+        })
+        .collect::<Result<_, _>>()
+        .map(Depths)
 }
 
 /// The core configuration for these settings.
@@ -89,8 +109,8 @@ pub fn config(args: &SynthArgs) -> SynthConfig {
             FaultRates::default()
         },
         scale_extent_with_sensors: args.scale_extent,
-        vw_depths_cm: args.vw_depths_cm.clone(),
-        t_depths_cm: args.t_depths_cm.clone(),
+        vw_depths_cm: args.vw_depths_cm.0.clone(),
+        t_depths_cm: args.t_depths_cm.0.clone(),
         ..SynthConfig::default()
     }
 }

@@ -474,6 +474,23 @@ pub(super) fn sensor_last_collected(
     .collect()
 }
 
+pub(super) fn sensor_reading_counts(c: &mut Transaction<'_>) -> Result<Vec<(SensorId, u64)>> {
+    c.query(
+        "SELECT s.name, n.count FROM (SELECT sensor, COUNT(*) AS count FROM readings
+             GROUP BY sensor) n JOIN sensors s ON s.id = n.sensor ORDER BY s.name COLLATE \"C\"",
+        &[],
+    )
+    .db()?
+    .iter()
+    .map(|r| {
+        Ok((
+            parse_sensor("readings", r.get(0))?,
+            count("readings", r.get(1))?,
+        ))
+    })
+    .collect()
+}
+
 /// All missions (`id` = `None`) or one, oldest first, with their stops and visits.
 pub(super) fn missions(
     c: &mut Transaction<'_>,

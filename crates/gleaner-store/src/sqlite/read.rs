@@ -437,6 +437,18 @@ pub(super) fn sensor_last_collected(c: &Connection) -> Result<Vec<(SensorId, Uni
         .collect()
 }
 
+pub(super) fn sensor_reading_counts(c: &Connection) -> Result<Vec<(SensorId, u64)>> {
+    let rows: Vec<(String, i64)> = select(
+        c,
+        "SELECT s.name, n.count FROM (SELECT sensor, COUNT(*) AS count FROM readings
+             GROUP BY sensor) n JOIN sensors s ON s.id = n.sensor ORDER BY s.name",
+        [],
+    )?;
+    rows.into_iter()
+        .map(|(name, n)| Ok((parse_sensor("readings", name)?, count("readings", n)?)))
+        .collect()
+}
+
 /// A `missions` row as read, before its stops and visits.
 struct MissionRow {
     id: i64,
