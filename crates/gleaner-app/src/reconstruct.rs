@@ -223,15 +223,20 @@ pub(crate) struct Models {
 /// Largest lag of the dynamic model's persistence fit, days.
 pub const DYNAMIC_LAG_DAYS: i64 = 14;
 
+/// Whether the dynamic model carries a common level of its own
+/// ([`DynamicFitOptions::common_mode`]).
+pub const DYNAMIC_COMMON_MODE: bool = false;
+
 /// The dynamic model's fit options at sampling step `step_s` (seconds): automatic
-/// shrinkage, reading noise 0.1% of the variance, lags up to [`DYNAMIC_LAG_DAYS`].
+/// shrinkage, reading noise 0.1% of the variance, lags up to [`DYNAMIC_LAG_DAYS`], a common
+/// level as [`DYNAMIC_COMMON_MODE`] says.
 pub fn dynamic_fit_options(step_s: i64) -> DynamicFitOptions {
     DynamicFitOptions {
         step_s: step_s.max(1),
         max_lag_s: DYNAMIC_LAG_DAYS * 86_400,
         shrinkage: Shrinkage::Auto,
         noise_share: 1e-3,
-        ..DynamicFitOptions::default()
+        common_mode: DYNAMIC_COMMON_MODE,
     }
 }
 

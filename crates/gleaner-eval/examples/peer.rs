@@ -1,7 +1,7 @@
 //! Runs the peer protocol with its settings overridden from the environment, for choosing
 //! settings on the tuning data (`gleaner evaluate peer` is the user-facing form):
 //! `cargo run --release -p gleaner-eval --example peer -- hourly|tuning DATA [OUT.csv]`
-//! with `SHRINK` (auto or an intensity), `NOISE` (share of the variance), `LAG_H` (hours).
+//! with `SHRINK` (auto or an intensity), `NOISE` (share of the variance), `LAG_H` (hours), `COMMON` (1: a common level).
 use std::path::PathBuf;
 
 use gleaner_eval::peer::{self, Dataset, Estimator, Planner};
@@ -24,6 +24,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if let Ok(x) = std::env::var("NOISE") {
         protocol.fit.noise_share = x.parse()?;
+    }
+    if let Ok(x) = std::env::var("COMMON") {
+        protocol.fit.common_mode = x == "1";
     }
     if let Ok(x) = std::env::var("LAG_H") {
         protocol.fit.max_lag_s = x.parse::<i64>()? * 3600;

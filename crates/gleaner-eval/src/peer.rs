@@ -473,6 +473,7 @@ impl Fitted {
         let peer = fit(&DynamicFitOptions {
             shrinkage: Shrinkage::Fixed(0.0),
             noise_share: 1e-9,
+            common_mode: false,
             ..protocol.fit
         })?;
         Ok(Fitted {

@@ -54,6 +54,10 @@ pub struct DynamicFitOptions {
     /// Reading noise variance as a share of the mean sensor variance (the nugget that keeps
     /// the filter well conditioned; readings are nearly exact).
     pub noise_share: f64,
+    /// Model a common level shared by every sensor (the field-wide wetness) as its own
+    /// state with its own persistence, the sensors' deviations from it with theirs
+    /// ([`DynamicModel::common`]); false: one persistence for the whole deviation.
+    pub common_mode: bool,
 }
 
 impl Default for DynamicFitOptions {
@@ -66,6 +70,7 @@ impl Default for DynamicFitOptions {
             min_overlap: 10,
             shrinkage: Shrinkage::Auto,
             noise_share: 1e-3,
+            common_mode: false,
         }
     }
 }
@@ -79,6 +84,9 @@ pub struct DynamicModel {
     step_s: f64,
     noise: f64,
     shrinkage: f64,
+    /// Stationary variance (unit²) and per-step persistence of the common level (0, 0: none).
+    common_var: f64,
+    common_phi: f64,
 }
 
 impl DynamicModel {
@@ -136,7 +144,42 @@ impl DynamicModel {
             step_s,
             noise,
             shrinkage: 0.0,
+            common_var: 0.0,
+            common_phi: 0.0,
         })
+    }
+
+    /// The same model with a common level: `x_i(t) = μ_i + c(t) + d_i(t)`, `c` stationary
+    /// with variance `var` (unit²) and lag-one autocorrelation `phi` per step, independent of
+    /// the deviations `d`.
+    ///
+    /// Errors: a negative or non-finite variance, `phi` outside [0, 1].
+    pub fn with_common(mut self, var: f64, phi: f64) -> Result<Self, KrigingError> {
+        check(
+            "common variance",
+            var,
+            var >= 0.0 && var.is_finite(),
+            ">= 0",
+        )?;
+        check("common phi", phi, (0.0..=1.0).contains(&phi), "in [0, 1]")?;
+        self.common_var = var;
+        self.common_phi = phi;
+        Ok(self)
+    }
+
+    /// The common level's stationary variance (unit²) and per-step persistence (0, 0 when
+    /// the model has none).
+    pub fn common(&self) -> (f64, f64) {
+        (self.common_var, self.common_phi)
+    }
+
+    /// A sensor's stationary (prior) variance, unit²: its deviation's plus the common level's.
+    pub fn prior_variance(&self, sensor: usize) -> f64 {
+        let n = self.len();
+        if sensor >= n {
+            return f64::NAN;
+        }
+        self.cov[sensor * n + sensor] + self.common_var
     }
 
     /// Number of sensors.
@@ -181,19 +224,23 @@ impl DynamicModel {
 
     /// Correlation of a deviation with itself `lag_s` seconds later: `φ^(|lag|/step)`.
     pub fn persistence(&self, lag_s: f64) -> f64 {
-        if self.phi <= 0.0 {
-            return if lag_s == 0.0 { 1.0 } else { 0.0 };
-        }
-        (self.phi.ln() * lag_s.abs() / self.step_s).exp()
+        decay(self.phi, lag_s, self.step_s)
     }
 
     /// A filter at time `time_s` (seconds) holding the stationary prior (nothing known yet).
     pub fn filter(&self, time_s: f64) -> FieldFilter<'_> {
+        let n = self.len();
+        let m = n + 1;
+        let mut cov = vec![0.0; m * m];
+        for i in 0..n {
+            cov[i * m..i * m + n].copy_from_slice(&self.cov[i * n..(i + 1) * n]);
+        }
+        cov[n * m + n] = self.common_var;
         FieldFilter {
             model: self,
             time_s,
-            mean: vec![0.0; self.len()],
-            cov: self.cov.clone(),
+            mean: vec![0.0; m],
+            cov,
         }
     }
 
@@ -220,6 +267,17 @@ impl DynamicModel {
     }
 }
 
+/// `phi^(|lag|/step)`, 1 at lag 0 even for `phi` = 0.
+fn decay(phi: f64, lag_s: f64, step_s: f64) -> f64 {
+    if lag_s == 0.0 {
+        return 1.0;
+    }
+    if phi <= 0.0 {
+        return 0.0;
+    }
+    (phi.ln() * lag_s.abs() / step_s).exp()
+}
+
 fn check(
     what: &'static str,
     value: f64,
@@ -237,8 +295,9 @@ fn check(
     }
 }
 
-/// The Kalman filter of a [`DynamicModel`]: the posterior of every sensor's deviation given
-/// the readings observed so far, at [`FieldFilter::time_s`].
+/// The Kalman filter of a [`DynamicModel`]: the posterior of every sensor's deviation and of
+/// the common level (the last of the n + 1 states) given the readings observed so far, at
+/// [`FieldFilter::time_s`].
 #[derive(Debug, Clone)]
 pub struct FieldFilter<'m> {
     model: &'m DynamicModel,
@@ -262,17 +321,31 @@ impl FieldFilter<'_> {
             return;
         }
         self.time_s = time_s;
-        let a = self.model.persistence(dt);
-        if a == 1.0 {
+        let model = self.model;
+        let n = model.len();
+        let m = n + 1;
+        let a = model.persistence(dt);
+        let ac = decay(model.common_phi, dt, model.step_s);
+        if a == 1.0 && ac == 1.0 {
             return;
         }
+        for x in &mut self.mean[..n] {
+            *x *= a;
+        }
+        self.mean[n] *= ac;
         let a2 = a * a;
-        for m in &mut self.mean {
-            *m *= a;
+        for i in 0..n {
+            let row = &mut self.cov[i * m..(i + 1) * m];
+            for (p, s) in row[..n].iter_mut().zip(&model.cov[i * n..(i + 1) * n]) {
+                *p = a2 * *p + (1.0 - a2) * s;
+            }
+            row[n] *= a * ac;
         }
-        for (p, s) in self.cov.iter_mut().zip(&self.model.cov) {
-            *p = a2 * *p + (1.0 - a2) * s;
+        for j in 0..n {
+            self.cov[n * m + j] *= a * ac;
         }
+        let c = &mut self.cov[n * m + n];
+        *c = ac * ac * *c + (1.0 - ac * ac) * model.common_var;
     }
 
     /// Takes a reading `value` (the modality's unit) of `sensor` at the filter's time.
@@ -282,7 +355,7 @@ impl FieldFilter<'_> {
         if sensor >= n || !value.is_finite() {
             return;
         }
-        let innovation = value - self.model.means[sensor] - self.mean[sensor];
+        let innovation = value - self.model.means[sensor] - self.mean[sensor] - self.mean[n];
         if let Some(gain) = self.update(sensor) {
             for (m, g) in self.mean.iter_mut().zip(&gain) {
                 *m += g * innovation;
@@ -298,29 +371,34 @@ impl FieldFilter<'_> {
         }
     }
 
-    /// Rank-one covariance update for a reading of `sensor`; the gain, or None when the
-    /// reading carries no information (its variance is already at the noise floor).
+    /// Rank-one covariance update for a reading of `sensor` (observation vector: its
+    /// deviation plus the common level); the gain, or None when the reading carries no
+    /// information (its variance is already at the noise floor).
     fn update(&mut self, sensor: usize) -> Option<Vec<f64>> {
         let n = self.model.len();
-        let s = self.cov[sensor * n + sensor] + self.model.noise;
-        let floor = 1e-12 * self.model.cov[sensor * n + sensor].max(1e-300);
+        let m = n + 1;
+        // P hᵀ = P[:, sensor] + P[:, n].
+        let col: Vec<f64> = (0..m)
+            .map(|j| self.cov[j * m + sensor] + self.cov[j * m + n])
+            .collect();
+        let s = col[sensor] + col[n] + self.model.noise;
+        let floor = 1e-12 * self.model.prior_variance(sensor).max(1e-300);
         if s.is_nan() || s <= floor {
             return None;
         }
-        let col: Vec<f64> = (0..n).map(|j| self.cov[j * n + sensor]).collect();
         let gain: Vec<f64> = col.iter().map(|c| c / s).collect();
         for (i, &gi) in gain.iter().enumerate() {
             if gi == 0.0 {
                 continue;
             }
-            let row = &mut self.cov[i * n..(i + 1) * n];
+            let row = &mut self.cov[i * m..(i + 1) * m];
             for (p, c) in row.iter_mut().zip(&col) {
                 *p -= gi * c;
             }
         }
         // Keep the diagonal non-negative against rounding.
-        for i in 0..n {
-            let d = &mut self.cov[i * n + i];
+        for i in 0..m {
+            let d = &mut self.cov[i * m + i];
             if *d < 0.0 {
                 *d = 0.0;
             }
@@ -335,16 +413,18 @@ impl FieldFilter<'_> {
         if sensor >= n {
             return (f64::NAN, f64::NAN);
         }
+        let m = n + 1;
+        let var =
+            self.cov[sensor * m + sensor] + 2.0 * self.cov[sensor * m + n] + self.cov[n * m + n];
         (
-            self.model.means[sensor] + self.mean[sensor],
-            self.cov[sensor * n + sensor].max(0.0),
+            self.model.means[sensor] + self.mean[sensor] + self.mean[n],
+            var.max(0.0),
         )
     }
 
     /// Sum of every sensor's posterior variance, unit².
     pub fn total_variance(&self) -> f64 {
-        let n = self.model.len();
-        (0..n).map(|i| self.cov[i * n + i].max(0.0)).sum()
+        (0..self.model.len()).map(|i| self.estimate(i).1).sum()
     }
 }
 
@@ -381,7 +461,7 @@ pub fn fit_dynamic(
         });
     }
     // Finite readings only, per sensor.
-    let clean: Vec<(Vec<i64>, Vec<f64>)> = series
+    let mut clean: Vec<(Vec<i64>, Vec<f64>)> = series
         .iter()
         .map(|s| {
             s.times
@@ -402,11 +482,44 @@ pub fn fit_dynamic(
     }
     let global = known.iter().sum::<f64>() / known.len() as f64;
     let means: Vec<f64> = means_opt.iter().map(|m| m.unwrap_or(global)).collect();
-    let dev: Vec<Vec<f64>> = clean
+    let mut dev: Vec<Vec<f64>> = clean
         .iter()
         .zip(&means)
         .map(|((_, v), m)| v.iter().map(|x| x - m).collect())
         .collect();
+    // The common level: at each time read by at least two sensors, the mean deviation; the
+    // sensors' deviations from it are what the covariance and φ describe.
+    let mut common = (0.0, 0.0);
+    if options.common_mode && n >= 2 {
+        let mut level: std::collections::BTreeMap<i64, (f64, usize)> = Default::default();
+        for ((t, _), d) in clean.iter().zip(&dev) {
+            for (&ti, &di) in t.iter().zip(d) {
+                let e = level.entry(ti).or_insert((0.0, 0));
+                e.0 += di;
+                e.1 += 1;
+            }
+        }
+        level.retain(|_, (_, c)| *c >= 2);
+        let (ct, cv): (Vec<i64>, Vec<f64>) =
+            level.iter().map(|(&t, &(s, c))| (t, s / c as f64)).unzip();
+        for ((t, _), d) in clean.iter_mut().zip(dev.iter_mut()) {
+            let mut keep_t = Vec::with_capacity(t.len());
+            let mut keep_d = Vec::with_capacity(t.len());
+            for (&ti, &di) in t.iter().zip(d.iter()) {
+                if let Ok(k) = ct.binary_search(&ti) {
+                    keep_t.push(ti);
+                    keep_d.push(di - cv[k]);
+                }
+            }
+            *t = keep_t;
+            *d = keep_d;
+        }
+        if cv.len() >= 2 {
+            let var_c = cv.iter().map(|x| x * x).sum::<f64>() / cv.len() as f64;
+            let phi_c = persistence_fit(&[(ct.as_slice(), cv.as_slice())], options);
+            common = (var_c, phi_c);
+        }
+    }
     let vars: Vec<Option<f64>> = dev
         .iter()
         .map(|d| (d.len() >= 2).then(|| d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64))
@@ -432,38 +545,13 @@ pub fn fit_dynamic(
         .collect();
 
     // φ from the pooled autocorrelation of the deviations.
+    let pooled: Vec<(&[i64], &[f64])> = clean
+        .iter()
+        .zip(&dev)
+        .map(|((t, _), d)| (t.as_slice(), d.as_slice()))
+        .collect();
+    let phi = persistence_fit(&pooled, options);
     let step = options.step_s;
-    let max_k = (options.max_lag_s / step).max(1);
-    let mut lags: Vec<i64> = Vec::new();
-    let mut k = 1i64;
-    while k <= max_k && lags.len() < 64 {
-        lags.push(k);
-        k = (k + 1).max((k as f64 * 1.15).ceil() as i64);
-    }
-    let (mut skl, mut skk) = (0.0, 0.0);
-    for &k in &lags {
-        let (mut sab, mut saa, mut sbb, mut cnt) = (0.0, 0.0, 0.0, 0usize);
-        for ((t, _), d) in clean.iter().zip(&dev) {
-            let (a, b, c, m) = paired(t, d, t, d, k * step);
-            sab += a;
-            saa += b;
-            sbb += c;
-            cnt += m;
-        }
-        if cnt >= options.min_overlap && saa > 0.0 && sbb > 0.0 {
-            let rho = sab / (saa * sbb).sqrt();
-            if rho > 0.05 {
-                let kf = k as f64;
-                skl += kf * rho.ln();
-                skk += kf * kf;
-            }
-        }
-    }
-    let phi = if skk > 0.0 {
-        (skl / skk).exp().clamp(0.0, 0.999_999)
-    } else {
-        0.0
-    };
 
     // Pairwise-complete correlations.
     let mut corr = vec![0.0; n * n];
@@ -544,9 +632,48 @@ pub fn fit_dynamic(
         cov = build(lambda);
     }
     let noise = options.noise_share.max(0.0) * mean_var;
-    let mut model = DynamicModel::new(means, cov, phi, step as f64, noise)?;
+    let mut model =
+        DynamicModel::new(means, cov, phi, step as f64, noise)?.with_common(common.0, common.1)?;
     model.shrinkage = lambda;
     Ok(model)
+}
+
+/// `exp(Σ k ln ρ_k / Σ k²)` over the pooled lag-k autocorrelations `ρ_k > 0.05` of the series
+/// (k steps up to `max_lag_s`, at most 64 lags spread geometrically), clamped to
+/// [0, 0.999999]; 0 without any.
+fn persistence_fit(series: &[(&[i64], &[f64])], options: &DynamicFitOptions) -> f64 {
+    let step = options.step_s;
+    let max_k = (options.max_lag_s / step).max(1);
+    let mut lags: Vec<i64> = Vec::new();
+    let mut k = 1i64;
+    while k <= max_k && lags.len() < 64 {
+        lags.push(k);
+        k = (k + 1).max((k as f64 * 1.15).ceil() as i64);
+    }
+    let (mut skl, mut skk) = (0.0, 0.0);
+    for &k in &lags {
+        let (mut sab, mut saa, mut sbb, mut cnt) = (0.0, 0.0, 0.0, 0usize);
+        for (t, d) in series {
+            let (a, b, c, m) = paired(t, d, t, d, k * step);
+            sab += a;
+            saa += b;
+            sbb += c;
+            cnt += m;
+        }
+        if cnt >= options.min_overlap && saa > 0.0 && sbb > 0.0 {
+            let rho = sab / (saa * sbb).sqrt();
+            if rho > 0.05 {
+                let kf = k as f64;
+                skl += kf * rho.ln();
+                skk += kf * kf;
+            }
+        }
+    }
+    if skk > 0.0 {
+        (skl / skk).exp().clamp(0.0, 0.999_999)
+    } else {
+        0.0
+    }
 }
 
 /// Strict Cholesky test (no jitter): whether the matrix is numerically positive definite
@@ -766,6 +893,71 @@ mod tests {
             est.iter()
                 .all(|(mu, v)| mu.is_finite() && v.is_finite() && *v >= 0.0)
         );
+    }
+
+    #[test]
+    fn a_common_level_is_learned_and_carries_unread_sensors() {
+        // Four sensors: a slow common level (a ramp) plus fast own deviations.
+        let t: Vec<i64> = (0..600).map(|i| i * 3600).collect();
+        let own = |k: usize, i: usize| ((i * (k + 3)) as f64 * 0.7).sin() * 0.002;
+        let level = |i: usize| 0.05 * (i as f64 / 100.0).sin();
+        let vals: Vec<Vec<f64>> = (0..4)
+            .map(|k| {
+                (0..600)
+                    .map(|i| 0.2 + 0.01 * k as f64 + level(i) + own(k, i))
+                    .collect()
+            })
+            .collect();
+        let series: Vec<SensorSeries<'_>> = vals
+            .iter()
+            .map(|v| SensorSeries {
+                position: [0.0, 0.0],
+                times: &t,
+                values: v,
+            })
+            .collect();
+        let opts = DynamicFitOptions {
+            step_s: 3600,
+            max_lag_s: 48 * 3600,
+            common_mode: true,
+            ..DynamicFitOptions::default()
+        };
+        let m = fit_dynamic(&series, &opts).unwrap();
+        let (var_c, phi_c) = m.common();
+        assert!(var_c > 10.0 * m.covariance()[0], "{var_c}");
+        assert!(phi_c > m.phi(), "{phi_c} vs {}", m.phi());
+        // Sensor 3 read at hour 0 only; the others every hour: its estimate follows the level.
+        let mut f = m.filter(0.0);
+        f.observe(3, vals[3][0]);
+        for i in 1..300 {
+            f.advance((i * 3600) as f64);
+            for k in 0..3 {
+                f.observe(k, vals[k][i]);
+            }
+        }
+        let (mu, var) = f.estimate(3);
+        assert!((mu - vals[3][299]).abs() < 0.01, "{mu} vs {}", vals[3][299]);
+        assert!(var < m.prior_variance(3));
+        // Without a common level the filter equals the plain model's.
+        let plain = m.clone().with_common(0.0, 0.0).unwrap();
+        let base = DynamicModel::new(
+            m.means().to_vec(),
+            m.covariance().to_vec(),
+            m.phi(),
+            3600.0,
+            m.noise(),
+        )
+        .unwrap();
+        let (mut a, mut b) = (plain.filter(0.0), base.filter(0.0));
+        for (k, v) in [(0, 0.21), (2, 0.19)] {
+            a.observe(k, v);
+            b.observe(k, v);
+        }
+        a.advance(7200.0);
+        b.advance(7200.0);
+        for k in 0..4 {
+            assert_eq!(a.estimate(k), b.estimate(k));
+        }
     }
 
     proptest! {
