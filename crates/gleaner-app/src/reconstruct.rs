@@ -237,6 +237,7 @@ pub fn dynamic_fit_options(step_s: i64) -> DynamicFitOptions {
         shrinkage: Shrinkage::Auto,
         noise_share: 1e-3,
         common_mode: DYNAMIC_COMMON_MODE,
+        ..DynamicFitOptions::default()
     }
 }
 
@@ -1017,6 +1018,7 @@ mod tests {
     /// reading at a time it reported, variances within the prior; bad ranges refused.
     #[test]
     fn series_over_a_range() {
+        use gleaner_store::StoreRead;
         use gleaner_synth::{SynthConfig, generate, write_readings_csv, write_sensors_csv};
         let farm = generate(&SynthConfig {
             seed: 7,
