@@ -1035,7 +1035,7 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     assert!(
         out.contains("vw@30cm at")
             && out.contains("model of changes")
-            && out.contains("kriging of changes")
+            && out.contains("dynamic field model")
             && out.contains("kriged"),
         "{out}"
     );
@@ -1054,7 +1054,7 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     .expect("JSON");
     assert_eq!(doc["format"], "gleaner.reconstruction");
     assert_eq!(doc["modality"], "vw@30cm");
-    assert_eq!(doc["estimator"], "changes");
+    assert_eq!(doc["estimator"], "dynamic");
     assert!(doc["model"]["changes_range_m"].as_f64().unwrap() > 0.0);
     let sensors = doc["sensors"].as_array().unwrap();
     assert_eq!(sensors.len(), 12);
@@ -1077,6 +1077,39 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
         let ll = row["lon_lat"].as_array().unwrap();
         assert!(ll[0].as_f64().unwrap().abs() <= 180.0 && ll[1].as_f64().unwrap().abs() <= 90.0);
     }
+
+    // Over a range: one CSV row per time and sensor, each mean inside its 90% interval, the
+    // same values as the series document; a range that ends before it starts is refused.
+    let when = |k: usize| doc["at"].as_str().unwrap()[..10].to_string() + &format!("T0{k}:00:00Z");
+    let (from, to) = (when(0), when(6));
+    let csv = dir.path().join("series.csv");
+    let printed = ok(&[
+        "reconstruct", "--project", s(&p), "--modality", "vw@30cm", "--from", &from, "--to", &to,
+        "--every-hours", "3", "--out", s(&csv),
+    ]);
+    assert!(printed.contains("3 times × 12 sensors"), "{printed}");
+    let text = std::fs::read_to_string(&csv).expect("series.csv");
+    let rows: Vec<&str> = text.lines().collect();
+    assert_eq!(rows[0], "time,sensor,mean,sd,lo90,hi90");
+    assert_eq!(rows.len(), 1 + 3 * 12);
+    for r in &rows[1..] {
+        let c: Vec<f64> = r.split(',').skip(2).map(|x| x.parse().unwrap()).collect();
+        assert!(c[2] <= c[0] && c[0] <= c[3] && c[1] >= 0.0, "{r}");
+    }
+    let series: serde_json::Value = serde_json::from_str(&ok(&[
+        "reconstruct", "--project", s(&p), "--modality", "vw@30cm", "--from", &from, "--to", &to,
+        "--every-hours", "3", "--json",
+    ]))
+    .expect("JSON");
+    assert_eq!(series["format"], "gleaner.reconstruction-series");
+    assert_eq!(series["times"].as_array().unwrap().len(), 3);
+    let first: Vec<&str> = rows[1].split(',').collect();
+    let m = series["mean"][0][0].as_f64().unwrap();
+    assert!((m - first[2].parse::<f64>().unwrap()).abs() <= 5e-7, "{m} vs {}", rows[1]);
+    let err = fail(&[
+        "reconstruct", "--project", s(&p), "--from", &to, "--to", &from,
+    ]);
+    assert!(err.contains("ends before it starts"), "{err}");
 }
 
 #[test]
