@@ -43,6 +43,7 @@
 pub mod campaign;
 pub mod cell_csv;
 mod cell_detail;
+mod choices;
 mod drift;
 mod error;
 mod explore;

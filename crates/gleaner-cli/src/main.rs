@@ -223,7 +223,8 @@ enum Command {
     Explore {
         #[command(flatten)]
         project: ProjectArg,
-        /// Planning time (RFC 3339 or date) [default: the latest reading].
+        /// Planning time (RFC 3339 or date, years 1900..=2199) [default: the latest reading;
+        /// without readings it must be given].
         #[arg(long, value_parser = parse_time)]
         at: Option<i64>,
         #[command(flatten)]
@@ -268,10 +269,12 @@ enum Command {
         /// The planned mission's id (printed by `gleaner plan`).
         #[arg(long)]
         mission: i64,
-        /// Collection time (RFC 3339 or date) [default: the mission's planned time].
+        /// Collection time (RFC 3339 or date), not before the mission's planned time [default:
+        /// the planned time].
         #[arg(long, value_parser = parse_time)]
         at: Option<i64>,
-        /// Cells actually visited, comma-separated, in order [default: the planned stops].
+        /// Cells actually visited, comma-separated, in order, each one of the mission's stops
+        /// [default: the planned stops].
         #[arg(long, value_delimiter = ',')]
         cells: Option<Vec<String>>,
         /// Replace an earlier record of this mission (otherwise recording a mission twice is
@@ -474,8 +477,8 @@ impl JsonArg {
 /// The mission time and which stored readings count as collected by then.
 #[derive(Args)]
 struct WhenArgs {
-    /// Mission time (RFC 3339 or YYYY-MM-DD, UTC) [default: the latest reading]. Only data up
-    /// to this time is used.
+    /// Mission time (RFC 3339 or YYYY-MM-DD, UTC; years 1900..=2199) [default: the latest
+    /// reading]. Only data up to this time is used.
     #[arg(long, value_parser = parse_time)]
     at: Option<i64>,
     /// Use only readings from this time on (RFC 3339 or date) as collected history.

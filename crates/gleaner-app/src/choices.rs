@@ -1,0 +1,85 @@
+//! Choices named in requests, parsed by `FromStr`, each spelled once: the reconstruction's
+//! estimator and the campaign's strategy (the energy preset is
+//! [`EnergyPreset`](crate::settings::EnergyPreset), next to the settings it names).
+
+use std::str::FromStr;
+
+use gleaner_kriging::Mean;
+
+use crate::campaign::Strategy;
+use crate::error::AppError;
+use crate::reconstruct::Estimator;
+
+impl Estimator {
+    /// Every estimator, in the order they are listed.
+    pub const ALL: [Self; 3] = [
+        Self::Changes,
+        Self::Levels(Mean::Unknown),
+        Self::Levels(Mean::Known),
+    ];
+
+    /// Its name in requests and documents: `changes` (kriging of changes), `levels` (ordinary
+    /// kriging of levels) or `simple` (simple kriging of levels).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Changes => "changes",
+            Self::Levels(Mean::Unknown) => "levels",
+            Self::Levels(Mean::Known) => "simple",
+        }
+    }
+}
+
+impl FromStr for Estimator {
+    type Err = AppError;
+
+    fn from_str(s: &str) -> Result<Self, AppError> {
+        Self::ALL
+            .into_iter()
+            .find(|e| e.name() == s)
+            .ok_or_else(|| {
+                AppError::Invalid(format!(
+                    "estimator {:?}: expected changes, levels or simple",
+                    gleaner_ingest::shorten(s)
+                ))
+            })
+    }
+}
+
+impl FromStr for Strategy {
+    type Err = AppError;
+
+    /// [`Strategy::parse`].
+    fn from_str(s: &str) -> Result<Self, AppError> {
+        Strategy::parse(s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::EnergyPreset;
+
+    #[test]
+    fn every_choice_parses_back_from_its_name_and_others_are_refused() {
+        for e in Estimator::ALL {
+            assert_eq!(e.name().parse::<Estimator>().expect("estimator"), e);
+        }
+        for s in Strategy::ALL.iter().chain(&Strategy::YARDSTICKS) {
+            assert_eq!(s.name().parse::<Strategy>().expect("strategy"), *s);
+        }
+        for p in EnergyPreset::ALL {
+            assert_eq!(p.name().parse::<EnergyPreset>().expect("preset"), p);
+        }
+        let e = "kriging"
+            .parse::<Estimator>()
+            .expect_err("unknown")
+            .to_string();
+        assert!(e.contains("expected changes, levels or simple"), "{e}");
+        assert!("best".parse::<Strategy>().is_err());
+        let p = "huge"
+            .parse::<EnergyPreset>()
+            .expect_err("unknown")
+            .to_string();
+        assert!(p.contains("expected paper or large-pack"), "{p}");
+    }
+}
