@@ -12,16 +12,19 @@ use crate::reconstruct::Estimator;
 
 impl Estimator {
     /// Every estimator, in the order they are listed.
-    pub const ALL: [Self; 3] = [
+    pub const ALL: [Self; 4] = [
+        Self::Dynamic,
         Self::Changes,
         Self::Levels(Mean::Unknown),
         Self::Levels(Mean::Known),
     ];
 
-    /// Its name in requests and documents: `changes` (kriging of changes), `levels` (ordinary
-    /// kriging of levels) or `simple` (simple kriging of levels).
+    /// Its name in requests and documents: `dynamic` (the dynamic field model), `changes`
+    /// (kriging of changes), `levels` (ordinary kriging of levels) or `simple` (simple kriging
+    /// of levels).
     pub fn name(self) -> &'static str {
         match self {
+            Self::Dynamic => "dynamic",
             Self::Changes => "changes",
             Self::Levels(Mean::Unknown) => "levels",
             Self::Levels(Mean::Known) => "simple",
@@ -38,7 +41,7 @@ impl FromStr for Estimator {
             .find(|e| e.name() == s)
             .ok_or_else(|| {
                 AppError::Invalid(format!(
-                    "estimator {:?}: expected changes, levels or simple",
+                    "estimator {:?}: expected dynamic, changes, levels or simple",
                     gleaner_ingest::shorten(s)
                 ))
             })
@@ -74,7 +77,7 @@ mod tests {
             .parse::<Estimator>()
             .expect_err("unknown")
             .to_string();
-        assert!(e.contains("expected changes, levels or simple"), "{e}");
+        assert!(e.contains("expected dynamic, changes, levels or simple"), "{e}");
         assert!("best".parse::<Strategy>().is_err());
         let p = "huge"
             .parse::<EnergyPreset>()

@@ -68,21 +68,6 @@ impl Estimator {
     }
 }
 
-impl std::str::FromStr for Estimator {
-    type Err = AppError;
-    /// `changes`, `levels` (ordinary kriging), `simple` (simple kriging) or `dynamic`.
-    fn from_str(s: &str) -> Result<Self> {
-        match s {
-            "changes" => Ok(Estimator::Changes),
-            "levels" => Ok(Estimator::Levels(Mean::Unknown)),
-            "simple" => Ok(Estimator::Levels(Mean::Known)),
-            "dynamic" => Ok(Estimator::Dynamic),
-            other => Err(AppError::Invalid(format!(
-                "estimator {other:?}: expected changes, levels, simple or dynamic"
-            ))),
-        }
-    }
-}
 
 /// One sensor's estimate.
 #[derive(Debug, Clone, PartialEq)]
