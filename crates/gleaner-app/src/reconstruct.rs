@@ -210,7 +210,7 @@ pub const DYNAMIC_LAG_DAYS: i64 = 14;
 
 /// Whether the dynamic model carries a common level of its own
 /// ([`DynamicFitOptions::common_mode`]).
-pub const DYNAMIC_COMMON_MODE: bool = true;
+pub const DYNAMIC_COMMON_MODE: bool = false;
 
 /// The dynamic model's fit options at sampling step `step_s` (seconds): automatic
 /// shrinkage, reading noise 0.1% of the variance, lags up to [`DYNAMIC_LAG_DAYS`], a common
