@@ -48,8 +48,9 @@ pub use config::{
 };
 pub use error::EnergyError;
 pub use flight::{
-    COORDINATE_STEP_DEG, CommandedFlight, FlightEnergyModel, HOLD_STEP_S, SPEED_STEP_MPS,
-    flight_degrees, flight_hold_s, flight_point, flight_position, flight_speed_mps,
+    ALTITUDE_STEP_M, COORDINATE_STEP_DEG, CommandedFlight, FlightEnergyModel, HOLD_STEP_S,
+    SPEED_STEP_MPS, flight_altitude_m, flight_degrees, flight_hold_s, flight_point,
+    flight_position, flight_speed_mps,
 };
 pub use link::{DataLogging, HoverConfig, LinkConfig, SensorBacklog};
 pub use mission::{

@@ -22,7 +22,7 @@ fn write(dir: &Path, name: &str, bytes: &[u8], files: &mut Vec<PathBuf>) -> Resu
 /// Writes the files of `export` into `dir` (created if missing).
 pub fn write_files(export: &MissionExport, dir: &Path) -> Result<Exported> {
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
-    let doc = gleaner_wire::convert::export_mission(&export);
+    let doc = gleaner_wire::convert::export_mission(export);
     let field = gleaner_wire::convert::field(&export.field);
     let mut files = Vec::new();
     write(
