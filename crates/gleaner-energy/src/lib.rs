@@ -41,6 +41,7 @@ mod link;
 pub mod minimise;
 mod mission;
 mod propulsion;
+pub mod wind;
 
 pub use config::{
     Battery, CruiseSpeed, EnergyConfig, LinearEnergy, PAPER_CELL_SIZE_M, PowerSource,
@@ -58,3 +59,4 @@ pub use mission::{
     TravelCostMatrix,
 };
 pub use propulsion::{Airframe, OptimalSpeed, PowerModel, PowerParameters};
+pub use wind::{Wind, WindLeg};
