@@ -127,6 +127,13 @@ pub use wpml::{WpmlOptions, parse_wpml_kmz, wpml_documents, wpml_kmz};
 pub fn commanded_speed_mps(speed_mps: f64) -> f64 {
     gleaner_energy::flight_speed_mps(speed_mps)
 }
+
+/// The flight altitude above home every flight file commands for a planned `altitude_m`, m
+/// (rounded to `gleaner_energy::ALTITUDE_STEP_M`, as the planner priced it).
+#[must_use]
+pub fn commanded_altitude_m(altitude_m: f64) -> f64 {
+    gleaner_energy::flight_altitude_m(altitude_m)
+}
 pub use geo::{
     BaseProperties, CellProperties, RouteProperties, SensorProperties, StopProperties, geojson,
     geojson_doc,

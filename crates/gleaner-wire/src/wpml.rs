@@ -47,6 +47,9 @@ pub const KML_NS: &str = "http://www.opengis.net/kml/2.2";
 pub const WPML_NS: &str = "http://www.dji.com/wpmz/1.0.2";
 /// The largest speed WPML accepts for `wpml:globalTransitionalSpeed`, m/s.
 pub const MAX_WPML_SPEED_MPS: f64 = 15.0;
+/// The lowest take-off security height WPML accepts (`wpml:takeOffSecurityHeight`), m: the
+/// flight altitude is written there, so lower flights are refused.
+pub const MIN_WPML_HEIGHT_M: f64 = 2.0;
 
 /// Which aircraft the archive declares (`wpml:droneInfo`, `wpml:payloadInfo`): enumeration
 /// values of DJI's product-support tables.
@@ -286,7 +289,8 @@ impl Flight<'_> {
 }
 
 /// The two XML documents of the archive (`template.kml`, `waylines.wpml`) for mission `m`,
-/// after [`check_flyable`] and the WPML limits (speed <= 15 m/s, at most 65,536 waypoints).
+/// after [`check_flyable`] and the WPML limits (speed <= 15 m/s, altitude >= 2 m, at most
+/// 65,536 waypoints).
 ///
 /// # Errors
 /// [`check_flyable`]'s refusals; [`ExportError::FileValue`] for a mission WPML cannot carry.
@@ -305,6 +309,16 @@ pub fn wpml_documents(
             ),
         });
     }
+    let altitude = gleaner_energy::flight_altitude_m(m.profile.altitude_m);
+    if altitude < MIN_WPML_HEIGHT_M {
+        return Err(ExportError::FileValue {
+            file: WPML_FILE.to_string(),
+            line: 0,
+            reason: format!(
+                "the flight altitude {altitude} m is below WPML's take-off security height of {MIN_WPML_HEIGHT_M} m"
+            ),
+        });
+    }
     if m.stops.len() > 65_536 {
         return Err(ExportError::FileValue {
             file: WPML_FILE.to_string(),
@@ -316,7 +330,7 @@ pub fn wpml_documents(
         m,
         options,
         speed,
-        altitude: gleaner_energy::flight_altitude_m(m.profile.altitude_m),
+        altitude,
     };
     Ok((f.template()?, f.waylines()?))
 }
@@ -758,6 +772,12 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("15 m/s"), "{e}");
+        let mut low = m.clone();
+        low.profile.altitude_m = 1.5;
+        let e = wpml_kmz(&low, WpmlOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("2 m"), "{e}");
         let mut none = m.clone();
         none.energy_model = None;
         assert!(matches!(
@@ -836,7 +856,7 @@ mod tests {
         fn any_mission_round_trips(
             dlon in proptest::collection::vec((-0.01..0.01f64, -0.01..0.01f64, 0.0..500.0f64), 1..10),
             speed in 0.2..14.0f64,
-            alt in 1.0..120.0f64,
+            alt in 2.0..120.0f64,
         ) {
             let mut m = adaptive_mission();
             m.energy.budget_j = 1e12;

@@ -55,7 +55,13 @@ pub fn write_files_with(export: &MissionExport, dir: &Path, wpml: WpmlOptions) -
     )?;
     let mut skipped = Vec::new();
     let speed = gleaner_energy_speed(doc.profile.cruise_speed_mps);
-    if speed <= gleaner_wire::wpml::MAX_WPML_SPEED_MPS {
+    let altitude = gleaner_wire::commanded_altitude_m(doc.profile.altitude_m);
+    if altitude < gleaner_wire::wpml::MIN_WPML_HEIGHT_M {
+        skipped.push(format!(
+            "mission.kmz: the flight altitude {altitude} m is below DJI WPML's {} m",
+            gleaner_wire::wpml::MIN_WPML_HEIGHT_M
+        ));
+    } else if speed <= gleaner_wire::wpml::MAX_WPML_SPEED_MPS {
         write(
             dir,
             "mission.kmz",
