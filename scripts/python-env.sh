@@ -2,7 +2,8 @@
 # Creates the Python environment the flight-file consumer checks run in: a venv at
 # <workspace>/.venv with pinned versions of the real consumers of gleaner's flight files —
 # pymavlink (QGC WPL 110 loader), MAVSDK-Python (QGroundControl .plan importer, with its
-# bundled mavsdk_server), geojson and shapely (RFC 7946 checks).
+# bundled mavsdk_server), geojson and shapely (RFC 7946 checks), fastkml (its bundled OGC KML
+# 2.2 schema) and lxml (the DJI WPML archive's KML parts validated against it).
 #
 # Idempotent: an existing venv is reused and only missing or mismatched pins are installed.
 # Override the interpreter with PYTHON=/path/to/python3 (3.11 is what CI uses).
@@ -17,6 +18,8 @@ PINS=(
   "mavsdk==3.10.2"
   "geojson==3.3.0"
   "shapely==2.1.2"
+  "fastkml==1.4.0"
+  "lxml==6.1.3"
 )
 
 if [ ! -x "$VENV/bin/python" ]; then
@@ -41,4 +44,4 @@ else
   echo "== python-env: installing ${PINS[*]}"
   "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check "${PINS[@]}"
 fi
-"$VENV/bin/python" -c "import pymavlink, mavsdk, geojson, shapely; print('== python-env: ok')"
+"$VENV/bin/python" -c "import pymavlink, mavsdk, geojson, shapely, fastkml, lxml; print('== python-env: ok')"

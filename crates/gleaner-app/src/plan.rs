@@ -146,9 +146,9 @@ enum Given<'a> {
     Values(&'a Vec<f64>),
 }
 
-/// The energy model of the project's `[energy]` settings, flying the speed the flight files
-/// command (the cruise speed rounded to `gleaner_energy::SPEED_STEP_MPS`): every plan prices
-/// the values the files will carry.
+/// The energy model of the project's `[energy]` settings, flying the speed and altitude the
+/// flight files command (the cruise speed rounded to `gleaner_energy::SPEED_STEP_MPS`, the
+/// altitude to `ALTITUDE_STEP_M`): every plan prices the values the files will carry.
 pub fn energy_model<S: Store>(project: &Project<S>) -> Result<MissionEnergyModel> {
     flight_model(&project.settings().energy, "[energy] settings")
 }
@@ -158,7 +158,10 @@ pub(crate) fn flight_model(
     energy: &crate::settings::EnergySection,
     context: &'static str,
 ) -> Result<MissionEnergyModel> {
-    MissionEnergyModel::new(&energy.to_core()?)
+    let mut config = energy.to_core()?;
+    // The altitude the files command (rounded to 0.25 m): the climb and descent are priced there.
+    config.link.altitude_m = gleaner_energy::flight_altitude_m(config.link.altitude_m);
+    MissionEnergyModel::new(&config)
         .and_then(|m| m.for_flight())
         .map_err(|e| AppError::core(context, e))
 }

@@ -234,9 +234,10 @@ enum Command {
         dry_run: bool,
     },
     /// Export a planned mission for flying and mapping: GeoJSON (cells with their scores, the
-    /// route, the base), a QGroundControl .plan, a QGC WPL 110 waypoint file and an SVG map.
+    /// route, the base), a QGroundControl .plan, a QGC WPL 110 waypoint file, a DJI WPML
+    /// archive (mission.kmz, for DJI Pilot 2) and an SVG map.
     #[command(
-        after_help = "Waypoints: take-off, the cruise speed the energy model assumed (MAV_CMD_DO_CHANGE_SPEED,\n178), one NAV_WAYPOINT (16) per cell at the cell centre holding for the planned hover time\n(param 1, rounded up to 0.1 s), return-to-launch (20); altitude from [energy] altitude_m.\nA mission the battery cannot carry, or out of range, is refused and nothing is written.\n\nExamples:\n  gleaner export --project farm --mission 1\n  gleaner export --project farm --mission 1 --out flight1"
+        after_help = "Waypoints: take-off, the cruise speed the energy model assumed (MAV_CMD_DO_CHANGE_SPEED,\n178), one NAV_WAYPOINT (16) per cell at the cell centre holding for the\nplanned hold (param 1: the hover rounded up to 0.25 s), return-to-launch (20); altitude from\n[energy] altitude_m. Every flight file is read back and its energy recomputed from what it\ncommands; a file above the usable budget is refused.\n\nmission.kmz (wpmz/template.kml + wpmz/waylines.wpml) follows DJI's published WPML reference:\nheights relative to the take-off point, the speed per waypoint, a hover action per waypoint,\nreturn home at the end. It has not been flown; check it in DJI Pilot 2 first. Not written when\nthe speed exceeds WPML's 15 m/s.\n\nExamples:\n  gleaner export --project farm --mission 1\n  gleaner export --project farm --mission 1 --out flight1\n  gleaner export --project farm --mission 1 --dji-drone 77 --dji-drone-sub 2 --dji-payload 68"
     )]
     Export {
         #[command(flatten)]
@@ -247,6 +248,17 @@ enum Command {
         /// Output directory [default: <project>/missions/<id>].
         #[arg(long)]
         out: Option<PathBuf>,
+        /// mission.kmz: DJI's aircraft enumeration value (wpml:droneEnumValue; 77 = Mavic 3
+        /// Enterprise series).
+        #[arg(long, default_value_t = 77)]
+        dji_drone: u32,
+        /// mission.kmz: DJI's aircraft sub-type (wpml:droneSubEnumValue; for 77: 0 = M3E,
+        /// 1 = M3T, 2 = M3M).
+        #[arg(long, default_value_t = 0)]
+        dji_drone_sub: u32,
+        /// mission.kmz: DJI's payload enumeration value (wpml:payloadEnumValue; 66 = M3E camera).
+        #[arg(long, default_value_t = 66)]
+        dji_payload: u32,
     },
     /// Draw the exploration overview: every exploration sortie on one map, one colour each
     /// (SVG and PNG).
@@ -886,17 +898,28 @@ fn run(cli: Cli) -> Result<()> {
             project,
             mission,
             out,
+            dji_drone,
+            dji_drone_sub,
+            dji_payload,
         } => {
             let p = project.open()?;
             let export = app::export(&p, MissionId(mission))?;
             let dir = out.unwrap_or_else(|| project.dir.join("missions").join(mission.to_string()));
-            let written = export::write_files(&export, &dir)?;
+            let wpml = gleaner_wire::WpmlOptions {
+                drone_enum: dji_drone,
+                drone_sub_enum: dji_drone_sub,
+                payload_enum: dji_payload,
+            };
+            let written = export::write_files_with(&export, &dir, wpml)?;
             let names: Vec<String> = written
                 .files
                 .iter()
                 .map(|f| f.display().to_string())
                 .collect();
             outln(&format!("wrote {}", names.join(", ")))?;
+            for note in &written.skipped {
+                outln(&format!("not written: {note}"))?;
+            }
         }
         Command::MapExploration { project, out } => {
             let p = project.open()?;

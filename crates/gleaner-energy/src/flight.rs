@@ -11,12 +11,16 @@
 //!   as long as the collection needs ([`flight_hold_s`]);
 //! - the cruise ground speed: rounded to the nearest [`SPEED_STEP_MPS`] (0.25 m/s)
 //!   ([`flight_speed_mps`]);
+//! - the flight altitude above home: rounded to the nearest [`ALTITUDE_STEP_M`] (0.25 m;
+//!   [`flight_altitude_m`], applied to the `[energy]` altitude before the model is built);
 //! - positions: latitude and longitude rounded to [`COORDINATE_STEP_DEG`] (1e-7 degrees, at
 //!   most 5.6 mm off; [`flight_position`]).
 //!
 //! Multiples of 0.25 are exact in binary, as `f64` and as the MAVLink `float32` the autopilot
 //! receives, and print as short decimals, so the value in a file, the value parsed back from
-//! it and the value on board are the same number.
+//! it and the value on board are the same number. Every energy-relevant value then prints
+//! with at most 15 significant digits, which any correctly rounding decimal parser (and
+//! serde_json's fast path) reads back exactly.
 
 use gleaner_field::{LatLon, LocalPoint, TransverseMercator};
 
@@ -34,6 +38,8 @@ pub const HOLD_STEP_S: f64 = 0.25;
 pub const SPEED_STEP_MPS: f64 = 0.25;
 /// Resolution of a commanded latitude or longitude, degrees (MAVLink `int32` degE7).
 pub const COORDINATE_STEP_DEG: f64 = 1e-7;
+/// Resolution of the commanded flight altitude above home, m. Exact in binary.
+pub const ALTITUDE_STEP_M: f64 = 0.25;
 
 /// The hold a file commands for a hover of `hover_s` seconds: the smallest multiple of
 /// [`HOLD_STEP_S`] that is >= `hover_s`, s. Exact arithmetic (×4, ceil, ÷4), so the result is
@@ -56,6 +62,17 @@ pub fn flight_speed_mps(speed_mps: f64) -> f64 {
     }
     let speed = ((speed_mps / SPEED_STEP_MPS).round() * SPEED_STEP_MPS).max(SPEED_STEP_MPS);
     if speed.is_finite() { speed } else { speed_mps }
+}
+
+/// The flight altitude above home a file commands for `altitude_m` (m): the nearest multiple
+/// of [`ALTITUDE_STEP_M`], at least one step. Non-finite or non-positive input (refused
+/// downstream) and values too large to round are returned unchanged.
+pub fn flight_altitude_m(altitude_m: f64) -> f64 {
+    if !(altitude_m.is_finite() && altitude_m > 0.0) {
+        return altitude_m;
+    }
+    let alt = ((altitude_m / ALTITUDE_STEP_M).round() * ALTITUDE_STEP_M).max(ALTITUDE_STEP_M);
+    if alt.is_finite() { alt } else { altitude_m }
 }
 
 /// A latitude or longitude as a file commands it: rounded to [`COORDINATE_STEP_DEG`],
@@ -239,6 +256,10 @@ mod tests {
         assert_eq!(flight_speed_mps(0.01), 0.25);
         assert!(flight_speed_mps(f64::INFINITY).is_infinite());
         assert_eq!(flight_speed_mps(-3.0), -3.0);
+        assert_eq!(flight_altitude_m(30.1), 30.0);
+        assert_eq!(flight_altitude_m(0.01), 0.25);
+        assert_eq!(flight_altitude_m(120.0), 120.0);
+        assert_eq!(flight_altitude_m(0.0), 0.0);
     }
 
     #[test]

@@ -41,6 +41,7 @@ mod link;
 pub mod minimise;
 mod mission;
 mod propulsion;
+pub mod wind;
 
 pub use config::{
     Battery, CruiseSpeed, EnergyConfig, LinearEnergy, PAPER_CELL_SIZE_M, PowerSource,
@@ -48,8 +49,9 @@ pub use config::{
 };
 pub use error::EnergyError;
 pub use flight::{
-    COORDINATE_STEP_DEG, CommandedFlight, FlightEnergyModel, HOLD_STEP_S, SPEED_STEP_MPS,
-    flight_degrees, flight_hold_s, flight_point, flight_position, flight_speed_mps,
+    ALTITUDE_STEP_M, COORDINATE_STEP_DEG, CommandedFlight, FlightEnergyModel, HOLD_STEP_S,
+    SPEED_STEP_MPS, flight_altitude_m, flight_degrees, flight_hold_s, flight_point,
+    flight_position, flight_speed_mps,
 };
 pub use link::{DataLogging, HoverConfig, LinkConfig, SensorBacklog};
 pub use mission::{
@@ -57,3 +59,4 @@ pub use mission::{
     TravelCostMatrix,
 };
 pub use propulsion::{Airframe, OptimalSpeed, PowerModel, PowerParameters};
+pub use wind::{Wind, WindLeg};

@@ -60,7 +60,7 @@ fn items(m: &MissionDoc) -> Result<Vec<Item>, ExportError> {
     check_flyable(m)?;
     let p = &m.profile;
     let [base_lon, base_lat] = p.base_lon_lat;
-    let alt = p.altitude_m;
+    let alt = gleaner_energy::flight_altitude_m(p.altitude_m);
     let mut out = Vec::with_capacity(m.stops.len() + 3);
     out.push(Item {
         command: MAV_CMD_NAV_TAKEOFF,

@@ -35,6 +35,7 @@
 //! | [`wpl`] | `QGC WPL 110` text (tab-separated, line 0 = home) | **lat, lon**, alt |
 //! | [`geojson()`] | GeoJSON FeatureCollection (RFC 7946) | **`[lon, lat]`** |
 //! | [`flight_notes`] | plain text for the operator, beside the WPL | labelled |
+//! | [`wpml_kmz`] | DJI WPML KMZ (`wpmz/template.kml` + `wpmz/waylines.wpml`), see [`wpml`] | `coordinates`: **lon, lat** |
 //!
 //! Both autopilot files command the same MAVLink items, in this order:
 //!
@@ -107,6 +108,7 @@ mod error;
 mod flight;
 mod geo;
 pub mod samples;
+pub mod wpml;
 
 pub use check::{MAX_ALTITUDE_M, MAX_HOVER_S, check_flyable};
 pub use error::ExportError;
@@ -117,6 +119,21 @@ pub use flight::{
     SPEED_TYPE_GROUND, THROTTLE_UNCHANGED, WPL_FILE, YAW_NOTE, check_commanded, commanded_flight,
     flight_notes, parse_qgc_plan, parse_wpl, qgc_plan, qgc_plan_doc, wpl,
 };
+pub use wpml::{WpmlOptions, parse_wpml_kmz, wpml_documents, wpml_kmz};
+
+/// The cruise ground speed every flight file commands for a planned `speed_mps`, m/s (rounded
+/// to `gleaner_energy::SPEED_STEP_MPS`, as the planner priced it).
+#[must_use]
+pub fn commanded_speed_mps(speed_mps: f64) -> f64 {
+    gleaner_energy::flight_speed_mps(speed_mps)
+}
+
+/// The flight altitude above home every flight file commands for a planned `altitude_m`, m
+/// (rounded to `gleaner_energy::ALTITUDE_STEP_M`, as the planner priced it).
+#[must_use]
+pub fn commanded_altitude_m(altitude_m: f64) -> f64 {
+    gleaner_energy::flight_altitude_m(altitude_m)
+}
 pub use geo::{
     BaseProperties, CellProperties, RouteProperties, SensorProperties, StopProperties, geojson,
     geojson_doc,

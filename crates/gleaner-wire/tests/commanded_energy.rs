@@ -2,8 +2,9 @@
 //!
 //! Random farms (base, sensors, cell size, battery, altitude, hover overhead, cruise rule,
 //! scores, one or two sorties) are planned by the application's `plan` use case, exported
-//! through `export`, written by every flight-file writer, read back from the text and priced
-//! again: the energy of what each file commands is never above the usable budget.
+//! through `export`, written by every flight-file writer (`.plan`, WPL, the DJI KMZ), read
+//! back from the text and priced again: the energy of what each file commands is never above
+//! the usable budget.
 //!
 //! `thousand_random_exported_missions` (ignored by default: a few minutes unoptimised) is the
 //! figure in BENCHMARKS.md:
@@ -23,8 +24,8 @@ use gleaner_energy::{CommandedFlight, MissionEnergyModel, flight_degrees, flight
 use gleaner_field::{Field, FieldConfig, LatLon, LocalPoint, Sensor, SensorId, TransverseMercator};
 use gleaner_mission::{Candidate, PlanOptions, Planner, plan_mission};
 use gleaner_wire::{
-    ExportError, check_commanded, commanded_flight, convert, flight_notes, parse_qgc_plan,
-    parse_wpl, qgc_plan, wpl,
+    ExportError, WpmlOptions, check_commanded, commanded_flight, convert, flight_notes,
+    parse_qgc_plan, parse_wpl, parse_wpml_kmz, qgc_plan, wpl, wpml_kmz,
 };
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
@@ -121,10 +122,17 @@ fn export_farm(farm: &Farm) -> Vec<Exported> {
         flight_notes(&doc).unwrap();
         let commanded = commanded_flight(&doc).unwrap();
         let mut commanded_j = Vec::new();
-        for flight in [
+        let mut flights = vec![
             parse_qgc_plan(&plan).unwrap(),
             parse_wpl(&waypoints).unwrap(),
-        ] {
+        ];
+        // The DJI archive too, within WPML's 15 m/s.
+        if commanded.speed_mps <= gleaner_wire::wpml::MAX_WPML_SPEED_MPS {
+            let kmz =
+                wpml_kmz(&doc, WpmlOptions::default()).unwrap_or_else(|e| panic!("{farm:?}: {e}"));
+            flights.push(parse_wpml_kmz(&kmz).unwrap().flight(commanded.home));
+        }
+        for flight in flights {
             // The files say exactly what the writer meant to command...
             assert_eq!(flight, commanded);
             // ...and that is the route the planner priced, to the last joule.
@@ -335,7 +343,7 @@ fn thousand_random_exported_missions() {
         }
     }
     println!(
-        "after: {missions} exported missions, {files} files (.plan + WPL), {over} above the usable budget"
+        "after: {missions} exported missions, {files} files (.plan, WPL and, within 15 m/s, DJI KMZ), {over} above the usable budget"
     );
     println!(
         "before: {before_over} of {before} missions' files above the usable budget (worst by {worst:.1} J)"

@@ -1,6 +1,7 @@
 //! The flight files against their real consumers: pymavlink's `MAVWPLoader`, MAVSDK's QGC
 //! and Mission Planner importers (through a mavsdk_server talking to a fake vehicle on
-//! loopback), and the `geojson` and `shapely` Python packages. The checks live in
+//! loopback), the `geojson` and `shapely` Python packages, and lxml with `fastkml`'s OGC KML
+//! 2.2 schema for the DJI WPML archive. The checks live in
 //! `consumers/*.py` and compute what the files must command from the mission document itself.
 //!
 //! The interpreter is `$GLEANER_PYTHON`, by default `<workspace>/.venv/bin/python`, created by
@@ -10,7 +11,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use gleaner_wire::samples::{adaptive_mission, exploration_sortie, field};
-use gleaner_wire::{FieldDoc, MissionDoc, flight_notes, geojson, qgc_plan, wpl};
+use gleaner_wire::{
+    FieldDoc, MissionDoc, WpmlOptions, flight_notes, geojson, qgc_plan, wpl, wpml_kmz,
+};
 
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -36,6 +39,7 @@ struct Files {
     plan: PathBuf,
     waypoints: PathBuf,
     geojson: PathBuf,
+    kmz: PathBuf,
 }
 
 fn write(field_doc: &FieldDoc, m: &MissionDoc) -> Files {
@@ -47,6 +51,7 @@ fn write(field_doc: &FieldDoc, m: &MissionDoc) -> Files {
         plan: p("mission.plan"),
         waypoints: p("mission.waypoints"),
         geojson: p("mission.geojson"),
+        kmz: p("mission.kmz"),
         _dir: dir,
     };
     let put = |path: &Path, text: String| std::fs::write(path, text).expect("write");
@@ -58,6 +63,7 @@ fn write(field_doc: &FieldDoc, m: &MissionDoc) -> Files {
     put(&files.plan, qgc_plan(m).unwrap());
     put(&files.waypoints, wpl(m).unwrap());
     put(&files.geojson, geojson(field_doc, m).unwrap());
+    std::fs::write(&files.kmz, wpml_kmz(m, WpmlOptions::default()).unwrap()).expect("write");
     put(
         &files.field.with_file_name("mission.txt"),
         flight_notes(m).unwrap(),
@@ -115,5 +121,13 @@ fn geojson_and_shapely_accept_the_map() {
     for (_, m) in missions() {
         let f = write(&field(), &m);
         run("check_geojson.py", &[&f.geojson, &f.mission, &f.field]);
+    }
+}
+
+#[test]
+fn lxml_and_the_kml_schema_accept_the_dji_archive() {
+    for (_, m) in missions() {
+        let f = write(&field(), &m);
+        run("check_kml.py", &[&f.kmz, &f.mission]);
     }
 }

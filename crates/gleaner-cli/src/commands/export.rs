@@ -1,15 +1,19 @@
 //! `gleaner export`: writes a mission's files — GeoJSON, QGroundControl `.plan`, QGC WPL 110,
-//! and the mission figure (SVG and PNG) — from the application layer's checked export.
+//! DJI WPML (`mission.kmz`), and the mission figure (SVG and PNG) — from the application
+//! layer's checked export.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use gleaner_app::MissionExport;
+use gleaner_wire::WpmlOptions;
 
 /// The files written.
 pub struct Exported {
     /// Every file written, in a fixed order.
     pub files: Vec<PathBuf>,
+    /// Files not written, each with the reason (a format that cannot carry this mission).
+    pub skipped: Vec<String>,
 }
 
 fn write(dir: &Path, name: &str, bytes: &[u8], files: &mut Vec<PathBuf>) -> Result<()> {
@@ -19,10 +23,16 @@ fn write(dir: &Path, name: &str, bytes: &[u8], files: &mut Vec<PathBuf>) -> Resu
     Ok(())
 }
 
-/// Writes the files of `export` into `dir` (created if missing).
+/// Writes the files of `export` into `dir` (created if missing), the DJI archive for the
+/// default aircraft ([`WpmlOptions::default`]).
 pub fn write_files(export: &MissionExport, dir: &Path) -> Result<Exported> {
+    write_files_with(export, dir, WpmlOptions::default())
+}
+
+/// [`write_files`] declaring `wpml` as the aircraft of `mission.kmz` (DJI WPML).
+pub fn write_files_with(export: &MissionExport, dir: &Path, wpml: WpmlOptions) -> Result<Exported> {
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
-    let doc = gleaner_wire::convert::export_mission(&export);
+    let doc = gleaner_wire::convert::export_mission(export);
     let field = gleaner_wire::convert::field(&export.field);
     let mut files = Vec::new();
     write(
@@ -43,6 +53,27 @@ pub fn write_files(export: &MissionExport, dir: &Path) -> Result<Exported> {
         gleaner_wire::wpl(&doc)?.as_bytes(),
         &mut files,
     )?;
+    let mut skipped = Vec::new();
+    let speed = gleaner_energy_speed(doc.profile.cruise_speed_mps);
+    let altitude = gleaner_wire::commanded_altitude_m(doc.profile.altitude_m);
+    if altitude < gleaner_wire::wpml::MIN_WPML_HEIGHT_M {
+        skipped.push(format!(
+            "mission.kmz: the flight altitude {altitude} m is below DJI WPML's {} m",
+            gleaner_wire::wpml::MIN_WPML_HEIGHT_M
+        ));
+    } else if speed <= gleaner_wire::wpml::MAX_WPML_SPEED_MPS {
+        write(
+            dir,
+            "mission.kmz",
+            &gleaner_wire::wpml_kmz(&doc, wpml)?,
+            &mut files,
+        )?;
+    } else {
+        skipped.push(format!(
+            "mission.kmz: the commanded speed {speed} m/s exceeds DJI WPML's {} m/s",
+            gleaner_wire::wpml::MAX_WPML_SPEED_MPS
+        ));
+    }
     write(
         dir,
         "mission.json",
@@ -53,7 +84,12 @@ pub fn write_files(export: &MissionExport, dir: &Path) -> Result<Exported> {
     write(dir, "mission.svg", svg.as_bytes(), &mut files)?;
     let png = gleaner_render::svg_to_png(&svg, 1600)?;
     write(dir, "mission.png", &png, &mut files)?;
-    Ok(Exported { files })
+    Ok(Exported { files, skipped })
+}
+
+/// The speed the flight files command for a planned `speed_mps`, m/s.
+fn gleaner_energy_speed(speed_mps: f64) -> f64 {
+    gleaner_wire::commanded_speed_mps(speed_mps)
 }
 
 /// Writes the exploration overview (`exploration.svg`, `exploration.png`) into `dir`: every
