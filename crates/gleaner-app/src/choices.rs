@@ -77,7 +77,10 @@ mod tests {
             .parse::<Estimator>()
             .expect_err("unknown")
             .to_string();
-        assert!(e.contains("expected dynamic, changes, levels or simple"), "{e}");
+        assert!(
+            e.contains("expected dynamic, changes, levels or simple"),
+            "{e}"
+        );
         assert!("best".parse::<Strategy>().is_err());
         let p = "huge"
             .parse::<EnergyPreset>()

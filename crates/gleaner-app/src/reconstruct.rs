@@ -68,7 +68,6 @@ impl Estimator {
     }
 }
 
-
 /// One sensor's estimate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SensorEstimate {

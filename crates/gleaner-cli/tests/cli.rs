@@ -1084,8 +1084,19 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     let (from, to) = (when(0), when(6));
     let csv = dir.path().join("series.csv");
     let printed = ok(&[
-        "reconstruct", "--project", s(&p), "--modality", "vw@30cm", "--from", &from, "--to", &to,
-        "--every-hours", "3", "--out", s(&csv),
+        "reconstruct",
+        "--project",
+        s(&p),
+        "--modality",
+        "vw@30cm",
+        "--from",
+        &from,
+        "--to",
+        &to,
+        "--every-hours",
+        "3",
+        "--out",
+        s(&csv),
     ]);
     assert!(printed.contains("3 times × 12 sensors"), "{printed}");
     let text = std::fs::read_to_string(&csv).expect("series.csv");
@@ -1097,17 +1108,37 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
         assert!(c[2] <= c[0] && c[0] <= c[3] && c[1] >= 0.0, "{r}");
     }
     let series: serde_json::Value = serde_json::from_str(&ok(&[
-        "reconstruct", "--project", s(&p), "--modality", "vw@30cm", "--from", &from, "--to", &to,
-        "--every-hours", "3", "--json",
+        "reconstruct",
+        "--project",
+        s(&p),
+        "--modality",
+        "vw@30cm",
+        "--from",
+        &from,
+        "--to",
+        &to,
+        "--every-hours",
+        "3",
+        "--json",
     ]))
     .expect("JSON");
     assert_eq!(series["format"], "gleaner.reconstruction-series");
     assert_eq!(series["times"].as_array().unwrap().len(), 3);
     let first: Vec<&str> = rows[1].split(',').collect();
     let m = series["mean"][0][0].as_f64().unwrap();
-    assert!((m - first[2].parse::<f64>().unwrap()).abs() <= 5e-7, "{m} vs {}", rows[1]);
+    assert!(
+        (m - first[2].parse::<f64>().unwrap()).abs() <= 5e-7,
+        "{m} vs {}",
+        rows[1]
+    );
     let err = fail(&[
-        "reconstruct", "--project", s(&p), "--from", &to, "--to", &from,
+        "reconstruct",
+        "--project",
+        s(&p),
+        "--from",
+        &to,
+        "--to",
+        &from,
     ]);
     assert!(err.contains("ends before it starts"), "{err}");
 }

@@ -2,8 +2,8 @@
 
 use gleaner_app::{
     CellView, Estimator, Exploration, FieldView, MissionExport, MissionId, MissionKind,
-    MissionRecord, MissionStatus, NewMission, PlannedMission, Reconstruction,
-    ReconstructionSeries, Scoring, driver,
+    MissionRecord, MissionStatus, NewMission, PlannedMission, Reconstruction, ReconstructionSeries,
+    Scoring, driver,
 };
 use gleaner_ingest::time::format_rfc3339;
 

@@ -918,7 +918,10 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
     }
     writeln!(md, "## Definitions\n")?;
     // The model-based estimate ("kriging" columns) the simulation used.
-    let named = |e: &str| command.contains(&format!("--estimator {e}")) || command.contains(&format!("--estimator={e}"));
+    let named = |e: &str| {
+        command.contains(&format!("--estimator {e}"))
+            || command.contains(&format!("--estimator={e}"))
+    };
     let model_based = if command.contains("--simple-kriging")
         || command.contains("--level-kriging")
         || named("levels")
