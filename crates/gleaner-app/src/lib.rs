@@ -88,6 +88,7 @@ pub use simulate::{ProjectRecord, REPLAY_DEFAULT_DAYS, Truth, fly, fly_buffered}
 pub use summaries::{pending_bytes, series_summary};
 pub use view::{
     CellView, FieldView, MissionExport, check_flyable, export, field_view, mission, missions,
+    newest_reading,
 };
 
 /// Re-exported so adapters name one crate for the lifecycle's data.

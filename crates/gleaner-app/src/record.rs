@@ -18,7 +18,8 @@ use crate::summaries;
 pub struct RecordRequest {
     /// The planned mission.
     pub mission: MissionId,
-    /// When the data was collected, seconds [default: the mission's planned time].
+    /// When the data was collected, seconds [default: the mission's planned time, or the
+    /// newest reading brought back when that is later].
     pub at: Option<UnixSeconds>,
     /// Cells actually visited, in order (ids like `x3y-1`) [default: the planned stops].
     pub cells: Option<Vec<String>>,
@@ -93,7 +94,19 @@ pub(crate) fn record_parsed<S: Store>(
                 .map_or(String::new(), |t| format!(" at {}", format_rfc3339(t)))
         )));
     }
-    let at = request.at.unwrap_or(mission.mission.planned_at);
+    // Without a collection time, the flight was no earlier than the newest reading it
+    // brought back (a same-day reading is not "after the flight"), nor than its planned time.
+    let newest_brought = parsed.as_ref().and_then(|p| {
+        p.files
+            .iter()
+            .flat_map(|(_, _, readings, _)| readings.rows.iter().map(|r| r.t))
+            .max()
+    });
+    let at = request.at.unwrap_or_else(|| {
+        newest_brought.map_or(mission.mission.planned_at, |t| {
+            t.max(mission.mission.planned_at)
+        })
+    });
     let labels: Vec<String> = match &request.cells {
         Some(c) => c.clone(),
         None => mission
