@@ -296,6 +296,11 @@ async function preview(ev) {
   const body = planBody(true);
   status("Planning (dry run)…");
   $("preview").disabled = true;
+  // Whatever was previewed before is not what the form says now: nothing to save until this
+  // preview succeeds.
+  state.preview = null;
+  state.previewBody = null;
+  $("save").disabled = true;
   try {
     const m = await call("POST", "/plan", body);
     state.preview = m;
@@ -355,7 +360,7 @@ function renderMissions() {
     const files = [["mission.plan", ".plan"], ["mission.waypoints", "WPL"], ["mission.geojson", "GeoJSON"], ["mission.svg", "SVG"], ["mission.png", "PNG"]];
     dl.append(el("span", { class: "muted" }, "Mission " + state.shown + ":"));
     for (const [name, label] of files) {
-      dl.append(el("a", { href: `${API}/missions/${state.shown}/files/${name}`, download: `mission-${state.shown}-${name.slice(8)}`, id: "dl-" + name.slice(8) }, label));
+      dl.append(el("a", { href: `${API}/missions/${state.shown}/files/${name}`, download: `mission-${state.shown}.${name.slice(8)}`, id: "dl-" + name.slice(8) }, label));
     }
   }
   const target = $("upload-target");
