@@ -950,6 +950,12 @@ pub fn run_campaign(
                 loop {
                     let n = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     let Some(&k) = order.get(n) else { break };
+                    if progress.cancelled() {
+                        if let Ok(mut slot) = slots[k].lock() {
+                            *slot = Some(Err(AppError::Cancelled));
+                        }
+                        continue;
+                    }
                     let result = run_one(&shared, keys[k].clone(), progress);
                     let copies = same.iter().enumerate().filter(|&(j, &r)| r == k && j != k);
                     progress.advance((copies.count() * request.schedule.len()) as u64);
@@ -1114,6 +1120,9 @@ fn run_one(
     let mut missions = Vec::with_capacity(request.schedule.len());
     let mut visits = Vec::new();
     for (index, &t) in request.schedule.iter().enumerate() {
+        if progress.cancelled() {
+            return Err(AppError::Cancelled);
+        }
         let cell_age = |c: usize| -> Option<f64> {
             cell_sensor_ids[c]
                 .iter()

@@ -53,6 +53,10 @@ pub enum AppError {
         /// The OS message.
         message: String,
     },
+    /// The caller gave up on the work ([`Progress::cancelled`](crate::Progress::cancelled));
+    /// nothing was written.
+    #[error("the work was cancelled")]
+    Cancelled,
 }
 
 impl AppError {

@@ -92,7 +92,7 @@ pub use simulate::{ProjectRecord, REPLAY_DEFAULT_DAYS, Truth, fly, fly_buffered}
 pub use summaries::{pending_bytes, series_summary};
 pub use view::{
     CellView, FieldView, MissionExport, cell_reading_counts, check_flyable, export,
-    export_energy_model, field_view, mission, missions,
+    export_energy_model, field_view, mission, missions, newest_reading,
 };
 
 /// Re-exported so adapters name one crate for the lifecycle's data.

@@ -13,6 +13,11 @@ pub trait Progress {
     }
     /// The current step is done.
     fn finish(&self) {}
+    /// Whether the caller gave up on the work: a long use case (a campaign) checks it between
+    /// units of work and stops with [`AppError::Cancelled`](crate::AppError::Cancelled).
+    fn cancelled(&self) -> bool {
+        false
+    }
 }
 
 /// Reports nothing.

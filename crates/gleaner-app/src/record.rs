@@ -18,8 +18,8 @@ use crate::summaries;
 pub struct RecordRequest {
     /// The planned mission.
     pub mission: MissionId,
-    /// When the data was collected, seconds [default: the mission's planned time]; not before
-    /// it.
+    /// When the data was collected, seconds [default: the mission's planned time, or the
+    /// newest reading brought back when that is later]; not before the planned time.
     pub at: Option<UnixSeconds>,
     /// Cells actually visited, in order (ids like `x3y-1`), each one of the mission's stops
     /// [default: the planned stops].
@@ -99,7 +99,17 @@ pub(crate) fn record_parsed<S: Store>(
     }
     crate::when::check("collection time", request.at)?;
     let planned_at = mission.mission.planned_at;
-    let at = request.at.unwrap_or(planned_at);
+    // Without a collection time, the flight was no earlier than the newest reading it
+    // brought back (a same-day reading is not "after the flight"), nor than its planned time.
+    let newest_brought = parsed.as_ref().and_then(|p| {
+        p.files
+            .iter()
+            .flat_map(|(_, _, readings, _)| readings.rows.iter().map(|r| r.t))
+            .max()
+    });
+    let at = request
+        .at
+        .unwrap_or_else(|| newest_brought.map_or(planned_at, |t| t.max(planned_at)));
     if at < planned_at {
         return Err(AppError::Invalid(format!(
             "collection time {} is before mission #{}'s planned time {}: a mission is flown at \

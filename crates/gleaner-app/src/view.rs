@@ -221,3 +221,19 @@ pub fn check_flyable(m: &MissionRecord) -> Result<()> {
     }
     Ok(())
 }
+
+/// The newest stored reading's time (any sensor, any modality), seconds; none without
+/// readings. One index seek per sensor and modality, not a scan of the readings (the cell
+/// summaries are not used: they may be stale after a bulk ingest).
+pub fn newest_reading<S: Store>(
+    project: &Project<S>,
+) -> Result<Option<gleaner_field::UnixSeconds>> {
+    let store = project.store();
+    let mut newest = None;
+    for m in store.modalities()? {
+        for (_, t, _) in store.latest_readings(&m.modality, i64::MIN..=i64::MAX)? {
+            newest = newest.max(Some(t));
+        }
+    }
+    Ok(newest)
+}

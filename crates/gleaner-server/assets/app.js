@@ -35,9 +35,11 @@ function status(text, cls) {
   s.className = cls || "muted";
 }
 
-async function call(method, path, body, { write = false, raw = false } = {}) {
+async function call(method, path, body, { raw = false } = {}) {
   const headers = {};
-  if (write && token()) headers["Authorization"] = "Bearer " + token();
+  // Writes need the token; on a server bound beyond loopback so do previews: send it whenever
+  // the page has one.
+  if (token()) headers["Authorization"] = "Bearer " + token();
   let payload = body;
   if (body !== undefined && !(body instanceof FormData)) {
     headers["Content-Type"] = "application/json";
@@ -296,6 +298,11 @@ async function preview(ev) {
   const body = planBody(true);
   status("Planning (dry run)…");
   $("preview").disabled = true;
+  // Whatever was previewed before is not what the form says now: nothing to save until this
+  // preview succeeds.
+  state.preview = null;
+  state.previewBody = null;
+  $("save").disabled = true;
   try {
     const m = await call("POST", "/plan", body);
     state.preview = m;
@@ -318,7 +325,7 @@ async function save() {
   $("save").disabled = true;
   status("Saving the mission…");
   try {
-    const m = await call("POST", "/plan", { ...state.previewBody, dry_run: false }, { write: true });
+    const m = await call("POST", "/plan", { ...state.previewBody, dry_run: false });
     $("plan-result").replaceChildren(el("p", { class: "ok", id: "saved" }, "Saved as mission " + m.mission_id + "."), energyView(m));
     await refresh();
     await loadMap(m.mission_id);
@@ -355,7 +362,7 @@ function renderMissions() {
     const files = [["mission.plan", ".plan"], ["mission.waypoints", "WPL"], ["mission.geojson", "GeoJSON"], ["mission.svg", "SVG"], ["mission.png", "PNG"]];
     dl.append(el("span", { class: "muted" }, "Mission " + state.shown + ":"));
     for (const [name, label] of files) {
-      dl.append(el("a", { href: `${API}/missions/${state.shown}/files/${name}`, download: `mission-${state.shown}-${name.slice(8)}`, id: "dl-" + name.slice(8) }, label));
+      dl.append(el("a", { href: `${API}/missions/${state.shown}/files/${name}`, download: `mission-${state.shown}.${name.slice(8)}`, id: "dl-" + name.slice(8) }, label));
     }
   }
   const target = $("upload-target");
@@ -378,10 +385,10 @@ async function upload(files) {
     let text;
     if (target) {
       if ($("upload-at").value) form.append("at", $("upload-at").value);
-      const r = await call("POST", `/missions/${target}/record`, form, { write: true });
+      const r = await call("POST", `/missions/${target}/record`, form);
       text = `Mission #${r.mission} recorded at ${r.at}: ${r.cells.length} cells, ${r.sensors_collected} sensors, ${r.readings_inserted} new readings.`;
     } else {
-      const r = await call("POST", "/ingest", form, { write: true });
+      const r = await call("POST", "/ingest", form);
       text = `Ingested ${r.files} file(s): ${r.readings} readings (${r.inserted} new, ${r.unchanged} already stored).`;
     }
     out.replaceChildren(el("p", { class: "ok" }, text));

@@ -297,26 +297,68 @@ impl RecordDoc {
     }
 }
 
-/// Parses an optional time field (RFC 3339 or `YYYY-MM-DD`, UTC) into seconds.
+/// Earliest time a request may name: 2000-01-01T00:00:00Z (s).
+pub const EARLIEST_TIME: i64 = 946_684_800;
+/// Times a request names are before 2100-01-01T00:00:00Z (s).
+pub const LATEST_TIME: i64 = 4_102_444_800;
+
+/// Parses an optional time field (RFC 3339 or `YYYY-MM-DD`, UTC) into seconds; refuses a
+/// time outside [2000-01-01, 2100-01-01) (`1900-01-01` is a typing error, not a mission).
 pub fn parse_time(field: &str, value: Option<&str>) -> Result<Option<i64>, ApiError> {
     value
         .map(|v| {
-            app::parse_timestamp(v).ok_or_else(|| {
+            let t = app::parse_timestamp(v).ok_or_else(|| {
                 ApiError::bad_request(
                     Some(field),
                     format!(
                         "expected RFC 3339 (2014-03-01T12:00:00Z) or a date (2014-03-01), got {v:?}"
                     ),
                 )
-            })
+            })?;
+            if !(EARLIEST_TIME..LATEST_TIME).contains(&t) {
+                return Err(ApiError::bad_request(
+                    Some(field),
+                    format!("{v:?} is outside 2000-01-01 .. 2100-01-01"),
+                ));
+            }
+            Ok(t)
         })
         .transpose()
 }
 
-/// The history range of a request (unbounded sides as the CLI's).
-pub fn history(from: Option<i64>, until: Option<i64>) -> app::History {
-    app::History {
+/// The history range of a request (unbounded sides as the CLI's), refusing a start after
+/// its end or after the mission time `at`.
+pub fn checked_history(
+    at: Option<i64>,
+    from: Option<i64>,
+    until: Option<i64>,
+) -> Result<app::History, ApiError> {
+    if let (Some(f), Some(u)) = (from, until)
+        && f > u
+    {
+        return Err(ApiError::bad_request(
+            Some("history_from"),
+            format!(
+                "history_from {} is after history_until {}",
+                app::format_rfc3339(f),
+                app::format_rfc3339(u)
+            ),
+        ));
+    }
+    if let (Some(f), Some(a)) = (from, at)
+        && f > a
+    {
+        return Err(ApiError::bad_request(
+            Some("history_from"),
+            format!(
+                "history_from {} is after the mission time at {}: nothing would be known",
+                app::format_rfc3339(f),
+                app::format_rfc3339(a)
+            ),
+        ));
+    }
+    Ok(app::History {
         from: from.unwrap_or(i64::MIN),
         until: until.unwrap_or(i64::MAX),
-    }
+    })
 }

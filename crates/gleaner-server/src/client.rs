@@ -144,6 +144,28 @@ impl Client {
         }
     }
 
+    /// Sends `raw` (a whole request: line, headers, blank line, body) as it is and reads one
+    /// response: for requests the other methods cannot make (another `Host`, no `Host`).
+    pub fn request_raw(&mut self, raw: &[u8]) -> std::io::Result<Response> {
+        if self.conn.is_none() {
+            let s = TcpStream::connect(self.addr)?;
+            s.set_nodelay(true)?;
+            s.set_read_timeout(Some(Duration::from_secs(120)))?;
+            self.conn = Some(BufReader::new(s));
+        }
+        let conn = self.conn.as_mut().expect("connected above");
+        conn.get_mut().write_all(raw)?;
+        conn.get_mut().flush()?;
+        let response = read_response(conn);
+        if response.as_ref().map_or(true, |r| {
+            r.header("connection")
+                .is_some_and(|c| c.eq_ignore_ascii_case("close"))
+        }) {
+            self.conn = None;
+        }
+        response
+    }
+
     fn try_request(
         &mut self,
         method: &str,
@@ -188,7 +210,9 @@ fn bad(what: &str) -> std::io::Error {
     std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string())
 }
 
-fn read_response(r: &mut BufReader<TcpStream>) -> std::io::Result<Response> {
+/// Reads one response from a connection (status line, headers, `Content-Length` or chunked
+/// body).
+pub fn read_response(r: &mut BufReader<TcpStream>) -> std::io::Result<Response> {
     let mut line = String::new();
     if r.read_line(&mut line)? == 0 {
         return Err(std::io::Error::new(

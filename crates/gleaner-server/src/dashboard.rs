@@ -20,6 +20,8 @@ pub const INDEX_HTML: &str = include_str!("../assets/index.html");
 pub const APP_JS: &str = include_str!("../assets/app.js");
 /// Its stylesheet.
 pub const APP_CSS: &str = include_str!("../assets/app.css");
+/// Its icon: a cell square with a route through it.
+pub const FAVICON_SVG: &str = include_str!("../assets/favicon.svg");
 
 /// The origin (`scheme://host[:port]`) of a basemap URL template.
 fn origin(url: &str) -> Option<&str> {
@@ -45,7 +47,8 @@ fn asset(body: &'static str, media: &'static str, csp: &HeaderValue) -> Response
     r
 }
 
-/// The dashboard's routes: `/`, `/app.js`, `/app.css`.
+/// The dashboard's routes: `/`, `/app.js`, `/app.css`, `/favicon.svg` (and `/favicon.ico`,
+/// 204).
 pub fn routes(basemap_url: Option<&str>) -> Router<AppState> {
     let img = match basemap_url.and_then(origin) {
         Some(o) => format!("'self' data: blob: {o}"),
@@ -55,7 +58,7 @@ pub fn routes(basemap_url: Option<&str>) -> Router<AppState> {
         "default-src 'self'; img-src {img}; style-src 'self' 'unsafe-inline'; script-src 'self'; connect-src 'self'; frame-ancestors 'none'; base-uri 'none'; form-action 'self'"
     ))
     .unwrap_or_else(|_| HeaderValue::from_static("default-src 'self'"));
-    let (c1, c2, c3) = (csp.clone(), csp.clone(), csp);
+    let (c1, c2, c3, c4) = (csp.clone(), csp.clone(), csp.clone(), csp);
     Router::new()
         .route(
             "/",
@@ -68,6 +71,15 @@ pub fn routes(basemap_url: Option<&str>) -> Router<AppState> {
         .route(
             "/app.css",
             get(move || async move { asset(APP_CSS, "text/css; charset=utf-8", &c3) }),
+        )
+        .route(
+            "/favicon.svg",
+            get(move || async move { asset(FAVICON_SVG, "image/svg+xml", &c4) }),
+        )
+        // Browsers ask for it whatever the page says: nothing to show, and no 404 in the log.
+        .route(
+            "/favicon.ico",
+            get(|| async { axum::http::StatusCode::NO_CONTENT }),
         )
 }
 
@@ -84,7 +96,12 @@ mod tests {
 
     #[test]
     fn the_page_loads_nothing_from_elsewhere() {
-        for text in [super::INDEX_HTML, super::APP_JS, super::APP_CSS] {
+        for text in [
+            super::INDEX_HTML,
+            super::APP_JS,
+            super::APP_CSS,
+            super::FAVICON_SVG,
+        ] {
             // The only absolute URL is the SVG namespace (a name, never fetched).
             let rest = text.replace("http://www.w3.org/2000/svg", "");
             assert!(

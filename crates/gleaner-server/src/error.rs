@@ -10,8 +10,9 @@ use utoipa::ToSchema;
 /// The JSON body of every error response.
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize, ToSchema)]
 pub struct ErrorBody {
-    /// A stable code: `bad_request`, `unauthorized`, `forbidden`, `not_found`, `conflict`,
-    /// `payload_too_large`, `unavailable`, `internal`.
+    /// A stable code: `bad_request`, `unauthorized`, `forbidden`, `not_found`,
+    /// `method_not_allowed`, `conflict`, `payload_too_large`, `unsupported_media_type`,
+    /// `misdirected_request`, `unavailable`, `internal`.
     pub error: String,
     /// The request field at fault (`at`, `files`, `mission`), when there is one.
     pub field: Option<String>,
@@ -90,6 +91,41 @@ impl ApiError {
         Self::new(StatusCode::SERVICE_UNAVAILABLE, "unavailable", None, reason)
     }
 
+    /// 405: the path exists, the method does not.
+    pub fn method_not_allowed(reason: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::METHOD_NOT_ALLOWED,
+            "method_not_allowed",
+            Some("method"),
+            reason,
+        )
+    }
+
+    /// 415: a JSON route sent something other than `application/json`.
+    pub fn unsupported_media_type(reason: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::UNSUPPORTED_MEDIA_TYPE,
+            "unsupported_media_type",
+            Some("Content-Type"),
+            reason,
+        )
+    }
+
+    /// 421: the `Host` is not one this server answers to.
+    pub fn misdirected(reason: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::MISDIRECTED_REQUEST,
+            "misdirected_request",
+            Some("Host"),
+            reason,
+        )
+    }
+
+    /// Whether this is the answer to cancelled work.
+    pub fn is_cancelled(&self) -> bool {
+        self.status == StatusCode::SERVICE_UNAVAILABLE && self.body.error == "cancelled"
+    }
+
     /// 500: the server failed.
     pub fn internal(reason: impl Into<String>) -> Self {
         Self::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", None, reason)
@@ -107,8 +143,15 @@ impl ApiError {
 impl From<AppError> for ApiError {
     fn from(e: AppError) -> Self {
         use gleaner_app::{AppError as E, StoreError as SE};
-        let reason = e.to_string();
-        match &e {
+        let (reason, named) = api_words(&e.to_string());
+        let e_field = named;
+        let out = match &e {
+            E::Cancelled => Self::new(
+                StatusCode::SERVICE_UNAVAILABLE,
+                "cancelled",
+                None,
+                "the work was cancelled: its client left or the server is shutting down",
+            ),
             E::NotFound { what, .. } => Self::not_found(Some(what), reason),
             E::Conflict(_) => Self::conflict(None, reason),
             E::Invalid(_) | E::Core { .. } => Self::bad_request(None, reason),
@@ -125,12 +168,67 @@ impl From<AppError> for ApiError {
                 _ => Self::internal(reason),
             },
             _ => Self::internal(reason),
+        };
+        match e_field {
+            Some(f) => {
+                let mut out = out;
+                out.body.field = Some(f.to_string());
+                out
+            }
+            None => out,
         }
     }
 }
 
+/// The CLI's flags an application message may name, and the API field that means the same.
+const FLAG_FIELDS: [(&str, &str); 12] = [
+    ("--history-from", "history_from"),
+    ("--history-until", "history_until"),
+    ("--time-limit", "time_limit_s"),
+    ("--energy-preset", "energy_preset"),
+    ("--iterations", "iterations"),
+    ("--modality", "modality"),
+    ("--sorties", "sorties"),
+    ("--solver", "solver"),
+    ("--amend", "amend"),
+    ("--cells", "cells"),
+    ("--seed", "seed"),
+    ("--at", "at"),
+];
+
+/// An application message in the API's words: each CLI flag it names becomes the API field
+/// (`--amend` → `amend`), and `gleaner <command>` hints become the endpoint's name; returns
+/// the first field named.
+fn api_words(message: &str) -> (String, Option<&'static str>) {
+    let mut out = message.to_string();
+    let mut first: Option<(usize, &'static str)> = None;
+    for (flag, field) in FLAG_FIELDS {
+        // Longest flags first in the table, so `--history-from` is not read as `--h…`.
+        let mut searched = 0;
+        while let Some(pos) = out[searched..].find(flag).map(|p| p + searched) {
+            let end = pos + flag.len();
+            let next = out[end..].chars().next();
+            if next.is_some_and(|c| c.is_ascii_alphanumeric() || c == '-') {
+                searched = end;
+                continue;
+            }
+            if first.is_none_or(|(p, _)| pos < p) {
+                first = Some((pos, field));
+            }
+            out.replace_range(pos..end, &format!("`{field}`"));
+            searched = pos + field.len() + 2;
+        }
+    }
+    let out = out.replace("``", "`");
+    (out, first.map(|(_, f)| f))
+}
+
 impl IntoResponse for ApiError {
-    fn into_response(self) -> Response {
+    fn into_response(mut self) -> Response {
+        // Every 400 names what is at fault; an error with no better name is about the body.
+        if self.status == StatusCode::BAD_REQUEST && self.body.field.is_none() {
+            self.body.field = Some("body".to_string());
+        }
         let mut r = (self.status, axum::Json(self.body)).into_response();
         if self.status == StatusCode::UNAUTHORIZED {
             r.headers_mut()

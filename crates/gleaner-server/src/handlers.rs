@@ -5,9 +5,11 @@ use std::path::PathBuf;
 
 use axum::Json;
 use axum::body::Bytes;
-use axum::extract::rejection::{BytesRejection, QueryRejection};
-use axum::extract::{Multipart, Path, Query, State};
-use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::extract::multipart::MultipartRejection;
+use axum::extract::rejection::BytesRejection;
+use axum::extract::{FromRequestParts, Multipart, Path, RawQuery, State};
+use axum::http::request::Parts;
+use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use gleaner_app::{self as app, MissionId, StoreRead};
 use gleaner_wire::docs::{CampaignDoc, CellRowDoc, ExplorationDoc, ReconstructionDoc, ScoringDoc};
@@ -18,18 +20,18 @@ use utoipa::{IntoParams, OpenApi};
 
 use crate::api::{
     CellDetailDoc, ExploreBody, IngestDoc, PlanBody, ProjectDoc, RecordDoc, ScoreBody,
-    SimulateBody, history, parse_time,
+    SimulateBody, checked_history, parse_time,
 };
-use crate::auth::authorize;
+use crate::auth::{Caller, Computing, Writing};
 use crate::error::{ApiError, ApiResult, ErrorBody};
-use crate::state::AppState;
+use crate::state::{AppState, Job};
 
 /// The OpenAPI document's header; the paths come from the handlers (utoipa-axum).
 #[derive(OpenApi)]
 #[openapi(
     info(
         title = "gleaner",
-        description = "Score a farm's sensor cells, plan battery-limited UAV missions, download their flight files and record the flights. Writes need `Authorization: Bearer <token>`. Units: m, s, J, W; positions WGS84 [lon, lat] degrees; times RFC 3339 UTC or seconds since the Unix epoch."
+        description = "Score a farm's sensor cells, plan battery-limited UAV missions, download their flight files and record the flights. Writes need `Authorization: Bearer <token>` (the scheme in any case); on a server bound beyond loopback every computation does too (previews, dry runs, simulations, reconstructions). JSON bodies need `Content-Type: application/json` (415 otherwise). Units: m, s, J, W; positions WGS84 [lon, lat] degrees; times RFC 3339 UTC or `YYYY-MM-DD`, from 2000-01-01 to before 2100-01-01."
     ),
     tags(
         (name = "project", description = "The project, its field and cells"),
@@ -59,41 +61,120 @@ fn energy_preset(value: Option<&str>) -> ApiResult<Option<String>> {
     }
 }
 
+/// A JSON route's `Content-Type`: `application/json` (parameters such as `charset` allowed),
+/// else 415 before the body is read, so a page on another site cannot post a form or plain
+/// text to it.
+#[derive(Debug, Clone, Copy)]
+pub struct JsonType;
+
+impl<S: Send + Sync> FromRequestParts<S> for JsonType {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, _: &S) -> Result<Self, ApiError> {
+        let given = parts
+            .headers
+            .get(header::CONTENT_TYPE)
+            .and_then(|v| v.to_str().ok());
+        let essence = given.map(|v| v.split(';').next().unwrap_or("").trim());
+        match essence {
+            Some(e) if e.eq_ignore_ascii_case("application/json") => Ok(Self),
+            _ => Err(ApiError::unsupported_media_type(format!(
+                "this endpoint takes a JSON body: send Content-Type: application/json (got {})",
+                given.map_or("none".to_string(), |g| format!("{g:?}"))
+            ))),
+        }
+    }
+}
+
+/// The API field a deserialisation error is about: the first segment of its path
+/// (`seeds[0]` → `seeds`), else the field serde names in its message, else `body`.
+fn field_of(path: &str, message: &str) -> String {
+    let first = path
+        .split(['.', '['])
+        .next()
+        .unwrap_or("")
+        .trim_matches('?');
+    if !first.is_empty() {
+        return first.to_string();
+    }
+    if message.contains("field")
+        && let Some(name) = message.split('`').nth(1).filter(|n| !n.is_empty())
+    {
+        return name.to_string();
+    }
+    "body".to_string()
+}
+
+fn body_bytes(body: Result<Bytes, BytesRejection>) -> ApiResult<Bytes> {
+    body.map_err(|r| {
+        if r.status() == StatusCode::PAYLOAD_TOO_LARGE {
+            ApiError::too_large(Some("body"), r.body_text())
+        } else {
+            ApiError::bad_request(Some("body"), r.body_text())
+        }
+    })
+}
+
 /// A JSON body (empty = `{}`), refusing unknown fields; errors name the field at fault.
 fn json_body<T: DeserializeOwned>(body: Result<Bytes, BytesRejection>) -> ApiResult<T> {
-    let bytes = body.map_err(|r| {
-        if r.status() == StatusCode::PAYLOAD_TOO_LARGE {
-            ApiError::too_large(None, r.body_text())
-        } else {
-            ApiError::bad_request(None, r.body_text())
-        }
-    })?;
+    parse_json(&body_bytes(body)?)
+}
+
+fn parse_json<T: DeserializeOwned>(bytes: &[u8]) -> ApiResult<T> {
     let bytes: &[u8] = if bytes.iter().all(u8::is_ascii_whitespace) {
         b"{}"
     } else {
-        &bytes
+        bytes
     };
     let de = &mut serde_json::Deserializer::from_slice(bytes);
     serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.inner().to_string();
-        // serde names an unknown or missing field in its message, not in the path.
-        let field = if path == "." {
-            inner
-                .split('`')
-                .nth(1)
-                .map(str::to_string)
-                .filter(|_| inner.contains("field"))
-        } else {
-            Some(path)
-        };
-        ApiError::bad_request(field.as_deref(), format!("invalid JSON body: {inner}"))
+        ApiError::bad_request(
+            Some(&field_of(&path, &inner)),
+            format!("invalid JSON body: {inner}"),
+        )
     })
 }
 
-fn query<T>(q: Result<Query<T>, QueryRejection>) -> ApiResult<T> {
-    q.map(|Query(t)| t)
-        .map_err(|r| ApiError::bad_request(None, r.body_text()))
+/// The JSON body of a request that writes unless it says `"dry_run": true`: a caller without
+/// the token is refused (401) unless the body is a well-formed dry run, so a bad body without
+/// the token is 401, never a 400 about its content.
+fn json_body_for<T: DeserializeOwned>(
+    s: &AppState,
+    caller: Caller,
+    body: Result<Bytes, BytesRejection>,
+) -> ApiResult<T> {
+    let bytes = body_bytes(body)?;
+    if !caller.authenticated {
+        let dry_run = bytes
+            .iter()
+            .all(u8::is_ascii_whitespace)
+            .then_some(false)
+            .or_else(|| {
+                serde_json::from_slice::<serde_json::Value>(&bytes)
+                    .ok()
+                    .map(|v| v.get("dry_run") == Some(&serde_json::Value::Bool(true)))
+            });
+        if dry_run != Some(true) {
+            caller.require_write(s)?;
+        }
+    }
+    parse_json(&bytes)
+}
+
+/// A query string, refusing unknown parameters; errors name the parameter at fault.
+fn query<T: DeserializeOwned>(raw: Option<String>) -> ApiResult<T> {
+    let raw = raw.unwrap_or_default();
+    let de = serde_urlencoded::Deserializer::new(form_urlencoded::parse(raw.as_bytes()));
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.inner().to_string();
+        ApiError::bad_request(
+            Some(&field_of(&path, &inner)),
+            format!("invalid query: {inner}"),
+        )
+    })
 }
 
 fn mission_id(text: &str) -> ApiResult<MissionId> {
@@ -117,21 +198,16 @@ fn cell_index(text: &str) -> ApiResult<gleaner_field::CellIndex> {
 /// The project and its settings.
 #[utoipa::path(get, path = "/api/v1/project", tag = "project",
     responses((status = 200, body = ProjectDoc), (status = 500, body = ErrorBody)))]
-pub async fn project(State(s): State<AppState>) -> ApiResult<Json<ProjectDoc>> {
+pub async fn project(State(s): State<AppState>) -> ApiResult<Response> {
     let basemap_url = s.0.basemap_url.clone();
     let writable = s.0.token.is_some();
     let (max_upload_bytes, max_time_limit_s) = (s.0.max_upload_bytes as u64, s.0.max_time_limit_s);
-    let doc = s
-        .run(move |p| {
+    let bytes = s
+        .cached("project", move |p| {
             let view = app::field_view(p)?;
-            let latest = view
-                .cells
-                .iter()
-                .flat_map(|c| c.metadata.summaries.iter().map(|m| m.stats.latest_t))
-                .max();
             let settings = p.settings();
             let u = &settings.utility;
-            Ok(ProjectDoc {
+            to_json(&ProjectDoc {
                 name: view.project.clone(),
                 version: env!("CARGO_PKG_VERSION").to_string(),
                 base_lon_lat: [view.base.lon(), view.base.lat()],
@@ -139,7 +215,7 @@ pub async fn project(State(s): State<AppState>) -> ApiResult<Json<ProjectDoc>> {
                 cell_size_m: view.cell_size_m,
                 sensors: view.sensors.len(),
                 readings: p.store().reading_count().map_err(app::AppError::from)?,
-                latest_reading: latest.map(app::format_rfc3339),
+                latest_reading: app::newest_reading(p)?.map(app::format_rfc3339),
                 missions: app::missions(p)?.len(),
                 weights: [u.alpha, u.beta, u.gamma, u.delta],
                 energy_preset: settings.energy.preset.clone(),
@@ -153,7 +229,7 @@ pub async fn project(State(s): State<AppState>) -> ApiResult<Json<ProjectDoc>> {
             })
         })
         .await?;
-    Ok(Json(doc))
+    Ok(json_response(bytes))
 }
 
 /// The field for maps: cells with their squares and latest scores, sensors, base
@@ -205,6 +281,7 @@ pub async fn cells(State(s): State<AppState>) -> ApiResult<Response> {
 /// How much of a cell's series to return.
 #[derive(Debug, Deserialize, IntoParams)]
 #[into_params(parameter_in = Query)]
+#[serde(deny_unknown_fields)]
 pub struct SeriesQuery {
     /// Days of readings before the cell's newest one, in [0, 3660] [default: 30].
     pub days: Option<f64>,
@@ -219,10 +296,10 @@ pub struct SeriesQuery {
 pub async fn cell(
     State(s): State<AppState>,
     Path(id): Path<String>,
-    q: Result<Query<SeriesQuery>, QueryRejection>,
+    RawQuery(q): RawQuery,
 ) -> ApiResult<Json<CellDetailDoc>> {
     let index = cell_index(&id)?;
-    let days = query(q)?.days.unwrap_or(30.0);
+    let days = query::<SeriesQuery>(q)?.days.unwrap_or(30.0);
     if !(days.is_finite() && (0.0..=3660.0).contains(&days)) {
         return Err(ApiError::bad_request(
             Some("days"),
@@ -247,19 +324,22 @@ pub async fn cell(
         (status = 413, body = ErrorBody)))]
 pub async fn score(
     State(s): State<AppState>,
-    headers: HeaderMap,
+    Computing(caller): Computing,
+    _: JsonType,
     body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<Json<ScoringDoc>> {
-    let b: ScoreBody = json_body(body)?;
+    let b: ScoreBody = json_body_for(&s, caller, body)?;
     if !b.dry_run {
-        authorize(s.0.token.as_ref(), &headers)?;
+        caller.require_write(&s)?;
     }
+    let at = parse_time("at", b.at.as_deref())?;
     let request = app::ScoreRequest {
-        at: parse_time("at", b.at.as_deref())?,
-        history: history(
+        at,
+        history: checked_history(
+            at,
             parse_time("history_from", b.history_from.as_deref())?,
             parse_time("history_until", b.history_until.as_deref())?,
-        ),
+        )?,
         probabilities: None,
         dry_run: b.dry_run,
     };
@@ -295,9 +375,10 @@ pub struct ReconstructQuery {
         (status = 500, body = ErrorBody)))]
 pub async fn reconstruct(
     State(s): State<AppState>,
-    q: Result<Query<ReconstructQuery>, QueryRejection>,
+    _: Computing,
+    RawQuery(q): RawQuery,
 ) -> ApiResult<Json<ReconstructionDoc>> {
-    let q = query(q)?;
+    let q: ReconstructQuery = query(q)?;
     let estimator = match q.estimator.as_deref() {
         None => app::Estimator::default(),
         Some(name) => gleaner_wire::convert::estimator_from_name(name).ok_or_else(|| {
@@ -321,13 +402,18 @@ pub async fn reconstruct(
         neighbours: q.neighbours,
         estimator,
     };
+    let has_modality = request.modality.is_some();
     let doc = s
         .run(move |p| {
             Ok(gleaner_wire::convert::reconstruction(&app::reconstruct(
                 p, &request,
             )?))
         })
-        .await?;
+        .await
+        .map_err(|e| match has_modality {
+            true => e.in_field("modality"),
+            false => e,
+        })?;
     Ok(Json(doc))
 }
 
@@ -345,6 +431,8 @@ pub const MAX_SIMULATED_MISSIONS: usize = 5_000;
         (status = 413, body = ErrorBody)))]
 pub async fn simulate(
     State(s): State<AppState>,
+    _: Computing,
+    _: JsonType,
     body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<Json<CampaignDoc>> {
     let b: SimulateBody = json_body(body)?;
@@ -397,9 +485,13 @@ pub async fn simulate(
         energy_preset,
         ..defaults
     };
-    let _slot = s.planning_slot().await?;
+    let simulation = Job {
+        kind: "simulate",
+        planning: true,
+        write: false,
+    };
     let doc = s
-        .run(move |p| {
+        .run_job(simulation, move |p, cancel| {
             let parts = app::ProjectRecord::read(p)?.into_parts(p.dir());
             let replay = app::campaign::replay(parts, &options, clock_now())?;
             let missions = replay.request.mission_runs();
@@ -409,12 +501,11 @@ pub async fn simulate(
                     format!(
                         "{missions} missions in all (missions × strategies × seeds × budgets): \
                          at most {MAX_SIMULATED_MISSIONS} per request; shorten the period or \
-                         name fewer strategies (the CLI's `gleaner simulate --project` has no \
-                         limit)"
+                         name fewer strategies (the command line's simulate has no limit)"
                     ),
                 ));
             }
-            let result = app::campaign::run_campaign(&replay.request, &replay.truth, &app::Silent)?;
+            let result = app::campaign::run_campaign(&replay.request, &replay.truth, cancel)?;
             Ok(gleaner_wire::convert::campaign(
                 &app::campaign::campaign_summary(&replay.request, &result),
             ))
@@ -446,15 +537,16 @@ pub async fn missions(State(s): State<AppState>) -> ApiResult<Json<Vec<MissionDo
     params(("id" = i64, Path, description = "Mission id")),
     responses((status = 200, body = MissionDoc), (status = 400, body = ErrorBody),
         (status = 404, body = ErrorBody)))]
-pub async fn mission(
-    State(s): State<AppState>,
-    Path(id): Path<String>,
-) -> ApiResult<Json<MissionDoc>> {
+pub async fn mission(State(s): State<AppState>, Path(id): Path<String>) -> ApiResult<Response> {
     let id = mission_id(&id)?;
-    let doc = s
-        .run(move |p| Ok(gleaner_wire::convert::stored_mission(&app::mission(p, id)?)))
+    let bytes = s
+        .cached(&format!("mission/{}", id.0), move |p| {
+            to_json(&gleaner_wire::convert::stored_mission(&app::mission(
+                p, id,
+            )?))
+        })
         .await?;
-    Ok(Json(doc))
+    Ok(json_response(bytes))
 }
 
 /// Plans a mission: scores the cells, chooses and orders those that fit the battery, and
@@ -466,17 +558,18 @@ pub async fn mission(
         (status = 413, body = ErrorBody)))]
 pub async fn plan(
     State(s): State<AppState>,
-    headers: HeaderMap,
+    Computing(caller): Computing,
+    _: JsonType,
     body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<Json<MissionDoc>> {
-    let b: PlanBody = json_body(body)?;
+    let b: PlanBody = json_body_for(&s, caller, body)?;
     if b.sorties.is_some_and(|k| k != 1) {
         return Err(ApiError::bad_request(
             Some("sorties"),
             "several sorties are planned by POST /api/v1/plan/sorties",
         ));
     }
-    let mut docs = plan_request(&s, &headers, b).await?;
+    let mut docs = plan_request(&s, caller, b).await?;
     Ok(Json(docs.swap_remove(0)))
 }
 
@@ -491,22 +584,25 @@ pub async fn plan(
         (status = 413, body = ErrorBody)))]
 pub async fn plan_sorties(
     State(s): State<AppState>,
-    headers: HeaderMap,
+    Computing(caller): Computing,
+    _: JsonType,
     body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<Json<Vec<MissionDoc>>> {
-    let b: PlanBody = json_body(body)?;
-    Ok(Json(plan_request(&s, &headers, b).await?))
+    let b: PlanBody = json_body_for(&s, caller, body)?;
+    Ok(Json(plan_request(&s, caller, b).await?))
 }
 
 /// The plan use case behind both plan routes: checks, one planning search at a time, the
 /// mission and any further sorties as wire documents, sortie 1 first (never empty).
-async fn plan_request(
-    s: &AppState,
-    headers: &HeaderMap,
-    b: PlanBody,
-) -> ApiResult<Vec<MissionDoc>> {
+async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Vec<MissionDoc>> {
     if !b.dry_run {
-        authorize(s.0.token.as_ref(), headers)?;
+        caller.require_write(s)?;
+    }
+    if b.iterations == Some(0) {
+        return Err(ApiError::bad_request(
+            Some("iterations"),
+            "iterations = 0: expected at least 1 (or leave it out for no cap)",
+        ));
     }
     if let Some(t) = b.time_limit_s
         && !(t.is_finite() && t >= 0.0 && t <= s.0.max_time_limit_s)
@@ -525,12 +621,14 @@ async fn plan_request(
         .map(app::parse_planner)
         .transpose()
         .map_err(|e| ApiError::from(e).in_field("solver"))?;
+    let at = parse_time("at", b.at.as_deref())?;
     let request = app::PlanRequest {
-        at: parse_time("at", b.at.as_deref())?,
-        history: history(
+        at,
+        history: checked_history(
+            at,
             parse_time("history_from", b.history_from.as_deref())?,
             parse_time("history_until", b.history_until.as_deref())?,
-        ),
+        )?,
         scores: None,
         cell_scores: None,
         planner,
@@ -540,9 +638,13 @@ async fn plan_request(
         dry_run: b.dry_run,
         sorties: b.sorties,
     };
-    let _slot = s.planning_slot().await?;
     let preset = energy_preset(b.energy_preset.as_deref())?;
-    s.run_write(request.dry_run, move |p| {
+    let job = Job {
+        kind: "plan",
+        planning: true,
+        write: !request.dry_run,
+    };
+    s.run_job(job, move |p, _| {
         let planned = app::plan_with_preset(p, &request, preset.as_deref(), clock_now())?;
         let mut docs = vec![gleaner_wire::convert::planned_mission(&planned)];
         docs.extend(planned.extra_sorties.iter().map(|e| {
@@ -566,20 +668,25 @@ async fn plan_request(
         (status = 401, body = ErrorBody), (status = 403, body = ErrorBody)))]
 pub async fn explore(
     State(s): State<AppState>,
-    headers: HeaderMap,
+    Computing(caller): Computing,
+    _: JsonType,
     body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<Json<ExplorationDoc>> {
-    let b: ExploreBody = json_body(body)?;
+    let b: ExploreBody = json_body_for(&s, caller, body)?;
     if !b.dry_run {
-        authorize(s.0.token.as_ref(), &headers)?;
+        caller.require_write(&s)?;
     }
     let request = app::ExploreRequest {
         at: parse_time("at", b.at.as_deref())?,
         dry_run: b.dry_run,
     };
-    let _slot = s.planning_slot().await?;
+    let job = Job {
+        kind: "explore",
+        planning: true,
+        write: !request.dry_run,
+    };
     let doc = s
-        .run_write(request.dry_run, move |p| {
+        .run_job(job, move |p, _| {
             Ok(gleaner_wire::convert::exploration(&app::explore(
                 p,
                 &request,
@@ -618,7 +725,13 @@ pub const MISSION_FILES: [(&str, &str, &str); 6] = [
 #[utoipa::path(get, path = "/api/v1/missions/{id}/files/{name}", tag = "missions",
     params(("id" = i64, Path, description = "Mission id"),
         ("name" = String, Path, description = "mission.plan, mission.waypoints, mission.geojson, mission.json, mission.svg or mission.png")),
-    responses((status = 200, description = "The file, as an attachment", content_type = "application/octet-stream"),
+    responses((status = 200, description = "The file, as an attachment named `mission-{id}.plan`, `.waypoints`, `.geojson`, `.json`, `.svg` or `.png`, of its own media type",
+            content(
+                (serde_json::Value = "application/json"),
+                (String = "text/plain; charset=utf-8"),
+                (serde_json::Value = "application/geo+json"),
+                (String = "image/svg+xml"),
+                (Vec<u8> = "image/png"))),
         (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
 pub async fn mission_file(
     State(s): State<AppState>,
@@ -665,7 +778,11 @@ pub async fn mission_file(
             })
         })
         .await?;
-    let disposition = format!("attachment; filename=\"mission-{}-{}\"", id.0, &name[8..]);
+    let disposition = format!(
+        "attachment; filename=\"mission-{}.{}\"",
+        id.0,
+        name.trim_start_matches("mission.")
+    );
     let mut r = bytes.into_response();
     let h = r.headers_mut();
     h.insert(header::CONTENT_TYPE, HeaderValue::from_static(media));
@@ -675,9 +792,27 @@ pub async fn mission_file(
     Ok(r)
 }
 
+/// The serialised OpenAPI document, made once when the router is built.
+#[derive(Clone)]
+pub struct OpenApiJson(pub std::sync::Arc<str>);
+
+/// This API's OpenAPI 3.1 document (this endpoint included).
+#[utoipa::path(get, path = "/api/v1/openapi.json", tag = "project",
+    responses((status = 200, description = "The OpenAPI document", body = serde_json::Value,
+        content_type = "application/json")))]
+pub async fn openapi_json(axum::Extension(doc): axum::Extension<OpenApiJson>) -> Response {
+    let mut r = doc.0.to_string().into_response();
+    r.headers_mut().insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("application/json"),
+    );
+    r
+}
+
 /// Which mission the map shows.
 #[derive(Debug, Deserialize, IntoParams)]
 #[into_params(parameter_in = Query)]
+#[serde(deny_unknown_fields)]
 pub struct MapQuery {
     /// Mission id [default: the newest mission; none: the field alone].
     pub mission: Option<i64>,
@@ -706,11 +841,8 @@ fn map_options() -> gleaner_render::FigureOptions {
 #[utoipa::path(get, path = "/api/v1/map.svg", tag = "missions", params(MapQuery),
     responses((status = 200, description = "SVG", content_type = "image/svg+xml"),
         (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
-pub async fn map(
-    State(s): State<AppState>,
-    q: Result<Query<MapQuery>, QueryRejection>,
-) -> ApiResult<Response> {
-    let which = query(q)?.mission;
+pub async fn map(State(s): State<AppState>, RawQuery(q): RawQuery) -> ApiResult<Response> {
+    let which = query::<MapQuery>(q)?.mission;
     let svg = s
         .run(move |p| {
             let field = gleaner_wire::convert::field(&app::field_view(p)?);
@@ -739,6 +871,8 @@ pub async fn map(
         (status = 400, body = ErrorBody), (status = 413, body = ErrorBody)))]
 pub async fn map_of(
     State(s): State<AppState>,
+    _: Computing,
+    _: JsonType,
     body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<Response> {
     let doc: MissionDoc = json_body(body)?;
@@ -746,7 +880,7 @@ pub async fn map_of(
         .run(move |p| {
             let field = gleaner_wire::convert::field(&app::field_view(p)?);
             gleaner_render::mission_figure_svg(&field, &doc, &map_options())
-                .map_err(|e| ApiError::bad_request(None, e.to_string()))
+                .map_err(|e| ApiError::bad_request(Some("body"), e.to_string()))
         })
         .await?;
     Ok(svg_response(svg))
@@ -795,6 +929,13 @@ fn safe_name(k: usize, name: &str) -> String {
         .collect();
     let clean = clean.trim_start_matches('.');
     format!("{k:03}-{}", if clean.is_empty() { "upload" } else { clean })
+}
+
+fn multipart_type(r: MultipartRejection) -> ApiError {
+    ApiError::unsupported_media_type(format!(
+        "this endpoint takes a multipart/form-data upload: {}",
+        r.body_text()
+    ))
 }
 
 fn multipart_error(e: axum::extract::multipart::MultipartError) -> ApiError {
@@ -900,10 +1041,10 @@ fn flag(upload: &Upload, name: &str) -> ApiResult<bool> {
         (status = 413, body = ErrorBody)))]
 pub async fn ingest(
     State(s): State<AppState>,
-    headers: HeaderMap,
-    m: Multipart,
+    _: Writing,
+    m: Result<Multipart, MultipartRejection>,
 ) -> ApiResult<Json<IngestDoc>> {
-    authorize(s.0.token.as_ref(), &headers)?;
+    let m = m.map_err(multipart_type)?;
     let upload = read_upload(m).await?;
     if upload.files.is_empty() {
         return Err(ApiError::bad_request(
@@ -973,11 +1114,11 @@ pub async fn ingest(
         (status = 413, body = ErrorBody)))]
 pub async fn record(
     State(s): State<AppState>,
-    headers: HeaderMap,
+    _: Writing,
     Path(id): Path<String>,
-    m: Multipart,
+    m: Result<Multipart, MultipartRejection>,
 ) -> ApiResult<Json<RecordDoc>> {
-    authorize(s.0.token.as_ref(), &headers)?;
+    let m = m.map_err(multipart_type)?;
     let id = mission_id(&id)?;
     let upload = read_upload(m).await?;
     let cells = upload

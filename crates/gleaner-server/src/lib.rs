@@ -38,21 +38,25 @@ mod error;
 pub mod handlers;
 pub mod state;
 
+mod security;
+
 use std::net::SocketAddr;
 use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Duration;
 
 use axum::Router;
 use axum::extract::DefaultBodyLimit;
 use axum::http::{HeaderValue, Method, header};
 use tower_http::cors::{AllowOrigin, CorsLayer};
-use tower_http::trace::TraceLayer;
 use utoipa::OpenApi as _;
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
 pub use auth::{Token, TokenError};
 pub use error::{ApiError, ErrorBody};
-pub use state::AppState;
+pub use state::{AppState, Event, Hook};
 
 /// Default address: loopback only.
 pub const DEFAULT_ADDR: &str = "127.0.0.1:8080";
@@ -60,6 +64,15 @@ pub const DEFAULT_ADDR: &str = "127.0.0.1:8080";
 pub const DEFAULT_MAX_UPLOAD_BYTES: usize = 64 << 20;
 /// Largest JSON request body, bytes.
 pub const MAX_JSON_BYTES: usize = 1 << 20;
+/// Default time a connection has to send a request's head (line and headers), a new
+/// connection or a kept-alive one between requests: after it, the connection is closed.
+pub const DEFAULT_HEADER_READ_TIMEOUT: Duration = Duration::from_secs(10);
+/// Default longest pause while a request's body is being sent.
+pub const DEFAULT_BODY_TIMEOUT: Duration = Duration::from_secs(30);
+/// Default most connections open at once; further ones wait in the listen queue.
+pub const DEFAULT_MAX_CONNECTIONS: usize = 256;
+/// Default longest wait at shutdown for requests in flight and for work still running.
+pub const DEFAULT_SHUTDOWN_GRACE: Duration = Duration::from_secs(30);
 
 /// How the server runs.
 #[derive(Debug, Clone)]
@@ -70,6 +83,14 @@ pub struct ServerConfig {
     pub addr: SocketAddr,
     /// Write token; without one, writes are refused (403) and only loopback may be bound.
     pub token: Option<Token>,
+    /// Whether computations that store nothing (plan previews, dry-run scorings and
+    /// explorations, simulations, reconstructions, map previews) may run without the token.
+    /// Only ever on a loopback address ([`ServerConfig::open_compute`]); true by default.
+    pub anonymous_compute: bool,
+    /// Host names (besides `localhost` and IP literals) the server answers to in the `Host`
+    /// header, e.g. the name of a reverse proxy; any other name is refused (421), so a page
+    /// on another site cannot reach the server through DNS rebinding.
+    pub allowed_hosts: Vec<String>,
     /// Origins allowed by CORS (none: CORS off, same origin only).
     pub cors_origins: Vec<String>,
     /// Basemap tile URL template (`https://…/{z}/{x}/{y}.png`) the dashboard draws under the
@@ -82,6 +103,19 @@ pub struct ServerConfig {
     /// Projects opened at start-up and shared by the requests (at most this many use cases
     /// run at once).
     pub pool_size: usize,
+    /// Time a connection has to send a request head ([`DEFAULT_HEADER_READ_TIMEOUT`]); also
+    /// the idle time after which a kept-alive connection is closed.
+    pub header_read_timeout: Duration,
+    /// Longest pause while a request body arrives ([`DEFAULT_BODY_TIMEOUT`]).
+    pub body_timeout: Duration,
+    /// Most connections open at once ([`DEFAULT_MAX_CONNECTIONS`]).
+    pub max_connections: usize,
+    /// Longest wait at shutdown ([`DEFAULT_SHUTDOWN_GRACE`]).
+    pub shutdown_grace: Duration,
+    /// How long a cached read is answered before it is refreshed when nothing was written
+    /// through this server ([`state::CACHE_TTL`]): the bound on how late another process's
+    /// write shows.
+    pub cache_ttl: Duration,
 }
 
 impl ServerConfig {
@@ -91,16 +125,30 @@ impl ServerConfig {
             project,
             addr: DEFAULT_ADDR.parse().expect("a valid constant address"),
             token: None,
+            anonymous_compute: true,
+            allowed_hosts: Vec::new(),
             cors_origins: Vec::new(),
             basemap_url: None,
             max_upload_bytes: DEFAULT_MAX_UPLOAD_BYTES,
             max_time_limit_s: 60.0,
             pool_size: 8,
+            header_read_timeout: DEFAULT_HEADER_READ_TIMEOUT,
+            body_timeout: DEFAULT_BODY_TIMEOUT,
+            max_connections: DEFAULT_MAX_CONNECTIONS,
+            shutdown_grace: DEFAULT_SHUTDOWN_GRACE,
+            cache_ttl: state::CACHE_TTL,
         }
     }
 
+    /// Whether computations that store nothing run without the token: only when allowed and
+    /// bound to loopback.
+    pub fn open_compute(&self) -> bool {
+        self.anonymous_compute && self.addr.ip().is_loopback()
+    }
+
     /// Refuses an unsafe configuration: a non-loopback address without a token, an unusable
-    /// CORS origin or basemap URL, a zero upload limit.
+    /// CORS origin, allowed host or basemap URL, a zero upload limit, timeout or connection
+    /// cap.
     pub fn check(&self) -> Result<(), ServerError> {
         if !self.addr.ip().is_loopback() && self.token.is_none() {
             return Err(ServerError::Config(format!(
@@ -114,6 +162,16 @@ impl ServerConfig {
             {
                 return Err(ServerError::Config(format!(
                     "CORS origin {o:?}: expected http(s)://host[:port]"
+                )));
+            }
+        }
+        for h in &self.allowed_hosts {
+            let ok = !h.is_empty()
+                && h.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '-'));
+            if !ok {
+                return Err(ServerError::Config(format!(
+                    "allowed host {h:?}: expected a host name (letters, digits, '.', '-'), without port"
                 )));
             }
         }
@@ -137,6 +195,14 @@ impl ServerConfig {
                 "max planner time limit {} s: expected seconds >= 0",
                 self.max_time_limit_s
             )));
+        }
+        if self.header_read_timeout.is_zero()
+            || self.body_timeout.is_zero()
+            || self.max_connections == 0
+        {
+            return Err(ServerError::Config(
+                "the header and body timeouts and the connection cap must be > 0".into(),
+            ));
         }
         Ok(())
     }
@@ -191,6 +257,7 @@ fn api_routes(max_upload_bytes: usize) -> (Router<AppState>, utoipa::openapi::Op
         .routes(routes!(handlers::explore))
         .routes(routes!(handlers::mission_file))
         .routes(routes!(handlers::map, handlers::map_of))
+        .routes(routes!(handlers::openapi_json))
         .layer(DefaultBodyLimit::max(MAX_JSON_BYTES));
     let uploads = OpenApiRouter::new()
         .routes(routes!(handlers::ingest))
@@ -204,24 +271,19 @@ pub fn openapi() -> utoipa::openapi::OpenApi {
     api_routes(DEFAULT_MAX_UPLOAD_BYTES).1
 }
 
-/// The whole application: API, OpenAPI document, dashboard, request logging, CORS.
+/// The whole application: API, OpenAPI document, dashboard, request logging (paths and
+/// redacted queries only), CORS, the `Host` allow-list and the security headers on every
+/// response.
 pub fn router(state: AppState, config: &ServerConfig) -> Router {
     let (api, doc) = api_routes(config.max_upload_bytes);
-    let doc_json = doc.to_json().unwrap_or_else(|_| "{}".to_string());
+    let doc_json: Arc<str> = doc.to_json().unwrap_or_else(|_| "{}".to_string()).into();
     let mut app = api
-        .route(
-            "/api/v1/openapi.json",
-            axum::routing::get(move || async move {
-                (
-                    [(header::CONTENT_TYPE, "application/json")],
-                    doc_json.clone(),
-                )
-            }),
-        )
         .merge(dashboard::routes(config.basemap_url.as_deref()))
         .fallback(|| async {
             ApiError::not_found(None, "no such page or endpoint (see /api/v1/openapi.json)")
         })
+        .method_not_allowed_fallback(security::method_not_allowed)
+        .layer(axum::Extension(handlers::OpenApiJson(doc_json)))
         .with_state(state);
     if !config.cors_origins.is_empty() {
         let origins: Vec<HeaderValue> = config
@@ -236,7 +298,20 @@ pub fn router(state: AppState, config: &ServerConfig) -> Router {
                 .allow_headers([header::AUTHORIZATION, header::CONTENT_TYPE]),
         );
     }
-    app.layer(TraceLayer::new_for_http())
+    let hosts = Arc::new(security::Hosts::new(&config.allowed_hosts));
+    let token = Arc::new(config.token.clone());
+    app.layer(axum::middleware::from_fn(
+        move |req: axum::extract::Request, next: axum::middleware::Next| {
+            security::refuse_wrong_tokens(Arc::clone(&token), req, next)
+        },
+    ))
+    .layer(axum::middleware::from_fn(
+        move |req: axum::extract::Request, next: axum::middleware::Next| {
+            security::check_host(Arc::clone(&hosts), req, next)
+        },
+    ))
+    .layer(axum::middleware::from_fn(security::headers))
+    .layer(security::trace_layer())
 }
 
 /// Serves `config`'s project on `listener` until `shutdown` completes, then finishes the
@@ -248,10 +323,120 @@ pub async fn serve(
 ) -> Result<(), ServerError> {
     config.check()?;
     let state = AppState::new(config)?;
-    let app = router(state, config);
+    serve_state(listener, config, state, shutdown).await
+}
+
+/// [`serve`] with a state made by the caller (who may keep a clone to watch it, e.g. with
+/// [`AppState::set_hook`]).
+///
+/// Each connection is served by hyper's HTTP/1.1 server with a header-read timeout (which is
+/// also the idle timeout of kept-alive connections) and a body timeout; at most
+/// `max_connections` are open at once, the others wait in the listen queue. At shutdown the
+/// listener closes, cancellable work (simulations) is cancelled, the requests in flight are
+/// finished, and the work still running (whose client left) is waited for, each wait bounded
+/// by `shutdown_grace`.
+pub async fn serve_state(
+    listener: tokio::net::TcpListener,
+    config: &ServerConfig,
+    state: AppState,
+    shutdown: impl std::future::Future<Output = ()> + Send + 'static,
+) -> Result<(), ServerError> {
+    use hyper_util::rt::{TokioIo, TokioTimer};
+    use tokio::sync::Semaphore;
+    config.check()?;
+    let app = router(state.clone(), config);
+    let service = hyper_util::service::TowerToHyperService::new(
+        tower_http::timeout::RequestBodyTimeout::new(app, config.body_timeout),
+    );
+    let mut http = hyper::server::conn::http1::Builder::new();
+    http.timer(TokioTimer::new())
+        .header_read_timeout(config.header_read_timeout)
+        .keep_alive(true);
+    let graceful = hyper_util::server::graceful::GracefulShutdown::new();
+    let limit = Arc::new(Semaphore::new(config.max_connections));
+    let open = Arc::new(AtomicUsize::new(0));
     tracing::info!(addr = %listener.local_addr()?, "serving gleaner");
-    axum::serve(listener, app)
-        .with_graceful_shutdown(shutdown)
-        .await?;
+    tokio::pin!(shutdown);
+    loop {
+        let permit = match Arc::clone(&limit).try_acquire_owned() {
+            Ok(p) => p,
+            Err(_) => {
+                state.event(Event::AtCapacity);
+                tokio::select! {
+                    p = Arc::clone(&limit).acquire_owned() => match p {
+                        Ok(p) => p,
+                        Err(_) => break,
+                    },
+                    () = &mut shutdown => break,
+                }
+            }
+        };
+        let stream = tokio::select! {
+            r = listener.accept() => match r {
+                Ok((stream, _)) => stream,
+                Err(e) => {
+                    // Out of file descriptors and the like: the connection is lost, the
+                    // server goes on.
+                    tracing::warn!(error = %e, "accepting a connection failed");
+                    continue;
+                }
+            },
+            () = &mut shutdown => break,
+        };
+        stream.set_nodelay(true).ok();
+        let n = open.fetch_add(1, Ordering::SeqCst) + 1;
+        state.event(Event::Accepted { open: n });
+        let conn = graceful.watch(http.serve_connection(TokioIo::new(stream), service.clone()));
+        let (state, open) = (state.clone(), Arc::clone(&open));
+        tokio::spawn(async move {
+            if let Err(e) = conn.await {
+                tracing::debug!(error = %e, "connection ended with an error");
+            }
+            let n = open.fetch_sub(1, Ordering::SeqCst) - 1;
+            state.event(Event::Closed { open: n });
+            drop(permit);
+        });
+    }
+    drop(listener);
+    state.begin_shutdown();
+    if tokio::time::timeout(config.shutdown_grace, graceful.shutdown())
+        .await
+        .is_err()
+    {
+        tracing::warn!("shutdown: requests still in flight after the grace period, closed");
+    }
+    if tokio::time::timeout(config.shutdown_grace, state.drain())
+        .await
+        .is_err()
+    {
+        tracing::warn!("shutdown: work still running after the grace period, left behind");
+    }
     Ok(())
+}
+
+/// What `gleaner serve` prints when it starts: the dashboard's address. A token drawn at
+/// start-up (`generated`) is put in the address's fragment (which never reaches a server's
+/// log) only when standard output is a terminal (`terminal`): output that goes to a file or
+/// a service's journal never holds it. A token the operator supplied is never printed.
+pub fn announce(
+    addr: SocketAddr,
+    token: Option<&Token>,
+    generated: bool,
+    terminal: bool,
+) -> String {
+    let mut text = match (token, generated, terminal) {
+        (Some(t), true, true) => format!(
+            "dashboard: http://{addr}/#token={}  (this session's write token; set GLEANER_TOKEN to choose one)",
+            t.reveal()
+        ),
+        (Some(_), true, false) => format!(
+            "dashboard: http://{addr}/  (a write token was drawn for this session and not printed, as standard output is not a terminal; set GLEANER_TOKEN or --token-file to choose one)"
+        ),
+        (Some(_), false, _) => format!("dashboard: http://{addr}/"),
+        (None, _, _) => format!("dashboard: http://{addr}/  (read-only)"),
+    };
+    text.push_str(&format!(
+        "\nAPI: http://{addr}/api/v1/openapi.json · stop with ctrl-c"
+    ));
+    text
 }

@@ -1,17 +1,25 @@
 //! The server's shared state: the project directory, a small pool of open projects, the
-//! token and the limits. Use cases run on tokio's blocking threads (the store is
-//! synchronous), so a long planning request never holds up the reads.
+//! token and the limits, the one-at-a-time slots, the read cache and the work in flight.
+//!
+//! Use cases run on tokio's blocking threads (the store is synchronous), so a long planning
+//! request never holds up the reads. Every permit a use case needs (the planning slot, the
+//! writer slot, a pooled project) moves into the blocking closure with it: a client that hangs
+//! up drops its request, not the permits, so the slot stays taken until the work really ends.
+//! Work that can stop early (a simulation) is cancelled when its client leaves or the server
+//! shuts down ([`Cancel`]); [`AppState::drain`] waits for whatever is still running.
 
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, RwLock};
 use std::time::{Duration, Instant};
 
 use axum::body::Bytes;
 
 use gleaner_app::Project;
-use tokio::sync::Semaphore;
+use tokio::sync::{OwnedSemaphorePermit, Semaphore, watch};
+use tokio_util::sync::CancellationToken;
+use tokio_util::task::TaskTracker;
 
 use crate::auth::Token;
 use crate::error::{ApiError, ApiResult};
@@ -23,6 +31,84 @@ pub type Opened = Project<gleaner_app::AnyStore>;
 #[derive(Clone)]
 pub struct AppState(pub(crate) Arc<Inner>);
 
+/// A point in the life of the server's work or connections, reported to the hook set with
+/// [`AppState::set_hook`] (tests synchronise on these; nothing else depends on them).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Event {
+    /// A use case of this kind starts on its blocking thread, holding its permits.
+    Started(&'static str),
+    /// Its client left before the answer (the request was dropped); the work is cancelled
+    /// if it can stop early and otherwise runs on, keeping its permits.
+    Abandoned(&'static str),
+    /// A use case ended and released its permits; `cancelled` when it stopped early.
+    Ended {
+        /// The kind of work.
+        kind: &'static str,
+        /// Whether it stopped early ([`gleaner_app::AppError::Cancelled`]).
+        cancelled: bool,
+    },
+    /// A connection was accepted; `open` connections now.
+    Accepted {
+        /// Open connections, this one included.
+        open: usize,
+    },
+    /// A connection closed; `open` connections remain.
+    Closed {
+        /// Open connections left.
+        open: usize,
+    },
+    /// The connection cap is reached: no connection is accepted until one closes.
+    AtCapacity,
+    /// Shutdown began: no new connection, cancellable work cancelled.
+    ShuttingDown,
+    /// A read found its cached answer being computed and waits for that computation.
+    CacheJoined,
+}
+
+/// A hook called at every [`Event`]. Called on the thread where the event happens (a blocking
+/// thread for `Started`, an async worker otherwise): it may block only at `Started`.
+pub type Hook = Arc<dyn Fn(&Event) + Send + Sync>;
+
+/// What a use case needs before it runs.
+#[derive(Debug, Clone, Copy)]
+pub struct Job {
+    /// A short name (`plan`, `simulate`, `read`), for events and logs.
+    pub kind: &'static str,
+    /// Takes the one planning slot (planning, exploration and simulation searches).
+    pub planning: bool,
+    /// Writes: queued behind the other writes; the read cache is invalidated when it ends.
+    pub write: bool,
+}
+
+impl Job {
+    /// A read: a pooled project only.
+    pub const fn read(kind: &'static str) -> Self {
+        Self {
+            kind,
+            planning: false,
+            write: false,
+        }
+    }
+}
+
+/// Whether the work's client left or the server is shutting down: a use case that can stop
+/// early checks it (as the campaign's [`gleaner_app::Progress::cancelled`]).
+#[derive(Debug, Clone)]
+pub struct Cancel(CancellationToken);
+
+impl Cancel {
+    /// Whether the work should stop.
+    pub fn is_cancelled(&self) -> bool {
+        self.0.is_cancelled()
+    }
+}
+
+impl gleaner_app::Progress for Cancel {
+    fn cancelled(&self) -> bool {
+        self.is_cancelled()
+    }
+}
+
 pub(crate) struct Inner {
     pub(crate) dir: PathBuf,
     /// Projects opened at start-up: opening one runs the store's schema check, which takes a
@@ -30,28 +116,57 @@ pub(crate) struct Inner {
     /// to a panic).
     pool: Mutex<Vec<Opened>>,
     /// One permit per pooled project: a request waits for a free one.
-    slots: Semaphore,
+    slots: Arc<Semaphore>,
     pub(crate) token: Option<Token>,
+    /// Whether computations that write nothing (previews, dry runs, simulations,
+    /// reconstructions) may run without the token: on loopback only.
+    pub(crate) open_compute: bool,
     pub(crate) basemap_url: Option<String>,
     pub(crate) max_upload_bytes: usize,
     pub(crate) max_time_limit_s: f64,
     /// One writing use case at a time: they queue here instead of racing into the store's
     /// busy timeout (a scoring that rebuilds the utility state holds its transaction for
     /// seconds on a large history).
-    pub(crate) writer: tokio::sync::Mutex<()>,
-    /// One planning or exploration search at a time: they use a core each for seconds, and
-    /// queueing them keeps a core for the reads.
-    pub(crate) planning: Semaphore,
+    writer: Arc<Semaphore>,
+    /// One planning, exploration or simulation search at a time: they use a core each for
+    /// seconds, and queueing them keeps a core for the reads.
+    planning: Arc<Semaphore>,
     /// Bumped after every write through this server.
     generation: AtomicU64,
-    /// Serialised answers of the large reads, with the generation they were computed at.
-    cache: Mutex<HashMap<&'static str, (u64, Instant, Bytes)>>,
+    /// Serialised answers of the reads, by key.
+    cache: Mutex<HashMap<String, CacheSlot>>,
+    /// The blocking work in flight (including work whose client left).
+    work: TaskTracker,
+    /// Cancelled at shutdown; each job's token is a child.
+    shutdown: CancellationToken,
+    hook: RwLock<Option<Hook>>,
+    /// [`CACHE_TTL`] unless configured.
+    cache_ttl: Duration,
 }
 
 /// How long a cached read is served without recomputing it when nothing was written through
 /// this server: the bound on how late a write by another process (a CLI command on the same
-/// project) shows.
+/// project) shows. After it, the first reader starts one recomputation and every reader is
+/// answered from the previous value until it is done.
 pub const CACHE_TTL: Duration = Duration::from_secs(1);
+
+/// Most cached answers kept (one per mission read, plus the project, field and cells).
+const CACHE_ENTRIES: usize = 1024;
+
+type Fill = watch::Receiver<Option<ApiResult<Bytes>>>;
+
+#[derive(Default)]
+struct CacheSlot {
+    /// The latest answer: the write generation it was computed at, when it was started.
+    current: Option<(u64, Instant, Bytes)>,
+    /// The recomputation in flight, for the generation it serves.
+    filling: Option<(u64, Fill)>,
+}
+
+enum Next {
+    Wait(Fill),
+    Start(watch::Sender<Option<ApiResult<Bytes>>>, Option<Bytes>),
+}
 
 impl AppState {
     /// State for the project in `config.project`, with `config.pool_size` (at least 1)
@@ -64,26 +179,53 @@ impl AppState {
         Ok(Self(Arc::new(Inner {
             dir: config.project.clone(),
             pool: Mutex::new(pool),
-            slots: Semaphore::new(n),
+            slots: Arc::new(Semaphore::new(n)),
             token: config.token.clone(),
+            open_compute: config.open_compute(),
             basemap_url: config.basemap_url.clone(),
             max_upload_bytes: config.max_upload_bytes,
             max_time_limit_s: config.max_time_limit_s,
-            writer: tokio::sync::Mutex::new(()),
-            planning: Semaphore::new(1),
+            writer: Arc::new(Semaphore::new(1)),
+            planning: Arc::new(Semaphore::new(1)),
             generation: AtomicU64::new(0),
             cache: Mutex::new(HashMap::new()),
+            work: TaskTracker::new(),
+            shutdown: CancellationToken::new(),
+            hook: RwLock::new(None),
+            cache_ttl: config.cache_ttl,
         })))
     }
 
-    /// Waits for the one slot planning, exploration and simulation searches share; held
-    /// until the returned permit is dropped.
-    pub async fn planning_slot(&self) -> ApiResult<tokio::sync::SemaphorePermit<'_>> {
-        self.0
-            .planning
-            .acquire()
-            .await
-            .map_err(|_| ApiError::unavailable("the server is shutting down"))
+    /// Sets the hook called at every [`Event`] (replacing any).
+    pub fn set_hook(&self, hook: Hook) {
+        if let Ok(mut h) = self.0.hook.write() {
+            *h = Some(hook);
+        }
+    }
+
+    pub(crate) fn event(&self, e: Event) {
+        let hook = self.0.hook.read().ok().and_then(|h| h.clone());
+        if let Some(h) = hook {
+            h(&e);
+        }
+    }
+
+    /// Whether the planning slot is free (no planning, exploration or simulation search is
+    /// running, abandoned or not).
+    pub fn planning_idle(&self) -> bool {
+        self.0.planning.available_permits() > 0
+    }
+
+    /// Starts the shutdown: cancels the work that can stop early.
+    pub(crate) fn begin_shutdown(&self) {
+        self.0.shutdown.cancel();
+        self.event(Event::ShuttingDown);
+    }
+
+    /// Waits until no use case runs any more (each started one ends, cancelled or not).
+    pub(crate) async fn drain(&self) {
+        self.0.work.close();
+        self.0.work.wait().await;
     }
 
     fn take(&self) -> ApiResult<Opened> {
@@ -100,47 +242,6 @@ impl AppState {
         }
     }
 
-    /// [`AppState::run`] for a use case that writes (unless `dry_run`): after the writes
-    /// queued before it.
-    pub async fn run_write<T: Send + 'static>(
-        &self,
-        dry_run: bool,
-        f: impl FnOnce(&mut Opened) -> ApiResult<T> + Send + 'static,
-    ) -> ApiResult<T> {
-        if dry_run {
-            return self.run(f).await;
-        }
-        let _writer = self.0.writer.lock().await;
-        let out = self.run(f).await;
-        // Even a failed write is assumed to have changed something: the cache only costs a
-        // recomputation.
-        self.0.generation.fetch_add(1, Ordering::SeqCst);
-        out
-    }
-
-    /// The serialised answer of the read `key`, recomputed by `f` when something was written
-    /// through this server since, or when it is older than [`CACHE_TTL`].
-    pub async fn cached(
-        &self,
-        key: &'static str,
-        f: impl FnOnce(&mut Opened) -> ApiResult<Vec<u8>> + Send + 'static,
-    ) -> ApiResult<Bytes> {
-        let generation = self.0.generation.load(Ordering::SeqCst);
-        if let Ok(cache) = self.0.cache.lock()
-            && let Some((g, at, bytes)) = cache.get(key)
-            && *g == generation
-            && at.elapsed() < CACHE_TTL
-        {
-            return Ok(bytes.clone());
-        }
-        let started = Instant::now();
-        let bytes = Bytes::from(self.run(f).await?);
-        if let Ok(mut cache) = self.0.cache.lock() {
-            cache.insert(key, (generation, started, bytes.clone()));
-        }
-        Ok(bytes)
-    }
-
     /// Runs `f` on a pooled project on a blocking thread, once a project is free. A use case
     /// that fails leaves its store as it was (one transaction each), so the project goes back
     /// to the pool either way; one lost to a panic is replaced at the next request.
@@ -148,20 +249,221 @@ impl AppState {
         &self,
         f: impl FnOnce(&mut Opened) -> ApiResult<T> + Send + 'static,
     ) -> ApiResult<T> {
-        let _slot = self
-            .0
-            .slots
-            .acquire()
+        self.run_job(Job::read("read"), move |p, _| f(p)).await
+    }
+
+    /// [`AppState::run`] for a use case that writes (unless `dry_run`): after the writes
+    /// queued before it.
+    pub async fn run_write<T: Send + 'static>(
+        &self,
+        dry_run: bool,
+        f: impl FnOnce(&mut Opened) -> ApiResult<T> + Send + 'static,
+    ) -> ApiResult<T> {
+        let job = Job {
+            kind: "write",
+            planning: false,
+            write: !dry_run,
+        };
+        self.run_job(job, move |p, _| f(p)).await
+    }
+
+    /// Runs `f` as `job`: waits for the permits it needs (planning slot, writer slot, a pooled
+    /// project), then runs it on a blocking thread that owns them until `f` returns. When the
+    /// request is dropped first (its client left), `f` is told through its [`Cancel`] and the
+    /// permits stay with it; a write bumps the cache generation when it ends either way.
+    pub async fn run_job<T: Send + 'static>(
+        &self,
+        job: Job,
+        f: impl FnOnce(&mut Opened, &Cancel) -> ApiResult<T> + Send + 'static,
+    ) -> ApiResult<T> {
+        let cancel = Cancel(self.0.shutdown.child_token());
+        let mut guard = AbandonGuard {
+            state: self.clone(),
+            cancel: cancel.clone(),
+            kind: job.kind,
+            armed: true,
+        };
+        let closed = |_| ApiError::unavailable("the server is shutting down");
+        let planning = match job.planning {
+            true => Some(
+                Arc::clone(&self.0.planning)
+                    .acquire_owned()
+                    .await
+                    .map_err(closed)?,
+            ),
+            false => None,
+        };
+        let writer = match job.write {
+            true => Some(
+                Arc::clone(&self.0.writer)
+                    .acquire_owned()
+                    .await
+                    .map_err(closed)?,
+            ),
+            false => None,
+        };
+        let slot = Arc::clone(&self.0.slots)
+            .acquire_owned()
             .await
-            .map_err(|_| ApiError::unavailable("the server is shutting down"))?;
+            .map_err(closed)?;
         let state = self.clone();
-        tokio::task::spawn_blocking(move || {
-            let mut p = state.take()?;
-            let out = f(&mut p);
-            state.give_back(p);
+        let handle = self.0.work.spawn_blocking(move || {
+            let finish = Finish {
+                state: state.clone(),
+                job,
+                permits: Some((planning, writer, slot)),
+                cancelled: false,
+            };
+            state.event(Event::Started(job.kind));
+            let out = state.take().and_then(|mut p| {
+                let out = f(&mut p, &cancel);
+                state.give_back(p);
+                out
+            });
+            let mut finish = finish;
+            finish.cancelled = out.as_ref().is_err_and(ApiError::is_cancelled);
+            drop(finish);
             out
-        })
-        .await
-        .map_err(|e| ApiError::internal(format!("the request's worker failed: {e}")))?
+        });
+        let out = handle
+            .await
+            .map_err(|e| ApiError::internal(format!("the request's worker failed: {e}")))?;
+        guard.armed = false;
+        out
+    }
+
+    /// The serialised answer of the read `key`, computed by `f` once per write through this
+    /// server (concurrent readers of a missing or outdated answer wait for the one
+    /// computation), and refreshed in the background after [`CACHE_TTL`] (readers meanwhile
+    /// get the previous answer). Errors are answered, not kept.
+    pub async fn cached(
+        &self,
+        key: &str,
+        f: impl FnOnce(&mut Opened) -> ApiResult<Vec<u8>> + Send + 'static,
+    ) -> ApiResult<Bytes> {
+        let generation = self.0.generation.load(Ordering::SeqCst);
+        let next = {
+            let mut cache = self
+                .0
+                .cache
+                .lock()
+                .map_err(|_| ApiError::internal("the read cache was poisoned"))?;
+            if cache.len() >= CACHE_ENTRIES && !cache.contains_key(key) {
+                cache.retain(|_, s| {
+                    s.filling.is_some() || s.current.as_ref().is_some_and(|c| c.0 == generation)
+                });
+            }
+            let slot = cache.entry(key.to_string()).or_default();
+            let current = slot
+                .current
+                .as_ref()
+                .filter(|c| c.0 == generation)
+                .map(|c| (c.1.elapsed() < self.0.cache_ttl, c.2.clone()));
+            let filling = slot
+                .filling
+                .as_ref()
+                .filter(|f| f.0 == generation)
+                .map(|f| f.1.clone());
+            match (current, filling) {
+                (Some((true, bytes)), _) | (Some((false, bytes)), Some(_)) => return Ok(bytes),
+                (None, Some(rx)) => {
+                    drop(cache);
+                    self.event(Event::CacheJoined);
+                    Next::Wait(rx)
+                }
+                (stale, None) => {
+                    let (tx, rx) = watch::channel(None);
+                    slot.filling = Some((generation, rx));
+                    Next::Start(tx, stale.map(|s| s.1))
+                }
+            }
+        };
+        let rx = match next {
+            Next::Wait(rx) => rx,
+            Next::Start(tx, stale) => {
+                let rx = tx.subscribe();
+                // The fill runs on its own task: a reader that hangs up does not stop it for
+                // the others.
+                let state = self.clone();
+                let key = key.to_string();
+                tokio::spawn(async move {
+                    let started = Instant::now();
+                    let out = state
+                        .run_job(Job::read("cache-fill"), move |p, _| f(p))
+                        .await
+                        .map(Bytes::from);
+                    if let Ok(mut cache) = state.0.cache.lock() {
+                        let slot = cache.entry(key).or_default();
+                        if slot.filling.as_ref().is_some_and(|f| f.0 == generation) {
+                            slot.filling = None;
+                        }
+                        if let Ok(bytes) = &out
+                            && slot.current.as_ref().is_none_or(|c| c.0 <= generation)
+                        {
+                            slot.current = Some((generation, started, bytes.clone()));
+                        }
+                    }
+                    tx.send(Some(out)).ok();
+                });
+                if let Some(bytes) = stale {
+                    return Ok(bytes);
+                }
+                rx
+            }
+        };
+        let mut rx = rx;
+        let out = rx
+            .wait_for(Option::is_some)
+            .await
+            .map_err(|_| ApiError::internal("the read's computation failed"))?
+            .clone();
+        out.unwrap_or_else(|| Err(ApiError::internal("the read's computation failed")))
+    }
+}
+
+/// Dropped with the request: when the answer was not reached, the client left.
+struct AbandonGuard {
+    state: AppState,
+    cancel: Cancel,
+    kind: &'static str,
+    armed: bool,
+}
+
+impl Drop for AbandonGuard {
+    fn drop(&mut self) {
+        if self.armed {
+            self.cancel.0.cancel();
+            self.state.event(Event::Abandoned(self.kind));
+        }
+    }
+}
+
+type Permits = (
+    Option<OwnedSemaphorePermit>,
+    Option<OwnedSemaphorePermit>,
+    OwnedSemaphorePermit,
+);
+
+/// Ends a job on its blocking thread, even when it panics: a write bumps the generation
+/// before its writer permit goes, then the permits are released, then `Ended` is reported.
+struct Finish {
+    state: AppState,
+    job: Job,
+    permits: Option<Permits>,
+    cancelled: bool,
+}
+
+impl Drop for Finish {
+    fn drop(&mut self) {
+        if self.job.write {
+            // Even a failed write is assumed to have changed something: the cache only costs
+            // a recomputation.
+            self.state.0.generation.fetch_add(1, Ordering::SeqCst);
+        }
+        drop(self.permits.take());
+        self.state.event(Event::Ended {
+            kind: self.job.kind,
+            cancelled: self.cancelled,
+        });
     }
 }

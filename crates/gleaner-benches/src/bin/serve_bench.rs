@@ -3,14 +3,16 @@
 //!
 //! ```text
 //! cargo run --release -p gleaner-benches --bin serve-bench -- --project caf
-//!     [--requests 20000] [--clients 50] [--workers 2] [--no-browser]
+//!     [--requests 20000] [--clients 64] [--workers 2] [--no-browser] [--caf-data DIR]
 //! ```
 //!
 //! The server runs in this process on an ephemeral loopback port with `--workers` runtime
 //! threads; `--clients` threads each keep one connection alive and send their share of
 //! `--requests` GETs back to back. Every run is bounded by its request count. The project
-//! must exist (`gleaner init` + `gleaner ingest`); the benchmark plans one mission (greedy,
-//! stored) if it has none, so run it on a copy you do not mind gaining a mission.
+//! must exist (`gleaner init` + `gleaner ingest`), or, with `--caf-data DIR` (the shared data
+//! folder), is made there first: the 42 CAF stations, every daily file ingested, scored at the
+//! newest reading. The benchmark plans missions (greedy, stored), so run it on a copy you do
+//! not mind gaining missions.
 
 use std::path::PathBuf;
 use std::sync::{Arc, Barrier};
@@ -25,15 +27,17 @@ struct Args {
     clients: usize,
     workers: usize,
     browser: bool,
+    caf_data: Option<PathBuf>,
 }
 
 fn parse_args() -> Result<Args, String> {
     let mut a = Args {
         project: PathBuf::new(),
         requests: 20_000,
-        clients: 50,
+        clients: 64,
         workers: 2,
         browser: true,
+        caf_data: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -56,6 +60,7 @@ fn parse_args() -> Result<Args, String> {
                     .map_err(|e| format!("--workers: {e}"))?
             }
             "--no-browser" => a.browser = false,
+            "--caf-data" => a.caf_data = Some(PathBuf::from(value("--caf-data")?)),
             "-h" | "--help" => {
                 return Err("usage: serve-bench --project DIR [--requests N] [--clients N] [--workers N] [--no-browser]".into());
             }
@@ -162,7 +167,59 @@ fn main() {
     }
 }
 
+/// The CAF project the figures are measured on, made in `dir` from the shared data folder.
+fn make_caf(
+    dir: &std::path::Path,
+    data: &std::path::Path,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use gleaner_app as app;
+    let caf = data.join("caf");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(caf.join("Daily"))?
+        .map(|e| e.map(|e| e.path()))
+        .collect::<Result<_, _>>()?;
+    files.sort();
+    eprintln!(
+        "making the CAF project in {} ({} daily files)…",
+        dir.display(),
+        files.len()
+    );
+    let (mut project, _) = app::init(&app::InitRequest {
+        dir: dir.to_path_buf(),
+        sensors: caf.join("sensors/CAF_sensor_locations.csv"),
+        utm_zone: Some("11N".into()),
+        name: Some("caf".into()),
+        ..Default::default()
+    })?;
+    app::ingest(
+        &mut project,
+        &app::IngestRequest {
+            files,
+            ..Default::default()
+        },
+        0,
+        &app::Silent,
+    )?;
+    app::score(
+        &mut project,
+        &app::ScoreRequest {
+            at: None,
+            history: app::History {
+                from: i64::MIN,
+                until: i64::MAX,
+            },
+            probabilities: None,
+            dry_run: false,
+        },
+    )?;
+    Ok(())
+}
+
 fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
+    if let Some(data) = &args.caf_data
+        && !args.project.join("gleaner.toml").exists()
+    {
+        make_caf(&args.project, data)?;
+    }
     let token = Token::random()?;
     let mut config = ServerConfig::new(args.project.clone());
     config.addr = "127.0.0.1:0".parse()?;
@@ -229,14 +286,49 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     println!("| run | requests | req/s | p50 ms | p99 ms | max ms | errors |");
     println!("|---|---|---|---|---|---|---|");
     let mission_path = format!("/api/v1/missions/{id}");
-    for (what, path) in [
+    let reads = [
+        ("GET /api/v1/project", "/api/v1/project"),
         ("GET /api/v1/cells", "/api/v1/cells"),
         ("GET /api/v1/missions/{id}", mission_path.as_str()),
-    ] {
+    ];
+    for (what, path) in reads {
         eprintln!("{what}…");
         println!(
             "{}",
             load(addr, path, args.requests, args.clients).line(what)
+        );
+    }
+
+    // The same reads while missions are planned and saved back to back (greedy: each save
+    // is a write that invalidates the cached answers, which are then computed again once).
+    for (what, path) in reads {
+        eprintln!("{what} while plans are saved…");
+        let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let saver = {
+            let stop = Arc::clone(&stop);
+            let token = token.clone();
+            std::thread::spawn(move || {
+                let mut c = Client::new(addr);
+                let mut saved = 0usize;
+                while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                    match c.post_json(
+                        "/api/v1/plan",
+                        &serde_json::json!({"solver": "greedy"}),
+                        Some(token.reveal()),
+                    ) {
+                        Ok(r) if r.status == 200 => saved += 1,
+                        _ => break,
+                    }
+                }
+                saved
+            })
+        };
+        let during = load(addr, path, args.requests, args.clients);
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        let saved = saver.join().map_err(|_| "saver thread")?;
+        println!(
+            "{} {saved} plans saved meanwhile",
+            during.line(&format!("{what} while plans are saved"))
         );
     }
 

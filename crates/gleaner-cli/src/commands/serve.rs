@@ -27,6 +27,11 @@ pub struct ServeArgs {
     /// [default: none, CORS off].
     #[arg(long = "cors-origin", value_name = "ORIGIN")]
     cors_origins: Vec<String>,
+    /// Another host name the server answers to (repeatable), e.g. its name behind a reverse
+    /// proxy [default: localhost and IP addresses only; other names are refused, against
+    /// DNS rebinding].
+    #[arg(long = "allow-host", value_name = "NAME")]
+    allowed_hosts: Vec<String>,
     /// Basemap tile URL template drawn under the cells, e.g.
     /// https://tile.example/{z}/{x}/{y}.png [default: none; the dashboard needs no network].
     #[arg(long)]
@@ -63,6 +68,7 @@ pub fn run(args: ServeArgs) -> Result<()> {
         addr: args.addr,
         token,
         cors_origins: args.cors_origins,
+        allowed_hosts: args.allowed_hosts,
         basemap_url: args.basemap_url,
         max_upload_bytes: args.max_upload_mib.saturating_mul(1 << 20),
         max_time_limit_s: args.max_time_limit,
@@ -86,15 +92,15 @@ pub fn run(args: ServeArgs) -> Result<()> {
             .await
             .with_context(|| format!("cannot listen on {}", config.addr))?;
         let addr = listener.local_addr()?;
-        match (&config.token, generated) {
-            (Some(t), true) => println!(
-                "dashboard: http://{addr}/#token={}  (this session's write token; set GLEANER_TOKEN to choose one)",
-                t.reveal()
-            ),
-            (Some(_), false) => println!("dashboard: http://{addr}/"),
-            (None, _) => println!("dashboard: http://{addr}/  (read-only)"),
-        }
-        println!("API: http://{addr}/api/v1/openapi.json · stop with ctrl-c");
+        println!(
+            "{}",
+            gleaner_server::announce(
+                addr,
+                config.token.as_ref(),
+                generated,
+                std::io::IsTerminal::is_terminal(&std::io::stdout()),
+            )
+        );
         gleaner_server::serve(listener, &config, shutdown_signal()).await?;
         println!("stopped");
         Ok(())

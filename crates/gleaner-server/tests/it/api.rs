@@ -9,7 +9,8 @@ use gleaner_server::handlers::MISSION_FILES;
 use crate::common::{Server, TOKEN, caf_project, flight_csv};
 
 /// Every API route (method, path as in the OpenAPI document).
-const ROUTES: [(&str, &str); 17] = [
+const ROUTES: [(&str, &str); 18] = [
+    ("get", "/api/v1/openapi.json"),
     ("get", "/api/v1/project"),
     ("get", "/api/v1/field"),
     ("get", "/api/v1/cells"),
@@ -136,9 +137,9 @@ fn reconstructs_every_sensor_and_refuses_bad_queries_naming_the_field() {
         ("estimator=best", Some("estimator")),
         ("at=yesterday", Some("at")),
         ("neighbours=0", Some("neighbours")),
-        ("neighbours=-1", None),
-        ("colour=red", None),
-        ("modality=vw@", None),
+        ("neighbours=-1", Some("neighbours")),
+        ("colour=red", Some("colour")),
+        ("modality=vw@", Some("modality")),
     ] {
         let r = c
             .request("GET", &format!("/api/v1/reconstruct?{query}"), &[], None)
@@ -444,10 +445,10 @@ fn score_plan_export_record_lifecycle() {
             .unwrap();
         assert_eq!(r.status, 200, "{name}: {}", r.text());
         assert_eq!(r.header("content-type"), Some(media), "{name}");
-        assert!(
-            r.header("content-disposition")
-                .unwrap()
-                .starts_with("attachment; filename=\"mission-"),
+        // Named with the file's own extension (QGroundControl lists only `.plan` files).
+        assert_eq!(
+            r.header("content-disposition"),
+            Some(format!("attachment; filename=\"mission-{mid}.{}\"", &name[8..]).as_str()),
             "{name}"
         );
         match name {
@@ -683,11 +684,23 @@ fn every_error_code() {
     assert_eq!((r.status, error(&r).1.as_deref()), (400, Some("cell")));
     let r = c.get("/api/v1/cells/x0y0?days=-1").unwrap();
     assert_eq!((r.status, error(&r).1.as_deref()), (400, Some("days")));
+    let auth = format!("Bearer {TOKEN}");
     let r = c
-        .request("POST", "/api/v1/score", &[], Some(b"{not json"))
+        .request(
+            "POST",
+            "/api/v1/score",
+            &[
+                ("Content-Type", "application/json"),
+                ("Authorization", &auth),
+            ],
+            Some(b"{not json"),
+        )
         .unwrap();
     assert_eq!(r.status, 400);
-    assert_eq!(error(&r).0, "bad_request");
+    assert_eq!(
+        (error(&r).0.as_str(), error(&r).1.as_deref()),
+        ("bad_request", Some("body"))
+    );
 
     // 404: missions, cells, files, routes.
     let r = c.get("/api/v1/missions/999").unwrap();

@@ -147,11 +147,42 @@ async fn drive(c: &fantoccini::Client, server: &Server, downloads: &Path) -> Res
         .for_element(Locator::Css("#cell-body svg.spark"))
         .await?;
 
+    // One file picker: the native input stays hidden inside its "choose files" label.
+    let pickers = c
+        .execute(
+            "return [...document.querySelectorAll('#upload-panel input[type=file]')].filter(i => getComputedStyle(i).display !== 'none').length",
+            vec![],
+        )
+        .await?;
+    assert_eq!(
+        pickers,
+        json!(0),
+        "the native file input is shown besides the link"
+    );
+
     // Plan through the form: preview, then save.
     let form = c.form(Locator::Id("plan-form")).await?;
     form.set_by_name("seed", "1").await?;
     form.set_by_name("iterations", "500").await?;
     form.set_by_name("time_limit_s", "5").await?;
+    c.find(Locator::Id("preview")).await?.click().await?;
+    c.wait()
+        .at_most(wait)
+        .for_element(Locator::Css("#plan-result #energy-total"))
+        .await?;
+    // A preview that fails leaves nothing to save (not the previous preview).
+    form.set_by_name("at", "1900-01-01").await?;
+    c.find(Locator::Id("preview")).await?.click().await?;
+    c.wait()
+        .at_most(wait)
+        .for_element(Locator::Css("#plan-result p.error"))
+        .await?;
+    assert!(
+        !c.find(Locator::Id("save")).await?.is_enabled().await?,
+        "Save is enabled after a failed preview"
+    );
+    assert_eq!(server.get_json("/api/v1/missions"), json!([]));
+    form.set_by_name("at", "").await?;
     c.find(Locator::Id("preview")).await?.click().await?;
     c.wait()
         .at_most(wait)
@@ -193,7 +224,7 @@ async fn drive(c: &fantoccini::Client, server: &Server, downloads: &Path) -> Res
 
     // Download the .plan through its button.
     c.find(Locator::Id("dl-plan")).await?.click().await?;
-    let file = downloads.join(format!("mission-{id}-plan"));
+    let file = downloads.join(format!("mission-{id}.plan"));
     let mut plan = None;
     // Each round trip to the browser paces the check; the count bounds it.
     for _ in 0..2000 {

@@ -210,3 +210,145 @@ impl Drop for Server {
         }
     }
 }
+
+/// A server whose [`gleaner_server::Event`]s the test receives, in order, and which can hold
+/// the work of chosen kinds at its start until the test releases it ([`Watched::release`]).
+pub struct Watched {
+    /// Where it listens.
+    pub addr: SocketAddr,
+    /// Its state (to ask whether the planning slot is free).
+    pub state: gleaner_server::AppState,
+    events: std::sync::mpsc::Receiver<gleaner_server::Event>,
+    gate: std::sync::mpsc::Sender<()>,
+    _dir: tempfile::TempDir,
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Watched {
+    /// Serves a fresh CAF project with the test token and `configure`'s settings, holding
+    /// the work of the kinds in `held` at its start.
+    pub fn start(held: &'static [&'static str], configure: impl FnOnce(&mut ServerConfig)) -> Self {
+        let dir = caf_project();
+        let mut config = ServerConfig::new(dir.path().join("caf"));
+        config.addr = "127.0.0.1:0".parse().unwrap();
+        config.token = Some(Token::new(TOKEN).unwrap());
+        configure(&mut config);
+        let listener = std::net::TcpListener::bind(config.addr).unwrap();
+        Self::serve(dir, config, listener, held)
+    }
+
+    /// Serves `config` on `listener` (bound by the test, which may already have connected
+    /// to it and sent its bytes: they are there when the server first reads).
+    pub fn serve(
+        dir: tempfile::TempDir,
+        config: ServerConfig,
+        listener: std::net::TcpListener,
+        held: &'static [&'static str],
+    ) -> Self {
+        let state = gleaner_server::AppState::new(&config).unwrap();
+        let (event_tx, events) = std::sync::mpsc::channel();
+        let (gate, gate_rx) = std::sync::mpsc::channel::<()>();
+        let event_tx = std::sync::Mutex::new(event_tx);
+        let gate_rx = std::sync::Mutex::new(gate_rx);
+        state.set_hook(std::sync::Arc::new(move |e: &gleaner_server::Event| {
+            if let Ok(tx) = event_tx.lock() {
+                tx.send(e.clone()).ok();
+            }
+            if let gleaner_server::Event::Started(kind) = e
+                && held.contains(kind)
+                && let Ok(rx) = gate_rx.lock()
+            {
+                rx.recv().ok();
+            }
+        }));
+        let addr = listener.local_addr().unwrap();
+        listener.set_nonblocking(true).unwrap();
+        let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+        let served = state.clone();
+        let thread = std::thread::spawn(move || {
+            let rt = tokio::runtime::Builder::new_multi_thread()
+                .worker_threads(2)
+                .enable_all()
+                .build()
+                .unwrap();
+            rt.block_on(async move {
+                let listener = tokio::net::TcpListener::from_std(listener).unwrap();
+                gleaner_server::serve_state(listener, &config, served, async {
+                    stopped.await.ok();
+                })
+                .await
+                .unwrap();
+            });
+        });
+        Self {
+            addr,
+            state,
+            events,
+            gate,
+            _dir: dir,
+            stop: Some(stop),
+            thread: Some(thread),
+        }
+    }
+
+    /// The next event that `keep` selects (others are skipped).
+    pub fn next(&self, keep: impl Fn(&gleaner_server::Event) -> bool) -> gleaner_server::Event {
+        loop {
+            let e = self.events.recv().expect("the server reports its events");
+            if keep(&e) {
+                return e;
+            }
+        }
+    }
+
+    /// Every event reported so far, without waiting.
+    pub fn so_far(&self) -> Vec<gleaner_server::Event> {
+        self.events.try_iter().collect()
+    }
+
+    /// Lets one held piece of work go on.
+    pub fn release(&self) {
+        self.gate.send(()).unwrap();
+    }
+
+    /// Starts the shutdown (returns at once).
+    pub fn begin_stop(&mut self) {
+        if let Some(s) = self.stop.take() {
+            s.send(()).ok();
+        }
+    }
+
+    /// Waits until the server has stopped.
+    pub fn join(&mut self) {
+        self.begin_stop();
+        if let Some(t) = self.thread.take() {
+            t.join().expect("the server thread ends without panicking");
+        }
+    }
+}
+
+impl Drop for Watched {
+    fn drop(&mut self) {
+        // Whatever is still held must end for the server to stop.
+        for _ in 0..4 {
+            self.gate.send(()).ok();
+        }
+        self.begin_stop();
+        if let Some(t) = self.thread.take() {
+            let panicked = t.join().is_err();
+            if panicked && !std::thread::panicking() {
+                panic!("the server thread panicked");
+            }
+        }
+    }
+}
+
+/// A whole HTTP/1.1 request with a JSON body, as raw bytes.
+pub fn raw_json(method: &str, path: &str, host: &str, extra: &str, body: &str) -> Vec<u8> {
+    format!(
+        "{method} {path} HTTP/1.1\r\nHost: {host}\r\nContent-Type: application/json\r\n{extra}Content-Length: {}\r\n\r\n{body}",
+        body.len()
+    )
+    .into_bytes()
+}

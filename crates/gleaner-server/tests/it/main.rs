@@ -4,5 +4,8 @@
 
 mod api;
 mod browser;
+mod cache;
 mod common;
 mod concurrency;
+mod defects;
+mod hardening;

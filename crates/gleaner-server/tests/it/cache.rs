@@ -1,0 +1,76 @@
+//! The read cache: an answer is computed once per write through the server, however many
+//! clients ask for it meanwhile, and a write makes the next answer new.
+
+use std::time::Duration;
+
+use serde_json::json;
+
+use gleaner_server::Event;
+use gleaner_server::client::Client;
+
+use crate::common::{TOKEN, Watched};
+
+#[test]
+fn an_answer_is_computed_once_per_change_however_many_ask() {
+    // Computations of cached answers are held at their start until released; no answer
+    // expires by time during the test.
+    let server = Watched::start(&["cache-fill"], |c| c.cache_ttl = Duration::from_secs(3600));
+    let addr = server.addr;
+    let readers: Vec<_> = (0..8)
+        .map(|_| std::thread::spawn(move || Client::new(addr).get("/api/v1/cells").unwrap()))
+        .collect();
+    // The computation's start and the seven others joining it, in whatever order they come.
+    let (mut started, mut joined) = (0, 0);
+    while started < 1 || joined < 7 {
+        match server.next(|e| matches!(e, Event::Started("cache-fill") | Event::CacheJoined)) {
+            Event::CacheJoined => joined += 1,
+            _ => started += 1,
+        }
+    }
+    server.release();
+    let answers: Vec<_> = readers.into_iter().map(|r| r.join().unwrap()).collect();
+    for a in &answers {
+        assert_eq!(a.status, 200, "{}", a.text());
+        assert_eq!(a.body, answers[0].body);
+    }
+    let fills = server
+        .so_far()
+        .into_iter()
+        .filter(|e| *e == Event::Started("cache-fill"))
+        .count();
+    assert_eq!(fills, 0, "one computation for eight readers");
+
+    // A write through the server: the next answer is computed again, once, and new.
+    let project = |server: &Watched| {
+        let addr = server.addr;
+        let r = std::thread::spawn(move || Client::new(addr).get("/api/v1/project").unwrap());
+        server.next(|e| *e == Event::Started("cache-fill"));
+        server.release();
+        let r = r.join().unwrap();
+        assert_eq!(r.status, 200, "{}", r.text());
+        r.json().unwrap()
+    };
+    assert_eq!(project(&server)["missions"], 0);
+    let r = Client::new(addr)
+        .post_json("/api/v1/plan", &json!({"solver": "greedy"}), Some(TOKEN))
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(project(&server)["missions"], 1);
+    // Unchanged since: answered from the cache (a computation would be let through, and
+    // seen).
+    server.so_far();
+    server.release();
+    let again = Client::new(addr).get("/api/v1/project").unwrap();
+    assert_eq!(again.json().unwrap()["missions"], 1);
+    assert!(
+        !server.so_far().contains(&Event::Started("cache-fill")),
+        "computed again without a change"
+    );
+    // A mission's answer too.
+    let id = r.json().unwrap()["mission_id"].as_i64().unwrap();
+    let path = format!("/api/v1/missions/{id}");
+    let first = std::thread::spawn(move || Client::new(addr).get(&path).unwrap());
+    server.next(|e| *e == Event::Started("cache-fill"));
+    server.release();
+    assert_eq!(first.join().unwrap().json().unwrap()["mission_id"], id);
+}
