@@ -929,10 +929,10 @@ mod tests {
         // Sensor 3 read at hour 0 only; the others every hour: its estimate follows the level.
         let mut f = m.filter(0.0);
         f.observe(3, vals[3][0]);
-        for i in 1..300 {
-            f.advance((i * 3600) as f64);
-            for k in 0..3 {
-                f.observe(k, vals[k][i]);
+        for (i, &time) in t.iter().enumerate().take(300).skip(1) {
+            f.advance(time as f64);
+            for (k, v) in vals.iter().enumerate().take(3) {
+                f.observe(k, v[i]);
             }
         }
         let (mu, var) = f.estimate(3);

@@ -617,6 +617,7 @@ fn reconstruction_sample() -> gleaner_app::Reconstruction {
             means: vec![0.25, 0.30],
         },
         changes: IncrementModel::new(v(1e-5, 2e-4, 5e5), 97_369.0, v(2e-5, 3e-4, 4e5)).unwrap(),
+        dynamic: None,
         estimator: Estimator::Changes,
         step_s: 86_400,
         sensors: vec![
