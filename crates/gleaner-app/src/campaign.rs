@@ -402,8 +402,8 @@ pub struct CampaignRequest {
     pub sorties: usize,
     /// Observations per kriging estimate.
     pub neighbours: usize,
-    /// The reconstruction's model-based estimator (the `kriged` metrics): the dynamic field
-    /// model (the default), kriging of changes or of levels.
+    /// The reconstruction's model-based estimator (the `kriged` metrics): kriging of changes
+    /// (the default), the dynamic field model or kriging of levels.
     pub estimator: crate::reconstruct::Estimator,
     /// Runs in parallel (threads; 0 = rayon's default).
     pub jobs: usize,

@@ -1,9 +1,9 @@
 //! Reconstruction (docs/method.md §7): every sensor's current value of one modality estimated from what
 //! is known — its last collected value carried forward, and a model-based estimate with its
-//! variance: by default the dynamic field model ([`Estimator::Dynamic`]: a learned covariance
-//! of levels between sensors with AR(1) dynamics, a Kalman filter over the readings known),
-//! or kriging of changes ([`Estimator::Changes`]: the last value plus the change since,
-//! estimated from the neighbours' known changes over the same interval), or space-time
+//! variance: by default kriging of changes ([`Estimator::Changes`]: the last value plus the
+//! change since, estimated from the neighbours' known changes over the same interval), or the
+//! dynamic field model ([`Estimator::Dynamic`]: a learned covariance of levels between sensors
+//! with AR(1) dynamics, a Kalman filter over the readings known), or space-time
 //! kriging of levels from every sensor's latest known reading ([`Estimator::Levels`]).
 //! [`reconstruct_series`] gives the dynamic model's estimates over a range of times.
 
@@ -33,7 +33,7 @@ pub struct ReconstructRequest {
     pub modality: Option<String>,
     /// Observations per estimate [default: [`DEFAULT_NEIGHBOURS`]].
     pub neighbours: Option<usize>,
-    /// The model-based estimator [default: [`Estimator::Dynamic`]].
+    /// The model-based estimator [default: [`Estimator::Changes`]].
     pub estimator: Estimator,
 }
 
@@ -44,6 +44,8 @@ pub enum Estimator {
     /// reading plus its change since, estimated from the changes its neighbours are known to
     /// have made over (part of) that interval; exactly the last value carried forward when no
     /// neighbour's change is known. A sensor never read gets the kriging of levels (ordinary).
+    /// The default: the dynamic model did not beat it on the tuning years (docs/evaluation/).
+    #[default]
     Changes,
     /// Space-time kriging of levels (residuals from each sensor's mean) from every sensor's
     /// latest known reading: ordinary ([`Mean::Unknown`]) or simple ([`Mean::Known`]).
@@ -51,9 +53,8 @@ pub enum Estimator {
     /// The dynamic field model ([`gleaner_kriging::DynamicModel`]): a learned, shrunk
     /// covariance of levels between sensors with AR(1) dynamics of the deviations, run as a
     /// Kalman filter over every reading known in the window [`dynamic_window_s`] before the
-    /// estimation time. The default (chosen on CAF 2013, docs/evaluation/); where the model
-    /// cannot be fitted ([`Estimator::resolve`]) kriging of changes answers instead.
-    #[default]
+    /// estimation time. Where the model cannot be fitted ([`Estimator::resolve`]) kriging of
+    /// changes answers instead.
     Dynamic,
 }
 

@@ -371,19 +371,19 @@ Examples:
         dir: PathBuf,
     },
     /// Estimate every sensor's current value of a modality from what is known: last value
-    /// carried forward, and a model-based estimate (the dynamic field model by default) with its
+    /// carried forward, and a model-based estimate (kriging of changes by default) with its
     /// standard deviation.
     #[command(
-        after_help = "Models are fitted on the readings known at --at. The \"kriged\" column is by default the
-dynamic field model: each sensor's mean, a covariance of levels between sensors learned from
-history and shrunk, AR(1) persistence of the deviations, and a Kalman filter over the
-readings known, so a sensor read lately is known from its own reading and one not read for
-long from the sensors read now (docs/method.md §7; it falls back to kriging of changes on
-networks over 2,000 sensors). --changes: kriging of changes (each sensor's last known reading
-plus its change since, estimated from the changes its neighbours read later made over that
-interval); --levels: ordinary kriging of levels (a separable exponential space-time
-covariance with a temporal nugget; the field's current level estimated from the data);
---simple: simple kriging of levels.
+        after_help = "Models are fitted on the readings known at --at. The \"kriged\" column is by default kriging
+of changes: each sensor's last known reading plus its change since, estimated from the changes
+its neighbours read later made over that interval (a model of changes: a spatially correlated
+field-wide part plus each sensor's own part; exactly the carried value when no neighbour knows
+more). --dynamic: the dynamic field model (each sensor's mean, a covariance of levels between
+sensors learned from history and shrunk, AR(1) persistence of the deviations, a Kalman filter
+over the readings known: a sensor read lately is known from its own reading, one not read for
+long from the sensors read now; docs/method.md §7); --levels: ordinary kriging of levels (a
+separable exponential space-time covariance with a temporal nugget); --simple: simple kriging
+of levels.
 
 --from/--to/--every-hours: every sensor's dynamic-model mean, sd and 90% interval at each
 time of a range (one fit on the readings up to --to; each time uses only readings stamped at
@@ -418,10 +418,11 @@ Examples:
         /// of changes.
         #[arg(long, conflicts_with = "simple")]
         levels: bool,
-        /// Kriging of changes (the last value plus the neighbours' known changes since) instead
-        /// of the dynamic field model.
+        /// The dynamic field model (a learned, shrunk covariance of levels between sensors
+        /// with AR(1) dynamics, a Kalman filter over the readings known) instead of kriging
+        /// of changes.
         #[arg(long, conflicts_with_all = ["simple", "levels"])]
-        changes: bool,
+        dynamic: bool,
         /// Reconstruct over a range instead of at one time, by the dynamic field model: the
         /// first estimation time (RFC 3339 or date; needs --to).
         #[arg(long, value_parser = parse_time, requires = "to", conflicts_with_all = ["at", "simple", "levels"])]
@@ -1012,7 +1013,7 @@ fn run(cli: Cli) -> Result<()> {
             neighbours,
             simple,
             levels,
-            changes,
+            dynamic,
             from,
             to,
             every_hours,
@@ -1062,14 +1063,14 @@ fn run(cli: Cli) -> Result<()> {
                     at,
                     modality,
                     neighbours: Some(neighbours),
-                    estimator: if changes {
-                        app::Estimator::Changes
+                    estimator: if dynamic {
+                        app::Estimator::Dynamic
                     } else if simple {
                         app::Estimator::Levels(gleaner_kriging::Mean::Known)
                     } else if levels {
                         app::Estimator::Levels(gleaner_kriging::Mean::Unknown)
                     } else {
-                        app::Estimator::Dynamic
+                        app::Estimator::Changes
                     },
                 },
             )?;

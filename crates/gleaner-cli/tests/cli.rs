@@ -1035,7 +1035,7 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     assert!(
         out.contains("vw@30cm at")
             && out.contains("model of changes")
-            && out.contains("dynamic field model")
+            && out.contains("kriging of changes")
             && out.contains("kriged"),
         "{out}"
     );
@@ -1054,7 +1054,7 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     .expect("JSON");
     assert_eq!(doc["format"], "gleaner.reconstruction");
     assert_eq!(doc["modality"], "vw@30cm");
-    assert_eq!(doc["estimator"], "dynamic");
+    assert_eq!(doc["estimator"], "changes");
     assert!(doc["model"]["changes_range_m"].as_f64().unwrap() > 0.0);
     let sensors = doc["sensors"].as_array().unwrap();
     assert_eq!(sensors.len(), 12);

@@ -937,7 +937,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
                 "ordinary"
             }
         )
-    } else if !named("changes") {
+    } else if named("dynamic") {
         "kriging = the dynamic field model: each sensor's mean and a covariance of levels between \
          sensors learned from the history (shrunk), AR(1) persistence of the deviations, a Kalman \
          filter over the readings known in the window before the estimate (docs/method.md §7): \

@@ -115,11 +115,11 @@ pub struct SimulateArgs {
     /// estimated from every sensor's latest reading) instead of kriging of changes.
     #[arg(long, conflicts_with = "simple_kriging")]
     pub level_kriging: bool,
-    /// The model-based estimate every strategy is judged by: `dynamic` (the dynamic field
-    /// model: a learned, shrunk covariance of levels between sensors with AR(1) dynamics, a
-    /// Kalman filter over the readings known; chosen on CAF 2013), `changes` (kriging of
-    /// changes), `levels` or `simple` (kriging of levels).
-    #[arg(long, default_value = "dynamic", conflicts_with_all = ["simple_kriging", "level_kriging"])]
+    /// The model-based estimate every strategy is judged by: `changes` (kriging of changes,
+    /// the default), `dynamic` (the dynamic field model: a learned, shrunk covariance of
+    /// levels between sensors with AR(1) dynamics, a Kalman filter over the readings known),
+    /// `levels` or `simple` (kriging of levels).
+    #[arg(long, default_value = "changes", conflicts_with_all = ["simple_kriging", "level_kriging"])]
     pub estimator: app::Estimator,
     /// Runs in parallel.
     #[arg(long, default_value_t = 2)]

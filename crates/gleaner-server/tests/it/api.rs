@@ -122,11 +122,13 @@ fn reconstructs_every_sensor_and_refuses_bad_queries_naming_the_field() {
         }
     }
     assert!(read_at_t > 0);
-    // The estimators differ; the default is the dynamic field model.
+    // The estimators differ; the default is kriging of changes.
     let default = server.get_json("/api/v1/reconstruct?at=2013-12-01");
-    assert_eq!(default["estimator"], "dynamic");
-    assert_eq!(default["sensors"].as_array().unwrap().len(), 42);
-    assert_ne!(default["sensors"], doc["sensors"]);
+    assert_eq!(default, doc);
+    let dynamic = server.get_json("/api/v1/reconstruct?at=2013-12-01&estimator=dynamic");
+    assert_eq!(dynamic["estimator"], "dynamic");
+    assert_eq!(dynamic["sensors"].as_array().unwrap().len(), 42);
+    assert_ne!(dynamic["sensors"], doc["sensors"]);
     let levels = server.get_json("/api/v1/reconstruct?at=2013-12-01&estimator=levels&neighbours=8");
     assert_eq!(levels["estimator"], "levels");
     assert_eq!(levels["sensors"].as_array().unwrap().len(), 42);
