@@ -158,7 +158,18 @@ fn command(reader: &str, case: &Path, project: &Path, scratch: &Path) -> Option<
         ],
         "probabilities" => vec!["score", "--project", &p, "--probabilities", &f],
         "toml" => vec!["score", "--project", &p],
-        "flight" => vec!["record", "--project", &p, "--mission", "1", &f],
+        // The collection time given (without it, a flight is dated by the newest reading it
+        // brings back, so no reading could be after it).
+        "flight" => vec![
+            "record",
+            "--project",
+            &p,
+            "--mission",
+            "1",
+            "--at",
+            "2014-01-20",
+            &f,
+        ],
         _ => return None,
     };
     Some(args.into_iter().map(str::to_string).collect())
