@@ -61,7 +61,7 @@ pub fn table(m: &MissionDoc) -> String {
             None => std::array::from_fn(|_| "-".to_string()),
         };
         out.push_str(&format!(
-            "{:>3} {:<10} {:>7.3} {:>6} {:>6} {:>7} {:>6} {:>8.1} {:>9.1} {:>7.1} {:>9.1} {:>7.1}\n",
+            "{:>3} {:<10} {:>7.3} {:>6} {:>6} {:>7} {:>6} {:>8.1} {:>9.1} {:>7.2} {:>9.1} {:>7.1}\n",
             s.order, s.cell, s.s, t[0], t[1], t[2], t[3], s.leg_distance_m, s.leg_energy_j, s.hover_s, s.hover_j, s.comm_j
         ));
     }
@@ -72,7 +72,7 @@ pub fn table(m: &MissionDoc) -> String {
         energy_line(m)
     ));
     out.push_str(&format!(
-        "flight: {:.0} m, {:.0} s at {:.1} m/s, {:.0} m above the base",
+        "flight: {:.0} m, {:.0} s at {:.2} m/s, {:.2} m above the base",
         e.distance_m, e.flight_time_s, m.profile.cruise_speed_mps, m.profile.altitude_m
     ));
     if let Some(g) = &m.greedy_baseline {
