@@ -359,7 +359,7 @@ function renderMissions() {
   const dl = $("downloads");
   dl.replaceChildren();
   if (state.shown) {
-    const files = [["mission.plan", ".plan"], ["mission.waypoints", "WPL"], ["mission.geojson", "GeoJSON"], ["mission.svg", "SVG"], ["mission.png", "PNG"]];
+    const files = [["mission.plan", ".plan"], ["mission.kmz", "DJI .kmz"], ["mission.waypoints", "WPL"], ["mission.geojson", "GeoJSON"], ["mission.svg", "SVG"], ["mission.png", "PNG"]];
     dl.append(el("span", { class: "muted" }, "Mission " + state.shown + ":"));
     for (const [name, label] of files) {
       dl.append(el("a", { href: `${API}/missions/${state.shown}/files/${name}`, download: `mission-${state.shown}.${name.slice(8)}`, id: "dl-" + name.slice(8) }, label));

@@ -698,8 +698,13 @@ pub async fn explore(
 }
 
 /// The files a mission can be downloaded as: name, media type, what it is.
-pub const MISSION_FILES: [(&str, &str, &str); 6] = [
+pub const MISSION_FILES: [(&str, &str, &str); 7] = [
     ("mission.plan", "application/json", "QGroundControl plan"),
+    (
+        "mission.kmz",
+        "application/vnd.google-earth.kmz",
+        "DJI WPML mission (follows DJI's published reference; not flown)",
+    ),
     (
         "mission.waypoints",
         "text/plain; charset=utf-8",
@@ -724,10 +729,11 @@ pub const MISSION_FILES: [(&str, &str, &str); 6] = [
 /// for a mission that is not safe to fly.
 #[utoipa::path(get, path = "/api/v1/missions/{id}/files/{name}", tag = "missions",
     params(("id" = i64, Path, description = "Mission id"),
-        ("name" = String, Path, description = "mission.plan, mission.waypoints, mission.geojson, mission.json, mission.svg or mission.png")),
-    responses((status = 200, description = "The file, as an attachment named `mission-{id}.plan`, `.waypoints`, `.geojson`, `.json`, `.svg` or `.png`, of its own media type",
+        ("name" = String, Path, description = "mission.plan, mission.kmz, mission.waypoints, mission.geojson, mission.json, mission.svg or mission.png")),
+    responses((status = 200, description = "The file, as an attachment named `mission-{id}.plan`, `.kmz`, `.waypoints`, `.geojson`, `.json`, `.svg` or `.png`, of its own media type",
             content(
                 (serde_json::Value = "application/json"),
+                (Vec<u8> = "application/vnd.google-earth.kmz"),
                 (String = "text/plain; charset=utf-8"),
                 (serde_json::Value = "application/geo+json"),
                 (String = "image/svg+xml"),
@@ -760,6 +766,9 @@ pub async fn mission_file(
                     .map_err(export_err)?
                     .into_bytes(),
                 "mission.waypoints" => gleaner_wire::wpl(&doc).map_err(export_err)?.into_bytes(),
+                "mission.kmz" => {
+                    gleaner_wire::wpml_kmz(&doc, Default::default()).map_err(export_err)?
+                }
                 "mission.geojson" => gleaner_wire::geojson(&field, &doc)
                     .map_err(export_err)?
                     .into_bytes(),

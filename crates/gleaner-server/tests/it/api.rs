@@ -458,6 +458,10 @@ fn score_plan_export_record_lifecycle() {
                 assert_eq!(r.json().unwrap()["fileType"], "Plan");
             }
             "mission.waypoints" => assert!(r.text().starts_with("QGC WPL 110")),
+            "mission.kmz" => {
+                let kmz = gleaner_wire::parse_wpml_kmz(&r.body).expect("a WPML archive");
+                assert!(!kmz.waylines.waypoints.is_empty());
+            }
             "mission.geojson" => assert_eq!(r.json().unwrap()["type"], "FeatureCollection"),
             "mission.json" => assert_eq!(r.json().unwrap()["mission_id"], mid),
             "mission.svg" => assert!(r.text().contains("<svg")),
