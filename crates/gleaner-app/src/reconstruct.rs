@@ -242,7 +242,16 @@ fn fit_dynamic_model<S: Store>(
     let batch = project
         .store()
         .readings_for(Some(modality), UnixSeconds::MIN..=at)?;
-    let columns = per_sensor(&ids, &batch);
+    Ok(dynamic_from_columns(&per_sensor(&ids, &batch), step_s))
+}
+
+/// The dynamic model fitted on per-sensor columns (times in seconds, ascending) at sampling
+/// step `step_s` (seconds); None over [`gleaner_kriging::MAX_DYNAMIC_SENSORS`] sensors or
+/// without two distinct readings.
+fn dynamic_from_columns(columns: &Columns, step_s: i64) -> Option<DynamicModel> {
+    if columns.len() > gleaner_kriging::MAX_DYNAMIC_SENSORS {
+        return None;
+    }
     let series: Vec<SensorSeries<'_>> = columns
         .iter()
         .map(|(t, v)| SensorSeries {
@@ -251,7 +260,7 @@ fn fit_dynamic_model<S: Store>(
             values: v,
         })
         .collect();
-    Ok(fit_dynamic(&series, &dynamic_fit_options(step_s)).ok())
+    fit_dynamic(&series, &dynamic_fit_options(step_s)).ok()
 }
 
 /// How far back the dynamic estimator reads, seconds: three persistence times
@@ -789,7 +798,8 @@ pub fn reconstruct_series<S: Store>(
     }
     let all_times: Vec<Vec<UnixSeconds>> = columns.iter().map(|c| c.0.clone()).collect();
     let step = sampling_step(&all_times).max(1);
-    let model = fit_dynamic_model(project, &modality, request.to, step)?.ok_or_else(|| {
+    // The model from the columns just read (they are every reading up to the range's end).
+    let model = dynamic_from_columns(&columns, step).ok_or_else(|| {
         AppError::Invalid(format!(
             "the dynamic field model cannot be fitted on {modality} here (more than {} sensors, or no two distinct readings)",
             gleaner_kriging::MAX_DYNAMIC_SENSORS
