@@ -24,7 +24,7 @@ use crate::error::{AppError, Result};
 use crate::explore::{ExplorationMemo, ExploreRequest, explore, explore_with};
 use crate::ingest::{Format, IngestRequest, Parsed, ingest_parsed};
 use crate::init::{InitRequest, init_store, init_store_with};
-use crate::plan::{PlanRequest, plan_scored};
+use crate::plan::{Objective, PlanRequest, plan_scored};
 use crate::progress::{Progress, Silent};
 use crate::project::Project;
 use crate::reconstruct::{
@@ -74,6 +74,15 @@ pub enum Strategy {
     /// Expected reduction of the field's posterior variance (greedy marginal gains of the
     /// kriging model fitted on the history), default planner.
     Variance,
+    /// The information objective (docs/method.md §7): the route whose readings remove the
+    /// most posterior variance of the dynamic field model (fitted on the history, run as a
+    /// filter over what is known at each mission), summed over every sensor; marginal-gain
+    /// orienteering ([`crate::plan::Objective::Information`]).
+    Information,
+    /// The oracle's flyable twin: each cell worth its sensors' *predicted* squared error
+    /// before the flight — the campaign estimator's variance from what is known, nothing
+    /// clairvoyant — routed by the default planner.
+    Expected,
     /// gleaner's earlier method ([`crate::settings::UtilitySection::gated`]: gated S with a
     /// 14-day freshness half-life and the bounded anomaly, the project's γ and δ), the
     /// default planner.
@@ -89,10 +98,11 @@ pub enum Strategy {
 
 impl Strategy {
     /// Every strategy, ablations included, in report order.
-    pub const ALL: [Strategy; 13] = [
+    pub const ALL: [Strategy; 15] = [
         Strategy::Gleaner,
         Strategy::Paper,
         Strategy::Variance,
+        Strategy::Information,
         Strategy::Freshness,
         Strategy::RoundRobin,
         Strategy::Random,
@@ -103,11 +113,13 @@ impl Strategy {
         Strategy::Without(Term::Uncertainty),
         Strategy::Without(Term::Redundancy),
         Strategy::Gated,
+        Strategy::Expected,
     ];
 
-    /// The main strategies (`main`): gleaner, paper, variance, freshness, round-robin,
-    /// random, nearest, exhaustive — the first eight of [`Strategy::ALL`], no ablations.
-    pub const MAIN: &'static [Strategy] = Self::ALL.as_slice().split_at(8).0;
+    /// The main strategies (`main`): gleaner, paper, variance, information, freshness,
+    /// round-robin, random, nearest, exhaustive — the first nine of [`Strategy::ALL`], no
+    /// ablations.
+    pub const MAIN: &'static [Strategy] = Self::ALL.as_slice().split_at(9).0;
 
     /// Yardsticks run only when named: they see the truth (see [`Strategy::Oracle`]).
     pub const YARDSTICKS: [Strategy; 1] = [Strategy::Oracle];
@@ -132,6 +144,8 @@ impl Strategy {
             Strategy::Without(Term::Uncertainty) => "no-uncertainty",
             Strategy::Without(Term::Redundancy) => "no-redundancy",
             Strategy::Variance => "variance",
+            Strategy::Information => "information",
+            Strategy::Expected => "expected-error",
             Strategy::Gated => "gated",
             Strategy::Oracle => "oracle",
         }
@@ -203,8 +217,12 @@ impl Strategy {
         match self {
             Strategy::Exhaustive => 4,
             Strategy::Gleaner | Strategy::Without(_) => 3,
-            Strategy::Freshness | Strategy::Gated | Strategy::Paper => 2,
-            Strategy::Variance | Strategy::RoundRobin | Strategy::Random | Strategy::Oracle => 1,
+            Strategy::Freshness | Strategy::Gated | Strategy::Paper | Strategy::Information => 2,
+            Strategy::Variance
+            | Strategy::RoundRobin
+            | Strategy::Random
+            | Strategy::Oracle
+            | Strategy::Expected => 1,
             Strategy::Nearest => 0,
         }
     }
@@ -227,6 +245,8 @@ impl Strategy {
             | Strategy::Random
             | Strategy::Nearest
             | Strategy::Variance
+            | Strategy::Information
+            | Strategy::Expected
             | Strategy::Oracle => Some(self),
             Strategy::Freshness
             | Strategy::Paper
@@ -587,6 +607,11 @@ pub struct MissionMetrics {
     pub mae_kriged: f64,
     /// Mean kriging variance, the unit squared.
     pub mean_variance: f64,
+    /// Share of the sensors *estimated* (not read at T − period: their estimate is not their
+    /// own reading) whose true value lies in the estimator's 90% interval, estimate ±
+    /// 1.645·sd; NaN when none was estimated (or results of an older version). A calibrated
+    /// model covers 90%.
+    pub coverage90: f64,
     /// Root-mean-square error of last value carried forward from what was known before this
     /// mission's flights (after the previous mission's), against the same truth: the error the
     /// operator lived with between the two missions, at its largest. NaN when not measured
@@ -670,6 +695,9 @@ pub struct CampaignResult {
     pub covariance: Covariance,
     /// The model of changes fitted on the history (`None` in results written before it).
     pub changes: Option<IncrementModel>,
+    /// The estimator every run was judged by, resolved against the fitted models (`None` in
+    /// results written before it was recorded).
+    pub estimator: Option<crate::reconstruct::Estimator>,
     /// Events that became available during the campaign.
     pub events: Vec<TruthEvent>,
     /// One per (strategy, seed, budget), in that order.
@@ -1002,6 +1030,7 @@ pub fn run_campaign(
         period_s: truth.period_s,
         covariance: shared.model.covariance,
         changes: Some(shared.changes),
+        estimator: Some(shared.estimator),
         events: shared.events,
         runs,
     })
@@ -1181,6 +1210,7 @@ fn run_one(
                     .collect(),
             ),
             Some(Strategy::Nearest) => Some(vec![1.0; centres.len()]),
+            Some(Strategy::Expected) => Some(expected_scores(&before_estimates, &cell_sensor_ids)),
             Some(Strategy::Oracle) => Some(oracle_scores(
                 &before_estimates,
                 &cell_sensor_ids,
@@ -1232,10 +1262,15 @@ fn run_one(
                     max_iterations: Some(request.planner_iterations),
                     time_limit_s: Some(3_600.0),
                     sorties: Some(request.sorties),
+                    objective: Some(if key.strategy.selection() == Some(Strategy::Information) {
+                        Objective::Information
+                    } else {
+                        Objective::Score
+                    }),
                     ..PlanRequest::default()
                 },
                 None,
-                scored,
+                (scored, shared.dynamic.as_ref()),
                 false,
                 request.clock_now,
             )?;
@@ -1333,6 +1368,7 @@ fn run_one(
             rmse_kriged: after.rmse_kriged,
             mae_kriged: after.mae_kriged,
             mean_variance: after.mean_variance,
+            coverage90: after.coverage90,
             rmse_carried_before: before.rmse_carried,
             rmse_kriged_before: before.rmse_kriged,
             evaluated: after.evaluated,
@@ -1374,6 +1410,20 @@ fn oracle_scores(
         .collect()
 }
 
+/// Each cell's predicted squared error before the flight: the sum of its sensors' estimator
+/// variances ((unit)² ×10⁶, + 1e-9 so every cell stays eligible).
+fn expected_scores(estimates: &[SensorEstimate], cell_sensor_ids: &[Vec<SensorId>]) -> Vec<f64> {
+    let variance: HashMap<&SensorId, f64> = estimates
+        .iter()
+        .filter(|e| e.variance.is_finite())
+        .map(|e| (&e.sensor, e.variance.max(0.0)))
+        .collect();
+    cell_sensor_ids
+        .iter()
+        .map(|ids| 1e-9 + 1e6 * ids.iter().filter_map(|s| variance.get(s)).sum::<f64>())
+        .collect()
+}
+
 /// The errors of one reconstruction against the truth (see [`MissionMetrics`]).
 struct Errors {
     rmse_carried: f64,
@@ -1381,6 +1431,7 @@ struct Errors {
     rmse_kriged: f64,
     mae_kriged: f64,
     mean_variance: f64,
+    coverage90: f64,
     evaluated: usize,
 }
 
@@ -1392,10 +1443,15 @@ fn reconstruction_errors(
     target: UnixSeconds,
 ) -> Errors {
     let (mut se_c, mut ae_c, mut se_k, mut ae_k, mut var, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0);
+    let (mut covered, mut estimated) = (0usize, 0usize);
     for e in estimates {
         let Some(v) = value_at(series, &e.sensor, target) else {
             continue;
         };
+        if e.last_time != Some(target) {
+            estimated += 1;
+            covered += usize::from((e.kriged - v).abs() <= Z90 * e.variance.max(0.0).sqrt());
+        }
         se_c += (e.carried - v).powi(2);
         ae_c += (e.carried - v).abs();
         se_k += (e.kriged - v).powi(2);
@@ -1410,9 +1466,17 @@ fn reconstruction_errors(
         rmse_kriged: (se_k / nf).sqrt(),
         mae_kriged: ae_k / nf,
         mean_variance: var / nf,
+        coverage90: if estimated == 0 {
+            f64::NAN
+        } else {
+            covered as f64 / estimated as f64
+        },
         evaluated: n,
     }
 }
+
+/// The standard normal's 95% quantile: a 90% interval is mean ± `Z90`·sd.
+const Z90: f64 = 1.644_853_626_951_472_2;
 
 /// A schedule: every `step_s` seconds from `start` to `end` inclusive.
 pub fn every(start: UnixSeconds, end: UnixSeconds, step_s: i64) -> Result<Vec<UnixSeconds>> {
@@ -1547,7 +1611,7 @@ pub fn block_interval(per_run: &[Vec<(UnixSeconds, f64)>]) -> Interval {
 /// `rmse_carried_before`, `mae_kriged`,
 /// `mae_carried`, `staleness_mean_days`, `staleness_max_days`, `energy_kj`, `utilisation`,
 /// `cells`, `classifier_accuracy`, `lost_readings`, `mean_sd` (square root of the mean
-/// kriging variance).
+/// kriging variance), `coverage90` (share of estimated sensors inside their 90% interval).
 pub fn metric(m: &MissionMetrics, name: &str) -> f64 {
     match name {
         "rmse_kriged" => m.rmse_kriged,
@@ -1570,12 +1634,13 @@ pub fn metric(m: &MissionMetrics, name: &str) -> f64 {
         "classifier_accuracy" => m.classifier_accuracy.unwrap_or(f64::NAN),
         "lost_readings" => m.lost_readings as f64,
         "mean_sd" => m.mean_variance.sqrt(),
+        "coverage90" => m.coverage90,
         _ => f64::NAN,
     }
 }
 
 /// The per-mission metrics [`metric`] knows, in report order.
-pub const METRICS: [&str; 14] = [
+pub const METRICS: [&str; 15] = [
     "rmse_kriged",
     "rmse_carried",
     "rmse_kriged_before",
@@ -1583,6 +1648,7 @@ pub const METRICS: [&str; 14] = [
     "mae_kriged",
     "mae_carried",
     "mean_sd",
+    "coverage90",
     "staleness_mean_days",
     "staleness_max_days",
     "energy_kj",
@@ -1910,18 +1976,18 @@ mod tests {
             assert_eq!(first.strategy, expected, "{key:?}");
         }
         // With γ and δ set in the project, gleaner's method zeroes them itself: still one
-        // run (keys 40..44 are no-uncertainty's, 0..4 gleaner's); the gated strategy keeps
+        // run (keys 44..48 are no-uncertainty's, 0..4 gleaner's); the gated strategy keeps
         // the project's γ and δ, so a changed γ is seen in its signature.
-        let gated_before = run_signature(&request, &all[48]).unwrap();
+        let gated_before = run_signature(&request, &all[52]).unwrap();
         request.settings.utility.gamma = 0.5;
         request.settings.utility.delta = 0.5;
         assert_eq!(same_runs(&request, &all).unwrap(), same);
         assert_eq!(
-            (all[40].strategy, same[40]),
+            (all[44].strategy, same[44]),
             (Strategy::Without(Term::Uncertainty), 0)
         );
-        assert_eq!(all[48].strategy, Strategy::Gated);
-        assert_ne!(run_signature(&request, &all[48]).unwrap(), gated_before);
+        assert_eq!(all[52].strategy, Strategy::Gated);
+        assert_ne!(run_signature(&request, &all[52]).unwrap(), gated_before);
         // Given scores never share a run with the utility engine's, even with equal settings.
         assert_ne!(
             run_signature(&request, &all[0]).unwrap(),

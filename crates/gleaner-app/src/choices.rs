@@ -8,6 +8,7 @@ use gleaner_kriging::Mean;
 
 use crate::campaign::Strategy;
 use crate::error::AppError;
+use crate::plan::Objective;
 use crate::reconstruct::Estimator;
 
 impl Estimator {
@@ -48,6 +49,35 @@ impl FromStr for Estimator {
     }
 }
 
+impl Objective {
+    /// Every objective, the default first.
+    pub const ALL: [Self; 2] = [Self::Score, Self::Information];
+
+    /// Its name in settings and requests: `score` or `information`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Score => "score",
+            Self::Information => "information",
+        }
+    }
+}
+
+impl FromStr for Objective {
+    type Err = AppError;
+
+    fn from_str(s: &str) -> Result<Self, AppError> {
+        Self::ALL
+            .into_iter()
+            .find(|o| o.name() == s)
+            .ok_or_else(|| {
+                AppError::Invalid(format!(
+                    "objective {:?}: expected score or information",
+                    gleaner_ingest::shorten(s)
+                ))
+            })
+    }
+}
+
 impl FromStr for Strategy {
     type Err = AppError;
 
@@ -73,6 +103,10 @@ mod tests {
         for p in EnergyPreset::ALL {
             assert_eq!(p.name().parse::<EnergyPreset>().expect("preset"), p);
         }
+        for o in Objective::ALL {
+            assert_eq!(o.name().parse::<Objective>().expect("objective"), o);
+        }
+        assert!("entropy".parse::<Objective>().is_err());
         let e = "kriging"
             .parse::<Estimator>()
             .expect_err("unknown")

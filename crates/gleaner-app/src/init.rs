@@ -217,29 +217,36 @@ fn check_grid_size(sensors: &[Sensor], base: LatLon, settings: &Settings) -> Res
 }
 
 fn read_sensors(request: &InitRequest) -> Result<Vec<Sensor>> {
-    let utm = request
-        .utm_zone
-        .as_deref()
-        .map(parse_utm_zone)
-        .transpose()?;
-    let (inputs, _) = if request.hubbard_brook {
-        read_hubbard_brook_sensors(&request.sensors)?
-    } else {
-        read_sensors_csv(
+    if request.hubbard_brook {
+        let (inputs, _) = read_hubbard_brook_sensors(&request.sensors)?;
+        return non_empty(
             &request.sensors,
-            &SensorsOptions {
-                utm,
-                ..Default::default()
-            },
-        )?
-    };
-    if inputs.is_empty() {
-        return Err(AppError::Invalid(format!(
-            "{}: no sensors",
-            request.sensors.display()
-        )));
+            inputs.into_iter().map(|s| s.sensor).collect(),
+        );
     }
-    Ok(inputs.into_iter().map(|s| s.sensor).collect())
+    read_sensors_file(&request.sensors, request.utm_zone.as_deref())
+}
+
+/// The stations of a sensors file (CSV or tab-separated: id and WGS84 latitude/longitude,
+/// or UTM easting/northing in m with `utm_zone`, e.g. `11N`), as `init` reads it; at least
+/// one. Errors name the file, line and field.
+pub fn read_sensors_file(path: &Path, utm_zone: Option<&str>) -> Result<Vec<Sensor>> {
+    let utm = utm_zone.map(parse_utm_zone).transpose()?;
+    let (inputs, _) = read_sensors_csv(
+        path,
+        &SensorsOptions {
+            utm,
+            ..Default::default()
+        },
+    )?;
+    non_empty(path, inputs.into_iter().map(|s| s.sensor).collect())
+}
+
+fn non_empty(path: &Path, sensors: Vec<Sensor>) -> Result<Vec<Sensor>> {
+    if sensors.is_empty() {
+        return Err(AppError::Invalid(format!("{}: no sensors", path.display())));
+    }
+    Ok(sensors)
 }
 
 /// Writes the sensors and the grid into the project's store, in one transaction.

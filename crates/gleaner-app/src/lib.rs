@@ -47,6 +47,7 @@ mod choices;
 mod drift;
 mod error;
 mod explore;
+mod information;
 mod ingest;
 mod init;
 mod knowledge;
@@ -70,13 +71,14 @@ pub use error::{AppError, Result};
 pub use explore::{Exploration, ExploreRequest, explore};
 pub use ingest::{Format, IngestOutcome, IngestRequest, batch_of, detect, ingest};
 pub use init::{
-    DEFAULT_CELL_SIZE_M, InitOutcome, InitRequest, init, init_store, init_store_with, relative_to,
+    DEFAULT_CELL_SIZE_M, InitOutcome, InitRequest, init, init_store, init_store_with,
+    read_sensors_file, relative_to,
 };
 pub use knowledge::{History, Knowledge, knowledge};
 pub use migrate::{MigrateOutcome, migrate};
 pub use plan::{
-    Baseline, ExtraSortie, MAX_SORTIES, PlanRequest, PlannedMission, energy_model, flight_profile,
-    parse_planner, plan, plan_with_preset,
+    Baseline, ExtraSortie, MAX_SORTIES, Objective, PlanRequest, PlannedMission, energy_model,
+    flight_profile, parse_planner, plan, plan_with_preset,
 };
 pub use progress::{Progress, Silent};
 pub use project::{Project, database};

@@ -7,7 +7,9 @@ use gleaner_energy::{
     CellService, MissionEnergy, MissionEnergyModel, flight_point, flight_position,
 };
 use gleaner_field::{LatLon, LocalPoint, UnixSeconds};
-use gleaner_mission::{Candidate, MissionPlan, PlanOptions, Planner, plan_mission, plan_sorties};
+use gleaner_mission::{
+    Candidate, MissionPlan, PlanOptions, Planner, plan_mission, plan_sorties, plan_sorties_valued,
+};
 use gleaner_store::{
     EnergyBreakdown, FlightProfile, MissionId, MissionKind, NewMission, StopRecord, Store,
     StoreWrite,
@@ -59,6 +61,22 @@ pub struct PlanRequest {
     /// routes from the base, each within the budget, planned together by the team orienteering
     /// solver; each is stored as its own mission.
     pub sorties: Option<usize>,
+    /// What the route maximises [default: the project's `[planner] objective`].
+    pub objective: Option<Objective>,
+}
+
+/// What the planner maximises (docs/method.md §4, §7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Objective {
+    /// The sum of the visited cells' scores (S, or the scores given).
+    #[default]
+    Score,
+    /// The information the route's readings bring: the expected reduction of the dynamic
+    /// field model's posterior variance over every sensor of the condition modality, as a
+    /// share of the field's total (non-additive: planned with marginal gains). Cells are
+    /// eligible when their reading would reduce it; S is still computed and reported.
+    Information,
 }
 
 /// Most sorties one `plan` may ask for.
@@ -302,7 +320,14 @@ pub fn plan_with_preset<S: Store>(
     energy_preset: Option<&str>,
     clock_now: UnixSeconds,
 ) -> Result<PlannedMission> {
-    plan_scored(project, request, energy_preset, None, true, clock_now)
+    plan_scored(
+        project,
+        request,
+        energy_preset,
+        (None, None),
+        true,
+        clock_now,
+    )
 }
 
 /// [`plan_with_preset`] with the utility engine's scoring already computed: `scoring` must be
@@ -320,7 +345,7 @@ pub(crate) fn plan_scored<S: Store>(
     project: &mut Project<S>,
     request: &PlanRequest,
     energy_preset: Option<&str>,
-    scored: Option<Scoring>,
+    (scored, dynamic): (Option<Scoring>, Option<&gleaner_kriging::DynamicModel>),
     refuse_empty: bool,
     clock_now: UnixSeconds,
 ) -> Result<PlannedMission> {
@@ -420,10 +445,56 @@ pub(crate) fn plan_scored<S: Store>(
     let profile = flight_profile(project, &model)?;
     let services = services(&model, k, t)?;
     let points = FlightPoints::of(&k.field);
+    // The information objective: the filter at t over what is known, the model fitted on it
+    // unless the caller (a campaign) hands its own.
+    let fitted;
+    let information = match request.objective.unwrap_or(settings.planner.objective) {
+        Objective::Score => None,
+        Objective::Information => {
+            let name = score::condition_modality(&settings, &k.modalities).ok_or_else(|| {
+                AppError::Invalid(
+                    "the information objective needs a soil-moisture modality; plan by score"
+                        .into(),
+                )
+            })?;
+            let modality = gleaner_field::Modality::new(&name)
+                .map_err(|e| AppError::Invalid(format!("modality {name:?}: {e}")))?;
+            let model = match dynamic {
+                Some(m) => m,
+                None => {
+                    let known = t.min(request.history.until);
+                    fitted = crate::reconstruct::fit_dynamic_at(project, &modality, known)?
+                        .ok_or_else(|| {
+                            AppError::Invalid(format!(
+                                "the dynamic field model cannot be fitted on {modality} here (more than {} sensors, or no two distinct readings): plan by score",
+                                gleaner_kriging::MAX_DYNAMIC_SENSORS
+                            ))
+                        })?;
+                    &fitted
+                }
+            };
+            Some(crate::information::CellInformation::at(
+                project,
+                k,
+                request.history,
+                &modality,
+                model,
+                t,
+            )?)
+        }
+    };
+    let anomaly_form = match &information {
+        Some(_) => format!("{anomaly_form}; routed by information (dynamic field model)"),
+        None => anomaly_form,
+    };
+    let prizes: Vec<f64> = match &information {
+        Some(info) => info.singletons(),
+        None => scores.clone(),
+    };
     let candidates: Vec<Candidate> = points
         .centres
         .iter()
-        .zip(&scores)
+        .zip(&prizes)
         .zip(&services)
         .map(|((&centre, &score), svc)| Candidate {
             centre,
@@ -446,11 +517,31 @@ pub(crate) fn plan_scored<S: Store>(
             "sorties = {sorties}: allowed 1..={MAX_SORTIES}"
         )));
     }
-    let (mut plans, empty): (Vec<MissionPlan>, Vec<MissionPlan>) =
-        plan_sorties(&model, base, &candidates, &options, sorties)
-            .map_err(|e| AppError::core("planner", e))?
-            .into_iter()
-            .partition(|p| !p.order.is_empty());
+    let planned = match &information {
+        None => plan_sorties(&model, base, &candidates, &options, sorties),
+        Some(info) => plan_sorties_valued(
+            &model,
+            base,
+            &candidates,
+            |cells| info.value(cells),
+            &options,
+            sorties,
+        )
+        .map(|mut plans| {
+            // Each sortie's worth is what it adds to the ones before it.
+            let mut before: Vec<usize> = Vec::new();
+            for p in &mut plans {
+                let v0 = info.value(&before);
+                before.extend(&p.order);
+                p.total_score = info.value(&before) - v0;
+            }
+            plans
+        }),
+    };
+    let (mut plans, empty): (Vec<MissionPlan>, Vec<MissionPlan>) = planned
+        .map_err(|e| AppError::core("planner", e))?
+        .into_iter()
+        .partition(|p| !p.order.is_empty());
     let plan = if plans.is_empty() {
         if refuse_empty && !request.dry_run {
             return Err(AppError::Invalid(format!(

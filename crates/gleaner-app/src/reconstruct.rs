@@ -133,10 +133,10 @@ pub(crate) fn target_modality<S: Store>(
 }
 
 /// Per sensor: the times (seconds, ascending) and values of its readings.
-type Columns = Vec<(Vec<UnixSeconds>, Vec<f64>)>;
+pub(crate) type Columns = Vec<(Vec<UnixSeconds>, Vec<f64>)>;
 
 /// Per project sensor (sorted by id): times and values of one batch's readings.
-fn per_sensor(ids: &[SensorId], batch: &ReadingBatch) -> Columns {
+pub(crate) fn per_sensor(ids: &[SensorId], batch: &ReadingBatch) -> Columns {
     let index: HashMap<&SensorId, usize> = ids.iter().enumerate().map(|(k, s)| (s, k)).collect();
     let mut out = vec![(Vec::new(), Vec::new()); ids.len()];
     for r in &batch.rows {
@@ -226,6 +226,27 @@ pub fn dynamic_fit_options(step_s: i64) -> DynamicFitOptions {
     }
 }
 
+/// The dynamic field model of `modality` fitted on every reading stored at or before `at`
+/// (seconds), at the readings' median sampling step; None when it cannot be fitted (more
+/// than [`gleaner_kriging::MAX_DYNAMIC_SENSORS`] sensors, no two distinct readings).
+pub(crate) fn fit_dynamic_at<S: Store>(
+    project: &Project<S>,
+    modality: &Modality,
+    at: UnixSeconds,
+) -> Result<Option<DynamicModel>> {
+    let sensors = project.sensors()?;
+    if sensors.len() > gleaner_kriging::MAX_DYNAMIC_SENSORS {
+        return Ok(None);
+    }
+    let ids: Vec<SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
+    let batch = project
+        .store()
+        .readings_for(Some(modality), UnixSeconds::MIN..=at)?;
+    let columns = per_sensor(&ids, &batch);
+    let times: Vec<Vec<UnixSeconds>> = columns.iter().map(|c| c.0.clone()).collect();
+    Ok(dynamic_from_columns(&columns, sampling_step(&times).max(1)))
+}
+
 /// Fits the dynamic model of `modality` on every reading stamped at or before `at`
 /// (seconds); None when the network is too large for it or has no two distinct readings.
 fn fit_dynamic_model<S: Store>(
@@ -279,12 +300,12 @@ pub fn dynamic_window_s(model: &DynamicModel) -> i64 {
 /// Runs `model`'s Kalman filter over `columns` (per sensor, times ascending, seconds) from
 /// the stationary prior at `start`, stopping at each of `stops` (ascending, seconds) to call
 /// `emit` with the filter; readings stamped after the last stop are not used.
-pub(crate) fn run_filter(
-    model: &DynamicModel,
+pub(crate) fn run_filter<'m>(
+    model: &'m DynamicModel,
     columns: &[(Vec<UnixSeconds>, Vec<f64>)],
     start: UnixSeconds,
     stops: &[UnixSeconds],
-    mut emit: impl FnMut(usize, &gleaner_kriging::FieldFilter<'_>),
+    mut emit: impl FnMut(usize, &gleaner_kriging::FieldFilter<'m>),
 ) {
     let mut events: Vec<(UnixSeconds, usize, f64)> = Vec::new();
     let end = stops.last().copied().unwrap_or(start);

@@ -271,19 +271,44 @@ fn with_freshness_form<S: Store>(
         let k = &scoring.knowledge;
         match condition_modality(project.settings(), &k.modalities) {
             Some(name) => {
-                let modality =
-                    Modality::new(&name).map_err(|e| AppError::Invalid(e.to_string()))?;
-                let index = crate::drift::drift_index(
-                    project,
-                    k,
-                    &modality,
-                    scoring.t,
-                    (u.drift_window_days * 86_400.0) as i64,
-                    history,
-                )?;
+                // The condition modality, or every depth of its quantity.
+                let quantity = name.split('@').next().unwrap_or(&name);
+                let names: Vec<&String> = if u.drift_all_depths {
+                    k.modalities
+                        .iter()
+                        .filter(|m| m.split('@').next() == Some(quantity))
+                        .collect()
+                } else {
+                    vec![&name]
+                };
+                let mut index = vec![0.0; k.field.cells().len()];
+                for name in &names {
+                    let modality =
+                        Modality::new(name).map_err(|e| AppError::Invalid(e.to_string()))?;
+                    let one = crate::drift::drift_index(
+                        project,
+                        k,
+                        &modality,
+                        scoring.t,
+                        (u.drift_window_days * 86_400.0) as i64,
+                        history,
+                    )?;
+                    for (a, b) in index.iter_mut().zip(&one) {
+                        if b.is_finite() {
+                            *a += b;
+                        }
+                    }
+                }
                 let config = u.to_core(&k.modalities)?;
                 crate::drift::apply(&mut scoring.terms, &index, &config)?;
-                scoring.anomaly_form = format!("{}; F drift", scoring.anomaly_form);
+                scoring.anomaly_form = if u.drift_all_depths {
+                    format!(
+                        "{}; F drift ({quantity} at every depth)",
+                        scoring.anomaly_form
+                    )
+                } else {
+                    format!("{}; F drift", scoring.anomaly_form)
+                };
             }
             None => scoring.warnings.push(
                 "freshness_form = \"drift\" needs a soil-moisture (condition) modality: F from \

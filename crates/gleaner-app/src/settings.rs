@@ -217,6 +217,12 @@ pub struct UtilitySection {
     /// worth more (default 0.5; 0 = off, F from age and drift alone; see
     /// docs/method-improvement.md).
     pub drift_spread: f64,
+    /// `drift` only: sum each cell's drift index over every depth of the condition
+    /// modality's quantity (e.g. `vw@30cm` … `vw@150cm`: the expected squared error of the
+    /// cell's carried values summed over its depths, in one unit) instead of the condition
+    /// modality alone (default false).
+    #[serde(default)]
+    pub drift_all_depths: bool,
 }
 
 /// gleaner's own freshness half-life, seconds (14 days): F grows about linearly with age
@@ -271,6 +277,7 @@ impl Default for UtilitySection {
             drift_window_days: DEFAULT_DRIFT_WINDOW_DAYS,
             drift_shrink: DEFAULT_DRIFT_SHRINK,
             drift_spread: DEFAULT_DRIFT_SPREAD,
+            drift_all_depths: false,
         }
     }
 }
@@ -409,6 +416,10 @@ pub struct PlannerSection {
     pub time_limit_s: f64,
     /// Seed.
     pub seed: u64,
+    /// What a route maximises: `score` (the sum of the visited cells' S) or `information`
+    /// (the expected reduction of the dynamic field model's posterior variance over the whole
+    /// field, docs/method.md §7).
+    pub objective: crate::plan::Objective,
 }
 
 impl Default for PlannerSection {
@@ -419,6 +430,7 @@ impl Default for PlannerSection {
             solver: core.planner.name().into(),
             time_limit_s: core.time_limit.as_secs_f64(),
             seed: core.seed,
+            objective: crate::plan::Objective::default(),
         }
     }
 }

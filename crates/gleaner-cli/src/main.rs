@@ -214,6 +214,12 @@ enum Command {
         /// `large-pack`); fields set in `[energy]` still override the preset's values.
         #[arg(long, value_parser = parse_energy_preset)]
         energy_preset: Option<app::EnergyPreset>,
+        /// What the route maximises: `score` (the sum of the visited cells' S) or
+        /// `information` (the expected reduction of the dynamic field model's posterior
+        /// variance over the whole field, non-additive: correlated cells share information)
+        /// [default: [planner] objective, score].
+        #[arg(long, value_parser = parse_objective)]
+        objective: Option<app::Objective>,
     },
     /// Plan the exploration phase: as few sorties as possible, each within the battery, that
     /// together visit every cell; each sortie is stored as an exploration mission.
@@ -612,6 +618,10 @@ fn parse_energy_preset(s: &str) -> Result<app::EnergyPreset, String> {
     s.parse().map_err(|e: app::AppError| e.to_string())
 }
 
+fn parse_objective(s: &str) -> Result<app::Objective, String> {
+    s.parse().map_err(|e: app::AppError| e.to_string())
+}
+
 pub(crate) fn parse_time(s: &str) -> Result<i64, String> {
     gleaner_app::parse_timestamp(s).ok_or_else(|| {
         format!("expected RFC 3339 (2014-03-01T12:00:00Z) or a date (2014-03-01), got {s:?}")
@@ -839,6 +849,7 @@ fn run(cli: Cli) -> Result<()> {
             dry_run,
             sorties,
             energy_preset,
+            objective,
         } => {
             let mut p = project.open()?;
             let planned = app::plan_with_preset(
@@ -854,6 +865,7 @@ fn run(cli: Cli) -> Result<()> {
                     max_iterations: iterations,
                     dry_run,
                     sorties: Some(sorties),
+                    objective,
                 },
                 energy_preset.map(app::EnergyPreset::name),
                 clock_now(),
@@ -981,11 +993,10 @@ fn run(cli: Cli) -> Result<()> {
             out(&table)?;
         }
         Command::Synth(args) => {
-            let sensors = args.sensors;
             let (farm, files) = synth::run(&args)?;
             outln(&format!(
                 "wrote {} sensors, {} readings, {} events to {}",
-                sensors,
+                farm.sensors().len(),
                 farm.reading_count(),
                 farm.events().len(),
                 files

@@ -1631,3 +1631,82 @@ fn cells_show_the_true_reading_count_before_any_scoring() {
         "summaries missing after the re-grid: {json}"
     );
 }
+
+/// `plan --objective information`: the route's worth is the share of the field's posterior
+/// variance its readings remove (in (0, 1], at most the sum of what each cell removes alone),
+/// within the battery, and the mission says how it was routed; unknown objectives are refused.
+#[test]
+fn plan_by_information_reports_the_share_of_variance_removed() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    let args = [
+        "plan",
+        "--project",
+        p,
+        "--dry-run",
+        "--json",
+        "--iterations",
+        "50",
+        "--objective",
+        "information",
+    ];
+    let doc: serde_json::Value = serde_json::from_str(&ok(&args)).expect("json");
+    let value = doc["total_score"].as_f64().expect("total_score");
+    assert!(value > 0.0 && value <= 1.0 + 1e-12, "{value}");
+    assert!(
+        doc["energy"]["total_j"].as_f64().expect("energy")
+            <= doc["energy"]["budget_j"].as_f64().expect("budget")
+    );
+    assert!(!doc["stops"].as_array().expect("stops").is_empty());
+    assert!(doc.to_string().contains("routed by information"), "{doc}");
+    let err = fail(&["plan", "--project", p, "--objective", "entropy"]);
+    assert!(err.contains("expected score or information"), "{err}");
+}
+
+/// `synth --layout`: a synthetic farm laid on CAF's own 42 stations keeps their ids and
+/// positions (within 1e-5°, about a metre: the file's UTM coordinates are what is read).
+#[test]
+fn synth_lays_a_farm_on_a_real_networks_stations() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("farm");
+    let layout = shared_data().join("caf/sensors/CAF_sensor_locations.csv");
+    let said = ok(&[
+        "synth",
+        "--out",
+        s(&out),
+        "--layout",
+        s(&layout),
+        "--utm-zone",
+        "11N",
+        "--days",
+        "10",
+        "--seed",
+        "100",
+    ]);
+    assert!(said.contains("wrote 42 sensors"), "{said}");
+    let written = std::fs::read_to_string(out.join("sensors.csv")).expect("sensors");
+    let caf = std::fs::read_to_string(&layout).expect("caf sensors");
+    for line in caf.lines().skip(1) {
+        let c: Vec<&str> = line.split(',').collect();
+        let row = written
+            .lines()
+            .find(|l| l.starts_with(&format!("{},", c[0])))
+            .unwrap_or_else(|| panic!("{} missing from {written}", c[0]));
+        let w: Vec<&str> = row.split(',').collect();
+        let (lat, lon): (f64, f64) = (c[3].parse().unwrap(), c[4].parse().unwrap());
+        let (wlat, wlon): (f64, f64) = (w[1].parse().unwrap(), w[2].parse().unwrap());
+        assert!(
+            (lat - wlat).abs() < 1e-5 && (lon - wlon).abs() < 1e-5,
+            "{row} vs {line}"
+        );
+    }
+    let err = fail(&[
+        "synth",
+        "--out",
+        s(&out),
+        "--layout",
+        s(&out.join("nothing.csv")),
+    ]);
+    assert!(err.contains("nothing.csv"), "{err}");
+}

@@ -426,6 +426,20 @@ impl FieldFilter<'_> {
     pub fn total_variance(&self) -> f64 {
         (0..self.model.len()).map(|i| self.estimate(i).1).sum()
     }
+
+    /// The information a reading of each of `sensors` at the filter's time would bring:
+    /// the expected reduction of [`Self::total_variance`] (unit², summed over *every*
+    /// sensor, not only those read), which does not depend on the values read. Not additive:
+    /// two correlated sensors tell less together than the sum of what each tells alone.
+    /// Repeated and out-of-range sensors add nothing. The filter itself is left unchanged.
+    pub fn information(&self, sensors: &[usize]) -> f64 {
+        let before = self.total_variance();
+        let mut after = self.clone();
+        for &i in sensors {
+            after.observe_variance_only(i);
+        }
+        (before - after.total_variance()).max(0.0)
+    }
 }
 
 /// Fits a [`DynamicModel`] from sensor series (positions are not used: the covariance is
@@ -715,6 +729,29 @@ mod tests {
             0.0,
         )
         .unwrap()
+    }
+
+    #[test]
+    fn information_is_the_variance_a_reading_removes_field_wide_and_not_additive() {
+        let m = two_sensor(0.8, 0.9);
+        let f = m.filter(0.0);
+        // Reading sensor 0 (noise-free model): its own 1e-4 and 0.64 of sensor 1's.
+        let one = f.information(&[0]);
+        assert!((one - 1e-4 * (1.0 + 0.64)).abs() < 1e-12, "{one}");
+        // Both: every variance gone, less than the sum of the singletons.
+        let both = f.information(&[0, 1]);
+        assert!((both - 2e-4).abs() < 1e-12, "{both}");
+        assert!(both < one + f.information(&[1]));
+        // Repeats and strangers add nothing; the filter is unchanged.
+        assert_eq!(f.information(&[0, 0, 7]), one);
+        assert_eq!(f.information(&[]), 0.0);
+        assert!((f.total_variance() - 2e-4).abs() < 1e-15);
+        // Uncorrelated sensors: additive.
+        let g = two_sensor(0.0, 0.9);
+        let gf = g.filter(0.0);
+        assert!(
+            (gf.information(&[0, 1]) - gf.information(&[0]) - gf.information(&[1])).abs() < 1e-15
+        );
     }
 
     #[test]

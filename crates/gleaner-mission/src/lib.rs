@@ -40,8 +40,8 @@ use std::time::{Duration, Instant};
 use gleaner_energy::{CellVisit, EnergyError, MissionEnergy, MissionEnergyModel};
 use gleaner_field::LocalPoint;
 use gleaner_orienteering::{
-    Metric, Problem, ProblemError, SolveError, SolveOptions, SolverKind, solve,
-    time_limit_from_secs,
+    MarginalOptions, Metric, Problem, ProblemError, SolveError, SolveOptions, SolverKind, solve,
+    solve_marginal, time_limit_from_secs,
 };
 use thiserror::Error;
 
@@ -200,56 +200,13 @@ pub fn plan_sorties(
     sorties: usize,
 ) -> Result<Vec<MissionPlan>, PlanError> {
     let sorties = sorties.max(1);
-    for (index, c) in candidates.iter().enumerate() {
-        if !c.score.is_finite() {
-            return Err(PlanError::InvalidCandidate {
-                index,
-                what: "score",
-                value: c.score,
-            });
-        }
-        if !(c.hover_s.is_finite() && c.hover_s >= 0.0) {
-            return Err(PlanError::InvalidCandidate {
-                index,
-                what: "hover time (s)",
-                value: c.hover_s,
-            });
-        }
-    }
+    check_candidates(candidates)?;
     let chosen: Vec<usize> = (0..candidates.len())
         .filter(|&k| candidates[k].score > 0.0)
         .collect();
     let started = Instant::now();
     let mut orders: Vec<Vec<usize>> = vec![Vec::new(); sorties];
-    let budget = model.usable_budget_j() - model.sortie_fixed_j();
-    if !chosen.is_empty() && budget > 0.0 {
-        // Travel costs: energy per metre times the straight-line distance (m), evaluated on
-        // demand by the solver (exactly the entries of `travel_cost_matrix`, without its
-        // n² memory: 800 MB for 10,000 cells).
-        let mut points = Vec::with_capacity(chosen.len() + 1);
-        points.push([base.e, base.n]);
-        points.extend(chosen.iter().map(|&k| {
-            let c = candidates[k].centre;
-            [c.e, c.n]
-        }));
-        let mut rewards = vec![0.0];
-        rewards.extend(chosen.iter().map(|&k| candidates[k].score));
-        let mut service = vec![0.0];
-        service.extend(
-            chosen
-                .iter()
-                .map(|&k| model.service_energy_j(candidates[k].hover_s)),
-        );
-        let problem = Problem::from_scaled_points(
-            &points,
-            Metric::Euclidean,
-            model.energy_per_metre_j(),
-            rewards,
-            budget,
-        )?
-        .with_service_costs(service)?
-        .with_endpoints(0, 0)?
-        .with_vehicles(sorties)?;
+    if let Some(problem) = instance(model, base, candidates, &chosen, sorties)? {
         let mut solve_options = SolveOptions::default()
             .with_time_limit(options.time_limit)
             .with_seed(options.seed);
@@ -268,8 +225,157 @@ pub fn plan_sorties(
                 .collect();
         }
     }
+    finish(
+        model,
+        base,
+        candidates,
+        orders,
+        chosen.len(),
+        options.planner,
+        started,
+    )
+}
+
+/// Plans `sorties` disjoint sorties from `base` maximising a *set function* of the visited
+/// cells instead of a sum of scores: `value` gets the candidate indices visited so far (in
+/// no particular order) and returns their joint worth (e.g. the information they bring
+/// together, which is less than the sum of what each brings alone when they are
+/// correlated). Candidates with `score > 0` are the eligible cells (their scores are reported
+/// as [`MissionPlan::total_score`], they do not steer the search). Sorties are planned one
+/// after the other, each maximising the gain over the cells already planned, by
+/// [`gleaner_orienteering::solve_marginal`] (marginal-gain insertion and exchange search);
+/// deterministic. Every route is re-checked by the energy model.
+pub fn plan_sorties_valued<F: FnMut(&[usize]) -> f64>(
+    model: &MissionEnergyModel,
+    base: LocalPoint,
+    candidates: &[Candidate],
+    mut value: F,
+    options: &PlanOptions,
+    sorties: usize,
+) -> Result<Vec<MissionPlan>, PlanError> {
+    let sorties = sorties.max(1);
+    check_candidates(candidates)?;
+    let started = Instant::now();
+    let mut orders: Vec<Vec<usize>> = Vec::with_capacity(sorties);
+    let mut taken: Vec<usize> = Vec::new();
+    let mut considered = 0;
+    for _ in 0..sorties {
+        let chosen: Vec<usize> = (0..candidates.len())
+            .filter(|&k| candidates[k].score > 0.0 && !taken.contains(&k))
+            .collect();
+        considered = considered.max(chosen.len());
+        let mut order = Vec::new();
+        if let Some(problem) = instance(model, base, candidates, &chosen, 1)? {
+            let mut set = taken.clone();
+            let base_len = set.len();
+            let found = solve_marginal(
+                &problem,
+                |nodes: &[usize]| {
+                    set.truncate(base_len);
+                    set.extend(nodes.iter().map(|&node| chosen[node - 1]));
+                    let v = value(&set);
+                    if v.is_finite() { v } else { 0.0 }
+                },
+                &MarginalOptions::default(),
+            );
+            if let Some(route) = found.solution.routes.first() {
+                order = route
+                    .iter()
+                    .filter(|&&node| node != 0)
+                    .map(|&node| chosen[node - 1])
+                    .collect();
+            }
+        }
+        taken.extend(&order);
+        orders.push(order);
+    }
+    finish(
+        model,
+        base,
+        candidates,
+        orders,
+        considered,
+        options.planner,
+        started,
+    )
+}
+
+/// The orienteering instance over the `chosen` candidates (node k + 1 is `chosen[k]`, node 0
+/// the base, start and end), or None when nothing can be visited.
+fn instance(
+    model: &MissionEnergyModel,
+    base: LocalPoint,
+    candidates: &[Candidate],
+    chosen: &[usize],
+    sorties: usize,
+) -> Result<Option<Problem>, PlanError> {
+    let budget = model.usable_budget_j() - model.sortie_fixed_j();
+    if chosen.is_empty() || budget <= 0.0 {
+        return Ok(None);
+    }
+    // Travel costs: energy per metre times the straight-line distance (m), evaluated on
+    // demand by the solver (exactly the entries of `travel_cost_matrix`, without its
+    // n² memory: 800 MB for 10,000 cells).
+    let mut points = Vec::with_capacity(chosen.len() + 1);
+    points.push([base.e, base.n]);
+    points.extend(chosen.iter().map(|&k| {
+        let c = candidates[k].centre;
+        [c.e, c.n]
+    }));
+    let mut rewards = vec![0.0];
+    rewards.extend(chosen.iter().map(|&k| candidates[k].score));
+    let mut service = vec![0.0];
+    service.extend(
+        chosen
+            .iter()
+            .map(|&k| model.service_energy_j(candidates[k].hover_s)),
+    );
+    let problem = Problem::from_scaled_points(
+        &points,
+        Metric::Euclidean,
+        model.energy_per_metre_j(),
+        rewards,
+        budget,
+    )?
+    .with_service_costs(service)?
+    .with_endpoints(0, 0)?
+    .with_vehicles(sorties)?;
+    Ok(Some(problem))
+}
+
+/// Finite scores and finite non-negative hover times, or the first offender.
+fn check_candidates(candidates: &[Candidate]) -> Result<(), PlanError> {
+    for (index, c) in candidates.iter().enumerate() {
+        if !c.score.is_finite() {
+            return Err(PlanError::InvalidCandidate {
+                index,
+                what: "score",
+                value: c.score,
+            });
+        }
+        if !(c.hover_s.is_finite() && c.hover_s >= 0.0) {
+            return Err(PlanError::InvalidCandidate {
+                index,
+                what: "hover time (s)",
+                value: c.hover_s,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The plans of the solver's `orders`, each re-checked by the energy model's breakdown.
+fn finish(
+    model: &MissionEnergyModel,
+    base: LocalPoint,
+    candidates: &[Candidate],
+    orders: Vec<Vec<usize>>,
+    considered: usize,
+    planner: Planner,
+    started: Instant,
+) -> Result<Vec<MissionPlan>, PlanError> {
     let solve_seconds = started.elapsed().as_secs_f64();
-    let mut plans = Vec::with_capacity(sorties);
+    let mut plans = Vec::with_capacity(orders.len());
     for order in orders {
         let visits: Vec<CellVisit> = order
             .iter()
@@ -289,8 +395,8 @@ pub fn plan_sorties(
             total_score: order.iter().map(|&k| candidates[k].score).sum(),
             order,
             energy,
-            considered: chosen.len(),
-            planner: options.planner,
+            considered,
+            planner,
             solve_seconds,
         });
     }
@@ -314,6 +420,51 @@ mod tests {
             score,
             hover_s: 30.0,
         }
+    }
+
+    #[test]
+    fn a_set_value_skips_redundant_cells_and_sorties_do_not_repeat_cells() {
+        // Cells 0 and 1 are twins (together worth what one is), cell 2 is far off; a budget
+        // that fits about two of the three: the valued planner takes one twin and cell 2.
+        let cells = [
+            cell(100.0, 0.0, 1.0),
+            cell(110.0, 0.0, 1.0),
+            cell(-400.0, 0.0, 1.0),
+        ];
+        let value = |set: &[usize]| {
+            let twins = set.iter().any(|&k| k < 2) as u8 as f64;
+            twins + set.contains(&2) as u8 as f64
+        };
+        let plans = plan_sorties_valued(
+            &model(),
+            LocalPoint::default(),
+            &cells,
+            value,
+            &opts(Planner::Default),
+            2,
+        )
+        .unwrap();
+        assert_eq!(plans.len(), 2);
+        let mut first = plans[0].order.clone();
+        first.sort_unstable();
+        assert!(first.contains(&2), "{first:?}");
+        assert_eq!(first.iter().filter(|&&k| k < 2).count(), 1, "{first:?}");
+        for p in &plans {
+            assert!(p.energy.feasible);
+            assert!(p.order.iter().all(|k| !first.contains(k)) || std::ptr::eq(p, &plans[0]));
+        }
+        // Nothing eligible: empty sorties, 0 J of cells.
+        let none = [cell(100.0, 0.0, 0.0)];
+        let plans = plan_sorties_valued(
+            &model(),
+            LocalPoint::default(),
+            &none,
+            value,
+            &opts(Planner::Default),
+            1,
+        )
+        .unwrap();
+        assert!(plans[0].order.is_empty());
     }
 
     /// [`plan_mission`] from the origin with the paper model and [`opts`].

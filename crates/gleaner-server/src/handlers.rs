@@ -381,12 +381,9 @@ pub async fn reconstruct(
     let q: ReconstructQuery = query(q)?;
     let estimator = match q.estimator.as_deref() {
         None => app::Estimator::default(),
-        Some(name) => gleaner_wire::convert::estimator_from_name(name).ok_or_else(|| {
-            ApiError::bad_request(
-                Some("estimator"),
-                format!("expected changes, levels, simple or dynamic, got {name:?}"),
-            )
-        })?,
+        Some(name) => name
+            .parse::<app::Estimator>()
+            .map_err(|e| ApiError::from(e).in_field("estimator"))?,
     };
     if let Some(n) = q.neighbours
         && !(1..=MAX_NEIGHBOURS).contains(&n)
@@ -637,6 +634,12 @@ async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Ve
         max_iterations: b.iterations,
         dry_run: b.dry_run,
         sorties: b.sorties,
+        objective: b
+            .objective
+            .as_deref()
+            .map(str::parse::<app::Objective>)
+            .transpose()
+            .map_err(|e| ApiError::from(e).in_field("objective"))?,
     };
     let preset = energy_preset(b.energy_preset.as_deref())?;
     let job = Job {

@@ -1,6 +1,6 @@
 //! The generator's configuration: plain data with documented units and CAF-like defaults.
 
-use gleaner_field::{LatLon, UnixSeconds};
+use gleaner_field::{LatLon, SensorId, TransverseMercator, UnixSeconds};
 
 use crate::SynthError;
 
@@ -77,6 +77,11 @@ pub struct SynthConfig {
     pub event_radius_m: Option<f64>,
     /// Weather and soil-temperature drivers.
     pub climate: Climate,
+    /// Lay the farm on these stations (id, WGS84 position) instead of a jittered grid: the
+    /// synthetic weather, soils and faults are drawn at a real network's own positions
+    /// (e.g. CAF's layout). `sensor_count` and the extent are then taken from the layout and
+    /// the field centre is its centroid. Default `None`.
+    pub layout: Option<Vec<(SensorId, LatLon)>>,
 }
 
 impl Default for SynthConfig {
@@ -99,6 +104,7 @@ impl Default for SynthConfig {
             event_duration_days: [7.0, 28.0],
             event_radius_m: None,
             climate: Climate::default(),
+            layout: None,
         }
     }
 }
@@ -263,6 +269,27 @@ fn check_depths(name: &'static str, depths: &[u32]) -> Result<(), SynthError> {
 impl SynthConfig {
     /// Checks every setting; [`crate::generate`] calls this first.
     pub fn validate(&self) -> Result<(), SynthError> {
+        if let Some(layout) = &self.layout {
+            if layout.is_empty() {
+                return Err(invalid("layout", 0, "must hold at least one station"));
+            }
+            if layout.len() != self.sensor_count {
+                return Err(invalid(
+                    "sensor_count",
+                    self.sensor_count,
+                    "must equal the layout's station count (see SynthConfig::on_layout)",
+                ));
+            }
+            let mut ids: Vec<&SensorId> = layout.iter().map(|(id, _)| id).collect();
+            ids.sort();
+            if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+                return Err(invalid(
+                    "layout",
+                    w[0].as_str(),
+                    "station ids must be distinct",
+                ));
+            }
+        }
         if self.sensor_count == 0 || self.sensor_count > 10_000_000 {
             return Err(invalid(
                 "sensor_count",
@@ -396,6 +423,39 @@ impl SynthConfig {
             }
         }
         Ok(())
+    }
+
+    /// This configuration laid on `layout` (station ids with WGS84 positions, at least one):
+    /// [`Self::layout`] set, `sensor_count` its length, the field centre its centroid and the
+    /// extent its bounding box in the local frame (at least 1 m a side), so the spatial fields
+    /// and the events span the real network.
+    pub fn on_layout(mut self, layout: Vec<(SensorId, LatLon)>) -> Result<Self, SynthError> {
+        if layout.is_empty() {
+            return Err(invalid("layout", 0, "must hold at least one station"));
+        }
+        let n = layout.len() as f64;
+        let lat = layout.iter().map(|(_, p)| p.lat()).sum::<f64>() / n;
+        let lon = layout.iter().map(|(_, p)| p.lon()).sum::<f64>() / n;
+        let centre = LatLon::new(lat, lon).map_err(|_| SynthError::InvalidSetting {
+            name: "layout",
+            value: format!("centroid {lat}, {lon}"),
+            reason: "its centroid is not a valid position",
+        })?;
+        let frame = TransverseMercator::local(centre);
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for (_, p) in &layout {
+            let q = frame.forward(*p);
+            for (k, v) in [q.e, q.n].into_iter().enumerate() {
+                lo[k] = lo[k].min(v);
+                hi[k] = hi[k].max(v);
+            }
+        }
+        self.extent_m = [0, 1].map(|k| 2.0 * lo[k].abs().max(hi[k].abs()).max(0.5));
+        self.centre = centre;
+        self.sensor_count = layout.len();
+        self.scale_extent_with_sensors = false;
+        self.layout = Some(layout);
+        Ok(self)
     }
 
     /// The field extent actually used, `[east-west, north-south]` metres, after the optional

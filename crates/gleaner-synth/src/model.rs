@@ -261,19 +261,32 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
     let nx = ((n as f64 * w / h).sqrt().round() as usize).clamp(1, n);
     let ny = n.div_ceil(nx);
     let (dx, dy) = (w / nx as f64, h / ny as f64);
-    let local: Vec<LocalPoint> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            let mut rng = stream(config.seed, Domain::Layout, i as u64);
-            let (col, row) = ((i % nx) as f64, (i / nx) as f64);
-            let je = 0.8 * (uniform(&mut rng) - 0.5);
-            let jn = 0.8 * (uniform(&mut rng) - 0.5);
-            LocalPoint::new(
-                -w / 2.0 + (col + 0.5 + je) * dx,
-                -h / 2.0 + (row + 0.5 + jn) * dy,
-            )
-        })
-        .collect();
+    let local: Vec<LocalPoint> = match &config.layout {
+        Some(layout) => layout.iter().map(|(_, p)| frame.forward(*p)).collect(),
+        None => grid_layout(config, n, [w, h], [nx, ny], [dx, dy]),
+    };
+    // The closure below keeps the grid's layout stream.
+    fn grid_layout(
+        config: &SynthConfig,
+        n: usize,
+        [w, h]: [f64; 2],
+        [nx, _ny]: [usize; 2],
+        [dx, dy]: [f64; 2],
+    ) -> Vec<LocalPoint> {
+        (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let mut rng = stream(config.seed, Domain::Layout, i as u64);
+                let (col, row) = ((i % nx) as f64, (i / nx) as f64);
+                let je = 0.8 * (uniform(&mut rng) - 0.5);
+                let jn = 0.8 * (uniform(&mut rng) - 0.5);
+                LocalPoint::new(
+                    -w / 2.0 + (col + 0.5 + je) * dx,
+                    -h / 2.0 + (row + 0.5 + jn) * dy,
+                )
+            })
+            .collect()
+    }
 
     // Static spatial fields, drawn in a fixed order.
     let mut frng = stream(config.seed, Domain::Fields, 0);
@@ -293,7 +306,10 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
         .par_iter()
         .enumerate()
         .map(|(i, p)| -> Result<Sensor, crate::SynthError> {
-            let id = SensorId::new(format!("SYN{:0width$}", i + 1))?;
+            let id = match &config.layout {
+                Some(layout) => layout[i].0.clone(),
+                None => SensorId::new(format!("SYN{:0width$}", i + 1))?,
+            };
             let ll = frame.inverse(*p);
             let mut s = Sensor::new(id, LatLon::new(ll.lat(), ll.lon())?);
             s.elevation_m = Some(round_to(785.0 + 12.0 * elevation_field.at(*p), 2));
@@ -861,6 +877,45 @@ fn apply_faults(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_farm_laid_on_a_layout_keeps_its_stations_ids_and_positions() {
+        let layout: Vec<(SensorId, LatLon)> = [
+            ("CAF003", 46.7825, -117.0852),
+            ("CAF007", 46.7811, -117.0790),
+            ("CAF009", 46.7790, -117.0821),
+        ]
+        .iter()
+        .map(|&(id, lat, lon)| (SensorId::new(id).unwrap(), LatLon::new(lat, lon).unwrap()))
+        .collect();
+        let config = SynthConfig {
+            seed: 3,
+            days: 20,
+            ..SynthConfig::default()
+        }
+        .on_layout(layout.clone())
+        .unwrap();
+        assert_eq!(config.sensor_count, 3);
+        let farm = generate(&config).unwrap();
+        assert_eq!(farm.sensors().len(), 3);
+        for (s, (id, p)) in farm.sensors().iter().zip(&layout) {
+            assert_eq!(&s.id, id);
+            assert!((s.position.lat() - p.lat()).abs() < 1e-7, "{s:?}");
+            assert!((s.position.lon() - p.lon()).abs() < 1e-7, "{s:?}");
+        }
+        assert!(farm.reading_count() > 0);
+        // Deterministic, and a mismatched count or a repeated id is refused.
+        assert_eq!(
+            generate(&config).unwrap().reading_count(),
+            farm.reading_count()
+        );
+        let mut wrong = config.clone();
+        wrong.sensor_count = 4;
+        assert!(generate(&wrong).is_err());
+        let twice = vec![layout[0].clone(), layout[0].clone()];
+        assert!(generate(&SynthConfig::default().on_layout(twice).unwrap()).is_err());
+        assert!(SynthConfig::default().on_layout(Vec::new()).is_err());
+    }
 
     #[test]
     fn interp_clamps_and_interpolates() {

@@ -292,29 +292,6 @@ pub fn scoring(s: &Scoring) -> ScoringDoc {
     }
 }
 
-/// The name of a reconstruction's estimator in documents and queries: `changes`, `levels`
-/// (ordinary kriging of levels), `simple` (simple kriging of levels) or `dynamic` (the
-/// dynamic field model).
-pub fn estimator_name(e: Estimator) -> &'static str {
-    match e {
-        Estimator::Changes => "changes",
-        Estimator::Dynamic => "dynamic",
-        Estimator::Levels(gleaner_kriging::Mean::Unknown) => "levels",
-        Estimator::Levels(gleaner_kriging::Mean::Known) => "simple",
-    }
-}
-
-/// The estimator named by [`estimator_name`], if any.
-pub fn estimator_from_name(name: &str) -> Option<Estimator> {
-    match name {
-        "changes" => Some(Estimator::Changes),
-        "levels" => Some(Estimator::Levels(gleaner_kriging::Mean::Unknown)),
-        "simple" => Some(Estimator::Levels(gleaner_kriging::Mean::Known)),
-        "dynamic" => Some(Estimator::Dynamic),
-        _ => None,
-    }
-}
-
 /// A reconstruction over a range: every sensor's mean, sd and 90% interval at each time.
 pub fn reconstruction_series(r: &ReconstructionSeries) -> crate::docs::ReconstructionSeriesDoc {
     let n = r.sensors.len();
@@ -327,7 +304,7 @@ pub fn reconstruction_series(r: &ReconstructionSeries) -> crate::docs::Reconstru
         format: crate::RECONSTRUCTION_SERIES_FORMAT.into(),
         version: VERSION,
         modality: r.modality.clone(),
-        estimator: estimator_name(Estimator::Dynamic).into(),
+        estimator: Estimator::Dynamic.name().into(),
         model: crate::docs::DynamicModelDoc {
             phi: r.model.phi(),
             step_s: r.model.step_s(),
@@ -363,7 +340,7 @@ pub fn reconstruction(r: &Reconstruction) -> ReconstructionDoc {
         version: VERSION,
         at: format_rfc3339(r.at),
         modality: r.modality.clone(),
-        estimator: estimator_name(r.estimator).into(),
+        estimator: r.estimator.name().into(),
         step_s: r.step_s,
         model: ReconstructionModelDoc {
             levels_sill: c.sill,

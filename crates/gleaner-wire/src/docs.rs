@@ -327,7 +327,8 @@ pub struct StrategySummaryDoc {
     /// Per mission, means over 7-day blocks with 95% intervals: `rmse_kriged`,
     /// `rmse_carried`, `mae_kriged`, `mae_carried` (after the flights; the modality's unit),
     /// `rmse_kriged_before`, `rmse_carried_before` (before them), `mean_sd` (the
-    /// model's standard deviation, the modality's unit), `staleness_mean_days`,
+    /// model's standard deviation, the modality's unit), `coverage90` (fraction of the
+    /// estimated sensors inside their 90% interval), `staleness_mean_days`,
     /// `staleness_max_days` (d), `energy_kj` (kJ per mission), `utilisation` (energy /
     /// budget), `cells`, `classifier_accuracy` (fraction), `lost_readings`.
     pub metrics: BTreeMap<String, IntervalDoc>,

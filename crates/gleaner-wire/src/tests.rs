@@ -653,11 +653,6 @@ fn reconstruction_document() {
     let back: docs::ReconstructionDoc = serde_json::from_str(&text).unwrap();
     assert_eq!(back, doc);
     insta::assert_snapshot!("reconstruction.json", text);
-    for name in ["changes", "levels", "simple"] {
-        let e = crate::convert::estimator_from_name(name).unwrap();
-        assert_eq!(crate::convert::estimator_name(e), name);
-    }
-    assert!(crate::convert::estimator_from_name("kriging").is_none());
 }
 
 #[test]

@@ -245,6 +245,8 @@ fn synthetic(
         scale_extent: false,
         vw_depths_cm: synth::Depths(vec![30, 60, 90]),
         t_depths_cm: synth::Depths(vec![30]),
+        layout: None,
+        utm_zone: None,
     })?;
     writeln!(
         out,

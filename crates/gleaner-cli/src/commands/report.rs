@@ -24,9 +24,11 @@ const CATCHES: &str = "catches.csv";
 const COMMAND: &str = "command.txt";
 const VISITS: &str = "visits.csv";
 
-const MISSIONS_HEADER: &str = "label,strategy,seed,budget,index,t,sorties,cells,energy_j,budget_j,rmse_carried,mae_carried,rmse_kriged,mae_kriged,mean_variance,evaluated,staleness_mean_s,staleness_max_s,classifier_accuracy,lost_readings,events_caught,rmse_carried_before,rmse_kriged_before";
+const MISSIONS_HEADER: &str = "label,strategy,seed,budget,index,t,sorties,cells,energy_j,budget_j,rmse_carried,mae_carried,rmse_kriged,mae_kriged,mean_variance,evaluated,staleness_mean_s,staleness_max_s,classifier_accuracy,lost_readings,events_caught,rmse_carried_before,rmse_kriged_before,coverage90";
 /// Columns of `missions.csv` before the pre-flight errors were added (still read).
 const MISSIONS_COLUMNS_V1: usize = 21;
+/// Columns of missions.csv before `coverage90`.
+const MISSIONS_COLUMNS_V2: usize = 23;
 
 fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
@@ -37,7 +39,7 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
     let mut campaign = String::from(
         "label,modality,period_s,sill,nugget,range_m,time_scale_s,temporal_share,\
         changes_shared_nugget,changes_shared_partial,changes_shared_scale_s,changes_range_m,\
-        changes_own_nugget,changes_own_partial,changes_own_scale_s\n",
+        changes_own_nugget,changes_own_partial,changes_own_scale_s,estimator\n",
     );
     let mut missions = format!("{MISSIONS_HEADER}\n");
     let mut events = String::from("label,event,sensors,start,end\n");
@@ -59,7 +61,7 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
         )?;
         // The model of changes: 7 more columns (empty when unknown).
         match r.changes {
-            Some(m) => writeln!(
+            Some(m) => write!(
                 campaign,
                 ",{},{},{},{},{},{},{}",
                 m.shared.nugget,
@@ -70,8 +72,13 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
                 m.own.partial,
                 m.own.scale_s
             )?,
-            None => writeln!(campaign, ",,,,,,,")?,
+            None => write!(campaign, ",,,,,,,")?,
         }
+        writeln!(
+            campaign,
+            ",{}",
+            r.estimator.map_or("", gleaner_app::Estimator::name)
+        )?;
         for e in &r.events {
             let ids: Vec<&str> = e.sensors.iter().map(SensorId::as_str).collect();
             writeln!(
@@ -90,7 +97,7 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
             for m in &run.missions {
                 writeln!(
                     missions,
-                    "{head},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    "{head},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     m.index,
                     m.t,
                     m.sorties,
@@ -110,7 +117,8 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
                     m.lost_readings,
                     m.events_caught,
                     m.rmse_carried_before,
-                    m.rmse_kriged_before
+                    m.rmse_kriged_before,
+                    m.coverage90
                 )?;
             }
             for v in &run.visits {
@@ -187,8 +195,8 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
     let mut results: Vec<CampaignResult> = Vec::new();
     let p = dir.join(CAMPAIGN);
     // Files written before the temporal nugget have 7 columns (temporal share 1), before the
-    // model of changes 8.
-    let campaign_rows = rows_of(&p, &[15, 8, 7])?;
+    // model of changes 8, before the estimator 15.
+    let campaign_rows = rows_of(&p, &[16, 15, 8, 7])?;
     for (line, c) in campaign_rows {
         let share = match c.get(7) {
             Some(v) => num(&p, line, "temporal_share", v)?,
@@ -202,7 +210,7 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
         )
         .and_then(|c| c.with_temporal_share(share))
         .with_context(|| format!("{}:{line}", p.display()))?;
-        let changes = if c.len() == 15 && !c[8].is_empty() {
+        let changes = if c.len() >= 15 && !c[8].is_empty() {
             let f = |k: usize, what: &str| num::<f64>(&p, line, what, &c[k]);
             let v = |k: usize| -> Result<Variogram> {
                 Ok(Variogram {
@@ -224,6 +232,13 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
             period_s: num(&p, line, "period_s", &c[2])?,
             covariance: cov,
             changes,
+            estimator: match c.get(15).map(String::as_str) {
+                None | Some("") => None,
+                Some(name) => Some(
+                    name.parse::<gleaner_app::Estimator>()
+                        .with_context(|| format!("{}:{line}: estimator", p.display()))?,
+                ),
+            },
             events: Vec::new(),
             runs: Vec::new(),
         });
@@ -252,7 +267,11 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
     let p = dir.join(MISSIONS);
     for (line, c) in rows_of(
         &p,
-        &[MISSIONS_HEADER.split(',').count(), MISSIONS_COLUMNS_V1],
+        &[
+            MISSIONS_HEADER.split(',').count(),
+            MISSIONS_COLUMNS_V2,
+            MISSIONS_COLUMNS_V1,
+        ],
     )? {
         let r = find(&mut results, &c[0], &p, line)?;
         let key = RunKey {
@@ -273,6 +292,11 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
             rmse_kriged: f(12, "rmse_kriged")?,
             mae_kriged: f(13, "mae_kriged")?,
             mean_variance: f(14, "mean_variance")?,
+            coverage90: if c.len() > 23 {
+                f(23, "coverage90")?
+            } else {
+                f64::NAN
+            },
             evaluated: num(&p, line, "evaluated", &c[15])?,
             staleness_mean_s: f(16, "staleness_mean_s")?,
             staleness_max_s: f(17, "staleness_max_s")?,
@@ -589,6 +613,12 @@ fn describe(name: &str, unit: &str) -> (&'static str, String, f64, usize) {
             1000.0,
             2,
         ),
+        "coverage90" => (
+            "90% interval coverage of the estimated sensors",
+            "%".into(),
+            100.0,
+            1,
+        ),
         "staleness_mean_days" => ("mean staleness", "days".into(), 1.0, 2),
         "staleness_max_days" => ("max staleness", "days".into(), 1.0, 1),
         "energy_kj" => ("energy per mission", "kJ".into(), 1.0, 1),
@@ -710,11 +740,11 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
     )?;
     writeln!(
         md,
-        "| strategy | runs | RMSE kriging | ΔRMSE vs gleaner | RMSE carried | MAE kriging | energy kJ/mission | utilisation % | cells/mission | staleness mean d | staleness max d | events caught | delay d | Δdelay vs gleaner d | classifier % | lost readings |"
+        "| strategy | runs | RMSE kriging | ΔRMSE vs gleaner | RMSE carried | MAE kriging | 90% coverage % | energy kJ/mission | utilisation % | cells/mission | staleness mean d | staleness max d | events caught | delay d | Δdelay vs gleaner d | classifier % | lost readings |"
     )?;
     writeln!(
         md,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     )?;
     let at_main: Vec<&Summary> = summaries
         .iter()
@@ -724,7 +754,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         let (caught, total) = s.events_caught;
         writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {caught}/{total} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {caught}/{total} | {} | {} | {} | {} |",
             s.strategy.name(),
             s.runs,
             fmt_iv(get(s, "rmse_kriged"), 1000.0, 2),
@@ -733,6 +763,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
                 .map_or("–".into(), |i| fmt_iv(i, 1000.0, 2)),
             fmt_iv(get(s, "rmse_carried"), 1000.0, 2),
             fmt_iv(get(s, "mae_kriged"), 1000.0, 2),
+            fmt_iv(get(s, "coverage90"), 100.0, 1),
             fmt_iv(get(s, "energy_kj"), 1.0, 1),
             fmt_iv(get(s, "utilisation"), 100.0, 1),
             fmt_iv(get(s, "cells"), 1.0, 1),
@@ -918,12 +949,18 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
     }
     writeln!(md, "## Definitions\n")?;
     // The model-based estimate ("kriging" columns) the simulation used.
-    let named = |e: &str| {
-        command.contains(&format!("--estimator {e}"))
-            || command.contains(&format!("--estimator={e}"))
+    // Recorded with the results; older results: named on the command line.
+    let recorded = results.iter().find_map(|r| r.estimator);
+    let named = |e: &str| match recorded {
+        Some(r) => r.name() == e,
+        None => {
+            command.contains(&format!("--estimator {e}"))
+                || command.contains(&format!("--estimator={e}"))
+        }
     };
-    let model_based = if command.contains("--simple-kriging")
-        || command.contains("--level-kriging")
+    let old_flag = |f: &str| recorded.is_none() && command.contains(f);
+    let model_based = if old_flag("--simple-kriging")
+        || old_flag("--level-kriging")
         || named("levels")
         || named("simple")
     {
@@ -931,7 +968,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
             "kriging = {} kriging of levels (residuals from each sensor's history mean) with a \
              separable exponential space-time covariance and a temporal nugget fitted on the \
              history, from the 16 most correlated latest readings",
-            if command.contains("--simple-kriging") || named("simple") {
+            if old_flag("--simple-kriging") || named("simple") {
                 "simple"
             } else {
                 "ordinary"

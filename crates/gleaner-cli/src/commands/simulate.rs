@@ -262,6 +262,8 @@ fn synthetic(args: &SimulateArgs, seed: u64, dir: &Path) -> Result<Replay> {
         scale_extent: args.farm_scale_extent,
         vw_depths_cm: synth::Depths(vec![30, 60, 90]),
         t_depths_cm: synth::Depths(vec![30]),
+        layout: None,
+        utm_zone: None,
     })?;
     let events: Vec<TruthEvent> = farm
         .events()

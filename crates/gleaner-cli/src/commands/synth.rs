@@ -72,6 +72,14 @@ pub struct SynthArgs {
     /// Soil-temperature depths, cm, comma-separated (modalities t@<d>cm); empty ('') for none.
     #[arg(long = "t-depths", value_parser = parse_depths, default_value = "30")]
     pub t_depths_cm: Depths,
+    /// Lay the farm on a real network's stations: a sensors file as `init` reads it (id and
+    /// lat/lon, or UTM easting/northing with --utm-zone); its ids and positions replace the
+    /// jittered grid and --sensors.
+    #[arg(long)]
+    pub layout: Option<PathBuf>,
+    /// UTM zone of --layout's coordinates (e.g. 11N for CAF's own sensors file).
+    #[arg(long, requires = "layout")]
+    pub utm_zone: Option<String>,
 }
 
 /// A list of depths, cm (`--vw-depths`, `--t-depths`): possibly empty.
@@ -128,7 +136,14 @@ fn write_file(
 
 /// Generates the farm and writes its four files; returns the farm and the file names.
 pub fn run(args: &SynthArgs) -> Result<(SynthFarm, SynthFiles)> {
-    let farm = generate(&config(args)).context("invalid synthetic farm settings")?;
+    let mut config = config(args);
+    if let Some(path) = &args.layout {
+        let sensors = gleaner_app::read_sensors_file(path, args.utm_zone.as_deref())?;
+        config = config
+            .on_layout(sensors.into_iter().map(|s| (s.id, s.position)).collect())
+            .with_context(|| format!("{}: cannot lay a farm on it", path.display()))?;
+    }
+    let farm = generate(&config).context("invalid synthetic farm settings")?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create", args.out.display()))?;
     let files = SynthFiles::in_dir(&args.out);
