@@ -804,6 +804,12 @@ pub(crate) enum Symbol {
     Swatch(Rgb),
     /// A filled square and a route line over it (a sortie).
     Sortie(Rgb, Rgb, u32),
+    /// A sensor read at the map's time: a dark disc, radius pt.
+    SensorRead(f64),
+    /// A sensor only estimated: a white disc with a dark ring, radius pt.
+    SensorEstimated(f64),
+    /// The field's outline: a dark line.
+    Outline,
 }
 
 /// One legend entry.
@@ -904,6 +910,29 @@ fn draw_symbol(svg: &mut Svg, s: &Symbol, x: f64, cy: f64, font: f64) {
                 fill.hex()
             ));
             route_line(svg, &[(x, cy), (x + w, cy)], &line.hex(), dash_attr(*dash));
+        }
+        Symbol::SensorRead(r) | Symbol::SensorEstimated(r) => {
+            let read = matches!(s, Symbol::SensorRead(_));
+            let (fill, stroke, sw) = if read {
+                (INK, "#ffffff", 0.45)
+            } else {
+                ("#ffffff", INK, 0.6)
+            };
+            svg.line(format_args!(
+                r#"<circle cx="{}" cy="{}" r="{}" fill="{fill}" stroke="{stroke}" stroke-width="{sw}"/>"#,
+                N(cx),
+                N(cy),
+                N(*r)
+            ));
+        }
+        Symbol::Outline => {
+            svg.line(format_args!(
+                r#"<line x1="{}" y1="{}" x2="{}" y2="{}" stroke="{INK}" stroke-width="0.9"/>"#,
+                N(x + 0.1 * w),
+                N(cy),
+                N(x + 0.9 * w),
+                N(cy)
+            ));
         }
     }
 }
