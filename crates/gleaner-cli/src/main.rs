@@ -394,8 +394,8 @@ readings stamped at or before it) as CSV (time,sensor,mean,sd,lo90,hi90), or wit
 (178 mm wide; the PNG at 300 dpi): left the estimate, right its uncertainty (the posterior sd),
 each cell coloured by its sensors' mean on a colour-blind-safe scale (viridis; reversed magma)
 with a colour bar in the modality's unit; sensors read within one sampling step before the time
-are dark discs, those only estimated white; the field's outline, a scale bar in metres, a north
-arrow, and the modality, time (UTC) and estimator in the title (as GET
+are dark discs, those only estimated white diamonds; the field's outline, a scale bar in
+metres, a north arrow, and the modality, time (UTC) and estimator in the title (as GET
 /api/v1/reconstruct/map.svg, .png).
 
 --json: the `gleaner.reconstruction` document (as GET /api/v1/reconstruct): sd = the model's

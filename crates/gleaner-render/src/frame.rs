@@ -806,7 +806,7 @@ pub(crate) enum Symbol {
     Sortie(Rgb, Rgb, u32),
     /// A sensor read at the map's time: a dark disc, radius pt.
     SensorRead(f64),
-    /// A sensor only estimated: a white disc with a dark ring, radius pt.
+    /// A sensor only estimated: a white diamond, half-size pt.
     SensorEstimated(f64),
     /// The field's outline: a dark line.
     Outline,
@@ -911,19 +911,9 @@ fn draw_symbol(svg: &mut Svg, s: &Symbol, x: f64, cy: f64, font: f64) {
             ));
             route_line(svg, &[(x, cy), (x + w, cy)], &line.hex(), dash_attr(*dash));
         }
-        Symbol::SensorRead(r) | Symbol::SensorEstimated(r) => {
-            let read = matches!(s, Symbol::SensorRead(_));
-            let (fill, stroke, sw) = if read {
-                (INK, "#ffffff", 0.45)
-            } else {
-                ("#ffffff", INK, 0.6)
-            };
-            svg.line(format_args!(
-                r#"<circle cx="{}" cy="{}" r="{}" fill="{fill}" stroke="{stroke}" stroke-width="{sw}"/>"#,
-                N(cx),
-                N(cy),
-                N(*r)
-            ));
+        Symbol::SensorRead(r) => crate::reconstruction::sensor_marker(svg, cx, cy, *r, true, ""),
+        Symbol::SensorEstimated(r) => {
+            crate::reconstruction::sensor_marker(svg, cx, cy, *r, false, "")
         }
         Symbol::Outline => {
             svg.line(format_args!(

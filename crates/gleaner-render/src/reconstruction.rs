@@ -84,29 +84,48 @@ struct Point {
 
 /// Radius of a sensor marker at text size `font`, pt.
 fn marker_r(font: f64) -> f64 {
-    0.21 * font
+    0.25 * font
 }
 
-/// A sensor marker: read = filled dark disc with a white rim; estimated only = white disc
-/// with a dark ring.
-fn sensor_marker(svg: &mut Svg, x: f64, y: f64, r: f64, read: bool, title: &str) {
-    let (fill, stroke, w) = if read {
-        (INK, "#ffffff", 0.45)
+/// A sensor marker centred at (`x`, `y`), `r` pt: read = a dark disc with a thin white rim;
+/// estimated only = a white diamond with a dark edge (told apart by shape as well as by
+/// tone, so in grey too and on dark cells). A marker with a `title` (a sensor on the map,
+/// not a legend symbol) carries the class `sensor-read` or `sensor-estimated`.
+pub(crate) fn sensor_marker(svg: &mut Svg, x: f64, y: f64, r: f64, read: bool, title: &str) {
+    let (title, class) = if title.is_empty() {
+        (String::new(), "")
+    } else if read {
+        (
+            format!("<title>{}</title>", esc(title)),
+            r#" class="sensor-read""#,
+        )
     } else {
-        ("#ffffff", INK, 0.6)
+        (
+            format!("<title>{}</title>", esc(title)),
+            r#" class="sensor-estimated""#,
+        )
     };
-    svg.line(format_args!(
-        r#"<circle class="{}" cx="{}" cy="{}" r="{}" fill="{fill}" stroke="{stroke}" stroke-width="{w}">{}</circle>"#,
-        if read { "sensor-read" } else { "sensor-estimated" },
-        N(x),
-        N(y),
-        N(r),
-        if title.is_empty() {
-            String::new()
-        } else {
-            format!("<title>{}</title>", esc(title))
-        }
-    ));
+    if read {
+        svg.line(format_args!(
+            r##"<circle{class} cx="{}" cy="{}" r="{}" fill="{INK}" stroke="#ffffff" stroke-width="0.35">{title}</circle>"##,
+            N(x),
+            N(y),
+            N(r)
+        ));
+    } else {
+        let d = 1.2 * r;
+        svg.line(format_args!(
+            r##"<path{class} d="M{} {}L{} {}L{} {}L{} {}Z" fill="#ffffff" stroke="{INK}" stroke-width="0.55" stroke-linejoin="round">{title}</path>"##,
+            N(x),
+            N(y - d),
+            N(x + d),
+            N(y),
+            N(x),
+            N(y + d),
+            N(x - d),
+            N(y)
+        ));
+    }
 }
 
 /// One panel's content: which values, which colours, the bar's title.
@@ -129,7 +148,7 @@ struct Panel<'a> {
 /// posterior variances (a posterior standard deviation) on reversed magma, from 0. Each
 /// panel has a colour bar titled with the quantity and its unit. On both, every sensor is
 /// marked — a dark disc if it was read at the time (its latest reading at most
-/// `read_within_s` before it), a white disc with a dark ring if it is only estimated — and
+/// `read_within_s` before it), a white diamond if it is only estimated — and
 /// the field's outline is drawn over the cells. Ticks are metres from the base station or
 /// degrees ([`crate::Coordinates`]); the legend row holds the symbols, a scale bar in metres
 /// and a north arrow; the title names the modality, the time (UTC) and the estimator.
