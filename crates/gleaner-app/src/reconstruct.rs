@@ -132,8 +132,11 @@ pub(crate) fn target_modality<S: Store>(
     Modality::new(&name).map_err(|e| AppError::Invalid(format!("modality {name:?}: {e}")))
 }
 
+/// One sensor's readings: times (seconds, ascending) and values.
+type Column = (Vec<UnixSeconds>, Vec<f64>);
+
 /// Per sensor: the times (seconds, ascending) and values of its readings.
-type Columns = Vec<(Vec<UnixSeconds>, Vec<f64>)>;
+type Columns = Vec<Column>;
 
 /// Per project sensor (sorted by id): times and values of one batch's readings.
 fn per_sensor(ids: &[SensorId], batch: &ReadingBatch) -> Columns {
@@ -585,6 +588,9 @@ pub(crate) fn estimate_with<S: Store>(
     Ok(estimates)
 }
 
+/// A sensor's latest known reading: time (s) and value, if any.
+type Latest = Option<(UnixSeconds, f64)>;
+
 /// What the kriging estimators need at one time: the sensors' positions (east/north m), the
 /// fitted models, each sensor's latest known reading (time s, value) and, for the kriging of
 /// changes, every sensor's readings in the change window (times ascending, s).
@@ -592,8 +598,8 @@ struct KrigingInputs<'a> {
     positions: &'a [[f64; 2]],
     model: &'a FieldModel,
     changes: &'a IncrementModel,
-    latest: &'a [Option<(UnixSeconds, f64)>],
-    series: &'a [(Vec<UnixSeconds>, Vec<f64>)],
+    latest: &'a [Latest],
+    series: &'a [Column],
     observations: Vec<Observation>,
     at: UnixSeconds,
     neighbours: usize,
@@ -604,10 +610,7 @@ impl<'a> KrigingInputs<'a> {
     fn new(
         positions: &'a [[f64; 2]],
         (model, changes): (&'a FieldModel, &'a IncrementModel),
-        (latest, series): (
-            &'a [Option<(UnixSeconds, f64)>],
-            &'a [(Vec<UnixSeconds>, Vec<f64>)],
-        ),
+        (latest, series): (&'a [Latest], &'a [Column]),
         at: UnixSeconds,
         (neighbours, estimator): (usize, Estimator),
     ) -> Self {

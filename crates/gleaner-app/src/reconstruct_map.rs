@@ -194,13 +194,7 @@ pub(crate) fn outline(cells: &[CellIndex]) -> Vec<Vec<Corner>> {
         let mut ring = vec![start];
         let mut at = start;
         // Each corner has as many boundary edges out as in, so the walk returns to its start.
-        loop {
-            let Some(ends) = out_edges.get_mut(&at) else {
-                break;
-            };
-            if ends.is_empty() {
-                break;
-            }
+        while let Some(ends) = out_edges.get_mut(&at).filter(|e| !e.is_empty()) {
             let next = ends.remove(0);
             ring.push(next);
             at = next;

@@ -445,7 +445,7 @@ pub fn reconstruction_map_svg(
                 panel.key,
                 fill.hex(),
                 esc(&c.id),
-                esc(&format!("{} {}", value_text(value), panel.unit).trim_end().to_string())
+                esc(format!("{} {}", value_text(value), panel.unit).trim_end())
             ));
         }
         svg.line(format_args!("</g>"));

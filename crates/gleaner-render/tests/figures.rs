@@ -668,7 +668,8 @@ fn reconstruction_map_refuses_bad_numbers_and_survives_odd_inputs() {
         ..FigureOptions::default()
     };
     let base = example::reconstruction_map();
-    let cases: Vec<(Box<dyn Fn(&mut ReconstructionMapDoc)>, &str)> = vec![
+    type Spoil = Box<dyn Fn(&mut ReconstructionMapDoc)>;
+    let cases: Vec<(Spoil, &str)> = vec![
         (Box::new(|d| d.cells[3].mean = f64::NAN), "cell"),
         (Box::new(|d| d.cells[2].sd = -0.1), "sd"),
         (
