@@ -469,7 +469,9 @@ pub async fn reconstruct(
                 ))
             })
             .await
-            .map_err(in_modality)?;
+            // Without a modality, what the range's readings cannot give is the range's fault
+            // (e.g. no readings at or before its end).
+            .map_err(|e| in_modality(e).in_field("to"))?;
         return Ok(Json(ReconstructAnswer::Range(doc)));
     }
     let request = app::ReconstructRequest {

@@ -282,6 +282,8 @@ fn reconstructs_a_range_and_refuses_bad_ranges_naming_the_field() {
             400,
             "modality",
         ),
+        // Before the project's first reading.
+        ("from=2001-01-01&to=2001-02-01", 400, "to"),
     ] {
         let r = c
             .request("GET", &format!("/api/v1/reconstruct?{query}"), &[], None)
