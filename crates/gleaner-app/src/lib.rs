@@ -56,6 +56,7 @@ mod plan;
 mod progress;
 mod project;
 mod reconstruct;
+mod reconstruct_map;
 mod record;
 mod score;
 pub mod settings;
@@ -84,9 +85,10 @@ pub use progress::{Progress, Silent};
 pub use project::{Project, database};
 pub use reconstruct::{
     DEFAULT_NEIGHBOURS, Estimator, MAX_SERIES_TIMES, ReconstructRequest, ReconstructSeriesRequest,
-    Reconstruction, ReconstructionSeries, SensorEstimate, dynamic_fit_options, dynamic_window_s,
-    reconstruct, reconstruct_series,
+    Reconstruction, ReconstructionSeries, SensorEstimate, Z90, dynamic_fit_options,
+    dynamic_window_s, reconstruct, reconstruct_series,
 };
+pub use reconstruct_map::{MapCell, ReconstructMapRequest, ReconstructionMap, reconstruct_map};
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};
 pub use settings::{EnergyPreset, Settings};

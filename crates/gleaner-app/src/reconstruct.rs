@@ -9,7 +9,7 @@
 
 use std::collections::HashMap;
 
-use gleaner_field::{LatLon, Modality, SensorId, UnixSeconds};
+use gleaner_field::{CellIndex, LatLon, Modality, SensorId, UnixSeconds};
 use gleaner_kriging::{
     Change, DynamicFitOptions, DynamicModel, FieldModel, FitOptions, IncrementFitOptions,
     IncrementModel, Mean, Observation, SensorSeries, Shrinkage, estimate_change, fit, fit_dynamic,
@@ -132,8 +132,11 @@ pub(crate) fn target_modality<S: Store>(
     Modality::new(&name).map_err(|e| AppError::Invalid(format!("modality {name:?}: {e}")))
 }
 
+/// One sensor's readings: times (seconds, ascending) and values.
+pub(crate) type Column = (Vec<UnixSeconds>, Vec<f64>);
+
 /// Per sensor: the times (seconds, ascending) and values of its readings.
-pub(crate) type Columns = Vec<(Vec<UnixSeconds>, Vec<f64>)>;
+pub(crate) type Columns = Vec<Column>;
 
 /// Per project sensor (sorted by id): times and values of one batch's readings.
 pub(crate) fn per_sensor(ids: &[SensorId], batch: &ReadingBatch) -> Columns {
@@ -346,12 +349,27 @@ fn fit_inner<S: Store>(
         .store()
         .readings_for(Some(modality), UnixSeconds::MIN..=at)?;
     let columns = per_sensor(&ids, &batch);
+    fit_on_columns(
+        &positions(&sensors, &field),
+        &columns,
+        modality,
+        with_changes,
+    )
+}
+
+/// [`fit_inner`] on per-sensor columns already read (times ascending, seconds), the sensors
+/// at `positions` (east/north metres).
+fn fit_on_columns(
+    positions: &[[f64; 2]],
+    columns: &Columns,
+    modality: &Modality,
+    with_changes: bool,
+) -> Result<(FieldModel, Option<IncrementModel>, i64)> {
     let times: Vec<Vec<UnixSeconds>> = columns.iter().map(|c| c.0.clone()).collect();
     let step = sampling_step(&times).max(1);
-    let positions = positions(&sensors, &field);
     let series: Vec<SensorSeries<'_>> = columns
         .iter()
-        .zip(&positions)
+        .zip(positions)
         .map(|((t, v), p)| SensorSeries {
             position: *p,
             times: t,
@@ -546,23 +564,13 @@ pub(crate) fn estimate_with<S: Store>(
         }
     };
     let positions = positions(&sensors, &field);
-    let observations: Vec<Observation> = latest
-        .iter()
-        .zip(&positions)
-        .zip(&model.means)
-        .filter_map(|((l, p), mean)| {
-            l.map(|(t, v)| Observation {
-                position: *p,
-                age_s: (at - t).max(0) as f64,
-                residual: v - mean,
-            })
-        })
-        .collect();
-    // Kriging of levels: the estimator itself, or for a sensor never read, ordinary.
-    let level_mean = match estimator {
-        Estimator::Levels(mean) => mean,
-        Estimator::Changes | Estimator::Dynamic => Mean::Unknown,
-    };
+    let kriging = KrigingInputs::new(
+        &positions,
+        (model, changes),
+        (&latest, &series),
+        at,
+        (neighbours, estimator),
+    );
     // The dynamic model: one filter pass over the window's readings.
     let mut filtered: Vec<(f64, f64)> = Vec::new();
     if let (Estimator::Dynamic, Some(model)) = (estimator, dynamic) {
@@ -575,35 +583,9 @@ pub(crate) fn estimate_with<S: Store>(
         .iter()
         .enumerate()
         .map(|(k, s)| {
-            let (kriged, variance) = match (estimator, latest[k]) {
-                (Estimator::Dynamic, _) if k < filtered.len() => filtered[k],
-                (Estimator::Levels(_) | Estimator::Dynamic, _) | (Estimator::Changes, None) => {
-                    let e = krige_with(
-                        &model.covariance,
-                        &observations,
-                        positions[k],
-                        neighbours,
-                        level_mean,
-                    );
-                    (model.means[k] + e.residual, e.variance)
-                }
-                (Estimator::Changes, Some((t_k, v_k))) => {
-                    let known = neighbour_changes(
-                        &series,
-                        &positions,
-                        (k, t_k),
-                        at,
-                        CHANGE_CANDIDATES.max(4 * neighbours),
-                    );
-                    let e = estimate_change(
-                        changes,
-                        &known,
-                        positions[k],
-                        ((t_k - at) as f64, 0.0),
-                        neighbours,
-                    );
-                    (v_k + e.change, e.variance)
-                }
+            let (kriged, variance) = match estimator {
+                Estimator::Dynamic if k < filtered.len() => filtered[k],
+                _ => kriging.estimate(k),
             };
             SensorEstimate {
                 sensor: s.id.clone(),
@@ -625,6 +607,98 @@ pub(crate) fn estimate_with<S: Store>(
         series,
     });
     Ok(estimates)
+}
+
+/// A sensor's latest known reading: time (s) and value, if any.
+type Latest = Option<(UnixSeconds, f64)>;
+
+/// What the kriging estimators need at one time: the sensors' positions (east/north m), the
+/// fitted models, each sensor's latest known reading (time s, value) and, for the kriging of
+/// changes, every sensor's readings in the change window (times ascending, s).
+struct KrigingInputs<'a> {
+    positions: &'a [[f64; 2]],
+    model: &'a FieldModel,
+    changes: &'a IncrementModel,
+    latest: &'a [Latest],
+    series: &'a [Column],
+    observations: Vec<Observation>,
+    at: UnixSeconds,
+    neighbours: usize,
+    estimator: Estimator,
+}
+
+impl<'a> KrigingInputs<'a> {
+    fn new(
+        positions: &'a [[f64; 2]],
+        (model, changes): (&'a FieldModel, &'a IncrementModel),
+        (latest, series): (&'a [Latest], &'a [Column]),
+        at: UnixSeconds,
+        (neighbours, estimator): (usize, Estimator),
+    ) -> Self {
+        let observations: Vec<Observation> = latest
+            .iter()
+            .zip(positions)
+            .zip(&model.means)
+            .filter_map(|((l, p), mean)| {
+                l.map(|(t, v)| Observation {
+                    position: *p,
+                    age_s: (at - t).max(0) as f64,
+                    residual: v - mean,
+                })
+            })
+            .collect();
+        Self {
+            positions,
+            model,
+            changes,
+            latest,
+            series,
+            observations,
+            at,
+            neighbours,
+            estimator,
+        }
+    }
+
+    /// Sensor `k`'s estimate (the modality's unit) and variance (its square) by the kriging
+    /// of changes or of levels; kriging of levels (ordinary) for a sensor never read and for
+    /// [`Estimator::Dynamic`] (whose caller answers from the filter).
+    fn estimate(&self, k: usize) -> (f64, f64) {
+        // Kriging of levels: the estimator itself, or for a sensor never read, ordinary.
+        let level_mean = match self.estimator {
+            Estimator::Levels(mean) => mean,
+            Estimator::Changes | Estimator::Dynamic => Mean::Unknown,
+        };
+        match (self.estimator, self.latest[k]) {
+            (Estimator::Levels(_) | Estimator::Dynamic, _) | (Estimator::Changes, None) => {
+                let e = krige_with(
+                    &self.model.covariance,
+                    &self.observations,
+                    self.positions[k],
+                    self.neighbours,
+                    level_mean,
+                );
+                (self.model.means[k] + e.residual, e.variance)
+            }
+            (Estimator::Changes, Some((t_k, v_k))) => {
+                let known = neighbour_changes(
+                    self.series,
+                    self.positions,
+                    (k, t_k),
+                    self.at,
+                    CHANGE_CANDIDATES.max(4 * self.neighbours),
+                );
+                let e = estimate_change(
+                    self.changes,
+                    &known,
+                    self.positions[k],
+                    ((t_k - self.at) as f64, 0.0),
+                    self.neighbours,
+                );
+                (v_k + e.change, e.variance)
+            }
+        }
+    }
 }
 
 /// The changes known over the unseen interval of sensor `k` (last read at `t_k`, estimated
@@ -732,7 +806,8 @@ pub fn reconstruct<S: Store>(
     })
 }
 
-/// What to reconstruct over a range of times (one fit, one filter pass).
+/// What to reconstruct over a range of times (one fit; for the dynamic model one filter
+/// pass).
 #[derive(Debug, Clone, Default)]
 pub struct ReconstructSeriesRequest {
     /// First estimation time, seconds.
@@ -743,16 +818,27 @@ pub struct ReconstructSeriesRequest {
     pub every_s: i64,
     /// The modality [default: the condition modality].
     pub modality: Option<String>,
+    /// The model-based estimator [default: [`Estimator::Changes`], as at one time].
+    pub estimator: Estimator,
+    /// Observations per kriging estimate [default: [`DEFAULT_NEIGHBOURS`]].
+    pub neighbours: Option<usize>,
+    /// Only the sensors of this cell [default: every sensor].
+    pub cell: Option<CellIndex>,
 }
 
 /// Most estimation times one series request may ask for.
 pub const MAX_SERIES_TIMES: usize = 200_000;
 
-/// Every sensor's dynamic-model estimate at a grid of times.
+/// Every sensor's estimate at a grid of times.
 #[derive(Debug, Clone)]
 pub struct ReconstructionSeries {
     /// The modality.
     pub modality: String,
+    /// The modality's unit as stored (e.g. `m3/m3`), if known.
+    pub unit: Option<String>,
+    /// The estimator used ([`Estimator::Dynamic`] falls back to [`Estimator::Changes`]
+    /// where the dynamic model cannot be fitted).
+    pub estimator: Estimator,
     /// Estimation times, seconds, ascending.
     pub times: Vec<UnixSeconds>,
     /// The sensors (columns), by id, with their WGS84 positions.
@@ -761,30 +847,53 @@ pub struct ReconstructionSeries {
     pub mean: Vec<f64>,
     /// Posterior variances, same layout, the unit squared (without the reading noise).
     pub variance: Vec<f64>,
-    /// The dynamic model (fitted on every reading stamped at or before `to`).
-    pub model: DynamicModel,
+    /// The dynamic model (fitted on every reading stamped at or before `to`), when it is
+    /// the estimator.
+    pub model: Option<DynamicModel>,
 }
 
+/// The standard normal's 95% quantile: a 90% interval is `mean ± Z90·sd`.
+pub const Z90: f64 = 1.644_853_626_951_472_2;
+
 impl ReconstructionSeries {
-    /// The 90% interval `mean ± 1.645·sd` of entry (time index, sensor index).
+    /// The 90% interval `mean ± 1.645·sd` of entry (time index, sensor index); under the
+    /// dynamic model the sd includes the reading noise.
     pub fn interval90(&self, t: usize, s: usize) -> (f64, f64) {
         let k = t * self.sensors.len() + s;
-        let half = 1.644_853_626_951_472_2 * (self.variance[k] + self.model.noise()).sqrt();
+        let noise = self.model.as_ref().map_or(0.0, DynamicModel::noise);
+        let half = Z90 * (self.variance[k].max(0.0) + noise).sqrt();
         (self.mean[k] - half, self.mean[k] + half)
     }
 }
 
+/// The unit stored for `modality` (e.g. `m3/m3`), if any.
+pub(crate) fn modality_unit<S: Store>(
+    project: &Project<S>,
+    modality: &Modality,
+) -> Result<Option<String>> {
+    Ok(project
+        .store()
+        .modalities()?
+        .into_iter()
+        .find(|m| m.modality == *modality)
+        .and_then(|m| m.unit))
+}
+
 /// The use case: every sensor's posterior mean and variance of the modality at each time
-/// `from, from + every, .., ≤ to`, by the dynamic field model. The model's parameters are
+/// `from, from + every, .., ≤ to`, by the request's estimator. The models' parameters are
 /// fitted once, on every reading stamped at or before `to`; each time's estimate uses only
-/// the readings stamped at or before it. Writes nothing.
+/// the readings stamped at or before it (the dynamic model in one filter pass; the kriging
+/// estimators from each sensor's latest reading by then, as [`reconstruct`] at that time).
+/// Writes nothing.
 ///
 /// Errors: `to` before `from`, a non-positive step, more than [`MAX_SERIES_TIMES`] times,
-/// no readings of the modality, a network the dynamic model cannot take.
+/// no readings of the modality, models that cannot be fitted, an unknown `cell`.
 pub fn reconstruct_series<S: Store>(
     project: &Project<S>,
     request: &ReconstructSeriesRequest,
 ) -> Result<ReconstructionSeries> {
+    crate::when::check("range start", Some(request.from))?;
+    crate::when::check("range end", Some(request.to))?;
     if request.to < request.from {
         return Err(AppError::Invalid(
             "the range ends before it starts (--to before --from)".into(),
@@ -807,7 +916,19 @@ pub fn reconstruct_series<S: Store>(
         .collect();
     let modality = target_modality(project, request.modality.as_deref())?;
     let sensors = project.sensors()?;
+    let (_, field) = project.field()?;
     let ids: Vec<SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
+    // The columns: every sensor, or the cell's.
+    let wanted: Vec<usize> = match request.cell {
+        None => (0..ids.len()).collect(),
+        Some(index) => {
+            let cell = field.cell_at(index).ok_or_else(|| AppError::NotFound {
+                what: "cell",
+                id: index.to_string(),
+            })?;
+            field.cells()[cell.index()].sensors.clone()
+        }
+    };
     let batch = project
         .store()
         .readings_for(Some(&modality), UnixSeconds::MIN..=request.to)?;
@@ -819,31 +940,90 @@ pub fn reconstruct_series<S: Store>(
     }
     let all_times: Vec<Vec<UnixSeconds>> = columns.iter().map(|c| c.0.clone()).collect();
     let step = sampling_step(&all_times).max(1);
-    // The model from the columns just read (they are every reading up to the range's end).
-    let model = dynamic_from_columns(&columns, step).ok_or_else(|| {
-        AppError::Invalid(format!(
-            "the dynamic field model cannot be fitted on {modality} here (more than {} sensors, or no two distinct readings)",
-            gleaner_kriging::MAX_DYNAMIC_SENSORS
-        ))
-    })?;
-    let start = request.from.saturating_sub(dynamic_window_s(&model));
-    let n = ids.len();
-    let mut mean = vec![0.0; times.len() * n];
-    let mut variance = vec![0.0; times.len() * n];
-    run_filter(&model, &columns, start, &times, |i, f| {
-        for k in 0..n {
-            let (m, v) = f.estimate(k);
-            mean[i * n + k] = m;
-            variance[i * n + k] = v;
+    // The dynamic model from the columns just read (they are every reading up to the
+    // range's end), when it is asked for.
+    let dynamic = match request.estimator {
+        Estimator::Dynamic => dynamic_from_columns(&columns, step),
+        _ => None,
+    };
+    let estimator = request.estimator.resolve(dynamic.as_ref());
+    let m = wanted.len();
+    let mut mean = vec![0.0; times.len() * m];
+    let mut variance = vec![0.0; times.len() * m];
+    match (&dynamic, estimator) {
+        (Some(model), Estimator::Dynamic) => {
+            let start = request.from.saturating_sub(dynamic_window_s(model));
+            run_filter(model, &columns, start, &times, |i, f| {
+                for (j, &k) in wanted.iter().enumerate() {
+                    let (mu, v) = f.estimate(k);
+                    mean[i * m + j] = mu;
+                    variance[i * m + j] = v;
+                }
+            });
         }
-    });
+        _ => {
+            let positions = positions(&sensors, &field);
+            let (levels, changes, _) = fit_on_columns(&positions, &columns, &modality, true)?;
+            let changes = changes.ok_or_else(|| AppError::Invalid("no model of changes".into()))?;
+            let neighbours = request.neighbours.unwrap_or(DEFAULT_NEIGHBOURS).max(1);
+            for (i, &at) in times.iter().enumerate() {
+                // What `estimate` reads at `at`: each sensor's latest reading by then and,
+                // for the kriging of changes, every reading from a margin before the
+                // stalest of them.
+                let latest: Vec<Option<(UnixSeconds, f64)>> = columns
+                    .iter()
+                    .map(|(t, v)| {
+                        let n = t.partition_point(|&x| x <= at);
+                        (n > 0).then(|| (t[n - 1], v[n - 1]))
+                    })
+                    .collect();
+                let series: Columns = match estimator {
+                    Estimator::Changes => {
+                        let needed = latest
+                            .iter()
+                            .flatten()
+                            .map(|l| l.0)
+                            .min()
+                            .unwrap_or(at)
+                            .saturating_sub(CHANGE_MARGIN_S);
+                        columns
+                            .iter()
+                            .map(|(t, v)| {
+                                let a = t.partition_point(|&x| x < needed);
+                                let b = t.partition_point(|&x| x <= at);
+                                (t[a..b].to_vec(), v[a..b].to_vec())
+                            })
+                            .collect()
+                    }
+                    _ => Vec::new(),
+                };
+                let kriging = KrigingInputs::new(
+                    &positions,
+                    (&levels, &changes),
+                    (&latest, &series),
+                    at,
+                    (neighbours, estimator),
+                );
+                for (j, &k) in wanted.iter().enumerate() {
+                    let (mu, v) = kriging.estimate(k);
+                    mean[i * m + j] = mu;
+                    variance[i * m + j] = v;
+                }
+            }
+        }
+    }
     Ok(ReconstructionSeries {
         modality: modality.to_string(),
+        unit: modality_unit(project, &modality)?,
+        estimator,
         times,
-        sensors: sensors.iter().map(|s| (s.id.clone(), s.position)).collect(),
+        sensors: wanted
+            .iter()
+            .map(|&k| (sensors[k].id.clone(), sensors[k].position))
+            .collect(),
         mean,
         variance,
-        model,
+        model: dynamic.filter(|_| estimator == Estimator::Dynamic),
     })
 }
 
@@ -1073,12 +1253,16 @@ mod tests {
             to: t0 + 40 * DAY,
             every_s: DAY,
             modality: Some("vw@30cm".into()),
+            estimator: Estimator::Dynamic,
+            ..Default::default()
         };
         let series = reconstruct_series(&project, &request).unwrap();
         let n = series.sensors.len();
         assert_eq!(series.times.len(), 11);
         assert_eq!(series.mean.len(), 11 * n);
-        let model = &series.model;
+        assert_eq!(series.estimator, Estimator::Dynamic);
+        assert_eq!(series.unit.as_deref(), Some("m3/m3"));
+        let model = series.model.as_ref().unwrap();
         let batch = project
             .store()
             .readings_for(
@@ -1119,5 +1303,68 @@ mod tests {
                 Err(AppError::Invalid(_))
             ));
         }
+        // The kriging estimators over a range: at each time what `reconstruct` gives then
+        // with the models fitted up to the range's end; at the end exactly `reconstruct`.
+        for estimator in [
+            Estimator::Changes,
+            Estimator::Levels(Mean::Unknown),
+            Estimator::Levels(Mean::Known),
+        ] {
+            let request = ReconstructSeriesRequest {
+                estimator,
+                ..request.clone()
+            };
+            let series = reconstruct_series(&project, &request).unwrap();
+            assert_eq!(series.estimator, estimator);
+            assert!(series.model.is_none());
+            let last = series.times.len() - 1;
+            let at_end = reconstruct(
+                &project,
+                &ReconstructRequest {
+                    at: Some(request.to),
+                    modality: request.modality.clone(),
+                    neighbours: None,
+                    estimator,
+                },
+            )
+            .unwrap();
+            for (k, e) in at_end.sensors.iter().enumerate() {
+                assert_eq!(series.mean[last * n + k], e.kriged, "{estimator:?} {k}");
+                assert_eq!(series.variance[last * n + k], e.variance);
+                let (lo, hi) = series.interval90(last, k);
+                let half = Z90 * e.variance.sqrt();
+                assert!((hi - lo - 2.0 * half).abs() < 1e-12);
+            }
+            assert!(series.mean.iter().all(|m| m.is_finite()));
+            assert!(series.variance.iter().all(|v| *v >= 0.0));
+        }
+        // One cell's sensors only: the same columns as in the whole field's series.
+        let (_, field) = project.field().unwrap();
+        let cell = &field.cells()[0];
+        let one = reconstruct_series(
+            &project,
+            &ReconstructSeriesRequest {
+                cell: Some(cell.index),
+                ..request.clone()
+            },
+        )
+        .unwrap();
+        assert_eq!(one.sensors.len(), cell.sensors.len());
+        for (j, &k) in cell.sensors.iter().enumerate() {
+            assert_eq!(one.sensors[j], series.sensors[k]);
+            for t in 0..series.times.len() {
+                assert_eq!(one.mean[t * one.sensors.len() + j], series.mean[t * n + k]);
+            }
+        }
+        assert!(matches!(
+            reconstruct_series(
+                &project,
+                &ReconstructSeriesRequest {
+                    cell: Some(CellIndex { i: 9_999, j: 9_999 }),
+                    ..request.clone()
+                }
+            ),
+            Err(AppError::NotFound { what: "cell", .. })
+        ));
     }
 }

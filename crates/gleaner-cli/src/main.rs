@@ -391,10 +391,18 @@ long from the sensors read now; docs/method.md §7); --levels: ordinary kriging 
 separable exponential space-time covariance with a temporal nugget); --simple: simple kriging
 of levels.
 
---from/--to/--every-hours: every sensor's dynamic-model mean, sd and 90% interval at each
-time of a range (one fit on the readings up to --to; each time uses only readings stamped at
-or before it) as CSV (time,sensor,mean,sd,lo90,hi90), or with --json the
-`gleaner.reconstruction-series` document.
+--from/--to/--every-hours: every sensor's mean, sd and 90% interval (mean ± 1.645·sd) at each
+time of a range, by the same estimator (one fit on the readings up to --to; each time uses only
+readings stamped at or before it) as CSV (time,sensor,mean,sd,lo90,hi90), or with --json the
+`gleaner.reconstruction-series` document (as GET /api/v1/reconstruct?from=..&to=..).
+
+--map FILE.svg|FILE.png: the map of the estimated field at --at, a two-panel figure for a paper
+(178 mm wide; the PNG at 300 dpi): left the estimate, right its uncertainty (the posterior sd),
+each cell coloured by its sensors' mean on a colour-blind-safe scale (viridis; reversed magma)
+with a colour bar in the modality's unit; sensors read within one sampling step before the time
+are dark discs, those only estimated white diamonds; the field's outline, a scale bar in
+metres, a north arrow, and the modality, time (UTC) and estimator in the title (as GET
+/api/v1/reconstruct/map.svg, .png).
 
 --json: the `gleaner.reconstruction` document (as GET /api/v1/reconstruct): sd = the model's
 standard deviation, positions WGS84 [lon, lat].
@@ -402,7 +410,9 @@ standard deviation, positions WGS84 [lon, lat].
 Examples:
   gleaner reconstruct --project caf --at 2014-03-01 --modality vw@30cm
   gleaner reconstruct --project caf --at 2014-03-01 --json
-  gleaner reconstruct --project caf --from 2015-02-11 --to 2015-03-04 --every-hours 1 --out vw30.csv"
+  gleaner reconstruct --project caf --from 2015-02-11 --to 2015-03-04 --every-hours 1 --out vw30.csv
+  gleaner reconstruct --project caf --at 2014-03-01 --map vw30-2014-03-01.svg
+  gleaner reconstruct --project caf --at 2014-03-01 --dynamic --map vw30-2014-03-01.png"
     )]
     Reconstruct {
         #[command(flatten)]
@@ -429,9 +439,9 @@ Examples:
         /// of changes.
         #[arg(long, conflicts_with_all = ["simple", "levels"])]
         dynamic: bool,
-        /// Reconstruct over a range instead of at one time, by the dynamic field model: the
-        /// first estimation time (RFC 3339 or date; needs --to).
-        #[arg(long, value_parser = parse_time, requires = "to", conflicts_with_all = ["at", "simple", "levels"])]
+        /// Reconstruct over a range instead of at one time: the first estimation time
+        /// (RFC 3339 or date; needs --to).
+        #[arg(long, value_parser = parse_time, requires = "to", conflicts_with_all = ["at", "map"])]
         from: Option<i64>,
         /// The range's last estimation time (RFC 3339 or date).
         #[arg(long, value_parser = parse_time, requires = "from")]
@@ -447,6 +457,10 @@ Examples:
         /// instead of the table.
         #[arg(long)]
         json: bool,
+        /// Draw the map of the estimate and its uncertainty at --at into this file: SVG or
+        /// PNG by its extension (`.svg`, `.png`).
+        #[arg(long, value_name = "FILE", conflicts_with = "json")]
+        map: Option<PathBuf>,
     },
 }
 
@@ -1030,8 +1044,49 @@ fn run(cli: Cli) -> Result<()> {
             every_hours,
             out,
             json,
+            map,
         } => {
             let p = project.open()?;
+            let estimator = if dynamic {
+                app::Estimator::Dynamic
+            } else if simple {
+                app::Estimator::Levels(gleaner_kriging::Mean::Known)
+            } else if levels {
+                app::Estimator::Levels(gleaner_kriging::Mean::Unknown)
+            } else {
+                app::Estimator::Changes
+            };
+            if let Some(path) = map {
+                let kind = reconstruct::MapFile::of(&path)?;
+                let m = app::reconstruct_map(
+                    &p,
+                    &app::ReconstructMapRequest {
+                        reconstruct: app::ReconstructRequest {
+                            at,
+                            modality,
+                            neighbours: Some(neighbours),
+                            estimator,
+                        },
+                        read_within_s: None,
+                    },
+                )?;
+                let bytes =
+                    reconstruct::map_file(&gleaner_wire::convert::reconstruction_map(&m), kind)?;
+                std::fs::write(&path, bytes)
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+                outln(&format!(
+                    "{}: {} at {} ({}), {} cells, {} of {} sensors read within {} s",
+                    path.display(),
+                    m.reconstruction.modality,
+                    app::format_rfc3339(m.reconstruction.at),
+                    m.reconstruction.estimator.name(),
+                    m.cells.len(),
+                    m.read.iter().filter(|&&r| r).count(),
+                    m.read.len(),
+                    m.read_within_s
+                ))?;
+                return Ok(());
+            }
             if let (Some(from), Some(to)) = (from, to) {
                 if !(every_hours.is_finite() && every_hours > 0.0 && every_hours <= 24.0 * 3660.0) {
                     anyhow::bail!(
@@ -1045,6 +1100,9 @@ fn run(cli: Cli) -> Result<()> {
                         to,
                         every_s: ((every_hours * 3600.0).round() as i64).max(1),
                         modality,
+                        estimator,
+                        neighbours: Some(neighbours),
+                        cell: None,
                     },
                 )?;
                 if json {
@@ -1074,15 +1132,7 @@ fn run(cli: Cli) -> Result<()> {
                     at,
                     modality,
                     neighbours: Some(neighbours),
-                    estimator: if dynamic {
-                        app::Estimator::Dynamic
-                    } else if simple {
-                        app::Estimator::Levels(gleaner_kriging::Mean::Known)
-                    } else if levels {
-                        app::Estimator::Levels(gleaner_kriging::Mean::Unknown)
-                    } else {
-                        app::Estimator::Changes
-                    },
+                    estimator,
                 },
             )?;
             emit(

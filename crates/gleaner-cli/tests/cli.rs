@@ -1141,6 +1141,81 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
         &from,
     ]);
     assert!(err.contains("ends before it starts"), "{err}");
+
+    // The kriging of levels over the same range: its own estimator in the document.
+    let levels: serde_json::Value = serde_json::from_str(&ok(&[
+        "reconstruct",
+        "--project",
+        s(&p),
+        "--from",
+        &from,
+        "--to",
+        &to,
+        "--every-hours",
+        "3",
+        "--levels",
+        "--json",
+    ]))
+    .expect("JSON");
+    assert_eq!(levels["estimator"], "levels");
+    assert!(levels["model"].is_null());
+    assert_eq!(series["estimator"], "changes");
+
+    // The map of the estimate and its uncertainty: SVG and PNG by the extension.
+    let svg_path = dir.path().join("field.svg");
+    let printed = ok(&[
+        "reconstruct",
+        "--project",
+        s(&p),
+        "--at",
+        &to,
+        "--map",
+        s(&svg_path),
+    ]);
+    assert!(
+        printed.contains("vw@30cm") && printed.contains("sensors read"),
+        "{printed}"
+    );
+    let svg = std::fs::read_to_string(&svg_path).expect("field.svg");
+    assert!(svg.starts_with("<svg") && svg.contains(r#"width="178mm""#));
+    for id in [
+        "panel-value",
+        "panel-sd",
+        "value-outline",
+        "north-arrow",
+        "scale-bar",
+    ] {
+        assert!(svg.contains(&format!(r#"id="{id}""#)), "no #{id}");
+    }
+    let cells = svg.matches(r#"id="value-cell-"#).count();
+    assert!(cells > 0 && cells == svg.matches(r#"id="sd-cell-"#).count());
+    // Every sensor is marked on both panels, read or estimated.
+    let marked = svg.matches(r#"class="sensor-read""#).count()
+        + svg.matches(r#"class="sensor-estimated""#).count();
+    assert_eq!(marked, 2 * 12);
+    let png_path = dir.path().join("field.PNG");
+    ok(&[
+        "reconstruct",
+        "--project",
+        s(&p),
+        "--at",
+        &to,
+        "--dynamic",
+        "--map",
+        s(&png_path),
+    ]);
+    let png = std::fs::read(&png_path).expect("field.PNG");
+    assert_eq!(&png[1..4], b"PNG");
+    // 178 mm at 300 dpi.
+    assert_eq!(u32::from_be_bytes(png[16..20].try_into().unwrap()), 2102);
+    let err = fail(&[
+        "reconstruct",
+        "--project",
+        s(&p),
+        "--map",
+        s(&dir.path().join("field.pdf")),
+    ]);
+    assert!(err.contains(".svg or .png"), "{err}");
 }
 
 #[test]

@@ -1,5 +1,6 @@
-//! Renders the example mission figure and exploration map into a directory: SVG (text as
-//! text, DejaVu Sans), SVG with the text outlined (needs no font: for PDF/LaTeX) and PNG.
+//! Renders the example mission figure, exploration map and reconstruction map into a
+//! directory: SVG (text as text, DejaVu Sans), SVG with the text outlined (needs no font:
+//! for PDF/LaTeX) and PNG.
 //!
 //! ```text
 //! cargo run -p gleaner-render --example figure1 -- [OUT_DIR] [WIDTH_PX]
@@ -9,7 +10,8 @@
 use std::path::PathBuf;
 
 use gleaner_render::{
-    FigureOptions, example, exploration_map_svg, mission_figure_svg, outline_text, svg_to_png,
+    FULL_WIDTH_MM, FigureOptions, example, exploration_map_svg, mission_figure_svg, outline_text,
+    png_width_px, reconstruction_map_svg, svg_to_png,
 };
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -31,8 +33,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "exploration-example",
             exploration_map_svg(&field, &example::exploration(), &opts)?,
         ),
+        (
+            "reconstruction-map-example",
+            reconstruction_map_svg(
+                &example::reconstruction_map(),
+                &FigureOptions {
+                    width_mm: FULL_WIDTH_MM,
+                    ..FigureOptions::default()
+                },
+            )?,
+        ),
     ];
     for (name, svg) in figures {
+        // The full-width figure keeps the column figures' resolution.
+        let width_px = if name.starts_with("reconstruction") {
+            png_width_px(FULL_WIDTH_MM, f64::from(width_px) / (85.0 / 25.4))
+        } else {
+            width_px
+        };
         let svg_path = dir.join(format!("{name}.svg"));
         let png_path = dir.join(format!("{name}.png"));
         let outlined_path = dir.join(format!("{name}-outlined.svg"));

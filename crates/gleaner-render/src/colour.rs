@@ -1,5 +1,6 @@
-//! Colours: the sequential map for S (viridis: perceptually uniform, readable in grey and by
-//! colour-blind readers) and the qualitative palette for sorties (Okabe & Ito).
+//! Colours: the sequential maps for values (viridis) and uncertainty (reversed magma), both
+//! perceptually uniform and readable in grey and by colour-blind readers, and the qualitative
+//! palette for sorties (Okabe & Ito).
 
 /// An sRGB colour.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,34 +39,74 @@ const VIRIDIS: [Rgb; 11] = [
     Rgb(0xfd, 0xe7, 0x25),
 ];
 
+/// Magma (perceptually uniform, readable in grey and by colour-blind readers) at 1, 0.9,
+/// ..., 0.2: light for small values, dark purple for large ones; its near-black end is left
+/// out so dark markers stay visible on every cell.
+const MAGMA_REVERSED: [Rgb; 9] = [
+    Rgb(0xfc, 0xfd, 0xbf),
+    Rgb(0xfe, 0xcf, 0x92),
+    Rgb(0xfe, 0x9f, 0x6d),
+    Rgb(0xf7, 0x70, 0x5c),
+    Rgb(0xde, 0x49, 0x68),
+    Rgb(0xb7, 0x37, 0x79),
+    Rgb(0x8c, 0x29, 0x81),
+    Rgb(0x64, 0x1a, 0x80),
+    Rgb(0x3b, 0x0f, 0x70),
+];
+
+/// A colour map through equally spaced anchors.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ColourMap(&'static [Rgb]);
+
+/// Viridis: the figures' sequential map for values (S, an estimated field).
+pub(crate) const VALUE_MAP: ColourMap = ColourMap(&VIRIDIS);
+
+/// Reversed magma without its darkest part: the sequential map for uncertainty (light =
+/// well known, dark = uncertain), distinct from [`VALUE_MAP`] at a glance.
+pub(crate) const UNCERTAINTY_MAP: ColourMap = ColourMap(&MAGMA_REVERSED);
+
+impl ColourMap {
+    /// The colour of `t` in [0, 1] (clamped; NaN maps to 0).
+    pub(crate) fn at(self, t: f64) -> Rgb {
+        let anchors = self.0;
+        let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
+        let x = t * (anchors.len() - 1) as f64;
+        let k = (x.floor() as usize).min(anchors.len() - 2);
+        let u = x - k as f64;
+        let (a, b) = (anchors[k], anchors[k + 1]);
+        let mix = |p: u8, q: u8| {
+            (f64::from(p) + (f64::from(q) - f64::from(p)) * u)
+                .round()
+                .clamp(0.0, 255.0) as u8
+        };
+        Rgb(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+    }
+
+    /// The `<stop>`s of an SVG gradient equal to [`ColourMap::at`] over [0, 1].
+    pub(crate) fn stops(self) -> String {
+        let n = self.0.len() - 1;
+        self.0
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                format!(
+                    r#"<stop offset="{}" stop-color="{}"/>"#,
+                    k as f64 / n as f64,
+                    c.hex()
+                )
+            })
+            .collect()
+    }
+}
+
 /// The sequential colour of `t` in [0, 1] (clamped; NaN maps to 0).
 pub(crate) fn sequential(t: f64) -> Rgb {
-    let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
-    let x = t * (VIRIDIS.len() - 1) as f64;
-    let k = (x.floor() as usize).min(VIRIDIS.len() - 2);
-    let u = x - k as f64;
-    let (a, b) = (VIRIDIS[k], VIRIDIS[k + 1]);
-    let mix = |p: u8, q: u8| {
-        (f64::from(p) + (f64::from(q) - f64::from(p)) * u)
-            .round()
-            .clamp(0.0, 255.0) as u8
-    };
-    Rgb(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+    VALUE_MAP.at(t)
 }
 
 /// The `<stop>`s of an SVG gradient equal to [`sequential`] over [0, 1].
 pub(crate) fn ramp_stops() -> String {
-    VIRIDIS
-        .iter()
-        .enumerate()
-        .map(|(k, c)| {
-            format!(
-                r#"<stop offset="{}" stop-color="{}"/>"#,
-                k as f64 / (VIRIDIS.len() - 1) as f64,
-                c.hex()
-            )
-        })
-        .collect()
+    VALUE_MAP.stops()
 }
 
 /// Okabe & Ito's colour-blind-safe qualitative palette, without its yellow (too light for
@@ -101,6 +142,23 @@ mod tests {
         assert_eq!(sequential(-3.0), VIRIDIS[0]);
         assert_eq!(sequential(f64::NAN), VIRIDIS[0]);
         assert_eq!(sequential(7.0).hex(), "#fde725");
+    }
+
+    #[test]
+    fn the_uncertainty_map_runs_from_light_to_dark() {
+        assert_eq!(UNCERTAINTY_MAP.at(0.0), MAGMA_REVERSED[0]);
+        assert_eq!(UNCERTAINTY_MAP.at(1.0), MAGMA_REVERSED[8]);
+        // Lightness falls monotonically along the map (a sequential scale in grey too).
+        let luma =
+            |c: Rgb| 0.2126 * f64::from(c.0) + 0.7152 * f64::from(c.1) + 0.0722 * f64::from(c.2);
+        for k in 1..=100 {
+            let (a, b) = (
+                UNCERTAINTY_MAP.at(f64::from(k - 1) / 100.0),
+                UNCERTAINTY_MAP.at(f64::from(k) / 100.0),
+            );
+            assert!(luma(b) <= luma(a) + 1e-9, "{k}");
+        }
+        assert_eq!(UNCERTAINTY_MAP.stops().matches("<stop").count(), 9);
     }
 
     #[test]

@@ -1,13 +1,15 @@
 //! A small built-in field and missions for examples, tests and documentation: 60 m cells
 //! over about 0.8 x 0.5 km near Pullman, WA (the CAF site's latitude), scores from smooth
 //! made-up fields, an eight-stop adaptive mission with the paper's headline energies
-//! (55,309.8 J of 66,500 J), and three exploration sorties covering every cell.
+//! (55,309.8 J of 66,500 J), three exploration sorties covering every cell, and a
+//! reconstruction of soil moisture over the field at one time.
 //!
 //! The numbers are illustrative, not model output: they exercise the figures.
 
+use gleaner_wire::docs::{MapCellDoc, MapSensorDoc, ReconstructionMapDoc};
 use gleaner_wire::{
-    CellDoc, EnergyDoc, FIELD_FORMAT, FieldDoc, MISSION_FORMAT, MissionDoc, ProfileDoc, ScoresDoc,
-    SensorDoc, StopDoc, VERSION,
+    CellDoc, EnergyDoc, FIELD_FORMAT, FieldDoc, MISSION_FORMAT, MissionDoc, ProfileDoc,
+    RECONSTRUCTION_MAP_FORMAT, ScoresDoc, SensorDoc, StopDoc, VERSION,
 };
 
 const BASE: [f64; 2] = [-117.0875, 46.7782];
@@ -283,4 +285,127 @@ pub fn exploration() -> Vec<MissionDoc> {
             )
         })
         .collect()
+}
+
+/// The boundary of the example field's cells as closed rings of `[lon, lat]`.
+fn outline() -> Vec<Vec<[f64; 2]>> {
+    use std::collections::{BTreeMap, HashSet};
+    let cells: HashSet<(i64, i64)> = grid().into_iter().collect();
+    let mut edges: BTreeMap<(i64, i64), Vec<(i64, i64)>> = BTreeMap::new();
+    for &(i, j) in &cells {
+        for (other, a, b) in [
+            ((i, j - 1), (i, j), (i + 1, j)),
+            ((i + 1, j), (i + 1, j), (i + 1, j + 1)),
+            ((i, j + 1), (i + 1, j + 1), (i, j + 1)),
+            ((i - 1, j), (i, j + 1), (i, j)),
+        ] {
+            if !cells.contains(&other) {
+                edges.entry(a).or_default().push(b);
+            }
+        }
+    }
+    edges.values_mut().for_each(|e| e.sort_unstable());
+    let corner = |(i, j): (i64, i64)| {
+        let (e, n) = sw_corner(i, j);
+        to_lon_lat(e, n)
+    };
+    let mut rings = Vec::new();
+    while let Some((&start, _)) = edges.iter().find(|(_, e)| !e.is_empty()) {
+        let mut ring = vec![corner(start)];
+        let mut at = start;
+        while let Some(next) = edges
+            .get_mut(&at)
+            .filter(|e| !e.is_empty())
+            .map(|e| e.remove(0))
+        {
+            ring.push(corner(next));
+            at = next;
+            if at == start {
+                break;
+            }
+        }
+        rings.push(ring);
+    }
+    rings
+}
+
+/// The example reconstruction: volumetric water content at 30 cm (m³/m³) on 2014-06-01
+/// at noon by kriging of changes, wetter to the north-east; sensors in about two cells of
+/// three read within the day, the others estimated with a larger sd.
+pub fn reconstruction_map() -> ReconstructionMapDoc {
+    let field = field();
+    let read = |id: &str| {
+        let h: i64 = id.bytes().map(i64::from).sum();
+        hash01(h, 17) > 0.33
+    };
+    let mut sensors = Vec::new();
+    for s in &field.sensors {
+        let (e, n) = {
+            let kx = M_PER_DEG_LAT * BASE[1].to_radians().cos();
+            (
+                (s.lon_lat[0] - BASE[0]) * kx,
+                (s.lon_lat[1] - BASE[1]) * M_PER_DEG_LAT,
+            )
+        };
+        let estimate = 0.18 + 0.12 * (e / 900.0) + 0.05 * (n / 500.0) + 0.02 * (e / 130.0).sin();
+        let is_read = read(&s.id);
+        sensors.push(MapSensorDoc {
+            sensor: s.id.clone(),
+            lon_lat: s.lon_lat,
+            estimate,
+            sd: if is_read {
+                0.002
+            } else {
+                0.008 + 0.012 * hash01(e as i64, n as i64)
+            },
+            last_reading: Some(
+                if is_read {
+                    "2014-06-01T00:00:00Z"
+                } else {
+                    "2014-05-20T00:00:00Z"
+                }
+                .into(),
+            ),
+            read: is_read,
+        });
+    }
+    let cells = field
+        .cells
+        .iter()
+        .map(|c| {
+            let (ix, iy) = {
+                let rest = c.cell.trim_start_matches('x');
+                let (i, j) = rest.split_once('y').unwrap_or(("0", "0"));
+                (i.parse::<i64>().unwrap_or(0), j.parse::<i64>().unwrap_or(0))
+            };
+            let prefix = format!("S{ix:02}{iy:02}");
+            let mine: Vec<&MapSensorDoc> = sensors
+                .iter()
+                .filter(|s| s.sensor.starts_with(&prefix))
+                .collect();
+            let n = mine.len().max(1) as f64;
+            MapCellDoc {
+                cell: c.cell.clone(),
+                ring_lon_lat: c.ring_lon_lat.clone(),
+                sensors: mine.iter().map(|s| s.sensor.clone()).collect(),
+                mean: mine.iter().map(|s| s.estimate).sum::<f64>() / n,
+                sd: (mine.iter().map(|s| s.sd * s.sd).sum::<f64>() / n).sqrt(),
+            }
+        })
+        .collect();
+    ReconstructionMapDoc {
+        format: RECONSTRUCTION_MAP_FORMAT.into(),
+        version: VERSION,
+        project: "example farm".into(),
+        at: "2014-06-01T12:00:00Z".into(),
+        modality: "vw@30cm".into(),
+        unit: Some("m3/m3".into()),
+        estimator: "changes".into(),
+        base_lon_lat: BASE,
+        cell_size_m: CELL_M,
+        read_within_s: 86_400,
+        cells,
+        sensors,
+        outline_lon_lat: outline(),
+    }
 }

@@ -56,15 +56,17 @@ pub(crate) fn formula(w: [f64; 4]) -> String {
     out
 }
 
-/// The colour scale of S: domain and ticks.
-struct ColourScale {
-    lo: f64,
-    hi: f64,
-    ticks: Vec<(f64, String)>,
+/// A colour scale (of S, or of an estimated field): domain and ticks.
+pub(crate) struct ColourScale {
+    pub(crate) lo: f64,
+    pub(crate) hi: f64,
+    pub(crate) ticks: Vec<(f64, String)>,
 }
 
 impl ColourScale {
-    fn new(values: &[f64]) -> Option<Self> {
+    /// The scale spanning `values` (widened around a single value); None without a finite
+    /// one.
+    pub(crate) fn new(values: &[f64]) -> Option<Self> {
         let (lo, hi) = values
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
@@ -87,7 +89,7 @@ impl ColourScale {
     }
 
     /// Ticks at least `min_gap` pt apart on a bar `len` pt long.
-    fn set_ticks(&mut self, len: f64, min_gap: f64) {
+    pub(crate) fn set_ticks(&mut self, len: f64, min_gap: f64) {
         let span = self.hi - self.lo;
         let mut step = ticks::nice_step(span / 10.0);
         for _ in 0..40 {
@@ -102,11 +104,13 @@ impl ColourScale {
         self.ticks.clear();
     }
 
-    fn t(&self, v: f64) -> f64 {
+    /// Where `v` lies on the scale, 0 at `lo`, 1 at `hi`.
+    pub(crate) fn t(&self, v: f64) -> f64 {
         (v - self.lo) / (self.hi - self.lo)
     }
 
-    fn label_width(&self, font: f64) -> f64 {
+    /// The widest tick label this scale can have, pt.
+    pub(crate) fn label_width(&self, font: f64) -> f64 {
         // Any tick set's labels are at most as wide as these.
         let d = ticks::decimals(ticks::nice_step((self.hi - self.lo) / 10.0));
         [self.lo, self.hi, -self.hi.abs().max(self.lo.abs())]

@@ -804,6 +804,12 @@ pub(crate) enum Symbol {
     Swatch(Rgb),
     /// A filled square and a route line over it (a sortie).
     Sortie(Rgb, Rgb, u32),
+    /// A sensor read at the map's time: a dark disc, radius pt.
+    SensorRead(f64),
+    /// A sensor only estimated: a white diamond, half-size pt.
+    SensorEstimated(f64),
+    /// The field's outline: a dark line.
+    Outline,
 }
 
 /// One legend entry.
@@ -904,6 +910,19 @@ fn draw_symbol(svg: &mut Svg, s: &Symbol, x: f64, cy: f64, font: f64) {
                 fill.hex()
             ));
             route_line(svg, &[(x, cy), (x + w, cy)], &line.hex(), dash_attr(*dash));
+        }
+        Symbol::SensorRead(r) => crate::reconstruction::sensor_marker(svg, cx, cy, *r, true, ""),
+        Symbol::SensorEstimated(r) => {
+            crate::reconstruction::sensor_marker(svg, cx, cy, *r, false, "")
+        }
+        Symbol::Outline => {
+            svg.line(format_args!(
+                r#"<line x1="{}" y1="{}" x2="{}" y2="{}" stroke="{INK}" stroke-width="0.9"/>"#,
+                N(x + 0.1 * w),
+                N(cy),
+                N(x + 0.9 * w),
+                N(cy)
+            ));
         }
     }
 }

@@ -6,15 +6,19 @@
 //!   and visiting order, the dashed return leg, the base, coordinate ticks, a north arrow, a
 //!   scale bar, a legend and the energy breakdown in kJ.
 //! - [`exploration_map_svg`]: the exploration sorties on one map, one colour per sortie.
+//! - [`reconstruction_map_svg`]: an estimated field and its uncertainty at one time, two
+//!   panels side by side (viridis for the value, reversed magma for the posterior sd, each
+//!   with a colour bar in the modality's unit), sensors read then told from those only
+//!   estimated, the field's outline, scale bar and north arrow.
 //! - [`line_chart_svg`] and [`interval_chart_svg`]: campaign report charts (a metric per
 //!   strategy over time or budget; means with 95% intervals).
 //! - [`svg_to_png`]: rasterises either with resvg, loading only the bundled DejaVu Sans
 //!   ([`FONT_FAMILY`]), so output is the same on every machine; [`outline_text`] turns the
 //!   text of a figure into outlines of that font for a vector file that needs no fonts.
 //!
-//! Inputs are the wire documents ([`FieldDoc`], [`MissionDoc`]); positions are WGS84
-//! `[lon, lat]` degrees, projected here onto a local equirectangular frame centred on the
-//! field's base station (metres east and north; north is up). That is accurate to well under
+//! Inputs are the wire documents ([`FieldDoc`], [`MissionDoc`], [`ReconstructionMapDoc`]);
+//! positions are WGS84 `[lon, lat]` degrees, projected here onto a local equirectangular
+//! frame centred on the field's base station (metres east and north; north is up). That is accurate to well under
 //! a pixel over a farm (a few km). Figures are sized in millimetres and laid out in points
 //! (1 pt = 1/72 in) with the real advance widths of the bundled font; output is deterministic
 //! (same input, same bytes).
@@ -38,6 +42,7 @@ mod figure;
 mod font;
 mod frame;
 mod png;
+mod reconstruction;
 mod svg;
 mod ticks;
 
@@ -48,12 +53,29 @@ pub use exploration::exploration_map_svg;
 pub use figure::mission_figure_svg;
 pub use font::FONT_FAMILY;
 pub use png::{MAX_PNG_SIDE_PX, outline_text, parse_svg, svg_to_png};
+pub use reconstruction::reconstruction_map_svg;
 
 /// The SVG parser used by [`parse_svg`] (resvg's), for inspecting parsed figures.
 pub use resvg::usvg;
 
 #[doc(no_inline)]
+pub use gleaner_wire::docs::ReconstructionMapDoc;
+#[doc(no_inline)]
 pub use gleaner_wire::{FieldDoc, MissionDoc};
+
+/// The full page width of a two-column paper, mm: the reconstruction map's usual width.
+pub const FULL_WIDTH_MM: f64 = 178.0;
+
+/// The PNG width, px, of a figure `width_mm` wide printed at `dpi` dots per inch (at least 1,
+/// at most [`MAX_PNG_SIDE_PX`]).
+pub fn png_width_px(width_mm: f64, dpi: f64) -> u32 {
+    let px = (width_mm / 25.4 * dpi).round();
+    if px.is_finite() {
+        px.clamp(1.0, f64::from(MAX_PNG_SIDE_PX)) as u32
+    } else {
+        1
+    }
+}
 
 /// What the map's coordinate ticks show.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -4,8 +4,8 @@
 
 use gleaner_render::usvg::{self, Node};
 use gleaner_render::{
-    Coordinates, FieldDoc, FigureOptions, MissionDoc, RenderError, example, exploration_map_svg,
-    mission_figure_svg, parse_svg, svg_to_png,
+    Coordinates, FieldDoc, FigureOptions, MissionDoc, ReconstructionMapDoc, RenderError, example,
+    exploration_map_svg, mission_figure_svg, parse_svg, reconstruction_map_svg, svg_to_png,
 };
 use resvg::tiny_skia::Pixmap;
 
@@ -546,6 +546,202 @@ fn arbitrary_numbers_never_panic() {
             parse_svg(&svg).unwrap();
         }
         if let Ok(svg) = exploration_map_svg(&f, std::slice::from_ref(&m), &opts) {
+            parse_svg(&svg).unwrap();
+        }
+    }
+}
+
+/// The reconstruction map at the full page width: both panels, one shape per cell in each,
+/// every sensor marked in each (read and estimated told apart), colour bars titled with the
+/// unit, outline, legend, north arrow, scale bar, the title's modality, time and estimator.
+#[test]
+fn reconstruction_map_has_both_panels() {
+    let doc = example::reconstruction_map();
+    let opts = FigureOptions {
+        width_mm: 178.0,
+        ..FigureOptions::default()
+    };
+    let svg = reconstruction_map_svg(&doc, &opts).unwrap();
+    let tree = parse_svg(&svg).unwrap();
+    let ids = ids(&tree);
+    for key in ["value", "sd"] {
+        let cells = ids
+            .iter()
+            .filter(|id| id.starts_with(&format!("{key}-cell-")))
+            .count();
+        assert_eq!(cells, doc.cells.len(), "{key}: one shape per cell");
+        for id in ["panel-", "-cells", "-outline", "-sensors", "-colour-bar"] {
+            let want = if id.ends_with('-') {
+                format!("{id}{key}")
+            } else {
+                format!("{key}{id}")
+            };
+            assert!(ids.contains(&want), "no #{want}");
+        }
+    }
+    for id in ["north-arrow", "scale-bar", "legend", "axes"] {
+        assert!(ids.iter().any(|i| i == id), "no #{id}");
+    }
+    let read = doc.sensors.iter().filter(|s| s.read).count();
+    assert!(read > 0 && read < doc.sensors.len());
+    assert_eq!(count(&svg, r#"class="sensor-read""#), 2 * read);
+    assert_eq!(
+        count(&svg, r#"class="sensor-estimated""#),
+        2 * (doc.sensors.len() - read)
+    );
+    assert_eq!(count(&svg, r#"class="legend-entry""#), 3);
+    let all = texts(&tree);
+    let has = |s: &str| all.iter().any(|(t, _)| t.contains(s));
+    assert!(has("Estimated VW at 30 cm"));
+    assert!(has("2014-06-01 12:00 UTC"));
+    assert!(has("kriging of changes"));
+    assert!(has("VW (m\u{b3}/m\u{b3})"), "value bar title with its unit");
+    assert!(has("sd (m\u{b3}/m\u{b3})"), "sd bar title with its unit");
+    assert!(has("(a) Estimate") && has("(b) Uncertainty"));
+    assert!(has("sensor read within 1 d before the time"));
+    assert!(has("sensor estimated only") && has("field outline"));
+    assert!(has(" m") && has("N"));
+    check_layout("reconstruction map", &svg, 7.0);
+    assert!(svg.contains(r#"width="178mm""#));
+    // A narrower page still lays out cleanly; so does a field in degrees.
+    for opts in [
+        FigureOptions {
+            width_mm: 130.0,
+            ..FigureOptions::default()
+        },
+        FigureOptions {
+            width_mm: 178.0,
+            coordinates: Coordinates::Degrees,
+            ..FigureOptions::default()
+        },
+    ] {
+        let svg = reconstruction_map_svg(&doc, &opts).unwrap();
+        check_layout(&format!("reconstruction map {opts:?}"), &svg, 7.0);
+    }
+}
+
+/// The figure's bytes are fixed: the snapshot holds the SVG of the example.
+#[test]
+fn reconstruction_map_snapshot() {
+    let opts = FigureOptions {
+        width_mm: 178.0,
+        ..FigureOptions::default()
+    };
+    let doc = example::reconstruction_map();
+    let svg = reconstruction_map_svg(&doc, &opts).unwrap();
+    assert_eq!(svg, reconstruction_map_svg(&doc, &opts).unwrap());
+    insta::assert_snapshot!("reconstruction-map.svg", svg);
+    // The PNG decodes at the asked width, opaque, with both colour maps' ends in it.
+    let png = svg_to_png(&svg, 1200).unwrap();
+    let pix = Pixmap::decode_png(&png).unwrap();
+    assert_eq!(pix.width(), 1200);
+    let size = parse_svg(&svg).unwrap().size();
+    let want = (f64::from(size.height()) * 1200.0 / f64::from(size.width())).round() as u32;
+    assert_eq!(pix.height(), want);
+    // Opaque (but for the last row, which the page may cover only in part), not blank.
+    let w = pix.width() as usize;
+    let rows = pix.pixels().len() / w;
+    assert!(
+        pix.pixels()[..(rows - 1) * w]
+            .iter()
+            .all(|p| p.alpha() == 255)
+    );
+    let near = |r: u8, g: u8, b: u8| {
+        pix.pixels().iter().any(|p| {
+            (i32::from(p.red()) - i32::from(r)).abs() < 24
+                && (i32::from(p.green()) - i32::from(g)).abs() < 24
+                && (i32::from(p.blue()) - i32::from(b)).abs() < 24
+        })
+    };
+    assert!(near(0x44, 0x01, 0x54), "viridis' dark end");
+    assert!(near(0xfd, 0xe7, 0x25), "viridis' light end");
+    assert!(near(0x3b, 0x0f, 0x70), "the uncertainty map's dark end");
+    assert_eq!(png, svg_to_png(&svg, 1200).unwrap());
+}
+
+/// Bad numbers are errors naming them; odd inputs (no cells, one cell, every sd 0, a
+/// constant field, no unit) still make clean figures; arbitrary numbers never panic.
+#[test]
+fn reconstruction_map_refuses_bad_numbers_and_survives_odd_inputs() {
+    let opts = FigureOptions {
+        width_mm: 178.0,
+        ..FigureOptions::default()
+    };
+    let base = example::reconstruction_map();
+    type Spoil = Box<dyn Fn(&mut ReconstructionMapDoc)>;
+    let cases: Vec<(Spoil, &str)> = vec![
+        (Box::new(|d| d.cells[3].mean = f64::NAN), "cell"),
+        (Box::new(|d| d.cells[2].sd = -0.1), "sd"),
+        (
+            Box::new(|d| d.sensors[1].estimate = f64::INFINITY),
+            "estimate",
+        ),
+        (Box::new(|d| d.sensors[0].lon_lat[1] = 95.0), "latitude"),
+        (
+            Box::new(|d| d.outline_lon_lat[0][2][0] = f64::NAN),
+            "outline",
+        ),
+        (Box::new(|d| d.cell_size_m = 0.0), "cell_size_m"),
+        (Box::new(|d| d.read_within_s = -1), "read_within_s"),
+        (Box::new(|d| d.base_lon_lat[0] = 200.0), "base"),
+    ];
+    for (spoil, what) in cases {
+        let mut d = base.clone();
+        spoil(&mut d);
+        let e = reconstruction_map_svg(&d, &opts).unwrap_err();
+        assert!(e.to_string().contains(what), "{what}: {e}");
+    }
+    let mut one = base.clone();
+    one.cells.truncate(1);
+    one.sensors.truncate(1);
+    let mut none = base.clone();
+    none.cells.clear();
+    none.sensors.clear();
+    none.outline_lon_lat.clear();
+    let mut flat = base.clone();
+    flat.unit = None;
+    flat.project.clear();
+    for c in &mut flat.cells {
+        c.mean = 0.25;
+        c.sd = 0.0;
+    }
+    for (name, d) in [("one cell", one), ("no cells", none), ("flat", flat)] {
+        let svg = reconstruction_map_svg(&d, &opts).unwrap();
+        check_layout(name, &svg, 7.0);
+    }
+    let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut next = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x
+    };
+    let specials = [
+        f64::NAN,
+        -1e308,
+        1e308,
+        0.0,
+        -0.0,
+        1e-300,
+        179.9,
+        -90.0,
+        1e6,
+    ];
+    for _ in 0..40 {
+        let mut d = base.clone();
+        for _ in 0..3 {
+            let v = specials[(next() % specials.len() as u64) as usize];
+            let c = (next() % d.cells.len() as u64) as usize;
+            let n = d.sensors.len();
+            match next() % 5 {
+                0 => d.cells[c].mean = v,
+                1 => d.cells[c].sd = v,
+                2 => d.cells[c].ring_lon_lat[1][0] = v,
+                3 => d.sensors[c % n].estimate = v,
+                _ => d.cell_size_m = v,
+            }
+        }
+        if let Ok(svg) = reconstruction_map_svg(&d, &opts) {
             parse_svg(&svg).unwrap();
         }
     }

@@ -256,6 +256,189 @@ function renderCell(d) {
     body.append(el("label", {}, "Recent series (60 days)", sel), holder);
     draw();
   }
+  estimatedSeries(c.cell, body);
+}
+
+// ---- a cell's estimated series with its 90% band ---------------------------------------------
+
+const SVG_NS = "http://www.w3.org/2000/svg";
+function svgEl(tag, attrs, text) {
+  const e = document.createElementNS(SVG_NS, tag);
+  for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, String(v));
+  if (text !== undefined) e.textContent = text;
+  return e;
+}
+
+// RFC 3339 without milliseconds (what the API takes).
+const isoSeconds = (ms) => new Date(ms).toISOString().replace(/\.\d{3}Z$/, "Z");
+
+// A unit as printed.
+function prettyUnit(u) {
+  if (!u) return "";
+  return u === "m3/m3" ? "m³/m³" : u === "degC" ? "°C" : u;
+}
+
+// Round tick values over [lo, hi]: about `n` of them.
+function niceTicks(lo, hi, n) {
+  const span = hi - lo;
+  if (!(span > 0)) return [lo];
+  const raw = span / n, mag = Math.pow(10, Math.floor(Math.log10(raw)));
+  const step = [1, 2, 5, 10].map((m) => m * mag).find((s) => s >= raw) || 10 * mag;
+  const out = [];
+  for (let v = Math.ceil(lo / step) * step; v <= hi + step * 1e-9; v += step) out.push(+v.toFixed(12));
+  return out;
+}
+
+// One sensor's chart: the 90% interval as a band, the mean as a line, readings as dots,
+// dated x axis and a y axis in the modality's unit.
+function bandChart(sensor, times, mean, lo, hi, readings, quantity, unit, estimator) {
+  const W = 360, H = 190, L = 46, R = 8, T = 16, B = 34;
+  const svg = svgEl("svg", { viewBox: `0 0 ${W} ${H}`, class: "estimate", "data-sensor": sensor, role: "img" });
+  const t0 = times[0], t1 = times[times.length - 1];
+  const values = lo.concat(hi, readings.map((r) => r[1])).filter((v) => Number.isFinite(v));
+  let v0 = Math.min(...values), v1 = Math.max(...values);
+  if (!(v1 > v0)) { v0 -= 0.01; v1 += 0.01; }
+  const pad = 0.05 * (v1 - v0);
+  v0 -= pad; v1 += pad;
+  const x = (t) => L + (t1 > t0 ? (t - t0) / (t1 - t0) : 0.5) * (W - L - R);
+  const y = (v) => T + (1 - (v - v0) / (v1 - v0)) * (H - T - B);
+  const f = (n) => n.toFixed(1);
+  svg.append(svgEl("text", { x: L, y: 11 }, `${sensor} · ${quantity} · ${estimator}`));
+  // Band: upper edge forwards, lower edge back.
+  let d = times.map((t, i) => (i ? "L" : "M") + f(x(t)) + " " + f(y(hi[i]))).join("");
+  for (let i = times.length - 1; i >= 0; i--) d += "L" + f(x(times[i])) + " " + f(y(lo[i]));
+  svg.append(svgEl("path", { class: "band", d: d + "Z" }));
+  svg.append(svgEl("polyline", { class: "mean", points: times.map((t, i) => f(x(t)) + "," + f(y(mean[i]))).join(" ") }));
+  const dots = svgEl("g", { class: "readings" });
+  for (const [t, v] of readings) dots.append(svgEl("circle", { class: "reading", cx: f(x(t)), cy: f(y(v)), r: 2 }));
+  svg.append(dots);
+  // Axes.
+  const xa = svgEl("g", { class: "axis x-axis" });
+  xa.append(svgEl("path", { d: `M${L} ${H - B}H${W - R}` }));
+  const days = (t1 - t0) / 86400e3;
+  const stepDays = days > 120 ? 30 : days > 45 ? 14 : days > 14 ? 7 : days > 4 ? 2 : 1;
+  const first = Math.ceil(t0 / 86400e3 / stepDays) * stepDays;
+  for (let k = first; k * 86400e3 <= t1; k += stepDays) {
+    const t = k * 86400e3, px = x(t);
+    xa.append(svgEl("line", { x1: f(px), y1: H - B, x2: f(px), y2: H - B + 3 }));
+    xa.append(svgEl("text", { x: f(px), y: H - B + 12, "text-anchor": "middle" }, new Date(t).toISOString().slice(5, 10)));
+  }
+  xa.append(svgEl("text", { x: f((L + W - R) / 2), y: H - 4, "text-anchor": "middle" },
+    `date (UTC), ${new Date(t0).toISOString().slice(0, 10)} to ${new Date(t1).toISOString().slice(0, 10)}`));
+  svg.append(xa);
+  const ya = svgEl("g", { class: "axis y-axis" });
+  ya.append(svgEl("path", { d: `M${L} ${T}V${H - B}` }));
+  const ticks = niceTicks(v0, v1, 4);
+  const dec = Math.max(0, Math.min(6, -Math.floor(Math.log10((ticks[1] - ticks[0]) || 1))));
+  for (const v of ticks) {
+    ya.append(svgEl("line", { x1: L - 3, y1: f(y(v)), x2: L, y2: f(y(v)) }));
+    ya.append(svgEl("text", { x: L - 5, y: f(y(v) + 3), "text-anchor": "end" }, v.toFixed(dec)));
+  }
+  const label = quantity.toUpperCase() + (unit ? ` (${unit})` : "");
+  ya.append(svgEl("text", { x: 10, y: f((T + H - B) / 2), "text-anchor": "middle", transform: `rotate(-90 10 ${f((T + H - B) / 2)})` }, label));
+  svg.append(ya);
+  return svg;
+}
+
+async function estimatedSeries(cellId, body) {
+  const latest = state.project && state.project.latest_reading;
+  if (!latest) return;
+  const range = el("select", { id: "estimate-range" },
+    el("option", { value: "7" }, "last 7 days"), el("option", { value: "30" }, "last 30 days"),
+    el("option", { value: "90" }, "last 90 days"));
+  range.value = "30";
+  const estimator = el("select", { id: "estimate-estimator" },
+    el("option", { value: "changes" }, "kriging of changes"), el("option", { value: "dynamic" }, "dynamic field model"),
+    el("option", { value: "levels" }, "kriging of levels"));
+  const holder = el("div", { id: "estimate-chart" }, el("p", { class: "muted" }, "Estimating…"));
+  body.append(el("h3", {}, "Estimated series"),
+    el("div", { class: "estimate-controls" }, el("label", {}, "Range (6-hour steps)", range), el("label", {}, "Estimator", estimator)),
+    holder,
+    el("p", { class: "muted" }, "Line: estimated mean; band: 90% interval; dots: readings. ",
+      el("a", { href: "#field-map-pane", class: "link", id: "estimate-field-map", onclick: (e) => { e.preventDefault(); showFieldMap(latest); } }, "Field map at the range's end")));
+  const draw = async () => {
+    const days = +range.value;
+    const to = Date.parse(latest), from = to - days * 86400e3;
+    holder.replaceChildren(el("p", { class: "muted" }, "Estimating…"));
+    try {
+      const q = `?from=${isoSeconds(from)}&to=${isoSeconds(to)}&every_hours=6&cell=${encodeURIComponent(cellId)}&estimator=${estimator.value}`;
+      const [doc, detail] = await Promise.all([
+        call("GET", "/reconstruct" + q),
+        call("GET", "/cells/" + encodeURIComponent(cellId) + "?days=" + (days + 1)),
+      ]);
+      if (state.selected !== cellId) return;
+      const times = doc.times.map((t) => Date.parse(t));
+      const unit = prettyUnit(doc.unit);
+      const quantity = doc.modality.split("@")[0];
+      const charts = doc.sensors.map((s, j) => {
+        const sr = detail.series.find((r) => r.sensor === s.sensor && r.modality === doc.modality);
+        const readings = sr ? sr.t.map((t, i) => [t * 1000, sr.values[i]]).filter((r) => r[0] >= from && r[0] <= to) : [];
+        return bandChart(s.sensor, times, doc.mean.map((r) => r[j]), doc.lo90.map((r) => r[j]), doc.hi90.map((r) => r[j]),
+          readings, quantity, unit, doc.estimator);
+      });
+      holder.replaceChildren(...charts, el("p", { class: "muted", id: "estimate-facts" },
+        `${doc.modality}: ${doc.times.length} estimates from ${doc.times[0]} to ${doc.times[doc.times.length - 1]}`));
+    } catch (e) {
+      holder.replaceChildren(el("p", { class: "error" }, e.message));
+    }
+  };
+  range.addEventListener("change", draw);
+  estimator.addEventListener("change", draw);
+  await draw();
+}
+
+// ---- the estimated field map -------------------------------------------------------------------
+
+async function fetchBlob(path) {
+  const headers = {};
+  if (token()) headers["Authorization"] = "Bearer " + token();
+  const r = await fetch(API + path, { headers });
+  if (!r.ok) {
+    let msg = r.status + " " + r.statusText;
+    try { const e = await r.json(); msg = e.reason + (e.field ? " (" + e.field + ")" : ""); } catch (_) { /* not JSON */ }
+    throw new Error(msg);
+  }
+  return r.blob();
+}
+
+function fieldMapQuery() {
+  const at = $("field-map-at").value.trim();
+  return at ? "?at=" + encodeURIComponent(at) : "";
+}
+
+async function showFieldMap(at) {
+  const pane = $("field-map-pane");
+  pane.hidden = false;
+  if (at !== undefined) $("field-map-at").value = at || "";
+  const box = $("field-map");
+  box.replaceChildren(el("p", { class: "muted" }, "Drawing the estimated field…"));
+  try {
+    const text = await (await fetchBlob("/reconstruct/map.svg" + fieldMapQuery())).text();
+    const doc = new DOMParser().parseFromString(text, "image/svg+xml");
+    const svg = document.importNode(doc.documentElement, true);
+    svg.removeAttribute("width");
+    svg.removeAttribute("height");
+    svg.setAttribute("role", "img");
+    svg.setAttribute("id", "field-map-svg-figure");
+    box.replaceChildren(svg);
+    pane.scrollIntoView({ block: "nearest" });
+  } catch (e) {
+    box.replaceChildren(el("p", { class: "error" }, e.message));
+  }
+}
+
+async function downloadFieldMap(ext) {
+  try {
+    const blob = await fetchBlob("/reconstruct/map." + ext + fieldMapQuery());
+    const url = URL.createObjectURL(blob);
+    const a = el("a", { href: url, download: "field-map." + ext });
+    document.body.append(a);
+    a.click();
+    a.remove();
+    setTimeout(() => URL.revokeObjectURL(url), 10000);
+  } catch (e) {
+    status("Field map: " + e.message, "error");
+  }
 }
 
 // ---- planning --------------------------------------------------------------------------------
@@ -437,6 +620,10 @@ async function start() {
   $("colour-by").addEventListener("change", (e) => { state.colourBy = e.target.value; colourCells(); });
   $("plan-form").addEventListener("submit", preview);
   $("save").addEventListener("click", save);
+  $("field-map-button").addEventListener("click", () => showFieldMap());
+  $("field-map-redraw").addEventListener("click", () => showFieldMap());
+  $("field-map-png").addEventListener("click", () => downloadFieldMap("png"));
+  $("field-map-svg").addEventListener("click", () => downloadFieldMap("svg"));
   wireUpload();
   try {
     await refresh();

@@ -249,6 +249,8 @@ fn api_routes(max_upload_bytes: usize) -> (Router<AppState>, utoipa::openapi::Op
         .routes(routes!(handlers::cell))
         .routes(routes!(handlers::score))
         .routes(routes!(handlers::reconstruct))
+        .routes(routes!(handlers::reconstruct_map_svg))
+        .routes(routes!(handlers::reconstruct_map_png))
         .routes(routes!(handlers::simulate))
         .routes(routes!(handlers::missions))
         .routes(routes!(handlers::mission))

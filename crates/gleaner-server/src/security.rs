@@ -134,13 +134,17 @@ pub async fn method_not_allowed(method: Method) -> Response {
 
 /// Query parameters the API defines, logged with their values; any other parameter is logged
 /// by name only, so a token put in a query string never reaches the log.
-const LOGGED_PARAMETERS: [&str; 6] = [
+const LOGGED_PARAMETERS: [&str; 10] = [
     "at",
     "modality",
     "neighbours",
     "estimator",
     "days",
     "mission",
+    "from",
+    "to",
+    "every_hours",
+    "cell",
 ];
 
 /// A query string with the value of every parameter the API does not define replaced by `…`.

@@ -2,8 +2,8 @@
 
 use gleaner_app::{
     CellView, Estimator, Exploration, FieldView, MissionExport, MissionId, MissionKind,
-    MissionRecord, MissionStatus, NewMission, PlannedMission, Reconstruction, ReconstructionSeries,
-    Scoring, driver,
+    MissionRecord, MissionStatus, NewMission, PlannedMission, Reconstruction, ReconstructionMap,
+    ReconstructionSeries, Scoring, driver,
 };
 use gleaner_ingest::time::format_rfc3339;
 
@@ -304,13 +304,14 @@ pub fn reconstruction_series(r: &ReconstructionSeries) -> crate::docs::Reconstru
         format: crate::RECONSTRUCTION_SERIES_FORMAT.into(),
         version: VERSION,
         modality: r.modality.clone(),
-        estimator: Estimator::Dynamic.name().into(),
-        model: crate::docs::DynamicModelDoc {
-            phi: r.model.phi(),
-            step_s: r.model.step_s(),
-            shrinkage: r.model.shrinkage(),
-            noise: r.model.noise(),
-        },
+        unit: r.unit.clone(),
+        estimator: r.estimator.name().into(),
+        model: r.model.as_ref().map(|m| crate::docs::DynamicModelDoc {
+            phi: m.phi(),
+            step_s: m.step_s(),
+            shrinkage: m.shrinkage(),
+            noise: m.noise(),
+        }),
         times: r.times.iter().map(|&t| format_rfc3339(t)).collect(),
         sensors: r
             .sensors
@@ -321,9 +322,64 @@ pub fn reconstruction_series(r: &ReconstructionSeries) -> crate::docs::Reconstru
             })
             .collect(),
         mean: grid(&|t, s| r.mean[t * n + s]),
-        sd: grid(&|t, s| r.variance[t * n + s].sqrt()),
+        sd: grid(&|t, s| r.variance[t * n + s].max(0.0).sqrt()),
         lo90: grid(&|t, s| r.interval90(t, s).0),
         hi90: grid(&|t, s| r.interval90(t, s).1),
+    }
+}
+
+/// A reconstruction's map: cells with their mean and sd, sensors with their estimate and
+/// whether they were read at the time, the outline.
+pub fn reconstruction_map(m: &ReconstructionMap) -> crate::docs::ReconstructionMapDoc {
+    let r = &m.reconstruction;
+    crate::docs::ReconstructionMapDoc {
+        format: crate::RECONSTRUCTION_MAP_FORMAT.into(),
+        version: VERSION,
+        project: m.project.clone(),
+        at: format_rfc3339(r.at),
+        modality: r.modality.clone(),
+        unit: m.unit.clone(),
+        estimator: r.estimator.name().into(),
+        base_lon_lat: lon_lat(m.base),
+        cell_size_m: m.cell_size_m,
+        read_within_s: m.read_within_s,
+        cells: m
+            .cells
+            .iter()
+            .map(|c| {
+                let mut ring: Vec<[f64; 2]> = c.corners.iter().map(|&p| lon_lat(p)).collect();
+                ring.push(lon_lat(c.corners[0]));
+                crate::docs::MapCellDoc {
+                    cell: c.index.to_string(),
+                    ring_lon_lat: ring,
+                    sensors: c
+                        .sensors
+                        .iter()
+                        .map(|&k| r.sensors[k].sensor.as_str().to_string())
+                        .collect(),
+                    mean: c.mean,
+                    sd: c.sd,
+                }
+            })
+            .collect(),
+        sensors: r
+            .sensors
+            .iter()
+            .zip(&m.read)
+            .map(|(s, &read)| crate::docs::MapSensorDoc {
+                sensor: s.sensor.as_str().to_string(),
+                lon_lat: lon_lat(s.position),
+                estimate: s.kriged,
+                sd: s.variance.max(0.0).sqrt(),
+                last_reading: s.last_time.map(format_rfc3339),
+                read,
+            })
+            .collect(),
+        outline_lon_lat: m
+            .outline
+            .iter()
+            .map(|ring| ring.iter().map(|&p| lon_lat(p)).collect())
+            .collect(),
     }
 }
 

@@ -245,8 +245,9 @@ pub struct ReconstructionDoc {
     pub sensors: Vec<SensorEstimateDoc>,
 }
 
-/// Every sensor's dynamic-model estimate over a range of times (`gleaner reconstruct
-/// --from .. --to .. --json`): rows are times, columns the sensors in `sensors`' order.
+/// Every sensor's estimate over a range of times (`gleaner reconstruct --from .. --to ..
+/// --json`, `GET /api/v1/reconstruct?from=..&to=..`): rows are times, columns the sensors in
+/// `sensors`' order.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ReconstructionSeriesDoc {
@@ -256,11 +257,16 @@ pub struct ReconstructionSeriesDoc {
     pub version: u32,
     /// The modality (e.g. `vw@30cm`).
     pub modality: String,
-    /// Always `dynamic` (the dynamic field model).
+    /// The modality's unit as stored (e.g. `m3/m3`), if known.
+    #[serde(default)]
+    pub unit: Option<String>,
+    /// `changes` (kriging of changes), `levels` (ordinary kriging of levels), `simple`
+    /// (simple kriging of levels) or `dynamic` (the dynamic field model).
     pub estimator: String,
-    /// The model: lag-one persistence per step, the step (s), the shrinkage intensity of
-    /// the correlations, the reading noise variance (unit²).
-    pub model: DynamicModelDoc,
+    /// The dynamic model, when it is the estimator: lag-one persistence per step, the step
+    /// (s), the shrinkage intensity of the correlations, the reading noise variance (unit²);
+    /// null for the other estimators.
+    pub model: Option<DynamicModelDoc>,
     /// Estimation times, RFC 3339 UTC.
     pub times: Vec<String>,
     /// Sensor ids and WGS84 positions [lon, lat].
@@ -269,10 +275,82 @@ pub struct ReconstructionSeriesDoc {
     pub mean: Vec<Vec<f64>>,
     /// Posterior standard deviations, same layout, the unit.
     pub sd: Vec<Vec<f64>>,
-    /// Lower ends of the 90% intervals, same layout.
+    /// Lower ends of the 90% intervals (mean ± 1.645·sd; under the dynamic model the sd
+    /// includes the reading noise), same layout.
     pub lo90: Vec<Vec<f64>>,
     /// Upper ends of the 90% intervals, same layout.
     pub hi90: Vec<Vec<f64>>,
+}
+
+/// The map of a reconstruction at one time (`gleaner reconstruct --at T --map F`,
+/// `GET /api/v1/reconstruct/map.svg`): every cell's estimated value and its uncertainty,
+/// every sensor's estimate and whether it was read at the time, the field's outline. The
+/// input of the reconstruction figure.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ReconstructionMapDoc {
+    /// Always [`crate::RECONSTRUCTION_MAP_FORMAT`].
+    pub format: String,
+    /// Always [`crate::VERSION`] when written by this build.
+    pub version: u32,
+    /// Project name.
+    pub project: String,
+    /// Estimation time, RFC 3339 UTC.
+    pub at: String,
+    /// The modality (e.g. `vw@30cm`).
+    pub modality: String,
+    /// The modality's unit as stored (e.g. `m3/m3`), if known.
+    pub unit: Option<String>,
+    /// `changes`, `levels`, `simple` or `dynamic` (as [`ReconstructionDoc::estimator`]).
+    pub estimator: String,
+    /// Base station, WGS84 [lon, lat] degrees.
+    pub base_lon_lat: [f64; 2],
+    /// Cell side, m.
+    pub cell_size_m: f64,
+    /// A sensor counts as read at the time when its latest reading is at most this long
+    /// before it, s.
+    pub read_within_s: i64,
+    /// The cells, by grid index.
+    pub cells: Vec<MapCellDoc>,
+    /// The sensors, by id.
+    pub sensors: Vec<MapSensorDoc>,
+    /// The field's outline (the boundary of its cells' union) as closed rings, WGS84
+    /// [lon, lat] degrees.
+    pub outline_lon_lat: Vec<Vec<[f64; 2]>>,
+}
+
+/// A cell of a [`ReconstructionMapDoc`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct MapCellDoc {
+    /// Cell id (`x12y-3`).
+    pub cell: String,
+    /// The square, closed (first corner repeated), WGS84 [lon, lat] degrees.
+    pub ring_lon_lat: Vec<[f64; 2]>,
+    /// Its sensors' ids.
+    pub sensors: Vec<String>,
+    /// The mean of its sensors' estimates, the modality's unit.
+    pub mean: f64,
+    /// The root mean of its sensors' posterior variances, the modality's unit.
+    pub sd: f64,
+}
+
+/// A sensor of a [`ReconstructionMapDoc`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct MapSensorDoc {
+    /// Sensor id.
+    pub sensor: String,
+    /// Position, WGS84 [lon, lat] degrees.
+    pub lon_lat: [f64; 2],
+    /// Model-based estimate, the modality's unit.
+    pub estimate: f64,
+    /// Its posterior standard deviation, the modality's unit.
+    pub sd: f64,
+    /// Its latest known reading's time, RFC 3339 UTC (none: never read).
+    pub last_reading: Option<String>,
+    /// Whether it was read at the time (within `read_within_s`).
+    pub read: bool,
 }
 
 /// The dynamic field model's parameters in a [`ReconstructionSeriesDoc`].

@@ -147,6 +147,8 @@ pub const FIELD_FORMAT: &str = "gleaner.field";
 pub const RECONSTRUCTION_FORMAT: &str = "gleaner.reconstruction";
 /// `format` of [`docs::ReconstructionSeriesDoc`].
 pub const RECONSTRUCTION_SERIES_FORMAT: &str = "gleaner.reconstruction-series";
+/// `format` of [`docs::ReconstructionMapDoc`].
+pub const RECONSTRUCTION_MAP_FORMAT: &str = "gleaner.reconstruction-map";
 /// `format` of [`docs::CampaignDoc`].
 pub const CAMPAIGN_FORMAT: &str = "gleaner.campaign";
 /// The version of the documents this build writes.

@@ -710,3 +710,46 @@ fn campaign_document() {
     assert_eq!(back, doc);
     insta::assert_snapshot!("campaign.json", text);
 }
+
+#[test]
+fn reconstruction_map_document() {
+    use gleaner_app::{MapCell, ReconstructionMap};
+    use gleaner_field::{CellIndex, LatLon};
+    let r = reconstruction_sample();
+    let p = |lat, lon| LatLon::new(lat, lon).unwrap();
+    let corners = [
+        p(46.7787, -117.0868),
+        p(46.7787, -117.0863),
+        p(46.7791, -117.0863),
+        p(46.7791, -117.0868),
+    ];
+    let map = ReconstructionMap {
+        project: "caf".into(),
+        unit: Some("m3/m3".into()),
+        base: p(46.7782, -117.0875),
+        cell_size_m: 40.0,
+        cells: vec![MapCell {
+            index: CellIndex { i: 2, j: 1 },
+            corners,
+            sensors: vec![0, 1],
+            mean: 0.2995,
+            sd: (2e-4f64).sqrt(),
+        }],
+        read: vec![true, false],
+        read_within_s: 86_400,
+        outline: vec![corners.iter().chain(&corners[..1]).copied().collect()],
+        reconstruction: r,
+    };
+    let doc = crate::convert::reconstruction_map(&map);
+    assert_eq!(doc.format, crate::RECONSTRUCTION_MAP_FORMAT);
+    assert_eq!(doc.cells[0].cell, "x2y1");
+    assert_eq!(doc.cells[0].sensors, ["CAF003", "CAF007"]);
+    assert_eq!(doc.cells[0].ring_lon_lat.len(), 5);
+    assert_eq!(doc.cells[0].ring_lon_lat[0], doc.cells[0].ring_lon_lat[4]);
+    assert!(doc.sensors[0].read && !doc.sensors[1].read);
+    assert!((doc.sensors[1].sd - 0.02).abs() < 1e-15);
+    assert_eq!(doc.outline_lon_lat[0].len(), 5);
+    let text = serde_json::to_string_pretty(&doc).unwrap();
+    let back: docs::ReconstructionMapDoc = serde_json::from_str(&text).unwrap();
+    assert_eq!(back, doc);
+}

@@ -85,3 +85,53 @@ pub fn series_csv(r: &ReconstructionSeries) -> String {
     }
     out
 }
+
+/// What `--map` writes, by the file's extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MapFile {
+    /// `.svg`: the figure as SVG text.
+    Svg,
+    /// `.png`: the figure rasterised at 300 dpi.
+    Png,
+}
+
+impl MapFile {
+    /// The kind of `path` (`.svg` or `.png`, in any case).
+    pub fn of(path: &std::path::Path) -> anyhow::Result<Self> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("svg") => Ok(Self::Svg),
+            Some("png") => Ok(Self::Png),
+            _ => anyhow::bail!(
+                "--map {}: the file must end in .svg or .png",
+                path.display()
+            ),
+        }
+    }
+}
+
+/// The map's PNG resolution, dots per inch.
+pub const MAP_PNG_DPI: f64 = 300.0;
+
+/// The reconstruction map as the file's bytes.
+pub fn map_file(
+    doc: &gleaner_wire::docs::ReconstructionMapDoc,
+    kind: MapFile,
+) -> anyhow::Result<Vec<u8>> {
+    let opts = gleaner_render::FigureOptions {
+        width_mm: gleaner_render::FULL_WIDTH_MM,
+        ..Default::default()
+    };
+    let svg = gleaner_render::reconstruction_map_svg(doc, &opts)?;
+    Ok(match kind {
+        MapFile::Svg => svg.into_bytes(),
+        MapFile::Png => gleaner_render::svg_to_png(
+            &svg,
+            gleaner_render::png_width_px(gleaner_render::FULL_WIDTH_MM, MAP_PNG_DPI),
+        )?,
+    })
+}

@@ -9,7 +9,7 @@ use gleaner_server::handlers::MISSION_FILES;
 use crate::common::{Server, TOKEN, caf_project, flight_csv};
 
 /// Every API route (method, path as in the OpenAPI document).
-const ROUTES: [(&str, &str); 18] = [
+const ROUTES: [(&str, &str); 20] = [
     ("get", "/api/v1/openapi.json"),
     ("get", "/api/v1/project"),
     ("get", "/api/v1/field"),
@@ -17,6 +17,8 @@ const ROUTES: [(&str, &str); 18] = [
     ("get", "/api/v1/cells/{cell}"),
     ("post", "/api/v1/score"),
     ("get", "/api/v1/reconstruct"),
+    ("get", "/api/v1/reconstruct/map.svg"),
+    ("get", "/api/v1/reconstruct/map.png"),
     ("post", "/api/v1/simulate"),
     ("get", "/api/v1/missions"),
     ("get", "/api/v1/missions/{id}"),
@@ -153,6 +155,233 @@ fn reconstructs_every_sensor_and_refuses_bad_queries_naming_the_field() {
         if field.is_some() {
             assert_eq!(f.as_deref(), field, "{query}: {reason}");
         }
+    }
+}
+
+/// `GET /api/v1/reconstruct` over a range: every time's mean, sd and 90% interval, the same
+/// values at its end as the reconstruction at that time, one cell's columns on request;
+/// ranges too long, reversed or half given are refused naming the field.
+#[test]
+fn reconstructs_a_range_and_refuses_bad_ranges_naming_the_field() {
+    let server = Server::caf();
+    let doc = server.get_json(
+        "/api/v1/reconstruct?from=2013-11-01&to=2013-12-01&every_hours=6&estimator=changes",
+    );
+    assert_eq!(doc["format"], "gleaner.reconstruction-series");
+    assert_eq!(doc["version"], 1);
+    assert_eq!(doc["estimator"], "changes");
+    assert_eq!(doc["unit"], "m3/m3");
+    assert!(doc["model"].is_null());
+    let times = doc["times"].as_array().unwrap();
+    assert_eq!(times.len(), 30 * 4 + 1);
+    assert_eq!(times[0], "2013-11-01T00:00:00Z");
+    assert_eq!(times[120], "2013-12-01T00:00:00Z");
+    assert_eq!(doc["sensors"].as_array().unwrap().len(), 42);
+    for key in ["mean", "sd", "lo90", "hi90"] {
+        let rows = doc[key].as_array().unwrap();
+        assert_eq!(rows.len(), 121, "{key}");
+        assert!(
+            rows.iter().all(|r| r.as_array().unwrap().len() == 42),
+            "{key}"
+        );
+    }
+    for t in 0..121 {
+        for s in 0..42 {
+            let (m, sd) = (
+                doc["mean"][t][s].as_f64().unwrap(),
+                doc["sd"][t][s].as_f64().unwrap(),
+            );
+            let (lo, hi) = (
+                doc["lo90"][t][s].as_f64().unwrap(),
+                doc["hi90"][t][s].as_f64().unwrap(),
+            );
+            assert!(sd >= 0.0 && lo <= m && m <= hi, "{t} {s}");
+            assert!((hi - lo - 2.0 * 1.644_853_626_951_472_2 * sd).abs() < 1e-9);
+        }
+    }
+    // Its last time is the reconstruction at that time.
+    let at = server.get_json("/api/v1/reconstruct?at=2013-12-01&estimator=changes");
+    for (s, x) in at["sensors"].as_array().unwrap().iter().enumerate() {
+        assert_eq!(doc["sensors"][s]["sensor"], x["sensor"]);
+        assert_eq!(doc["mean"][120][s], x["estimate"], "{x}");
+    }
+    // The default estimator is kriging of changes; the dynamic model carries its parameters.
+    let default =
+        server.get_json("/api/v1/reconstruct?from=2013-11-01&to=2013-12-01&every_hours=6");
+    assert_eq!(default, doc);
+    let dynamic =
+        server.get_json("/api/v1/reconstruct?from=2013-11-25&to=2013-12-01&estimator=dynamic");
+    assert_eq!(dynamic["estimator"], "dynamic");
+    assert_eq!(dynamic["times"].as_array().unwrap().len(), 7);
+    assert!(dynamic["model"]["phi"].as_f64().unwrap() > 0.0);
+    // One cell: its sensors' columns only, the same numbers.
+    let field = server.get_json("/api/v1/cells");
+    let cell = &field[0];
+    let id = cell["cell"].as_str().unwrap();
+    let one = server.get_json(&format!(
+        "/api/v1/reconstruct?from=2013-11-01&to=2013-12-01&every_hours=6&cell={id}"
+    ));
+    let sensors: Vec<&str> = cell["sensors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    let got: Vec<&str> = one["sensors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v["sensor"].as_str().unwrap())
+        .collect();
+    assert_eq!(got, sensors);
+    let k = doc["sensors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|v| v["sensor"] == sensors[0])
+        .unwrap();
+    assert_eq!(one["mean"][60][0], doc["mean"][60][k]);
+
+    let mut c = server.client();
+    for (query, status, field) in [
+        ("from=2013-01-01&to=2013-12-31&every_hours=1", 400, "to"),
+        ("from=2013-12-01&to=2013-11-01", 400, "to"),
+        ("from=2013-11-01", 400, "to"),
+        ("to=2013-11-01", 400, "from"),
+        (
+            "from=2013-11-01&to=2013-12-01&every_hours=0",
+            400,
+            "every_hours",
+        ),
+        (
+            "from=2013-11-01&to=2013-12-01&every_hours=-6",
+            400,
+            "every_hours",
+        ),
+        (
+            "from=2013-11-01&to=2013-12-01&every_hours=nan",
+            400,
+            "every_hours",
+        ),
+        (
+            "from=2013-11-01&to=2013-12-01&every_hours=six",
+            400,
+            "every_hours",
+        ),
+        ("from=1900-01-01&to=2013-12-01", 400, "from"),
+        ("from=2013-11-01&to=2013-12-01&at=2013-11-05", 400, "at"),
+        ("from=2013-11-01&to=2013-12-01&cell=somewhere", 400, "cell"),
+        ("from=2013-11-01&to=2013-12-01&cell=x999y999", 404, "cell"),
+        (
+            "from=2013-11-01&to=2013-12-01&estimator=best",
+            400,
+            "estimator",
+        ),
+        (
+            "from=2013-11-01&to=2013-12-01&modality=nothing@1cm",
+            400,
+            "modality",
+        ),
+        // Before the project's first reading.
+        ("from=2001-01-01&to=2001-02-01", 400, "to"),
+    ] {
+        let r = c
+            .request("GET", &format!("/api/v1/reconstruct?{query}"), &[], None)
+            .unwrap();
+        assert_eq!(r.status, status, "{query}: {}", r.text());
+        let (_, f, reason) = error(&r);
+        assert_eq!(f.as_deref(), Some(field), "{query}: {reason}");
+    }
+    // Too many steps: the message says how many and what the limit is.
+    let r = c
+        .get("/api/v1/reconstruct?from=2013-01-01&to=2013-12-31&every_hours=1")
+        .unwrap();
+    let (_, _, reason) = error(&r);
+    assert!(
+        reason.contains("8737") && reason.contains("1000"),
+        "{reason}"
+    );
+}
+
+/// `GET /api/v1/reconstruct/map.svg` and `.png`: the two-panel figure of the estimate and
+/// its uncertainty at a time, with its media type; bad queries name their field.
+#[test]
+fn draws_the_reconstruction_map_as_svg_and_png() {
+    let server = Server::caf();
+    let mut c = server.client();
+    let r = c
+        .get("/api/v1/reconstruct/map.svg?at=2013-12-01&estimator=changes")
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(r.header("content-type"), Some("image/svg+xml"));
+    let svg = r.text();
+    assert!(svg.starts_with("<svg") && svg.contains("2013-12-01 00:00 UTC"));
+    assert!(svg.contains("kriging of changes") && svg.contains("VW (m\u{b3}/m\u{b3})"));
+    assert_eq!(svg.matches(r#"id="value-cell-"#).count(), 42);
+    assert_eq!(svg.matches(r#"id="sd-cell-"#).count(), 42);
+    let marked = svg.matches(r#"class="sensor-read""#).count()
+        + svg.matches(r#"class="sensor-estimated""#).count();
+    assert_eq!(marked, 2 * 42);
+    assert!(svg.matches(r#"class="sensor-read""#).count() > 0);
+    // The same figure as the default estimator's, and deterministic.
+    let again = c.get("/api/v1/reconstruct/map.svg?at=2013-12-01").unwrap();
+    assert_eq!(again.text(), svg);
+    let png = c
+        .get("/api/v1/reconstruct/map.png?at=2013-12-01&estimator=dynamic")
+        .unwrap();
+    assert_eq!(png.status, 200, "{}", png.text());
+    assert_eq!(png.header("content-type"), Some("image/png"));
+    assert_eq!(&png.body[1..4], b"PNG");
+    assert_eq!(
+        u32::from_be_bytes(png.body[16..20].try_into().unwrap()),
+        2102
+    );
+    for (query, field) in [
+        ("at=yesterday", "at"),
+        ("estimator=best", "estimator"),
+        ("neighbours=0", "neighbours"),
+        ("from=2013-11-01", "from"),
+        ("modality=nothing@1cm", "modality"),
+    ] {
+        for ext in ["svg", "png"] {
+            let r = c
+                .get(&format!("/api/v1/reconstruct/map.{ext}?{query}"))
+                .unwrap();
+            assert_eq!(r.status, 400, "{ext} {query}: {}", r.text());
+            let (_, f, reason) = error(&r);
+            assert_eq!(f.as_deref(), Some(field), "{ext} {query}: {reason}");
+        }
+    }
+    // Declared with their media types.
+    let doc = server.get_json("/api/v1/openapi.json");
+    let paths = &doc["paths"];
+    assert!(
+        paths["/api/v1/reconstruct/map.svg"]["get"]["responses"]["200"]["content"]["image/svg+xml"]
+            .is_object()
+    );
+    assert!(
+        paths["/api/v1/reconstruct/map.png"]["get"]["responses"]["200"]["content"]["image/png"]
+            .is_object()
+    );
+    let answer = &paths["/api/v1/reconstruct"]["get"]["responses"]["200"]["content"]["application/json"]
+        ["schema"];
+    assert!(answer.to_string().contains("ReconstructAnswer"), "{answer}");
+    let names: Vec<&str> = paths["/api/v1/reconstruct"]["get"]["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    for name in [
+        "at",
+        "from",
+        "to",
+        "every_hours",
+        "cell",
+        "modality",
+        "estimator",
+    ] {
+        assert!(names.contains(&name), "{name}: {names:?}");
     }
 }
 

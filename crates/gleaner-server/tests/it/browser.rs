@@ -1,8 +1,8 @@
 //! The dashboard in a real headless Chromium (Debian's `chromium` and `chromium-driver`,
 //! installed by `scripts/browser-env.sh`), driven over WebDriver: it opens the dashboard on a
-//! CAF project, sees one shape per cell, plans a mission through the form, sees the route
-//! drawn and the energy total equal to the API's, downloads the `.plan`, and saves a
-//! screenshot. Fails (never skips) when the browser is missing.
+//! CAF project, sees one shape per cell, sees a cell's estimated series with its 90% band
+//! and the estimated field map, plans a mission through the form, sees the route drawn and
+//! the energy total equal to the API's, downloads the `.plan`, and saves a screenshot. Fails (never skips) when the browser is missing.
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -146,6 +146,106 @@ async fn drive(c: &fantoccini::Client, server: &Server, downloads: &Path) -> Res
         .at_most(wait)
         .for_element(Locator::Css("#cell-body svg.spark"))
         .await?;
+
+    // ... and its sensors' estimated series over the last 30 days at 6-hour steps: per
+    // sensor one chart with the 90% band, the mean line through every time, the readings
+    // as dots, dated x ticks and a y axis in m³/m³.
+    c.wait()
+        .at_most(wait)
+        .for_element(Locator::Css("#estimate-chart svg.estimate path.band"))
+        .await?;
+    let cell = &field["cells"][0];
+    let cell_id = cell["cell"].as_str().unwrap();
+    let project = server.get_json("/api/v1/project");
+    let latest = project["latest_reading"].as_str().unwrap().to_string();
+    let to = gleaner_app::parse_timestamp(&latest).unwrap();
+    let from = to - 30 * 86_400;
+    let detail = server.get_json(&format!("/api/v1/cells/{cell_id}?days=31"));
+    let sensors: Vec<String> = detail["cell"]["sensors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap().to_string())
+        .collect();
+    let charts = c
+        .find_all(Locator::Css("#estimate-chart svg.estimate"))
+        .await?;
+    assert_eq!(
+        charts.len(),
+        sensors.len(),
+        "one chart per sensor of {cell_id}"
+    );
+    for chart in &charts {
+        let sensor = chart.attr("data-sensor").await?.unwrap();
+        assert!(sensors.contains(&sensor), "{sensor}");
+        let count = |css: &'static str| {
+            let chart = chart.clone();
+            async move { chart.find_all(Locator::Css(css)).await.map(|v| v.len()) }
+        };
+        assert_eq!(count("path.band").await?, 1);
+        assert_eq!(count("polyline.mean").await?, 1);
+        let points = chart
+            .find(Locator::Css("polyline.mean"))
+            .await?
+            .attr("points")
+            .await?
+            .unwrap();
+        assert_eq!(points.split(' ').count(), 30 * 4 + 1, "a point per 6 h");
+        let band = chart
+            .find(Locator::Css("path.band"))
+            .await?
+            .attr("d")
+            .await?
+            .unwrap();
+        assert_eq!(
+            band.matches('L').count() + 1,
+            2 * (30 * 4 + 1),
+            "both edges"
+        );
+        let readings = detail["series"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["sensor"] == sensor.as_str() && s["modality"] == "vw@30cm")
+            .map_or(0, |s| {
+                s["t"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .filter(|t| (from..=to).contains(&t.as_i64().unwrap()))
+                    .count()
+            });
+        assert!(readings > 0, "CAF reports daily");
+        assert_eq!(
+            count("circle.reading").await?,
+            readings,
+            "a dot per reading"
+        );
+        assert!(
+            count(".x-axis text").await? >= 4,
+            "dated ticks and the axis title"
+        );
+        assert!(count(".y-axis text").await? >= 3);
+        let y_texts = chart.find_all(Locator::Css(".y-axis text")).await?;
+        let y_title = y_texts.last().unwrap().html(true).await?;
+        assert_eq!(y_title, "VW (m³/m³)");
+    }
+
+    // The estimated field map: both panels, one shape per cell in each.
+    c.find(Locator::Id("field-map-button"))
+        .await?
+        .click()
+        .await?;
+    c.wait()
+        .at_most(wait)
+        .for_element(Locator::Css("#field-map svg #panel-sd"))
+        .await?;
+    for key in ["value", "sd"] {
+        let cells = c
+            .find_all(Locator::Css(&format!("#field-map path[id^='{key}-cell-']")))
+            .await?;
+        assert_eq!(cells.len(), n_cells, "{key} panel");
+    }
 
     // One file picker: the native input stays hidden inside its "choose files" label.
     let pickers = c

@@ -155,8 +155,15 @@ fn every_computation_needs_the_token_when_not_loopback_only() {
             .unwrap();
         assert_eq!(r.status, 401, "{path}: {}", r.text());
     }
-    let r = c.get("/api/v1/reconstruct?at=2013-12-01").unwrap();
-    assert_eq!(r.status, 401, "{}", r.text());
+    for path in [
+        "/api/v1/reconstruct?at=2013-12-01",
+        "/api/v1/reconstruct?from=2013-11-01&to=2013-12-01",
+        "/api/v1/reconstruct/map.svg?at=2013-12-01",
+        "/api/v1/reconstruct/map.png?at=2013-12-01",
+    ] {
+        let r = c.get(path).unwrap();
+        assert_eq!(r.status, 401, "{path}: {}", r.text());
+    }
     // With the token they run (the quick ones here).
     let auth = format!("Bearer {TOKEN}");
     for (path, body) in [
@@ -176,15 +183,16 @@ fn every_computation_needs_the_token_when_not_loopback_only() {
             .unwrap();
         assert_eq!(r.status, 200, "{path}: {}", r.text());
     }
-    let r = c
-        .request(
-            "GET",
-            "/api/v1/reconstruct?at=2013-12-01",
-            &[("Authorization", &auth)],
-            None,
-        )
-        .unwrap();
-    assert_eq!(r.status, 200, "{}", r.text());
+    for path in [
+        "/api/v1/reconstruct?at=2013-12-01",
+        "/api/v1/reconstruct?from=2013-11-25&to=2013-12-01",
+        "/api/v1/reconstruct/map.svg?at=2013-12-01",
+    ] {
+        let r = c
+            .request("GET", path, &[("Authorization", &auth)], None)
+            .unwrap();
+        assert_eq!(r.status, 200, "{path}: {}", r.text());
+    }
     // Stored data stays readable.
     assert_eq!(c.get("/api/v1/project").unwrap().status, 200);
 }

@@ -1,0 +1,598 @@
+//! The reconstruction map: an estimated field and its uncertainty at one time, two panels
+//! side by side.
+
+use gleaner_wire::docs::ReconstructionMapDoc;
+
+use crate::colour::{ColourMap, Rgb, UNCERTAINTY_MAP, VALUE_MAP};
+use crate::figure::{ColourScale, display_time};
+use crate::font::{CAP_HEIGHT_EM, text_width};
+use crate::frame::{
+    self, Axes, Entry, INK, MapView, PT_PER_MM, Projection, Symbol, TICK, finite, lon_lat,
+};
+use crate::svg::{Anchor, N, Svg, esc, fit};
+use crate::{FigureOptions, RenderError};
+
+/// A unit as printed: `m3/m3` as m³/m³, `degC` as °C; others as they are.
+pub(crate) fn pretty_unit(unit: &str) -> String {
+    match unit.trim() {
+        "m3/m3" | "m^3/m^3" => "m\u{b3}/m\u{b3}".into(),
+        "degC" | "deg C" | "C" => "\u{b0}C".into(),
+        "degF" => "\u{b0}F".into(),
+        u => u.replace("m3", "m\u{b3}").replace("m2", "m\u{b2}"),
+    }
+}
+
+/// A modality as printed: `vw@30cm` as "VW at 30 cm", `t@0.5m` as "T at 0.5 m".
+pub(crate) fn pretty_modality(modality: &str) -> String {
+    let (quantity, depth) = match modality.split_once('@') {
+        Some((q, d)) => (q, Some(d)),
+        None => (modality, None),
+    };
+    let q = quantity.to_uppercase();
+    match depth {
+        Some(d) => {
+            let split = d.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(d.len());
+            let (num, unit) = d.split_at(split);
+            if unit.is_empty() {
+                format!("{q} at {num}")
+            } else {
+                format!("{q} at {num} {unit}")
+            }
+        }
+        None => q,
+    }
+}
+
+/// An estimator's name as printed.
+pub(crate) fn estimator_text(name: &str) -> String {
+    match name {
+        "changes" => "kriging of changes".into(),
+        "levels" => "ordinary kriging of levels".into(),
+        "simple" => "simple kriging of levels".into(),
+        "dynamic" => "dynamic field model".into(),
+        other => other.into(),
+    }
+}
+
+/// A duration, s, as printed: whole days or hours when it is one.
+fn duration_text(s: i64) -> String {
+    match s {
+        0 => "0 s".into(),
+        s if s % 86_400 == 0 => format!("{} d", s / 86_400),
+        s if s % 3_600 == 0 => format!("{} h", s / 3_600),
+        s if s % 60 == 0 => format!("{} min", s / 60),
+        s => format!("{s} s"),
+    }
+}
+
+/// A cell of the map in the local frame.
+struct Shape {
+    id: String,
+    ring: Vec<(f64, f64)>,
+    mean: f64,
+    sd: f64,
+}
+
+/// A sensor in the local frame.
+struct Point {
+    id: String,
+    at: (f64, f64),
+    estimate: f64,
+    sd: f64,
+    read: bool,
+}
+
+/// Radius of a sensor marker at text size `font`, pt.
+fn marker_r(font: f64) -> f64 {
+    0.25 * font
+}
+
+/// A sensor marker centred at (`x`, `y`), `r` pt: read = a dark disc with a thin white rim;
+/// estimated only = a white diamond with a dark edge (told apart by shape as well as by
+/// tone, so in grey too and on dark cells). A marker with a `title` (a sensor on the map,
+/// not a legend symbol) carries the class `sensor-read` or `sensor-estimated`.
+pub(crate) fn sensor_marker(svg: &mut Svg, x: f64, y: f64, r: f64, read: bool, title: &str) {
+    let (title, class) = if title.is_empty() {
+        (String::new(), "")
+    } else if read {
+        (
+            format!("<title>{}</title>", esc(title)),
+            r#" class="sensor-read""#,
+        )
+    } else {
+        (
+            format!("<title>{}</title>", esc(title)),
+            r#" class="sensor-estimated""#,
+        )
+    };
+    if read {
+        svg.line(format_args!(
+            r##"<circle{class} cx="{}" cy="{}" r="{}" fill="{INK}" stroke="#ffffff" stroke-width="0.35">{title}</circle>"##,
+            N(x),
+            N(y),
+            N(r)
+        ));
+    } else {
+        let d = 1.2 * r;
+        svg.line(format_args!(
+            r##"<path{class} d="M{} {}L{} {}L{} {}L{} {}Z" fill="#ffffff" stroke="{INK}" stroke-width="0.55" stroke-linejoin="round">{title}</path>"##,
+            N(x),
+            N(y - d),
+            N(x + d),
+            N(y),
+            N(x),
+            N(y + d),
+            N(x - d),
+            N(y)
+        ));
+    }
+}
+
+/// One panel's content: which values, which colours, the bar's title.
+struct Panel<'a> {
+    /// `value` or `sd`: ids of its groups and cells.
+    key: &'static str,
+    header: String,
+    bar_title: String,
+    map: ColourMap,
+    scale: Option<ColourScale>,
+    value: &'a dyn Fn(&Shape) -> f64,
+    unit: &'a str,
+}
+
+/// The map of a reconstruction as an SVG document, `opts.width_mm` wide (178 mm, the full
+/// page width, suits its two panels).
+///
+/// Left, the estimated field: every cell filled by the mean of its sensors' estimates on
+/// viridis; right, its uncertainty: every cell filled by the root mean of its sensors'
+/// posterior variances (a posterior standard deviation) on reversed magma, from 0. Each
+/// panel has a colour bar titled with the quantity and its unit. On both, every sensor is
+/// marked — a dark disc if it was read at the time (its latest reading at most
+/// `read_within_s` before it), a white diamond if it is only estimated — and
+/// the field's outline is drawn over the cells. Ticks are metres from the base station or
+/// degrees ([`crate::Coordinates`]); the legend row holds the symbols, a scale bar in metres
+/// and a north arrow; the title names the modality, the time (UTC) and the estimator.
+///
+/// Errors: a NaN or infinite number, a negative sd or cell size, an impossible position,
+/// or unusable options.
+pub fn reconstruction_map_svg(
+    doc: &ReconstructionMapDoc,
+    opts: &FigureOptions,
+) -> Result<String, RenderError> {
+    frame::check_options(opts)?;
+    let projection = Projection::new(doc.base_lon_lat)?;
+    let cell_size_m = finite(|| "cell_size_m".into(), doc.cell_size_m)?;
+    if cell_size_m <= 0.0 {
+        return Err(RenderError::OutOfRange {
+            what: "cell_size_m".into(),
+            value: cell_size_m,
+            expected: "> 0 m",
+        });
+    }
+    if doc.read_within_s < 0 {
+        return Err(RenderError::OutOfRange {
+            what: "read_within_s".into(),
+            value: doc.read_within_s as f64,
+            expected: ">= 0 s",
+        });
+    }
+    let non_negative = |what: String, v: f64| -> Result<f64, RenderError> {
+        let v = finite(|| what.clone(), v)?;
+        if v < 0.0 {
+            return Err(RenderError::OutOfRange {
+                what,
+                value: v,
+                expected: ">= 0",
+            });
+        }
+        Ok(v)
+    };
+    let mut cells = Vec::with_capacity(doc.cells.len());
+    for c in &doc.cells {
+        let mut ring = Vec::with_capacity(c.ring_lon_lat.len());
+        for (k, p) in c.ring_lon_lat.iter().enumerate() {
+            ring.push(projection.local(lon_lat(|| format!("cell {} ring point {k}", c.cell), *p)?));
+        }
+        cells.push(Shape {
+            id: c.cell.clone(),
+            ring,
+            mean: finite(|| format!("cell {} mean", c.cell), c.mean)?,
+            sd: non_negative(format!("cell {} sd", c.cell), c.sd)?,
+        });
+    }
+    let mut sensors = Vec::with_capacity(doc.sensors.len());
+    for s in &doc.sensors {
+        sensors.push(Point {
+            id: s.sensor.clone(),
+            at: projection.local(lon_lat(|| format!("sensor {}", s.sensor), s.lon_lat)?),
+            estimate: finite(|| format!("sensor {} estimate", s.sensor), s.estimate)?,
+            sd: non_negative(format!("sensor {} sd", s.sensor), s.sd)?,
+            read: s.read,
+        });
+    }
+    let mut outline = Vec::with_capacity(doc.outline_lon_lat.len());
+    for (r, ring) in doc.outline_lon_lat.iter().enumerate() {
+        let mut pts = Vec::with_capacity(ring.len());
+        for (k, p) in ring.iter().enumerate() {
+            pts.push(projection.local(lon_lat(|| format!("outline ring {r} point {k}"), *p)?));
+        }
+        outline.push(pts);
+    }
+
+    // Extent: cells, sensors, outline; a point still gets an area.
+    let mut ext: Option<(f64, f64, f64, f64)> = None;
+    let mut grow = |(e, n): (f64, f64)| {
+        ext = Some(match ext {
+            None => (e, e, n, n),
+            Some(x) => (x.0.min(e), x.1.max(e), x.2.min(n), x.3.max(n)),
+        });
+    };
+    cells
+        .iter()
+        .flat_map(|c| c.ring.iter())
+        .for_each(|&p| grow(p));
+    sensors.iter().for_each(|s| grow(s.at));
+    outline.iter().flatten().for_each(|&p| grow(p));
+    let (e0, e1, n0, n1) = ext.unwrap_or((0.0, 0.0, 0.0, 0.0));
+    let min_span = cell_size_m.max(20.0);
+    let widen = |lo: f64, hi: f64| {
+        if hi - lo < min_span {
+            let mid = 0.5 * (lo + hi);
+            (mid - 0.5 * min_span, mid + 0.5 * min_span)
+        } else {
+            (lo, hi)
+        }
+    };
+    let (e0, e1) = widen(e0, e1);
+    let (n0, n1) = widen(n0, n1);
+    let extent = (e0, e1, n0, n1);
+
+    let font = opts.font_pt;
+    let cap = CAP_HEIGHT_EM * font;
+    let width = opts.width_mm * PT_PER_MM;
+    let margin = 0.6 * font;
+    let inner = width - 2.0 * margin;
+
+    // Text.
+    let quantity = pretty_modality(&doc.modality);
+    let short = doc
+        .modality
+        .split('@')
+        .next()
+        .unwrap_or_default()
+        .to_uppercase();
+    let unit = doc.unit.as_deref().map(pretty_unit).unwrap_or_default();
+    let with_unit = |label: &str| {
+        if unit.is_empty() {
+            label.to_string()
+        } else {
+            format!("{label} ({unit})")
+        }
+    };
+    let title = match &opts.title {
+        Some(t) => t.clone(),
+        None => format!(
+            "Estimated {quantity} \u{b7} {} \u{b7} {}",
+            display_time(&doc.at),
+            estimator_text(&doc.estimator)
+        ),
+    };
+    let read = sensors.iter().filter(|s| s.read).count();
+    let subtitle = format!(
+        "{}{} sensors: {} read within {} before the time, {} estimated only \u{b7} {} cells of {} m, each the mean of its sensors",
+        if doc.project.is_empty() {
+            String::new()
+        } else {
+            format!("{} \u{b7} ", doc.project)
+        },
+        sensors.len(),
+        read,
+        duration_text(doc.read_within_s),
+        sensors.len() - read,
+        cells.len(),
+        ticks_label(cell_size_m)
+    );
+
+    // Colour scales: the estimate over its range, the sd from 0.
+    let means: Vec<f64> = cells.iter().map(|c| c.mean).collect();
+    let value_scale = ColourScale::new(&means);
+    let max_sd = cells.iter().map(|c| c.sd).fold(0.0, f64::max);
+    let sd_scale = (!cells.is_empty()).then(|| ColourScale {
+        lo: 0.0,
+        hi: if max_sd > 0.0 { max_sd } else { 1e-3 },
+        ticks: Vec::new(),
+    });
+    let value_of = |c: &Shape| c.mean;
+    let sd_of = |c: &Shape| c.sd;
+    let mut panels = [
+        Panel {
+            key: "value",
+            header: format!("(a) Estimate: {}", with_unit(&short)),
+            bar_title: with_unit(&short),
+            map: VALUE_MAP,
+            scale: value_scale,
+            value: &value_of,
+            unit: &unit,
+        },
+        Panel {
+            key: "sd",
+            header: format!("(b) Uncertainty: {}", with_unit("posterior sd")),
+            bar_title: with_unit("sd"),
+            map: UNCERTAINTY_MAP,
+            scale: sd_scale,
+            value: &sd_of,
+            unit: &unit,
+        },
+    ];
+
+    // Horizontal layout: two slots, each [y title | y labels | map | gap | colour bar].
+    let gap_between = 1.6 * font;
+    let slot_w = (inner - gap_between) / 2.0;
+    let bar_w = 0.9 * font;
+    let bar_gap = 0.9 * font;
+    let column_w = |p: &Panel| {
+        let labels = p.scale.as_ref().map_or(0.0, |s| s.label_width(font));
+        bar_w + TICK + 1.2 + labels + 0.5 * font + 1.25 * font
+    };
+    let columns = [column_w(&panels[0]), column_w(&panels[1])];
+    let widest_column = columns[0].max(columns[1]);
+    let titles = frame::Titles::new(&title, &subtitle, font, inner, margin);
+    let header_baseline = titles.map_top + cap;
+    let map_top = header_baseline + 0.9 * font;
+    let pad = marker_r(font) + 1.5;
+    let mut ylab_w = text_width("\u{2212}000", font, false);
+    let y_area = |ylab_w: f64| 1.25 * font + ylab_w + 1.2 + TICK;
+    let (mut view, mut axes);
+    let mut passes = 0;
+    loop {
+        let avail_w = (slot_w - y_area(ylab_w) - bar_gap - widest_column).max(4.0 * font);
+        view = MapView::fit(
+            extent,
+            0.0,
+            map_top,
+            avail_w,
+            opts.max_map_aspect * avail_w,
+            pad,
+        );
+        axes = Axes::new(&view, &projection, opts.coordinates, font);
+        let measured = axes.y_label_width(font);
+        passes += 1;
+        if measured <= ylab_w + 0.01 || passes >= 3 {
+            break;
+        }
+        ylab_w = measured;
+    }
+    let used_w = y_area(ylab_w) + view.w + bar_gap + widest_column;
+    let offset = 0.5 * (slot_w - used_w).max(0.0);
+    let slot_x = |k: usize| margin + k as f64 * (slot_w + gap_between);
+    let x_title_baseline = view.y + view.h + TICK + 1.0 + cap + 1.2 * font + 0.1 * font;
+
+    // The legend row: symbols left, scale bar and north arrow right.
+    let entries = vec![
+        Entry {
+            symbol: Symbol::SensorRead(marker_r(font)),
+            text: format!(
+                "sensor read within {} before the time",
+                duration_text(doc.read_within_s)
+            ),
+        },
+        Entry {
+            symbol: Symbol::SensorEstimated(marker_r(font)),
+            text: "sensor estimated only".into(),
+        },
+        Entry {
+            symbol: Symbol::Outline,
+            text: "field outline".into(),
+        },
+    ];
+    let na_h = frame::north_arrow_height(font);
+    let na_w = 2.0 * font;
+    let scale_max = (0.22 * inner).max(text_width("500 m", font, false) + 2.0);
+    let len_m = frame::scale_length_m(view.k, scale_max);
+    let scale_w = (len_m * view.k).max(text_width(&frame::distance_label(len_m), font, false));
+    let right_w = scale_w + 1.5 * font + na_w;
+    let legend_w = (inner - right_w - 2.0 * font).max(10.0 * font);
+    let row_top = x_title_baseline + 0.9 * font;
+    let legend_h = frame::legend_height(&entries, legend_w, font);
+    let row_h = legend_h.max(na_h);
+    let height = row_top + row_h + margin;
+
+    // Draw.
+    let mut svg = Svg::new(width, height, font, &title);
+    titles.draw(&mut svg, margin);
+    let r = marker_r(font);
+    for (k, panel) in panels.iter_mut().enumerate() {
+        let x0 = slot_x(k) + offset;
+        let mut v = view;
+        v.x = x0 + y_area(ylab_w);
+        svg.line(format_args!(r#"<g id="panel-{}">"#, panel.key));
+        svg.text_attrs(
+            x0,
+            header_baseline,
+            font,
+            Anchor::Start,
+            true,
+            &format!(r#"fill="{INK}""#),
+            &fit(&panel.header, font, true, slot_w - offset),
+        );
+        // Cells.
+        svg.line(format_args!(
+            r##"<g id="{}-cells" stroke="#ffffff" stroke-width="0.35" stroke-linejoin="round">"##,
+            panel.key
+        ));
+        for (j, c) in cells.iter().enumerate() {
+            if c.ring.len() < 3 {
+                continue;
+            }
+            let value = (panel.value)(c);
+            let fill: Rgb = match &panel.scale {
+                Some(s) => panel.map.at(s.t(value)),
+                None => crate::colour::NO_SCORE,
+            };
+            let mut d = String::new();
+            for (i, &p) in c.ring.iter().enumerate() {
+                let (x, y) = v.pt(p);
+                d.push_str(&format!(
+                    "{}{} {}",
+                    if i == 0 { "M" } else { "L" },
+                    N(x),
+                    N(y)
+                ));
+            }
+            d.push('Z');
+            svg.line(format_args!(
+                r#"<path id="{}-cell-{j}" class="cell" d="{d}" fill="{}"><title>{} {}</title></path>"#,
+                panel.key,
+                fill.hex(),
+                esc(&c.id),
+                esc(format!("{} {}", value_text(value), panel.unit).trim_end())
+            ));
+        }
+        svg.line(format_args!("</g>"));
+        // Outline.
+        if !outline.is_empty() {
+            let mut d = String::new();
+            for ring in &outline {
+                for (i, &p) in ring.iter().enumerate() {
+                    let (x, y) = v.pt(p);
+                    d.push_str(&format!(
+                        "{}{} {}",
+                        if i == 0 { "M" } else { "L" },
+                        N(x),
+                        N(y)
+                    ));
+                }
+            }
+            svg.line(format_args!(
+                r#"<path id="{}-outline" d="{d}" fill="none" stroke="{INK}" stroke-width="0.9" stroke-linejoin="round"/>"#,
+                panel.key
+            ));
+        }
+        // Sensors: the estimated ones first, the read ones over them.
+        svg.line(format_args!(r#"<g id="{}-sensors">"#, panel.key));
+        for read in [false, true] {
+            for s in sensors.iter().filter(|s| s.read == read) {
+                let (x, y) = v.pt(s.at);
+                let value = if panel.key == "sd" { s.sd } else { s.estimate };
+                let title = format!("{} {} {}", s.id, value_text(value), panel.unit);
+                sensor_marker(&mut svg, x, y, r, s.read, title.trim_end());
+            }
+        }
+        svg.line(format_args!("</g>"));
+        let axes_k = Axes::new(&v, &projection, opts.coordinates, font);
+        frame::draw_axes(&mut svg, &v, &axes_k, font, x0, x_title_baseline);
+        // Colour bar: gradient, frame, ticks, labels, the rotated title.
+        if let Some(scale) = panel.scale.as_mut() {
+            let bx = v.x + v.w + bar_gap;
+            let (top, len) = (v.y, v.h);
+            scale.set_ticks(len, 1.5 * font);
+            svg.line(format_args!(r#"<g id="{}-colour-bar">"#, panel.key));
+            svg.line(format_args!(
+                r#"<defs><linearGradient id="{}-ramp" x1="0" y1="1" x2="0" y2="0">{}</linearGradient></defs>"#,
+                panel.key,
+                panel.map.stops()
+            ));
+            svg.line(format_args!(
+                r#"<rect x="{}" y="{}" width="{}" height="{}" fill="url(#{}-ramp)" stroke="{INK}" stroke-width="0.4"/>"#,
+                N(bx),
+                N(top),
+                N(bar_w),
+                N(len),
+                panel.key
+            ));
+            let mut label_w: f64 = 0.0;
+            for (value, label) in &scale.ticks {
+                let ty = top + len - scale.t(*value) * len;
+                svg.line(format_args!(
+                    r#"<line class="colour-tick" x1="{}" y1="{}" x2="{}" y2="{}" stroke="{INK}" stroke-width="0.4"/>"#,
+                    N(bx + bar_w),
+                    N(ty),
+                    N(bx + bar_w + TICK),
+                    N(ty)
+                ));
+                svg.text_attrs(
+                    bx + bar_w + TICK + 1.2,
+                    ty + 0.5 * cap,
+                    font,
+                    Anchor::Start,
+                    false,
+                    &format!(r#"fill="{INK}""#),
+                    label,
+                );
+                label_w = label_w.max(text_width(label, font, false));
+            }
+            // Rotated a quarter turn: its glyphs lie left of its baseline at `cx`.
+            let cx = bx + bar_w + TICK + 1.2 + label_w + 0.5 * font + 0.93 * font;
+            let cy = top + 0.5 * len;
+            svg.text_attrs(
+                cx,
+                cy,
+                font,
+                Anchor::Middle,
+                false,
+                &format!(
+                    r#"fill="{INK}" transform="rotate(-90 {} {})""#,
+                    N(cx),
+                    N(cy)
+                ),
+                &fit(&panel.bar_title, font, false, len),
+            );
+            svg.line(format_args!("</g>"));
+        }
+        svg.line(format_args!("</g>"));
+    }
+    frame::draw_legend(
+        &mut svg, "legend", &entries, margin, row_top, legend_w, font,
+    );
+    let na_cx = width - margin - 0.5 * na_w;
+    frame::north_arrow(&mut svg, na_cx, row_top, na_h, font);
+    let sb_cx = width - margin - na_w - 1.5 * font - 0.5 * scale_w;
+    frame::scale_bar(
+        &mut svg,
+        sb_cx,
+        row_top + 0.5 * (na_h - frame::scale_bar_height(font)),
+        len_m,
+        view.k,
+        font,
+    );
+    Ok(svg.finish())
+}
+
+/// A value in a tooltip: four significant decimals.
+fn value_text(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && !(1e-3..1e5).contains(&a) {
+        format!("{v:.3e}")
+    } else {
+        format!("{v:.4}")
+    }
+}
+
+/// A length in m as printed (no trailing zeros).
+fn ticks_label(m: f64) -> String {
+    let s = format!("{m:.2}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_printed_for_readers() {
+        assert_eq!(pretty_modality("vw@30cm"), "VW at 30 cm");
+        assert_eq!(pretty_modality("vwc-a@0.15m"), "VWC-A at 0.15 m");
+        assert_eq!(pretty_modality("t"), "T");
+        assert_eq!(pretty_unit("m3/m3"), "m\u{b3}/m\u{b3}");
+        assert_eq!(pretty_unit("degC"), "\u{b0}C");
+        assert_eq!(pretty_unit("kPa"), "kPa");
+        assert_eq!(estimator_text("changes"), "kriging of changes");
+        assert_eq!(estimator_text("other"), "other");
+        assert_eq!(duration_text(86_400), "1 d");
+        assert_eq!(duration_text(21_600), "6 h");
+        assert_eq!(duration_text(90), "90 s");
+        assert_eq!(ticks_label(40.0), "40");
+        assert_eq!(value_text(0.28731), "0.2873");
+        assert_eq!(value_text(1.5e-5), "1.500e-5");
+    }
+}
