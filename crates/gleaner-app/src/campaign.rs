@@ -1450,7 +1450,9 @@ fn reconstruction_errors(
         };
         if e.last_time != Some(target) {
             estimated += 1;
-            covered += usize::from((e.kriged - v).abs() <= Z90 * e.variance.max(0.0).sqrt());
+            covered += usize::from(
+                (e.kriged - v).abs() <= crate::reconstruct::Z90 * e.variance.max(0.0).sqrt(),
+            );
         }
         se_c += (e.carried - v).powi(2);
         ae_c += (e.carried - v).abs();
@@ -1474,9 +1476,6 @@ fn reconstruction_errors(
         evaluated: n,
     }
 }
-
-/// The standard normal's 95% quantile: a 90% interval is mean ± `Z90`·sd.
-const Z90: f64 = 1.644_853_626_951_472_2;
 
 /// A schedule: every `step_s` seconds from `start` to `end` inclusive.
 pub fn every(start: UnixSeconds, end: UnixSeconds, step_s: i64) -> Result<Vec<UnixSeconds>> {

@@ -10,7 +10,7 @@ use gleaner_kriging::{DynamicModel, FieldFilter};
 use gleaner_store::Store;
 
 use crate::error::{AppError, Result};
-use crate::knowledge::{History, Knowledge};
+use crate::knowledge::{History, Knowledge, known_until};
 use crate::project::Project;
 use crate::reconstruct::{dynamic_window_s, per_sensor, run_filter};
 
@@ -55,7 +55,7 @@ impl<'m> CellInformation<'m> {
         let batch = project.store().readings_for(Some(modality), start..=at)?;
         let mut columns = per_sensor(&ids, &batch);
         for ((times, values), last) in columns.iter_mut().zip(&k.last_collected) {
-            let cut = history.until.max(last.unwrap_or(UnixSeconds::MIN)).min(at);
+            let cut = known_until(at, history.until, *last);
             let (kept_t, kept_v): (Vec<UnixSeconds>, Vec<f64>) = times
                 .iter()
                 .zip(values.iter())

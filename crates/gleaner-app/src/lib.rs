@@ -63,6 +63,8 @@ pub mod settings;
 mod simulate;
 mod state;
 mod summaries;
+#[cfg(test)]
+mod test_farm;
 mod value;
 mod view;
 mod when;

@@ -463,13 +463,11 @@ pub(crate) fn plan_scored<S: Store>(
                 Some(m) => m,
                 None => {
                     let known = t.min(request.history.until);
-                    fitted = crate::reconstruct::fit_dynamic_at(project, &modality, known)?
-                        .ok_or_else(|| {
-                            AppError::Invalid(format!(
-                                "the dynamic field model cannot be fitted on {modality} here (more than {} sensors, or no two distinct readings): plan by score",
-                                gleaner_kriging::MAX_DYNAMIC_SENSORS
-                            ))
-                        })?;
+                    fitted =
+                        crate::reconstruct::fit_dynamic_model(project, &modality, known, None)?
+                            .ok_or_else(|| {
+                                crate::reconstruct::unfit_dynamic(&modality, "plan by score")
+                            })?;
                     &fitted
                 }
             };

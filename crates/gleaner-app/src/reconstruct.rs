@@ -186,7 +186,7 @@ pub(crate) fn fit_models<S: Store>(
 ) -> Result<Models> {
     let (levels, changes, step_s) = fit_inner(project, modality, at, true)?;
     let changes = changes.ok_or_else(|| AppError::Invalid("no model of changes".into()))?;
-    let dynamic = fit_dynamic_model(project, modality, at, step_s)?;
+    let dynamic = fit_dynamic_model(project, modality, at, Some(step_s))?;
     Ok(Models {
         levels,
         changes,
@@ -229,13 +229,22 @@ pub fn dynamic_fit_options(step_s: i64) -> DynamicFitOptions {
     }
 }
 
-/// The dynamic field model of `modality` fitted on every reading stored at or before `at`
-/// (seconds), at the readings' median sampling step; None when it cannot be fitted (more
-/// than [`gleaner_kriging::MAX_DYNAMIC_SENSORS`] sensors, no two distinct readings).
-pub(crate) fn fit_dynamic_at<S: Store>(
+/// Why the dynamic model is missing for `modality`, and what to do instead (`advice`).
+pub(crate) fn unfit_dynamic(modality: &Modality, advice: &str) -> AppError {
+    AppError::Invalid(format!(
+        "the dynamic field model cannot be fitted on {modality} here (more than {} sensors, or no two distinct readings): {advice}",
+        gleaner_kriging::MAX_DYNAMIC_SENSORS
+    ))
+}
+
+/// Fits the dynamic model of `modality` on every reading stored at or before `at`
+/// (seconds), at sampling step `step_s` (seconds; `None`: the readings' median spacing);
+/// None when the network is too large for it or has no two distinct readings.
+pub(crate) fn fit_dynamic_model<S: Store>(
     project: &Project<S>,
     modality: &Modality,
     at: UnixSeconds,
+    step_s: Option<i64>,
 ) -> Result<Option<DynamicModel>> {
     let sensors = project.sensors()?;
     if sensors.len() > gleaner_kriging::MAX_DYNAMIC_SENSORS {
@@ -246,27 +255,11 @@ pub(crate) fn fit_dynamic_at<S: Store>(
         .store()
         .readings_for(Some(modality), UnixSeconds::MIN..=at)?;
     let columns = per_sensor(&ids, &batch);
-    let times: Vec<Vec<UnixSeconds>> = columns.iter().map(|c| c.0.clone()).collect();
-    Ok(dynamic_from_columns(&columns, sampling_step(&times).max(1)))
-}
-
-/// Fits the dynamic model of `modality` on every reading stamped at or before `at`
-/// (seconds); None when the network is too large for it or has no two distinct readings.
-fn fit_dynamic_model<S: Store>(
-    project: &Project<S>,
-    modality: &Modality,
-    at: UnixSeconds,
-    step_s: i64,
-) -> Result<Option<DynamicModel>> {
-    let sensors = project.sensors()?;
-    if sensors.len() > gleaner_kriging::MAX_DYNAMIC_SENSORS {
-        return Ok(None);
-    }
-    let ids: Vec<SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
-    let batch = project
-        .store()
-        .readings_for(Some(modality), UnixSeconds::MIN..=at)?;
-    Ok(dynamic_from_columns(&per_sensor(&ids, &batch), step_s))
+    let step_s = step_s.unwrap_or_else(|| {
+        let times: Vec<Vec<UnixSeconds>> = columns.iter().map(|c| c.0.clone()).collect();
+        sampling_step(&times).max(1)
+    });
+    Ok(dynamic_from_columns(&columns, step_s))
 }
 
 /// The dynamic model fitted on per-sensor columns (times in seconds, ascending) at sampling
@@ -524,12 +517,7 @@ pub(crate) fn estimate_with<S: Store>(
     let (needed, series) = match estimator {
         Estimator::Levels(_) => (None, Vec::new()),
         Estimator::Dynamic => {
-            let model = dynamic.ok_or_else(|| {
-                AppError::Invalid(format!(
-                    "the dynamic field model cannot be fitted on {modality} here (more than {} sensors, or no two distinct readings): use another estimator",
-                    gleaner_kriging::MAX_DYNAMIC_SENSORS
-                ))
-            })?;
+            let model = dynamic.ok_or_else(|| unfit_dynamic(modality, "use another estimator"))?;
             let start = at.saturating_sub(dynamic_window_s(model)).max(from);
             let batch = project.store().readings_for(Some(modality), start..=at)?;
             (None, per_sensor(&ids, &batch))
@@ -1039,28 +1027,20 @@ mod tests {
     #[test]
     fn estimates_from_kept_reads_are_the_store_estimates() {
         use gleaner_store::StoreRead;
-        use gleaner_synth::{SynthConfig, generate, write_readings_csv, write_sensors_csv};
-        let farm = generate(&SynthConfig {
+        let crate::test_farm::SynthProject {
+            tmp: _tmp,
+            farm,
+            mut project,
+            readings,
+            ..
+        } = crate::test_farm::synth_project(&gleaner_synth::SynthConfig {
             seed: 5,
             sensor_count: 18,
             days: 60,
             vw_depths_cm: vec![30],
             t_depths_cm: vec![30],
-            ..SynthConfig::default()
-        })
-        .unwrap();
-        let tmp = tempfile::tempdir().unwrap();
-        let sensors = tmp.path().join("sensors.csv");
-        write_sensors_csv(&farm, &mut std::fs::File::create(&sensors).unwrap()).unwrap();
-        let readings = tmp.path().join("readings.csv");
-        write_readings_csv(&farm, &mut std::fs::File::create(&readings).unwrap()).unwrap();
-        let init = crate::init::InitRequest {
-            dir: tmp.path().join("farm"),
-            sensors,
-            base: Some(farm.base()),
-            ..Default::default()
-        };
-        let (mut project, _) = crate::init::init(&init).unwrap();
+            ..gleaner_synth::SynthConfig::default()
+        });
         let truth = crate::simulate::Truth::from_files(
             &project,
             &crate::ingest::IngestRequest {
@@ -1215,38 +1195,19 @@ mod tests {
     #[test]
     fn series_over_a_range() {
         use gleaner_store::StoreRead;
-        use gleaner_synth::{SynthConfig, generate, write_readings_csv, write_sensors_csv};
-        let farm = generate(&SynthConfig {
+        let crate::test_farm::SynthProject {
+            tmp: _tmp,
+            farm,
+            project,
+            ..
+        } = crate::test_farm::ingested_synth_project(&gleaner_synth::SynthConfig {
             seed: 7,
             sensor_count: 12,
             days: 50,
             vw_depths_cm: vec![30],
             t_depths_cm: vec![],
-            ..SynthConfig::default()
-        })
-        .unwrap();
-        let tmp = tempfile::tempdir().unwrap();
-        let sensors = tmp.path().join("sensors.csv");
-        write_sensors_csv(&farm, &mut std::fs::File::create(&sensors).unwrap()).unwrap();
-        let readings = tmp.path().join("readings.csv");
-        write_readings_csv(&farm, &mut std::fs::File::create(&readings).unwrap()).unwrap();
-        let (mut project, _) = crate::init::init(&crate::init::InitRequest {
-            dir: tmp.path().join("farm"),
-            sensors,
-            base: Some(farm.base()),
-            ..Default::default()
-        })
-        .unwrap();
-        crate::ingest::ingest(
-            &mut project,
-            &crate::ingest::IngestRequest {
-                files: vec![readings],
-                ..Default::default()
-            },
-            UnixSeconds::MAX / 4,
-            &crate::Silent,
-        )
-        .unwrap();
+            ..gleaner_synth::SynthConfig::default()
+        });
         let t0 = farm.times()[0];
         let request = ReconstructSeriesRequest {
             from: t0 + 30 * DAY,

@@ -220,38 +220,19 @@ mod tests {
     /// the tolerance, an outline that closes.
     #[test]
     fn a_map_lays_the_estimates_on_the_cells() {
-        use gleaner_synth::{SynthConfig, generate, write_readings_csv, write_sensors_csv};
-        let farm = generate(&SynthConfig {
+        let crate::test_farm::SynthProject {
+            tmp: _tmp,
+            farm,
+            project,
+            ..
+        } = crate::test_farm::ingested_synth_project(&gleaner_synth::SynthConfig {
             seed: 3,
             sensor_count: 14,
             days: 40,
             vw_depths_cm: vec![30],
             t_depths_cm: vec![],
-            ..SynthConfig::default()
-        })
-        .unwrap();
-        let tmp = tempfile::tempdir().unwrap();
-        let sensors = tmp.path().join("sensors.csv");
-        write_sensors_csv(&farm, &mut std::fs::File::create(&sensors).unwrap()).unwrap();
-        let readings = tmp.path().join("readings.csv");
-        write_readings_csv(&farm, &mut std::fs::File::create(&readings).unwrap()).unwrap();
-        let (mut project, _) = crate::init::init(&crate::init::InitRequest {
-            dir: tmp.path().join("farm"),
-            sensors,
-            base: Some(farm.base()),
-            ..Default::default()
-        })
-        .unwrap();
-        crate::ingest::ingest(
-            &mut project,
-            &crate::ingest::IngestRequest {
-                files: vec![readings],
-                ..Default::default()
-            },
-            i64::MAX / 4,
-            &crate::Silent,
-        )
-        .unwrap();
+            ..gleaner_synth::SynthConfig::default()
+        });
         let at = farm.times()[0] + 30 * 86_400;
         let request = ReconstructMapRequest {
             reconstruct: ReconstructRequest {
