@@ -1,8 +1,8 @@
 //! Explicit conversions from the application layer's data to the documents.
 
 use gleaner_app::{
-    CellView, Estimator, Exploration, FieldView, MissionExport, MissionId, MissionKind,
-    MissionRecord, MissionStatus, NewMission, PlannedMission, Reconstruction, ReconstructionMap,
+    CellView, Exploration, FieldView, MissionExport, MissionId, MissionKind, MissionRecord,
+    MissionStatus, NewMission, PlannedMission, Reconstruction, ReconstructionMap,
     ReconstructionSeries, Scoring, driver,
 };
 use gleaner_ingest::time::format_rfc3339;
