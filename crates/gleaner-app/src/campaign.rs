@@ -609,9 +609,9 @@ pub struct MissionMetrics {
     pub mean_variance: f64,
     /// Share of the sensors *estimated* (not read at T − period: their estimate is not their
     /// own reading) whose true value lies in the estimator's 90% interval, estimate ±
-    /// 1.645·sd; NaN when none was estimated (or results of an older version). A calibrated
+    /// 1.645·sd; None when none was estimated (or results of an older version). A calibrated
     /// model covers 90%.
-    pub coverage90: f64,
+    pub coverage90: Option<f64>,
     /// Root-mean-square error of last value carried forward from what was known before this
     /// mission's flights (after the previous mission's), against the same truth: the error the
     /// operator lived with between the two missions, at its largest. NaN when not measured
@@ -1431,7 +1431,7 @@ struct Errors {
     rmse_kriged: f64,
     mae_kriged: f64,
     mean_variance: f64,
-    coverage90: f64,
+    coverage90: Option<f64>,
     evaluated: usize,
 }
 
@@ -1468,11 +1468,7 @@ fn reconstruction_errors(
         rmse_kriged: (se_k / nf).sqrt(),
         mae_kriged: ae_k / nf,
         mean_variance: var / nf,
-        coverage90: if estimated == 0 {
-            f64::NAN
-        } else {
-            covered as f64 / estimated as f64
-        },
+        coverage90: (estimated > 0).then(|| covered as f64 / estimated as f64),
         evaluated: n,
     }
 }
@@ -1633,7 +1629,7 @@ pub fn metric(m: &MissionMetrics, name: &str) -> f64 {
         "classifier_accuracy" => m.classifier_accuracy.unwrap_or(f64::NAN),
         "lost_readings" => m.lost_readings as f64,
         "mean_sd" => m.mean_variance.sqrt(),
-        "coverage90" => m.coverage90,
+        "coverage90" => m.coverage90.unwrap_or(f64::NAN),
         _ => f64::NAN,
     }
 }

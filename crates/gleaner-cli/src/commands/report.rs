@@ -118,7 +118,7 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
                     m.events_caught,
                     m.rmse_carried_before,
                     m.rmse_kriged_before,
-                    m.coverage90
+                    m.coverage90.map_or(String::new(), |c| c.to_string())
                 )?;
             }
             for v in &run.visits {
@@ -292,10 +292,9 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
             rmse_kriged: f(12, "rmse_kriged")?,
             mae_kriged: f(13, "mae_kriged")?,
             mean_variance: f(14, "mean_variance")?,
-            coverage90: if c.len() > 23 {
-                f(23, "coverage90")?
-            } else {
-                f64::NAN
+            coverage90: match c.get(23).map(String::as_str) {
+                None | Some("") => None,
+                Some(_) => Some(f(23, "coverage90")?),
             },
             evaluated: num(&p, line, "evaluated", &c[15])?,
             staleness_mean_s: f(16, "staleness_mean_s")?,
