@@ -628,6 +628,7 @@ fn reconstruction_sample() -> gleaner_app::Reconstruction {
                 carried: 0.312,
                 kriged: 0.312,
                 variance: 0.0,
+                half90: 0.0,
             },
             SensorEstimate {
                 sensor: SensorId::new("CAF007").unwrap(),
@@ -636,6 +637,7 @@ fn reconstruction_sample() -> gleaner_app::Reconstruction {
                 carried: 0.30,
                 kriged: 0.287,
                 variance: 4e-4,
+                half90: 0.0329,
             },
         ],
     }
