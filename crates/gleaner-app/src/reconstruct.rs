@@ -707,39 +707,49 @@ impl<'a> KrigingInputs<'a> {
     }
 
     /// The kriging of changes' standardised out-of-sample errors `|z|`, for the calibration
-    /// of its intervals: each sensor's latest reading in the change window, estimated as if
-    /// the sensor had been unseen for as long as the sensors unseen now (up to
-    /// [`BACKTEST_AGES`] of their ages, evenly spread): from its reading at or before that
-    /// long before and the changes then known of the sensors outside its cell (cell-mates are
-    /// read together, so they are never known when it is not), against the reading:
+    /// of its intervals: the sensors read last (within [`BACKTEST_FRESH_S`] of the latest
+    /// reading), each estimated at its latest reading as if it had been unseen as long as
+    /// the sensors unseen now are (their ages, up to [`BACKTEST_SAMPLES`] pairs in all, the
+    /// ages evenly spread over their sorted list): from its reading at or before that long
+    /// before and the changes then known of the sensors outside its cell (cell-mates are read
+    /// together, so they are never known when it is not), against the reading:
     /// `|v − v̂| / sd`. Empty for the other estimators, or when no sensor is unseen now.
     fn backtest(&self) -> Vec<f64> {
         if self.estimator != Estimator::Changes {
             return Vec::new();
         }
+        let Some(newest) = self.latest.iter().flatten().map(|l| l.0).max() else {
+            return Vec::new();
+        };
         let mut ages: Vec<i64> = self
             .latest
             .iter()
             .flatten()
             .map(|l| self.at - l.0)
-            .filter(|&a| a > 0)
+            .filter(|&a| a > self.at - newest + BACKTEST_FRESH_S)
             .collect();
         ages.sort_unstable();
-        ages.dedup();
-        if ages.is_empty() {
+        let targets: Vec<usize> = (0..self.latest.len())
+            .filter(|&k| self.latest[k].is_some_and(|l| l.0 >= newest - BACKTEST_FRESH_S))
+            .collect();
+        if ages.is_empty() || targets.is_empty() {
             return Vec::new();
         }
-        let picks = BACKTEST_AGES.min(ages.len());
-        let ages: Vec<i64> = (0..picks)
-            .map(|i| ages[(i * (ages.len() - 1)) / (picks - 1).max(1)])
+        let per = (BACKTEST_SAMPLES / targets.len()).clamp(1, ages.len());
+        let picks: Vec<i64> = (0..per)
+            .map(|i| ages[((2 * i + 1) * ages.len()) / (2 * per)])
             .collect();
         let mut errors = Vec::new();
-        for (k, (times, values)) in self.series.iter().enumerate() {
+        for &k in &targets {
+            let (times, values) = &self.series[k];
             let (Some(&tau), Some(&v)) = (times.last(), values.last()) else {
                 continue;
             };
-            for &age in &ages {
-                let start = times.partition_point(|&t| t <= tau - age);
+            for &age in &picks {
+                // The same gap before this sensor's last reading as the unseen sensor's
+                // before the estimation time.
+                let gap = age - (self.at - tau);
+                let start = times.partition_point(|&t| t <= tau - gap);
                 if start == 0 {
                     continue;
                 }
@@ -839,9 +849,13 @@ fn neighbour_changes(
     out
 }
 
-/// At most this many unseen intervals are back-tested per sensor for the calibration of the
-/// kriging of changes' intervals ([`interval_multiplier`]).
-pub const BACKTEST_AGES: usize = 4;
+/// At most this many (sensor, unseen interval) pairs are back-tested for the calibration of
+/// the kriging of changes' intervals ([`interval_multiplier`]).
+pub const BACKTEST_SAMPLES: usize = 160;
+
+/// Sensors whose latest reading is within this of the newest one count as read last, s
+/// (readings of one visit are stamped within minutes of each other).
+pub const BACKTEST_FRESH_S: i64 = 3_600;
 
 /// Fewest back-tested errors for a calibrated interval; with fewer, `Z90`·sd.
 pub const BACKTEST_MIN: usize = 20;
