@@ -1450,9 +1450,7 @@ fn reconstruction_errors(
         };
         if e.last_time != Some(target) {
             estimated += 1;
-            covered += usize::from(
-                (e.kriged - v).abs() <= e.half90,
-            );
+            covered += usize::from((e.kriged - v).abs() <= e.half90);
         }
         se_c += (e.carried - v).powi(2);
         ae_c += (e.carried - v).abs();

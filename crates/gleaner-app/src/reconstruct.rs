@@ -1346,7 +1346,9 @@ mod tests {
         assert_eq!((c[2].from_s, c[2].to_s), (rel(92), rel(96)));
         assert!((c[2].change + 0.05).abs() < 1e-12);
         // A target read after everyone else: no neighbour knows more.
-        assert!(neighbour_changes(&series, &positions, (1, 99 * DAY), at, 64, |_| false).is_empty());
+        assert!(
+            neighbour_changes(&series, &positions, (1, 99 * DAY), at, 64, |_| false).is_empty()
+        );
     }
 
     /// A series over a range: one row per time, every sensor's mean close to its own

@@ -84,10 +84,8 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
         )));
     }
     let config = project.settings().energy.to_core()?;
-    let (capacity_j, reserve_fraction) = (
-        config.battery.capacity_j,
-        config.battery.reserve_fraction,
-    );
+    let (capacity_j, reserve_fraction) =
+        (config.battery.capacity_j, config.battery.reserve_fraction);
     let left = request.energy_left_j;
     if !(left.is_finite() && left > 0.0 && left <= capacity_j) {
         return Err(AppError::Invalid(format!(

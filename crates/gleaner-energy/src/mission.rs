@@ -587,7 +587,9 @@ mod tests {
         let route = visits(&[(300.0, 400.0), (300.0, 0.0)], 30.0);
         let base = LocalPoint::new(0.0, 0.0);
         let tour = m.breakdown(base, &route).unwrap();
-        let cont = m.continuation(base, base, &route, m.usable_budget_j()).unwrap();
+        let cont = m
+            .continuation(base, base, &route, m.usable_budget_j())
+            .unwrap();
         assert_eq!(cont.total_j, tour.total_j);
         assert_eq!(cont.legs, tour.legs);
         let cfg = EnergyConfig {

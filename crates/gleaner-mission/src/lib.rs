@@ -730,11 +730,21 @@ mod tests {
         let home = replan(&m, ends, &[], 1e9, &opts(Planner::Default)).unwrap();
         let short = home.energy.total_j + 2.5 * m.service_energy_j(30.0);
         let few = replan(&m, ends, rest, short, &opts(Planner::Default)).unwrap();
-        assert!(!few.order.is_empty() && few.order.len() < 5, "{:?}", few.order);
+        assert!(
+            !few.order.is_empty() && few.order.len() < 5,
+            "{:?}",
+            few.order
+        );
         assert!(few.energy.total_j <= short);
         assert!(few.total_score <= ample.total_score);
         // Not even the leg home.
-        let err = replan(&m, ends, rest, 0.5 * home.energy.total_j, &opts(Planner::Default));
+        let err = replan(
+            &m,
+            ends,
+            rest,
+            0.5 * home.energy.total_j,
+            &opts(Planner::Default),
+        );
         assert!(matches!(err, Err(PlanError::Infeasible { .. })));
     }
 

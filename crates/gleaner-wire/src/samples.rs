@@ -200,6 +200,7 @@ pub fn adaptive_mission() -> MissionDoc {
         candidates: Some(5),
         greedy_baseline: None,
         energy_model: Some(paper_model()),
+        continuation: None,
     }
 }
 
@@ -235,5 +236,6 @@ pub fn exploration_sortie() -> MissionDoc {
         candidates: None,
         greedy_baseline: None,
         energy_model: Some(paper_model()),
+        continuation: None,
     }
 }
