@@ -22,7 +22,7 @@ pub struct ReplanRequest {
     pub energy_left_j: f64,
     /// Planner seed [default: the mission's].
     pub seed: Option<u64>,
-    /// Iteration cap of the search [default: the planner's own limits].
+    /// Iteration cap of the search [default: [`REPLAN_ITERATIONS`]].
     pub iterations: Option<u64>,
     /// Wall-clock limit, seconds [default: 1 s].
     pub time_limit_s: Option<f64>,
@@ -53,8 +53,7 @@ pub struct Replan {
     pub solve_seconds: f64,
 }
 
-/// Default wall-clock limit of a re-plan, seconds: an answer in the air is needed now.
-pub const REPLAN_TIME_LIMIT_S: f64 = 1.0;
+pub use gleaner_mission::{REPLAN_ITERATIONS, REPLAN_TIME_LIMIT_S};
 
 /// The use case: the best continuation of mission `request.mission` after `after_stop`
 /// stops with `energy_left_j` joules left — the remaining stops dropped and reordered so
@@ -119,7 +118,7 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
     let options = PlanOptions {
         planner: Planner::Default,
         seed: request.seed.unwrap_or(parent.mission.seed),
-        max_iterations: request.iterations,
+        max_iterations: Some(request.iterations.unwrap_or(REPLAN_ITERATIONS)),
         ..PlanOptions::default()
     }
     .with_time_limit_secs(request.time_limit_s.unwrap_or(REPLAN_TIME_LIMIT_S))

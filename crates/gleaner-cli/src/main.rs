@@ -295,9 +295,9 @@ enum Command {
         /// Wall-clock limit of the search, seconds.
         #[arg(long, default_value_t = gleaner_app::REPLAN_TIME_LIMIT_S)]
         time_limit: f64,
-        /// Iteration cap of the search (deterministic runs).
-        #[arg(long)]
-        iterations: Option<u64>,
+        /// Iteration cap of the search (deterministic answers).
+        #[arg(long, default_value_t = gleaner_app::REPLAN_ITERATIONS)]
+        iterations: u64,
         #[command(flatten)]
         json: JsonArg,
     },
@@ -1002,7 +1002,7 @@ fn run(cli: Cli) -> Result<()> {
                     after_stop,
                     energy_left_j: energy_left,
                     seed,
-                    iterations,
+                    iterations: Some(iterations),
                     time_limit_s: Some(time_limit),
                 },
             )?;

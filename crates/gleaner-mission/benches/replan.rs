@@ -1,11 +1,11 @@
 //! Benchmark: re-planning in the air on a 42-cell field (CAF's size) — the continuation after
 //! 2 of 12 stops (10 remaining), and the bound with all 42 cells remaining — at the default
-//! planner with the replan command's 1 s time limit.
+//! planner with the replan command's defaults (iteration cap, 1 s time limit).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use gleaner_energy::{EnergyConfig, MissionEnergyModel};
 use gleaner_field::LocalPoint;
-use gleaner_mission::{Candidate, PlanOptions, replan};
+use gleaner_mission::{Candidate, PlanOptions, REPLAN_ITERATIONS, replan};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -30,8 +30,10 @@ fn bench(c: &mut Criterion) {
         .expect("flight model");
     let all = cells();
     let base = LocalPoint::new(0.0, 0.0);
+    // The replan command's defaults: its iteration cap within a 1 s limit.
     let options = PlanOptions {
         time_limit: Duration::from_secs(1),
+        max_iterations: Some(REPLAN_ITERATIONS),
         ..PlanOptions::default()
     };
     let mut group = c.benchmark_group("replan");
@@ -51,8 +53,14 @@ fn bench(c: &mut Criterion) {
     });
     group.bench_function("all_42_cells_remaining", |b| {
         b.iter(|| {
-            replan(&model, (all[20].centre, base), black_box(&all), 40_000.0, &options)
-                .expect("feasible")
+            replan(
+                &model,
+                (all[20].centre, base),
+                black_box(&all),
+                40_000.0,
+                &options,
+            )
+            .expect("feasible")
         })
     });
     group.finish();

@@ -300,6 +300,13 @@ pub fn plan_sorties_valued<F: FnMut(&[usize]) -> f64>(
     )
 }
 
+/// Default wall-clock limit of [`replan`] in the air, seconds (an answer is needed now).
+pub const REPLAN_TIME_LIMIT_S: f64 = 1.0;
+
+/// Default iteration cap of [`replan`]'s search: deterministic answers, well within 100 ms
+/// on a 42-cell field (BENCHMARKS.md).
+pub const REPLAN_ITERATIONS: u64 = 200;
+
 /// Re-plans the rest of a sortie in the air. The aircraft is at `start` (local frame, m, at
 /// the flight altitude) with `budget_j` joules it may still spend (the energy left less the
 /// reserve); `remaining` are the stops not flown yet (a stop with `score <= 0` is never

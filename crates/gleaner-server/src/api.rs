@@ -109,7 +109,7 @@ pub struct ReplanBody {
     pub energy_left_j: f64,
     /// Planner seed [default: the mission's].
     pub seed: Option<u64>,
-    /// Stop the search after this many iterations (machine-independent answers).
+    /// Stop the search after this many iterations [default: 200, the replan command's cap].
     pub iterations: Option<u64>,
     /// Planner time limit, s [default: 1; at most the server's maximum].
     pub time_limit_s: Option<f64>,
