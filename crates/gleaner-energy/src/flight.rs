@@ -165,7 +165,11 @@ impl FlightEnergyModel {
     /// The energy breakdown of `flight` as commanded: from its home through its waypoints and
     /// back, at its speed and altitude, hovering its holds; positions projected into
     /// `TransverseMercator::local(origin)` (the planner's frame: the project's base station).
-    /// Compare `total_j` with `usable_budget_j`.
+    /// A waypoint holding exactly 0 s is a turn point of a detour around a no-fly zone (a
+    /// stop always holds at least [`HOLD_STEP_S`]): it belongs to the leg to the next stop (or
+    /// to the return leg), priced by [`MissionEnergyModel::breakdown_paths`] as the planner
+    /// priced it; a flight of turn points only is priced as stops. Compare `total_j` with
+    /// `usable_budget_j`.
     ///
     /// # Errors
     /// As [`FlightEnergyModel::model`]; negative or non-finite holds.
@@ -177,15 +181,22 @@ impl FlightEnergyModel {
         let model = self.model(flight.speed_mps, flight.altitude_m)?;
         let frame = TransverseMercator::local(origin);
         let home = frame.forward(flight.home);
-        let visits: Vec<CellVisit> = flight
-            .waypoints
-            .iter()
-            .map(|&(p, hold_s)| CellVisit {
-                centre: frame.forward(p),
-                hover_s: hold_s,
-            })
-            .collect();
-        model.breakdown(home, &visits)
+        let all_turns = flight.waypoints.iter().all(|&(_, hold_s)| hold_s == 0.0);
+        let mut visits: Vec<CellVisit> = Vec::with_capacity(flight.waypoints.len());
+        let mut via: Vec<Vec<LocalPoint>> = vec![Vec::new()];
+        for &(p, hold_s) in &flight.waypoints {
+            let centre = frame.forward(p);
+            if hold_s == 0.0 && !all_turns {
+                via.last_mut().expect("never empty").push(centre);
+            } else {
+                visits.push(CellVisit {
+                    centre,
+                    hover_s: hold_s,
+                });
+                via.push(Vec::new());
+            }
+        }
+        model.breakdown_paths(home, &visits, &via)
     }
 }
 
