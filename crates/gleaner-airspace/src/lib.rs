@@ -44,6 +44,8 @@
 
 use std::sync::OnceLock;
 
+pub mod fixture;
+
 pub use geo::{Coord, Geometry, LineString, MultiPolygon, Polygon};
 use geo::{
     BoundingRect, Contains, Intersects, Line, Rect,

@@ -229,12 +229,25 @@ impl ProjectAirspace {
     /// The turn points of the legs of a flown sequence `points` (base, stops..., base; local
     /// frame, m) as WGS84 positions (on the files' 1e-7° grid, as planned): one list per
     /// leg. `None` when a leg has no path (a stop inside a zone, or cut off).
+    /// As in [`Detours`], two stops the zones separate are joined through the base
+    /// (`points[0]`).
     pub fn legs_via(&self, points: &[LocalPoint]) -> Option<Vec<Vec<LatLon>>> {
+        let base = *points.first()?;
+        let pair = |a: LocalPoint, b: LocalPoint| -> Option<Vec<Coord<f64>>> {
+            let pair = [Coord { x: a.e, y: a.n }, Coord { x: b.e, y: b.n }];
+            self.airspace.paths(&pair).via(0, 1).map(<[_]>::to_vec)
+        };
         let mut out = Vec::with_capacity(points.len().saturating_sub(1));
         for w in points.windows(2) {
-            let pair = [Coord { x: w[0].e, y: w[0].n }, Coord { x: w[1].e, y: w[1].n }];
-            let paths = self.airspace.paths(&pair);
-            let via = paths.via(0, 1)?;
+            let via = match pair(w[0], w[1]) {
+                Some(v) => v,
+                None => {
+                    let mut v = pair(w[0], base)?;
+                    v.push(Coord { x: base.e, y: base.n });
+                    v.extend(pair(base, w[1])?);
+                    v
+                }
+            };
             out.push(
                 via.iter()
                     .map(|c| {
@@ -246,6 +259,38 @@ impl ProjectAirspace {
             );
         }
         Some(out)
+    }
+
+    /// The turn points of every leg of the stored mission `m` (one list per stop, one for the
+    /// return leg), recomputed from the zones as they are now.
+    ///
+    /// # Errors
+    /// [`AppError::Invalid`] when a stop now lies in a zone, or a leg has no path: plan again.
+    pub fn mission_via(&self, m: &gleaner_store::MissionRecord) -> Result<Vec<Vec<LatLon>>> {
+        if m.mission.stops.is_empty() {
+            return Ok(Vec::new());
+        }
+        let base = flight_point(&self.frame, m.mission.profile.base);
+        let mut points = vec![base];
+        for s in &m.mission.stops {
+            let c = self.frame.forward(s.centre);
+            if let Some(why) = self.blocked(c) {
+                return Err(AppError::Invalid(format!(
+                    "mission #{}: stop {} (cell {}) is {why}; plan it again",
+                    m.id,
+                    s.order + 1,
+                    s.cell
+                )));
+            }
+            points.push(c);
+        }
+        points.push(base);
+        self.legs_via(&points).ok_or_else(|| {
+            AppError::Invalid(format!(
+                "mission #{}: a leg has no path around the zones; plan it again",
+                m.id
+            ))
+        })
     }
 
     /// The underlying airspace (local frame, m).
