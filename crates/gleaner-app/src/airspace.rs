@@ -334,6 +334,76 @@ pub fn unreachable_cells(
     Ok(out)
 }
 
+/// Polygons in `frame` (local east/north metres) as a GeoJSON FeatureCollection of Polygons
+/// in WGS84 `[lon, lat]` degrees (rounded to 1e-7°), one Feature per polygon with its
+/// `name` (`zone k`): the file `[field] no_fly` or `geofence` reads.
+pub fn polygons_geojson(frame: &TransverseMercator, polygons: &[geo::Polygon<f64>]) -> String {
+    let features: Vec<String> = polygons
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let ring = |r: &geo::LineString<f64>| {
+                let pts: Vec<String> = r
+                    .coords()
+                    .map(|c| {
+                        let q = gleaner_energy::flight_position(
+                            frame.inverse(LocalPoint::new(c.x, c.y)),
+                        );
+                        format!("[{:.7},{:.7}]", q.lon(), q.lat())
+                    })
+                    .collect();
+                format!("[{}]", pts.join(","))
+            };
+            let rings: Vec<String> = std::iter::once(p.exterior())
+                .chain(p.interiors())
+                .map(ring)
+                .collect();
+            format!(
+                r#"{{"type":"Feature","properties":{{"name":"zone {k}"}},"geometry":{{"type":"Polygon","coordinates":[{}]}}}}"#,
+                rings.join(",")
+            )
+        })
+        .collect();
+    format!(
+        "{{\"type\":\"FeatureCollection\",\"features\":[\n{}\n]}}\n",
+        features.join(",\n")
+    )
+}
+
+/// `count` seeded no-fly polygons (4 to 7 corners, 8 to 25 m across from their centre) over
+/// the box of `points` (local frame, m; e.g. the cell centres) grown by 20 m, each at least
+/// 60 m from `base` (m), as a GeoJSON file's text ([`polygons_geojson`]): the fixture of the
+/// zone tests and benchmarks. Deterministic for a seed.
+pub fn seeded_no_fly_geojson(
+    frame: &TransverseMercator,
+    seed: u64,
+    count: usize,
+    points: &[LocalPoint],
+    base: LocalPoint,
+) -> String {
+    let (mut lo, mut hi) = (
+        Coord { x: base.e, y: base.n },
+        Coord { x: base.e, y: base.n },
+    );
+    for p in points {
+        lo.x = lo.x.min(p.e);
+        lo.y = lo.y.min(p.n);
+        hi.x = hi.x.max(p.e);
+        hi.y = hi.y.max(p.n);
+    }
+    let grow = 20.0;
+    let polygons = gleaner_airspace::fixture::seeded_polygons(
+        seed,
+        count,
+        Coord { x: lo.x - grow, y: lo.y - grow },
+        Coord { x: hi.x + grow, y: hi.y + grow },
+        (8.0, 25.0),
+        &[Coord { x: base.e, y: base.n }],
+        60.0,
+    );
+    polygons_geojson(frame, &polygons)
+}
+
 /// A geometry in WGS84 `[lon, lat]` projected into `frame` (x = east, y = north, m).
 fn to_local(frame: &TransverseMercator, g: &Geometry<f64>) -> Geometry<f64> {
     use geo::MapCoords;
