@@ -299,6 +299,16 @@ impl ProjectAirspace {
     }
 }
 
+/// The turn points of a stored mission's legs for its maps (see
+/// [`ProjectAirspace::mission_via`]); empty without zones, or when they cannot be computed
+/// (a stop now in a zone: the export refuses such a mission, a map draws it straight).
+pub fn stored_via<S>(project: &Project<S>, m: &gleaner_store::MissionRecord) -> Vec<Vec<LatLon>> {
+    match of_project(project) {
+        Ok(Some(a)) => a.mission_via(m).unwrap_or_default(),
+        _ => Vec::new(),
+    }
+}
+
 /// The cells of `field` (and the base) the flight cannot reach under `airspace`: their centre
 /// (at `centres`, local frame, m) blocked, or cut off from the base (`detours` over base +
 /// centres). Errors when the base itself is blocked: nothing can be flown.
@@ -332,6 +342,11 @@ pub fn unreachable_cells(
         });
     }
     Ok(out)
+}
+
+/// The rectangle from (`e0`, `n0`) to (`e1`, `n1`), local frame, m (a geofence fixture).
+pub fn rectangle(e0: f64, n0: f64, e1: f64, n1: f64) -> geo::Polygon<f64> {
+    geo::Rect::new(geo::coord! {x: e0, y: n0}, geo::coord! {x: e1, y: n1}).to_polygon()
 }
 
 /// Polygons in `frame` (local east/north metres) as a GeoJSON FeatureCollection of Polygons

@@ -192,9 +192,9 @@ pub fn exploration_map_svg(
         svg.line(format_args!("</g>"));
     }
     svg.line(format_args!(r#"<g id="base">"#));
-    for (k, (base, _)) in routes.iter().enumerate() {
+    for (k, (base, _, _)) in routes.iter().enumerate() {
         // One marker per distinct base.
-        if routes[..k].iter().any(|(b, _)| b == base) {
+        if routes[..k].iter().any(|(b, _, _)| b == base) {
             continue;
         }
         let (x, y) = view.pt(*base);

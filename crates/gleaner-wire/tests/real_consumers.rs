@@ -175,11 +175,7 @@ fn zoned_caf_exports() -> (tempfile::TempDir, Vec<(FieldDoc, MissionDoc)>) {
         lo = (lo.0.min(c.e), lo.1.min(c.n));
         hi = (hi.0.max(c.e), hi.1.max(c.n));
     }
-    let fence = geo::Rect::new(
-        geo::coord! {x: lo.0 - 60.0, y: lo.1 - 60.0},
-        geo::coord! {x: hi.0 + 60.0, y: hi.1 + 60.0},
-    )
-    .to_polygon();
+    let fence = app::airspace::rectangle(lo.0 - 60.0, lo.1 - 60.0, hi.0 + 60.0, hi.1 + 60.0);
     let geofence = tmp.path().join("fence.geojson");
     std::fs::write(
         &geofence,
