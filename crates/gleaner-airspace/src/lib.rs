@@ -157,8 +157,9 @@ fn mitred(distance: f64) -> BufferStyle<f64> {
     BufferStyle::new(distance).line_join(LineJoin::Miter(MITER_LIMIT))
 }
 
-/// The miter limit handed to `geo`'s buffer.
-const MITER_LIMIT: f64 = 2.0;
+/// The miter limit handed to `geo`'s buffer: the sharpest corner angle still mitred, rad
+/// (sharper corners are bevelled: two corners instead of a far spike).
+const MITER_LIMIT: f64 = 0.5;
 
 /// Signed area of a closed ring (positive = counter-clockwise), m².
 fn signed_area(ring: &LineString<f64>) -> f64 {
