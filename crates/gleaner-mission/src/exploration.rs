@@ -911,15 +911,20 @@ mod tests {
                 LocalPoint::new(500.0 * a.cos(), 500.0 * a.sin())
             })
             .collect();
-        let tour = giant_tour(&cells, &ExplorationOptions::default()).unwrap();
+        let legs = Legs {
+            base: LocalPoint::new(0.0, 0.0),
+            cells: &cells,
+            detours: None,
+        };
+        let tour = giant_tour(&legs, &ExplorationOptions::default()).unwrap();
         let mut sorted = tour.clone();
         sorted.sort_unstable();
         assert_eq!(sorted, (0..n).collect::<Vec<_>>());
         let polygon = n as f64 * 2.0 * 500.0 * (std::f64::consts::PI / n as f64).sin();
         assert!(
-            (cycle_length(&cells, &tour) - polygon).abs() < 1e-6,
+            (cycle_length(&legs, &tour) - polygon).abs() < 1e-6,
             "{}",
-            cycle_length(&cells, &tour)
+            cycle_length(&legs, &tour)
         );
     }
 
@@ -933,22 +938,59 @@ mod tests {
         ];
         let to_base: Vec<f64> = cells.iter().map(|c| m.energy_per_metre_j() * c.e).collect();
         let service = [m.service_energy_j(30.0); 3];
-        let cost = SplitCost {
+        let base = LocalPoint::new(0.0, 0.0);
+        let legs = Legs {
+            base,
             cells: &cells,
+            detours: None,
+        };
+        let cost = SplitCost {
+            legs: &legs,
             epm: m.energy_per_metre_j(),
             to_base: &to_base,
             service_j: &service,
             fixed_j: 0.0,
             budget: m.usable_budget_j(),
         };
-        let base = LocalPoint::new(0.0, 0.0);
-        let merged = eliminate_sorties(&cost, base, vec![vec![1], vec![0], vec![2]]);
+        let merged = eliminate_sorties(&cost, vec![vec![1], vec![0], vec![2]]);
         assert_eq!(merged.len(), 1);
         let mut cells_visited = merged[0].clone();
         cells_visited.sort_unstable();
         assert_eq!(cells_visited, vec![0, 1, 2]);
         // Collinear cells: any out-and-back order flies 2 x 180 m.
-        assert!((path_length(&cells, base, &merged[0]) - 360.0).abs() < 1e-9);
+        assert!((path_length(&legs, &merged[0]) - 360.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn straight_detours_plan_the_same_sorties_and_blocked_legs_are_longer() {
+        let m = paper();
+        let cells = grid(6, 4);
+        let service = vec![m.service_energy_j(30.0); cells.len()];
+        let base = LocalPoint::new(0.0, 0.0);
+        let mut pts = vec![base];
+        pts.extend(cells.iter().copied());
+        let straight = Detours::straight(&pts);
+        let o = ExplorationOptions::default();
+        let plain = plan_exploration(&m, base, &cells, &service, &o).unwrap();
+        let routed =
+            plan_exploration_routed(&m, base, &cells, &service, &o, Some(&straight)).unwrap();
+        assert_eq!(plain.sorties.len(), routed.sorties.len());
+        assert!((plain.total_energy_j - routed.total_energy_j).abs() <= 1e-6 * plain.total_energy_j);
+        // Every leg to cell 0 detours 30 m north: the plan flies them and prices them.
+        let detour = Detours::new(&pts, |i, j| {
+            Some(if i == 1 || j == 1 {
+                vec![LocalPoint::new(0.5 * (pts[i].e + pts[j].e), 30.0 + pts[i].n.max(pts[j].n))]
+            } else {
+                Vec::new()
+            })
+        });
+        let p = plan_exploration_routed(&m, base, &cells, &service, &o, Some(&detour)).unwrap();
+        assert!(p.total_energy_j > plain.total_energy_j);
+        let mut seen: Vec<usize> = p.sorties.iter().flat_map(|s| s.cells.clone()).collect();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..cells.len()).collect::<Vec<_>>());
+        let err = plan_exploration_routed(&m, base, &cells[1..], &service[1..], &o, Some(&detour));
+        assert!(err.is_err(), "detours over the wrong node count");
     }
 
     #[test]

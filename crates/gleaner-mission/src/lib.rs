@@ -644,6 +644,71 @@ mod tests {
     }
 
     #[test]
+    fn detours_are_priced_and_unreachable_cells_never_planned() {
+        let cells = grid40();
+        let m = model();
+        let mut pts = vec![LocalPoint::default()];
+        pts.extend(cells.iter().map(|c| c.centre));
+        // Cell 3 is unreachable; legs touching cell 5 turn 25 m south of their midpoint.
+        let d = Detours::new(&pts, |i, j| {
+            if i == 4 || j == 4 {
+                None
+            } else if i == 6 || j == 6 {
+                let (a, b) = (pts[i], pts[j]);
+                Some(vec![LocalPoint::new(0.5 * (a.e + b.e), 0.5 * (a.n + b.n) - 25.0)])
+            } else {
+                Some(Vec::new())
+            }
+        });
+        let plans = plan_sorties_routed(
+            &m,
+            LocalPoint::default(),
+            &cells,
+            &opts(Planner::Default),
+            2,
+            Some(&d),
+        )
+        .unwrap();
+        let straight = Detours::straight(&pts);
+        let plain = plan_sorties(&m, LocalPoint::default(), &cells, &opts(Planner::Default), 2)
+            .unwrap();
+        let same = plan_sorties_routed(
+            &m,
+            LocalPoint::default(),
+            &cells,
+            &opts(Planner::Default),
+            2,
+            Some(&straight),
+        )
+        .unwrap();
+        assert_eq!(
+            plain.iter().map(|p| p.total_score).sum::<f64>(),
+            same.iter().map(|p| p.total_score).sum::<f64>()
+        );
+        for p in &plans {
+            assert!(!p.order.contains(&3));
+            assert!(p.energy.feasible);
+            assert_eq!(p.via.len(), p.order.len() + 1);
+            // The breakdown priced the polylines: leg distances are the detours' lengths.
+            let mut prev = 0;
+            for (k, &c) in p.order.iter().enumerate() {
+                assert_eq!(p.energy.legs[k].distance_m, d.length_m(prev, c + 1));
+                prev = c + 1;
+            }
+        }
+        let e = plan_sorties_routed(
+            &m,
+            LocalPoint::default(),
+            &cells[1..],
+            &opts(Planner::Default),
+            1,
+            Some(&d),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("detours over 41 nodes"), "{e}");
+    }
+
+    #[test]
     fn nonpositive_scores_are_never_planned() {
         let cells = [
             cell(20.0, 20.0, 0.0),
