@@ -175,7 +175,7 @@ pub fn load(
 ///
 /// # Errors
 /// As [`load`].
-pub fn of_project<S>(project: &Project<S>) -> Result<Option<ProjectAirspace>> {
+pub fn of_project<S: gleaner_store::Store>(project: &Project<S>) -> Result<Option<ProjectAirspace>> {
     let base = project.settings().base()?;
     load(
         &project.settings().field,
@@ -302,7 +302,7 @@ impl ProjectAirspace {
 /// The turn points of a stored mission's legs for its maps (see
 /// [`ProjectAirspace::mission_via`]); empty without zones, or when they cannot be computed
 /// (a stop now in a zone: the export refuses such a mission, a map draws it straight).
-pub fn stored_via<S>(project: &Project<S>, m: &gleaner_store::MissionRecord) -> Vec<Vec<LatLon>> {
+pub fn stored_via<S: gleaner_store::Store>(project: &Project<S>, m: &gleaner_store::MissionRecord) -> Vec<Vec<LatLon>> {
     match of_project(project) {
         Ok(Some(a)) => a.mission_via(m).unwrap_or_default(),
         _ => Vec::new(),

@@ -664,7 +664,8 @@ pub(crate) fn plan_scored<S: Store>(
         ),
     };
     let mission = new_mission(&plan);
-    let frame = k.field.frame();
+    let frame = &k.field.frame().clone();
+    let first_via = via_positions(frame, &plan.via);
     let extra_sorties: Vec<ExtraSortie> = plans
         .iter()
         .map(|p| ExtraSortie {
@@ -687,7 +688,7 @@ pub(crate) fn plan_scored<S: Store>(
         seed,
         time_limit_s,
         extra_sorties,
-        via: via_positions(frame, &plan.via),
+        via: first_via,
         unreachable,
     };
     if !request.dry_run {
