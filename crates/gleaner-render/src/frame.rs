@@ -388,21 +388,9 @@ pub(crate) fn fit_map(
     }
 }
 
-/// The page points of a route from `base` through `stops` and back, with the marker radius
-/// at each (`base_r` at the base, `stop_r` at the stops), for [`draw_route`].
-pub(crate) fn route_points(
-    view: &MapView,
-    base: (f64, f64),
-    stops: &[(f64, f64)],
-    base_r: f64,
-    stop_r: f64,
-) -> (Vec<(f64, f64)>, Vec<f64>) {
-    route_points_via(view, base, stops, &[], base_r, stop_r)
-}
-
-/// [`route_points`] through the turn points of legs flown around no-fly zones (`via[k]`
-/// before stop k, `via[stops.len()]` on the return leg; local frame, m): turn points have
-/// radius 0.
+/// The route's points on the page (pt) and the marker radius at each (pt): base, stops,
+/// base, through the turn points of legs flown around no-fly zones (`via[k]` before stop k,
+/// `via[stops.len()]` on the return leg; local frame, m), which have radius 0.
 pub(crate) fn route_points_via(
     view: &MapView,
     base: (f64, f64),
