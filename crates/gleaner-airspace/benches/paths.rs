@@ -9,7 +9,10 @@ fn zones(seed: u64) -> Vec<Geometry<f64>> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     (0..20)
         .map(|_| {
-            let (cx, cy) = (rng.random_range(-400.0..400.0), rng.random_range(-250.0..250.0));
+            let (cx, cy) = (
+                rng.random_range(-400.0..400.0),
+                rng.random_range(-250.0..250.0),
+            );
             let k = rng.random_range(4..8);
             let mut ring: Vec<(f64, f64)> = (0..k)
                 .map(|i| {

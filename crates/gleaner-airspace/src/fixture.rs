@@ -42,10 +42,7 @@ pub fn seeded_polygons(
                 y: rng.uniform(min.y, max.y),
             };
             let reach = keep_away_m + radius_m.1;
-            if avoid
-                .iter()
-                .any(|a| (a.x - c.x).hypot(a.y - c.y) < reach)
-            {
+            if avoid.iter().any(|a| (a.x - c.x).hypot(a.y - c.y) < reach) {
                 continue;
             }
             let k = 4 + (rng.next() % 4) as usize;

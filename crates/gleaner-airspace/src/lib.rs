@@ -46,11 +46,11 @@ use std::sync::OnceLock;
 
 pub mod fixture;
 
-pub use geo::{Coord, Geometry, LineString, MultiPolygon, Polygon};
 use geo::{
     BoundingRect, Contains, Intersects, Line, Rect,
     algorithm::buffer::{Buffer, BufferStyle, LineJoin},
 };
+pub use geo::{Coord, Geometry, LineString, MultiPolygon, Polygon};
 use thiserror::Error;
 
 /// How much room the flight keeps from the zones.

@@ -33,7 +33,10 @@ fn check_path(airspace: &Airspace, a: Coord<f64>, via: &[Coord<f64>], b: Coord<f
         );
         total += dist(w[0], w[1]);
     }
-    assert!((total - len).abs() <= 1e-9 * len.max(1.0), "{total} vs {len}");
+    assert!(
+        (total - len).abs() <= 1e-9 * len.max(1.0),
+        "{total} vs {len}"
+    );
 }
 
 #[test]
@@ -79,18 +82,33 @@ fn points_inside_a_zone_or_outside_the_fence_are_blocked() {
         Rect::new(coord! {x: -100.0, y: -100.0}, coord! {x: 100.0, y: 100.0}).to_polygon(),
     ]);
     let airspace = Airspace::new(
-        &[rect(10.0, 10.0, 20.0, 20.0), rect(-50.0, -50.0, -40.0, -40.0)],
+        &[
+            rect(10.0, 10.0, 20.0, 20.0),
+            rect(-50.0, -50.0, -40.0, -40.0),
+        ],
         Some(&fence),
         opts(5.0),
     )
     .unwrap();
-    assert_eq!(airspace.blocked(c(15.0, 15.0)), Some(Blocked::NoFly { zone: 0 }));
+    assert_eq!(
+        airspace.blocked(c(15.0, 15.0)),
+        Some(Blocked::NoFly { zone: 0 })
+    );
     // Within the buffer of zone 1.
-    assert_eq!(airspace.blocked(c(-37.0, -45.0)), Some(Blocked::NoFly { zone: 1 }));
+    assert_eq!(
+        airspace.blocked(c(-37.0, -45.0)),
+        Some(Blocked::NoFly { zone: 1 })
+    );
     assert_eq!(airspace.blocked(c(0.0, 0.0)), None);
     // Inside the fence but within 5 m of its edge.
-    assert_eq!(airspace.blocked(c(97.0, 0.0)), Some(Blocked::OutsideGeofence));
-    assert_eq!(airspace.blocked(c(200.0, 0.0)), Some(Blocked::OutsideGeofence));
+    assert_eq!(
+        airspace.blocked(c(97.0, 0.0)),
+        Some(Blocked::OutsideGeofence)
+    );
+    assert_eq!(
+        airspace.blocked(c(200.0, 0.0)),
+        Some(Blocked::OutsideGeofence)
+    );
     let paths = airspace.paths(&[c(0.0, 0.0), c(15.0, 15.0)]);
     assert_eq!(paths.length_m(0, 1), None);
     assert_eq!(paths.length_m(1, 1), None);
@@ -127,13 +145,23 @@ fn a_concave_geofence_is_followed_inside() {
 fn overlapping_zones_merge_and_lines_are_buffered() {
     let line = Geometry::LineString(LineString::from(vec![(50.0, -100.0), (50.0, 100.0)]));
     let airspace = Airspace::new(
-        &[rect(0.0, 0.0, 30.0, 30.0), rect(20.0, 20.0, 40.0, 40.0), line],
+        &[
+            rect(0.0, 0.0, 30.0, 30.0),
+            rect(20.0, 20.0, 40.0, 40.0),
+            line,
+        ],
         None,
         opts(3.0),
     )
     .unwrap();
-    assert_eq!(airspace.blocked(c(50.0, 90.0)), Some(Blocked::NoFly { zone: 2 }));
-    assert_eq!(airspace.blocked(c(52.9, 0.0)), Some(Blocked::NoFly { zone: 2 }));
+    assert_eq!(
+        airspace.blocked(c(50.0, 90.0)),
+        Some(Blocked::NoFly { zone: 2 })
+    );
+    assert_eq!(
+        airspace.blocked(c(52.9, 0.0)),
+        Some(Blocked::NoFly { zone: 2 })
+    );
     assert_eq!(airspace.blocked(c(53.1, 0.0)), None);
     let (a, b) = (c(0.0, 60.0), c(100.0, 60.0));
     let paths = airspace.paths(&[a, b]);

@@ -118,7 +118,10 @@ pub fn load(
                 Geometry::MultiPolygon(mp) => mp.0,
                 _ => Vec::new(),
             };
-            fence.get_or_insert_with(|| MultiPolygon(Vec::new())).0.extend(polygons);
+            fence
+                .get_or_insert_with(|| MultiPolygon(Vec::new()))
+                .0
+                .extend(polygons);
             zones.push(view);
         }
         if fence.is_none() {
@@ -175,7 +178,9 @@ pub fn load(
 ///
 /// # Errors
 /// As [`load`].
-pub fn of_project<S: gleaner_store::Store>(project: &Project<S>) -> Result<Option<ProjectAirspace>> {
+pub fn of_project<S: gleaner_store::Store>(
+    project: &Project<S>,
+) -> Result<Option<ProjectAirspace>> {
     let base = project.settings().base()?;
     load(
         &project.settings().field,
@@ -243,7 +248,10 @@ impl ProjectAirspace {
                 Some(v) => v,
                 None => {
                     let mut v = pair(w[0], base)?;
-                    v.push(Coord { x: base.e, y: base.n });
+                    v.push(Coord {
+                        x: base.e,
+                        y: base.n,
+                    });
                     v.extend(pair(base, w[1])?);
                     v
                 }
@@ -302,7 +310,10 @@ impl ProjectAirspace {
 /// The turn points of a stored mission's legs for its maps (see
 /// [`ProjectAirspace::mission_via`]); empty without zones, or when they cannot be computed
 /// (a stop now in a zone: the export refuses such a mission, a map draws it straight).
-pub fn stored_via<S: gleaner_store::Store>(project: &Project<S>, m: &gleaner_store::MissionRecord) -> Vec<Vec<LatLon>> {
+pub fn stored_via<S: gleaner_store::Store>(
+    project: &Project<S>,
+    m: &gleaner_store::MissionRecord,
+) -> Vec<Vec<LatLon>> {
     match of_project(project) {
         Ok(Some(a)) => a.mission_via(m).unwrap_or_default(),
         _ => Vec::new(),
@@ -397,8 +408,14 @@ pub fn seeded_no_fly_geojson(
     base: LocalPoint,
 ) -> String {
     let (mut lo, mut hi) = (
-        Coord { x: base.e, y: base.n },
-        Coord { x: base.e, y: base.n },
+        Coord {
+            x: base.e,
+            y: base.n,
+        },
+        Coord {
+            x: base.e,
+            y: base.n,
+        },
     );
     for p in points {
         lo.x = lo.x.min(p.e);
@@ -410,10 +427,19 @@ pub fn seeded_no_fly_geojson(
     let polygons = gleaner_airspace::fixture::seeded_polygons(
         seed,
         count,
-        Coord { x: lo.x - grow, y: lo.y - grow },
-        Coord { x: hi.x + grow, y: hi.y + grow },
+        Coord {
+            x: lo.x - grow,
+            y: lo.y - grow,
+        },
+        Coord {
+            x: hi.x + grow,
+            y: hi.y + grow,
+        },
         (8.0, 25.0),
-        &[Coord { x: base.e, y: base.n }],
+        &[Coord {
+            x: base.e,
+            y: base.n,
+        }],
         60.0,
     );
     polygons_geojson(frame, &polygons)
@@ -424,9 +450,8 @@ fn to_local(frame: &TransverseMercator, g: &Geometry<f64>) -> Geometry<f64> {
     use geo::MapCoords;
     g.map_coords(|c| {
         // Positions were checked on reading; an invalid one cannot reach here.
-        let p = LatLon::new(c.y, c.x).map_or(LocalPoint::new(f64::NAN, f64::NAN), |p| {
-            frame.forward(p)
-        });
+        let p =
+            LatLon::new(c.y, c.x).map_or(LocalPoint::new(f64::NAN, f64::NAN), |p| frame.forward(p));
         Coord { x: p.e, y: p.n }
     })
 }
@@ -517,12 +542,17 @@ fn ring(ps: &[geojson::Position], at: &str) -> std::result::Result<Vec<[f64; 2]>
         ));
     }
     if r.first() != r.last() {
-        return Err(format!("{at}: the ring is not closed (first position != last)"));
+        return Err(format!(
+            "{at}: the ring is not closed (first position != last)"
+        ));
     }
     Ok(r)
 }
 
-fn polygon(rings: &[Vec<geojson::Position>], at: &str) -> std::result::Result<Vec<Vec<[f64; 2]>>, String> {
+fn polygon(
+    rings: &[Vec<geojson::Position>],
+    at: &str,
+) -> std::result::Result<Vec<Vec<[f64; 2]>>, String> {
     if rings.is_empty() {
         return Err(format!("{at}: a polygon without rings"));
     }
@@ -680,7 +710,10 @@ mod tests {
             let name = write(dir.path(), "zones.geojson", text);
             let e = load(&settings_with(None, Some(name)), dir.path(), &frame).unwrap_err();
             let msg = e.to_string();
-            assert!(msg.contains("zones.geojson") && msg.contains(expected), "{msg}");
+            assert!(
+                msg.contains("zones.geojson") && msg.contains(expected),
+                "{msg}"
+            );
         }
         let line = r#"{"type":"LineString","coordinates":[[-117.08,46.78],[-117.07,46.78]]}"#;
         let name = write(dir.path(), "fence.geojson", line);
@@ -692,7 +725,10 @@ mod tests {
             &frame,
         )
         .unwrap_err();
-        assert!(e.to_string().contains("missing.geojson: cannot read"), "{e}");
+        assert!(
+            e.to_string().contains("missing.geojson: cannot read"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -4,8 +4,8 @@
 
 use gleaner_energy::CellVisit;
 use gleaner_energy::MissionEnergyModel;
-use gleaner_field::{LocalPoint, UnixSeconds};
 use gleaner_field::LatLon;
+use gleaner_field::{LocalPoint, UnixSeconds};
 use gleaner_mission::Detours;
 use gleaner_mission::exploration::{
     ExplorationError, ExplorationOptions, ExplorationPlan, plan_exploration,

@@ -183,7 +183,10 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
                 .geofence
                 .as_ref()
                 .map(|p| relative_to(p, &request.dir)),
-            no_fly: request.no_fly.as_ref().map(|p| relative_to(p, &request.dir)),
+            no_fly: request
+                .no_fly
+                .as_ref()
+                .map(|p| relative_to(p, &request.dir)),
             no_fly_buffer_m: request
                 .no_fly_buffer_m
                 .unwrap_or(crate::settings::DEFAULT_NO_FLY_BUFFER_M),

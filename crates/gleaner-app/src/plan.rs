@@ -311,8 +311,13 @@ pub(crate) fn routing<S: Store>(
     project: &Project<S>,
     k: &Knowledge,
     points: &FlightPoints,
-) -> Result<Option<(crate::airspace::ProjectAirspace, Detours, Vec<crate::airspace::Unreachable>)>>
-{
+) -> Result<
+    Option<(
+        crate::airspace::ProjectAirspace,
+        Detours,
+        Vec<crate::airspace::Unreachable>,
+    )>,
+> {
     let Some(airspace) = crate::airspace::of_project(project)? else {
         return Ok(None);
     };

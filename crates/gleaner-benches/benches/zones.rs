@@ -64,7 +64,8 @@ fn caf(dir: &std::path::Path, zones: bool) -> Project<AnyStore> {
         lo = (lo.0.min(c.e), lo.1.min(c.n));
         hi = (hi.0.max(c.e), hi.1.max(c.n));
     }
-    let fence = gleaner_app::airspace::rectangle(lo.0 - 60.0, lo.1 - 60.0, hi.0 + 60.0, hi.1 + 60.0);
+    let fence =
+        gleaner_app::airspace::rectangle(lo.0 - 60.0, lo.1 - 60.0, hi.0 + 60.0, hi.1 + 60.0);
     let geofence = dir.join("fence.geojson");
     std::fs::write(
         &geofence,

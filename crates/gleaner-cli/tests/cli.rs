@@ -1838,7 +1838,15 @@ fn caf_with_no_fly_zones_plans_around_them() {
     )
     .expect("bad");
     let err = fail(&[
-        "init", "--dir", p, "--sensors", caf, "--utm-zone", "11N", "--force", "--no-fly",
+        "init",
+        "--dir",
+        p,
+        "--sensors",
+        caf,
+        "--utm-zone",
+        "11N",
+        "--force",
+        "--no-fly",
         s(&bad),
     ]);
     assert!(
@@ -1863,7 +1871,9 @@ fn caf_with_no_fly_zones_plans_around_them() {
     ]);
     let toml = std::fs::read_to_string(project.join("gleaner.toml")).expect("toml");
     assert!(
-        toml.contains("no_fly = ") && toml.contains("geofence = ") && toml.contains("no_fly_buffer_m = 5"),
+        toml.contains("no_fly = ")
+            && toml.contains("geofence = ")
+            && toml.contains("no_fly_buffer_m = 5"),
         "{toml}"
     );
     // Exploration: every reachable cell once, the others reported.
@@ -1876,7 +1886,10 @@ fn caf_with_no_fly_zones_plans_around_them() {
         .map(|m| m["stops"].as_array().expect("stops").len())
         .sum();
     let unreachable = e["unreachable"].as_array().map_or(0, Vec::len);
-    assert_eq!(visited + unreachable, e["cells"].as_u64().expect("cells") as usize);
+    assert_eq!(
+        visited + unreachable,
+        e["cells"].as_u64().expect("cells") as usize
+    );
     let turns: usize = e["sorties"]
         .as_array()
         .expect("sorties")
@@ -1893,18 +1906,38 @@ fn caf_with_no_fly_zones_plans_around_them() {
     }
     std::fs::write(&scores, text).expect("scores");
     let json = ok(&[
-        "plan", "--project", p, "--at", "2014-03-01", "--scores", s(&scores), "--json",
+        "plan",
+        "--project",
+        p,
+        "--at",
+        "2014-03-01",
+        "--scores",
+        s(&scores),
+        "--json",
     ]);
     let m: serde_json::Value = serde_json::from_str(&json).expect("json");
     let blocked: Vec<&str> = m["unreachable"]
         .as_array()
-        .map(|u| u.iter().map(|c| c["cell"].as_str().expect("cell")).collect())
+        .map(|u| {
+            u.iter()
+                .map(|c| c["cell"].as_str().expect("cell"))
+                .collect()
+        })
         .unwrap_or_default();
     for stop in m["stops"].as_array().expect("stops") {
         assert!(!blocked.contains(&stop["cell"].as_str().expect("cell")));
     }
     let id = m["mission_id"].as_i64().expect("id").to_string();
-    let text = ok(&["plan", "--project", p, "--at", "2014-03-01", "--scores", s(&scores), "--dry-run"]);
+    let text = ok(&[
+        "plan",
+        "--project",
+        p,
+        "--at",
+        "2014-03-01",
+        "--scores",
+        s(&scores),
+        "--dry-run",
+    ]);
     if !blocked.is_empty() {
         assert!(text.contains("unreachable cells"), "{text}");
     }

@@ -250,6 +250,68 @@ mod tests {
         MissionEnergyModel::new(&EnergyConfig::paper()).unwrap()
     }
 
+    /// A flight with detours: zero-hold waypoints are turn points, priced along the
+    /// polylines exactly as the planner's `breakdown_paths` priced them, and a polyline costs
+    /// more than the straight leg.
+    #[test]
+    fn zero_hold_waypoints_are_turn_points_priced_as_planned() {
+        let m = model().for_flight().unwrap();
+        let origin = LatLon::new(46.78, -117.08).unwrap();
+        let frame = TransverseMercator::local(origin);
+        let at = |e: f64, n: f64| flight_position(frame.inverse(LocalPoint::new(e, n)));
+        let local = |p: LatLon| frame.forward(p);
+        let home = flight_position(origin);
+        let (a, t1, b, t2) = (
+            at(200.0, 0.0),
+            at(250.0, 60.0),
+            at(300.0, 0.0),
+            at(150.0, -40.0),
+        );
+        let flight = CommandedFlight {
+            home,
+            altitude_m: m.link().altitude_m,
+            speed_mps: m.cruise_speed_mps(),
+            waypoints: vec![(a, 30.0), (t1, 0.0), (b, 30.5), (t2, 0.0)],
+        };
+        let commanded = m.flight_energy_model().energy(origin, &flight).unwrap();
+        let visits = [
+            CellVisit {
+                centre: local(a),
+                hover_s: 30.0,
+            },
+            CellVisit {
+                centre: local(b),
+                hover_s: 30.5,
+            },
+        ];
+        let via = vec![Vec::new(), vec![local(t1)], vec![local(t2)]];
+        let planned = m.breakdown_paths(local(home), &visits, &via).unwrap();
+        assert_eq!(commanded.total_j.to_bits(), planned.total_j.to_bits());
+        assert_eq!(commanded.legs.len(), 3);
+        let straight = m.breakdown(local(home), &visits).unwrap();
+        assert!(planned.total_j > straight.total_j);
+        assert!(planned.legs[1].distance_m > straight.legs[1].distance_m);
+        // Reversed polylines have the same length to the bit.
+        let p = [local(a), local(t1), local(b)];
+        let r = [local(b), local(t1), local(a)];
+        assert_eq!(
+            crate::path_length_m(&p).to_bits(),
+            crate::path_length_m(&r).to_bits()
+        );
+        // A flight of turn points only is priced as stops.
+        let only = CommandedFlight {
+            waypoints: vec![(a, 0.0)],
+            ..flight
+        };
+        assert!(
+            m.flight_energy_model()
+                .energy(origin, &only)
+                .unwrap()
+                .total_j
+                > 0.0
+        );
+    }
+
     #[test]
     fn holds_round_up_to_the_step() {
         assert_eq!(flight_hold_s(30.0), 30.0);

@@ -37,7 +37,7 @@ impl Detours {
             }
         }
         let reachable: Vec<bool> = (0..n)
-            .map(|k| k == 0 || (found[k] .is_some() && found[k * n].is_some()))
+            .map(|k| k == 0 || (found[k].is_some() && found[k * n].is_some()))
             .collect();
         let mut out = Self {
             n,
@@ -64,7 +64,11 @@ impl Detours {
                 polyline.push(points[i]);
                 polyline.extend_from_slice(&turns);
                 polyline.push(points[j]);
-                out.length_m[i * n + j] = if i == j { 0.0 } else { path_length_m(&polyline) };
+                out.length_m[i * n + j] = if i == j {
+                    0.0
+                } else {
+                    path_length_m(&polyline)
+                };
                 out.via[i * n + j] = turns;
             }
         }

@@ -453,7 +453,10 @@ pub fn plan_exploration_routed(
 
 /// A closed tour through all cells: nearest neighbour from cell 0, then the generic tour
 /// improvement (2-opt, Or-opt, double-bridge kicks) with cell `tour[0]` held in place.
-fn giant_tour(legs: &Legs<'_>, options: &ExplorationOptions) -> Result<Vec<usize>, ExplorationError> {
+fn giant_tour(
+    legs: &Legs<'_>,
+    options: &ExplorationOptions,
+) -> Result<Vec<usize>, ExplorationError> {
     let cells = legs.cells;
     let n = cells.len();
     if n < 4 {
@@ -488,9 +491,7 @@ fn giant_tour(legs: &Legs<'_>, options: &ExplorationOptions) -> Result<Vec<usize
             Problem::from_points(&points, Metric::Euclidean, vec![0.0; n], 0.0)?
         }
         Some(_) => {
-            let cost: Vec<f64> = (0..n)
-                .flat_map(|a| (0..n).map(move |b| d(a, b)))
-                .collect();
+            let cost: Vec<f64> = (0..n).flat_map(|a| (0..n).map(move |b| d(a, b))).collect();
             Problem::new(cost, vec![0.0; n], 0.0)?
         }
     }
@@ -975,11 +976,16 @@ mod tests {
         let routed =
             plan_exploration_routed(&m, base, &cells, &service, &o, Some(&straight)).unwrap();
         assert_eq!(plain.sorties.len(), routed.sorties.len());
-        assert!((plain.total_energy_j - routed.total_energy_j).abs() <= 1e-6 * plain.total_energy_j);
+        assert!(
+            (plain.total_energy_j - routed.total_energy_j).abs() <= 1e-6 * plain.total_energy_j
+        );
         // Every leg to cell 0 detours 30 m north: the plan flies them and prices them.
         let detour = Detours::new(&pts, |i, j| {
             Some(if i == 1 || j == 1 {
-                vec![LocalPoint::new(0.5 * (pts[i].e + pts[j].e), 30.0 + pts[i].n.max(pts[j].n))]
+                vec![LocalPoint::new(
+                    0.5 * (pts[i].e + pts[j].e),
+                    30.0 + pts[i].n.max(pts[j].n),
+                )]
             } else {
                 Vec::new()
             })

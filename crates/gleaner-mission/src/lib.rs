@@ -655,7 +655,10 @@ mod tests {
                 None
             } else if i == 6 || j == 6 {
                 let (a, b) = (pts[i], pts[j]);
-                Some(vec![LocalPoint::new(0.5 * (a.e + b.e), 0.5 * (a.n + b.n) - 25.0)])
+                Some(vec![LocalPoint::new(
+                    0.5 * (a.e + b.e),
+                    0.5 * (a.n + b.n) - 25.0,
+                )])
             } else {
                 Some(Vec::new())
             }
@@ -670,8 +673,14 @@ mod tests {
         )
         .unwrap();
         let straight = Detours::straight(&pts);
-        let plain = plan_sorties(&m, LocalPoint::default(), &cells, &opts(Planner::Default), 2)
-            .unwrap();
+        let plain = plan_sorties(
+            &m,
+            LocalPoint::default(),
+            &cells,
+            &opts(Planner::Default),
+            2,
+        )
+        .unwrap();
         let same = plan_sorties_routed(
             &m,
             LocalPoint::default(),

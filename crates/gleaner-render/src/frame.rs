@@ -439,10 +439,7 @@ pub(crate) fn mission_via(
     }
     let mut leg = Vec::with_capacity(m.return_via_lon_lat.len());
     for (k, p) in m.return_via_lon_lat.iter().enumerate() {
-        leg.push(projection.local(lon_lat(
-            || format!("{label} return turn point {k}"),
-            *p,
-        )?));
+        leg.push(projection.local(lon_lat(|| format!("{label} return turn point {k}"), *p)?));
     }
     out.push(leg);
     Ok(out)
@@ -546,7 +543,10 @@ pub(crate) fn draw_zones(svg: &mut Svg, view: &MapView, zones: &[ZoneShape]) {
         }
         let (fill, stroke) = if z.no_fly {
             (
-                format!(r#"fill="{}" fill-opacity="0.55" fill-rule="evenodd""#, NO_FLY.hex()),
+                format!(
+                    r#"fill="{}" fill-opacity="0.55" fill-rule="evenodd""#,
+                    NO_FLY.hex()
+                ),
                 format!(r#"stroke="{INK}" stroke-width="0.5""#),
             )
         } else {

@@ -89,15 +89,7 @@ fn items(m: &MissionDoc) -> Result<Vec<Item>, ExportError> {
         out.push(Item {
             command: MAV_CMD_NAV_WAYPOINT,
             frame: MAV_FRAME_GLOBAL_RELATIVE_ALT,
-            params: [
-                hold,
-                0.0,
-                0.0,
-                f64::NAN,
-                deg7(lat),
-                deg7(lon),
-                alt,
-            ],
+            params: [hold, 0.0, 0.0, f64::NAN, deg7(lat), deg7(lon), alt],
             positioned: true,
         });
     }

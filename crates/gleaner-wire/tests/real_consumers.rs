@@ -161,8 +161,7 @@ fn zoned_caf_exports() -> (tempfile::TempDir, Vec<(FieldDoc, MissionDoc)>) {
     };
     let p = init(None, None);
     let (_, field) = p.field().expect("field");
-    let centres: Vec<gleaner_field::LocalPoint> =
-        field.cells().iter().map(|c| c.centre).collect();
+    let centres: Vec<gleaner_field::LocalPoint> = field.cells().iter().map(|c| c.centre).collect();
     let origin = gleaner_field::LocalPoint::new(0.0, 0.0);
     let no_fly = tmp.path().join("no_fly.geojson");
     std::fs::write(
@@ -216,7 +215,10 @@ fn shapely_finds_no_path_crossing_a_zone_and_mavsdk_still_imports_the_plan() {
     let (_tmp, docs) = zoned_caf_exports();
     assert!(docs.len() >= 3, "{} sorties", docs.len());
     let turns: usize = docs.iter().map(|(_, m)| turn_points(m)).sum();
-    assert!(turns > 0, "no leg went around a zone: the test would prove nothing");
+    assert!(
+        turns > 0,
+        "no leg went around a zone: the test would prove nothing"
+    );
     for (field_doc, m) in &docs {
         assert_eq!(m.zones.len(), 21);
         let f = write(field_doc, m);
@@ -235,4 +237,43 @@ fn shapely_finds_no_path_crossing_a_zone_and_mavsdk_still_imports_the_plan() {
     run("check_wpl.py", &[&f.waypoints, &f.mission]);
     run("check_geojson.py", &[&f.geojson, &f.mission, &f.field]);
     run("check_kml.py", &[&f.kmz, &f.mission]);
+}
+
+/// The checker is not vacuous: a zone laid across a straight leg of the sample mission is
+/// reported (the file, the zone and the segment).
+#[test]
+fn shapely_reports_a_path_across_a_zone() {
+    let mut m = adaptive_mission();
+    let [bx, by] = m.profile.base_lon_lat;
+    let [sx, sy] = m.stops[0].centre_lon_lat;
+    // A small square on the middle of the first leg.
+    let (cx, cy) = (0.5 * (bx + sx), 0.5 * (by + sy));
+    let d = 2e-5;
+    m.zones = vec![gleaner_wire::ZoneDoc {
+        kind: "no-fly".into(),
+        name: Some("shed".into()),
+        feature: 0,
+        polygons_lon_lat: vec![vec![vec![
+            [cx - d, cy - d],
+            [cx + d, cy - d],
+            [cx + d, cy + d],
+            [cx - d, cy + d],
+            [cx - d, cy - d],
+        ]]],
+        lines_lon_lat: Vec::new(),
+        buffer_m: 5.0,
+    }];
+    let f = write(&field(), &m);
+    let out = Command::new(python())
+        .arg(workspace().join("consumers/check_zones.py"))
+        .args([&f.mission, &f.plan])
+        .env("PYTHONDONTWRITEBYTECODE", "1")
+        .output()
+        .expect("run check_zones.py");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "a crossing passed: {stderr}");
+    assert!(
+        stderr.contains("mission.plan: the path crosses no-fly zone 0 (shed) on segment(s) [0]"),
+        "{stderr}"
+    );
 }

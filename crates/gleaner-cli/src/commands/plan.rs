@@ -85,8 +85,8 @@ pub fn table(m: &MissionDoc) -> String {
         "\nweights alpha,beta,gamma,delta = {:?}; anomaly {}\n",
         m.weights, m.anomaly_form
     ));
-    let turns: usize = m.stops.iter().map(|s| s.via_lon_lat.len()).sum::<usize>()
-        + m.return_via_lon_lat.len();
+    let turns: usize =
+        m.stops.iter().map(|s| s.via_lon_lat.len()).sum::<usize>() + m.return_via_lon_lat.len();
     if turns > 0 {
         let legs = m.stops.iter().filter(|s| !s.via_lon_lat.is_empty()).count()
             + usize::from(!m.return_via_lon_lat.is_empty());
@@ -103,7 +103,10 @@ pub fn table(m: &MissionDoc) -> String {
 pub fn unreachable_lines(u: &[gleaner_wire::UnreachableDoc]) -> String {
     let mut out = String::new();
     if !u.is_empty() {
-        out.push_str(&format!("unreachable cells ({}), never planned:\n", u.len()));
+        out.push_str(&format!(
+            "unreachable cells ({}), never planned:\n",
+            u.len()
+        ));
         for c in u {
             out.push_str(&format!("  {}: {}\n", c.cell, c.reason));
         }
