@@ -731,6 +731,33 @@ mod tests {
         );
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// No zone file panics the reader or the airspace: arbitrary bytes, and valid
+        /// polygons with arbitrary (also huge, tiny, degenerate) coordinates.
+        #[test]
+        fn no_zone_file_panics(
+            bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..300),
+            coords in proptest::collection::vec((-200.0f64..200.0, -100.0f64..100.0), 0..8),
+        ) {
+            let dir = tempfile::tempdir().unwrap();
+            let frame = TransverseMercator::local(LatLon::new(46.78, -117.08).unwrap());
+            std::fs::write(dir.path().join("a.geojson"), &bytes).unwrap();
+            let _ = load(&settings_with(Some("a.geojson".into()), Some("a.geojson".into())), dir.path(), &frame);
+            let ring: Vec<String> = coords
+                .iter()
+                .chain(coords.first())
+                .map(|(x, y)| format!("[{x},{y}]"))
+                .collect();
+            let text = format!(
+                r#"{{"type":"Polygon","coordinates":[[{}]]}}"#,
+                ring.join(",")
+            );
+            std::fs::write(dir.path().join("b.geojson"), text).unwrap();
+            let _ = load(&settings_with(Some("b.geojson".into()), Some("b.geojson".into())), dir.path(), &frame);
+        }
+    }
+
     #[test]
     fn a_line_zone_blocks_its_buffer_and_legs_go_around() {
         let dir = tempfile::tempdir().unwrap();
