@@ -63,15 +63,20 @@ def check(argv):
             part = kml_part(root)
             need(schema.validate(part), f"{name}: KML 2.2 schema: {schema.error_log}")
             wps = waypoints(root)
-            need(len(wps) == len(mission["stops"]), f"{name}: {len(wps)} waypoints")
-            for stop, (lon, lat, height, speed, hover) in zip(mission["stops"], wps):
-                what = f"{name}: stop {stop['order']} ({stop['cell']})"
-                d = expect.distance_m([lon, lat], stop["centre_lon_lat"])
-                need(d < expect.MAX_OFFSET_M, f"{what}: waypoint {d:.4f} m from the cell centre")
+            plan = expect.flown(mission)
+            need(len(wps) == len(plan), f"{name}: {len(wps)} waypoints, expected {len(plan)}")
+            for k, ((lon_lat, stop), (lon, lat, height, speed, hover)) in enumerate(zip(plan, wps)):
+                what = (f"{name}: stop {stop['order']} ({stop['cell']})" if stop
+                        else f"{name}: turn point {k}")
+                d = expect.distance_m([lon, lat], lon_lat)
+                need(d < expect.MAX_OFFSET_M, f"{what}: waypoint {d:.4f} m from the plan")
                 need(height == profile["altitude_m"], f"{what}: height {height} m")
                 need(abs(speed - profile["cruise_speed_mps"]) <= 0.125,
                      f"{what}: speed {speed} m/s for a planned {profile['cruise_speed_mps']} m/s")
-                expect.check_hold(hover, stop["hover_s"], what)
+                if stop:
+                    expect.check_hold(hover, stop["hover_s"], what)
+                else:
+                    need(hover == 0, f"{what}: a turn point hovers {hover} s")
     return f"lxml parsed {os.path.basename(path)}; its KML parts validate against OGC KML 2.2 " \
            f"(fastkml's schema); {len(mission['stops'])} waypoints with speeds, heights and holds"
 

@@ -50,7 +50,7 @@ async def import_with(autopilot, plan_path, wpl_path):
 
 
 def check_plan_items(mission, items, source):
-    n = len(mission["stops"]) + 3
+    n = len(expect.flown(mission)) + 3
     need(len(items) == n, f"{source}: {len(items)} mission items, expected {n}")
     for k, it in enumerate(items):
         need(it.seq == k, f"{source}: item {k} has seq {it.seq}")
@@ -67,6 +67,32 @@ def check_home(mission, home, source):
     need(d < expect.MAX_OFFSET_M, f"{source}: home {d:.3f} m from the base")
     need(expect.close(home.z, profile["base_alt_m"]),
          f"{source}: home altitude {home.z} != {profile['base_alt_m']} m AMSL")
+
+
+# MAV_CMD_NAV_FENCE_*: polygon vertex (inclusion, exclusion), circle (inclusion, exclusion).
+FENCE_POLYGON = {True: 5001, False: 5002}
+FENCE_CIRCLE = {True: 5003, False: 5004}
+
+
+def check_fence(fence, items, source):
+    """The geoFence MAVSDK imported: one fence item (mission type 1) per polygon vertex, with the
+    polygon's kind (inclusion / exclusion) and vertex count, at the plan's positions, then one
+    per circle; nothing without zones."""
+    need(fence.get("version") == 2, f"{source}: geoFence version {fence.get('version')}")
+    want = []
+    for p in fence["polygons"]:
+        for lat, lon in p["polygon"]:
+            want.append((FENCE_POLYGON[p["inclusion"]], len(p["polygon"]), lat, lon))
+    for c in fence["circles"]:
+        lat, lon = c["circle"]["center"]
+        want.append((FENCE_CIRCLE[c["inclusion"]], c["circle"]["radius"], lat, lon))
+    need(len(items) == len(want), f"{source}: {len(items)} fence items, expected {len(want)}")
+    for k, (it, (command, p1, lat, lon)) in enumerate(zip(items, want)):
+        need(it.mission_type == 1, f"{source}: fence item {k} has mission type {it.mission_type}")
+        need(it.command == command, f"{source}: fence item {k} command {it.command} != {command}")
+        need(expect.close(it.param1, p1), f"{source}: fence item {k} param1 {it.param1} != {p1}")
+        d = expect.distance_m([it.y / 1e7, it.x / 1e7], [lon, lat])
+        need(d < expect.MAX_OFFSET_M, f"{source}: fence item {k} is {d:.3f} m off")
 
 
 def check(argv):
@@ -88,7 +114,8 @@ def check(argv):
     px4, px4_wpl = asyncio.run(asyncio.wait_for(
         import_with("px4", plan_path, wpl_path), TIMEOUT_S))
     check_plan_items(mission, px4.mission_items, "MAVSDK QGC import (PX4)")
-    need(not px4.geofence_items and not px4.rally_items, "MAVSDK imported a geofence or rally points")
+    need(not px4.rally_items, "MAVSDK imported rally points")
+    check_fence(plan_json["geoFence"], px4.geofence_items, "MAVSDK QGC import (PX4)")
 
     ardu, _ = asyncio.run(asyncio.wait_for(import_with("ardupilot", plan_path, None), TIMEOUT_S))
     items = ardu.mission_items
@@ -100,8 +127,8 @@ def check(argv):
     done = f"MAVSDK imported {len(px4.mission_items)} items from {os.path.basename(plan_path)}"
     if px4_wpl is not None:
         w = px4_wpl.mission_items
-        need(len(w) == len(mission["stops"]) + 4,
-             f"MAVSDK Mission Planner import: {len(w)} items, expected {len(mission['stops']) + 4}")
+        need(len(w) == len(expect.flown(mission)) + 4,
+             f"MAVSDK Mission Planner import: {len(w)} items, expected {len(expect.flown(mission)) + 4}")
         check_home(mission, w[0], "MAVSDK Mission Planner import")
         expect.check_items(mission, [as_item(it) for it in w[1:]], "MAVSDK Mission Planner import")
         need(all(math.isnan(it.param4) for it in w[1:] if it.command != expect.DO_CHANGE_SPEED

@@ -21,7 +21,8 @@ def check(argv):
     profile = mission["profile"]
     loader = mavwp.MAVWPLoader()
     n = loader.load(path)
-    need(n == len(mission["stops"]) + 4, f"{n} items loaded, expected {len(mission['stops']) + 4}")
+    want = len(expect.flown(mission)) + 4
+    need(n == want, f"{n} items loaded, expected {want}")
     wps = [loader.wp(k) for k in range(n)]
     for k, w in enumerate(wps):
         need(w.seq == k, f"item {k} has seq {w.seq}")

@@ -69,15 +69,27 @@ def check_hold(hold, hover_s, what):
     need(hold / HOLD_STEP_S == int(hold / HOLD_STEP_S), f"{what}: hold {hold} s not on 0.25 s")
 
 
+def flown(mission):
+    """The waypoints after take-off as (lon_lat, stop or None): each stop preceded by the turn
+    points of its leg around no-fly zones (`via_lon_lat`), then the return leg's
+    (`return_via_lon_lat`)."""
+    out = []
+    for stop in mission["stops"]:
+        out += [(p, None) for p in stop.get("via_lon_lat", [])]
+        out.append((stop["centre_lon_lat"], stop))
+    out += [(p, None) for p in mission.get("return_via_lon_lat", [])]
+    return out
+
+
 def expected_sequence(mission):
-    """(command, frame) of the items after home: take-off, speed, one waypoint per stop, RTL;
-    for a continuation re-planned in the air, no take-off: speed, a waypoint where the
-    aircraft is, one per stop, RTL."""
+    """(command, frame) of the items after home: take-off, speed, one waypoint per stop and
+    per turn point, RTL; for a continuation re-planned in the air, no take-off: speed, a
+    waypoint where the aircraft is, then the same."""
     if mission.get("continuation"):
         seq = [(DO_CHANGE_SPEED, FRAME_MISSION), (NAV_WAYPOINT, FRAME_GLOBAL_RELATIVE_ALT)]
     else:
         seq = [(NAV_TAKEOFF, FRAME_GLOBAL_RELATIVE_ALT), (DO_CHANGE_SPEED, FRAME_MISSION)]
-    seq += [(NAV_WAYPOINT, FRAME_GLOBAL_RELATIVE_ALT)] * len(mission["stops"])
+    seq += [(NAV_WAYPOINT, FRAME_GLOBAL_RELATIVE_ALT)] * len(flown(mission))
     seq.append((NAV_RETURN_TO_LAUNCH, FRAME_MISSION))
     return seq
 
@@ -107,13 +119,17 @@ def check_items(mission, items, source, yaw_nan=True):
     need(close(speed["p2"], profile["cruise_speed_mps"]),
          f"{source}: DO_CHANGE_SPEED speed {speed['p2']} != {profile['cruise_speed_mps']} m/s")
     need(speed["p3"] == -1.0, f"{source}: DO_CHANGE_SPEED throttle {speed['p3']} != -1")
-    for stop, wp in zip(mission["stops"], waypoints):
-        what = f"{source}: stop {stop['order']} ({stop['cell']})"
-        d = distance_m([wp["lon"], wp["lat"]], stop["centre_lon_lat"])
-        need(d < MAX_OFFSET_M, f"{what}: waypoint {d:.4f} m from the cell centre")
+    for k, ((lon_lat, stop), wp) in enumerate(zip(flown(mission), waypoints)):
+        what = (f"{source}: stop {stop['order']} ({stop['cell']})" if stop
+                else f"{source}: turn point {k}")
+        d = distance_m([wp["lon"], wp["lat"]], lon_lat)
+        need(d < MAX_OFFSET_M, f"{what}: waypoint {d:.4f} m from the plan")
         need(close(wp["alt"], profile["altitude_m"]),
              f"{what}: altitude {wp['alt']} != {profile['altitude_m']} m above home")
-        check_hold(wp["p1"], stop["hover_s"], what)
+        if stop:
+            check_hold(wp["p1"], stop["hover_s"], what)
+        else:
+            need(wp["p1"] == 0, f"{what}: a turn point holds {wp['p1']} s")
         if yaw_nan:
             need(math.isnan(wp["p4"]), f"{what}: yaw {wp['p4']} is not NaN")
     need(all(rtl[k] == 0 for k in ("p1", "p2", "p3", "p4")), f"{source}: RTL has parameters")

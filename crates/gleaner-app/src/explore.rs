@@ -4,15 +4,20 @@
 
 use gleaner_energy::CellVisit;
 use gleaner_energy::MissionEnergyModel;
+use gleaner_field::LatLon;
 use gleaner_field::{LocalPoint, UnixSeconds};
+use gleaner_mission::Detours;
 use gleaner_mission::exploration::{
     ExplorationError, ExplorationOptions, ExplorationPlan, plan_exploration,
+    plan_exploration_routed,
 };
 use gleaner_store::{MissionId, MissionKind, NewMission, Store, StoreWrite};
 
 use crate::error::{AppError, Result};
 use crate::knowledge::History;
-use crate::plan::{FlightPoints, breakdown, energy_model, flight_profile, services, stops};
+use crate::plan::{
+    FlightPoints, breakdown, energy_model, flight_profile, routing, services, stops, via_positions,
+};
 use crate::project::Project;
 
 /// What to explore.
@@ -39,6 +44,12 @@ pub struct Exploration {
     pub total_energy_j: f64,
     /// The sorties as missions, with their ids unless a dry run.
     pub sorties: Vec<(Option<MissionId>, NewMission)>,
+    /// Per sortie, the turn points of its legs around no-fly zones (WGS84, the files' grid;
+    /// one list per stop and one for the return leg; none without zones).
+    pub via: Vec<Vec<Vec<LatLon>>>,
+    /// Cells the flight cannot reach (inside a buffered no-fly zone, outside the geofence, or
+    /// cut off): left out of the sorties.
+    pub unreachable: Vec<crate::airspace::Unreachable>,
 }
 
 /// The use case: plans the exploration sorties and, unless a dry run, stores them as
@@ -107,17 +118,53 @@ pub(crate) fn explore_with<S: Store>(
     let centres = &points.centres;
     let service_j: Vec<f64> = svc.iter().map(|s| s.energy_j).collect();
     let base = points.base;
-    let plan = memo
-        .plan(
-            &model,
-            base,
-            centres,
-            &service_j,
-            &ExplorationOptions::default(),
-        )
-        .map_err(|e| AppError::core("exploration", e))?;
+    let routed = routing(project, &k, &points)?;
+    let (plan, detours, unreachable) = match &routed {
+        None => (
+            memo.plan(
+                &model,
+                base,
+                centres,
+                &service_j,
+                &ExplorationOptions::default(),
+            )
+            .map_err(|e| AppError::core("exploration", e))?,
+            None,
+            Vec::new(),
+        ),
+        Some((_, all, unreachable)) => {
+            // The reachable cells only, with their legs; cell indices mapped back after.
+            let keep: Vec<usize> = (0..centres.len())
+                .filter(|&c| all.reachable(c + 1))
+                .collect();
+            let nodes: Vec<usize> = std::iter::once(0)
+                .chain(keep.iter().map(|&c| c + 1))
+                .collect();
+            let mut pts = vec![base];
+            pts.extend(keep.iter().map(|&c| centres[c]));
+            let sub = Detours::new(&pts, |i, j| Some(all.via(nodes[i], nodes[j]).to_vec()));
+            let kept_centres: Vec<_> = keep.iter().map(|&c| centres[c]).collect();
+            let kept_service: Vec<f64> = keep.iter().map(|&c| service_j[c]).collect();
+            let mut plan = plan_exploration_routed(
+                &model,
+                base,
+                &kept_centres,
+                &kept_service,
+                &ExplorationOptions::default(),
+                Some(&sub),
+            )
+            .map_err(|e| AppError::core("exploration", e))?;
+            for s in &mut plan.sorties {
+                for c in &mut s.cells {
+                    *c = keep[*c];
+                }
+            }
+            (plan, Some(all), unreachable.clone())
+        }
+    };
     let zeros = vec![0.0; centres.len()];
     let mut sorties = Vec::with_capacity(plan.sorties.len());
+    let mut vias = Vec::with_capacity(plan.sorties.len());
     for s in &plan.sorties {
         let visits: Vec<CellVisit> = s
             .cells
@@ -127,9 +174,11 @@ pub(crate) fn explore_with<S: Store>(
                 hover_s: svc[c].hover_s,
             })
             .collect();
+        let via = detours.map(|d| d.route_via(&s.cells)).unwrap_or_default();
         let energy = model
-            .breakdown(base, &visits)
+            .breakdown_paths(base, &visits, &via)
             .map_err(|e| AppError::core("exploration", e))?;
+        vias.push(via_positions(k.field.frame(), &via));
         if !energy.feasible {
             return Err(AppError::Core {
                 context: "exploration",
@@ -181,6 +230,8 @@ pub(crate) fn explore_with<S: Store>(
         lower_bound_sorties: plan.lower_bound_sorties,
         total_energy_j: plan.total_energy_j,
         sorties,
+        via: vias,
+        unreachable,
     })
 }
 

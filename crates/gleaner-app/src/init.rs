@@ -57,6 +57,12 @@ pub struct InitRequest {
     /// drift as F and the bounded anomaly, [`crate::settings::UtilitySection::gleaner`])
     /// instead of the paper's S (docs/method.md §2, the default).
     pub gleaner_method: bool,
+    /// GeoJSON file of the geofence (`[field] geofence`): the polygons the flight stays inside.
+    pub geofence: Option<PathBuf>,
+    /// GeoJSON file of the no-fly zones (`[field] no_fly`).
+    pub no_fly: Option<PathBuf>,
+    /// Safety buffer around the no-fly zones and inside the geofence, m [default 5].
+    pub no_fly_buffer_m: Option<f64>,
 }
 
 /// What `init` did.
@@ -173,6 +179,17 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
                     .fallback_radius_m
                     .min(crate::settings::MAX_RADIUS_CELLS * cell_size_m),
             ),
+            geofence: request
+                .geofence
+                .as_ref()
+                .map(|p| relative_to(p, &request.dir)),
+            no_fly: request
+                .no_fly
+                .as_ref()
+                .map(|p| relative_to(p, &request.dir)),
+            no_fly_buffer_m: request
+                .no_fly_buffer_m
+                .unwrap_or(crate::settings::DEFAULT_NO_FLY_BUFFER_M),
         },
         sensors: SensorsSection {
             file: relative_to(&request.sensors, &request.dir),
@@ -185,6 +202,15 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
     };
     settings.validate()?;
     check_grid_size(&sensors, base, &settings)?;
+    // The zone files are read now (as given, relative to the working directory: the
+    // project directory may not exist yet), so a bad one is refused before anything is
+    // created.
+    let given = FieldSection {
+        geofence: request.geofence.as_ref().map(|p| p.display().to_string()),
+        no_fly: request.no_fly.as_ref().map(|p| p.display().to_string()),
+        ..settings.field.clone()
+    };
+    crate::airspace::load(&given, Path::new("."), &TransverseMercator::local(base))?;
     Ok(settings)
 }
 

@@ -40,6 +40,7 @@
 //! [`LatLon`]: gleaner_field::LatLon
 #![deny(missing_docs)]
 
+pub mod airspace;
 pub mod campaign;
 pub mod cell_csv;
 mod cell_detail;

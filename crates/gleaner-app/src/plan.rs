@@ -8,7 +8,8 @@ use gleaner_energy::{
 };
 use gleaner_field::{LatLon, LocalPoint, UnixSeconds};
 use gleaner_mission::{
-    Candidate, MissionPlan, PlanOptions, Planner, plan_mission, plan_sorties, plan_sorties_valued,
+    Candidate, Detours, MissionPlan, PlanOptions, Planner, plan_sorties_routed,
+    plan_sorties_valued_routed,
 };
 use gleaner_store::{
     EnergyBreakdown, FlightProfile, MissionId, MissionKind, NewMission, StopRecord, Store,
@@ -89,6 +90,8 @@ pub struct ExtraSortie {
     pub id: Option<MissionId>,
     /// The sortie as stored.
     pub mission: NewMission,
+    /// The turn points of its legs around no-fly zones (see [`PlannedMission::via`]).
+    pub via: Vec<Vec<LatLon>>,
 }
 
 /// The headline numbers of a comparison plan.
@@ -122,6 +125,13 @@ pub struct PlannedMission {
     pub time_limit_s: f64,
     /// Sorties 2..=K when several were asked for (`mission` is sortie 1); empty otherwise.
     pub extra_sorties: Vec<ExtraSortie>,
+    /// The turn points of each leg around the no-fly zones, WGS84 on the files' 1e-7° grid:
+    /// one list per stop (the leg arriving there) and one for the return leg; empty lists
+    /// for straight legs, no lists without zones.
+    pub via: Vec<Vec<LatLon>>,
+    /// Cells the flight cannot reach (a centre inside a buffered no-fly zone, outside the
+    /// geofence, or cut off from the base): never planned.
+    pub unreachable: Vec<crate::airspace::Unreachable>,
 }
 
 /// Largest magnitude of a user-given score (the utility engine's scores are a few units).
@@ -244,10 +254,21 @@ pub(crate) fn services(
     let services = model
         .field_services(&k.field, &elapsed)
         .map_err(|e| AppError::core("collection times", e))?;
-    // Hover for the hold the files command (rounded up): the planner prices that.
+    // Hover for the hold the files command (rounded up): the planner prices that. A stop holds
+    // at least one hold step, so a file tells its stops from a detour's turn points (0 s).
     Ok(services
         .into_iter()
-        .map(|s| model.flight_service(s))
+        .map(|s| {
+            let s = model.flight_service(s);
+            if s.hover_s < gleaner_energy::HOLD_STEP_S {
+                model.flight_service(CellService {
+                    hover_s: gleaner_energy::HOLD_STEP_S,
+                    ..s
+                })
+            } else {
+                s
+            }
+        })
         .collect())
 }
 
@@ -280,6 +301,50 @@ pub(crate) fn stops(
                 hover_j: energy.cells[n].hover_j,
                 comm_j: energy.cells[n].comm_j,
             }
+        })
+        .collect()
+}
+
+/// The project's airspace over `points`: the legs around the zones (base first, then every
+/// cell in field order) and the cells they leave unreachable; `None` without zones.
+pub(crate) fn routing<S: Store>(
+    project: &Project<S>,
+    k: &Knowledge,
+    points: &FlightPoints,
+) -> Result<
+    Option<(
+        crate::airspace::ProjectAirspace,
+        Detours,
+        Vec<crate::airspace::Unreachable>,
+    )>,
+> {
+    let Some(airspace) = crate::airspace::of_project(project)? else {
+        return Ok(None);
+    };
+    let mut nodes = Vec::with_capacity(points.centres.len() + 1);
+    nodes.push(points.base);
+    nodes.extend_from_slice(&points.centres);
+    let detours = airspace.detours(&nodes);
+    let unreachable = crate::airspace::unreachable_cells(
+        &airspace,
+        &k.cell_labels(),
+        points.base,
+        &points.centres,
+        &detours,
+    )?;
+    Ok(Some((airspace, detours, unreachable)))
+}
+
+/// The turn points of a plan's legs as WGS84 positions on the files' grid.
+pub(crate) fn via_positions(
+    frame: &gleaner_field::TransverseMercator,
+    via: &[Vec<LocalPoint>],
+) -> Vec<Vec<LatLon>> {
+    via.iter()
+        .map(|leg| {
+            leg.iter()
+                .map(|&p| flight_position(frame.inverse(p)))
+                .collect()
         })
         .collect()
 }
@@ -445,6 +510,9 @@ pub(crate) fn plan_scored<S: Store>(
     let profile = flight_profile(project, &model)?;
     let services = services(&model, k, t)?;
     let points = FlightPoints::of(&k.field);
+    let routed = routing(project, k, &points)?;
+    let detours = routed.as_ref().map(|(_, d, _)| d);
+    let unreachable = routed.as_ref().map(|r| r.2.clone()).unwrap_or_default();
     // The information objective: the filter at t over what is known, the model fitted on it
     // unless the caller (a campaign) hands its own.
     let fitted;
@@ -516,14 +584,15 @@ pub(crate) fn plan_scored<S: Store>(
         )));
     }
     let planned = match &information {
-        None => plan_sorties(&model, base, &candidates, &options, sorties),
-        Some(info) => plan_sorties_valued(
+        None => plan_sorties_routed(&model, base, &candidates, &options, sorties, detours),
+        Some(info) => plan_sorties_valued_routed(
             &model,
             base,
             &candidates,
             |cells| info.value(cells),
             &options,
             sorties,
+            detours,
         )
         .map(|mut plans| {
             // Each sortie's worth is what it adds to the ones before it.
@@ -555,7 +624,7 @@ pub(crate) fn plan_scored<S: Store>(
     } else {
         plans.remove(0)
     };
-    let greedy = plan_mission(
+    let greedy = plan_sorties_routed(
         &model,
         base,
         &candidates,
@@ -563,8 +632,11 @@ pub(crate) fn plan_scored<S: Store>(
             planner: Planner::Greedy,
             ..options
         },
+        1,
+        detours,
     )
-    .map_err(|e| AppError::core("planner", e))?;
+    .map_err(|e| AppError::core("planner", e))?
+    .remove(0);
     check_feasible(&plan)?;
     for p in &plans {
         check_feasible(p)?;
@@ -597,11 +669,14 @@ pub(crate) fn plan_scored<S: Store>(
         ),
     };
     let mission = new_mission(&plan);
+    let frame = &k.field.frame().clone();
+    let first_via = via_positions(frame, &plan.via);
     let extra_sorties: Vec<ExtraSortie> = plans
         .iter()
         .map(|p| ExtraSortie {
             id: None,
             mission: new_mission(p),
+            via: via_positions(frame, &p.via),
         })
         .collect();
     let mut planned = PlannedMission {
@@ -618,6 +693,8 @@ pub(crate) fn plan_scored<S: Store>(
         seed,
         time_limit_s,
         extra_sorties,
+        via: first_via,
+        unreachable,
     };
     if !request.dry_run {
         let known = planned

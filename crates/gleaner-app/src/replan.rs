@@ -62,7 +62,8 @@ pub use gleaner_mission::{REPLAN_ITERATIONS, REPLAN_TIME_LIMIT_S};
 /// where the aircraft is). Writes nothing: the flight is recorded against the mission itself
 /// (the continuation's stops are the mission's).
 ///
-/// Errors: an unknown mission, one already recorded as flown, `after_stop` beyond its stops,
+/// Errors: a project with a geofence or no-fly zones (the continuation's legs are straight
+/// lines), an unknown mission, one already recorded as flown, `after_stop` beyond its stops,
 /// an energy left that is not a finite positive number or exceeds the battery, not enough
 /// energy for the leg home with the reserve (land now), invalid `[energy]` settings.
 pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result<Replan> {
@@ -72,6 +73,15 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
             "mission #{} was already recorded as flown: nothing to re-plan",
             parent.id
         )));
+    }
+    let field_settings = &project.settings().field;
+    if field_settings.geofence.is_some() || field_settings.no_fly.is_some() {
+        // The continuation's legs are straight: never hand over one that may cross a zone.
+        return Err(AppError::Invalid(
+            "re-planning in the air does not route around no-fly zones yet, and this project \
+             sets [field] geofence or no_fly: fly the planned mission or return to launch"
+                .into(),
+        ));
     }
     let stops = &parent.mission.stops;
     if request.after_stop > stops.len() {

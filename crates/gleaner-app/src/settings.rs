@@ -71,6 +71,27 @@ pub struct FieldSection {
     /// Neighbour fallback radius, metres.
     #[serde(default = "default_radius")]
     pub neighbour_radius_m: f64,
+    /// GeoJSON file (relative to the project directory, or absolute) of the polygons the
+    /// flight stays inside (`[lon, lat]` WGS84; a Polygon, MultiPolygon, or Features of
+    /// them); none = no geofence.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub geofence: Option<String>,
+    /// GeoJSON file (relative to the project directory, or absolute) of the no-fly zones:
+    /// polygons (buildings, tree rows, neighbours), lines (power lines) or points, `[lon,
+    /// lat]` WGS84; none = no zone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub no_fly: Option<String>,
+    /// Safety buffer, m: every no-fly zone grown by it and the geofence shrunk by it
+    /// [default 5 m].
+    #[serde(default = "default_no_fly_buffer")]
+    pub no_fly_buffer_m: f64,
+}
+
+/// The default `[field] no_fly_buffer_m`, m.
+pub const DEFAULT_NO_FLY_BUFFER_M: f64 = 5.0;
+
+fn default_no_fly_buffer() -> f64 {
+    DEFAULT_NO_FLY_BUFFER_M
 }
 
 fn default_k() -> usize {
@@ -723,8 +744,9 @@ impl Settings {
         let u = &self.utility;
         let e = &self.energy;
         let p = &self.planner;
-        let values: [(&str, Option<f64>); 37] = [
+        let values: [(&str, Option<f64>); 38] = [
             ("field.base_alt_m", Some(f.base_alt_m)),
+            ("field.no_fly_buffer_m", Some(f.no_fly_buffer_m)),
             ("field.cell_size_m", Some(f.cell_size_m)),
             ("field.neighbour_k", Some(f.neighbour_k as f64)),
             ("field.neighbour_radius_m", Some(f.neighbour_radius_m)),
@@ -871,6 +893,7 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ("field.cell_size_m", 0.5, 10_000.0, false, "m"),
     ("field.neighbour_k", 0.0, 64.0, false, "cells"),
     ("field.neighbour_radius_m", 0.0, 100_000.0, false, "m"),
+    ("field.no_fly_buffer_m", 0.0, 1_000.0, false, "m"),
     ("ingest.bytes_per_reading", 0.0, 1e6, true, "bytes"),
     ("ingest.default_interval_s", 1.0, 31_622_400.0, false, "s"),
     ("utility.alpha", 0.0, 1e6, false, ""),

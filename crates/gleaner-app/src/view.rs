@@ -39,6 +39,10 @@ pub struct FieldView {
     pub cells: Vec<CellView>,
     /// Sensors with their positions, sorted by id.
     pub sensors: Vec<(SensorId, LatLon)>,
+    /// The geofence and no-fly zones as the settings' files give them (empty without).
+    pub zones: Vec<crate::airspace::ZoneView>,
+    /// The safety buffer kept from the zones (`[field] no_fly_buffer_m`), m.
+    pub zone_buffer_m: f64,
 }
 
 /// The cell table with its metadata, by grid index.
@@ -80,6 +84,10 @@ pub fn field_view<S: Store>(project: &Project<S>) -> Result<FieldView> {
         cell_size_m: field.cell_size_m(),
         cells,
         sensors: sensors.into_iter().map(|s| (s.id, s.position)).collect(),
+        zones: crate::airspace::of_project(project)?
+            .map(|a| a.zones)
+            .unwrap_or_default(),
+        zone_buffer_m: settings.field.no_fly_buffer_m,
     })
 }
 
@@ -129,6 +137,10 @@ pub struct MissionExport {
     /// The energy model every flight-file writer prices the values it writes with (the
     /// project's aircraft, with the battery the mission was planned against).
     pub energy: FlightEnergyModel,
+    /// The turn points of each leg around the no-fly zones (one list per stop, one for the
+    /// return leg; WGS84 on the files' 1e-7° grid), recomputed from the zones as they are:
+    /// the files fly them and the writers price them. Empty without zones.
+    pub via: Vec<Vec<LatLon>>,
 }
 
 /// The use case behind every export: the mission and its field, checked safe to fly — the
@@ -140,10 +152,15 @@ pub fn export<S: Store>(project: &Project<S>, id: MissionId) -> Result<MissionEx
     let mission = mission(project, id)?;
     check_flyable(&mission)?;
     let energy = export_energy_model(project, &mission)?;
+    let via = match crate::airspace::of_project(project)? {
+        Some(a) => a.mission_via(&mission)?,
+        None => Vec::new(),
+    };
     Ok(MissionExport {
         field: field_view(project)?,
         mission,
         energy,
+        via,
     })
 }
 

@@ -49,7 +49,7 @@ struct Cli {
 enum Command {
     /// Create a project from a sensors file: settings, database, sensors and the cell grid.
     #[command(
-        after_help = "Examples:\n  gleaner init --dir farm --sensors sensors.csv --cell-size 40\n  gleaner init --dir caf --sensors ../shared/data/caf/sensors/CAF_sensor_locations.csv --utm-zone 11N\n  gleaner init --dir farm --sensors sensors.csv --method gleaner   (plan by gleaner's method)"
+        after_help = "Examples:\n  gleaner init --dir farm --sensors sensors.csv --cell-size 40\n  gleaner init --dir caf --sensors ../shared/data/caf/sensors/CAF_sensor_locations.csv --utm-zone 11N\n  gleaner init --dir farm --sensors sensors.csv --method gleaner   (plan by gleaner's method)\n  gleaner init --dir farm --sensors sensors.csv --geofence fence.geojson --no-fly buildings.geojson --no-fly-buffer 5"
     )]
     Init {
         /// Project directory (created if missing).
@@ -106,6 +106,21 @@ enum Command {
         /// which loses to random sampling on CAF 2014). Written into `[utility]`.
         #[arg(long, value_enum, default_value_t = MethodArg::Gleaner)]
         method: MethodArg,
+        /// GeoJSON file of the geofence: a Polygon or MultiPolygon (or Features of them),
+        /// `[lon, lat]` WGS84 degrees; every flight stays inside it, `--no-fly-buffer`
+        /// metres from its edge (`[field] geofence`).
+        #[arg(long, value_name = "GEOJSON")]
+        geofence: Option<PathBuf>,
+        /// GeoJSON file of the no-fly zones: Polygons (buildings, tree rows, neighbours),
+        /// LineStrings (power lines) or Points, `[lon, lat]` WGS84 degrees; every leg keeps
+        /// `--no-fly-buffer` metres away, flying the shortest way around; cells inside are
+        /// reported unreachable (`[field] no_fly`).
+        #[arg(long, value_name = "GEOJSON")]
+        no_fly: Option<PathBuf>,
+        /// Safety buffer around the no-fly zones and inside the geofence, metres, 0..=1000
+        /// (`[field] no_fly_buffer_m`) [default: 5].
+        #[arg(long, value_name = "M")]
+        no_fly_buffer: Option<f64>,
     },
     /// Ingest readings files into the project, all or nothing; re-ingesting changes nothing.
     #[command(
@@ -791,6 +806,9 @@ fn run(cli: Cli) -> Result<()> {
             force,
             database,
             method,
+            geofence,
+            no_fly,
+            no_fly_buffer,
         } => {
             let base = base
                 .map(|(lat, lon)| gleaner_field::LatLon::new(lat, lon).context("--base"))
@@ -809,6 +827,9 @@ fn run(cli: Cli) -> Result<()> {
                 force,
                 database,
                 gleaner_method: matches!(method, MethodArg::Gleaner),
+                geofence,
+                no_fly,
+                no_fly_buffer_m: no_fly_buffer,
             })?;
             outln(&init_line(&outcome, &dir))?;
         }

@@ -1865,3 +1865,189 @@ fn synth_lays_a_farm_on_a_real_networks_stations() {
     ]);
     assert!(err.contains("nothing.csv"), "{err}");
 }
+
+/// CAF with a geofence (the cells' box grown by 60 m) and 20 seeded no-fly polygons: `init`
+/// takes the files, `explore` and `plan` fly around the zones and report the cells inside
+/// them as unreachable, `export` writes the detours (waypoints without a hold) and the
+/// `.plan`'s geoFence; a bad zone file is refused naming the file, feature and field.
+#[test]
+fn caf_with_no_fly_zones_plans_around_them() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let project = dir.path().join("caf");
+    let p = s(&project);
+    let locations = shared_data().join("caf/sensors/CAF_sensor_locations.csv");
+    let caf = s(&locations);
+    ok(&["init", "--dir", p, "--sensors", caf, "--utm-zone", "11N"]);
+    // The zone files, in the project's local frame.
+    let (_, field) = gleaner_app::Project::open(&project)
+        .expect("open")
+        .field()
+        .expect("field");
+    let centres: Vec<gleaner_field::LocalPoint> = field.cells().iter().map(|c| c.centre).collect();
+    let origin = gleaner_field::LocalPoint::new(0.0, 0.0);
+    let no_fly = dir.path().join("no_fly.geojson");
+    std::fs::write(
+        &no_fly,
+        gleaner_app::airspace::seeded_no_fly_geojson(field.frame(), 20, 20, &centres, origin),
+    )
+    .expect("zones");
+    let (mut lo, mut hi) = ((0.0f64, 0.0f64), (0.0f64, 0.0f64));
+    for c in &centres {
+        lo = (lo.0.min(c.e), lo.1.min(c.n));
+        hi = (hi.0.max(c.e), hi.1.max(c.n));
+    }
+    let fence = dir.path().join("fence.geojson");
+    std::fs::write(
+        &fence,
+        gleaner_app::airspace::polygons_geojson(
+            field.frame(),
+            &[gleaner_app::airspace::rectangle(
+                lo.0 - 60.0,
+                lo.1 - 60.0,
+                hi.0 + 60.0,
+                hi.1 + 60.0,
+            )],
+        ),
+    )
+    .expect("fence");
+    // A bad file is refused with its feature and field.
+    let bad = dir.path().join("bad.geojson");
+    std::fs::write(
+        &bad,
+        r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},"geometry":{"type":"Polygon","coordinates":[[[-117.08,46.78],[-117.07,46.78],[-117.08,46.78]]]}}]}"#,
+    )
+    .expect("bad");
+    let err = fail(&[
+        "init",
+        "--dir",
+        p,
+        "--sensors",
+        caf,
+        "--utm-zone",
+        "11N",
+        "--force",
+        "--no-fly",
+        s(&bad),
+    ]);
+    assert!(
+        err.contains("bad.geojson: feature 0: `geometry`: coordinates[0]: a ring of 3 positions"),
+        "{err}"
+    );
+    ok(&[
+        "init",
+        "--dir",
+        p,
+        "--sensors",
+        caf,
+        "--utm-zone",
+        "11N",
+        "--force",
+        "--geofence",
+        s(&fence),
+        "--no-fly",
+        s(&no_fly),
+        "--no-fly-buffer",
+        "5",
+    ]);
+    let toml = std::fs::read_to_string(project.join("gleaner.toml")).expect("toml");
+    assert!(
+        toml.contains("no_fly = ")
+            && toml.contains("geofence = ")
+            && toml.contains("no_fly_buffer_m = 5"),
+        "{toml}"
+    );
+    // Exploration: every reachable cell once, the others reported.
+    let json = ok(&["explore", "--project", p, "--at", "2014-03-01", "--json"]);
+    let e: serde_json::Value = serde_json::from_str(&json).expect("json");
+    let visited: usize = e["sorties"]
+        .as_array()
+        .expect("sorties")
+        .iter()
+        .map(|m| m["stops"].as_array().expect("stops").len())
+        .sum();
+    let unreachable = e["unreachable"].as_array().map_or(0, Vec::len);
+    assert_eq!(
+        visited + unreachable,
+        e["cells"].as_u64().expect("cells") as usize
+    );
+    let turns: usize = e["sorties"]
+        .as_array()
+        .expect("sorties")
+        .iter()
+        .flat_map(|m| m["stops"].as_array().expect("stops").iter())
+        .map(|s| s["via_lon_lat"].as_array().map_or(0, Vec::len))
+        .sum();
+    assert!(turns > 0, "no leg went around a zone");
+    // A plan from given scores (every cell 1): the unreachable cells are never planned.
+    let scores = dir.path().join("scores.csv");
+    let mut text = String::from("cell_id,score\n");
+    for c in field.cells() {
+        text.push_str(&format!("{},1\n", c.index));
+    }
+    std::fs::write(&scores, text).expect("scores");
+    let json = ok(&[
+        "plan",
+        "--project",
+        p,
+        "--at",
+        "2014-03-01",
+        "--scores",
+        s(&scores),
+        "--json",
+    ]);
+    let m: serde_json::Value = serde_json::from_str(&json).expect("json");
+    let blocked: Vec<&str> = m["unreachable"]
+        .as_array()
+        .map(|u| {
+            u.iter()
+                .map(|c| c["cell"].as_str().expect("cell"))
+                .collect()
+        })
+        .unwrap_or_default();
+    for stop in m["stops"].as_array().expect("stops") {
+        assert!(!blocked.contains(&stop["cell"].as_str().expect("cell")));
+    }
+    let id = m["mission_id"].as_i64().expect("id").to_string();
+    let text = ok(&[
+        "plan",
+        "--project",
+        p,
+        "--at",
+        "2014-03-01",
+        "--scores",
+        s(&scores),
+        "--dry-run",
+    ]);
+    if !blocked.is_empty() {
+        assert!(text.contains("unreachable cells"), "{text}");
+    }
+    let out = dir.path().join("export");
+    ok(&["export", "--project", p, "--mission", &id, "--out", s(&out)]);
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("mission.plan")).expect("plan"))
+            .expect("json");
+    let polygons = plan["geoFence"]["polygons"].as_array().expect("polygons");
+    assert_eq!(polygons.len(), 21);
+    assert_eq!(
+        polygons.iter().filter(|p| p["inclusion"] == true).count(),
+        1,
+        "one inclusion fence"
+    );
+    let holds: Vec<f64> = plan["mission"]["items"]
+        .as_array()
+        .expect("items")
+        .iter()
+        .filter(|it| it["command"] == 16)
+        .map(|it| it["params"][0].as_f64().expect("hold"))
+        .collect();
+    let stops = m["stops"].as_array().expect("stops").len();
+    let vias: usize = m["stops"]
+        .as_array()
+        .expect("stops")
+        .iter()
+        .map(|s| s["via_lon_lat"].as_array().map_or(0, Vec::len))
+        .sum::<usize>()
+        + m["return_via_lon_lat"].as_array().map_or(0, Vec::len);
+    assert_eq!(holds.len(), stops + vias);
+    assert_eq!(holds.iter().filter(|&&h| h == 0.0).count(), vias);
+}

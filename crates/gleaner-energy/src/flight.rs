@@ -168,8 +168,12 @@ impl FlightEnergyModel {
     /// The energy breakdown of `flight` as commanded: from its home through its waypoints and
     /// back, at its speed and altitude, hovering its holds; positions projected into
     /// `TransverseMercator::local(origin)` (the planner's frame: the project's base station).
-    /// An [`CommandedFlight::airborne`] flight starts at its first waypoint in the air
-    /// ([`MissionEnergyModel::continuation`]: a 0 m first leg, descent only). Compare
+    /// A waypoint holding exactly 0 s is a turn point of a detour around a no-fly zone (a
+    /// stop always holds at least [`HOLD_STEP_S`]): it belongs to the leg to the next stop (or
+    /// to the return leg), priced by [`MissionEnergyModel::breakdown_paths`] as the planner
+    /// priced it; a flight of turn points only is priced as stops. An
+    /// [`CommandedFlight::airborne`] flight starts at its first waypoint in the air
+    /// ([`MissionEnergyModel::continuation_paths`]: no take-off, descent only). Compare
     /// `total_j` with the budget the flight was planned against (`usable_budget_j`, or for a
     /// continuation the energy left less the reserve).
     ///
@@ -183,19 +187,31 @@ impl FlightEnergyModel {
         let model = self.model(flight.speed_mps, flight.altitude_m)?;
         let frame = TransverseMercator::local(origin);
         let home = frame.forward(flight.home);
-        let visits: Vec<CellVisit> = flight
-            .waypoints
-            .iter()
-            .map(|&(p, hold_s)| CellVisit {
-                centre: frame.forward(p),
-                hover_s: hold_s,
-            })
-            .collect();
-        match (flight.airborne, visits.first()) {
-            (true, Some(first)) => {
-                model.continuation(first.centre, home, &visits, self.usable_budget_j)
+        // A continuation starts at its first waypoint, in the air.
+        let (start, waypoints) = match (flight.airborne, flight.waypoints.split_first()) {
+            (true, Some((first, rest))) => (Some(frame.forward(first.0)), rest),
+            _ => (None, flight.waypoints.as_slice()),
+        };
+        let all_turns = waypoints.iter().all(|&(_, hold_s)| hold_s == 0.0);
+        let mut visits: Vec<CellVisit> = Vec::with_capacity(waypoints.len());
+        let mut via: Vec<Vec<LocalPoint>> = vec![Vec::new()];
+        for &(p, hold_s) in waypoints {
+            let centre = frame.forward(p);
+            if hold_s == 0.0 && !all_turns {
+                via.last_mut().expect("never empty").push(centre);
+            } else {
+                visits.push(CellVisit {
+                    centre,
+                    hover_s: hold_s,
+                });
+                via.push(Vec::new());
             }
-            _ => model.breakdown(home, &visits),
+        }
+        match start {
+            Some(start) => {
+                model.continuation_paths(start, home, &visits, &via, self.usable_budget_j)
+            }
+            None => model.breakdown_paths(home, &visits, &via),
         }
     }
 }
@@ -248,6 +264,69 @@ mod tests {
 
     fn model() -> MissionEnergyModel {
         MissionEnergyModel::new(&EnergyConfig::paper()).unwrap()
+    }
+
+    /// A flight with detours: zero-hold waypoints are turn points, priced along the
+    /// polylines exactly as the planner's `breakdown_paths` priced them, and a polyline costs
+    /// more than the straight leg.
+    #[test]
+    fn zero_hold_waypoints_are_turn_points_priced_as_planned() {
+        let m = model().for_flight().unwrap();
+        let origin = LatLon::new(46.78, -117.08).unwrap();
+        let frame = TransverseMercator::local(origin);
+        let at = |e: f64, n: f64| flight_position(frame.inverse(LocalPoint::new(e, n)));
+        let local = |p: LatLon| frame.forward(p);
+        let home = flight_position(origin);
+        let (a, t1, b, t2) = (
+            at(200.0, 0.0),
+            at(250.0, 60.0),
+            at(300.0, 0.0),
+            at(150.0, -40.0),
+        );
+        let flight = CommandedFlight {
+            home,
+            altitude_m: m.link().altitude_m,
+            speed_mps: m.cruise_speed_mps(),
+            waypoints: vec![(a, 30.0), (t1, 0.0), (b, 30.5), (t2, 0.0)],
+            airborne: false,
+        };
+        let commanded = m.flight_energy_model().energy(origin, &flight).unwrap();
+        let visits = [
+            CellVisit {
+                centre: local(a),
+                hover_s: 30.0,
+            },
+            CellVisit {
+                centre: local(b),
+                hover_s: 30.5,
+            },
+        ];
+        let via = vec![Vec::new(), vec![local(t1)], vec![local(t2)]];
+        let planned = m.breakdown_paths(local(home), &visits, &via).unwrap();
+        assert_eq!(commanded.total_j.to_bits(), planned.total_j.to_bits());
+        assert_eq!(commanded.legs.len(), 3);
+        let straight = m.breakdown(local(home), &visits).unwrap();
+        assert!(planned.total_j > straight.total_j);
+        assert!(planned.legs[1].distance_m > straight.legs[1].distance_m);
+        // Reversed polylines have the same length to the bit.
+        let p = [local(a), local(t1), local(b)];
+        let r = [local(b), local(t1), local(a)];
+        assert_eq!(
+            crate::path_length_m(&p).to_bits(),
+            crate::path_length_m(&r).to_bits()
+        );
+        // A flight of turn points only is priced as stops.
+        let only = CommandedFlight {
+            waypoints: vec![(a, 0.0)],
+            ..flight
+        };
+        assert!(
+            m.flight_energy_model()
+                .energy(origin, &only)
+                .unwrap()
+                .total_j
+                > 0.0
+        );
     }
 
     #[test]

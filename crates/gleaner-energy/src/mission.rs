@@ -15,6 +15,28 @@ pub(crate) fn distance_m(a: &LocalPoint, b: &LocalPoint) -> f64 {
     (de * de + dn * dn).sqrt()
 }
 
+/// Length of the polyline through `points` (a leg flown around obstacles: its start, turn
+/// points, end), m: the sum of its segments' [`distance_m`], added from the end whose
+/// (easting, northing) is smaller, so a polyline and its reverse have the same length to the
+/// last bit (a planner's cost matrix stays exactly symmetric). Two points give their
+/// straight-line distance exactly; fewer give 0.
+pub fn path_length_m(points: &[LocalPoint]) -> f64 {
+    let (Some(first), Some(last)) = (points.first(), points.last()) else {
+        return 0.0;
+    };
+    let forward = first
+        .e
+        .total_cmp(&last.e)
+        .then(first.n.total_cmp(&last.n))
+        .is_le();
+    let segment = |w: &[LocalPoint]| distance_m(&w[0], &w[1]);
+    if forward {
+        points.windows(2).map(segment).sum()
+    } else {
+        points.windows(2).rev().map(segment).sum()
+    }
+}
+
 /// One stop of a route: where the UAV hovers and for how long.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CellVisit {
@@ -442,12 +464,32 @@ impl MissionEnergyModel {
         base: LocalPoint,
         route: &[CellVisit],
     ) -> Result<MissionEnergy, EnergyError> {
+        self.breakdown_paths(base, route, &[])
+    }
+
+    /// [`MissionEnergyModel::breakdown`] of a route whose legs are polylines (flown around
+    /// no-fly zones at the cruise altitude and speed, without stopping): `via[i]` holds the
+    /// turn points (local frame, m) between the previous stop (the base for `i = 0`) and stop
+    /// `i`, and `via[route.len()]` those of the return leg. A missing entry (or `via` empty) is
+    /// a straight leg, so `breakdown_paths(base, route, &[])` is `breakdown(base, route)` to
+    /// the last bit. Each leg's distance is [`path_length_m`] of its polyline (the same
+    /// function a planner's cost matrix uses), its energy P(V)/V times that, its time that
+    /// over V.
+    ///
+    /// # Errors
+    /// As [`MissionEnergyModel::breakdown`], and for a non-finite turn point.
+    pub fn breakdown_paths(
+        &self,
+        base: LocalPoint,
+        route: &[CellVisit],
+        via: &[Vec<LocalPoint>],
+    ) -> Result<MissionEnergy, EnergyError> {
         let vertical = if route.is_empty() {
             (0.0, 0.0)
         } else {
             (self.vertical_j, self.vertical_s)
         };
-        self.path(base, base, route, vertical, self.budget_j)
+        self.path(base, base, route, via, vertical, self.budget_j)
     }
 
     /// The energy breakdown of a *continuation*: the aircraft is already in the air at
@@ -466,10 +508,27 @@ impl MissionEnergyModel {
         route: &[CellVisit],
         budget_j: f64,
     ) -> Result<MissionEnergy, EnergyError> {
+        self.continuation_paths(start, base, route, &[], budget_j)
+    }
+
+    /// [`MissionEnergyModel::continuation`] with legs that are polylines through `via`
+    /// (turn points, local frame m; `via[i]` before stop `i`, `via[route.len()]` on the way
+    /// home), as [`MissionEnergyModel::breakdown_paths`].
+    ///
+    /// # Errors
+    /// As [`MissionEnergyModel::continuation`], and for a non-finite turn point.
+    pub fn continuation_paths(
+        &self,
+        start: LocalPoint,
+        base: LocalPoint,
+        route: &[CellVisit],
+        via: &[Vec<LocalPoint>],
+        budget_j: f64,
+    ) -> Result<MissionEnergy, EnergyError> {
         finite("start easting (m)", start.e)?;
         finite("start northing (m)", start.n)?;
         finite("remaining budget (J)", budget_j)?;
-        self.path(start, base, route, self.descent(), budget_j)
+        self.path(start, base, route, via, self.descent(), budget_j)
     }
 
     /// Energy (J) and time (s) of the descent before landing: `P(0)·h/v_descent` and
@@ -485,13 +544,15 @@ impl MissionEnergyModel {
         }
     }
 
-    /// From `start` through `route` to `end`, with `(vertical_j, vertical_s)` of climb and
+    /// From `start` through `route` to `end` (legs polylines through `via`, as
+    /// [`MissionEnergyModel::breakdown_paths`]), with `(vertical_j, vertical_s)` of climb and
     /// descent, against `budget_j`. With `start == end` and an empty route, no leg at all.
     fn path(
         &self,
         start: LocalPoint,
         end: LocalPoint,
         route: &[CellVisit],
+        via: &[Vec<LocalPoint>],
         (vertical_j, vertical_s): (f64, f64),
         budget_j: f64,
     ) -> Result<MissionEnergy, EnergyError> {
@@ -502,13 +563,27 @@ impl MissionEnergyModel {
             finite("cell northing (m)", v.centre.n)?;
             non_negative("hover time (s)", v.hover_s)?;
         }
+        for p in via.iter().flatten() {
+            finite("turn point easting (m)", p.e)?;
+            finite("turn point northing (m)", p.n)?;
+        }
         let mut legs = Vec::with_capacity(route.len() + 1);
         let mut cells = Vec::with_capacity(route.len());
         let mut previous = start;
         let home = !route.is_empty() || start != end;
         let stops = route.iter().map(|v| v.centre).chain(home.then_some(end));
-        for to in stops {
-            let distance_m = distance_m(&previous, &to);
+        let mut polyline = Vec::new();
+        for (k, to) in stops.enumerate() {
+            let distance_m = match via.get(k) {
+                Some(turns) if !turns.is_empty() => {
+                    polyline.clear();
+                    polyline.push(previous);
+                    polyline.extend_from_slice(turns);
+                    polyline.push(to);
+                    path_length_m(&polyline)
+                }
+                _ => distance_m(&previous, &to),
+            };
             legs.push(LegEnergy {
                 distance_m,
                 time_s: distance_m / self.cruise_speed_mps,

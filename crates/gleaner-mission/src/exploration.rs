@@ -45,6 +45,8 @@
 
 use gleaner_energy::{CellVisit, EnergyError, MissionEnergyModel};
 use gleaner_field::LocalPoint;
+
+use crate::Detours;
 use gleaner_orienteering::{
     ImproveOptions, Metric, Problem, ProblemError, SolutionError, improve_routes,
 };
@@ -172,6 +174,28 @@ fn distance_m(a: &LocalPoint, b: &LocalPoint) -> f64 {
     (de * de + dn * dn).sqrt()
 }
 
+/// Leg lengths between the base (`None`) and the cells (`Some(c)`), m: straight, or along
+/// the detours' polylines.
+struct Legs<'a> {
+    base: LocalPoint,
+    cells: &'a [LocalPoint],
+    detours: Option<&'a Detours>,
+}
+
+impl Legs<'_> {
+    fn at(&self, c: Option<usize>) -> LocalPoint {
+        c.map_or(self.base, |c| self.cells[c])
+    }
+
+    /// The leg from `a` to `b`, m.
+    fn d(&self, a: Option<usize>, b: Option<usize>) -> f64 {
+        match self.detours {
+            None => distance_m(&self.at(a), &self.at(b)),
+            Some(d) => d.length_m(a.map_or(0, |c| c + 1), b.map_or(0, |c| c + 1)),
+        }
+    }
+}
+
 /// Plans the fewest budget-feasible sorties from `base` that together visit every cell of
 /// `centres` (cell centres, local frame, metres) with service energies `service_j` (hover +
 /// receiver energy per cell, J, e.g. [`MissionEnergyModel::service_energy_j`]), then the least
@@ -189,7 +213,43 @@ pub fn plan_exploration(
     service_j: &[f64],
     options: &ExplorationOptions,
 ) -> Result<ExplorationPlan, ExplorationError> {
+    plan_exploration_routed(model, base, centres, service_j, options, None)
+}
+
+/// [`plan_exploration`] with legs flown around no-fly zones: `detours` over the base and
+/// `centres` (in order) gives every leg's polyline, whose length every step of the method
+/// uses in place of the straight line, and every sortie is re-checked along its polylines
+/// ([`MissionEnergyModel::breakdown_paths`]). A cell `detours` marks unreachable is a
+/// [`ExplorationError::CellUnreachable`]: leave such cells out. `None` is
+/// [`plan_exploration`].
+///
+/// # Errors
+/// As [`plan_exploration`]; [`EnergyError::LengthMismatch`] for detours over another number
+/// of nodes than base + cells.
+pub fn plan_exploration_routed(
+    model: &MissionEnergyModel,
+    base: LocalPoint,
+    centres: &[LocalPoint],
+    service_j: &[f64],
+    options: &ExplorationOptions,
+    detours: Option<&Detours>,
+) -> Result<ExplorationPlan, ExplorationError> {
     let cells = centres;
+    if let Some(d) = detours
+        && d.len() != cells.len() + 1
+    {
+        return Err(EnergyError::LengthMismatch {
+            what: "detour nodes vs base + cells",
+            left: d.len(),
+            right: cells.len() + 1,
+        }
+        .into());
+    }
+    let legs = Legs {
+        base,
+        cells,
+        detours,
+    };
     if cells.len() != service_j.len() {
         return Err(EnergyError::LengthMismatch {
             what: "cell centres vs service energies",
@@ -232,7 +292,7 @@ pub fn plan_exploration(
     let capacity = model.usable_budget_j() * (1.0 - options.budget_margin) - fixed_j;
     let route_budget = (capacity - 1e-9 * capacity.max(1.0)).max(0.0);
     let budget = fixed_j + route_budget;
-    let to_base: Vec<f64> = cells.iter().map(|c| epm * distance_m(c, &base)).collect();
+    let to_base: Vec<f64> = (0..n).map(|c| epm * legs.d(Some(c), None)).collect();
     for i in 0..n {
         let alone = fixed_j + 2.0 * to_base[i] + service_j[i];
         if alone.is_nan() || alone > budget {
@@ -244,12 +304,12 @@ pub fn plan_exploration(
         }
     }
     let lower_bound_sorties = sortie_lower_bound(&to_base, service_j, budget - fixed_j);
-    let tour = giant_tour(cells, options)?;
-    let giant_tour_m = cycle_length(cells, &tour);
+    let tour = giant_tour(&legs, options)?;
+    let giant_tour_m = cycle_length(&legs, &tour);
     let sweep = sweep_order(cells, base);
 
     let cost = SplitCost {
-        cells,
+        legs: &legs,
         epm,
         to_base: &to_base,
         service_j,
@@ -284,15 +344,26 @@ pub fn plan_exploration(
     let mut groups = best.map(|b| b.2).unwrap_or_default();
     // The sorties as a team orienteering instance in J: node 0 = base, node c + 1 = cell c.
     let sorties_problem = if n > 0 {
-        let points: Vec<[f64; 2]> = std::iter::once(base)
-            .chain(cells.iter().copied())
-            .map(|p| [epm * p.e, epm * p.n])
-            .collect();
         let mut service = Vec::with_capacity(n + 1);
         service.push(0.0);
         service.extend_from_slice(service_j);
+        let problem = match detours {
+            None => {
+                let points: Vec<[f64; 2]> = std::iter::once(base)
+                    .chain(cells.iter().copied())
+                    .map(|p| [epm * p.e, epm * p.n])
+                    .collect();
+                Problem::from_points(&points, Metric::Euclidean, vec![0.0; n + 1], route_budget)?
+            }
+            Some(d) => {
+                let cost: Vec<f64> = (0..=n)
+                    .flat_map(|a| (0..=n).map(move |b| epm * d.length_m(a, b)))
+                    .collect();
+                Problem::new(cost, vec![0.0; n + 1], route_budget)?
+            }
+        };
         Some(
-            Problem::from_points(&points, Metric::Euclidean, vec![0.0; n + 1], route_budget)?
+            problem
                 .with_service_costs(service)?
                 .with_vehicles(groups.len().max(1))?,
         )
@@ -334,7 +405,7 @@ pub fn plan_exploration(
     if options.eliminate_sorties {
         for _ in 0..=options.max_improvement_rounds {
             let before = groups.len();
-            groups = eliminate_sorties(&cost, base, groups);
+            groups = eliminate_sorties(&cost, groups);
             if groups.len() == before {
                 break;
             }
@@ -353,7 +424,8 @@ pub fn plan_exploration(
                 hover_s: service_j[c] / per_joule_of_service,
             })
             .collect();
-        let e = model.breakdown(base, &visits)?;
+        let via = detours.map(|d| d.route_via(&g)).unwrap_or_default();
+        let e = model.breakdown_paths(base, &visits, &via)?;
         if !e.feasible {
             return Err(ExplorationError::Infeasible {
                 sortie: k,
@@ -382,14 +454,15 @@ pub fn plan_exploration(
 /// A closed tour through all cells: nearest neighbour from cell 0, then the generic tour
 /// improvement (2-opt, Or-opt, double-bridge kicks) with cell `tour[0]` held in place.
 fn giant_tour(
-    cells: &[LocalPoint],
+    legs: &Legs<'_>,
     options: &ExplorationOptions,
 ) -> Result<Vec<usize>, ExplorationError> {
+    let cells = legs.cells;
     let n = cells.len();
     if n < 4 {
         return Ok((0..n).collect());
     }
-    let d = |a: usize, b: usize| distance_m(&cells[a], &cells[b]);
+    let d = |a: usize, b: usize| legs.d(Some(a), Some(b));
     let mut tour = Vec::with_capacity(n + 1);
     let mut used = vec![false; n];
     let mut current = 0;
@@ -409,12 +482,20 @@ fn giant_tour(
         current = next;
     }
     tour.push(0);
-    let points: Vec<[f64; 2]> = cells.iter().map(|c| [c.e, c.n]).collect();
     // Any budget at least the tour's length will do; it only sets the improvement threshold
     // (1e-9 relative).
-    let length = cycle_length(cells, &tour[..n]);
-    let problem = Problem::from_points(&points, Metric::Euclidean, vec![0.0; n], 0.0)?
-        .with_budget(length * (1.0 + 1e-6) + 1.0)?;
+    let length = cycle_length(legs, &tour[..n]);
+    let problem = match legs.detours {
+        None => {
+            let points: Vec<[f64; 2]> = cells.iter().map(|c| [c.e, c.n]).collect();
+            Problem::from_points(&points, Metric::Euclidean, vec![0.0; n], 0.0)?
+        }
+        Some(_) => {
+            let cost: Vec<f64> = (0..n).flat_map(|a| (0..n).map(move |b| d(a, b))).collect();
+            Problem::new(cost, vec![0.0; n], 0.0)?
+        }
+    }
+    .with_budget(length * (1.0 + 1e-6) + 1.0)?;
     let improve = ImproveOptions {
         neighbours: options.neighbours,
         between_routes: false,
@@ -479,27 +560,20 @@ fn sweep_order(cells: &[LocalPoint], base: LocalPoint) -> Vec<usize> {
 }
 
 /// Energy of the sortie base -> order -> base, J.
-fn sortie_energy(cost: &SplitCost<'_>, base: LocalPoint, order: &[usize]) -> f64 {
+fn sortie_energy(cost: &SplitCost<'_>, order: &[usize]) -> f64 {
     if order.is_empty() {
         return 0.0;
     }
     let service: f64 = order.iter().map(|&c| cost.service_j[c]).sum();
-    cost.fixed_j + cost.epm * path_length(cost.cells, base, order) + service
+    cost.fixed_j + cost.epm * path_length(cost.legs, order) + service
 }
 
 /// Repeatedly tries to empty a sortie (fewest cells first) by inserting each of its cells,
 /// farthest first, at the cheapest feasible position of another sortie; commits when all fit.
-fn eliminate_sorties(
-    cost: &SplitCost<'_>,
-    base: LocalPoint,
-    mut groups: Vec<Vec<usize>>,
-) -> Vec<Vec<usize>> {
-    let at = |c: Option<usize>| c.map_or(base, |c| cost.cells[c]);
+fn eliminate_sorties(cost: &SplitCost<'_>, mut groups: Vec<Vec<usize>>) -> Vec<Vec<usize>> {
+    let d = |a: Option<usize>, b: Option<usize>| cost.legs.d(a, b);
     loop {
-        let energies: Vec<f64> = groups
-            .iter()
-            .map(|g| sortie_energy(cost, base, g))
-            .collect();
+        let energies: Vec<f64> = groups.iter().map(|g| sortie_energy(cost, g)).collect();
         let mut candidates: Vec<usize> = (0..groups.len()).collect();
         candidates.sort_by(|&a, &b| {
             groups[a]
@@ -514,18 +588,16 @@ fn eliminate_sorties(
             let mut moving = std::mem::take(&mut trial[r]);
             moving.sort_by(|&a, &b| cost.to_base[b].total_cmp(&cost.to_base[a]).then(a.cmp(&b)));
             for &c in &moving {
-                let p = cost.cells[c];
                 let mut best: Option<(f64, usize, usize)> = None;
                 for (k, g) in trial.iter().enumerate() {
                     if k == r || g.is_empty() {
                         continue;
                     }
                     for pos in 0..=g.len() {
-                        let prev = at(pos.checked_sub(1).map(|q| g[q]));
-                        let next = at(g.get(pos).copied());
+                        let prev = pos.checked_sub(1).map(|q| g[q]);
+                        let next = g.get(pos).copied();
                         let delta = cost.epm
-                            * (distance_m(&prev, &p) + distance_m(&p, &next)
-                                - distance_m(&prev, &next))
+                            * (d(prev, Some(c)) + d(Some(c), next) - d(prev, next))
                             + cost.service_j[c];
                         if trial_energy[k] + delta <= cost.budget
                             && best.is_none_or(|b| delta < b.0)
@@ -539,7 +611,7 @@ fn eliminate_sorties(
                 };
                 trial[k].insert(pos, c);
                 // Recompute exactly rather than accumulate deltas, so feasibility is exact.
-                trial_energy[k] = sortie_energy(cost, base, &trial[k]);
+                trial_energy[k] = sortie_energy(cost, &trial[k]);
                 if trial_energy[k] > cost.budget {
                     continue 'attempt;
                 }
@@ -557,7 +629,7 @@ fn eliminate_sorties(
 
 /// Everything the split DP needs, in J.
 struct SplitCost<'a> {
-    cells: &'a [LocalPoint],
+    legs: &'a Legs<'a>,
     epm: f64,
     to_base: &'a [f64],
     service_j: &'a [f64],
@@ -582,7 +654,7 @@ impl SplitCost<'_> {
             let mut service = 0.0;
             for j in i..m {
                 if j > i {
-                    path += self.epm * distance_m(&self.cells[seq[j - 1]], &self.cells[seq[j]]);
+                    path += self.epm * self.legs.d(Some(seq[j - 1]), Some(seq[j]));
                 }
                 service += self.service_j[seq[j]];
                 let sortie =
@@ -611,21 +683,21 @@ impl SplitCost<'_> {
     }
 }
 
-fn cycle_length(cells: &[LocalPoint], tour: &[usize]) -> f64 {
+fn cycle_length(legs: &Legs<'_>, tour: &[usize]) -> f64 {
     let n = tour.len();
     (0..n)
-        .map(|k| distance_m(&cells[tour[k]], &cells[tour[(k + 1) % n]]))
+        .map(|k| legs.d(Some(tour[k]), Some(tour[(k + 1) % n])))
         .sum()
 }
 
-fn path_length(cells: &[LocalPoint], base: LocalPoint, order: &[usize]) -> f64 {
-    let mut previous = base;
+fn path_length(legs: &Legs<'_>, order: &[usize]) -> f64 {
+    let mut previous = None;
     let mut total = 0.0;
     for &c in order {
-        total += distance_m(&previous, &cells[c]);
-        previous = cells[c];
+        total += legs.d(previous, Some(c));
+        previous = Some(c);
     }
-    total + distance_m(&previous, &base)
+    total + legs.d(previous, None)
 }
 
 #[cfg(test)]
@@ -840,15 +912,20 @@ mod tests {
                 LocalPoint::new(500.0 * a.cos(), 500.0 * a.sin())
             })
             .collect();
-        let tour = giant_tour(&cells, &ExplorationOptions::default()).unwrap();
+        let legs = Legs {
+            base: LocalPoint::new(0.0, 0.0),
+            cells: &cells,
+            detours: None,
+        };
+        let tour = giant_tour(&legs, &ExplorationOptions::default()).unwrap();
         let mut sorted = tour.clone();
         sorted.sort_unstable();
         assert_eq!(sorted, (0..n).collect::<Vec<_>>());
         let polygon = n as f64 * 2.0 * 500.0 * (std::f64::consts::PI / n as f64).sin();
         assert!(
-            (cycle_length(&cells, &tour) - polygon).abs() < 1e-6,
+            (cycle_length(&legs, &tour) - polygon).abs() < 1e-6,
             "{}",
-            cycle_length(&cells, &tour)
+            cycle_length(&legs, &tour)
         );
     }
 
@@ -862,22 +939,64 @@ mod tests {
         ];
         let to_base: Vec<f64> = cells.iter().map(|c| m.energy_per_metre_j() * c.e).collect();
         let service = [m.service_energy_j(30.0); 3];
-        let cost = SplitCost {
+        let base = LocalPoint::new(0.0, 0.0);
+        let legs = Legs {
+            base,
             cells: &cells,
+            detours: None,
+        };
+        let cost = SplitCost {
+            legs: &legs,
             epm: m.energy_per_metre_j(),
             to_base: &to_base,
             service_j: &service,
             fixed_j: 0.0,
             budget: m.usable_budget_j(),
         };
-        let base = LocalPoint::new(0.0, 0.0);
-        let merged = eliminate_sorties(&cost, base, vec![vec![1], vec![0], vec![2]]);
+        let merged = eliminate_sorties(&cost, vec![vec![1], vec![0], vec![2]]);
         assert_eq!(merged.len(), 1);
         let mut cells_visited = merged[0].clone();
         cells_visited.sort_unstable();
         assert_eq!(cells_visited, vec![0, 1, 2]);
         // Collinear cells: any out-and-back order flies 2 x 180 m.
-        assert!((path_length(&cells, base, &merged[0]) - 360.0).abs() < 1e-9);
+        assert!((path_length(&legs, &merged[0]) - 360.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn straight_detours_plan_the_same_sorties_and_blocked_legs_are_longer() {
+        let m = paper();
+        let cells = grid(6, 4);
+        let service = vec![m.service_energy_j(30.0); cells.len()];
+        let base = LocalPoint::new(0.0, 0.0);
+        let mut pts = vec![base];
+        pts.extend(cells.iter().copied());
+        let straight = Detours::straight(&pts);
+        let o = ExplorationOptions::default();
+        let plain = plan_exploration(&m, base, &cells, &service, &o).unwrap();
+        let routed =
+            plan_exploration_routed(&m, base, &cells, &service, &o, Some(&straight)).unwrap();
+        assert_eq!(plain.sorties.len(), routed.sorties.len());
+        assert!(
+            (plain.total_energy_j - routed.total_energy_j).abs() <= 1e-6 * plain.total_energy_j
+        );
+        // Every leg to cell 0 detours 30 m north: the plan flies them and prices them.
+        let detour = Detours::new(&pts, |i, j| {
+            Some(if i == 1 || j == 1 {
+                vec![LocalPoint::new(
+                    0.5 * (pts[i].e + pts[j].e),
+                    30.0 + pts[i].n.max(pts[j].n),
+                )]
+            } else {
+                Vec::new()
+            })
+        });
+        let p = plan_exploration_routed(&m, base, &cells, &service, &o, Some(&detour)).unwrap();
+        assert!(p.total_energy_j > plain.total_energy_j);
+        let mut seen: Vec<usize> = p.sorties.iter().flat_map(|s| s.cells.clone()).collect();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..cells.len()).collect::<Vec<_>>());
+        let err = plan_exploration_routed(&m, base, &cells[1..], &service[1..], &o, Some(&detour));
+        assert!(err.is_err(), "detours over the wrong node count");
     }
 
     #[test]

@@ -33,7 +33,10 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod detours;
 pub mod exploration;
+
+pub use detours::Detours;
 
 use std::time::{Duration, Instant};
 
@@ -141,6 +144,10 @@ pub struct MissionPlan {
     /// Wall-clock time spent solving, seconds (informational; never affects the result when an
     /// iteration cap is set).
     pub solve_seconds: f64,
+    /// The turn points of each leg around no-fly zones (local frame, m), one entry per stop
+    /// and one for the return leg: empty entries for straight legs, no entries for straight
+    /// routes or an empty order. What [`MissionPlan::energy`] was priced along.
+    pub via: Vec<Vec<LocalPoint>>,
 }
 
 /// Why a mission could not be planned.
@@ -164,6 +171,14 @@ pub enum PlanError {
         what: &'static str,
         /// Its value.
         value: f64,
+    },
+    /// Detours over another number of nodes than the base and the candidates.
+    #[error("detours over {nodes} nodes for {candidates} candidates and the base")]
+    Detours {
+        /// Nodes of the detours.
+        nodes: usize,
+        /// Candidates given.
+        candidates: usize,
     },
     /// The solver returned a route the energy model finds infeasible (a bug; reported, never
     /// handed to an operator).
@@ -199,14 +214,34 @@ pub fn plan_sorties(
     options: &PlanOptions,
     sorties: usize,
 ) -> Result<Vec<MissionPlan>, PlanError> {
+    plan_sorties_routed(model, base, candidates, options, sorties, None)
+}
+
+/// [`plan_sorties`] with legs flown around no-fly zones: `detours` (over the base and
+/// `candidates`, in order) gives every leg's polyline; the travel costs are the energy per
+/// metre times their lengths (a dense matrix, not assumed metric), unreachable candidates
+/// are left out, and every sortie is re-checked along its polylines
+/// ([`MissionEnergyModel::breakdown_paths`]). `None` is [`plan_sorties`].
+///
+/// # Errors
+/// As [`plan_sorties`]; [`PlanError::Detours`] when `detours` is not over base + candidates.
+pub fn plan_sorties_routed(
+    model: &MissionEnergyModel,
+    base: LocalPoint,
+    candidates: &[Candidate],
+    options: &PlanOptions,
+    sorties: usize,
+    detours: Option<&Detours>,
+) -> Result<Vec<MissionPlan>, PlanError> {
     let sorties = sorties.max(1);
     check_candidates(candidates)?;
+    check_detours(candidates, detours)?;
     let chosen: Vec<usize> = (0..candidates.len())
-        .filter(|&k| candidates[k].score > 0.0)
+        .filter(|&k| candidates[k].score > 0.0 && detours.is_none_or(|d| d.reachable(k + 1)))
         .collect();
     let started = Instant::now();
     let mut orders: Vec<Vec<usize>> = vec![Vec::new(); sorties];
-    if let Some(problem) = instance(model, base, candidates, &chosen, sorties)? {
+    if let Some(problem) = instance(model, base, candidates, &chosen, sorties, detours)? {
         let mut solve_options = SolveOptions::default()
             .with_time_limit(options.time_limit)
             .with_seed(options.seed);
@@ -233,6 +268,7 @@ pub fn plan_sorties(
         chosen.len(),
         options.planner,
         started,
+        detours,
     )
 }
 
@@ -249,23 +285,45 @@ pub fn plan_sorties_valued<F: FnMut(&[usize]) -> f64>(
     model: &MissionEnergyModel,
     base: LocalPoint,
     candidates: &[Candidate],
-    mut value: F,
+    value: F,
     options: &PlanOptions,
     sorties: usize,
 ) -> Result<Vec<MissionPlan>, PlanError> {
+    plan_sorties_valued_routed(model, base, candidates, value, options, sorties, None)
+}
+
+/// [`plan_sorties_valued`] with legs flown around no-fly zones (see
+/// [`plan_sorties_routed`]). `None` is [`plan_sorties_valued`].
+///
+/// # Errors
+/// As [`plan_sorties_routed`].
+pub fn plan_sorties_valued_routed<F: FnMut(&[usize]) -> f64>(
+    model: &MissionEnergyModel,
+    base: LocalPoint,
+    candidates: &[Candidate],
+    mut value: F,
+    options: &PlanOptions,
+    sorties: usize,
+    detours: Option<&Detours>,
+) -> Result<Vec<MissionPlan>, PlanError> {
     let sorties = sorties.max(1);
     check_candidates(candidates)?;
+    check_detours(candidates, detours)?;
     let started = Instant::now();
     let mut orders: Vec<Vec<usize>> = Vec::with_capacity(sorties);
     let mut taken: Vec<usize> = Vec::new();
     let mut considered = 0;
     for _ in 0..sorties {
         let chosen: Vec<usize> = (0..candidates.len())
-            .filter(|&k| candidates[k].score > 0.0 && !taken.contains(&k))
+            .filter(|&k| {
+                candidates[k].score > 0.0
+                    && !taken.contains(&k)
+                    && detours.is_none_or(|d| d.reachable(k + 1))
+            })
             .collect();
         considered = considered.max(chosen.len());
         let mut order = Vec::new();
-        if let Some(problem) = instance(model, base, candidates, &chosen, 1)? {
+        if let Some(problem) = instance(model, base, candidates, &chosen, 1, detours)? {
             let mut set = taken.clone();
             let base_len = set.len();
             let found = solve_marginal(
@@ -297,6 +355,7 @@ pub fn plan_sorties_valued<F: FnMut(&[usize]) -> f64>(
         considered,
         options.planner,
         started,
+        detours,
     )
 }
 
@@ -408,6 +467,7 @@ pub fn replan(
         considered: chosen.len(),
         planner: options.planner,
         solve_seconds: started.elapsed().as_secs_f64(),
+        via: Vec::new(),
     })
 }
 
@@ -419,10 +479,36 @@ fn instance(
     candidates: &[Candidate],
     chosen: &[usize],
     sorties: usize,
+    detours: Option<&Detours>,
 ) -> Result<Option<Problem>, PlanError> {
     let budget = model.usable_budget_j() - model.sortie_fixed_j();
     if chosen.is_empty() || budget <= 0.0 {
         return Ok(None);
+    }
+    if let Some(d) = detours {
+        // Travel costs along the legs' polylines: energy per metre times their lengths, the
+        // products the energy model's breakdown forms leg by leg.
+        let nodes: Vec<usize> = std::iter::once(0)
+            .chain(chosen.iter().map(|&k| k + 1))
+            .collect();
+        let epm = model.energy_per_metre_j();
+        let mut cost = Vec::with_capacity(nodes.len() * nodes.len());
+        for &a in &nodes {
+            cost.extend(nodes.iter().map(|&b| epm * d.length_m(a, b)));
+        }
+        let mut rewards = vec![0.0];
+        rewards.extend(chosen.iter().map(|&k| candidates[k].score));
+        let mut service = vec![0.0];
+        service.extend(
+            chosen
+                .iter()
+                .map(|&k| model.service_energy_j(candidates[k].hover_s)),
+        );
+        let problem = Problem::new(cost, rewards, budget)?
+            .with_service_costs(service)?
+            .with_endpoints(0, 0)?
+            .with_vehicles(sorties)?;
+        return Ok(Some(problem));
     }
     // Travel costs: energy per metre times the straight-line distance (m), evaluated on
     // demand by the solver (exactly the entries of `travel_cost_matrix`, without its
@@ -454,6 +540,17 @@ fn instance(
     Ok(Some(problem))
 }
 
+/// Detours over the base and every candidate, if any.
+fn check_detours(candidates: &[Candidate], detours: Option<&Detours>) -> Result<(), PlanError> {
+    match detours {
+        Some(d) if d.len() != candidates.len() + 1 => Err(PlanError::Detours {
+            nodes: d.len(),
+            candidates: candidates.len(),
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// Finite scores and finite non-negative hover times, or the first offender.
 fn check_candidates(candidates: &[Candidate]) -> Result<(), PlanError> {
     for (index, c) in candidates.iter().enumerate() {
@@ -476,6 +573,7 @@ fn check_candidates(candidates: &[Candidate]) -> Result<(), PlanError> {
 }
 
 /// The plans of the solver's `orders`, each re-checked by the energy model's breakdown.
+#[allow(clippy::too_many_arguments)]
 fn finish(
     model: &MissionEnergyModel,
     base: LocalPoint,
@@ -484,6 +582,7 @@ fn finish(
     considered: usize,
     planner: Planner,
     started: Instant,
+    detours: Option<&Detours>,
 ) -> Result<Vec<MissionPlan>, PlanError> {
     let solve_seconds = started.elapsed().as_secs_f64();
     let mut plans = Vec::with_capacity(orders.len());
@@ -495,7 +594,8 @@ fn finish(
                 hover_s: candidates[k].hover_s,
             })
             .collect();
-        let energy = model.breakdown(base, &visits)?;
+        let via = detours.map(|d| d.route_via(&order)).unwrap_or_default();
+        let energy = model.breakdown_paths(base, &visits, &via)?;
         if !energy.feasible {
             return Err(PlanError::Infeasible {
                 total_j: energy.total_j,
@@ -509,6 +609,7 @@ fn finish(
             considered,
             planner,
             solve_seconds,
+            via,
         });
     }
     Ok(plans)
@@ -652,6 +753,80 @@ mod tests {
         );
         // The paper battery fits at most 13 such cells, so a second battery must add cells.
         assert!(seen.len() > single.order.len());
+    }
+
+    #[test]
+    fn detours_are_priced_and_unreachable_cells_never_planned() {
+        let cells = grid40();
+        let m = model();
+        let mut pts = vec![LocalPoint::default()];
+        pts.extend(cells.iter().map(|c| c.centre));
+        // Cell 3 is unreachable; legs touching cell 5 turn 25 m south of their midpoint.
+        let d = Detours::new(&pts, |i, j| {
+            if i == 4 || j == 4 {
+                None
+            } else if i == 6 || j == 6 {
+                let (a, b) = (pts[i], pts[j]);
+                Some(vec![LocalPoint::new(
+                    0.5 * (a.e + b.e),
+                    0.5 * (a.n + b.n) - 25.0,
+                )])
+            } else {
+                Some(Vec::new())
+            }
+        });
+        let plans = plan_sorties_routed(
+            &m,
+            LocalPoint::default(),
+            &cells,
+            &opts(Planner::Default),
+            2,
+            Some(&d),
+        )
+        .unwrap();
+        let straight = Detours::straight(&pts);
+        let plain = plan_sorties(
+            &m,
+            LocalPoint::default(),
+            &cells,
+            &opts(Planner::Default),
+            2,
+        )
+        .unwrap();
+        let same = plan_sorties_routed(
+            &m,
+            LocalPoint::default(),
+            &cells,
+            &opts(Planner::Default),
+            2,
+            Some(&straight),
+        )
+        .unwrap();
+        assert_eq!(
+            plain.iter().map(|p| p.total_score).sum::<f64>(),
+            same.iter().map(|p| p.total_score).sum::<f64>()
+        );
+        for p in &plans {
+            assert!(!p.order.contains(&3));
+            assert!(p.energy.feasible);
+            assert_eq!(p.via.len(), p.order.len() + 1);
+            // The breakdown priced the polylines: leg distances are the detours' lengths.
+            let mut prev = 0;
+            for (k, &c) in p.order.iter().enumerate() {
+                assert_eq!(p.energy.legs[k].distance_m, d.length_m(prev, c + 1));
+                prev = c + 1;
+            }
+        }
+        let e = plan_sorties_routed(
+            &m,
+            LocalPoint::default(),
+            &cells[1..],
+            &opts(Planner::Default),
+            1,
+            Some(&d),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("detours over 41 nodes"), "{e}");
     }
 
     #[test]

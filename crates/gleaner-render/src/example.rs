@@ -117,6 +117,7 @@ pub fn field() -> FieldDoc {
         base_lon_lat: BASE,
         cells,
         sensors,
+        zones: Vec::new(),
     }
 }
 
@@ -149,6 +150,7 @@ fn stops(cells: &[(i64, i64)], exploration: bool) -> (Vec<StopDoc>, f64) {
             hover_s: 12.0,
             hover_j: 2100.0,
             comm_j: 155.0,
+            via_lon_lat: Vec::new(),
         });
         prev = c;
     }
@@ -205,6 +207,9 @@ fn mission_doc(
         greedy_baseline: None,
         energy_model: None,
         continuation: None,
+        return_via_lon_lat: Vec::new(),
+        zones: Vec::new(),
+        unreachable: Vec::new(),
     }
 }
 

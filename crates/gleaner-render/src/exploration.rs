@@ -39,10 +39,14 @@ pub fn exploration_map_svg(
     let mut extra = Vec::new();
     for (k, m) in sorties.iter().enumerate() {
         let (base, stops) = frame::mission_points(&projection, m, &format!("sortie {}", k + 1))?;
+        let via = frame::mission_via(&projection, m, &format!("sortie {}", k + 1))?;
         extra.push(base);
         extra.extend(stops.iter().copied());
-        routes.push((base, stops));
+        extra.extend(via.iter().flatten().copied());
+        routes.push((base, stops, via));
     }
+    let zones = frame::zone_shapes(&projection, &field.zones)?;
+    extra.extend(frame::zone_points(&zones));
     let scene = Scene::new(field, &extra)?;
 
     let font = opts.font_pt;
@@ -157,12 +161,13 @@ pub fn exploration_map_svg(
     let mut svg = Svg::new(width, height, font, &title);
     titles.draw(&mut svg, margin);
     frame::draw_cells(&mut svg, &view, &scene.cells, &fills);
+    frame::draw_zones(&mut svg, &view, &zones);
     frame::draw_sensors(&mut svg, &view, &scene.sensors);
     let br = base_r(font);
     let dot_r = 0.28 * font;
-    for (k, (base, stops)) in routes.iter().enumerate() {
+    for (k, (base, stops, via)) in routes.iter().enumerate() {
         let (c, dash) = colour::qualitative(k);
-        let (pts, radii) = frame::route_points(&view, *base, stops, br, dot_r);
+        let (pts, radii) = frame::route_points_via(&view, *base, stops, via, br, dot_r);
         svg.line(format_args!(r#"<g id="sortie-{}" class="sortie">"#, k + 1));
         if !stops.is_empty() {
             frame::draw_route(
@@ -187,9 +192,9 @@ pub fn exploration_map_svg(
         svg.line(format_args!("</g>"));
     }
     svg.line(format_args!(r#"<g id="base">"#));
-    for (k, (base, _)) in routes.iter().enumerate() {
+    for (k, (base, _, _)) in routes.iter().enumerate() {
         // One marker per distinct base.
-        if routes[..k].iter().any(|(b, _)| b == base) {
+        if routes[..k].iter().any(|(b, _, _)| b == base) {
             continue;
         }
         let (x, y) = view.pt(*base);

@@ -243,6 +243,15 @@ pub fn mission_figure_svg(
     frame::check_options(opts)?;
     let projection = frame::Projection::new(field.base_lon_lat)?;
     let (base, stops) = frame::mission_points(&projection, mission, "mission")?;
+    let via = frame::mission_via(&projection, mission, "mission")?;
+    let zones = frame::zone_shapes(
+        &projection,
+        if mission.zones.is_empty() {
+            &field.zones
+        } else {
+            &mission.zones
+        },
+    )?;
     for (k, w) in mission.weights.iter().enumerate() {
         finite(
             || format!("mission weight {}", ["alpha", "beta", "gamma", "delta"][k]),
@@ -251,6 +260,8 @@ pub fn mission_figure_svg(
     }
     let mut extra = vec![base];
     extra.extend(stops.iter().copied());
+    extra.extend(via.iter().flatten().copied());
+    extra.extend(frame::zone_points(&zones));
     let scene = Scene::new(field, &extra)?;
 
     let font = opts.font_pt;
@@ -354,6 +365,18 @@ pub fn mission_figure_svg(
             text: "cell not scored".into(),
         });
     }
+    if zones.iter().any(|z| z.no_fly) {
+        entries.push(Entry {
+            symbol: Symbol::Swatch(frame::NO_FLY),
+            text: "no-fly zone".into(),
+        });
+    }
+    if zones.iter().any(|z| !z.no_fly) {
+        entries.push(Entry {
+            symbol: Symbol::Outline,
+            text: "geofence".into(),
+        });
+    }
     let legend_h = frame::legend_height(&entries, inner, font);
     let table_top = legend_top + legend_h + 0.5 * font;
     let height = table_top + EnergyTable::height(font) + margin;
@@ -362,11 +385,12 @@ pub fn mission_figure_svg(
     let mut svg = Svg::new(width, height, font, &title);
     titles.draw(&mut svg, margin);
     frame::draw_cells(&mut svg, &view, &scene.cells, &fills);
+    frame::draw_zones(&mut svg, &view, &zones);
     frame::draw_sensors(&mut svg, &view, &scene.sensors);
 
     // Route.
     let br = base_r(font);
-    let (pts, radii) = frame::route_points(&view, base, &stops, br, stop_r);
+    let (pts, radii) = frame::route_points_via(&view, base, &stops, &via, br, stop_r);
     let base_pt = pts[0];
     svg.line(format_args!(r#"<g id="route">"#));
     if !stops.is_empty() {

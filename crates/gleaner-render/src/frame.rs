@@ -388,23 +388,209 @@ pub(crate) fn fit_map(
     }
 }
 
-/// The page points of a route from `base` through `stops` and back, with the marker radius
-/// at each (`base_r` at the base, `stop_r` at the stops), for [`draw_route`].
-pub(crate) fn route_points(
+/// The route's points on the page (pt) and the marker radius at each (pt): base, stops,
+/// base, through the turn points of legs flown around no-fly zones (`via[k]` before stop k,
+/// `via[stops.len()]` on the return leg; local frame, m), which have radius 0.
+pub(crate) fn route_points_via(
     view: &MapView,
     base: (f64, f64),
     stops: &[(f64, f64)],
+    via: &[Vec<(f64, f64)>],
     base_r: f64,
     stop_r: f64,
 ) -> (Vec<(f64, f64)>, Vec<f64>) {
     let base_pt = view.pt(base);
     let mut pts = vec![base_pt];
-    pts.extend(stops.iter().map(|&p| view.pt(p)));
-    pts.push(base_pt);
     let mut radii = vec![base_r];
-    radii.extend(stops.iter().map(|_| stop_r));
+    for (k, &p) in stops.iter().enumerate() {
+        for &t in via.get(k).into_iter().flatten() {
+            pts.push(view.pt(t));
+            radii.push(0.0);
+        }
+        pts.push(view.pt(p));
+        radii.push(stop_r);
+    }
+    for &t in via.get(stops.len()).into_iter().flatten() {
+        pts.push(view.pt(t));
+        radii.push(0.0);
+    }
+    pts.push(base_pt);
     radii.push(base_r);
     (pts, radii)
+}
+
+/// The turn points of a mission's legs (one list per stop, then the return leg's), local
+/// frame, m.
+pub(crate) fn mission_via(
+    projection: &Projection,
+    m: &MissionDoc,
+    label: &str,
+) -> Result<Vec<Vec<(f64, f64)>>, RenderError> {
+    let mut out = Vec::with_capacity(m.stops.len() + 1);
+    for s in &m.stops {
+        let mut leg = Vec::with_capacity(s.via_lon_lat.len());
+        for (k, p) in s.via_lon_lat.iter().enumerate() {
+            leg.push(projection.local(lon_lat(
+                || format!("{label} stop {} turn point {k}", s.order),
+                *p,
+            )?));
+        }
+        out.push(leg);
+    }
+    let mut leg = Vec::with_capacity(m.return_via_lon_lat.len());
+    for (k, p) in m.return_via_lon_lat.iter().enumerate() {
+        leg.push(projection.local(lon_lat(|| format!("{label} return turn point {k}"), *p)?));
+    }
+    out.push(leg);
+    Ok(out)
+}
+
+/// A zone projected into the local frame, m.
+pub(crate) struct ZoneShape {
+    /// A no-fly zone (else the geofence).
+    pub(crate) no_fly: bool,
+    /// Polygon rings (each polygon's exterior and holes, in order).
+    pub(crate) polygons: Vec<Vec<Vec<(f64, f64)>>>,
+    /// Lines; a single point for a point zone.
+    pub(crate) lines: Vec<Vec<(f64, f64)>>,
+    /// Its label for the tooltip.
+    pub(crate) label: String,
+}
+
+/// Fill of a no-fly zone.
+pub(crate) const NO_FLY: Rgb = Rgb(0x40, 0x40, 0x40);
+
+/// The zones of the documents (`zones` of the mission, else of the field), projected.
+pub(crate) fn zone_shapes(
+    projection: &Projection,
+    zones: &[gleaner_wire::ZoneDoc],
+) -> Result<Vec<ZoneShape>, RenderError> {
+    let mut out = Vec::with_capacity(zones.len());
+    for (z, zone) in zones.iter().enumerate() {
+        let what = |k: usize| format!("zone {z} position {k}");
+        let mut polygons = Vec::new();
+        let mut n = 0;
+        for p in &zone.polygons_lon_lat {
+            let mut rings = Vec::new();
+            for r in p {
+                let mut ring = Vec::with_capacity(r.len());
+                for q in r {
+                    ring.push(projection.local(lon_lat(|| what(n), *q)?));
+                    n += 1;
+                }
+                rings.push(ring);
+            }
+            polygons.push(rings);
+        }
+        let mut lines = Vec::new();
+        for l in &zone.lines_lon_lat {
+            let mut line = Vec::with_capacity(l.len());
+            for q in l {
+                line.push(projection.local(lon_lat(|| what(n), *q)?));
+                n += 1;
+            }
+            lines.push(line);
+        }
+        let name = zone
+            .name
+            .as_ref()
+            .map_or_else(String::new, |n| format!(" {n}"));
+        out.push(ZoneShape {
+            no_fly: zone.kind != "geofence",
+            polygons,
+            lines,
+            label: format!("{}{name} (buffer {} m)", zone.kind, zone.buffer_m),
+        });
+    }
+    Ok(out)
+}
+
+/// Every point of the zones (to keep them on the map), m.
+pub(crate) fn zone_points(zones: &[ZoneShape]) -> Vec<(f64, f64)> {
+    zones
+        .iter()
+        .flat_map(|z| {
+            z.polygons
+                .iter()
+                .flatten()
+                .flatten()
+                .chain(z.lines.iter().flatten())
+                .copied()
+        })
+        .collect()
+}
+
+/// Draws the zones over the cells: no-fly zones filled dark and outlined, lines (power
+/// lines) as thick dark strokes, points as dark discs; the geofence as a dashed outline.
+pub(crate) fn draw_zones(svg: &mut Svg, view: &MapView, zones: &[ZoneShape]) {
+    if zones.is_empty() {
+        return;
+    }
+    svg.line(format_args!(r#"<g id="zones">"#));
+    for (k, z) in zones.iter().enumerate() {
+        let mut d = String::new();
+        for ring in z.polygons.iter().flatten() {
+            for (j, &p) in ring.iter().enumerate() {
+                let (x, y) = view.pt(p);
+                d.push_str(&format!(
+                    "{}{} {}",
+                    if j == 0 { "M" } else { "L" },
+                    N(x),
+                    N(y)
+                ));
+            }
+            d.push('Z');
+        }
+        let (fill, stroke) = if z.no_fly {
+            (
+                format!(
+                    r#"fill="{}" fill-opacity="0.55" fill-rule="evenodd""#,
+                    NO_FLY.hex()
+                ),
+                format!(r#"stroke="{INK}" stroke-width="0.5""#),
+            )
+        } else {
+            (
+                r#"fill="none""#.to_string(),
+                format!(r#"stroke="{INK}" stroke-width="0.8" stroke-dasharray="3 1.5""#),
+            )
+        };
+        if !d.is_empty() {
+            svg.line(format_args!(
+                r#"<path id="zone-{k}" d="{d}" {fill} {stroke}><title>{}</title></path>"#,
+                esc(&z.label)
+            ));
+        }
+        for line in &z.lines {
+            if let [p] = line[..] {
+                let (x, y) = view.pt(p);
+                svg.line(format_args!(
+                    r#"<circle cx="{}" cy="{}" r="1.6" fill="{}"><title>{}</title></circle>"#,
+                    N(x),
+                    N(y),
+                    NO_FLY.hex(),
+                    esc(&z.label)
+                ));
+                continue;
+            }
+            let mut d = String::new();
+            for (j, &p) in line.iter().enumerate() {
+                let (x, y) = view.pt(p);
+                d.push_str(&format!(
+                    "{}{} {}",
+                    if j == 0 { "M" } else { "L" },
+                    N(x),
+                    N(y)
+                ));
+            }
+            svg.line(format_args!(
+                r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1.4"><title>{}</title></path>"#,
+                NO_FLY.hex(),
+                esc(&z.label)
+            ));
+        }
+    }
+    svg.line(format_args!("</g>"));
 }
 
 /// One tick: its position along the axis (m in the local frame) and its label.

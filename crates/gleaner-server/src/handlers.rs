@@ -1154,11 +1154,12 @@ pub async fn map(State(s): State<AppState>, RawQuery(q): RawQuery) -> ApiResult<
                 None => app::missions(p)?.pop(),
             };
             let svg = match mission {
-                Some(m) => gleaner_render::mission_figure_svg(
-                    &field,
-                    &gleaner_wire::convert::stored_mission(&m),
-                    &map_options(),
-                ),
+                Some(m) => {
+                    // The route as flown: through the turn points around the no-fly zones.
+                    let mut doc = gleaner_wire::convert::stored_mission(&m);
+                    gleaner_wire::convert::set_via(&mut doc, &app::airspace::stored_via(p, &m));
+                    gleaner_render::mission_figure_svg(&field, &doc, &map_options())
+                }
                 None => gleaner_render::exploration_map_svg(&field, &[], &map_options()),
             };
             svg.map_err(|e| ApiError::internal(e.to_string()))

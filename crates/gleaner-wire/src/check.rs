@@ -63,6 +63,26 @@ pub(crate) fn mission_doc(m: &MissionDoc) -> Result<(), ExportError> {
             || format!("stop {} (cell {})", s.order, s.cell),
             s.centre_lon_lat,
         )?;
+        for (k, p) in s.via_lon_lat.iter().enumerate() {
+            position(
+                || format!("stop {} (cell {}) turn point {k}", s.order, s.cell),
+                *p,
+            )?;
+        }
+    }
+    for (k, p) in m.return_via_lon_lat.iter().enumerate() {
+        position(|| format!("return leg turn point {k}"), *p)?;
+    }
+    for (z, zone) in m.zones.iter().enumerate() {
+        for p in zone
+            .polygons_lon_lat
+            .iter()
+            .flatten()
+            .flatten()
+            .chain(zone.lines_lon_lat.iter().flatten())
+        {
+            position(|| format!("zone {z}"), *p)?;
+        }
     }
     Ok(())
 }

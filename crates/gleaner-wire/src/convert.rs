@@ -14,11 +14,48 @@ use crate::docs::{
 };
 use crate::{
     BaselineDoc, CAMPAIGN_FORMAT, CellDoc, EnergyDoc, FIELD_FORMAT, FieldDoc, MISSION_FORMAT,
-    MissionDoc, ProfileDoc, RECONSTRUCTION_FORMAT, ScoresDoc, SensorDoc, StopDoc, VERSION,
+    MissionDoc, ProfileDoc, RECONSTRUCTION_FORMAT, ScoresDoc, SensorDoc, StopDoc, UnreachableDoc,
+    VERSION, ZoneDoc,
 };
 
 fn lon_lat(p: gleaner_field::LatLon) -> [f64; 2] {
     [p.lon(), p.lat()]
+}
+
+/// The zones of the project's settings, with the buffer the planner kept (m).
+pub fn zones(zones: &[gleaner_app::airspace::ZoneView], buffer_m: f64) -> Vec<ZoneDoc> {
+    zones
+        .iter()
+        .map(|z| ZoneDoc {
+            kind: z.kind.name().into(),
+            name: z.name.clone(),
+            feature: z.feature,
+            polygons_lon_lat: z.polygons.clone(),
+            lines_lon_lat: z.lines.clone(),
+            buffer_m,
+        })
+        .collect()
+}
+
+/// Cells the flight cannot reach.
+pub fn unreachable(u: &[gleaner_app::airspace::Unreachable]) -> Vec<UnreachableDoc> {
+    u.iter()
+        .map(|u| UnreachableDoc {
+            cell: u.cell.clone(),
+            reason: u.reason.clone(),
+        })
+        .collect()
+}
+
+/// Sets the turn points of `doc`'s legs (one list per stop, then the return leg's; WGS84).
+pub fn set_via(doc: &mut MissionDoc, via: &[Vec<gleaner_field::LatLon>]) {
+    for (k, leg) in via.iter().enumerate() {
+        let points: Vec<[f64; 2]> = leg.iter().map(|&p| lon_lat(p)).collect();
+        match doc.stops.get_mut(k) {
+            Some(s) => s.via_lon_lat = points,
+            None => doc.return_via_lon_lat = points,
+        }
+    }
 }
 
 /// A mission document from a mission's fields.
@@ -63,9 +100,13 @@ pub fn mission_doc(
                 hover_s: s.hover_s,
                 hover_j: s.hover_j,
                 comm_j: s.comm_j,
+                via_lon_lat: Vec::new(),
             })
             .collect(),
         return_distance_m: m.return_distance_m,
+        return_via_lon_lat: Vec::new(),
+        zones: Vec::new(),
+        unreachable: Vec::new(),
         energy: EnergyDoc {
             travel_j: e.travel_j,
             hover_j: e.hover_j,
@@ -103,6 +144,8 @@ pub fn stored_mission(m: &MissionRecord) -> MissionDoc {
 pub fn export_mission(e: &MissionExport) -> MissionDoc {
     let mut doc = stored_mission(&e.mission);
     doc.energy_model = Some(e.energy.into());
+    set_via(&mut doc, &e.via);
+    doc.zones = zones(&e.field.zones, e.field.zone_buffer_m);
     doc
 }
 
@@ -130,6 +173,8 @@ pub fn planned_mission(p: &PlannedMission) -> MissionDoc {
         None,
     );
     doc.candidates = Some(p.candidates);
+    set_via(&mut doc, &p.via);
+    doc.unreachable = unreachable(&p.unreachable);
     doc.greedy_baseline = Some(BaselineDoc {
         planner: p.greedy.planner.name().into(),
         cells: p.greedy.cells,
@@ -150,15 +195,21 @@ pub fn exploration(e: &Exploration) -> ExplorationDoc {
         sorties: e
             .sorties
             .iter()
-            .map(|(id, m)| {
-                mission_doc(
+            .enumerate()
+            .map(|(k, (id, m))| {
+                let mut doc = mission_doc(
                     *id,
                     m,
                     if id.is_some() { "planned" } else { "dry-run" },
                     None,
-                )
+                );
+                if let Some(via) = e.via.get(k) {
+                    set_via(&mut doc, via);
+                }
+                doc
             })
             .collect(),
+        unreachable: unreachable(&e.unreachable),
     }
 }
 
@@ -200,6 +251,7 @@ pub fn field(f: &FieldView) -> FieldDoc {
                 lon_lat: lon_lat(*p),
             })
             .collect(),
+        zones: zones(&f.zones, f.zone_buffer_m),
     }
 }
 

@@ -168,6 +168,9 @@ pub struct ExplorationDoc {
     pub total_energy_j: f64,
     /// The sorties.
     pub sorties: Vec<crate::MissionDoc>,
+    /// Cells the flight cannot reach, left out of the sorties (absent when every cell is).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub unreachable: Vec<crate::UnreachableDoc>,
 }
 
 /// A temporal variogram of changes, `nugget + partial · (1 − exp(−h / scale_s))` at lag

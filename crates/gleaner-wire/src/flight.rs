@@ -96,20 +96,14 @@ fn items(m: &MissionDoc) -> Result<Vec<Item>, ExportError> {
             positioned: true,
         });
     }
-    for s in &m.stops {
-        let [lon, lat] = s.centre_lon_lat;
+    for w in crate::flown_waypoints(m) {
+        let [lon, lat] = w.lon_lat;
+        // A detour's turn point holds 0 s (a stop at least 0.25 s): flown through.
+        let hold = w.stop.map_or(0.0, |k| hold_s(m.stops[k].hover_s));
         out.push(Item {
             command: MAV_CMD_NAV_WAYPOINT,
             frame: MAV_FRAME_GLOBAL_RELATIVE_ALT,
-            params: [
-                hold_s(s.hover_s),
-                0.0,
-                0.0,
-                f64::NAN,
-                deg7(lat),
-                deg7(lon),
-                alt,
-            ],
+            params: [hold, 0.0, 0.0, f64::NAN, deg7(lat), deg7(lon), alt],
             positioned: true,
         });
     }
@@ -210,7 +204,8 @@ pub struct QgcPlan {
     pub ground_station: String,
     /// The mission.
     pub mission: QgcMission,
-    /// Empty geofence (version 2): MAVSDK's importer requires the object.
+    /// The geofence and no-fly zones (version 2; empty without zones): MAVSDK's importer
+    /// requires the object.
     pub geo_fence: QgcGeoFence,
     /// No rally points (version 2): MAVSDK's importer requires the object.
     pub rally_points: QgcRallyPoints,
@@ -279,15 +274,70 @@ fn is_unpositioned(x: &Option<Option<f64>>) -> bool {
     x.is_none()
 }
 
-/// Empty geofence of a [`QgcPlan`].
+/// The geofence of a [`QgcPlan`] (QGroundControl's `geoFence`, version 2): the mission's
+/// zones as QGroundControl polygons (`inclusion` true for the geofence, false for a no-fly
+/// zone; vertices `[lat, lon]` degrees, not repeating the first) and circles (a point zone:
+/// centre `[lat, lon]`, radius = the buffer, m). A geofence's holes are exclusion polygons;
+/// a no-fly polygon's holes are not written (the whole exterior is excluded, which is
+/// safer). Line zones (power lines) have no QGroundControl fence shape and are written only
+/// to the GeoJSON; the route keeps their buffer all the same.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct QgcGeoFence {
-    /// Circles (none).
+    /// Circles.
     pub circles: Vec<serde_json::Value>,
-    /// Polygons (none).
+    /// Polygons.
     pub polygons: Vec<serde_json::Value>,
     /// Always 2.
     pub version: u32,
+}
+
+impl QgcGeoFence {
+    /// The fence of `m`'s zones.
+    pub fn of(m: &MissionDoc) -> Self {
+        let mut polygons = Vec::new();
+        let mut circles = Vec::new();
+        let vertices = |ring: &[[f64; 2]]| -> serde_json::Value {
+            let open = match ring.split_last() {
+                Some((last, rest)) if Some(last) == ring.first() => rest,
+                _ => ring,
+            };
+            open.iter()
+                .map(|&[lon, lat]| serde_json::json!([deg7(lat), deg7(lon)]))
+                .collect()
+        };
+        for z in &m.zones {
+            let fence = z.kind == "geofence";
+            for p in &z.polygons_lon_lat {
+                let Some((outer, holes)) = p.split_first() else {
+                    continue;
+                };
+                polygons.push(serde_json::json!({
+                    "inclusion": fence, "polygon": vertices(outer), "version": 1
+                }));
+                if fence {
+                    for h in holes {
+                        polygons.push(serde_json::json!({
+                            "inclusion": false, "polygon": vertices(h), "version": 1
+                        }));
+                    }
+                }
+            }
+            for l in &z.lines_lon_lat {
+                if let [[lon, lat]] = l[..] {
+                    circles.push(serde_json::json!({
+                        "circle": {"center": [deg7(lat), deg7(lon)], "radius": z.buffer_m},
+                        "inclusion": false,
+                        "version": 1
+                    }));
+                }
+            }
+        }
+        Self {
+            circles,
+            polygons,
+            version: 2,
+        }
+    }
 }
 
 /// Empty rally points of a [`QgcPlan`].
@@ -336,11 +386,7 @@ pub fn qgc_plan_doc(m: &MissionDoc) -> Result<QgcPlan, ExportError> {
             planned_home_position: [deg7(lat), deg7(lon), p.base_alt_m],
             items,
         },
-        geo_fence: QgcGeoFence {
-            circles: Vec::new(),
-            polygons: Vec::new(),
-            version: 2,
-        },
+        geo_fence: QgcGeoFence::of(m),
         rally_points: QgcRallyPoints {
             points: Vec::new(),
             version: 2,

@@ -93,6 +93,20 @@ pub struct BaseProperties {
     pub alt_m: f64,
 }
 
+/// Properties of a zone feature (as given, without the buffer).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ZoneProperties {
+    /// `geofence` or `no-fly`.
+    pub kind: String,
+    /// The feature's name in the settings' file, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Position of the feature in the settings' file, from 0.
+    pub feature: usize,
+    /// The buffer the route keeps from it, m.
+    pub buffer_m: f64,
+}
+
 /// Properties of a sensor Point feature.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SensorProperties {
@@ -209,7 +223,7 @@ pub fn geojson_doc(field: &FieldDoc, m: &MissionDoc) -> Result<FeatureCollection
     let base = pos(m.profile.base_lon_lat);
     // A continuation's route starts where the aircraft is.
     let mut line = vec![m.continuation.map_or(base, |c| pos(c.start_lon_lat))];
-    line.extend(m.stops.iter().map(|s| pos(s.centre_lon_lat)));
+    line.extend(crate::flown_waypoints(m).iter().map(|w| pos(w.lon_lat)));
     line.push(base);
     features.push(feature(
         Geometry::new_line_string(line),
@@ -259,6 +273,25 @@ pub fn geojson_doc(field: &FieldDoc, m: &MissionDoc) -> Result<FeatureCollection
             },
         )?);
     }
+    let zones = if m.zones.is_empty() {
+        &field.zones
+    } else {
+        &m.zones
+    };
+    for (k, z) in zones.iter().enumerate() {
+        if let Some(geometry) = zone_geometry(z) {
+            features.push(feature(
+                geometry,
+                Some(format!("zone:{k}")),
+                &ZoneProperties {
+                    kind: z.kind.clone(),
+                    name: z.name.clone(),
+                    feature: z.feature,
+                    buffer_m: z.buffer_m,
+                },
+            )?);
+        }
+    }
     let mut members = JsonObject::new();
     members.insert(
         "gleaner".to_string(),
@@ -271,9 +304,49 @@ pub fn geojson_doc(field: &FieldDoc, m: &MissionDoc) -> Result<FeatureCollection
     })
 }
 
+/// A zone's geometry (rings oriented as RFC 7946 §3.1.6 asks: exteriors counter-clockwise,
+/// holes clockwise), or `None` for an empty zone.
+fn zone_geometry(z: &crate::ZoneDoc) -> Option<Geometry> {
+    let orient = |ring: &Vec<[f64; 2]>, ccw: bool| {
+        let mut r: Vec<[f64; 2]> = ring.iter().copied().map(pos).collect();
+        if (signed_area2(&r) > 0.0) != ccw {
+            r.reverse();
+        }
+        r
+    };
+    let polygons: Vec<Vec<Vec<[f64; 2]>>> = z
+        .polygons_lon_lat
+        .iter()
+        .filter(|p| !p.is_empty())
+        .map(|p| {
+            p.iter()
+                .enumerate()
+                .map(|(k, ring)| orient(ring, k == 0))
+                .collect()
+        })
+        .collect();
+    let lines: Vec<Vec<[f64; 2]>> = z
+        .lines_lon_lat
+        .iter()
+        .map(|l| l.iter().copied().map(pos).collect())
+        .collect();
+    match (polygons.len(), lines.len()) {
+        (0, 0) => None,
+        (1, 0) => Some(Geometry::new_polygon(polygons.into_iter().next()?)),
+        (_, 0) => Some(Geometry::new_multi_polygon(polygons)),
+        (0, 1) if lines[0].len() == 1 => Some(Geometry::new_point(lines[0][0])),
+        (0, _) if lines.iter().all(|l| l.len() == 1) => {
+            Some(Geometry::new_multi_point(lines.into_iter().map(|l| l[0])))
+        }
+        (0, 1) => Some(Geometry::new_line_string(lines.into_iter().next()?)),
+        _ => Some(Geometry::new_multi_line_string(lines)),
+    }
+}
+
 /// The GeoJSON (RFC 7946) map of a mission over its field: a FeatureCollection of every cell
 /// as a Polygon (counter-clockwise ring) with its latest scores and visiting order, the route
-/// LineString base → stops → base, one Point per stop with its planned energy, the base Point
+/// LineString base → stops (through the turn points of legs flown around no-fly zones) →
+/// base, the zones (`kind` `geofence` or `no-fly`, as given, without the buffer), one Point per stop with its planned energy, the base Point
 /// and the sensors as Points. Positions are `[lon, lat]` WGS84 degrees rounded to 1e-7; no
 /// `crs` member. The mission's id, kind, time, weights, anomaly form, profile and energy
 /// breakdown are the collection's `"gleaner"` foreign member ([`FlightMeta`]).

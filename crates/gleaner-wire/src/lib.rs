@@ -135,8 +135,8 @@ pub fn commanded_altitude_m(altitude_m: f64) -> f64 {
     gleaner_energy::flight_altitude_m(altitude_m)
 }
 pub use geo::{
-    BaseProperties, CellProperties, RouteProperties, SensorProperties, StopProperties, geojson,
-    geojson_doc,
+    BaseProperties, CellProperties, RouteProperties, SensorProperties, StopProperties,
+    ZoneProperties, geojson, geojson_doc,
 };
 
 /// Format name and version of [`MissionDoc`].
@@ -194,6 +194,75 @@ pub struct StopDoc {
     pub hover_j: f64,
     /// Receiver energy, J.
     pub comm_j: f64,
+    /// Turn points `[lon, lat]` (WGS84 degrees, on the files' 1e-7° grid) of the leg
+    /// arriving here, flown around no-fly zones at the cruise altitude and speed without a
+    /// hold; absent for a straight leg. `leg_distance_m` and `leg_energy_j` are the whole
+    /// polyline's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub via_lon_lat: Vec<[f64; 2]>,
+}
+
+/// A geofence or no-fly zone as the project's settings give it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ZoneDoc {
+    /// `geofence` (the flight stays inside) or `no-fly` (it keeps out).
+    pub kind: String,
+    /// The feature's `name`, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Position of the feature in its file, from 0.
+    pub feature: usize,
+    /// Polygons: rings (exterior first, then holes), each closed, of `[lon, lat]` WGS84
+    /// degrees. Empty for a line or point zone.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub polygons_lon_lat: Vec<Vec<Vec<[f64; 2]>>>,
+    /// Lines (a power line; a single position for a point zone), `[lon, lat]` WGS84 degrees.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lines_lon_lat: Vec<Vec<[f64; 2]>>,
+    /// The safety buffer the planner kept from the zone (grown) or inside the fence
+    /// (shrunk), m.
+    pub buffer_m: f64,
+}
+
+/// A cell the flight cannot reach.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct UnreachableDoc {
+    /// Cell id (`x12y-3`).
+    pub cell: String,
+    /// Why (inside a buffered no-fly zone, outside the geofence, cut off from the base).
+    pub reason: String,
+}
+
+/// One waypoint of the flown sequence (see [`flown_waypoints`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlownWaypoint {
+    /// `[lon, lat]`, WGS84 degrees.
+    pub lon_lat: [f64; 2],
+    /// The stop it is (index into `stops`), or `None` for a detour's turn point.
+    pub stop: Option<usize>,
+}
+
+/// The waypoints a mission flies after take-off, in order: each stop preceded by the turn
+/// points of its leg, then the return leg's turn points (the aircraft then returns home).
+pub fn flown_waypoints(m: &MissionDoc) -> Vec<FlownWaypoint> {
+    let mut out = Vec::new();
+    for (k, s) in m.stops.iter().enumerate() {
+        out.extend(s.via_lon_lat.iter().map(|&p| FlownWaypoint {
+            lon_lat: p,
+            stop: None,
+        }));
+        out.push(FlownWaypoint {
+            lon_lat: s.centre_lon_lat,
+            stop: Some(k),
+        });
+    }
+    out.extend(m.return_via_lon_lat.iter().map(|&p| FlownWaypoint {
+        lon_lat: p,
+        stop: None,
+    }));
+    out
 }
 
 /// The energy breakdown of a sortie (docs/method.md §3).
@@ -268,6 +337,17 @@ pub struct MissionDoc {
     pub stops: Vec<StopDoc>,
     /// Return leg, m.
     pub return_distance_m: f64,
+    /// Turn points `[lon, lat]` of the return leg around no-fly zones (see
+    /// [`StopDoc::via_lon_lat`]); absent when straight.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub return_via_lon_lat: Vec<[f64; 2]>,
+    /// The geofence and no-fly zones the route was planned around (absent without zones):
+    /// the `.plan`'s `geoFence`, the GeoJSON's zone features.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub zones: Vec<ZoneDoc>,
+    /// Cells the flight cannot reach (plan output only; absent when every cell is).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub unreachable: Vec<UnreachableDoc>,
     /// Energy totals.
     pub energy: EnergyDoc,
     /// Sum of S over the stops.
@@ -460,6 +540,9 @@ pub struct FieldDoc {
     pub cells: Vec<CellDoc>,
     /// Sensors, sorted by id.
     pub sensors: Vec<SensorDoc>,
+    /// The geofence and no-fly zones of the project's settings (absent without).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub zones: Vec<ZoneDoc>,
 }
 
 #[cfg(test)]

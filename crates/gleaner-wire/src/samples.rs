@@ -99,6 +99,7 @@ pub fn field() -> FieldDoc {
         base_lon_lat: BASE_LON_LAT,
         cells,
         sensors: out,
+        zones: Vec::new(),
     }
 }
 
@@ -145,6 +146,7 @@ fn stop(
         hover_s,
         hover_j: hover_s * 168.48,
         comm_j: (hover_s - 30.0) * 0.5,
+        via_lon_lat: Vec::new(),
     }
 }
 
@@ -201,6 +203,9 @@ pub fn adaptive_mission() -> MissionDoc {
         greedy_baseline: None,
         energy_model: Some(paper_model()),
         continuation: None,
+        return_via_lon_lat: Vec::new(),
+        zones: Vec::new(),
+        unreachable: Vec::new(),
     }
 }
 
@@ -236,6 +241,9 @@ pub fn exploration_sortie() -> MissionDoc {
         candidates: None,
         greedy_baseline: None,
         energy_model: Some(paper_model()),
+        return_via_lon_lat: Vec::new(),
+        zones: Vec::new(),
+        unreachable: Vec::new(),
         continuation: None,
     }
 }

@@ -118,6 +118,8 @@ struct Flight<'a> {
     options: WpmlOptions,
     speed: f64,
     altitude: f64,
+    /// The flown waypoints: stops and detours' turn points.
+    points: Vec<crate::FlownWaypoint>,
 }
 
 impl Flight<'_> {
@@ -184,8 +186,8 @@ impl Flight<'_> {
 
     /// One waypoint: position, index, height, speed, stop-at-point turn, hover action.
     fn placemark(&self, w: &mut W, k: usize, template: bool) -> Result<(), ExportError> {
-        let s = &self.m.stops[k];
-        let [lon, lat] = s.centre_lon_lat;
+        let point = self.points[k];
+        let [lon, lat] = point.lon_lat;
         parent(w, "Placemark", |w| {
             parent(w, "Point", |w| {
                 leaf(
@@ -218,7 +220,10 @@ impl Flight<'_> {
                 )?;
                 leaf(w, "wpml:waypointTurnDampingDist", "0")
             })?;
-            let hold = flight_hold_s(s.hover_s);
+            // A detour's turn point has no hold.
+            let hold = point
+                .stop
+                .map_or(0.0, |s| flight_hold_s(self.m.stops[s].hover_s));
             if hold <= 0.0 {
                 // WPML's hoverTime must be > 0: a stop without a hold has no action.
                 return Ok(());
@@ -263,7 +268,7 @@ impl Flight<'_> {
                     "toPointAndStopWithDiscontinuityCurvature",
                 )?;
                 leaf(w, "wpml:globalHeight", &num(self.altitude))?;
-                for k in 0..self.m.stops.len() {
+                for k in 0..self.points.len() {
                     self.placemark(w, k, true)?;
                 }
                 Ok(())
@@ -279,7 +284,7 @@ impl Flight<'_> {
                 leaf(w, "wpml:executeHeightMode", "relativeToStartPoint")?;
                 leaf(w, "wpml:waylineId", "0")?;
                 leaf(w, "wpml:autoFlightSpeed", &num(self.speed))?;
-                for k in 0..self.m.stops.len() {
+                for k in 0..self.points.len() {
                     self.placemark(w, k, false)?;
                 }
                 Ok(())
@@ -328,11 +333,12 @@ pub fn wpml_documents(
             ),
         });
     }
-    if m.stops.len() > 65_536 {
+    let points = crate::flown_waypoints(m);
+    if points.len() > 65_536 {
         return Err(ExportError::FileValue {
             file: WPML_FILE.to_string(),
             line: 0,
-            reason: format!("{} waypoints: WPML numbers at most 65,536", m.stops.len()),
+            reason: format!("{} waypoints: WPML numbers at most 65,536", points.len()),
         });
     }
     let f = Flight {
@@ -340,6 +346,7 @@ pub fn wpml_documents(
         options,
         speed,
         altitude,
+        points,
     };
     Ok((f.template()?, f.waylines()?))
 }

@@ -148,7 +148,14 @@ pub fn write_exploration_map<S: gleaner_app::Store>(
     let sorties: Vec<_> = gleaner_app::missions(project)?
         .iter()
         .filter(|m| gleaner_wire::convert::is_exploration(m))
-        .map(gleaner_wire::convert::stored_mission)
+        .map(|m| {
+            let mut doc = gleaner_wire::convert::stored_mission(m);
+            gleaner_wire::convert::set_via(
+                &mut doc,
+                &gleaner_app::airspace::stored_via(project, m),
+            );
+            doc
+        })
         .collect();
     anyhow::ensure!(
         !sorties.is_empty(),

@@ -85,6 +85,32 @@ pub fn table(m: &MissionDoc) -> String {
         "\nweights alpha,beta,gamma,delta = {:?}; anomaly {}\n",
         m.weights, m.anomaly_form
     ));
+    let turns: usize =
+        m.stops.iter().map(|s| s.via_lon_lat.len()).sum::<usize>() + m.return_via_lon_lat.len();
+    if turns > 0 {
+        let legs = m.stops.iter().filter(|s| !s.via_lon_lat.is_empty()).count()
+            + usize::from(!m.return_via_lon_lat.is_empty());
+        out.push_str(&format!(
+            "around the no-fly zones: {legs} legs with {turns} turn points (in the files as \
+             waypoints without a hold, at the same altitude and speed)\n"
+        ));
+    }
+    out.push_str(&unreachable_lines(&m.unreachable));
+    out
+}
+
+/// One line per unreachable cell (empty when none).
+pub fn unreachable_lines(u: &[gleaner_wire::UnreachableDoc]) -> String {
+    let mut out = String::new();
+    if !u.is_empty() {
+        out.push_str(&format!(
+            "unreachable cells ({}), never planned:\n",
+            u.len()
+        ));
+        for c in u {
+            out.push_str(&format!("  {}: {}\n", c.cell, c.reason));
+        }
+    }
     out
 }
 
@@ -156,5 +182,6 @@ pub fn exploration_table(e: &ExplorationDoc) -> String {
             cells.join(" ")
         ));
     }
+    out.push_str(&unreachable_lines(&e.unreachable));
     out
 }
