@@ -176,6 +176,24 @@ fn writers_of_one_project_are_serialised() {
     assert_eq!(ts, vec![1000, 1001]);
 }
 
+/// The project's exclusion is PostgreSQL's session advisory lock: it keeps out another
+/// connection's `lock_project` and its write transactions (two server replicas).
+#[test]
+fn the_project_exclusion_holds_across_connections() {
+    let mut fresh = Fresh::new();
+    let mut first = fresh.open("exclusion");
+    let project = first.project().to_string();
+    let second = PgStore::open(&fresh.url, &project).unwrap();
+    let third = PgStore::open(&fresh.url, &project).unwrap();
+    conformance::exclusion_holds_across_connections(&mut first, second, third);
+    // Another project's exclusion is another lock.
+    let other = fresh.open("exclusion");
+    first.lock_project().unwrap();
+    other.lock_project().unwrap();
+    other.unlock_project();
+    first.unlock_project();
+}
+
 /// [`AnyStore`] forwards every method faithfully, on both backends.
 #[test]
 fn conformance_through_any_store() {

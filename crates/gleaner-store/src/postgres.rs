@@ -485,4 +485,32 @@ impl Store for PgStore {
         crate::failpoint::committed();
         Ok(out)
     }
+
+    fn lock_project(&self) -> Result<()> {
+        // Outside any transaction: a session-level lock, kept until unlocked or the
+        // connection ends. The session's `lock_timeout` bounds the wait.
+        let mut client = self.client.borrow_mut();
+        match client.execute("SELECT pg_advisory_lock($1)", &[&self.lock_key]) {
+            Ok(_) => Ok(()),
+            Err(e) if is_lock_timeout(&e) => Err(StoreError::Backend(format!(
+                "another gleaner process has been writing to project {} for more than {} s; \
+                 try again when it has finished",
+                self.project,
+                LOCK_TIMEOUT.as_secs()
+            ))),
+            Err(e) => Err(StoreError::Backend(describe(&e))),
+        }
+    }
+
+    fn unlock_project(&self) {
+        let mut client = self.client.borrow_mut();
+        let released = client
+            .query_one("SELECT pg_advisory_unlock($1)", &[&self.lock_key])
+            .map(|r| r.get::<_, bool>(0));
+        if !matches!(released, Ok(true)) {
+            // Never leave a hold behind on a connection that stays open: another replica
+            // would wait for it until its timeout.
+            let _ = client.batch_execute("SELECT pg_advisory_unlock_all()");
+        }
+    }
 }
