@@ -357,9 +357,11 @@ impl Farms {
     /// The farms' routes: `GET /api/v1/farms` (the caller's farm) and everything under
     /// `/api/v1/farms/{farm}/`.
     pub(crate) fn router(&self) -> Router {
+        // The dispatcher is the fallback, not a `{*rest}` route: a route's path parameters
+        // would stay in the request and add to the farm's own (`/missions/{id}`).
         Router::new()
             .route("/api/v1/farms", axum::routing::get(farms_list))
-            .route("/api/v1/farms/{*rest}", axum::routing::any(dispatch))
+            .fallback(dispatch)
             .with_state(self.clone())
     }
 
@@ -405,9 +407,16 @@ pub async fn farms_list(State(farms): State<Farms>, headers: HeaderMap) -> Respo
     }
 }
 
-/// `/api/v1/farms/{farm}/{rest}`: checks the token against the farm, then answers as the
+/// The farms router's fallback: `/api/v1/farms/{farm}/{rest}` checks the token against the farm, then answers as the
 /// farm's own `/api/v1/{rest}`.
 async fn dispatch(State(farms): State<Farms>, mut req: Request) -> Response {
+    if !req.uri().path().starts_with("/api/v1/farms/") {
+        return ApiError::not_found(
+            None,
+            "no such page or endpoint: a farms server answers under /api/v1/farms/{farm}/ (see /api/v1/openapi.json)",
+        )
+        .into_response();
+    }
     let (farm, scope) = match farms.access(req.headers()) {
         Ok(a) => a,
         Err(e) => return e.into_response(),

@@ -421,12 +421,6 @@ pub fn farms_router(farms: &Farms, config: &ServerConfig) -> Router {
             axum::routing::get(handlers::openapi_json),
         )
         .layer(axum::Extension(handlers::OpenApiJson(doc_json)))
-        .fallback(|| async {
-            ApiError::not_found(
-                None,
-                "no such page or endpoint: a farms server answers under /api/v1/farms/{farm}/ (see /api/v1/openapi.json)",
-            )
-        })
         .method_not_allowed_fallback(security::method_not_allowed);
     secure(app, config)
 }
@@ -605,6 +599,10 @@ async fn serve_app(
     {
         tracing::warn!("shutdown: work still running after the grace period, left behind");
     }
+    // The pooled projects are closed on a blocking thread: a PostgreSQL client cannot be
+    // dropped on the runtime's threads.
+    let pools: Vec<_> = states.iter().flat_map(AppState::take_pool).collect();
+    tokio::task::spawn_blocking(move || drop(pools)).await.ok();
     Ok(())
 }
 

@@ -270,6 +270,16 @@ impl AppState {
         }
     }
 
+    /// Empties the pool of open projects (at shutdown, so the caller closes them where it
+    /// may block); a later request would open its own.
+    pub(crate) fn take_pool(&self) -> Vec<Opened> {
+        self.0
+            .pool
+            .lock()
+            .map(|mut p| std::mem::take(&mut *p))
+            .unwrap_or_default()
+    }
+
     fn give_back(&self, p: Opened) {
         if let Ok(mut pool) = self.0.pool.lock() {
             pool.push(p);

@@ -1491,12 +1491,13 @@ pub fn exclusion_holds_across_connections<S: Store + Send + 'static>(
         std::thread::spawn(move || {
             let mut store = store;
             waiting.send(()).unwrap();
-            if lock {
+            // Once the hold (or the write transaction) is had, the first holder must be gone.
+            let locked_after = !lock || {
                 store.lock_project().unwrap();
-            }
-            // Inside the hold (or the write transaction), the first holder must be gone.
+                released.load(Ordering::SeqCst)
+            };
             let out = store.write(|tx| {
-                let seen = released.load(Ordering::SeqCst);
+                let seen = locked_after && released.load(Ordering::SeqCst);
                 let holder = tx.config_get("holder")?;
                 tx.config_set(key, "done")?;
                 Ok::<_, StoreError>((seen, holder))
