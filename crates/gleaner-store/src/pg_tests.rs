@@ -185,6 +185,22 @@ fn the_project_exclusion_holds_across_connections() {
     let project = first.project().to_string();
     let second = PgStore::open(&fresh.url, &project).unwrap();
     let third = PgStore::open(&fresh.url, &project).unwrap();
+    // The waiting shows in pg_locks (what `lock_waiters` counts), then the wait ends.
+    first.lock_project().unwrap();
+    let waiter = PgStore::open(&fresh.url, &project).unwrap();
+    assert_eq!(first.lock_waiters().unwrap(), 0);
+    let t = std::thread::spawn(move || {
+        waiter.lock_project().unwrap();
+        waiter.unlock_project();
+    });
+    let mut polls = 0;
+    while first.lock_waiters().unwrap() == 0 {
+        polls += 1;
+        assert!(polls < 1_000_000, "the second lock_project never waited");
+    }
+    first.unlock_project();
+    t.join().unwrap();
+    assert_eq!(first.lock_waiters().unwrap(), 0);
     conformance::exclusion_holds_across_connections(&mut first, second, third);
     // Another project's exclusion is another lock.
     let other = fresh.open("exclusion");

@@ -193,6 +193,26 @@ impl PgStore {
         &self.project
     }
 
+    /// How many sessions are waiting for this project's advisory lock (its exclusion, or a
+    /// write transaction's lock) right now: what an operator asks when writes seem stuck,
+    /// and how tests see that a writer of another process really waits.
+    pub fn lock_waiters(&self) -> Result<i64> {
+        // A bigint key shows in pg_locks as classid (high 32 bits), objid (low), objsubid 1.
+        let row = self
+            .client
+            .borrow_mut()
+            .query_one(
+                "SELECT count(*) FROM pg_locks
+                 WHERE locktype = 'advisory' AND NOT granted AND objsubid = 1
+                   AND database = (SELECT oid FROM pg_database WHERE datname = current_database())
+                   AND classid::bigint = ($1::bigint >> 32) & 4294967295
+                   AND objid::bigint = $1::bigint & 4294967295",
+                &[&self.lock_key],
+            )
+            .db()?;
+        Ok(row.get(0))
+    }
+
     /// Whether the database at `url` has a project (schema) `project`.
     pub fn project_exists(url: &str, project: &str) -> Result<bool> {
         let mut client = Client::connect(url, NoTls).map_err(|e| StoreError::Open {

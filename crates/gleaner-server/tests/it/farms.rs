@@ -367,6 +367,123 @@ fn the_farms_openapi_document_lists_every_farm_route() {
     assert_eq!(served, doc);
 }
 
+/// Waits (a bounded number of polls of pg_locks, no sleeps) until someone waits for the
+/// farm's lock.
+fn until_waiting(project: &app::Project<app::AnyStore>) {
+    let app::AnyStore::Postgres(store) = project.store() else {
+        panic!("north is a PostgreSQL farm");
+    };
+    let mut polls = 0;
+    while store.lock_waiters().unwrap() == 0 {
+        polls += 1;
+        assert!(polls < 1_000_000, "no writer ever waited for the farm's lock");
+    }
+}
+
+fn stops(mission: &Value) -> Vec<String> {
+    mission["stops"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["cell"].as_str().unwrap().to_string())
+        .collect()
+}
+
+/// The farm's exclusion held by another process (the test's own connection, as another
+/// replica or a CLI command would hold it) holds up a plan through one replica and a record
+/// through the other from their first read: each is seen waiting for the farm's advisory
+/// lock and stores nothing meanwhile; the plan is computed from what the holder wrote while
+/// it waited (a flight recorded over the cells it would otherwise have chosen), exactly as a
+/// dry run planned afterwards.
+#[test]
+fn plans_and_records_wait_for_the_farms_lock_held_elsewhere() {
+    use app::{Store as _, StoreRead as _};
+    let farms = Farms::new("held");
+    let replicas = [Replica::start(farms.path()), Replica::start(farms.path())];
+    let token = farms.north_write.clone();
+    let plan_body = |at: &str, dry_run: bool| {
+        json!({"solver": "greedy", "seed": 3, "at": at, "dry_run": dry_run})
+    };
+    let first = ok_json(
+        &post(
+            replicas[0].addr,
+            "/api/v1/farms/north/plan",
+            &plan_body("2014-02-01", false),
+            Some(&token),
+        ),
+        "the first plan",
+    );
+    let first_id = first["mission_id"].as_i64().unwrap();
+    let before = ok_json(
+        &post(
+            replicas[0].addr,
+            "/api/v1/farms/north/plan",
+            &plan_body("2014-02-02", true),
+            Some(&token),
+        ),
+        "a preview",
+    );
+    assert_eq!(stops(&before), stops(&first), "the same cells a day later");
+
+    let mut holder = app::Project::open(&farms.path().join("north")).unwrap();
+    holder.store().lock_project().unwrap();
+    let (addr, t, body) = (replicas[0].addr, token.clone(), plan_body("2014-02-02", false));
+    let plan = std::thread::spawn(move || post(addr, "/api/v1/farms/north/plan", &body, Some(&t)));
+    until_waiting(&holder);
+    assert_eq!(holder.store().missions().unwrap().len(), 1, "the plan waits");
+    // Meanwhile the holder records the first mission's flight over its cells.
+    app::record_flight(
+        &mut holder,
+        &app::RecordRequest {
+            mission: app::MissionId(first_id),
+            at: Some(1_391_256_000), // 2014-02-01T12:00Z
+            cells: Some(stops(&first)),
+            readings: None,
+            amend: false,
+        },
+        0,
+        &Silent,
+    )
+    .unwrap();
+    holder.store().unlock_project();
+    let planned = ok_json(&plan.join().unwrap(), "the plan after the lock");
+    let after = ok_json(
+        &post(
+            replicas[1].addr,
+            "/api/v1/farms/north/plan",
+            &plan_body("2014-02-02", true),
+            Some(&token),
+        ),
+        "a preview after",
+    );
+    assert_eq!(stops(&planned), stops(&after), "planned from the store as it is now");
+    assert_ne!(stops(&planned), stops(&first), "not from the store before the flight");
+
+    holder.store().lock_project().unwrap();
+    let id = planned["mission_id"].as_i64().unwrap();
+    let (addr, t, cells) = (replicas[1].addr, token.clone(), stops(&planned).join(","));
+    let record = std::thread::spawn(move || {
+        Client::new(addr)
+            .post_multipart(
+                &format!("/api/v1/farms/north/missions/{id}/record"),
+                &[
+                    Part::Text("at".into(), "2014-02-02".into()),
+                    Part::Text("cells".into(), cells),
+                ],
+                Some(&t),
+            )
+            .unwrap()
+    });
+    until_waiting(&holder);
+    let m = holder.store().mission(app::MissionId(id)).unwrap().unwrap();
+    assert_eq!(m.status, app::MissionStatus::Planned, "the record waits");
+    holder.store().unlock_project();
+    ok_json(&record.join().unwrap(), "the record after the lock");
+    let m = holder.store().mission(app::MissionId(id)).unwrap().unwrap();
+    assert_eq!(m.status, app::MissionStatus::Flown);
+    drop(holder);
+}
+
 /// The sensors of every cell of a farm, by cell id.
 fn sensors_by_cell(addr: SocketAddr, token: &str) -> BTreeMap<String, Vec<String>> {
     let cells = ok_json(&get(addr, "/api/v1/farms/north/cells", Some(token)), "cells");
