@@ -17,6 +17,10 @@
 //!   compare, never logged); uploads are size-limited and saved under sanitised names in a
 //!   temporary folder; downloads are made in memory from the export use case, never read from
 //!   a client-given path; CORS is off unless origins are configured.
+//! - Many farms ([`farms`], `gleaner serve --farms DIR`): every project of a directory under
+//!   `/api/v1/farms/{farm}/`, each guarded by its own hashed tokens of read or write scope
+//!   ([`farms_router`], [`farms_openapi`]); several such servers may serve one PostgreSQL
+//!   database, the writing use cases holding each farm's lock in the database.
 //! - Errors are JSON `{error, field, reason}` ([`ErrorBody`]) with 400, 401, 403, 404, 409,
 //!   413 or 500.
 //!

@@ -180,8 +180,15 @@ fn get(addr: SocketAddr, path: &str, token: Option<&str>) -> Response {
 }
 
 fn post(addr: SocketAddr, path: &str, body: &Value, token: Option<&str>) -> Response {
-    Client::new(addr).post_json(path, body, token).unwrap()
+    Client::with_read_timeout(addr, PATIENCE)
+        .post_json(path, body, token)
+        .unwrap()
 }
+
+/// How long a write may wait for its answer: writes on one farm are serialised, so with a
+/// thousand in flight the last waits for all the others (a bound on a stuck server, not a
+/// timing assertion).
+const PATIENCE: std::time::Duration = std::time::Duration::from_secs(3600);
 
 fn ok_json(r: &Response, what: &str) -> Value {
     assert_eq!(r.status, 200, "{what}: {}", r.text());
@@ -509,6 +516,8 @@ struct Pair {
     mission: i64,
     inserted: u64,
     unchanged: u64,
+    /// Seconds from the request to its answer: the plan's, the record's.
+    latency: [f64; 2],
 }
 
 /// Two replicas over one PostgreSQL farm, `GLEANER_REPLICA_WRITES` writes (default 40) made
@@ -552,6 +561,7 @@ fn replicas_over_one_postgres_serialise_plans_and_records() {
                 let at = 1_391_212_800 + 3600 * i as i64;
                 let at_text = format!("@{at}");
                 barrier.wait();
+                let t0 = std::time::Instant::now();
                 let r = post(
                     plan_on,
                     "/api/v1/farms/north/plan",
@@ -560,6 +570,7 @@ fn replicas_over_one_postgres_serialise_plans_and_records() {
                 );
                 assert_eq!(r.status, 200, "plan {i}: {}", r.text());
                 let planned = r.json().unwrap();
+                let plan_s = t0.elapsed().as_secs_f64();
                 let mission = planned["mission_id"].as_i64().unwrap();
                 let stops: Vec<String> = planned["stops"]
                     .as_array()
@@ -582,7 +593,8 @@ fn replicas_over_one_postgres_serialise_plans_and_records() {
                     Part::Text("cells".into(), stops.join(",")),
                     Part::File("files".into(), format!("flight-{i}.csv"), csv),
                 ];
-                let r = Client::new(record_on)
+                let t1 = std::time::Instant::now();
+                let r = Client::with_read_timeout(record_on, PATIENCE)
                     .post_multipart(
                         &format!("/api/v1/farms/north/missions/{mission}/record"),
                         &parts,
@@ -592,6 +604,7 @@ fn replicas_over_one_postgres_serialise_plans_and_records() {
                 assert_eq!(r.status, 200, "record {i} ({at_text}): {}", r.text());
                 let recorded = r.json().unwrap();
                 Pair {
+                    latency: [plan_s, t1.elapsed().as_secs_f64()],
                     mission,
                     inserted: recorded["readings_inserted"].as_u64().unwrap(),
                     unchanged: recorded["readings_unchanged"].as_u64().unwrap(),
@@ -630,6 +643,17 @@ fn replicas_over_one_postgres_serialise_plans_and_records() {
     );
     let unchanged: u64 = done.iter().map(|p| p.unchanged).sum();
     assert_eq!(project.store().missions().unwrap().len(), pairs);
+    let quantiles = |k: usize| {
+        let mut l: Vec<f64> = done.iter().map(|p| p.latency[k]).collect();
+        l.sort_by(f64::total_cmp);
+        let q = |f: f64| l[((l.len() - 1) as f64 * f).round() as usize];
+        format!("p50 {:.2} s, p99 {:.2} s, max {:.2} s", q(0.5), q(0.99), q(1.0))
+    };
+    eprintln!(
+        "replicas: plans {}; records {}",
+        quantiles(0),
+        quantiles(1)
+    );
     eprintln!(
         "replicas: {} writes ({pairs} plans + {pairs} records) over 2 replicas in {:.1} s: {:.1} writes/s; {} distinct mission ids, 0 lost, 0 duplicated; {inserted} readings stored, {unchanged} already there",
         2 * pairs,
