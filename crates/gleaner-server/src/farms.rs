@@ -185,10 +185,12 @@ impl FarmTokens {
     /// Reads a tokens file.
     pub fn load(path: &Path) -> Result<Self, ServerError> {
         let text = std::fs::read_to_string(path).map_err(|e| {
-            ServerError::Config(format!("{}: cannot read the tokens file: {e}", path.display()))
+            ServerError::Config(format!(
+                "{}: cannot read the tokens file: {e}",
+                path.display()
+            ))
         })?;
-        Self::parse(&text)
-            .map_err(|e| ServerError::Config(format!("{}: {e}", path.display())))
+        Self::parse(&text).map_err(|e| ServerError::Config(format!("{}: {e}", path.display())))
     }
 
     /// The farm and scope of the token `given`, if it is one of these: hashed, then compared
@@ -273,7 +275,10 @@ impl std::fmt::Debug for Farms {
 /// A farm directory whose name cannot name a farm is refused.
 pub fn farm_dirs(dir: &Path) -> Result<BTreeMap<String, PathBuf>, ServerError> {
     let entries = std::fs::read_dir(dir).map_err(|e| {
-        ServerError::Config(format!("{}: cannot read the farms directory: {e}", dir.display()))
+        ServerError::Config(format!(
+            "{}: cannot read the farms directory: {e}",
+            dir.display()
+        ))
     })?;
     let mut out = BTreeMap::new();
     for e in entries {

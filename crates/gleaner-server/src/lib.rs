@@ -60,8 +60,8 @@ use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
 pub use auth::{Token, TokenError};
-pub use farms::{FarmTokens, Farms, Scope};
 pub use error::{ApiError, ErrorBody};
+pub use farms::{FarmTokens, Farms, Scope};
 pub use state::{AppState, Event, Hook};
 
 /// Default address: loopback only.
@@ -337,20 +337,28 @@ pub fn farms_openapi() -> utoipa::openapi::OpenApi {
             for (code, why) in [
                 ("401", "No farm token, or one that is no farm's"),
                 ("403", "A read-scope token on a write"),
-                ("404", "No such farm for this token (another farm's token gets the same)"),
+                (
+                    "404",
+                    "No such farm for this token (another farm's token gets the same)",
+                ),
             ] {
-                op.responses.responses.entry(code.to_string()).or_insert_with(|| {
-                    utoipa::openapi::ResponseBuilder::new()
-                        .description(why)
-                        .content(
-                            "application/json",
-                            utoipa::openapi::ContentBuilder::new()
-                                .schema(Some(utoipa::openapi::Ref::from_schema_name("ErrorBody")))
-                                .build(),
-                        )
-                        .build()
-                        .into()
-                });
+                op.responses
+                    .responses
+                    .entry(code.to_string())
+                    .or_insert_with(|| {
+                        utoipa::openapi::ResponseBuilder::new()
+                            .description(why)
+                            .content(
+                                "application/json",
+                                utoipa::openapi::ContentBuilder::new()
+                                    .schema(Some(utoipa::openapi::Ref::from_schema_name(
+                                        "ErrorBody",
+                                    )))
+                                    .build(),
+                            )
+                            .build()
+                            .into()
+                    });
             }
         }
         doc.paths
@@ -364,7 +372,10 @@ pub fn farms_openapi() -> utoipa::openapi::OpenApi {
     doc.merge(extra);
     let components = doc.components.get_or_insert_with(Default::default);
     for (name, schema) in [
-        ("FarmDoc", <farms::FarmDoc as utoipa::PartialSchema>::schema()),
+        (
+            "FarmDoc",
+            <farms::FarmDoc as utoipa::PartialSchema>::schema(),
+        ),
         ("Scope", <farms::Scope as utoipa::PartialSchema>::schema()),
     ] {
         components.schemas.insert(name.to_string(), schema);

@@ -178,12 +178,7 @@ impl AppState {
     /// State for the project in `config.project`, with `config.pool_size` (at least 1)
     /// projects opened here, so a missing project fails at start-up, not at a request.
     pub fn new(config: &crate::ServerConfig) -> Result<Self, gleaner_app::AppError> {
-        Self::build(
-            config,
-            &config.project,
-            Arc::new(Semaphore::new(1)),
-            false,
-        )
+        Self::build(config, &config.project, Arc::new(Semaphore::new(1)), false)
     }
 
     /// State for one farm of a `--farms` server: the project in `dir`, `config.pool_size`

@@ -1514,12 +1514,17 @@ pub fn exclusion_holds_across_connections<S: Store + Send + 'static>(
     waiting_rx.recv().unwrap();
     // Still held once after this; the holder's own writes go on.
     first.unlock_project();
-    first.write(|tx| tx.config_set("holder", "first, again")).unwrap();
+    first
+        .write(|tx| tx.config_set("holder", "first, again"))
+        .unwrap();
     released.store(true, Ordering::SeqCst);
     first.unlock_project();
     for (name, t) in [("lock_project", locker), ("a write", writer)] {
         let (seen, holder) = t.join().unwrap();
-        assert!(seen, "{name} of another connection ran while the exclusion was held");
+        assert!(
+            seen,
+            "{name} of another connection ran while the exclusion was held"
+        );
         assert_eq!(holder.as_deref(), Some("first, again"), "{name}");
     }
     assert_eq!(first.config_get("second").unwrap().as_deref(), Some("done"));

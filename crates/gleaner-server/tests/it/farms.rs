@@ -238,7 +238,10 @@ fn a_farm_token_opens_its_own_farm_only_and_read_scope_cannot_write() {
     assert_eq!((upload.status, upload.text()), (404, other.text()));
 
     // Without a token, or with one that is no farm's: 401 whether the farm exists or not.
-    for path in ["/api/v1/farms/north/project", "/api/v1/farms/nowhere/project"] {
+    for path in [
+        "/api/v1/farms/north/project",
+        "/api/v1/farms/nowhere/project",
+    ] {
         assert_eq!(get(a, path, None).status, 401, "{path}");
         assert_eq!(
             get(a, path, Some("0123456789abcdef0123456789abcdef")).status,
@@ -285,7 +288,10 @@ fn a_farm_token_opens_its_own_farm_only_and_read_scope_cannot_write() {
         )
         .unwrap();
     assert_eq!(r.status, 403, "{}", r.text());
-    let missions = ok_json(&get(a, "/api/v1/farms/north/missions", Some(nr)), "missions");
+    let missions = ok_json(
+        &get(a, "/api/v1/farms/north/missions", Some(nr)),
+        "missions",
+    );
     assert_eq!(missions.as_array().unwrap().len(), 0, "nothing was stored");
 
     // The write token writes; the mission is the farm's own.
@@ -344,7 +350,10 @@ fn the_farms_openapi_document_lists_every_farm_route() {
             .collect();
         assert_eq!(
             methods.len(),
-            [&item.get, &item.post].iter().filter(|o| o.is_some()).count(),
+            [&item.get, &item.post]
+                .iter()
+                .filter(|o| o.is_some())
+                .count(),
             "{farm_path}"
         );
         for m in methods {
@@ -383,7 +392,10 @@ fn until_waiting(project: &app::Project<app::AnyStore>) {
     let mut polls = 0;
     while store.lock_waiters().unwrap() == 0 {
         polls += 1;
-        assert!(polls < 1_000_000, "no writer ever waited for the farm's lock");
+        assert!(
+            polls < 1_000_000,
+            "no writer ever waited for the farm's lock"
+        );
     }
 }
 
@@ -408,9 +420,7 @@ fn plans_and_records_wait_for_the_farms_lock_held_elsewhere() {
     let farms = Farms::new("held");
     let replicas = [Replica::start(farms.path()), Replica::start(farms.path())];
     let token = farms.north_write.clone();
-    let plan_body = |at: &str, dry_run: bool| {
-        json!({"solver": "greedy", "seed": 3, "at": at, "dry_run": dry_run})
-    };
+    let plan_body = |at: &str, dry_run: bool| json!({"solver": "greedy", "seed": 3, "at": at, "dry_run": dry_run});
     let first = ok_json(
         &post(
             replicas[0].addr,
@@ -434,10 +444,18 @@ fn plans_and_records_wait_for_the_farms_lock_held_elsewhere() {
 
     let mut holder = app::Project::open(&farms.path().join("north")).unwrap();
     holder.store().lock_project().unwrap();
-    let (addr, t, body) = (replicas[0].addr, token.clone(), plan_body("2014-02-02", false));
+    let (addr, t, body) = (
+        replicas[0].addr,
+        token.clone(),
+        plan_body("2014-02-02", false),
+    );
     let plan = std::thread::spawn(move || post(addr, "/api/v1/farms/north/plan", &body, Some(&t)));
     until_waiting(&holder);
-    assert_eq!(holder.store().missions().unwrap().len(), 1, "the plan waits");
+    assert_eq!(
+        holder.store().missions().unwrap().len(),
+        1,
+        "the plan waits"
+    );
     // Meanwhile the holder records the first mission's flight over its cells.
     app::record_flight(
         &mut holder,
@@ -463,8 +481,16 @@ fn plans_and_records_wait_for_the_farms_lock_held_elsewhere() {
         ),
         "a preview after",
     );
-    assert_eq!(stops(&planned), stops(&after), "planned from the store as it is now");
-    assert_ne!(stops(&planned), stops(&first), "not from the store before the flight");
+    assert_eq!(
+        stops(&planned),
+        stops(&after),
+        "planned from the store as it is now"
+    );
+    assert_ne!(
+        stops(&planned),
+        stops(&first),
+        "not from the store before the flight"
+    );
 
     holder.store().lock_project().unwrap();
     let id = planned["mission_id"].as_i64().unwrap();
@@ -493,7 +519,10 @@ fn plans_and_records_wait_for_the_farms_lock_held_elsewhere() {
 
 /// The sensors of every cell of a farm, by cell id.
 fn sensors_by_cell(addr: SocketAddr, token: &str) -> BTreeMap<String, Vec<String>> {
-    let cells = ok_json(&get(addr, "/api/v1/farms/north/cells", Some(token)), "cells");
+    let cells = ok_json(
+        &get(addr, "/api/v1/farms/north/cells", Some(token)),
+        "cells",
+    );
     cells
         .as_array()
         .unwrap()
@@ -536,7 +565,10 @@ fn replicas_over_one_postgres_serialise_plans_and_records() {
     let replicas = [Replica::start(farms.path()), Replica::start(farms.path())];
     let addrs = [replicas[0].addr, replicas[1].addr];
     let token = farms.north_write.clone();
-    let before = ok_json(&get(addrs[0], "/api/v1/farms/north/project", Some(&token)), "project");
+    let before = ok_json(
+        &get(addrs[0], "/api/v1/farms/north/project", Some(&token)),
+        "project",
+    );
     let readings_before = before["readings"].as_u64().unwrap();
     let cells = Arc::new(sensors_by_cell(addrs[0], &token));
     let flights: Arc<BTreeMap<String, Vec<u8>>> = Arc::new(
@@ -550,11 +582,8 @@ fn replicas_over_one_postgres_serialise_plans_and_records() {
     let started = std::time::Instant::now();
     let threads: Vec<_> = (0..pairs)
         .map(|i| {
-            let (barrier, token, flights) = (
-                Arc::clone(&barrier),
-                token.clone(),
-                Arc::clone(&flights),
-            );
+            let (barrier, token, flights) =
+                (Arc::clone(&barrier), token.clone(), Arc::clone(&flights));
             let (plan_on, record_on) = (addrs[i % 2], addrs[(i + 1) % 2]);
             std::thread::spawn(move || {
                 // Each plan at its own hour of February 2014, after every stored reading.
@@ -647,13 +676,14 @@ fn replicas_over_one_postgres_serialise_plans_and_records() {
         let mut l: Vec<f64> = done.iter().map(|p| p.latency[k]).collect();
         l.sort_by(f64::total_cmp);
         let q = |f: f64| l[((l.len() - 1) as f64 * f).round() as usize];
-        format!("p50 {:.2} s, p99 {:.2} s, max {:.2} s", q(0.5), q(0.99), q(1.0))
+        format!(
+            "p50 {:.2} s, p99 {:.2} s, max {:.2} s",
+            q(0.5),
+            q(0.99),
+            q(1.0)
+        )
     };
-    eprintln!(
-        "replicas: plans {}; records {}",
-        quantiles(0),
-        quantiles(1)
-    );
+    eprintln!("replicas: plans {}; records {}", quantiles(0), quantiles(1));
     eprintln!(
         "replicas: {} writes ({pairs} plans + {pairs} records) over 2 replicas in {:.1} s: {:.1} writes/s; {} distinct mission ids, 0 lost, 0 duplicated; {inserted} readings stored, {unchanged} already there",
         2 * pairs,
