@@ -54,7 +54,7 @@ def check(argv):
             want = scores[key.lower()] if scores else None
             need(props.get(key) == want, f"cell {doc['cell']}: {key} = {props.get(key)} != {want}")
 
-    # The route: base -> stops -> base.
+    # The route: base (or, for a continuation, where the aircraft is) -> stops -> base.
     routes = by_kind.get("route", [])
     need(len(routes) == 1, f"{len(routes)} route features")
     route = routes[0]
@@ -63,7 +63,8 @@ def check(argv):
     need(line.is_valid, "the route: shapely says invalid")
     coords = list(route["geometry"]["coordinates"])
     base = mission["profile"]["base_lon_lat"]
-    planned = [base] + [s["centre_lon_lat"] for s in mission["stops"]] + [base]
+    start = (mission.get("continuation") or {}).get("start_lon_lat", base)
+    planned = [start] + [s["centre_lon_lat"] for s in mission["stops"]] + [base]
     need(len(coords) == len(planned), f"route has {len(coords)} positions, expected {len(planned)}")
     for k, (got, want) in enumerate(zip(coords, planned)):
         d = expect.distance_m(got, want)

@@ -39,7 +39,8 @@ def check(argv):
     ]
     expect.check_items(mission, items, "pymavlink")
     need(all(w.current == 0 for w in wps[1:]), "an item after home is marked current")
-    need(not math.isnan(items[1]["p4"]), "DO_CHANGE_SPEED param4 is NaN")
+    speed = next(it for it in items if it["command"] == expect.DO_CHANGE_SPEED)
+    need(not math.isnan(speed["p4"]), "DO_CHANGE_SPEED param4 is NaN")
     return f"pymavlink MAVWPLoader read {n} items from {os.path.basename(path)} " \
            f"({len(mission['stops'])} stops, {profile['cruise_speed_mps']} m/s)"
 

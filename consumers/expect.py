@@ -70,8 +70,13 @@ def check_hold(hold, hover_s, what):
 
 
 def expected_sequence(mission):
-    """(command, frame) of the items after home: take-off, speed, one waypoint per stop, RTL."""
-    seq = [(NAV_TAKEOFF, FRAME_GLOBAL_RELATIVE_ALT), (DO_CHANGE_SPEED, FRAME_MISSION)]
+    """(command, frame) of the items after home: take-off, speed, one waypoint per stop, RTL;
+    for a continuation re-planned in the air, no take-off: speed, a waypoint where the
+    aircraft is, one per stop, RTL."""
+    if mission.get("continuation"):
+        seq = [(DO_CHANGE_SPEED, FRAME_MISSION), (NAV_WAYPOINT, FRAME_GLOBAL_RELATIVE_ALT)]
+    else:
+        seq = [(NAV_TAKEOFF, FRAME_GLOBAL_RELATIVE_ALT), (DO_CHANGE_SPEED, FRAME_MISSION)]
     seq += [(NAV_WAYPOINT, FRAME_GLOBAL_RELATIVE_ALT)] * len(mission["stops"])
     seq.append((NAV_RETURN_TO_LAUNCH, FRAME_MISSION))
     return seq
@@ -84,11 +89,20 @@ def check_items(mission, items, source, yaw_nan=True):
     seq = [(it["command"], it["frame"]) for it in items]
     need(seq == expected_sequence(mission),
          f"{source}: (command, frame) sequence {seq} != {expected_sequence(mission)}")
-    take_off, speed, *waypoints, rtl = items
-    need(distance_m([take_off["lon"], take_off["lat"]], profile["base_lon_lat"]) < MAX_OFFSET_M,
-         f"{source}: take-off not at the base")
-    need(close(take_off["alt"], profile["altitude_m"]),
-         f"{source}: take-off altitude {take_off['alt']} != {profile['altitude_m']}")
+    continuation = mission.get("continuation")
+    if continuation:
+        speed, start, *waypoints, rtl = items
+        need(distance_m([start["lon"], start["lat"]], continuation["start_lon_lat"]) < MAX_OFFSET_M,
+             f"{source}: the first waypoint is not where the aircraft is")
+        need(start["p1"] == 0.0, f"{source}: the first waypoint holds {start['p1']} s, not 0")
+        need(close(start["alt"], profile["altitude_m"]),
+             f"{source}: first waypoint altitude {start['alt']} != {profile['altitude_m']}")
+    else:
+        take_off, speed, *waypoints, rtl = items
+        need(distance_m([take_off["lon"], take_off["lat"]], profile["base_lon_lat"]) < MAX_OFFSET_M,
+             f"{source}: take-off not at the base")
+        need(close(take_off["alt"], profile["altitude_m"]),
+             f"{source}: take-off altitude {take_off['alt']} != {profile['altitude_m']}")
     need(speed["p1"] == 1.0, f"{source}: DO_CHANGE_SPEED speed type {speed['p1']} != 1 (ground)")
     need(close(speed["p2"], profile["cruise_speed_mps"]),
          f"{source}: DO_CHANGE_SPEED speed {speed['p2']} != {profile['cruise_speed_mps']} m/s")

@@ -1450,9 +1450,7 @@ fn reconstruction_errors(
         };
         if e.last_time != Some(target) {
             estimated += 1;
-            covered += usize::from(
-                (e.kriged - v).abs() <= crate::reconstruct::Z90 * e.variance.max(0.0).sqrt(),
-            );
+            covered += usize::from((e.kriged - v).abs() <= e.half90);
         }
         se_c += (e.carried - v).powi(2);
         ae_c += (e.carried - v).abs();
@@ -1854,6 +1852,7 @@ mod tests {
             carried: 0.0,
             kriged,
             variance: 1.0,
+            half90: crate::reconstruct::Z90,
         };
         let estimates = [est("a", 0.10), est("b", 0.20), est("c", 0.30)];
         let mut series = BTreeMap::new();

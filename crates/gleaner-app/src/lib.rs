@@ -58,6 +58,7 @@ mod project;
 mod reconstruct;
 mod reconstruct_map;
 mod record;
+mod replan;
 mod score;
 pub mod settings;
 mod simulate;
@@ -92,6 +93,7 @@ pub use reconstruct::{
 };
 pub use reconstruct_map::{MapCell, ReconstructMapRequest, ReconstructionMap, reconstruct_map};
 pub use record::{RecordOutcome, RecordRequest, record_flight};
+pub use replan::{REPLAN_TIME_LIMIT_S, Replan, ReplanRequest, replan};
 pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};
 pub use settings::{EnergyPreset, Settings};
 pub use simulate::{ProjectRecord, REPLAY_DEFAULT_DAYS, Truth, fly, fly_buffered};

@@ -84,6 +84,10 @@ pub struct SensorEstimate {
     pub kriged: f64,
     /// Its variance under the model, the unit squared.
     pub variance: f64,
+    /// Half-width of its 90% prediction interval `kriged ± half90`, the modality's unit: for
+    /// the kriging of changes calibrated on the estimator's own out-of-sample errors at past
+    /// reads ([`interval_multiplier`]), otherwise [`Z90`]·√variance.
+    pub half90: f64,
 }
 
 /// Every sensor's estimate at one time.
@@ -404,6 +408,13 @@ pub const CHANGE_LAG_DAYS: [i64; 11] = [1, 2, 3, 5, 7, 10, 14, 21, 28, 42, 56];
 /// neighbour missing that day is taken from its latest reading before it).
 pub const CHANGE_MARGIN_S: i64 = 8 * 86_400;
 
+/// Each sensor's cell, as an index of the field's cells (sensors in project order).
+fn sensor_cells(field: &gleaner_field::Field, sensors: usize) -> Vec<usize> {
+    (0..sensors)
+        .map(|k| field.cell_of_sensor(k).index())
+        .collect()
+}
+
 /// Sensor positions in the field's local frame, east/north metres.
 fn positions(sensors: &[gleaner_field::Sensor], field: &gleaner_field::Field) -> Vec<[f64; 2]> {
     sensors
@@ -552,13 +563,15 @@ pub(crate) fn estimate_with<S: Store>(
         }
     };
     let positions = positions(&sensors, &field);
+    let cells = sensor_cells(&field, sensors.len());
     let kriging = KrigingInputs::new(
-        &positions,
+        (&positions, &cells),
         (model, changes),
         (&latest, &series),
         at,
         (neighbours, estimator),
     );
+    let q = kriging.multiplier();
     // The dynamic model: one filter pass over the window's readings.
     let mut filtered: Vec<(f64, f64)> = Vec::new();
     if let (Estimator::Dynamic, Some(model)) = (estimator, dynamic) {
@@ -582,6 +595,7 @@ pub(crate) fn estimate_with<S: Store>(
                 carried: latest[k].map_or(model.means[k], |l| l.1),
                 kriged,
                 variance,
+                half90: kriging.half90(k, variance, q),
             }
         })
         .collect();
@@ -605,6 +619,8 @@ type Latest = Option<(UnixSeconds, f64)>;
 /// changes, every sensor's readings in the change window (times ascending, s).
 struct KrigingInputs<'a> {
     positions: &'a [[f64; 2]],
+    /// Each sensor's cell (an index of the field's cells): cell-mates are read together.
+    cells: &'a [usize],
     model: &'a FieldModel,
     changes: &'a IncrementModel,
     latest: &'a [Latest],
@@ -617,7 +633,7 @@ struct KrigingInputs<'a> {
 
 impl<'a> KrigingInputs<'a> {
     fn new(
-        positions: &'a [[f64; 2]],
+        (positions, cells): (&'a [[f64; 2]], &'a [usize]),
         (model, changes): (&'a FieldModel, &'a IncrementModel),
         (latest, series): (&'a [Latest], &'a [Column]),
         at: UnixSeconds,
@@ -637,6 +653,7 @@ impl<'a> KrigingInputs<'a> {
             .collect();
         Self {
             positions,
+            cells,
             model,
             changes,
             latest,
@@ -675,6 +692,7 @@ impl<'a> KrigingInputs<'a> {
                     (k, t_k),
                     self.at,
                     CHANGE_CANDIDATES.max(4 * self.neighbours),
+                    |_| false,
                 );
                 let e = estimate_change(
                     self.changes,
@@ -687,26 +705,116 @@ impl<'a> KrigingInputs<'a> {
             }
         }
     }
+
+    /// The kriging of changes' standardised out-of-sample errors `|z|`, for the calibration
+    /// of its intervals: the sensors read last (within [`BACKTEST_FRESH_S`] of the latest
+    /// reading), each estimated at its latest reading as if it had been unseen as long as
+    /// the sensors unseen now are (their ages, up to [`BACKTEST_SAMPLES`] pairs in all, the
+    /// ages evenly spread over their sorted list): from its reading at or before that long
+    /// before and the changes then known of the sensors outside its cell (cell-mates are read
+    /// together, so they are never known when it is not), against the reading:
+    /// `|v − v̂| / sd`. Empty for the other estimators, or when no sensor is unseen now.
+    fn backtest(&self) -> Vec<f64> {
+        if self.estimator != Estimator::Changes {
+            return Vec::new();
+        }
+        let Some(newest) = self.latest.iter().flatten().map(|l| l.0).max() else {
+            return Vec::new();
+        };
+        let mut ages: Vec<i64> = self
+            .latest
+            .iter()
+            .flatten()
+            .map(|l| self.at - l.0)
+            .filter(|&a| a > self.at - newest + BACKTEST_FRESH_S)
+            .collect();
+        ages.sort_unstable();
+        let targets: Vec<usize> = (0..self.latest.len())
+            .filter(|&k| self.latest[k].is_some_and(|l| l.0 >= newest - BACKTEST_FRESH_S))
+            .collect();
+        if ages.is_empty() || targets.is_empty() {
+            return Vec::new();
+        }
+        let per = (BACKTEST_SAMPLES / targets.len()).clamp(1, ages.len());
+        let picks: Vec<i64> = (0..per)
+            .map(|i| ages[((2 * i + 1) * ages.len()) / (2 * per)])
+            .collect();
+        let mut errors = Vec::new();
+        for &k in &targets {
+            let (times, values) = &self.series[k];
+            let (Some(&tau), Some(&v)) = (times.last(), values.last()) else {
+                continue;
+            };
+            for &age in &picks {
+                // The same gap before this sensor's last reading as the unseen sensor's
+                // before the estimation time.
+                let gap = age - (self.at - tau);
+                let start = times.partition_point(|&t| t <= tau - gap);
+                if start == 0 {
+                    continue;
+                }
+                let (t0, v0) = (times[start - 1], values[start - 1]);
+                let known = neighbour_changes(
+                    self.series,
+                    self.positions,
+                    (k, t0),
+                    tau,
+                    CHANGE_CANDIDATES.max(4 * self.neighbours),
+                    |j| self.cells[j] == self.cells[k],
+                );
+                let e = estimate_change(
+                    self.changes,
+                    &known,
+                    self.positions[k],
+                    ((t0 - tau) as f64, 0.0),
+                    self.neighbours,
+                );
+                if e.variance > 0.0 && e.variance.is_finite() {
+                    errors.push((v - v0 - e.change).abs() / e.variance.sqrt());
+                }
+            }
+        }
+        errors
+    }
+
+    /// The multiplier of this time's 90% intervals for sensor estimates by the kriging of
+    /// changes ([`interval_multiplier`] of [`Self::backtest`]).
+    fn multiplier(&self) -> f64 {
+        interval_multiplier(&self.backtest())
+    }
+
+    /// Sensor `k`'s 90% half-width for an estimate of variance `variance` (the unit
+    /// squared): `q`·sd for the kriging of changes from a reading, `Z90`·sd otherwise.
+    fn half90(&self, k: usize, variance: f64, q: f64) -> f64 {
+        let calibrated = self.estimator == Estimator::Changes && self.latest[k].is_some();
+        (if calibrated { q } else { Z90 }) * variance.max(0.0).sqrt()
+    }
 }
 
 /// The changes known over the unseen interval of sensor `k` (last read at `t_k`, estimated
 /// at `at`), times in seconds relative to `at`: for the `max_candidates` sensors nearest to it
-/// among those read after `t_k`, the latest reading minus the reading at or just before `t_k`
-/// (the first reading in `series` when there is none by then). `series` per sensor,
-/// ascending; positions metres.
+/// among those read after `t_k` and by `at` (other than those `skip` names; `k` itself is
+/// always skipped), the latest reading by `at` minus the reading at or just before `t_k` (the
+/// first reading in `series` when there is none by then). `series` per sensor, ascending;
+/// positions metres.
 fn neighbour_changes(
     series: &[(Vec<UnixSeconds>, Vec<f64>)],
     positions: &[[f64; 2]],
     (k, t_k): (usize, UnixSeconds),
     at: UnixSeconds,
     max_candidates: usize,
+    skip: impl Fn(usize) -> bool,
 ) -> Vec<Change> {
     let p = positions[k];
-    // Squared distance and index of every sensor read after t_k.
+    // The index of each sensor's latest reading by `at`, if any.
+    let last = |times: &[UnixSeconds]| times.partition_point(|&t| t <= at).checked_sub(1);
+    // Squared distance and index of every sensor read after t_k (and by `at`).
     let mut candidates: Vec<(f64, usize)> = series
         .iter()
         .enumerate()
-        .filter(|(j, (times, _))| *j != k && times.last().is_some_and(|&b| b > t_k))
+        .filter(|(j, (times, _))| {
+            *j != k && !skip(*j) && last(times.as_slice()).is_some_and(|b| times[b] > t_k)
+        })
         .map(|(j, _)| {
             let q = positions[j];
             ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2), j)
@@ -721,9 +829,10 @@ fn neighbour_changes(
     let mut out = Vec::with_capacity(candidates.len());
     for (_, j) in candidates {
         let (times, values) = &series[j];
-        let (Some(&b), Some(&vb)) = (times.last(), values.last()) else {
+        let Some(end) = last(times.as_slice()) else {
             continue;
         };
+        let (b, vb) = (times[end], values[end]);
         // Readings at or before t_k: the latest of them, else the first reading.
         let i = times.partition_point(|&t| t <= t_k).saturating_sub(1);
         let (a, va) = (times[i], values[i]);
@@ -738,6 +847,32 @@ fn neighbour_changes(
         });
     }
     out
+}
+
+/// At most this many (sensor, unseen interval) pairs are back-tested for the calibration of
+/// the kriging of changes' intervals ([`interval_multiplier`]).
+pub const BACKTEST_SAMPLES: usize = 160;
+
+/// Sensors whose latest reading is within this of the newest one count as read last, s
+/// (readings of one visit are stamped within minutes of each other).
+pub const BACKTEST_FRESH_S: i64 = 3_600;
+
+/// Fewest back-tested errors for a calibrated interval; with fewer, `Z90`·sd.
+pub const BACKTEST_MIN: usize = 20;
+
+/// The multiplier `q` of a 90% prediction interval `estimate ± q·sd` from standardised
+/// out-of-sample errors `|z|`: their split-conformal quantile, the ⌈0.9 (n + 1)⌉-th smallest
+/// (so a new error as exchangeable with them falls inside with probability ≥ 90%); [`Z90`]
+/// (the Gaussian interval) with fewer than [`BACKTEST_MIN`] errors. Non-finite errors are
+/// left out.
+pub fn interval_multiplier(errors: &[f64]) -> f64 {
+    let mut z: Vec<f64> = errors.iter().copied().filter(|z| z.is_finite()).collect();
+    if z.len() < BACKTEST_MIN {
+        return Z90;
+    }
+    z.sort_by(f64::total_cmp);
+    let rank = (0.9 * (z.len() + 1) as f64).ceil() as usize;
+    z[rank.clamp(1, z.len()) - 1]
 }
 
 /// Fewest candidate neighbours (the nearest read after the target) the kriging of changes
@@ -835,6 +970,11 @@ pub struct ReconstructionSeries {
     pub mean: Vec<f64>,
     /// Posterior variances, same layout, the unit squared (without the reading noise).
     pub variance: Vec<f64>,
+    /// Half-widths of the 90% prediction intervals, same layout, the modality's unit: under
+    /// the dynamic model `Z90`·√(variance + reading noise); under the kriging of changes
+    /// calibrated at each time on the estimator's out-of-sample errors at past readings
+    /// ([`interval_multiplier`]); `Z90`·√variance otherwise.
+    pub half90: Vec<f64>,
     /// The dynamic model (fitted on every reading stamped at or before `to`), when it is
     /// the estimator.
     pub model: Option<DynamicModel>,
@@ -844,13 +984,10 @@ pub struct ReconstructionSeries {
 pub const Z90: f64 = 1.644_853_626_951_472_2;
 
 impl ReconstructionSeries {
-    /// The 90% interval `mean ± 1.645·sd` of entry (time index, sensor index); under the
-    /// dynamic model the sd includes the reading noise.
+    /// The 90% prediction interval `mean ± half90` of entry (time index, sensor index).
     pub fn interval90(&self, t: usize, s: usize) -> (f64, f64) {
         let k = t * self.sensors.len() + s;
-        let noise = self.model.as_ref().map_or(0.0, DynamicModel::noise);
-        let half = Z90 * (self.variance[k].max(0.0) + noise).sqrt();
-        (self.mean[k] - half, self.mean[k] + half)
+        (self.mean[k] - self.half90[k], self.mean[k] + self.half90[k])
     }
 }
 
@@ -938,6 +1075,7 @@ pub fn reconstruct_series<S: Store>(
     let m = wanted.len();
     let mut mean = vec![0.0; times.len() * m];
     let mut variance = vec![0.0; times.len() * m];
+    let mut half90 = vec![0.0; times.len() * m];
     match (&dynamic, estimator) {
         (Some(model), Estimator::Dynamic) => {
             let start = request.from.saturating_sub(dynamic_window_s(model));
@@ -946,11 +1084,13 @@ pub fn reconstruct_series<S: Store>(
                     let (mu, v) = f.estimate(k);
                     mean[i * m + j] = mu;
                     variance[i * m + j] = v;
+                    half90[i * m + j] = Z90 * (v.max(0.0) + model.noise()).sqrt();
                 }
             });
         }
         _ => {
             let positions = positions(&sensors, &field);
+            let cells = sensor_cells(&field, sensors.len());
             let (levels, changes, _) = fit_on_columns(&positions, &columns, &modality, true)?;
             let changes = changes.ok_or_else(|| AppError::Invalid("no model of changes".into()))?;
             let neighbours = request.neighbours.unwrap_or(DEFAULT_NEIGHBOURS).max(1);
@@ -986,16 +1126,18 @@ pub fn reconstruct_series<S: Store>(
                     _ => Vec::new(),
                 };
                 let kriging = KrigingInputs::new(
-                    &positions,
+                    (&positions, &cells),
                     (&levels, &changes),
                     (&latest, &series),
                     at,
                     (neighbours, estimator),
                 );
+                let q = kriging.multiplier();
                 for (j, &k) in wanted.iter().enumerate() {
                     let (mu, v) = kriging.estimate(k);
                     mean[i * m + j] = mu;
                     variance[i * m + j] = v;
+                    half90[i * m + j] = kriging.half90(k, v, q);
                 }
             }
         }
@@ -1011,6 +1153,7 @@ pub fn reconstruct_series<S: Store>(
             .collect(),
         mean,
         variance,
+        half90,
         model: dynamic.filter(|_| estimator == Estimator::Dynamic),
     })
 }
@@ -1020,6 +1163,22 @@ mod tests {
     use super::*;
 
     const DAY: i64 = 86_400;
+
+    /// The split-conformal multiplier: the ⌈0.9 (n + 1)⌉-th smallest error; the Gaussian
+    /// multiplier below [`BACKTEST_MIN`] errors; non-finite errors left out.
+    #[test]
+    fn interval_multiplier_is_the_conformal_quantile() {
+        let errors: Vec<f64> = (1..=99).rev().map(|i| f64::from(i) / 100.0).collect();
+        assert_eq!(interval_multiplier(&errors), 0.90);
+        let mut with_nan = errors.clone();
+        with_nan.push(f64::NAN);
+        assert_eq!(interval_multiplier(&with_nan), 0.90);
+        // n = 19: ⌈0.9·20⌉ = 18 → the 18th smallest; fewer than 20 → Z90.
+        assert_eq!(interval_multiplier(&errors[..19]), Z90);
+        let twenty: Vec<f64> = (1..=20).map(f64::from).collect();
+        assert_eq!(interval_multiplier(&twenty), 19.0);
+        assert_eq!(interval_multiplier(&[]), Z90);
+    }
 
     /// Estimates reusing the previous estimate's reads (nothing stored after its time, at
     /// later times with the same look-back) equal, to the bit, estimates reading the store;
@@ -1169,9 +1328,9 @@ mod tests {
             (vec![], vec![]),
         ];
         let positions: Vec<[f64; 2]> = (0..6).map(|k| [10.0 * k as f64, 0.0]).collect();
-        let c = neighbour_changes(&series, &positions, (0, 90 * DAY), at, 64);
+        let c = neighbour_changes(&series, &positions, (0, 90 * DAY), at, 64, |_| false);
         // Only the nearest 2 candidates: sensors 1 and 3 (sensor 2 knows nothing newer).
-        let near = neighbour_changes(&series, &positions, (0, 90 * DAY), at, 2);
+        let near = neighbour_changes(&series, &positions, (0, 90 * DAY), at, 2, |_| false);
         assert_eq!(near.len(), 2, "{near:?}");
         assert_eq!(
             (near[0].position, near[1].position),
@@ -1187,7 +1346,9 @@ mod tests {
         assert_eq!((c[2].from_s, c[2].to_s), (rel(92), rel(96)));
         assert!((c[2].change + 0.05).abs() < 1e-12);
         // A target read after everyone else: no neighbour knows more.
-        assert!(neighbour_changes(&series, &positions, (1, 99 * DAY), at, 64).is_empty());
+        assert!(
+            neighbour_changes(&series, &positions, (1, 99 * DAY), at, 64, |_| false).is_empty()
+        );
     }
 
     /// A series over a range: one row per time, every sensor's mean close to its own
@@ -1293,8 +1454,7 @@ mod tests {
                 assert_eq!(series.mean[last * n + k], e.kriged, "{estimator:?} {k}");
                 assert_eq!(series.variance[last * n + k], e.variance);
                 let (lo, hi) = series.interval90(last, k);
-                let half = Z90 * e.variance.sqrt();
-                assert!((hi - lo - 2.0 * half).abs() < 1e-12);
+                assert!((hi - lo - 2.0 * e.half90).abs() < 1e-12);
             }
             assert!(series.mean.iter().all(|m| m.is_finite()));
             assert!(series.variance.iter().all(|v| *v >= 0.0));

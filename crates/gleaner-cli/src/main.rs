@@ -266,6 +266,41 @@ enum Command {
         #[arg(long, default_value_t = 66)]
         dji_payload: u32,
     },
+    /// Re-plan a mission in the air: the best continuation from the stop the aircraft is
+    /// over with the energy it has left — the remaining stops dropped and reordered so that it
+    /// still reaches the base with the battery's reserve — written as a new file set
+    /// (.plan, WPL, GeoJSON, JSON) that starts where the aircraft is.
+    #[command(
+        after_help = "The continuation's files have no take-off: DO_CHANGE_SPEED to the mission's speed, a 0 s\nwaypoint where the aircraft is, the kept stops with their holds, return-to-launch. Their energy\nis recomputed from what they command (no climb; the descent at the base) and must fit the energy\nleft less the reserve ([energy] capacity_j x reserve_fraction). Nothing is stored: record the\nflight against the mission itself (its stops include the continuation's).\n\nExamples:\n  gleaner replan --project farm --mission 3 --after-stop 4 --energy-left 30000\n  gleaner replan --project farm --mission 3 --after-stop 0 --energy-left 52000 --json"
+    )]
+    Replan {
+        #[command(flatten)]
+        project: ProjectArg,
+        /// The mission in flight (planned, not yet recorded).
+        #[arg(long)]
+        mission: i64,
+        /// Stops already flown: the aircraft is over this stop, done collecting (1-based in
+        /// the mission's order; 0 = airborne over the base).
+        #[arg(long)]
+        after_stop: usize,
+        /// Energy left in the battery, J (as the autopilot reports it).
+        #[arg(long, value_name = "J")]
+        energy_left: f64,
+        /// Output directory [default: <project>/missions/<id>/replan-after-<K>].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Planner seed [default: the mission's].
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Wall-clock limit of the search, seconds.
+        #[arg(long, default_value_t = gleaner_app::REPLAN_TIME_LIMIT_S)]
+        time_limit: f64,
+        /// Iteration cap of the search (deterministic runs).
+        #[arg(long)]
+        iterations: Option<u64>,
+        #[command(flatten)]
+        json: JsonArg,
+    },
     /// Draw the exploration overview: every exploration sortie on one map, one colour each
     /// (SVG and PNG).
     #[command(after_help = "Example:\n  gleaner map-exploration --project farm")]
@@ -953,6 +988,52 @@ fn run(cli: Cli) -> Result<()> {
             for note in &written.skipped {
                 outln(&format!("not written: {note}"))?;
             }
+        }
+        Command::Replan {
+            project,
+            mission,
+            after_stop,
+            energy_left,
+            out,
+            seed,
+            time_limit,
+            iterations,
+            json,
+        } => {
+            let p = project.open()?;
+            let r = app::replan(
+                &p,
+                &app::ReplanRequest {
+                    mission: MissionId(mission),
+                    after_stop,
+                    energy_left_j: energy_left,
+                    seed,
+                    iterations,
+                    time_limit_s: Some(time_limit),
+                },
+            )?;
+            let dir = out.unwrap_or_else(|| {
+                project
+                    .dir
+                    .join("missions")
+                    .join(mission.to_string())
+                    .join(format!("replan-after-{after_stop}"))
+            });
+            let written = export::write_replan_files(&p, &r, &dir)?;
+            let doc = gleaner_wire::convert::replanned_mission(&r);
+            json.emit(&doc, "serialising the continuation", || {
+                let mut t = plan::replan_table(&doc, &r.dropped);
+                let names: Vec<String> = written
+                    .files
+                    .iter()
+                    .map(|f| f.display().to_string())
+                    .collect();
+                t.push_str(&format!("wrote {}\n", names.join(", ")));
+                for note in &written.skipped {
+                    t.push_str(&format!("not written: {note}\n"));
+                }
+                t
+            })?;
         }
         Command::MapExploration { project, out } => {
             let p = project.open()?;

@@ -729,6 +729,83 @@ fn export_writes_geojson_qgc_plan_and_wpl() {
     );
 }
 
+/// `replan` after the first stop: a continuation within the energy left less the reserve,
+/// its WPL without a take-off and starting where the aircraft is; too little energy for the
+/// way home, a stop beyond the mission's and a flown mission are refused.
+#[test]
+fn replan_writes_a_continuation_within_the_energy_left() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    ok(&[
+        "plan",
+        "--project",
+        p,
+        "--at",
+        "2014-01-25",
+        "--solver",
+        "exact",
+    ]);
+    let parent: serde_json::Value =
+        serde_json::from_str(&ok(&["missions", "--project", p, "--json"])).expect("json");
+    let stops = parent[0]["stops"].as_array().expect("stops").len();
+    assert!(stops >= 2, "{parent}");
+    let out = dir.path().join("replan");
+    let args = |left: &'static str, after: &'static str| {
+        vec![
+            "replan",
+            "--project",
+            p,
+            "--mission",
+            "1",
+            "--after-stop",
+            after,
+            "--energy-left",
+            left,
+            "--iterations",
+            "100",
+            "--out",
+            s(&out),
+        ]
+    };
+    let text = ok(&args("40000", "1"));
+    assert!(text.contains("continuation of mission #1 after stop 1"), "{text}");
+    let doc: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("mission.json")).expect("mission.json"),
+    )
+    .expect("json");
+    assert_eq!(doc["status"], "continuation");
+    assert_eq!(doc["continuation"]["parent_mission_id"], 1);
+    let budget = doc["energy"]["budget_j"].as_f64().expect("budget");
+    let reserve = doc["continuation"]["reserve_j"].as_f64().expect("reserve");
+    assert_eq!(budget, 40_000.0 - reserve);
+    assert!(doc["energy"]["total_j"].as_f64().expect("total") <= budget);
+    let kept = doc["stops"].as_array().expect("stops").len();
+    assert_eq!(kept, stops - 1, "ample energy keeps every remaining stop");
+    let wpl = std::fs::read_to_string(out.join("mission.waypoints")).expect("wpl");
+    let commands: Vec<&str> = wpl
+        .lines()
+        .skip(1)
+        .map(|l| l.split('\t').nth(3).expect("command"))
+        .collect();
+    // Home, speed, the waypoint where the aircraft is, the kept stops, return to launch.
+    assert_eq!(commands.len(), kept + 4, "{wpl}");
+    assert!(!commands.contains(&"22"), "no take-off: {wpl}");
+    assert_eq!(commands[1], "178");
+    assert_eq!(commands.last(), Some(&"20"));
+    assert!(out.join("mission.plan").exists() && !out.join("mission.kmz").exists());
+    let json: serde_json::Value = serde_json::from_str(&ok(&{
+        let mut a = args("40000", "1");
+        a.push("--json");
+        a
+    }))
+    .expect("json");
+    assert_eq!(json, doc, "--json prints the continuation's document");
+    assert!(fail(&args("3600", "1")).contains("land now"));
+    assert!(fail(&args("40000", "9")).contains("beyond"));
+    assert!(fail(&args("NaN", "1")).contains("energy left"));
+}
+
 #[test]
 fn hubbard_brook_project_from_real_data() {
     let dir = tempfile::tempdir().expect("temp dir");

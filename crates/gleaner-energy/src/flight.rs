@@ -106,6 +106,9 @@ pub struct CommandedFlight {
     pub speed_mps: f64,
     /// Waypoints in flying order: position (WGS84) and hold time (s).
     pub waypoints: Vec<(LatLon, f64)>,
+    /// A continuation flown from the air (no take-off item): the aircraft is at the first
+    /// waypoint at the flight altitude when the file starts; no take-off and no climb.
+    pub airborne: bool,
 }
 
 /// The parameters that price a commanded flight: the power curve, the receiver power, the
@@ -165,7 +168,10 @@ impl FlightEnergyModel {
     /// The energy breakdown of `flight` as commanded: from its home through its waypoints and
     /// back, at its speed and altitude, hovering its holds; positions projected into
     /// `TransverseMercator::local(origin)` (the planner's frame: the project's base station).
-    /// Compare `total_j` with `usable_budget_j`.
+    /// An [`CommandedFlight::airborne`] flight starts at its first waypoint in the air
+    /// ([`MissionEnergyModel::continuation`]: a 0 m first leg, descent only). Compare
+    /// `total_j` with the budget the flight was planned against (`usable_budget_j`, or for a
+    /// continuation the energy left less the reserve).
     ///
     /// # Errors
     /// As [`FlightEnergyModel::model`]; negative or non-finite holds.
@@ -185,7 +191,12 @@ impl FlightEnergyModel {
                 hover_s: hold_s,
             })
             .collect();
-        model.breakdown(home, &visits)
+        match (flight.airborne, visits.first()) {
+            (true, Some(first)) => {
+                model.continuation(first.centre, home, &visits, self.usable_budget_j)
+            }
+            _ => model.breakdown(home, &visits),
+        }
     }
 }
 
@@ -335,6 +346,7 @@ mod tests {
                 altitude_m: m.link().altitude_m,
                 speed_mps: m.cruise_speed_mps(),
                 waypoints: points.iter().zip(&visits).map(|(&p, v)| (p, v.hover_s)).collect(),
+                airborne: false,
             };
             let commanded = m.flight_energy_model().energy(origin, &flight).unwrap();
             prop_assert_eq!(commanded.total_j, planned.total_j);

@@ -442,8 +442,61 @@ impl MissionEnergyModel {
         base: LocalPoint,
         route: &[CellVisit],
     ) -> Result<MissionEnergy, EnergyError> {
-        finite("base easting (m)", base.e)?;
-        finite("base northing (m)", base.n)?;
+        let vertical = if route.is_empty() {
+            (0.0, 0.0)
+        } else {
+            (self.vertical_j, self.vertical_s)
+        };
+        self.path(base, base, route, vertical, self.budget_j)
+    }
+
+    /// The energy breakdown of a *continuation*: the aircraft is already in the air at
+    /// `start` (local frame, m, at the flight altitude), visits `route` in order (hovering
+    /// `hover_s` at each), returns to `base` and descends there — no take-off and no climb —
+    /// against the budget `budget_j` (J: the energy left less the reserve). `legs[0]` is the
+    /// leg from `start`; with an empty route the one leg home. `vertical_j` is the descent
+    /// alone (P(0)·h/v_descent, when climb and descent are modelled).
+    ///
+    /// # Errors
+    /// As [`MissionEnergyModel::breakdown`]; a budget that is not finite.
+    pub fn continuation(
+        &self,
+        start: LocalPoint,
+        base: LocalPoint,
+        route: &[CellVisit],
+        budget_j: f64,
+    ) -> Result<MissionEnergy, EnergyError> {
+        finite("start easting (m)", start.e)?;
+        finite("start northing (m)", start.n)?;
+        finite("remaining budget (J)", budget_j)?;
+        self.path(start, base, route, self.descent(), budget_j)
+    }
+
+    /// Energy (J) and time (s) of the descent before landing: `P(0)·h/v_descent` and
+    /// `h/v_descent` when climb and descent are modelled, else 0 — the fixed part of a
+    /// continuation ([`MissionEnergyModel::continuation`]).
+    pub fn descent(&self) -> (f64, f64) {
+        match &self.vertical {
+            None => (0.0, 0.0),
+            Some(v) => {
+                let t = self.link.altitude_m / v.descent_speed_mps;
+                (self.hover_power_w * t, t)
+            }
+        }
+    }
+
+    /// From `start` through `route` to `end`, with `(vertical_j, vertical_s)` of climb and
+    /// descent, against `budget_j`. With `start == end` and an empty route, no leg at all.
+    fn path(
+        &self,
+        start: LocalPoint,
+        end: LocalPoint,
+        route: &[CellVisit],
+        (vertical_j, vertical_s): (f64, f64),
+        budget_j: f64,
+    ) -> Result<MissionEnergy, EnergyError> {
+        finite("base easting (m)", end.e)?;
+        finite("base northing (m)", end.n)?;
         for v in route {
             finite("cell easting (m)", v.centre.e)?;
             finite("cell northing (m)", v.centre.n)?;
@@ -451,11 +504,9 @@ impl MissionEnergyModel {
         }
         let mut legs = Vec::with_capacity(route.len() + 1);
         let mut cells = Vec::with_capacity(route.len());
-        let mut previous = base;
-        let stops = route
-            .iter()
-            .map(|v| v.centre)
-            .chain((!route.is_empty()).then_some(base));
+        let mut previous = start;
+        let home = !route.is_empty() || start != end;
+        let stops = route.iter().map(|v| v.centre).chain(home.then_some(end));
         for to in stops {
             let distance_m = distance_m(&previous, &to);
             legs.push(LegEnergy {
@@ -477,11 +528,6 @@ impl MissionEnergyModel {
                 service_j: hover_j + comm_j,
             });
         }
-        let vertical_j = if route.is_empty() {
-            0.0
-        } else {
-            self.vertical_j
-        };
         let (outbound, return_j) = match legs.split_last() {
             Some((last, rest)) => (rest.iter().map(|l| l.energy_j).sum::<f64>(), last.energy_j),
             None => (0.0, 0.0),
@@ -493,11 +539,7 @@ impl MissionEnergyModel {
         let distance_m = legs.iter().map(|l| l.distance_m).sum::<f64>();
         let flight_time_s = legs.iter().map(|l| l.time_s).sum::<f64>()
             + cells.iter().map(|c| c.hover_s).sum::<f64>()
-            + if route.is_empty() {
-                0.0
-            } else {
-                self.vertical_s
-            };
+            + vertical_s;
         Ok(MissionEnergy {
             travel_j,
             vertical_j,
@@ -505,10 +547,10 @@ impl MissionEnergyModel {
             comm_j,
             return_j,
             total_j,
-            budget_j: self.budget_j,
-            utilisation: total_j / self.budget_j,
-            remaining_j: self.budget_j - total_j,
-            feasible: total_j <= self.budget_j,
+            budget_j,
+            utilisation: total_j / budget_j,
+            remaining_j: budget_j - total_j,
+            feasible: total_j <= budget_j,
             distance_m,
             flight_time_s,
             legs,
@@ -535,6 +577,44 @@ mod tests {
                 hover_s,
             })
             .collect()
+    }
+
+    /// A continuation from the base without climb/descent modelled is the closed tour to
+    /// the bit; with them it saves the climb; from elsewhere its first leg leaves `start`.
+    #[test]
+    fn a_continuation_is_the_tour_without_take_off() {
+        let m = model();
+        let route = visits(&[(300.0, 400.0), (300.0, 0.0)], 30.0);
+        let base = LocalPoint::new(0.0, 0.0);
+        let tour = m.breakdown(base, &route).unwrap();
+        let cont = m
+            .continuation(base, base, &route, m.usable_budget_j())
+            .unwrap();
+        assert_eq!(cont.total_j, tour.total_j);
+        assert_eq!(cont.legs, tour.legs);
+        let cfg = EnergyConfig {
+            vertical: Some(VerticalConfig::default()),
+            ..EnergyConfig::paper()
+        };
+        let v = MissionEnergyModel::new(&cfg).unwrap();
+        let tour = v.breakdown(base, &route).unwrap();
+        let cont = v.continuation(base, base, &route, 1e5).unwrap();
+        let h = v.link().altitude_m;
+        let descent = v.hover_power_w() * h / VerticalConfig::default().descent_speed_mps;
+        assert!((cont.vertical_j - descent).abs() < 1e-9);
+        assert!(cont.total_j < tour.total_j);
+        assert_eq!(cont.budget_j, 1e5);
+        // From (300, 400): the first leg is 0 m long, then 400 m, then 300 m home.
+        let start = LocalPoint::new(300.0, 400.0);
+        let c = m.continuation(start, base, &route, 10_000.0).unwrap();
+        let d: Vec<f64> = c.legs.iter().map(|l| l.distance_m).collect();
+        assert_eq!(d, vec![0.0, 400.0, 300.0]);
+        // Nothing left to visit: the leg home.
+        let home = m.continuation(start, base, &[], 10_000.0).unwrap();
+        assert_eq!(home.legs.len(), 1);
+        assert!((home.distance_m - 500.0).abs() < 1e-9);
+        assert_eq!(home.feasible, home.total_j <= 10_000.0);
+        assert!(m.continuation(start, base, &route, f64::NAN).is_err());
     }
 
     #[test]

@@ -300,6 +300,110 @@ pub fn plan_sorties_valued<F: FnMut(&[usize]) -> f64>(
     )
 }
 
+/// Re-plans the rest of a sortie in the air. The aircraft is at `start` (local frame, m, at
+/// the flight altitude) with `budget_j` joules it may still spend (the energy left less the
+/// reserve); `remaining` are the stops not flown yet (a stop with `score <= 0` is never
+/// kept). Returns the best continuation — a subset of `remaining` in a new order, then home
+/// to `base` — by the orienteering solver with `start` and `base` as the route's two ends.
+/// Its energy ([`MissionPlan::energy`]) is [`MissionEnergyModel::continuation`] over a 0 s
+/// first stop at `start` followed by the kept stops (what a continuation file commands:
+/// `legs[0]` and `cells[0]` are that 0 m, 0 s first stop; stop `i` of `order` is `legs[i + 1]`
+/// and `cells[i + 1]`).
+///
+/// # Errors
+/// [`PlanError::Infeasible`] when even the leg home exceeds the budget (land now); invalid
+/// candidates, positions or options as [`plan_mission`].
+pub fn replan(
+    model: &MissionEnergyModel,
+    (start, base): (LocalPoint, LocalPoint),
+    remaining: &[Candidate],
+    budget_j: f64,
+    options: &PlanOptions,
+) -> Result<MissionPlan, PlanError> {
+    check_candidates(remaining)?;
+    let started = Instant::now();
+    let here = CellVisit {
+        centre: start,
+        hover_s: 0.0,
+    };
+    let home = model.continuation(start, base, &[here], budget_j)?;
+    if !home.feasible {
+        return Err(PlanError::Infeasible {
+            total_j: home.total_j,
+            budget_j,
+        });
+    }
+    let chosen: Vec<usize> = (0..remaining.len())
+        .filter(|&k| remaining[k].score > 0.0)
+        .collect();
+    let mut order = Vec::new();
+    if !chosen.is_empty() {
+        let mut points = vec![[start.e, start.n], [base.e, base.n]];
+        points.extend(chosen.iter().map(|&k| {
+            let c = remaining[k].centre;
+            [c.e, c.n]
+        }));
+        let mut rewards = vec![0.0, 0.0];
+        rewards.extend(chosen.iter().map(|&k| remaining[k].score));
+        let mut service = vec![0.0, 0.0];
+        service.extend(
+            chosen
+                .iter()
+                .map(|&k| model.service_energy_j(remaining[k].hover_s)),
+        );
+        let problem = Problem::from_scaled_points(
+            &points,
+            Metric::Euclidean,
+            model.energy_per_metre_j(),
+            rewards,
+            (budget_j - model.descent().0).max(0.0),
+        )?
+        .with_service_costs(service)?
+        .with_endpoints(0, 1)?;
+        let mut solve_options = SolveOptions::default()
+            .with_time_limit(options.time_limit)
+            .with_seed(options.seed);
+        solve_options.max_iterations = options.max_iterations;
+        let kind = match options.planner {
+            Planner::Greedy => SolverKind::Greedy,
+            Planner::Default | Planner::Exact => SolverKind::Default,
+        };
+        let solution = solve(&problem, kind, &solve_options)?;
+        order = solution
+            .routes
+            .first()
+            .map(|route| {
+                route
+                    .iter()
+                    .filter(|&&node| node >= 2)
+                    .map(|&node| chosen[node - 2])
+                    .collect()
+            })
+            .unwrap_or_default();
+    }
+    let visits: Vec<CellVisit> = std::iter::once(here)
+        .chain(order.iter().map(|&k| CellVisit {
+            centre: remaining[k].centre,
+            hover_s: remaining[k].hover_s,
+        }))
+        .collect();
+    let energy = model.continuation(start, base, &visits, budget_j)?;
+    if !energy.feasible {
+        return Err(PlanError::Infeasible {
+            total_j: energy.total_j,
+            budget_j,
+        });
+    }
+    Ok(MissionPlan {
+        total_score: order.iter().map(|&k| remaining[k].score).sum(),
+        order,
+        energy,
+        considered: chosen.len(),
+        planner: options.planner,
+        solve_seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
 /// The orienteering instance over the `chosen` candidates (node k + 1 is `chosen[k]`, node 0
 /// the base, start and end), or None when nothing can be visited.
 fn instance(
@@ -602,6 +706,48 @@ mod tests {
         }
     }
 
+    /// In the air at the 5th of 10 stops: ample energy keeps every remaining stop, little
+    /// keeps some, too little for the leg home is refused; the priced continuation starts at
+    /// the aircraft with a 0 s stop and ends at the base.
+    #[test]
+    fn a_replan_keeps_what_the_energy_left_carries() {
+        let m = model();
+        let stops: Vec<Candidate> = (0..10)
+            .map(|k| cell(60.0 * f64::from(k) + 40.0, 120.0, 1.0 + f64::from(k % 3)))
+            .collect();
+        let here = stops[4].centre;
+        let rest = &stops[5..];
+        let ends = (here, LocalPoint::default());
+        let ample = replan(&m, ends, rest, 60_000.0, &opts(Planner::Default)).unwrap();
+        let mut kept = ample.order.clone();
+        kept.sort_unstable();
+        assert_eq!(kept, vec![0, 1, 2, 3, 4]);
+        assert!(ample.energy.feasible && ample.energy.total_j <= 60_000.0);
+        assert_eq!(ample.energy.legs[0].distance_m, 0.0);
+        assert_eq!(ample.energy.cells[0].hover_s, 0.0);
+        assert_eq!(ample.energy.legs.len(), ample.order.len() + 2);
+        // Enough for the way home and about two stops: fewer, still feasible.
+        let home = replan(&m, ends, &[], 1e9, &opts(Planner::Default)).unwrap();
+        let short = home.energy.total_j + 2.5 * m.service_energy_j(30.0);
+        let few = replan(&m, ends, rest, short, &opts(Planner::Default)).unwrap();
+        assert!(
+            !few.order.is_empty() && few.order.len() < 5,
+            "{:?}",
+            few.order
+        );
+        assert!(few.energy.total_j <= short);
+        assert!(few.total_score <= ample.total_score);
+        // Not even the leg home.
+        let err = replan(
+            &m,
+            ends,
+            rest,
+            0.5 * home.energy.total_j,
+            &opts(Planner::Default),
+        );
+        assert!(matches!(err, Err(PlanError::Infeasible { .. })));
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(24))]
         #[test]
@@ -620,6 +766,32 @@ mod tests {
                 prop_assert!(p.order.iter().all(|&k| cands[k].score > 0.0));
             }
             prop_assert!(d.total_score >= g.total_score - 1e-9);
+        }
+
+        #[test]
+        fn a_replan_never_exceeds_the_energy_left(
+            cells in proptest::collection::vec((0.0f64..800.0, 0.0f64..500.0, -0.5f64..3.0, 30.0f64..90.0), 0..30),
+            at in (0.0f64..800.0, 0.0f64..500.0),
+            left in 0.0f64..70_000.0,
+        ) {
+            let cands: Vec<Candidate> = cells
+                .iter()
+                .map(|&(e, n, score, hover_s)| Candidate { centre: LocalPoint::new(e, n), score, hover_s })
+                .collect();
+            let m = model();
+            let start = LocalPoint::new(at.0, at.1);
+            match replan(&m, (start, LocalPoint::default()), &cands, left, &opts(Planner::Default)) {
+                Ok(p) => {
+                    prop_assert!(p.energy.feasible && p.energy.total_j <= left);
+                    prop_assert!(p.order.iter().all(|&k| cands[k].score > 0.0));
+                    let mut seen = p.order.clone();
+                    seen.sort_unstable();
+                    seen.dedup();
+                    prop_assert_eq!(seen.len(), p.order.len());
+                }
+                Err(PlanError::Infeasible { total_j, .. }) => prop_assert!(total_j > left),
+                Err(e) => prop_assert!(false, "{e}"),
+            }
         }
     }
 }

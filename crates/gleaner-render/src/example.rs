@@ -204,6 +204,7 @@ fn mission_doc(
         candidates: None,
         greedy_baseline: None,
         energy_model: None,
+        continuation: None,
     }
 }
 

@@ -3,6 +3,7 @@
 //! (`gleaner.mission`, `gleaner.field`, cell rows, scorings, explorations) are gleaner-wire's.
 
 use gleaner_app as app;
+use gleaner_wire::MissionDoc;
 use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
 
@@ -95,6 +96,41 @@ pub struct PlanBody {
     /// reduction of the dynamic field model's posterior variance over the whole field)
     /// [default: the project's `[planner] objective`].
     pub objective: Option<String>,
+}
+
+/// A re-planning request in the air (`gleaner replan`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ReplanBody {
+    /// Stops already flown: the aircraft is over this stop, done collecting (1-based; 0 =
+    /// airborne over the base).
+    pub after_stop: usize,
+    /// Energy left in the battery, J.
+    pub energy_left_j: f64,
+    /// Planner seed [default: the mission's].
+    pub seed: Option<u64>,
+    /// Stop the search after this many iterations (machine-independent answers).
+    pub iterations: Option<u64>,
+    /// Planner time limit, s [default: 1; at most the server's maximum].
+    pub time_limit_s: Option<f64>,
+}
+
+/// A continuation re-planned in the air: the mission document (status `continuation`, its
+/// `continuation` member saying from where and with what energy), the stops dropped, and its
+/// flight files, each read back and priced within the energy left less the reserve.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct ReplanDoc {
+    /// The continuation.
+    pub mission: MissionDoc,
+    /// Remaining stops dropped (cell ids, in the mission's order).
+    pub dropped: Vec<String>,
+    /// The QGroundControl `.plan` (JSON text): no take-off, a 0 s first waypoint where the
+    /// aircraft is.
+    pub plan: String,
+    /// The same flight as a `QGC WPL 110` file.
+    pub waypoints: String,
+    /// Planning time, s.
+    pub solve_seconds: f64,
 }
 
 /// A replay of the served project's own record (`gleaner simulate --project`): which

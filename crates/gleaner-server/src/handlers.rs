@@ -21,8 +21,8 @@ use serde::de::DeserializeOwned;
 use utoipa::{IntoParams, OpenApi};
 
 use crate::api::{
-    CellDetailDoc, ExploreBody, IngestDoc, PlanBody, ProjectDoc, RecordDoc, ScoreBody,
-    SimulateBody, checked_history, parse_time,
+    CellDetailDoc, ExploreBody, IngestDoc, PlanBody, ProjectDoc, RecordDoc, ReplanBody,
+    ReplanDoc, ScoreBody, SimulateBody, checked_history, parse_time,
 };
 use crate::auth::{Caller, Computing, Writing};
 use crate::error::{ApiError, ApiResult, ErrorBody};
@@ -794,6 +794,71 @@ pub async fn plan(
     }
     let mut docs = plan_request(&s, caller, b).await?;
     Ok(Json(docs.swap_remove(0)))
+}
+
+/// Re-plans a mission in the air: the best continuation from the stop the aircraft is over
+/// with the energy it has left — the remaining stops dropped and reordered so that it still
+/// reaches the base with the battery's reserve — with its `.plan` and WPL files (no
+/// take-off; each read back and priced within the energy left less the reserve). Stores
+/// nothing: the flight is recorded against the mission itself.
+#[utoipa::path(post, path = "/api/v1/missions/{id}/replan", tag = "missions",
+    params(("id" = i64, Path, description = "Mission id")),
+    request_body = ReplanBody,
+    security((), ("bearer" = [])),
+    responses((status = 200, body = ReplanDoc), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 413, body = ErrorBody),
+        (status = 415, body = ErrorBody)))]
+pub async fn replan(
+    State(s): State<AppState>,
+    _: Computing,
+    _: JsonType,
+    Path(id): Path<String>,
+    body: Result<Bytes, BytesRejection>,
+) -> ApiResult<Json<ReplanDoc>> {
+    let id = mission_id(&id)?;
+    let b: ReplanBody = parse_json(&body_bytes(body)?)?;
+    if b.iterations == Some(0) {
+        return Err(ApiError::bad_request(
+            Some("iterations"),
+            "iterations = 0: expected at least 1 (or leave it out for no cap)",
+        ));
+    }
+    if let Some(t) = b.time_limit_s
+        && !(t.is_finite() && t >= 0.0 && t <= s.0.max_time_limit_s)
+    {
+        return Err(ApiError::bad_request(
+            Some("time_limit_s"),
+            format!(
+                "time limit {t} s: expected seconds in [0, {}]",
+                s.0.max_time_limit_s
+            ),
+        ));
+    }
+    let request = app::ReplanRequest {
+        mission: id,
+        after_stop: b.after_stop,
+        energy_left_j: b.energy_left_j,
+        seed: b.seed,
+        iterations: b.iterations,
+        time_limit_s: b.time_limit_s,
+    };
+    let doc = s
+        .run(move |p| {
+            let r = app::replan(p, &request)?;
+            let mission = gleaner_wire::convert::replanned_mission(&r);
+            let export_err =
+                |e: gleaner_wire::ExportError| ApiError::bad_request(None, e.to_string());
+            Ok(ReplanDoc {
+                plan: gleaner_wire::qgc_plan(&mission).map_err(export_err)?,
+                waypoints: gleaner_wire::wpl(&mission).map_err(export_err)?,
+                dropped: r.dropped.iter().map(ToString::to_string).collect(),
+                solve_seconds: r.solve_seconds,
+                mission,
+            })
+        })
+        .await?;
+    Ok(Json(doc))
 }
 
 /// Plans several disjoint sorties for one mission day (battery swaps; `sorties` in the body,

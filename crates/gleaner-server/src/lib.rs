@@ -279,6 +279,7 @@ fn api_routes(max_upload_bytes: usize) -> (Router<AppState>, utoipa::openapi::Op
         .routes(routes!(handlers::plan_sorties))
         .routes(routes!(handlers::explore))
         .routes(routes!(handlers::mission_file))
+        .routes(routes!(handlers::replan))
         .routes(routes!(handlers::map, handlers::map_of))
         .routes(routes!(handlers::openapi_json))
         .layer(DefaultBodyLimit::max(MAX_JSON_BYTES));

@@ -55,6 +55,9 @@ fn supported(format: &str, version: u32, expected: &'static str) -> Result<(), E
 pub(crate) fn mission_doc(m: &MissionDoc) -> Result<(), ExportError> {
     supported(&m.format, m.version, MISSION_FORMAT)?;
     position(|| "base".to_string(), m.profile.base_lon_lat)?;
+    if let Some(c) = &m.continuation {
+        position(|| "continuation start".to_string(), c.start_lon_lat)?;
+    }
     for s in &m.stops {
         position(
             || format!("stop {} (cell {})", s.order, s.cell),

@@ -85,6 +85,7 @@ pub fn mission_doc(
         candidates: None,
         greedy_baseline: None,
         energy_model: None,
+        continuation: None,
     }
 }
 
@@ -102,6 +103,21 @@ pub fn stored_mission(m: &MissionRecord) -> MissionDoc {
 pub fn export_mission(e: &MissionExport) -> MissionDoc {
     let mut doc = stored_mission(&e.mission);
     doc.energy_model = Some(e.energy.into());
+    doc
+}
+
+/// A continuation re-planned in the air, ready for the flight-file writers (status
+/// `continuation`, the parent's id as `mission_id`).
+pub fn replanned_mission(r: &gleaner_app::Replan) -> MissionDoc {
+    let mut doc = mission_doc(Some(r.parent), &r.mission, "continuation", None);
+    doc.energy_model = Some(r.energy.into());
+    doc.continuation = Some(crate::ContinuationDoc {
+        parent_mission_id: r.parent.0,
+        after_stop: r.after_stop,
+        start_lon_lat: lon_lat(r.start),
+        energy_left_j: r.energy_left_j,
+        reserve_j: r.reserve_j,
+    });
     doc
 }
 

@@ -55,19 +55,23 @@ struct Item {
     positioned: bool,
 }
 
-/// Take-off, speed, one waypoint per stop, return to launch; checks the mission first.
+/// Take-off, speed, one waypoint per stop, return to launch; checks the mission first. A
+/// continuation has no take-off: speed, a 0 s waypoint where the aircraft is, the stops,
+/// return to launch.
 fn items(m: &MissionDoc) -> Result<Vec<Item>, ExportError> {
     check_flyable(m)?;
     let p = &m.profile;
     let [base_lon, base_lat] = p.base_lon_lat;
     let alt = gleaner_energy::flight_altitude_m(p.altitude_m);
-    let mut out = Vec::with_capacity(m.stops.len() + 3);
-    out.push(Item {
-        command: MAV_CMD_NAV_TAKEOFF,
-        frame: MAV_FRAME_GLOBAL_RELATIVE_ALT,
-        params: [0.0, 0.0, 0.0, f64::NAN, deg7(base_lat), deg7(base_lon), alt],
-        positioned: true,
-    });
+    let mut out = Vec::with_capacity(m.stops.len() + 4);
+    if m.continuation.is_none() {
+        out.push(Item {
+            command: MAV_CMD_NAV_TAKEOFF,
+            frame: MAV_FRAME_GLOBAL_RELATIVE_ALT,
+            params: [0.0, 0.0, 0.0, f64::NAN, deg7(base_lat), deg7(base_lon), alt],
+            positioned: true,
+        });
+    }
     out.push(Item {
         command: MAV_CMD_DO_CHANGE_SPEED,
         frame: MAV_FRAME_MISSION,
@@ -82,6 +86,16 @@ fn items(m: &MissionDoc) -> Result<Vec<Item>, ExportError> {
         ],
         positioned: false,
     });
+    // A continuation starts where the aircraft is: a first waypoint there, no hold.
+    if let Some(c) = &m.continuation {
+        let [lon, lat] = c.start_lon_lat;
+        out.push(Item {
+            command: MAV_CMD_NAV_WAYPOINT,
+            frame: MAV_FRAME_GLOBAL_RELATIVE_ALT,
+            params: [0.0, 0.0, 0.0, f64::NAN, deg7(lat), deg7(lon), alt],
+            positioned: true,
+        });
+    }
     for s in &m.stops {
         let [lon, lat] = s.centre_lon_lat;
         out.push(Item {
@@ -382,7 +396,10 @@ fn latlon(what: &str, lat: f64, lon: f64) -> Result<LatLon, ExportError> {
 
 /// The flight that MAVLink items command, read the way an autopilot flies them: take-off
 /// altitude, the last `DO_CHANGE_SPEED` ground speed, one waypoint per `NAV_WAYPOINT` (all at
-/// the take-off altitude), return to launch last. `items` are (line, command, params).
+/// the take-off altitude), return to launch last. Without a take-off the flight is a
+/// continuation flown from the air ([`CommandedFlight::airborne`]): it starts at its first
+/// waypoint, whose altitude every other waypoint must share. `items` are (line, command,
+/// params).
 fn flight_of_items(
     file: &str,
     home: LatLon,
@@ -397,6 +414,7 @@ fn flight_of_items(
     let mut speed_mps = None;
     let mut waypoints = Vec::new();
     let mut returned = false;
+    let mut airborne = false;
     for (line, command, p) in items {
         if returned {
             return Err(bad(
@@ -405,7 +423,10 @@ fn flight_of_items(
             ));
         }
         match command {
-            MAV_CMD_NAV_TAKEOFF => altitude_m = Some(p[6]),
+            MAV_CMD_NAV_TAKEOFF if altitude_m.is_none() => altitude_m = Some(p[6]),
+            MAV_CMD_NAV_TAKEOFF => {
+                return Err(bad(line, "a take-off after the flight started".into()));
+            }
             MAV_CMD_DO_CHANGE_SPEED => {
                 if p[0] != SPEED_TYPE_GROUND {
                     return Err(bad(
@@ -416,9 +437,11 @@ fn flight_of_items(
                 speed_mps = Some(p[1]);
             }
             MAV_CMD_NAV_WAYPOINT => {
-                let Some(alt) = altitude_m else {
-                    return Err(bad(line, "a waypoint before take-off".into()));
-                };
+                // No take-off: a continuation, in the air at its first waypoint.
+                let alt = *altitude_m.get_or_insert_with(|| {
+                    airborne = true;
+                    p[6]
+                });
                 if speed_mps.is_none() {
                     return Err(bad(line, "a waypoint before the speed is set".into()));
                 }
@@ -443,10 +466,12 @@ fn flight_of_items(
             altitude_m,
             speed_mps,
             waypoints,
+            airborne,
         }),
         _ => Err(bad(
             0,
-            "needs a take-off, a speed and a return to launch".into(),
+            "needs a take-off (or, for a continuation, a first waypoint), a speed and a return to launch"
+                .into(),
         )),
     }
 }

@@ -207,7 +207,8 @@ pub fn geojson_doc(field: &FieldDoc, m: &MissionDoc) -> Result<FeatureCollection
         )?);
     }
     let base = pos(m.profile.base_lon_lat);
-    let mut line = vec![base];
+    // A continuation's route starts where the aircraft is.
+    let mut line = vec![m.continuation.map_or(base, |c| pos(c.start_lon_lat))];
     line.extend(m.stops.iter().map(|s| pos(s.centre_lon_lat)));
     line.push(base);
     features.push(feature(

@@ -283,6 +283,27 @@ pub struct MissionDoc {
     /// without it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub energy_model: Option<EnergyModelDoc>,
+    /// Present for a continuation re-planned in the air (`gleaner replan`): its files start
+    /// where the aircraft is, with no take-off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub continuation: Option<ContinuationDoc>,
+}
+
+/// A continuation's origin: the mission it continues, where the aircraft is and the energy
+/// it has left.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ContinuationDoc {
+    /// The mission being flown.
+    pub parent_mission_id: i64,
+    /// Stops of it already flown (0 = airborne over the base).
+    pub after_stop: usize,
+    /// Where the aircraft is, WGS84 `[lon, lat]` degrees: the first waypoint (hold 0 s).
+    pub start_lon_lat: [f64; 2],
+    /// Energy left when re-planned, J.
+    pub energy_left_j: f64,
+    /// The battery's reserve kept for landing, J (the budget is `energy_left_j − reserve_j`).
+    pub reserve_j: f64,
 }
 
 /// The parameters that price what a flight file commands (`gleaner_energy::FlightEnergyModel`):

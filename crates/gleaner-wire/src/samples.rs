@@ -200,6 +200,7 @@ pub fn adaptive_mission() -> MissionDoc {
         candidates: Some(5),
         greedy_baseline: None,
         energy_model: Some(paper_model()),
+        continuation: None,
     }
 }
 
@@ -235,5 +236,38 @@ pub fn exploration_sortie() -> MissionDoc {
         candidates: None,
         greedy_baseline: None,
         energy_model: Some(paper_model()),
+        continuation: None,
+    }
+}
+
+/// A continuation of [`adaptive_mission`] re-planned in the air after its first stop: the
+/// aircraft over `x2y1` with 40 kJ left (3.5 kJ reserve), the two remaining stops reversed.
+#[must_use]
+pub fn continuation() -> MissionDoc {
+    let parent = adaptive_mission();
+    let start = parent.stops[0].centre_lon_lat;
+    let mut stops: Vec<StopDoc> = parent.stops[1..].iter().rev().cloned().collect();
+    for (k, s) in stops.iter_mut().enumerate() {
+        s.order = k as u32 + 1;
+    }
+    let mut energy = energy(&stops, 89.4);
+    energy.budget_j = 36_500.0;
+    energy.utilisation = energy.total_j / energy.budget_j;
+    MissionDoc {
+        status: "continuation".to_string(),
+        planner: "replan".to_string(),
+        total_score: stops.iter().map(|s| s.s).sum(),
+        stops,
+        return_distance_m: 89.4,
+        energy,
+        candidates: None,
+        continuation: Some(crate::ContinuationDoc {
+            parent_mission_id: 7,
+            after_stop: 1,
+            start_lon_lat: start,
+            energy_left_j: 40_000.0,
+            reserve_j: 3_500.0,
+        }),
+        ..parent
     }
 }

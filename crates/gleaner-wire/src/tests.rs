@@ -4,7 +4,7 @@ use proptest::prelude::*;
 use serde_json::Value;
 
 use crate::flight::hold_s;
-use crate::samples::{adaptive_mission, exploration_sortie, field};
+use crate::samples::{adaptive_mission, continuation, exploration_sortie, field};
 use crate::*;
 use gleaner_energy::{HOLD_STEP_S, flight_speed_mps};
 
@@ -351,6 +351,62 @@ fn files_read_back_as_commanded() {
     }
 }
 
+/// A continuation's files have no take-off: both read back as the same airborne flight from a
+/// 0 s first waypoint where the aircraft is, priced without a climb and against the energy
+/// left less the reserve; a file above that is refused, and there is no DJI form.
+#[test]
+fn a_continuation_flies_from_the_air() {
+    let m = continuation();
+    let c = commanded_flight(&m).unwrap();
+    assert!(c.airborne);
+    assert_eq!(c.waypoints.len(), m.stops.len() + 1);
+    let start = m.continuation.unwrap().start_lon_lat;
+    assert_eq!(c.waypoints[0].1, 0.0);
+    assert_eq!(
+        c.waypoints[0].0.lon(),
+        gleaner_energy::flight_degrees(start[0])
+    );
+    assert_eq!(parse_qgc_plan(&qgc_plan(&m).unwrap()).unwrap(), c);
+    let text = wpl(&m).unwrap();
+    assert_eq!(parse_wpl(&text).unwrap(), c);
+    assert!(wpl_items(&text).iter().all(|it| it.0 != flight::MAV_CMD_NAV_TAKEOFF));
+    // Priced as the energy model prices a continuation: a 0 m first leg, then the stops.
+    let e = m
+        .energy_model
+        .unwrap()
+        .to_core()
+        .energy(
+            gleaner_field::LatLon::new(m.profile.base_lon_lat[1], m.profile.base_lon_lat[0])
+                .unwrap(),
+            &c,
+        )
+        .unwrap();
+    assert_eq!(e.legs[0].distance_m, 0.0);
+    assert_eq!(e.legs.len(), m.stops.len() + 2);
+    assert_eq!(commanded_j(&m), e.total_j);
+    let mut short = continuation();
+    short.energy.budget_j = e.total_j - 1.0;
+    short.energy.total_j = short.energy.budget_j - 1.0;
+    for r in [qgc_plan(&short), wpl(&short)] {
+        assert!(
+            matches!(r, Err(ExportError::CommandedOverBudget { .. })),
+            "{r:?}"
+        );
+    }
+    assert!(wpml_kmz(&m, WpmlOptions::default()).is_err());
+    // The geometry starts where the aircraft is.
+    let g: Value = serde_json::from_str(&geojson(&field(), &m).unwrap()).unwrap();
+    let route = g["features"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["id"] == "route")
+        .unwrap();
+    let first = &route["geometry"]["coordinates"][0];
+    let lon_lat = [first[0].as_f64().unwrap(), first[1].as_f64().unwrap()];
+    assert!(dist_m(lon_lat, start) < 0.01, "{lon_lat:?} {start:?}");
+}
+
 /// Broken files are errors naming the file and line, never panics.
 #[test]
 fn unreadable_files_are_errors() {
@@ -628,6 +684,7 @@ fn reconstruction_sample() -> gleaner_app::Reconstruction {
                 carried: 0.312,
                 kriged: 0.312,
                 variance: 0.0,
+                half90: 0.0,
             },
             SensorEstimate {
                 sensor: SensorId::new("CAF007").unwrap(),
@@ -636,6 +693,7 @@ fn reconstruction_sample() -> gleaner_app::Reconstruction {
                 carried: 0.30,
                 kriged: 0.287,
                 variance: 4e-4,
+                half90: 0.0329,
             },
         ],
     }

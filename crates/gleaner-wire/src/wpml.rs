@@ -299,6 +299,15 @@ pub fn wpml_documents(
     options: WpmlOptions,
 ) -> Result<(String, String), ExportError> {
     check_flyable(m)?;
+    if m.continuation.is_some() {
+        return Err(ExportError::FileValue {
+            file: WPML_FILE.to_string(),
+            line: 0,
+            reason: "a continuation re-planned in the air has no WPML form (a DJI wayline \
+                     mission starts with its own take-off): upload the .plan or the WPL"
+                .into(),
+        });
+    }
     let speed = flight_speed_mps(m.profile.cruise_speed_mps);
     if speed > MAX_WPML_SPEED_MPS {
         return Err(ExportError::FileValue {
@@ -425,6 +434,7 @@ impl WpmlArchive {
                 .iter()
                 .map(|p| (p.position, p.hover_s))
                 .collect(),
+            airborne: false,
         }
     }
 }

@@ -218,6 +218,7 @@ fn export_farm_before(farm: &Farm) -> Option<(f64, f64)> {
                 )
             })
             .collect(),
+        airborne: false,
     };
     let e = model.flight_energy_model().energy(base, &flight).unwrap();
     assert!(plan.energy.feasible);

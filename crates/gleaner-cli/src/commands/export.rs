@@ -87,6 +87,53 @@ pub fn write_files_with(export: &MissionExport, dir: &Path, wpml: WpmlOptions) -
     Ok(Exported { files, skipped })
 }
 
+/// Writes the files of a continuation re-planned in the air into `dir` (created if missing):
+/// `mission.plan`, `mission.waypoints` (no take-off: a 0 s first waypoint where the aircraft
+/// is), `mission.geojson` and `mission.json`; no DJI archive (a wayline mission takes off by
+/// itself) and no figure. Each flight file is read back and its energy recomputed against the
+/// energy left less the reserve.
+pub fn write_replan_files<S: gleaner_app::Store>(
+    project: &gleaner_app::Project<S>,
+    replan: &gleaner_app::Replan,
+    dir: &Path,
+) -> Result<Exported> {
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+    let doc = gleaner_wire::convert::replanned_mission(replan);
+    let field = gleaner_wire::convert::field(&gleaner_app::field_view(project)?);
+    let mut files = Vec::new();
+    write(
+        dir,
+        "mission.plan",
+        gleaner_wire::qgc_plan(&doc)?.as_bytes(),
+        &mut files,
+    )?;
+    write(
+        dir,
+        "mission.waypoints",
+        gleaner_wire::wpl(&doc)?.as_bytes(),
+        &mut files,
+    )?;
+    write(
+        dir,
+        "mission.geojson",
+        gleaner_wire::geojson(&field, &doc)?.as_bytes(),
+        &mut files,
+    )?;
+    write(
+        dir,
+        "mission.json",
+        serde_json::to_string_pretty(&doc)?.as_bytes(),
+        &mut files,
+    )?;
+    Ok(Exported {
+        files,
+        skipped: vec![
+            "mission.kmz: a DJI wayline mission takes off by itself; upload the .plan or the WPL"
+                .into(),
+        ],
+    })
+}
+
 /// The speed the flight files command for a planned `speed_mps`, m/s.
 fn gleaner_energy_speed(speed_mps: f64) -> f64 {
     gleaner_wire::commanded_speed_mps(speed_mps)

@@ -88,6 +88,35 @@ pub fn table(m: &MissionDoc) -> String {
     out
 }
 
+/// A continuation re-planned in the air: where it starts, the energy left and the reserve,
+/// the stops kept (the mission table) and those dropped.
+pub fn replan_table(m: &MissionDoc, dropped: &[gleaner_field::CellIndex]) -> String {
+    let mut out = String::new();
+    if let Some(c) = &m.continuation {
+        out.push_str(&format!(
+            "continuation of mission #{} after stop {} from [lon, lat] [{:.7}, {:.7}]: {:.1} J \
+             left, {:.1} J reserve kept\n",
+            c.parent_mission_id,
+            c.after_stop,
+            c.start_lon_lat[0],
+            c.start_lon_lat[1],
+            c.energy_left_j,
+            c.reserve_j
+        ));
+    }
+    out.push_str(&table(m));
+    let names: Vec<String> = dropped.iter().map(|c| c.to_string()).collect();
+    out.push_str(&format!(
+        "dropped: {}\n",
+        if names.is_empty() {
+            "none".to_string()
+        } else {
+            names.join(" ")
+        }
+    ));
+    out
+}
+
 /// The paper's line: "selected 8 cells; 55,309.8 J of 66,500 J, 83.2%" with the breakdown.
 pub fn energy_line(m: &MissionDoc) -> String {
     let e = &m.energy;

@@ -9,7 +9,7 @@ use gleaner_server::handlers::MISSION_FILES;
 use crate::common::{Server, TOKEN, caf_project, flight_csv};
 
 /// Every API route (method, path as in the OpenAPI document).
-const ROUTES: [(&str, &str); 20] = [
+const ROUTES: [(&str, &str); 21] = [
     ("get", "/api/v1/openapi.json"),
     ("get", "/api/v1/project"),
     ("get", "/api/v1/field"),
@@ -30,6 +30,7 @@ const ROUTES: [(&str, &str); 20] = [
     ("post", "/api/v1/map.svg"),
     ("post", "/api/v1/ingest"),
     ("post", "/api/v1/missions/{id}/record"),
+    ("post", "/api/v1/missions/{id}/replan"),
 ];
 
 fn error(r: &gleaner_server::client::Response) -> (String, Option<String>, String) {
@@ -697,6 +698,40 @@ fn score_plan_export_record_lifecycle() {
             _ => assert_eq!(&r.body[1..4], b"PNG"),
         }
     }
+    // Re-planning in the air after the first stop with 25 kJ left: a continuation within
+    // the energy left less the reserve, its .plan without a take-off; too little for the way
+    // home is refused with the advice to land.
+    let path = format!("/api/v1/missions/{mid}/replan");
+    let r = c
+        .post_json(
+            &path,
+            &json!({"after_stop": 1, "energy_left_j": 25000.0, "iterations": 200}),
+            None,
+        )
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    let rp = r.json().unwrap();
+    assert_eq!(rp["mission"]["status"], "continuation");
+    assert_eq!(rp["mission"]["continuation"]["after_stop"], 1);
+    let e = &rp["mission"]["energy"];
+    let budget = e["budget_j"].as_f64().unwrap();
+    assert!(budget < 25000.0 && e["total_j"].as_f64().unwrap() <= budget, "{e}");
+    let kept = rp["mission"]["stops"].as_array().unwrap().len();
+    let dropped = rp["dropped"].as_array().unwrap().len();
+    assert_eq!(kept + dropped, saved["stops"].as_array().unwrap().len() - 1);
+    let flight = gleaner_wire::parse_qgc_plan(rp["plan"].as_str().unwrap()).unwrap();
+    assert!(flight.airborne);
+    assert_eq!(flight.waypoints.len(), kept + 1);
+    assert!(rp["waypoints"].as_str().unwrap().starts_with("QGC WPL 110"));
+    let r = c
+        .post_json(&path, &json!({"after_stop": 1, "energy_left_j": 3600.0}), None)
+        .unwrap();
+    assert_eq!(r.status, 400, "{}", r.text());
+    assert!(error(&r).2.contains("land now"), "{}", r.text());
+    let r = c
+        .post_json(&path, &json!({"after_stop": 99, "energy_left_j": 3e4}), None)
+        .unwrap();
+    assert_eq!(r.status, 400, "{}", r.text());
     let svg = c.get(&format!("/api/v1/map.svg?mission={mid}")).unwrap();
     assert_eq!(svg.status, 200);
     let svg = svg.text();

@@ -1,0 +1,183 @@
+//! Re-planning in the air: the best continuation of a planned mission from the stop the
+//! aircraft is over, with the energy it has left.
+
+use gleaner_energy::FlightEnergyModel;
+use gleaner_field::{CellIndex, LatLon};
+use gleaner_mission::{Candidate, PlanOptions, Planner, replan as plan_continuation};
+use gleaner_store::{MissionId, MissionRecord, MissionStatus, NewMission, StopRecord, Store};
+
+use crate::error::{AppError, Result};
+use crate::plan::{FlightPoints, breakdown, energy_model};
+use crate::project::Project;
+
+/// What to re-plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReplanRequest {
+    /// The mission in flight (stored, not yet recorded as flown).
+    pub mission: MissionId,
+    /// Stops already flown: the aircraft is over stop `after_stop` (1-based, in the
+    /// mission's order), done collecting there; 0 = over the base, airborne.
+    pub after_stop: usize,
+    /// Energy left in the battery, J (as the autopilot reports it; the reserve is kept).
+    pub energy_left_j: f64,
+    /// Planner seed [default: the mission's].
+    pub seed: Option<u64>,
+    /// Iteration cap of the search [default: the planner's own limits].
+    pub iterations: Option<u64>,
+    /// Wall-clock limit, seconds [default: 1 s].
+    pub time_limit_s: Option<f64>,
+}
+
+/// A continuation: the stops kept, in their new order, from where the aircraft is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Replan {
+    /// The mission it continues.
+    pub parent: MissionId,
+    /// Stops flown before it (see [`ReplanRequest::after_stop`]).
+    pub after_stop: usize,
+    /// Where the aircraft is: the flown stop's centre (the base for 0), WGS84.
+    pub start: LatLon,
+    /// Energy left, J, as given.
+    pub energy_left_j: f64,
+    /// The battery's reserve, J (capacity × reserve fraction), kept for landing.
+    pub reserve_j: f64,
+    /// The continuation as a mission: the kept stops (orders from 0, legs from `start`,
+    /// the first stop's leg from the aircraft), its energy against `energy_left_j −
+    /// reserve_j` (`energy.budget_j`), the parent's profile, kind, time and weights.
+    pub mission: NewMission,
+    /// The remaining stops dropped, in the parent's order.
+    pub dropped: Vec<CellIndex>,
+    /// The energy model the continuation's flight files are priced with.
+    pub energy: FlightEnergyModel,
+    /// Time spent planning, seconds.
+    pub solve_seconds: f64,
+}
+
+/// Default wall-clock limit of a re-plan, seconds: an answer in the air is needed now.
+pub const REPLAN_TIME_LIMIT_S: f64 = 1.0;
+
+/// The use case: the best continuation of mission `request.mission` after `after_stop`
+/// stops with `energy_left_j` joules left — the remaining stops dropped and reordered so
+/// the aircraft still reaches the base with the battery's reserve, priced by the energy model
+/// exactly as its continuation files command it (no take-off or climb; a 0 s first waypoint
+/// where the aircraft is). Writes nothing: the flight is recorded against the mission itself
+/// (the continuation's stops are the mission's).
+///
+/// Errors: an unknown mission, one already recorded as flown, `after_stop` beyond its stops,
+/// an energy left that is not a finite positive number or exceeds the battery, not enough
+/// energy for the leg home with the reserve (land now), invalid `[energy]` settings.
+pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result<Replan> {
+    let parent: MissionRecord = crate::view::mission(project, request.mission)?;
+    if parent.status == MissionStatus::Flown {
+        return Err(AppError::Invalid(format!(
+            "mission #{} was already recorded as flown: nothing to re-plan",
+            parent.id
+        )));
+    }
+    let stops = &parent.mission.stops;
+    if request.after_stop > stops.len() {
+        return Err(AppError::Invalid(format!(
+            "mission #{} has {} stops: --after-stop {} is beyond them (0 = over the base)",
+            parent.id,
+            stops.len(),
+            request.after_stop
+        )));
+    }
+    let config = project.settings().energy.to_core()?;
+    let (capacity_j, reserve_fraction) =
+        (config.battery.capacity_j, config.battery.reserve_fraction);
+    let left = request.energy_left_j;
+    if !(left.is_finite() && left > 0.0 && left <= capacity_j) {
+        return Err(AppError::Invalid(format!(
+            "energy left {left} J: must be a positive number of joules, at most the battery's \
+             {capacity_j:.1} J"
+        )));
+    }
+    let reserve_j = capacity_j * reserve_fraction;
+    let export = crate::view::export_energy_model(project, &parent)?;
+    let model = energy_model(project)?
+        .with_cruise_speed(parent.mission.profile.cruise_speed_mps)
+        .map_err(|e| AppError::core("energy model", e))?;
+    let (_, field) = project.field()?;
+    let frame = field.frame();
+    let base = FlightPoints::of(&field).base;
+    let start_pos = match request.after_stop {
+        0 => gleaner_energy::flight_position(field.base()),
+        k => stops[k - 1].centre,
+    };
+    let remaining: &[StopRecord] = &stops[request.after_stop..];
+    // Exploration stops carry no score: each counts the same.
+    let unscored = remaining.iter().all(|s| s.score <= 0.0);
+    let candidates: Vec<Candidate> = remaining
+        .iter()
+        .map(|s| Candidate {
+            centre: frame.forward(s.centre),
+            score: if unscored { 1.0 } else { s.score },
+            hover_s: s.hover_s,
+        })
+        .collect();
+    let options = PlanOptions {
+        planner: Planner::Default,
+        seed: request.seed.unwrap_or(parent.mission.seed),
+        max_iterations: request.iterations,
+        ..PlanOptions::default()
+    }
+    .with_time_limit_secs(request.time_limit_s.unwrap_or(REPLAN_TIME_LIMIT_S))
+    .map_err(|e| AppError::Invalid(format!("time limit: {e}")))?;
+    let budget_j = left - reserve_j;
+    let plan = plan_continuation(
+        &model,
+        (frame.forward(start_pos), base),
+        &candidates,
+        budget_j,
+        &options,
+    )
+    .map_err(|e| match e {
+        gleaner_mission::PlanError::Infeasible { total_j, .. } => AppError::Invalid(format!(
+            "{left:.1} J left with a {reserve_j:.1} J reserve leaves {budget_j:.1} J, but the \
+             way home alone needs {total_j:.1} J: return to launch and land now"
+        )),
+        other => AppError::core("re-planning", other),
+    })?;
+    let kept: Vec<StopRecord> = plan
+        .order
+        .iter()
+        .enumerate()
+        .map(|(n, &k)| {
+            let (leg, cell) = (&plan.energy.legs[n + 1], &plan.energy.cells[n + 1]);
+            StopRecord {
+                order: n as u32,
+                leg_distance_m: leg.distance_m,
+                leg_energy_j: leg.energy_j,
+                hover_s: cell.hover_s,
+                hover_j: cell.hover_j,
+                comm_j: cell.comm_j,
+                ..remaining[k].clone()
+            }
+        })
+        .collect();
+    let dropped: Vec<CellIndex> = (0..remaining.len())
+        .filter(|k| !plan.order.contains(k))
+        .map(|k| remaining[k].cell)
+        .collect();
+    let mission = NewMission {
+        solver: "replan".into(),
+        seed: options.seed,
+        total_score: kept.iter().map(|s| s.score).sum(),
+        energy: breakdown(&plan.energy),
+        return_distance_m: plan.energy.legs.last().map_or(0.0, |l| l.distance_m),
+        stops: kept,
+        ..parent.mission.clone()
+    };
+    Ok(Replan {
+        parent: parent.id,
+        after_stop: request.after_stop,
+        start: start_pos,
+        energy_left_j: left,
+        reserve_j,
+        mission,
+        dropped,
+        energy: export,
+        solve_seconds: plan.solve_seconds,
+    })
+}
