@@ -769,7 +769,10 @@ fn replan_writes_a_continuation_within_the_energy_left() {
         ]
     };
     let text = ok(&args("40000", "1"));
-    assert!(text.contains("continuation of mission #1 after stop 1"), "{text}");
+    assert!(
+        text.contains("continuation of mission #1 after stop 1"),
+        "{text}"
+    );
     let doc: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(out.join("mission.json")).expect("mission.json"),
     )

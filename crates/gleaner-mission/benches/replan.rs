@@ -51,8 +51,14 @@ fn bench(c: &mut Criterion) {
     });
     group.bench_function("all_42_cells_remaining", |b| {
         b.iter(|| {
-            replan(&model, (all[20].centre, base), black_box(&all), 40_000.0, &options)
-                .expect("feasible")
+            replan(
+                &model,
+                (all[20].centre, base),
+                black_box(&all),
+                40_000.0,
+                &options,
+            )
+            .expect("feasible")
         })
     });
     group.finish();

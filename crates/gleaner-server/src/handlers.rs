@@ -21,8 +21,8 @@ use serde::de::DeserializeOwned;
 use utoipa::{IntoParams, OpenApi};
 
 use crate::api::{
-    CellDetailDoc, ExploreBody, IngestDoc, PlanBody, ProjectDoc, RecordDoc, ReplanBody,
-    ReplanDoc, ScoreBody, SimulateBody, checked_history, parse_time,
+    CellDetailDoc, ExploreBody, IngestDoc, PlanBody, ProjectDoc, RecordDoc, ReplanBody, ReplanDoc,
+    ScoreBody, SimulateBody, checked_history, parse_time,
 };
 use crate::auth::{Caller, Computing, Writing};
 use crate::error::{ApiError, ApiResult, ErrorBody};

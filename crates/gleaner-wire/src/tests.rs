@@ -369,7 +369,11 @@ fn a_continuation_flies_from_the_air() {
     assert_eq!(parse_qgc_plan(&qgc_plan(&m).unwrap()).unwrap(), c);
     let text = wpl(&m).unwrap();
     assert_eq!(parse_wpl(&text).unwrap(), c);
-    assert!(wpl_items(&text).iter().all(|it| it.0 != flight::MAV_CMD_NAV_TAKEOFF));
+    assert!(
+        wpl_items(&text)
+            .iter()
+            .all(|it| it.0 != flight::MAV_CMD_NAV_TAKEOFF)
+    );
     // Priced as the energy model prices a continuation: a 0 m first leg, then the stops.
     let e = m
         .energy_model

@@ -130,7 +130,10 @@ fn geojson_and_shapely_accept_the_map() {
 
 #[test]
 fn lxml_and_the_kml_schema_accept_the_dji_archive() {
-    for (_, m) in missions().into_iter().filter(|(_, m)| m.continuation.is_none()) {
+    for (_, m) in missions()
+        .into_iter()
+        .filter(|(_, m)| m.continuation.is_none())
+    {
         let f = write(&field(), &m);
         run("check_kml.py", &[&f.kmz, &f.mission]);
     }

@@ -715,7 +715,10 @@ fn score_plan_export_record_lifecycle() {
     assert_eq!(rp["mission"]["continuation"]["after_stop"], 1);
     let e = &rp["mission"]["energy"];
     let budget = e["budget_j"].as_f64().unwrap();
-    assert!(budget < 25000.0 && e["total_j"].as_f64().unwrap() <= budget, "{e}");
+    assert!(
+        budget < 25000.0 && e["total_j"].as_f64().unwrap() <= budget,
+        "{e}"
+    );
     let kept = rp["mission"]["stops"].as_array().unwrap().len();
     let dropped = rp["dropped"].as_array().unwrap().len();
     assert_eq!(kept + dropped, saved["stops"].as_array().unwrap().len() - 1);
@@ -724,12 +727,20 @@ fn score_plan_export_record_lifecycle() {
     assert_eq!(flight.waypoints.len(), kept + 1);
     assert!(rp["waypoints"].as_str().unwrap().starts_with("QGC WPL 110"));
     let r = c
-        .post_json(&path, &json!({"after_stop": 1, "energy_left_j": 3600.0}), None)
+        .post_json(
+            &path,
+            &json!({"after_stop": 1, "energy_left_j": 3600.0}),
+            None,
+        )
         .unwrap();
     assert_eq!(r.status, 400, "{}", r.text());
     assert!(error(&r).2.contains("land now"), "{}", r.text());
     let r = c
-        .post_json(&path, &json!({"after_stop": 99, "energy_left_j": 3e4}), None)
+        .post_json(
+            &path,
+            &json!({"after_stop": 99, "energy_left_j": 3e4}),
+            None,
+        )
         .unwrap();
     assert_eq!(r.status, 400, "{}", r.text());
     let svg = c.get(&format!("/api/v1/map.svg?mission={mid}")).unwrap();
