@@ -59,7 +59,13 @@ pub fn explore<S: Store>(
     request: &ExploreRequest,
     clock_now: UnixSeconds,
 ) -> Result<Exploration> {
-    explore_with(project, request, clock_now, &mut ExplorationMemo::default())
+    let run = |project: &mut Project<S>| {
+        explore_with(project, request, clock_now, &mut ExplorationMemo::default())
+    };
+    match request.dry_run {
+        true => run(project),
+        false => project.exclusive(run),
+    }
 }
 
 /// The last exploration plan and the exact inputs it was planned from. The plan is a pure

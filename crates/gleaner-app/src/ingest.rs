@@ -443,7 +443,7 @@ pub fn ingest<S: Store>(
     let limits = project.settings().ingest.value_limits();
     let parsed = parse_files(request, known_sensors(project.store())?, &limits, progress)?;
     refuse_future(&parsed, clock_now)?;
-    ingest_parsed(project, parsed, request, clock_now, progress)
+    project.exclusive(|project| ingest_parsed(project, parsed, request, clock_now, progress))
 }
 
 /// [`ingest`] with the readings already read (from files, or a simulation's history).

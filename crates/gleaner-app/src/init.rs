@@ -113,7 +113,7 @@ pub fn init(request: &InitRequest) -> Result<(Project<AnyStore>, InitOutcome)> {
         if created_dir {
             let _ = std::fs::remove_dir_all(&request.dir);
         } else if let (true, Some(db_path)) = (created_db, &db_path) {
-            for suffix in ["", "-wal", "-shm"] {
+            for suffix in ["", "-wal", "-shm", "-lock"] {
                 let mut p = db_path.clone().into_os_string();
                 p.push(suffix);
                 let _ = std::fs::remove_file(p);

@@ -385,14 +385,22 @@ pub fn plan_with_preset<S: Store>(
     energy_preset: Option<&str>,
     clock_now: UnixSeconds,
 ) -> Result<PlannedMission> {
-    plan_scored(
-        project,
-        request,
-        energy_preset,
-        (None, None),
-        true,
-        clock_now,
-    )
+    let run = |project: &mut Project<S>| {
+        plan_scored(
+            project,
+            request,
+            energy_preset,
+            (None, None),
+            true,
+            clock_now,
+        )
+    };
+    // A stored plan is computed from the store as it is when it is written: nothing is
+    // recorded or planned by another process between its scoring and its write.
+    match request.dry_run {
+        true => run(project),
+        false => project.exclusive(run),
+    }
 }
 
 /// [`plan_with_preset`] with the utility engine's scoring already computed: `scoring` must be

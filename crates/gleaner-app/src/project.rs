@@ -89,6 +89,21 @@ impl<S: Store> Project<S> {
         &mut self.store
     }
 
+    /// Runs `f` holding the project's exclusion ([`Store::lock_project`]: PostgreSQL's
+    /// session advisory lock of the project, or the SQLite file's lock file), so a use case
+    /// that reads, computes and then writes — a plan's scoring, search and store, a
+    /// recorded flight's checks and writes — runs whole before or after every other holder
+    /// and writer of the project, in this process or another: a second server replica over
+    /// the same PostgreSQL database, a CLI command. Re-entrant. Waits up to the store's lock
+    /// timeout. If `f` panics the hold is given back when the store is dropped (the
+    /// connection or the lock file closes).
+    pub fn exclusive<T>(&mut self, f: impl FnOnce(&mut Self) -> Result<T>) -> Result<T> {
+        self.store.lock_project()?;
+        let out = f(self);
+        self.store.unlock_project();
+        out
+    }
+
     /// The sensors, sorted by id, as core values.
     pub fn sensors(&self) -> Result<Vec<Sensor>> {
         sensors_of(&self.store)

@@ -71,7 +71,7 @@ pub fn record_flight<S: Store>(
         )?),
         _ => None,
     };
-    record_parsed(project, request, parsed, clock_now)
+    project.exclusive(|project| record_parsed(project, request, parsed, clock_now))
 }
 
 /// [`record_flight`] with the readings already read (from files, or from a simulated flight).

@@ -398,6 +398,15 @@ fn compute_history<S: Store>(project: &Project<S>, request: &ScoreRequest) -> Re
 /// fitted once, not once for this scoring and again for the state) and stores it with the
 /// scoring, in the same transaction: a refused scoring writes nothing, the state included.
 pub fn score<S: Store>(project: &mut Project<S>, request: &ScoreRequest) -> Result<Scoring> {
+    match request.dry_run {
+        true => score_held(project, request),
+        // The state rebuilt and the scoring computed are written over the store they read.
+        false => project.exclusive(|project| score_held(project, request)),
+    }
+}
+
+/// [`score`], the project's exclusion held unless a dry run.
+fn score_held<S: Store>(project: &mut Project<S>, request: &ScoreRequest) -> Result<Scoring> {
     crate::when::check("mission time", request.at)?;
     if !request.dry_run {
         project.check_stored_grid(&project.field()?.1)?;

@@ -319,7 +319,9 @@ pub fn fly<S: Store>(
     at: UnixSeconds,
     clock_now: UnixSeconds,
 ) -> Result<RecordOutcome> {
-    fly_buffered(project, truth, id, at, clock_now).map(|(outcome, _)| outcome)
+    project.exclusive(|project| {
+        fly_buffered(project, truth, id, at, clock_now).map(|(outcome, _)| outcome)
+    })
 }
 
 /// [`fly`], also returning how many readings the visited sensors' full buffers had dropped

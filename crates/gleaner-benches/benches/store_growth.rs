@@ -127,7 +127,7 @@ fn main() {
         second.push(t2);
         again.push(t3);
         drop(store);
-        for suffix in ["", "-wal", "-shm"] {
+        for suffix in ["", "-wal", "-shm", "-lock"] {
             let _ = std::fs::remove_file(format!("{}{suffix}", path.display()));
         }
     }

@@ -396,9 +396,15 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Serve the HTTP API (/api/v1) and the web dashboard for a project until ctrl-c.
     #[command(
-        after_help = "Binds 127.0.0.1:8080 by default. Writes (saving a plan, scoring, uploads) need\n`Authorization: Bearer <token>`: the token comes from --token-file or GLEANER_TOKEN, or on\nloopback is drawn at start-up and printed once in the dashboard's address. Binding any other\naddress needs a token. Request log on standard error (GLEANER_LOG=debug for more).\n\nExamples:\n  gleaner serve --project caf\n  GLEANER_TOKEN=$(cat token) gleaner serve --project caf --addr 0.0.0.0:8080"
+        after_help = "Binds 127.0.0.1:8080 by default. Writes (saving a plan, scoring, uploads) need\n`Authorization: Bearer <token>`: the token comes from --token-file or GLEANER_TOKEN, or on\nloopback is drawn at start-up and printed once in the dashboard's address. Binding any other\naddress needs a token. Request log on standard error (GLEANER_LOG=debug for more).\n\nExamples:\n  gleaner serve --project caf\n  GLEANER_TOKEN=$(cat token) gleaner serve --project caf --addr 0.0.0.0:8080\n  gleaner serve --farms farms --addr 0.0.0.0:8080   # every farms/*/gleaner.toml, farm tokens in farms/tokens"
     )]
     Serve(serve::ServeArgs),
+    /// Draw a token for one farm of a farms server (`serve --farms`): its SHA-256 is appended
+    /// to the tokens file, the token printed once.
+    #[command(
+        after_help = "Example:\n  gleaner farm-token --farms farms --farm north --scope write > north.token"
+    )]
+    FarmToken(serve::FarmTokenArgs),
     /// Replay a dataset (or a project's own record) as a campaign of missions, one run per
     /// strategy, seed and budget, through the same score, plan and record use cases; writes CSV
     /// results and a report.
@@ -1124,6 +1130,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Demo(args) => out(&demo::run(&args)?)?,
         Command::Migrate(args) => outln(&migrate::run(&args, &progress)?)?,
         Command::Serve(args) => serve::run(args)?,
+        Command::FarmToken(args) => serve::farm_token(args)?,
         Command::Simulate(args) => {
             let line: Vec<String> = std::env::args().skip(1).collect();
             let command = format!("gleaner {}", line.join(" "));

@@ -139,6 +139,60 @@ fn ingest_skip_mode_reports_rows() {
     );
 }
 
+/// `farm-token` prints a new token once and appends only its SHA-256 to the tokens file;
+/// an unknown farm is refused, naming the farms there.
+#[test]
+fn farm_token_prints_the_token_once_and_stores_its_hash() {
+    let dir = tempfile::tempdir().unwrap();
+    for farm in ["north", "south"] {
+        std::fs::create_dir_all(dir.path().join(farm)).unwrap();
+        std::fs::write(dir.path().join(farm).join("gleaner.toml"), "").unwrap();
+    }
+    let farms = dir.path().to_str().unwrap();
+    let token = ok(&[
+        "farm-token",
+        "--farms",
+        farms,
+        "--farm",
+        "north",
+        "--scope",
+        "read",
+    ]);
+    let token = token.trim();
+    assert_eq!(token.len(), 64, "{token}");
+    assert!(token.bytes().all(|b| b.is_ascii_hexdigit()));
+    let second = ok(&[
+        "farm-token",
+        "--farms",
+        farms,
+        "--farm",
+        "south",
+        "--scope",
+        "write",
+    ]);
+    let file = std::fs::read_to_string(dir.path().join("tokens")).unwrap();
+    let lines: Vec<&str> = file.lines().collect();
+    assert_eq!(lines.len(), 2, "{file}");
+    assert!(lines[0].starts_with("north read "), "{file}");
+    assert!(lines[1].starts_with("south write "), "{file}");
+    assert!(!file.contains(token) && !file.contains(second.trim()));
+    let tokens = gleaner_server::FarmTokens::parse(&file).unwrap();
+    assert_eq!(
+        tokens.find(token.as_bytes()),
+        Some(("north", gleaner_server::Scope::Read))
+    );
+    let err = fail(&[
+        "farm-token",
+        "--farms",
+        farms,
+        "--farm",
+        "east",
+        "--scope",
+        "read",
+    ]);
+    assert!(err.contains("north, south"), "{err}");
+}
+
 #[test]
 fn every_command_has_help_with_an_example() {
     for cmd in [
@@ -153,6 +207,7 @@ fn every_command_has_help_with_an_example() {
         "simulate",
         "report",
         "reconstruct",
+        "farm-token",
     ] {
         let out = ok(&[cmd, "--help"]);
         assert!(

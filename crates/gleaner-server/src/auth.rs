@@ -146,16 +146,24 @@ pub fn authorize(token: Option<&Token>, headers: &HeaderMap) -> Result<(), ApiEr
 /// malformed `Authorization` is refused (401) whatever the route.
 #[derive(Debug, Clone, Copy)]
 pub struct Caller {
-    /// Whether the request carries this server's token.
+    /// Whether the request may write: it carries this server's token (or, on a farm, a farm
+    /// token with the write scope).
     pub authenticated: bool,
+    /// Whether it carries a farm token with the read scope only.
+    pub read_scope: bool,
 }
 
 impl Caller {
     /// Refuses a caller without the token for work that writes: 403 on a server without a
-    /// token, 401 otherwise.
+    /// token or for a farm token of read scope, 401 otherwise.
     pub fn require_write(&self, state: &AppState) -> Result<(), ApiError> {
         if self.authenticated {
             return Ok(());
+        }
+        if self.read_scope || state.0.farm {
+            return Err(ApiError::forbidden(
+                "this farm token has the read scope: writes need a token with the write scope",
+            ));
         }
         if state.0.token.is_none() {
             return Err(ApiError::forbidden(
@@ -172,8 +180,21 @@ impl FromRequestParts<AppState> for Caller {
     type Rejection = ApiError;
 
     async fn from_request_parts(parts: &mut Parts, state: &AppState) -> Result<Self, ApiError> {
+        if state.0.farm {
+            // The dispatcher checked the farm token; without its word, nothing is allowed.
+            let access = parts
+                .extensions
+                .get::<crate::farms::FarmAccess>()
+                .ok_or_else(|| ApiError::unauthorized("send Authorization: Bearer <farm token>"))?;
+            let write = access.scope == crate::farms::Scope::Write;
+            return Ok(Self {
+                authenticated: write,
+                read_scope: !write,
+            });
+        }
         Ok(Self {
             authenticated: authenticate(state.0.token.as_ref(), &parts.headers)?,
+            read_scope: false,
         })
     }
 }

@@ -80,12 +80,27 @@ pub fn multipart(parts: &[Part]) -> (String, Vec<u8>) {
 pub struct Client {
     addr: SocketAddr,
     conn: Option<BufReader<TcpStream>>,
+    read_timeout: Duration,
 }
+
+/// How long a client waits for a response by default: a bound on a stuck server, not a
+/// timing assertion.
+pub const READ_TIMEOUT: Duration = Duration::from_secs(120);
 
 impl Client {
     /// A client for the server at `addr` (connects on first use).
     pub fn new(addr: SocketAddr) -> Self {
-        Self { addr, conn: None }
+        Self::with_read_timeout(addr, READ_TIMEOUT)
+    }
+
+    /// A client that waits up to `read_timeout` for each response (e.g. a benchmark whose
+    /// requests queue behind a thousand others).
+    pub fn with_read_timeout(addr: SocketAddr, read_timeout: Duration) -> Self {
+        Self {
+            addr,
+            conn: None,
+            read_timeout,
+        }
     }
 
     /// GET `path`.
@@ -150,7 +165,7 @@ impl Client {
         if self.conn.is_none() {
             let s = TcpStream::connect(self.addr)?;
             s.set_nodelay(true)?;
-            s.set_read_timeout(Some(Duration::from_secs(120)))?;
+            s.set_read_timeout(Some(self.read_timeout))?;
             self.conn = Some(BufReader::new(s));
         }
         let conn = self.conn.as_mut().expect("connected above");
@@ -176,8 +191,7 @@ impl Client {
         if self.conn.is_none() {
             let s = TcpStream::connect(self.addr)?;
             s.set_nodelay(true)?;
-            // A bound on a stuck server, not a timing assertion.
-            s.set_read_timeout(Some(Duration::from_secs(120)))?;
+            s.set_read_timeout(Some(self.read_timeout))?;
             self.conn = Some(BufReader::new(s));
         }
         let conn = self.conn.as_mut().expect("connected above");

@@ -202,7 +202,7 @@ fn cell_index(text: &str) -> ApiResult<gleaner_field::CellIndex> {
     responses((status = 200, body = ProjectDoc), (status = 500, body = ErrorBody)))]
 pub async fn project(State(s): State<AppState>) -> ApiResult<Response> {
     let basemap_url = s.0.basemap_url.clone();
-    let writable = s.0.token.is_some();
+    let writable = s.0.token.is_some() || s.0.farm;
     let (max_upload_bytes, max_time_limit_s) = (s.0.max_upload_bytes as u64, s.0.max_time_limit_s);
     let bytes = s
         .cached("project", move |p| {

@@ -17,6 +17,10 @@
 //!   compare, never logged); uploads are size-limited and saved under sanitised names in a
 //!   temporary folder; downloads are made in memory from the export use case, never read from
 //!   a client-given path; CORS is off unless origins are configured.
+//! - Many farms ([`farms`], `gleaner serve --farms DIR`): every project of a directory under
+//!   `/api/v1/farms/{farm}/`, each guarded by its own hashed tokens of read or write scope
+//!   ([`farms_router`], [`farms_openapi`]); several such servers may serve one PostgreSQL
+//!   database, the writing use cases holding each farm's lock in the database.
 //! - Errors are JSON `{error, field, reason}` ([`ErrorBody`]) with 400, 401, 403, 404, 409,
 //!   413 or 500.
 //!
@@ -35,6 +39,7 @@ pub mod auth;
 pub mod client;
 pub mod dashboard;
 mod error;
+pub mod farms;
 pub mod handlers;
 pub mod state;
 
@@ -56,6 +61,7 @@ use utoipa_axum::routes;
 
 pub use auth::{Token, TokenError};
 pub use error::{ApiError, ErrorBody};
+pub use farms::{FarmTokens, Farms, Scope};
 pub use state::{AppState, Event, Hook};
 
 /// Default address: loopback only.
@@ -77,8 +83,15 @@ pub const DEFAULT_SHUTDOWN_GRACE: Duration = Duration::from_secs(30);
 /// How the server runs.
 #[derive(Debug, Clone)]
 pub struct ServerConfig {
-    /// Project directory (`gleaner.toml`).
+    /// Project directory (`gleaner.toml`); unused with [`ServerConfig::farms`].
     pub project: PathBuf,
+    /// A directory of farms (`gleaner serve --farms DIR`): each subdirectory holding a
+    /// `gleaner.toml` is a project served under `/api/v1/farms/{farm}/` ([`farms`]), with
+    /// the farm tokens of [`ServerConfig::tokens_file`] instead of one server token.
+    pub farms: Option<PathBuf>,
+    /// The farm tokens file (`farm scope sha256-hex` lines) [default: `tokens` in the farms
+    /// directory].
+    pub tokens_file: Option<PathBuf>,
     /// Address to listen on.
     pub addr: SocketAddr,
     /// Write token; without one, writes are refused (403) and only loopback may be bound.
@@ -123,6 +136,8 @@ impl ServerConfig {
     pub fn new(project: PathBuf) -> Self {
         Self {
             project,
+            farms: None,
+            tokens_file: None,
             addr: DEFAULT_ADDR.parse().expect("a valid constant address"),
             token: None,
             anonymous_compute: true,
@@ -150,7 +165,13 @@ impl ServerConfig {
     /// CORS origin, allowed host or basemap URL, a zero upload limit, timeout or connection
     /// cap.
     pub fn check(&self) -> Result<(), ServerError> {
-        if !self.addr.ip().is_loopback() && self.token.is_none() {
+        if self.farms.is_some() && self.token.is_some() {
+            return Err(ServerError::Config(
+                "a farms server takes the farm tokens of its tokens file, not one server token (unset GLEANER_TOKEN / --token-file)".into(),
+            ));
+        }
+        // A farms server answers nothing without a farm token, whatever the address.
+        if self.farms.is_none() && !self.addr.ip().is_loopback() && self.token.is_none() {
             return Err(ServerError::Config(format!(
                 "listening on {} (not loopback) needs a token: set GLEANER_TOKEN or --token-file",
                 self.addr
@@ -274,20 +295,156 @@ pub fn openapi() -> utoipa::openapi::OpenApi {
     api_routes(DEFAULT_MAX_UPLOAD_BYTES).1
 }
 
+/// The OpenAPI document of a farms server (`gleaner serve --farms`): every path of
+/// [`openapi`] under `/api/v1/farms/{farm}` (with the `farm` path parameter and the bearer
+/// scheme on every operation: each needs a farm token), `GET /api/v1/farms`, and this
+/// document at `/api/v1/openapi.json`.
+pub fn farms_openapi() -> utoipa::openapi::OpenApi {
+    use utoipa::openapi::path::{ParameterBuilder, ParameterIn};
+    use utoipa::openapi::security::SecurityRequirement;
+    use utoipa::openapi::{ObjectBuilder, Required, Type};
+    let single = openapi();
+    let mut doc = single.clone();
+    doc.paths.paths.clear();
+    for (path, mut item) in single.paths.paths {
+        let tail = path.strip_prefix("/api/v1").unwrap_or(&path);
+        let farm = ParameterBuilder::new()
+            .name("farm")
+            .parameter_in(ParameterIn::Path)
+            .required(Required::True)
+            .description(Some(
+                "The farm: a subdirectory of the server's farms directory",
+            ))
+            .schema(Some(ObjectBuilder::new().schema_type(Type::String)))
+            .build();
+        let mut params = vec![farm];
+        params.extend(item.parameters.take().unwrap_or_default());
+        item.parameters = Some(params);
+        for op in [
+            &mut item.get,
+            &mut item.post,
+            &mut item.put,
+            &mut item.delete,
+            &mut item.patch,
+        ]
+        .into_iter()
+        .flatten()
+        {
+            op.security = Some(vec![SecurityRequirement::new(
+                "bearer",
+                Vec::<String>::new(),
+            )]);
+            op.operation_id = op.operation_id.take().map(|id| format!("farm_{id}"));
+            for (code, why) in [
+                ("401", "No farm token, or one that is no farm's"),
+                ("403", "A read-scope token on a write"),
+                (
+                    "404",
+                    "No such farm for this token (another farm's token gets the same)",
+                ),
+            ] {
+                op.responses
+                    .responses
+                    .entry(code.to_string())
+                    .or_insert_with(|| {
+                        utoipa::openapi::ResponseBuilder::new()
+                            .description(why)
+                            .content(
+                                "application/json",
+                                utoipa::openapi::ContentBuilder::new()
+                                    .schema(Some(utoipa::openapi::Ref::from_schema_name(
+                                        "ErrorBody",
+                                    )))
+                                    .build(),
+                            )
+                            .build()
+                            .into()
+                    });
+            }
+        }
+        doc.paths
+            .paths
+            .insert(format!("/api/v1/farms/{{farm}}{tail}"), item);
+    }
+    let (_, extra): (Router<Farms>, _) = OpenApiRouter::new()
+        .routes(routes!(farms::farms_list))
+        .routes(routes!(handlers::openapi_json))
+        .split_for_parts();
+    doc.merge(extra);
+    let components = doc.components.get_or_insert_with(Default::default);
+    for (name, schema) in [
+        (
+            "FarmDoc",
+            <farms::FarmDoc as utoipa::PartialSchema>::schema(),
+        ),
+        ("Scope", <farms::Scope as utoipa::PartialSchema>::schema()),
+    ] {
+        components.schemas.insert(name.to_string(), schema);
+    }
+    doc.tags
+        .get_or_insert_with(Vec::new)
+        .push(utoipa::openapi::tag::Tag::new("farms"));
+    doc.info.description = Some(format!(
+        "{} A farms server (`gleaner serve --farms DIR`) serves every farm's API under `/api/v1/farms/{{farm}}/`; every request needs that farm's token (read or write scope) in `Authorization: Bearer`.",
+        doc.info.description.unwrap_or_default()
+    ));
+    doc
+}
+
+/// One project's API (and with `dashboard` its dashboard) over `state`, without the
+/// security layers [`secure`] adds: what [`router`] serves, and what a farm's requests are
+/// dispatched to. `/api/v1/openapi.json` serves `doc_json`.
+pub(crate) fn project_router(
+    state: AppState,
+    config: &ServerConfig,
+    doc_json: Arc<str>,
+    dashboard: bool,
+) -> Router {
+    let (api, _) = api_routes(config.max_upload_bytes);
+    let app = match dashboard {
+        true => api.merge(dashboard::routes(config.basemap_url.as_deref())),
+        false => api,
+    };
+    app.fallback(|| async {
+        ApiError::not_found(None, "no such page or endpoint (see /api/v1/openapi.json)")
+    })
+    .method_not_allowed_fallback(security::method_not_allowed)
+    .layer(axum::Extension(handlers::OpenApiJson(doc_json)))
+    .with_state(state)
+}
+
 /// The whole application: API, OpenAPI document, dashboard, request logging (paths and
 /// redacted queries only), CORS, the `Host` allow-list and the security headers on every
 /// response.
 pub fn router(state: AppState, config: &ServerConfig) -> Router {
-    let (api, doc) = api_routes(config.max_upload_bytes);
+    let doc = api_routes(config.max_upload_bytes).1;
     let doc_json: Arc<str> = doc.to_json().unwrap_or_else(|_| "{}".to_string()).into();
-    let mut app = api
-        .merge(dashboard::routes(config.basemap_url.as_deref()))
-        .fallback(|| async {
-            ApiError::not_found(None, "no such page or endpoint (see /api/v1/openapi.json)")
-        })
-        .method_not_allowed_fallback(security::method_not_allowed)
+    secure(project_router(state, config, doc_json, true), config)
+}
+
+/// A farms server's application: `GET /api/v1/farms`, every farm's API under
+/// `/api/v1/farms/{farm}/` ([`Farms`]), the farms' OpenAPI document at
+/// `/api/v1/openapi.json`, with the same security layers as [`router`].
+pub fn farms_router(farms: &Farms, config: &ServerConfig) -> Router {
+    let doc_json: Arc<str> = farms_openapi()
+        .to_json()
+        .unwrap_or_else(|_| "{}".to_string())
+        .into();
+    let app = farms
+        .router()
+        .route(
+            "/api/v1/openapi.json",
+            axum::routing::get(handlers::openapi_json),
+        )
         .layer(axum::Extension(handlers::OpenApiJson(doc_json)))
-        .with_state(state);
+        .method_not_allowed_fallback(security::method_not_allowed);
+    secure(app, config)
+}
+
+/// CORS (when configured), the wrong-token refusal, the `Host` allow-list, the security
+/// headers and the request log around `app`.
+fn secure(app: Router, config: &ServerConfig) -> Router {
+    let mut app = app;
     if !config.cors_origins.is_empty() {
         let origins: Vec<HeaderValue> = config
             .cors_origins
@@ -325,8 +482,24 @@ pub async fn serve(
     shutdown: impl std::future::Future<Output = ()> + Send + 'static,
 ) -> Result<(), ServerError> {
     config.check()?;
+    if config.farms.is_some() {
+        let farms = Farms::open(config)?;
+        return serve_farms(listener, config, farms, shutdown).await;
+    }
     let state = AppState::new(config)?;
     serve_state(listener, config, state, shutdown).await
+}
+
+/// [`serve`] for a farms server made by the caller ([`Farms::open`]).
+pub async fn serve_farms(
+    listener: tokio::net::TcpListener,
+    config: &ServerConfig,
+    farms: Farms,
+    shutdown: impl std::future::Future<Output = ()> + Send + 'static,
+) -> Result<(), ServerError> {
+    config.check()?;
+    let app = farms_router(&farms, config);
+    serve_app(listener, config, app, farms.states(), shutdown).await
 }
 
 /// [`serve`] with a state made by the caller (who may keep a clone to watch it, e.g. with
@@ -344,10 +517,31 @@ pub async fn serve_state(
     state: AppState,
     shutdown: impl std::future::Future<Output = ()> + Send + 'static,
 ) -> Result<(), ServerError> {
-    use hyper_util::rt::{TokioIo, TokioTimer};
-    use tokio::sync::Semaphore;
     config.check()?;
     let app = router(state.clone(), config);
+    serve_app(listener, config, app, vec![state], shutdown).await
+}
+
+/// Serves `app` on `listener` (see [`serve_state`]); `states` are the projects' states it
+/// serves: told about the connections' events, shut down and drained at the end.
+async fn serve_app(
+    listener: tokio::net::TcpListener,
+    config: &ServerConfig,
+    app: Router,
+    states: Vec<AppState>,
+    shutdown: impl std::future::Future<Output = ()> + Send + 'static,
+) -> Result<(), ServerError> {
+    use hyper_util::rt::{TokioIo, TokioTimer};
+    use tokio::sync::Semaphore;
+    let states = Arc::new(states);
+    let event = {
+        let states = Arc::clone(&states);
+        move |e: Event| {
+            for s in states.iter() {
+                s.event(e.clone());
+            }
+        }
+    };
     let service = hyper_util::service::TowerToHyperService::new(
         tower_http::timeout::RequestBodyTimeout::new(app, config.body_timeout),
     );
@@ -364,7 +558,7 @@ pub async fn serve_state(
         let permit = match Arc::clone(&limit).try_acquire_owned() {
             Ok(p) => p,
             Err(_) => {
-                state.event(Event::AtCapacity);
+                event(Event::AtCapacity);
                 tokio::select! {
                     p = Arc::clone(&limit).acquire_owned() => match p {
                         Ok(p) => p,
@@ -388,32 +582,43 @@ pub async fn serve_state(
         };
         stream.set_nodelay(true).ok();
         let n = open.fetch_add(1, Ordering::SeqCst) + 1;
-        state.event(Event::Accepted { open: n });
+        event(Event::Accepted { open: n });
         let conn = graceful.watch(http.serve_connection(TokioIo::new(stream), service.clone()));
-        let (state, open) = (state.clone(), Arc::clone(&open));
+        let (event, open) = (event.clone(), Arc::clone(&open));
         tokio::spawn(async move {
             if let Err(e) = conn.await {
                 tracing::debug!(error = %e, "connection ended with an error");
             }
             let n = open.fetch_sub(1, Ordering::SeqCst) - 1;
-            state.event(Event::Closed { open: n });
+            event(Event::Closed { open: n });
             drop(permit);
         });
     }
     drop(listener);
-    state.begin_shutdown();
+    for s in states.iter() {
+        s.begin_shutdown();
+    }
     if tokio::time::timeout(config.shutdown_grace, graceful.shutdown())
         .await
         .is_err()
     {
         tracing::warn!("shutdown: requests still in flight after the grace period, closed");
     }
-    if tokio::time::timeout(config.shutdown_grace, state.drain())
+    let drain = async {
+        for s in states.iter() {
+            s.drain().await;
+        }
+    };
+    if tokio::time::timeout(config.shutdown_grace, drain)
         .await
         .is_err()
     {
         tracing::warn!("shutdown: work still running after the grace period, left behind");
     }
+    // The pooled projects are closed on a blocking thread: a PostgreSQL client cannot be
+    // dropped on the runtime's threads.
+    let pools: Vec<_> = states.iter().flat_map(AppState::take_pool).collect();
+    tokio::task::spawn_blocking(move || drop(pools)).await.ok();
     Ok(())
 }
 

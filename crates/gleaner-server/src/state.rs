@@ -118,15 +118,21 @@ pub(crate) struct Inner {
     /// One permit per pooled project: a request waits for a free one.
     slots: Arc<Semaphore>,
     pub(crate) token: Option<Token>,
+    /// One farm of a `--farms` server: the dispatcher checked the request's farm token and
+    /// put its scope in the request ([`crate::farms::FarmAccess`]); `token` is unused.
+    pub(crate) farm: bool,
     /// Whether computations that write nothing (previews, dry runs, simulations,
     /// reconstructions) may run without the token: on loopback only.
     pub(crate) open_compute: bool,
     pub(crate) basemap_url: Option<String>,
     pub(crate) max_upload_bytes: usize,
     pub(crate) max_time_limit_s: f64,
-    /// One writing use case at a time: they queue here instead of racing into the store's
-    /// busy timeout (a scoring that rebuilds the utility state holds its transaction for
-    /// seconds on a large history).
+    /// One writing use case at a time in this server: they queue here instead of racing into
+    /// the store's busy timeout (a scoring that rebuilds the utility state holds its
+    /// transaction for seconds on a large history). Across processes (server replicas, the
+    /// CLI) the use cases serialise on the project's exclusion in the store
+    /// (`Project::exclusive`); this queue only keeps this server's writers from all waiting
+    /// there at once.
     writer: Arc<Semaphore>,
     /// One planning, exploration or simulation search at a time: they use a core each for
     /// seconds, and queueing them keeps a core for the reads.
@@ -172,21 +178,44 @@ impl AppState {
     /// State for the project in `config.project`, with `config.pool_size` (at least 1)
     /// projects opened here, so a missing project fails at start-up, not at a request.
     pub fn new(config: &crate::ServerConfig) -> Result<Self, gleaner_app::AppError> {
+        Self::build(config, &config.project, Arc::new(Semaphore::new(1)), false)
+    }
+
+    /// State for one farm of a `--farms` server: the project in `dir`, `config.pool_size`
+    /// projects opened here, and the server's planning slot `planning` (shared by its farms,
+    /// so one search runs at a time on the whole server). Access is the farm tokens' (checked
+    /// by the dispatcher), not `config.token`.
+    pub fn for_farm(
+        config: &crate::ServerConfig,
+        dir: &std::path::Path,
+        planning: Arc<Semaphore>,
+    ) -> Result<Self, gleaner_app::AppError> {
+        Self::build(config, dir, planning, true)
+    }
+
+    fn build(
+        config: &crate::ServerConfig,
+        dir: &std::path::Path,
+        planning: Arc<Semaphore>,
+        farm: bool,
+    ) -> Result<Self, gleaner_app::AppError> {
         let n = config.pool_size.max(1);
         let pool = (0..n)
-            .map(|_| Project::open(&config.project))
+            .map(|_| Project::open(dir))
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self(Arc::new(Inner {
-            dir: config.project.clone(),
+            dir: dir.to_path_buf(),
             pool: Mutex::new(pool),
             slots: Arc::new(Semaphore::new(n)),
-            token: config.token.clone(),
-            open_compute: config.open_compute(),
+            token: if farm { None } else { config.token.clone() },
+            farm,
+            // A farm's requests all carry a farm token (checked before they reach it).
+            open_compute: farm || config.open_compute(),
             basemap_url: config.basemap_url.clone(),
             max_upload_bytes: config.max_upload_bytes,
             max_time_limit_s: config.max_time_limit_s,
             writer: Arc::new(Semaphore::new(1)),
-            planning: Arc::new(Semaphore::new(1)),
+            planning,
             generation: AtomicU64::new(0),
             cache: Mutex::new(HashMap::new()),
             work: TaskTracker::new(),
@@ -234,6 +263,16 @@ impl AppState {
             Some(p) => Ok(p),
             None => Ok(Project::open(&self.0.dir)?),
         }
+    }
+
+    /// Empties the pool of open projects (at shutdown, so the caller closes them where it
+    /// may block); a later request would open its own.
+    pub(crate) fn take_pool(&self) -> Vec<Opened> {
+        self.0
+            .pool
+            .lock()
+            .map(|mut p| std::mem::take(&mut *p))
+            .unwrap_or_default()
     }
 
     fn give_back(&self, p: Opened) {

@@ -54,7 +54,7 @@ fn fresh_store(
     modalities: &[ModalityRecord],
 ) -> SqliteStore {
     let path = dir.path().join("bench.db");
-    for suffix in ["", "-wal", "-shm"] {
+    for suffix in ["", "-wal", "-shm", "-lock"] {
         let _ = std::fs::remove_file(format!("{}{suffix}", path.display()));
     }
     let mut store = SqliteStore::open(&path).unwrap();

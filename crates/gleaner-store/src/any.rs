@@ -259,4 +259,18 @@ impl Store for AnyStore {
             Self::Postgres(s) => s.write(|tx| f(&mut AnyTx { inner: tx })),
         }
     }
+
+    fn lock_project(&self) -> Result<()> {
+        match self {
+            Self::Sqlite(s) => s.lock_project(),
+            Self::Postgres(s) => s.lock_project(),
+        }
+    }
+
+    fn unlock_project(&self) {
+        match self {
+            Self::Sqlite(s) => s.unlock_project(),
+            Self::Postgres(s) => s.unlock_project(),
+        }
+    }
 }

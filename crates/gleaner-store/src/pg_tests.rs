@@ -176,6 +176,40 @@ fn writers_of_one_project_are_serialised() {
     assert_eq!(ts, vec![1000, 1001]);
 }
 
+/// The project's exclusion is PostgreSQL's session advisory lock: it keeps out another
+/// connection's `lock_project` and its write transactions (two server replicas).
+#[test]
+fn the_project_exclusion_holds_across_connections() {
+    let mut fresh = Fresh::new();
+    let mut first = fresh.open("exclusion");
+    let project = first.project().to_string();
+    let second = PgStore::open(&fresh.url, &project).unwrap();
+    let third = PgStore::open(&fresh.url, &project).unwrap();
+    // The waiting shows in pg_locks (what `lock_waiters` counts), then the wait ends.
+    first.lock_project().unwrap();
+    let waiter = PgStore::open(&fresh.url, &project).unwrap();
+    assert_eq!(first.lock_waiters().unwrap(), 0);
+    let t = std::thread::spawn(move || {
+        waiter.lock_project().unwrap();
+        waiter.unlock_project();
+    });
+    let mut polls = 0;
+    while first.lock_waiters().unwrap() == 0 {
+        polls += 1;
+        assert!(polls < 1_000_000, "the second lock_project never waited");
+    }
+    first.unlock_project();
+    t.join().unwrap();
+    assert_eq!(first.lock_waiters().unwrap(), 0);
+    conformance::exclusion_holds_across_connections(&mut first, second, third);
+    // Another project's exclusion is another lock.
+    let other = fresh.open("exclusion");
+    first.lock_project().unwrap();
+    other.lock_project().unwrap();
+    other.unlock_project();
+    first.unlock_project();
+}
+
 /// [`AnyStore`] forwards every method faithfully, on both backends.
 #[test]
 fn conformance_through_any_store() {

@@ -193,6 +193,26 @@ impl PgStore {
         &self.project
     }
 
+    /// How many sessions are waiting for this project's advisory lock (its exclusion, or a
+    /// write transaction's lock) right now: what an operator asks when writes seem stuck,
+    /// and how tests see that a writer of another process really waits.
+    pub fn lock_waiters(&self) -> Result<i64> {
+        // A bigint key shows in pg_locks as classid (high 32 bits), objid (low), objsubid 1.
+        let row = self
+            .client
+            .borrow_mut()
+            .query_one(
+                "SELECT count(*) FROM pg_locks
+                 WHERE locktype = 'advisory' AND NOT granted AND objsubid = 1
+                   AND database = (SELECT oid FROM pg_database WHERE datname = current_database())
+                   AND classid::bigint = ($1::bigint >> 32) & 4294967295
+                   AND objid::bigint = $1::bigint & 4294967295",
+                &[&self.lock_key],
+            )
+            .db()?;
+        Ok(row.get(0))
+    }
+
     /// Whether the database at `url` has a project (schema) `project`.
     pub fn project_exists(url: &str, project: &str) -> Result<bool> {
         let mut client = Client::connect(url, NoTls).map_err(|e| StoreError::Open {
@@ -484,5 +504,33 @@ impl Store for PgStore {
         tx.tx.into_inner().commit().db()?;
         crate::failpoint::committed();
         Ok(out)
+    }
+
+    fn lock_project(&self) -> Result<()> {
+        // Outside any transaction: a session-level lock, kept until unlocked or the
+        // connection ends. The session's `lock_timeout` bounds the wait.
+        let mut client = self.client.borrow_mut();
+        match client.execute("SELECT pg_advisory_lock($1)", &[&self.lock_key]) {
+            Ok(_) => Ok(()),
+            Err(e) if is_lock_timeout(&e) => Err(StoreError::Backend(format!(
+                "another gleaner process has been writing to project {} for more than {} s; \
+                 try again when it has finished",
+                self.project,
+                LOCK_TIMEOUT.as_secs()
+            ))),
+            Err(e) => Err(StoreError::Backend(describe(&e))),
+        }
+    }
+
+    fn unlock_project(&self) {
+        let mut client = self.client.borrow_mut();
+        let released = client
+            .query_one("SELECT pg_advisory_unlock($1)", &[&self.lock_key])
+            .map(|r| r.get::<_, bool>(0));
+        if !matches!(released, Ok(true)) {
+            // Never leave a hold behind on a connection that stays open: another replica
+            // would wait for it until its timeout.
+            let _ = client.batch_execute("SELECT pg_advisory_unlock_all()");
+        }
     }
 }

@@ -13,7 +13,7 @@ mod dump;
 mod read;
 mod write;
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 use std::ops::RangeInclusive;
 use std::path::Path;
 use std::time::Duration;
@@ -67,7 +67,10 @@ impl<T> Db<T> for rusqlite::Result<T> {
 ///
 /// [`Store::write`] starts an `IMMEDIATE` transaction: it takes the write lock up front, so a
 /// second writer (another process on the same file) waits for the first, up to the busy
-/// timeout, instead of failing with "database is locked" half-way through its use case.
+/// timeout, instead of failing with "database is locked" half-way through its use case. Before
+/// it, a write takes the project's exclusion ([`Store::lock_project`]: a lock on the file
+/// `<database>-lock`), so it also waits for a use case of another connection that holds the
+/// exclusion between its reads and its write (a plan).
 #[derive(Debug)]
 pub struct SqliteStore {
     conn: Connection,
@@ -78,6 +81,9 @@ pub struct SqliteStore {
     count: Cell<Option<(i64, u64)>>,
     /// How long a writer waits for another connection's write lock ([`BUSY_TIMEOUT`]).
     busy_timeout: Duration,
+    /// The project's exclusion ([`Store::lock_project`]) while held: the locked
+    /// `<database>-lock` file (none for a database in memory) and the number of holds.
+    exclusion: RefCell<Option<(Option<std::fs::File>, u32)>>,
 }
 
 /// The error of a writer that waited `timeout` for another connection's write lock on `path`.
@@ -173,6 +179,7 @@ impl SqliteStore {
             conn,
             count: Cell::new(None),
             busy_timeout: BUSY_TIMEOUT,
+            exclusion: RefCell::new(None),
         })
     }
 
@@ -374,6 +381,11 @@ impl Store for SqliteStore {
         E: From<StoreError>,
     {
         let path = self.conn.path().unwrap_or(":memory:").to_string();
+        // The project's exclusion first, as PostgreSQL's writers take its advisory lock: a
+        // writer waits for a holder of `lock_project` on another connection (a plan in
+        // another process), not only for another write transaction.
+        hold(&self.exclusion, self.conn.path(), self.busy_timeout)?;
+        let _held = Held(&self.exclusion);
         let tx = self
             .conn
             .transaction_with_behavior(TransactionBehavior::Immediate)
@@ -407,5 +419,80 @@ impl Store for SqliteStore {
         // This connection's own commit leaves its data_version as it was at the start.
         self.count.set(count.map(|n| (version, n)));
         Ok(out)
+    }
+
+    fn lock_project(&self) -> Result<()> {
+        hold(&self.exclusion, self.conn.path(), self.busy_timeout)
+    }
+
+    fn unlock_project(&self) {
+        release(&self.exclusion);
+    }
+}
+
+type Exclusion = RefCell<Option<(Option<std::fs::File>, u32)>>;
+
+/// One more hold of the exclusion of the database at `db` (none or empty: in memory).
+fn hold(exclusion: &Exclusion, db: Option<&str>, timeout: Duration) -> Result<()> {
+    let mut held = exclusion.borrow_mut();
+    if let Some((_, n)) = held.as_mut() {
+        *n += 1;
+        return Ok(());
+    }
+    let file = match db.filter(|p| !p.is_empty()) {
+        None => None,
+        Some(db) => Some(lock_file(db, timeout)?),
+    };
+    *held = Some((file, 1));
+    Ok(())
+}
+
+/// One hold less; the last closes the file, which releases its lock.
+fn release(exclusion: &Exclusion) {
+    let mut held = exclusion.borrow_mut();
+    if let Some((_, n)) = held.as_mut() {
+        *n -= 1;
+        if *n == 0 {
+            *held = None;
+        }
+    }
+}
+
+/// Gives back a hold taken by a write transaction, however it ends.
+struct Held<'a>(&'a Exclusion);
+
+impl Drop for Held<'_> {
+    fn drop(&mut self) {
+        release(self.0);
+    }
+}
+
+/// Opens `<db>-lock` and takes its exclusive lock, waiting up to `timeout` for another
+/// process (or connection) that holds it.
+fn lock_file(db: &str, timeout: Duration) -> Result<std::fs::File> {
+    let path = format!("{db}-lock");
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .map_err(|e| StoreError::Backend(format!("{path}: cannot open the lock file: {e}")))?;
+    let start = std::time::Instant::now();
+    let mut pause = Duration::from_millis(1);
+    loop {
+        match file.try_lock() {
+            Ok(()) => return Ok(file),
+            Err(std::fs::TryLockError::WouldBlock) if start.elapsed() < timeout => {
+                // A lock wait, not a test's synchronisation: the holder's use case may take
+                // seconds (a plan), so the polling backs off to 50 ms.
+                std::thread::sleep(pause);
+                pause = (pause * 2).min(Duration::from_millis(50));
+            }
+            Err(std::fs::TryLockError::WouldBlock) => return Err(busy_error(db, timeout)),
+            Err(std::fs::TryLockError::Error(e)) => {
+                return Err(StoreError::Backend(format!("{path}: cannot lock: {e}")));
+            }
+        }
     }
 }

@@ -161,4 +161,25 @@ pub trait Store: StoreRead {
     fn write<R, E>(&mut self, f: impl FnOnce(&mut Self::Tx<'_>) -> Result<R, E>) -> Result<R, E>
     where
         E: From<StoreError>;
+
+    /// Takes the project's *exclusion*, held across connections, processes and machines
+    /// until [`unlock_project`](Self::unlock_project): on PostgreSQL the project's
+    /// session-level advisory lock (`pg_advisory_lock`, the key every write transaction of
+    /// the project takes with `pg_advisory_xact_lock`, so a holder also keeps out every
+    /// other writer); on an SQLite file an exclusive lock on the file `<database>-lock`
+    /// beside it (`flock`); a database in memory has no one to share with (nothing is
+    /// taken). A use case that reads, computes and then writes (a plan: scoring, search,
+    /// store) holds it throughout, so it runs whole before or after another holder's,
+    /// whichever server replica or CLI process runs each.
+    ///
+    /// Waits for another holder up to the backend's lock timeout ([`crate::PG_LOCK_TIMEOUT`],
+    /// [`crate::SQLITE_BUSY_TIMEOUT`]), then fails with "another gleaner process has been writing
+    /// to ...". Re-entrant: a holder may take it again; each successful call needs one
+    /// `unlock_project`. Released by the operating system or the server if the process or
+    /// the connection dies.
+    fn lock_project(&self) -> Result<()>;
+
+    /// Gives back one hold of [`lock_project`](Self::lock_project). Never fails: a hold
+    /// that cannot be given back (the connection is gone) ends with the connection.
+    fn unlock_project(&self);
 }

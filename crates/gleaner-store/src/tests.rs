@@ -677,3 +677,22 @@ fn a_killed_writer_leaves_whole_transactions_only() {
         .unwrap();
     assert_eq!(max_t.map_or(0, |t| t + 1), n);
 }
+
+/// The project's exclusion on SQLite is a lock on `gleaner.db-lock`: it keeps out another
+/// connection's `lock_project` and (while the holder is inside a write) its writes; a store
+/// in memory takes nothing but counts its holds.
+#[test]
+fn the_project_exclusion_holds_across_connections() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("gleaner.db");
+    let mut first = SqliteStore::open(&path).unwrap();
+    let second = SqliteStore::open(&path).unwrap();
+    let third = SqliteStore::open(&path).unwrap();
+    crate::conformance::exclusion_holds_across_connections(&mut first, second, third);
+    assert!(dir.path().join("gleaner.db-lock").exists());
+    let memory = SqliteStore::open_in_memory().unwrap();
+    memory.lock_project().unwrap();
+    memory.lock_project().unwrap();
+    memory.unlock_project();
+    memory.unlock_project();
+}

@@ -49,6 +49,7 @@ fn clean(dir: &Path) -> Result<()> {
         "gleaner.db",
         "gleaner.db-wal",
         "gleaner.db-shm",
+        "gleaner.db-lock",
     ] {
         let p = dir.join(name);
         if p.exists() {

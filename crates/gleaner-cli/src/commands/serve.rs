@@ -13,6 +13,14 @@ pub struct ServeArgs {
     /// Project directory.
     #[arg(long, value_name = "PROJECT", default_value = ".")]
     project: PathBuf,
+    /// Serve many farms: every subdirectory of DIR holding a gleaner.toml is a farm, served
+    /// under /api/v1/farms/{farm}/ to the holders of its tokens (no dashboard).
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["project", "token_file", "read_only"])]
+    farms: Option<PathBuf>,
+    /// The farms' tokens file (lines `farm scope sha256-hex`; `gleaner farm-token` adds
+    /// them) [default: DIR/tokens].
+    #[arg(long, value_name = "FILE", requires = "farms")]
+    tokens: Option<PathBuf>,
     /// Address to listen on; anything but loopback needs a token.
     #[arg(long, default_value = gleaner_server::DEFAULT_ADDR)]
     addr: SocketAddr,
@@ -48,7 +56,10 @@ pub struct ServeArgs {
 /// fragment when the token was generated here, so it never reaches a log).
 pub fn run(args: ServeArgs) -> Result<()> {
     let mut generated = false;
-    let token = if args.read_only {
+    let token = if args.farms.is_some() {
+        // Farm tokens only (GLEANER_TOKEN is for one project).
+        None
+    } else if args.read_only {
         None
     } else if let Some(path) = &args.token_file {
         Some(Token::from_file(path)?)
@@ -65,6 +76,8 @@ pub fn run(args: ServeArgs) -> Result<()> {
     };
     let config = ServerConfig {
         project: args.project,
+        farms: args.farms,
+        tokens_file: args.tokens,
         addr: args.addr,
         token,
         cors_origins: args.cors_origins,
@@ -92,6 +105,16 @@ pub fn run(args: ServeArgs) -> Result<()> {
             .await
             .with_context(|| format!("cannot listen on {}", config.addr))?;
         let addr = listener.local_addr()?;
+        if config.farms.is_some() {
+            let farms = gleaner_server::Farms::open(&config)?;
+            println!(
+                "farms: {}\nAPI: http://{addr}/api/v1/farms/{{farm}}/ (a farm token in Authorization: Bearer) · http://{addr}/api/v1/openapi.json · stop with ctrl-c",
+                farms.names().join(", ")
+            );
+            gleaner_server::serve_farms(listener, &config, farms, shutdown_signal()).await?;
+            println!("stopped");
+            return Ok(());
+        }
         println!(
             "{}",
             gleaner_server::announce(
@@ -126,4 +149,56 @@ async fn shutdown_signal() {
     }
     #[cfg(not(unix))]
     tokio::signal::ctrl_c().await.ok();
+}
+
+// The arguments of `gleaner farm-token` (no doc comment: the variant's is the help).
+#[derive(clap::Args)]
+pub struct FarmTokenArgs {
+    /// The farms directory (the tokens file is DIR/tokens unless --tokens).
+    #[arg(long, value_name = "DIR")]
+    farms: PathBuf,
+    /// The farm the token opens (a subdirectory of DIR).
+    #[arg(long)]
+    farm: String,
+    /// What the token may do: read (reads and previews) or write (also saves and uploads).
+    #[arg(long, value_parser = ["read", "write"])]
+    scope: String,
+    /// The tokens file [default: DIR/tokens].
+    #[arg(long, value_name = "FILE")]
+    tokens: Option<PathBuf>,
+}
+
+/// Draws a token for a farm, appends its hash to the tokens file and prints the token once
+/// (the file keeps only its SHA-256). A running server reads the file at start-up.
+pub fn farm_token(args: FarmTokenArgs) -> Result<()> {
+    use std::io::Write as _;
+    let farms = gleaner_server::farms::farm_dirs(&args.farms)?;
+    if !farms.contains_key(&args.farm) {
+        anyhow::bail!(
+            "{}: no farm {:?} in it (farms: {})",
+            args.farms.display(),
+            args.farm,
+            farms.keys().cloned().collect::<Vec<_>>().join(", ")
+        );
+    }
+    let scope = match args.scope.as_str() {
+        "read" => gleaner_server::Scope::Read,
+        _ => gleaner_server::Scope::Write,
+    };
+    let path = args.tokens.unwrap_or_else(|| args.farms.join("tokens"));
+    let (token, line) = gleaner_server::farms::new_token_line(&args.farm, scope)?;
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)
+        .with_context(|| format!("{}: cannot open the tokens file", path.display()))?;
+    writeln!(file, "{line}").with_context(|| format!("{}: cannot write", path.display()))?;
+    eprintln!(
+        "added a {} token for farm {} to {} (restart the servers to use it); the token, shown once:",
+        scope.name(),
+        args.farm,
+        path.display()
+    );
+    println!("{}", token.reveal());
+    Ok(())
 }

@@ -116,6 +116,16 @@ fn template() -> &'static Path {
     .path()
 }
 
+/// The template's CAF readings files (2013, the 42 stations), as ingested into it.
+pub fn template_inputs() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(template().join("input"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    files
+}
+
 /// A fresh copy of the template project (its own database), in its own temporary folder.
 pub fn caf_project() -> tempfile::TempDir {
     let tmp = tempfile::tempdir().unwrap();

@@ -8,4 +8,5 @@ mod cache;
 mod common;
 mod concurrency;
 mod defects;
+mod farms;
 mod hardening;
