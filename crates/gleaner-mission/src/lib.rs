@@ -242,15 +242,7 @@ pub fn plan_sorties_routed(
     let started = Instant::now();
     let mut orders: Vec<Vec<usize>> = vec![Vec::new(); sorties];
     if let Some(problem) = instance(model, base, candidates, &chosen, sorties, detours)? {
-        let mut solve_options = SolveOptions::default()
-            .with_time_limit(options.time_limit)
-            .with_seed(options.seed);
-        solve_options.max_iterations = options.max_iterations;
-        let kind = match options.planner {
-            Planner::Greedy => SolverKind::Greedy,
-            Planner::Default => SolverKind::Default,
-            Planner::Exact => SolverKind::Exact,
-        };
+        let (solve_options, kind) = solver_setup(options);
         let solution = solve(&problem, kind, &solve_options)?;
         for (order, route) in orders.iter_mut().zip(&solution.routes) {
             *order = route
@@ -409,14 +401,7 @@ pub fn replan(
             let c = remaining[k].centre;
             [c.e, c.n]
         }));
-        let mut rewards = vec![0.0, 0.0];
-        rewards.extend(chosen.iter().map(|&k| remaining[k].score));
-        let mut service = vec![0.0, 0.0];
-        service.extend(
-            chosen
-                .iter()
-                .map(|&k| model.service_energy_j(remaining[k].hover_s)),
-        );
+        let (rewards, service) = node_values(model, remaining, &chosen, 2);
         let problem = Problem::from_scaled_points(
             &points,
             Metric::Euclidean,
@@ -426,13 +411,11 @@ pub fn replan(
         )?
         .with_service_costs(service)?
         .with_endpoints(0, 1)?;
-        let mut solve_options = SolveOptions::default()
-            .with_time_limit(options.time_limit)
-            .with_seed(options.seed);
-        solve_options.max_iterations = options.max_iterations;
-        let kind = match options.planner {
-            Planner::Greedy => SolverKind::Greedy,
-            Planner::Default | Planner::Exact => SolverKind::Default,
+        let (solve_options, kind) = solver_setup(options);
+        // The exact solver plans closed tours: a path from the aircraft takes the default.
+        let kind = match kind {
+            SolverKind::Exact => SolverKind::Default,
+            other => other,
         };
         let solution = solve(&problem, kind, &solve_options)?;
         order = solution
@@ -496,14 +479,7 @@ fn instance(
         for &a in &nodes {
             cost.extend(nodes.iter().map(|&b| epm * d.length_m(a, b)));
         }
-        let mut rewards = vec![0.0];
-        rewards.extend(chosen.iter().map(|&k| candidates[k].score));
-        let mut service = vec![0.0];
-        service.extend(
-            chosen
-                .iter()
-                .map(|&k| model.service_energy_j(candidates[k].hover_s)),
-        );
+        let (rewards, service) = node_values(model, candidates, chosen, 1);
         let problem = Problem::new(cost, rewards, budget)?
             .with_service_costs(service)?
             .with_endpoints(0, 0)?
@@ -519,14 +495,7 @@ fn instance(
         let c = candidates[k].centre;
         [c.e, c.n]
     }));
-    let mut rewards = vec![0.0];
-    rewards.extend(chosen.iter().map(|&k| candidates[k].score));
-    let mut service = vec![0.0];
-    service.extend(
-        chosen
-            .iter()
-            .map(|&k| model.service_energy_j(candidates[k].hover_s)),
-    );
+    let (rewards, service) = node_values(model, candidates, chosen, 1);
     let problem = Problem::from_scaled_points(
         &points,
         Metric::Euclidean,
@@ -549,6 +518,39 @@ fn check_detours(candidates: &[Candidate], detours: Option<&Detours>) -> Result<
         }),
         _ => Ok(()),
     }
+}
+
+/// The rewards (S) and service energies (J) of `ends` leading end nodes (0 and 0 J: the base,
+/// or the aircraft and the base) followed by the `chosen` candidates.
+fn node_values(
+    model: &MissionEnergyModel,
+    candidates: &[Candidate],
+    chosen: &[usize],
+    ends: usize,
+) -> (Vec<f64>, Vec<f64>) {
+    let mut rewards = vec![0.0; ends];
+    rewards.extend(chosen.iter().map(|&k| candidates[k].score));
+    let mut service = vec![0.0; ends];
+    service.extend(
+        chosen
+            .iter()
+            .map(|&k| model.service_energy_j(candidates[k].hover_s)),
+    );
+    (rewards, service)
+}
+
+/// The solver's options and kind for `options`.
+fn solver_setup(options: &PlanOptions) -> (SolveOptions, SolverKind) {
+    let mut solve_options = SolveOptions::default()
+        .with_time_limit(options.time_limit)
+        .with_seed(options.seed);
+    solve_options.max_iterations = options.max_iterations;
+    let kind = match options.planner {
+        Planner::Greedy => SolverKind::Greedy,
+        Planner::Default => SolverKind::Default,
+        Planner::Exact => SolverKind::Exact,
+    };
+    (solve_options, kind)
 }
 
 /// Finite scores and finite non-negative hover times, or the first offender.

@@ -818,23 +818,7 @@ pub async fn replan(
 ) -> ApiResult<Json<ReplanDoc>> {
     let id = mission_id(&id)?;
     let b: ReplanBody = parse_json(&body_bytes(body)?)?;
-    if b.iterations == Some(0) {
-        return Err(ApiError::bad_request(
-            Some("iterations"),
-            "iterations = 0: expected at least 1 (or leave it out for no cap)",
-        ));
-    }
-    if let Some(t) = b.time_limit_s
-        && !(t.is_finite() && t >= 0.0 && t <= s.0.max_time_limit_s)
-    {
-        return Err(ApiError::bad_request(
-            Some("time_limit_s"),
-            format!(
-                "time limit {t} s: expected seconds in [0, {}]",
-                s.0.max_time_limit_s
-            ),
-        ));
-    }
+    search_limits(&s, b.iterations, b.time_limit_s)?;
     let request = app::ReplanRequest {
         mission: id,
         after_stop: b.after_stop,
@@ -882,17 +866,20 @@ pub async fn plan_sorties(
 
 /// The plan use case behind both plan routes: checks, one planning search at a time, the
 /// mission and any further sorties as wire documents, sortie 1 first (never empty).
-async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Vec<MissionDoc>> {
-    if !b.dry_run {
-        caller.require_write(s)?;
-    }
-    if b.iterations == Some(0) {
+/// A request's search limits: an iteration cap of at least 1, a time limit in [0, the
+/// server's maximum] seconds.
+fn search_limits(
+    s: &AppState,
+    iterations: Option<u64>,
+    time_limit_s: Option<f64>,
+) -> ApiResult<()> {
+    if iterations == Some(0) {
         return Err(ApiError::bad_request(
             Some("iterations"),
             "iterations = 0: expected at least 1 (or leave it out for no cap)",
         ));
     }
-    if let Some(t) = b.time_limit_s
+    if let Some(t) = time_limit_s
         && !(t.is_finite() && t >= 0.0 && t <= s.0.max_time_limit_s)
     {
         return Err(ApiError::bad_request(
@@ -903,6 +890,14 @@ async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Ve
             ),
         ));
     }
+    Ok(())
+}
+
+async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Vec<MissionDoc>> {
+    if !b.dry_run {
+        caller.require_write(s)?;
+    }
+    search_limits(s, b.iterations, b.time_limit_s)?;
     let planner = b
         .solver
         .as_deref()

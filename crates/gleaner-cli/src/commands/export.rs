@@ -23,6 +23,36 @@ fn write(dir: &Path, name: &str, bytes: &[u8], files: &mut Vec<PathBuf>) -> Resu
     Ok(())
 }
 
+/// Creates `dir` and writes `mission.geojson`, `mission.plan` and `mission.waypoints` of `doc`
+/// (each autopilot file read back and priced by its writer); returns their paths.
+fn write_map_and_autopilot_files(
+    field: &gleaner_wire::FieldDoc,
+    doc: &gleaner_wire::MissionDoc,
+    dir: &Path,
+) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+    let mut files = Vec::new();
+    write(
+        dir,
+        "mission.geojson",
+        gleaner_wire::geojson(field, doc)?.as_bytes(),
+        &mut files,
+    )?;
+    write(
+        dir,
+        "mission.plan",
+        gleaner_wire::qgc_plan(doc)?.as_bytes(),
+        &mut files,
+    )?;
+    write(
+        dir,
+        "mission.waypoints",
+        gleaner_wire::wpl(doc)?.as_bytes(),
+        &mut files,
+    )?;
+    Ok(files)
+}
+
 /// Writes the files of `export` into `dir` (created if missing), the DJI archive for the
 /// default aircraft ([`WpmlOptions::default`]).
 pub fn write_files(export: &MissionExport, dir: &Path) -> Result<Exported> {
@@ -31,28 +61,9 @@ pub fn write_files(export: &MissionExport, dir: &Path) -> Result<Exported> {
 
 /// [`write_files`] declaring `wpml` as the aircraft of `mission.kmz` (DJI WPML).
 pub fn write_files_with(export: &MissionExport, dir: &Path, wpml: WpmlOptions) -> Result<Exported> {
-    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
     let doc = gleaner_wire::convert::export_mission(export);
     let field = gleaner_wire::convert::field(&export.field);
-    let mut files = Vec::new();
-    write(
-        dir,
-        "mission.geojson",
-        gleaner_wire::geojson(&field, &doc)?.as_bytes(),
-        &mut files,
-    )?;
-    write(
-        dir,
-        "mission.plan",
-        gleaner_wire::qgc_plan(&doc)?.as_bytes(),
-        &mut files,
-    )?;
-    write(
-        dir,
-        "mission.waypoints",
-        gleaner_wire::wpl(&doc)?.as_bytes(),
-        &mut files,
-    )?;
+    let mut files = write_map_and_autopilot_files(&field, &doc, dir)?;
     let mut skipped = Vec::new();
     let speed = gleaner_energy_speed(doc.profile.cruise_speed_mps);
     let altitude = gleaner_wire::commanded_altitude_m(doc.profile.altitude_m);
@@ -88,8 +99,8 @@ pub fn write_files_with(export: &MissionExport, dir: &Path, wpml: WpmlOptions) -
 }
 
 /// Writes the files of a continuation re-planned in the air into `dir` (created if missing):
-/// `mission.plan`, `mission.waypoints` (no take-off: a 0 s first waypoint where the aircraft
-/// is), `mission.geojson` and `mission.json`; no DJI archive (a wayline mission takes off by
+/// `mission.geojson`, `mission.plan`, `mission.waypoints` (no take-off: a 0 s first waypoint
+/// where the aircraft is) and `mission.json`; no DJI archive (a wayline mission takes off by
 /// itself) and no figure. Each flight file is read back and its energy recomputed against the
 /// energy left less the reserve.
 pub fn write_replan_files<S: gleaner_app::Store>(
@@ -97,28 +108,9 @@ pub fn write_replan_files<S: gleaner_app::Store>(
     replan: &gleaner_app::Replan,
     dir: &Path,
 ) -> Result<Exported> {
-    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
     let doc = gleaner_wire::convert::replanned_mission(replan);
     let field = gleaner_wire::convert::field(&gleaner_app::field_view(project)?);
-    let mut files = Vec::new();
-    write(
-        dir,
-        "mission.plan",
-        gleaner_wire::qgc_plan(&doc)?.as_bytes(),
-        &mut files,
-    )?;
-    write(
-        dir,
-        "mission.waypoints",
-        gleaner_wire::wpl(&doc)?.as_bytes(),
-        &mut files,
-    )?;
-    write(
-        dir,
-        "mission.geojson",
-        gleaner_wire::geojson(&field, &doc)?.as_bytes(),
-        &mut files,
-    )?;
+    let mut files = write_map_and_autopilot_files(&field, &doc, dir)?;
     write(
         dir,
         "mission.json",
