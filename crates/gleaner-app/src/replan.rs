@@ -1,13 +1,13 @@
 //! Re-planning in the air: the best continuation of a planned mission from the stop the
 //! aircraft is over, with the energy it has left.
 
-use gleaner_energy::FlightEnergyModel;
+use gleaner_energy::{FlightEnergyModel, flight_point, flight_position};
 use gleaner_field::{CellIndex, LatLon};
 use gleaner_mission::{Candidate, PlanOptions, Planner, replan as plan_continuation};
 use gleaner_store::{MissionId, MissionRecord, MissionStatus, NewMission, StopRecord, Store};
 
 use crate::error::{AppError, Result};
-use crate::plan::{FlightPoints, breakdown, energy_model};
+use crate::plan::breakdown;
 use crate::project::Project;
 
 /// What to re-plan.
@@ -103,15 +103,18 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
         )));
     }
     let reserve_j = capacity_j * reserve_fraction;
+    // Priced by the very model the files' writers recompute with, at the mission's speed and
+    // altitude (what its files command).
     let export = crate::view::export_energy_model(project, &parent)?;
-    let model = energy_model(project)?
-        .with_cruise_speed(parent.mission.profile.cruise_speed_mps)
+    let profile = &parent.mission.profile;
+    let model = export
+        .model(profile.cruise_speed_mps, profile.altitude_m)
         .map_err(|e| AppError::core("energy model", e))?;
     let (_, field) = project.field()?;
     let frame = field.frame();
-    let base = FlightPoints::of(&field).base;
+    let base = flight_point(frame, field.base());
     let start_pos = match request.after_stop {
-        0 => gleaner_energy::flight_position(field.base()),
+        0 => flight_position(field.base()),
         k => stops[k - 1].centre,
     };
     let remaining: &[StopRecord] = &stops[request.after_stop..];

@@ -412,11 +412,6 @@ pub fn replan(
         .with_service_costs(service)?
         .with_endpoints(0, 1)?;
         let (solve_options, kind) = solver_setup(options);
-        // The exact solver plans closed tours: a path from the aircraft takes the default.
-        let kind = match kind {
-            SolverKind::Exact => SolverKind::Default,
-            other => other,
-        };
         let solution = solve(&problem, kind, &solve_options)?;
         order = solution
             .routes
