@@ -62,6 +62,7 @@ mod record;
 mod replan;
 mod score;
 pub mod settings;
+mod silent;
 mod simulate;
 mod state;
 mod summaries;
