@@ -45,8 +45,6 @@ pub enum Term {
     Uncertainty,
     /// Redundancy R (delta).
     Redundancy,
-    /// The silent-sensor factor (`silent_revival_per_day`).
-    Silent,
 }
 
 /// How a run chooses the cells of each mission.
@@ -100,7 +98,7 @@ pub enum Strategy {
 
 impl Strategy {
     /// Every strategy, ablations included, in report order.
-    pub const ALL: [Strategy; 16] = [
+    pub const ALL: [Strategy; 15] = [
         Strategy::Gleaner,
         Strategy::Paper,
         Strategy::Variance,
@@ -116,7 +114,6 @@ impl Strategy {
         Strategy::Without(Term::Redundancy),
         Strategy::Gated,
         Strategy::Expected,
-        Strategy::Without(Term::Silent),
     ];
 
     /// The main strategies (`main`): gleaner, paper, variance, information, freshness,
@@ -146,7 +143,6 @@ impl Strategy {
             Strategy::Without(Term::Anomaly) => "no-anomaly",
             Strategy::Without(Term::Uncertainty) => "no-uncertainty",
             Strategy::Without(Term::Redundancy) => "no-redundancy",
-            Strategy::Without(Term::Silent) => "no-silent",
             Strategy::Variance => "variance",
             Strategy::Information => "information",
             Strategy::Expected => "expected-error",
@@ -208,7 +204,6 @@ impl Strategy {
             Strategy::Without(Term::Anomaly) => u.beta = 0.0,
             Strategy::Without(Term::Uncertainty) => u.gamma = 0.0,
             Strategy::Without(Term::Redundancy) => u.delta = 0.0,
-            Strategy::Without(Term::Silent) => u.silent_revival_per_day = 0.0,
             _ => {}
         }
         s

@@ -62,7 +62,6 @@ mod record;
 mod replan;
 mod score;
 pub mod settings;
-mod silent;
 mod simulate;
 mod state;
 mod summaries;

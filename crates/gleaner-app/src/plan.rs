@@ -498,19 +498,6 @@ pub(crate) fn plan_scored<S: Store>(
                     Err(why) => scoring.warnings.push(why),
                 }
             }
-            let revival = settings.utility.silent_revival_per_day;
-            if revival > 0.0 {
-                // gleaner's silent sensors: a cell is worth S times the chance its sensors
-                // deliver (silent.rs).
-                let (chances, silent) =
-                    crate::silent::delivery(project, &scoring.knowledge, scoring.t, revival)?;
-                for (s, p) in scores.iter_mut().zip(&chances) {
-                    if *s > 0.0 {
-                        *s *= p;
-                    }
-                }
-                form = format!("{form}; × delivery ({silent} silent sensors)");
-            }
             let (t, w) = (scoring.t, scoring.weights);
             (None, Some(scoring), scores, t, form, w)
         }

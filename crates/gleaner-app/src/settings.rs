@@ -244,14 +244,6 @@ pub struct UtilitySection {
     /// modality alone (default false).
     #[serde(default)]
     pub drift_all_depths: bool,
-    /// Silent sensors: per day, the chance that a sensor whose last recorded collection
-    /// brought none of its readings back (down, flat battery, broken cable) has come back to
-    /// life; a cell is then worth its S times the mean over its sensors of the chance they
-    /// deliver, 1 − (1 − r)^(days since that collection) for a silent sensor, 1 otherwise
-    /// (docs/method.md §2). 0 = off (the paper's: every cell worth its S however its last
-    /// visit went); gleaner's method uses [`GLEANER_SILENT_REVIVAL_PER_DAY`].
-    #[serde(default)]
-    pub silent_revival_per_day: f64,
 }
 
 /// gleaner's own freshness half-life, seconds (14 days): F grows about linearly with age
@@ -264,12 +256,6 @@ pub const GLEANER_HALF_LIFE_S: f64 = 14.0 * 86_400.0;
 /// five planner seeds (5.62 → 5.67, level) and Hubbard Brook (7.77 → 7.52)
 /// (docs/method-improvement.md).
 pub const GLEANER_BETA: f64 = 4.0;
-
-/// gleaner's [`UtilitySection::silent_revival_per_day`] (1/day): on the tuning data (CAF
-/// daily VW 30 cm, 2007 to the end of 2013) the 558 outages between two readings of a sensor
-/// last 31,624 sensor-days in all, 0.0176 ends per missing day (a mean outage of 57 days,
-/// median 11).
-pub const GLEANER_SILENT_REVIVAL_PER_DAY: f64 = 0.0176;
 
 impl Default for UtilitySection {
     /// The core's defaults ([`gleaner_utility::UtilityConfig::default`],
@@ -313,7 +299,6 @@ impl Default for UtilitySection {
             drift_shrink: DEFAULT_DRIFT_SHRINK,
             drift_spread: DEFAULT_DRIFT_SPREAD,
             drift_all_depths: false,
-            silent_revival_per_day: 0.0,
         }
     }
 }
@@ -484,7 +469,6 @@ impl UtilitySection {
             beta: GLEANER_BETA,
             gamma: 0.0,
             delta: 0.0,
-            silent_revival_per_day: GLEANER_SILENT_REVIVAL_PER_DAY,
             ..self.gated()
         }
     }
@@ -522,7 +506,6 @@ impl UtilitySection {
             score_form: "additive".into(),
             variance_weight: 0.0,
             freshness_form: "half-life".into(),
-            silent_revival_per_day: 0.0,
             ..self.clone()
         }
     }
@@ -761,7 +744,7 @@ impl Settings {
         let u = &self.utility;
         let e = &self.energy;
         let p = &self.planner;
-        let values: [(&str, Option<f64>); 39] = [
+        let values: [(&str, Option<f64>); 38] = [
             ("field.base_alt_m", Some(f.base_alt_m)),
             ("field.no_fly_buffer_m", Some(f.no_fly_buffer_m)),
             ("field.cell_size_m", Some(f.cell_size_m)),
@@ -798,10 +781,6 @@ impl Settings {
             ("utility.drift_window_days", Some(u.drift_window_days)),
             ("utility.drift_shrink", Some(u.drift_shrink)),
             ("utility.drift_spread", Some(u.drift_spread)),
-            (
-                "utility.silent_revival_per_day",
-                Some(u.silent_revival_per_day),
-            ),
             ("energy.battery_j", e.battery_j),
             ("energy.reserve_fraction", e.reserve_fraction),
             ("energy.altitude_m", e.altitude_m),
@@ -946,7 +925,6 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ("utility.drift_window_days", 1.0, 36_500.0, false, "days"),
     ("utility.drift_shrink", 0.0, 1.0, false, ""),
     ("utility.drift_spread", 0.0, 10.0, false, ""),
-    ("utility.silent_revival_per_day", 0.0, 1.0, false, "per day"),
     ("energy.battery_j", 0.0, 1e9, true, "J"),
     ("energy.reserve_fraction", 0.0, 0.99, false, ""),
     ("energy.altitude_m", 0.0, 120.0, true, "m"),

@@ -70,7 +70,7 @@ pub struct SimulateArgs {
     /// Strategies, comma-separated, or `all` / `main` (gleaner, paper, variance, freshness,
     /// round-robin, random, nearest, exhaustive). Names: gleaner, paper, variance,
     /// freshness, round-robin, random, nearest, exhaustive, no-freshness, no-anomaly,
-    /// no-uncertainty, no-redundancy, no-silent, gated (gleaner's earlier method: the gated S with a
+    /// no-uncertainty, no-redundancy, gated (gleaner's earlier method: the gated S with a
     /// 14-day freshness half-life). The yardstick `oracle` runs only when named: it sees the
     /// values each flight will bring back (each cell worth its sensors' squared estimation
     /// error), so it bounds what any choice of cells could buy; it is not a flyable strategy.
