@@ -726,10 +726,7 @@ impl MissionEnergyModel {
         for v in route {
             let (hover_j, comm_j) = match self.per_cell_j {
                 Some(j) => (j, 0.0),
-                None => (
-                    self.hover_power_w * v.hover_s,
-                    self.rx_power_w * v.hover_s,
-                ),
+                None => (self.hover_power_w * v.hover_s, self.rx_power_w * v.hover_s),
             };
             cells.push(CellEnergy {
                 hover_s: v.hover_s,
