@@ -108,13 +108,13 @@ pub fn wind_lines(w: &gleaner_wire::WindDoc) -> String {
     let dir = format!("{:.0}°", w.from_deg);
     let mut out = if w.forecast_mps > 0.0 {
         format!(
-            "wind: forecast {:.1} m/s from {dir} + {:.1} m/s margin: legs priced at {:.1} m/s              from {dir} (airspeed holding each track at the planned ground speed)
+            "wind: forecast {:.1} m/s from {dir} + {:.1} m/s margin: legs priced at {:.1} m/s from {dir} (airspeed holding each track at the planned ground speed)
 ",
             w.forecast_mps, w.margin_mps, w.planned_mps
         )
     } else {
         format!(
-            "wind: planned in still air (no forecast: --wind SPEED@FROM or [flight] wind_mps);              direction {dir} from [flight] wind_from_deg
+            "wind: planned in still air (no forecast: --wind SPEED@FROM or [flight] wind_mps); direction {dir} from [flight] wind_from_deg
 "
         )
     };
@@ -146,11 +146,11 @@ pub fn wind_lines(w: &gleaner_wire::WindDoc) -> String {
     }
     match (w.strongest_feasible_mps, w.strongest_capped) {
         (Some(v), false) => out.push_str(&format!(
-            "strongest wind it stays within the battery in: {v:.1} m/s from {dir} (the              forecast's direction)
+            "strongest wind it stays within the battery in: {v:.1} m/s from {dir} (the forecast's direction)
 "
         )),
         (Some(v), true) => out.push_str(&format!(
-            "strongest wind it stays within the battery in: at least {v:.0} m/s from {dir} (the              forecast's direction; the search stops there)
+            "strongest wind it stays within the battery in: at least {v:.0} m/s from {dir} (the forecast's direction; the search stops there)
 "
         )),
         (None, _) => {}
