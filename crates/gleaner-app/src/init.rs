@@ -199,6 +199,7 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
         utility,
         energy: Default::default(),
         planner: Default::default(),
+        flight: Default::default(),
     };
     settings.validate()?;
     check_grid_size(&sensors, base, &settings)?;

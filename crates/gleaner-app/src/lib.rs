@@ -70,6 +70,7 @@ mod test_farm;
 mod value;
 mod view;
 mod when;
+pub mod wind;
 
 pub use cell_detail::{CellDetail, Contributions, SeriesPoint, cell_detail};
 pub use error::{AppError, Result};
@@ -104,6 +105,7 @@ pub use view::{
     export_energy_model, field_view, mission, missions, newest_reading,
 };
 
+pub use gleaner_energy::Wind;
 /// Re-exported so adapters name one crate for the lifecycle's data.
 pub use gleaner_ingest::OnError;
 pub use gleaner_ingest::time::{format_rfc3339, parse_timestamp};

@@ -64,6 +64,9 @@ pub struct PlanRequest {
     pub sorties: Option<usize>,
     /// What the route maximises [default: the project's `[planner] objective`].
     pub objective: Option<Objective>,
+    /// The forecast wind (m/s, and the direction it blows from) [default: the project's
+    /// `[flight] wind_mps` and `wind_from_deg`]; `[flight] wind_margin_mps` is added to it.
+    pub wind: Option<gleaner_energy::Wind>,
 }
 
 /// What the planner maximises (docs/method.md §4, §7).
@@ -92,6 +95,8 @@ pub struct ExtraSortie {
     pub mission: NewMission,
     /// The turn points of its legs around no-fly zones (see [`PlannedMission::via`]).
     pub via: Vec<Vec<LatLon>>,
+    /// Its legs' wind and the strongest wind it stands (see [`PlannedMission::wind`]).
+    pub wind: crate::wind::RouteWind,
 }
 
 /// The headline numbers of a comparison plan.
@@ -132,6 +137,10 @@ pub struct PlannedMission {
     /// Cells the flight cannot reach (a centre inside a buffered no-fly zone, outside the
     /// geofence, or cut off from the base): never planned.
     pub unreachable: Vec<crate::airspace::Unreachable>,
+    /// The wind it was planned in (forecast, margin, the wind its legs are priced in), each
+    /// leg's head-, tail- and cross-wind, and the strongest wind from the forecast's
+    /// direction at which it stays within the budget.
+    pub wind: crate::wind::RouteWind,
 }
 
 /// Largest magnitude of a user-given score (the utility engine's scores are a few units).
@@ -233,6 +242,8 @@ pub fn flight_profile<S: Store>(
         base_alt_m: project.settings().field.base_alt_m,
         altitude_m: model.link().altitude_m,
         cruise_speed_mps: model.cruise_speed_mps(),
+        wind_mps: model.wind().speed_mps,
+        wind_from_deg: model.wind().from_deg,
     })
 }
 
@@ -515,6 +526,10 @@ pub(crate) fn plan_scored<S: Store>(
             flight_model(&energy, "energy preset")?
         }
     };
+    // Legs and hovers priced in the forecast wind plus the margin (still air: the model as
+    // it was, to the bit).
+    let plan_wind = crate::wind::PlanWind::of(&settings.flight, request.wind)?;
+    let model = model.with_wind(plan_wind.planned);
     let profile = flight_profile(project, &model)?;
     let services = services(&model, k, t)?;
     let points = FlightPoints::of(&k.field);
@@ -650,6 +665,32 @@ pub(crate) fn plan_scored<S: Store>(
         check_feasible(p)?;
     }
     let terms = scoring.as_ref().map(|s| s.terms.as_slice());
+    let route_wind = |plan: &MissionPlan| -> Result<crate::wind::RouteWind> {
+        let visits: Vec<gleaner_energy::CellVisit> = plan
+            .order
+            .iter()
+            .map(|&k| gleaner_energy::CellVisit {
+                centre: candidates[k].centre,
+                hover_s: candidates[k].hover_s,
+            })
+            .collect();
+        let strongest = if visits.is_empty() {
+            None
+        } else {
+            crate::wind::strongest(
+                &model,
+                base,
+                &visits,
+                &plan.via,
+                plan_wind.forecast.from_deg,
+            )?
+        };
+        Ok(crate::wind::RouteWind {
+            wind: plan_wind,
+            legs: crate::wind::legs(&plan.energy),
+            strongest,
+        })
+    };
     let new_mission = |plan: &MissionPlan| NewMission {
         created_at: clock_now,
         kind: MissionKind::Adaptive,
@@ -681,12 +722,15 @@ pub(crate) fn plan_scored<S: Store>(
     let first_via = via_positions(frame, &plan.via);
     let extra_sorties: Vec<ExtraSortie> = plans
         .iter()
-        .map(|p| ExtraSortie {
-            id: None,
-            mission: new_mission(p),
-            via: via_positions(frame, &p.via),
+        .map(|p| {
+            Ok(ExtraSortie {
+                id: None,
+                mission: new_mission(p),
+                via: via_positions(frame, &p.via),
+                wind: route_wind(p)?,
+            })
         })
-        .collect();
+        .collect::<Result<_>>()?;
     let mut planned = PlannedMission {
         id: None,
         mission,
@@ -703,6 +747,7 @@ pub(crate) fn plan_scored<S: Store>(
         extra_sorties,
         via: first_via,
         unreachable,
+        wind: route_wind(&plan)?,
     };
     if !request.dry_run {
         let known = planned

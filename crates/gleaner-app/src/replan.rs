@@ -26,6 +26,9 @@ pub struct ReplanRequest {
     pub iterations: Option<u64>,
     /// Wall-clock limit, seconds [default: 1 s].
     pub time_limit_s: Option<f64>,
+    /// The wind now (m/s, and the direction it blows from), to which `[flight]
+    /// wind_margin_mps` is added [default: the wind the mission was planned in, as stored].
+    pub wind: Option<gleaner_energy::Wind>,
 }
 
 /// A continuation: the stops kept, in their new order, from where the aircraft is.
@@ -51,6 +54,8 @@ pub struct Replan {
     pub energy: FlightEnergyModel,
     /// Time spent planning, seconds.
     pub solve_seconds: f64,
+    /// The continuation's wind: the legs' components and the strongest wind it stands.
+    pub wind: crate::wind::RouteWind,
 }
 
 pub use gleaner_mission::{REPLAN_ITERATIONS, REPLAN_TIME_LIMIT_S};
@@ -105,8 +110,24 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
     let reserve_j = capacity_j * reserve_fraction;
     // Priced by the very model the files' writers recompute with, at the mission's speed and
     // altitude (what its files command).
-    let export = crate::view::export_energy_model(project, &parent)?;
-    let profile = &parent.mission.profile;
+    let stored = crate::view::export_energy_model(project, &parent)?;
+    // The wind now, if given (plus the margin), else the one the mission was planned in.
+    let plan_wind = match request.wind {
+        Some(w) => crate::wind::PlanWind::of(&project.settings().flight, Some(w))?,
+        None => crate::wind::PlanWind {
+            forecast: stored.wind,
+            margin_mps: 0.0,
+            planned: stored.wind,
+        },
+    };
+    let export = gleaner_energy::FlightEnergyModel {
+        wind: plan_wind.planned,
+        ..stored
+    };
+    let mut profile = parent.mission.profile;
+    profile.wind_mps = plan_wind.planned.speed_mps;
+    profile.wind_from_deg = plan_wind.planned.from_deg;
+    let profile = &profile;
     let model = export
         .model(profile.cruise_speed_mps, profile.altitude_m)
         .map_err(|e| AppError::core("energy model", e))?;
@@ -137,20 +158,15 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
     .with_time_limit_secs(request.time_limit_s.unwrap_or(REPLAN_TIME_LIMIT_S))
     .map_err(|e| AppError::Invalid(format!("time limit: {e}")))?;
     let budget_j = left - reserve_j;
-    let plan = plan_continuation(
-        &model,
-        (frame.forward(start_pos), base),
-        &candidates,
-        budget_j,
-        &options,
-    )
-    .map_err(|e| match e {
-        gleaner_mission::PlanError::Infeasible { total_j, .. } => AppError::Invalid(format!(
-            "{left:.1} J left with a {reserve_j:.1} J reserve leaves {budget_j:.1} J, but the \
+    let start_local = frame.forward(start_pos);
+    let plan = plan_continuation(&model, (start_local, base), &candidates, budget_j, &options)
+        .map_err(|e| match e {
+            gleaner_mission::PlanError::Infeasible { total_j, .. } => AppError::Invalid(format!(
+                "{left:.1} J left with a {reserve_j:.1} J reserve leaves {budget_j:.1} J, but the \
              way home alone needs {total_j:.1} J: return to launch and land now"
-        )),
-        other => AppError::core("re-planning", other),
-    })?;
+            )),
+            other => AppError::core("re-planning", other),
+        })?;
     let kept: Vec<StopRecord> = plan
         .order
         .iter()
@@ -172,6 +188,26 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
         .filter(|k| !plan.order.contains(k))
         .map(|k| remaining[k].cell)
         .collect();
+    let visits: Vec<gleaner_energy::CellVisit> = std::iter::once(gleaner_energy::CellVisit {
+        centre: start_local,
+        hover_s: 0.0,
+    })
+    .chain(plan.order.iter().map(|&k| gleaner_energy::CellVisit {
+        centre: candidates[k].centre,
+        hover_s: candidates[k].hover_s,
+    }))
+    .collect();
+    let wind = crate::wind::RouteWind {
+        wind: plan_wind,
+        legs: crate::wind::legs(&plan.energy),
+        strongest: crate::wind::strongest_continuation(
+            &model,
+            (start_local, base),
+            &visits,
+            budget_j,
+            plan_wind.forecast.from_deg,
+        )?,
+    };
     let mission = NewMission {
         solver: "replan".into(),
         seed: options.seed,
@@ -179,6 +215,7 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
         energy: breakdown(&plan.energy),
         return_distance_m: plan.energy.legs.last().map_or(0.0, |l| l.distance_m),
         stops: kept,
+        profile: *profile,
         ..parent.mission.clone()
     };
     Ok(Replan {
@@ -191,5 +228,6 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
         dropped,
         energy: export,
         solve_seconds: plan.solve_seconds,
+        wind,
     })
 }

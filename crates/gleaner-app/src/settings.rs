@@ -40,6 +40,46 @@ pub struct Settings {
     /// `[planner]`
     #[serde(default)]
     pub planner: PlannerSection,
+    /// `[flight]`: the wind forecast plans are made for (left out of the file when still
+    /// air, the default).
+    #[serde(default, skip_serializing_if = "FlightSection::is_default")]
+    pub flight: FlightSection,
+}
+
+/// `[flight]`: the weather a mission is planned for (docs/method.md §3, wind).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct FlightSection {
+    /// Forecast wind speed at the flight altitude, m/s (0: plan in still air, as without
+    /// wind; `plan --wind SPEED@FROM` overrides it).
+    pub wind_mps: f64,
+    /// Direction the forecast wind blows from, degrees clockwise from north
+    /// (meteorological: 270 is a west wind).
+    pub wind_from_deg: f64,
+    /// Added to a forecast wind speed > 0 before pricing the legs, m/s: a plan is feasible
+    /// at the forecast plus this margin (default 2 m/s, the usual error of a short-range
+    /// wind forecast). Not applied to still air (`wind_mps = 0`).
+    pub wind_margin_mps: f64,
+}
+
+/// Default `[flight] wind_margin_mps`, m/s.
+pub const DEFAULT_WIND_MARGIN_MPS: f64 = 2.0;
+
+impl Default for FlightSection {
+    fn default() -> Self {
+        Self {
+            wind_mps: 0.0,
+            wind_from_deg: 0.0,
+            wind_margin_mps: DEFAULT_WIND_MARGIN_MPS,
+        }
+    }
+}
+
+impl FlightSection {
+    /// True for the defaults (still air).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 /// `[project]`: name and database.
@@ -744,7 +784,11 @@ impl Settings {
         let u = &self.utility;
         let e = &self.energy;
         let p = &self.planner;
-        let values: [(&str, Option<f64>); 38] = [
+        let fl = &self.flight;
+        let values: [(&str, Option<f64>); 41] = [
+            ("flight.wind_mps", Some(fl.wind_mps)),
+            ("flight.wind_from_deg", Some(fl.wind_from_deg)),
+            ("flight.wind_margin_mps", Some(fl.wind_margin_mps)),
             ("field.base_alt_m", Some(f.base_alt_m)),
             ("field.no_fly_buffer_m", Some(f.no_fly_buffer_m)),
             ("field.cell_size_m", Some(f.cell_size_m)),
@@ -938,6 +982,15 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ("energy.bytes_per_reading", 0.0, 1e6, true, "bytes"),
     ("energy.cruise", 0.0, 50.0, true, "m/s"),
     ("planner.time_limit_s", 0.0, 86_400.0, false, "s"),
+    ("flight.wind_mps", 0.0, 40.0, false, "m/s"),
+    (
+        "flight.wind_from_deg",
+        0.0,
+        360.0,
+        false,
+        "degrees from north",
+    ),
+    ("flight.wind_margin_mps", 0.0, 20.0, false, "m/s"),
 ];
 
 /// Checks `value` of setting `key` against [`RANGES`].

@@ -170,7 +170,9 @@ const ENERGY_PRESETS: [&str; 2] = ["paper", "large-pack"];
 /// The energy model a mission's files are priced with: the project's `[energy]` settings as
 /// they are now (the aircraft that will fly), with the battery the mission was planned
 /// against — the settings' own preset, or the preset (`paper`, `large-pack`, fields set in
-/// `[energy]` still overriding) whose usable budget (J) is the mission's.
+/// `[energy]` still overriding) whose usable budget (J) is the mission's — in the wind the
+/// mission was planned in (stored with it: the forecast plus the margin; still air for
+/// missions planned before winds were).
 ///
 /// # Errors
 /// [`AppError::Invalid`] when no such model gives the mission's usable budget (the battery
@@ -180,10 +182,14 @@ pub fn export_energy_model<S: Store>(
     m: &MissionRecord,
 ) -> Result<FlightEnergyModel> {
     let budget_j = m.mission.energy.budget_j;
+    let p = &m.mission.profile;
+    let wind = gleaner_energy::Wind::new(p.wind_mps, p.wind_from_deg)
+        .map_err(|e| AppError::core("the mission's planned wind", e))?;
+    let in_wind = |f: FlightEnergyModel| FlightEnergyModel { wind, ..f };
     let own = project.settings().energy.clone();
     let model = crate::plan::flight_model(&own, "[energy] settings")?;
     if model.usable_budget_j() == budget_j {
-        return Ok(model.flight_energy_model());
+        return Ok(in_wind(model.flight_energy_model()));
     }
     for preset in ENERGY_PRESETS {
         let mut energy = own.clone();
@@ -191,7 +197,7 @@ pub fn export_energy_model<S: Store>(
         if let Ok(m) = crate::plan::flight_model(&energy, "energy preset")
             && m.usable_budget_j() == budget_j
         {
-            return Ok(m.flight_energy_model());
+            return Ok(in_wind(m.flight_energy_model()));
         }
     }
     Err(AppError::Invalid(format!(

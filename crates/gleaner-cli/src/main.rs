@@ -235,6 +235,13 @@ enum Command {
         /// [default: [planner] objective, score].
         #[arg(long, value_parser = parse_objective)]
         objective: Option<app::Objective>,
+        /// Forecast wind at the flight altitude as SPEED@FROM: m/s @ degrees clockwise from
+        /// north the wind blows from (e.g. 6@270, a 6 m/s west wind) [default: [flight]
+        /// wind_mps@wind_from_deg, still air]. Legs are priced at the airspeed that holds
+        /// their track at the planned ground speed, in this wind plus [flight]
+        /// wind_margin_mps (2 m/s); the plan prints the strongest wind it stands.
+        #[arg(long, value_name = "SPEED@FROM", value_parser = parse_wind)]
+        wind: Option<app::Wind>,
     },
     /// Plan the exploration phase: as few sorties as possible, each within the battery, that
     /// together visit every cell; each sortie is stored as an exploration mission.
@@ -313,6 +320,11 @@ enum Command {
         /// Iteration cap of the search (deterministic answers).
         #[arg(long, default_value_t = gleaner_app::REPLAN_ITERATIONS)]
         iterations: u64,
+        /// The wind now as SPEED@FROM (m/s @ degrees from north it blows from, e.g. 8@250),
+        /// plus [flight] wind_margin_mps; the continuation and its files are priced in it
+        /// [default: the wind the mission was planned in].
+        #[arg(long, value_name = "SPEED@FROM", value_parser = parse_wind)]
+        wind: Option<app::Wind>,
         #[command(flatten)]
         json: JsonArg,
     },
@@ -688,6 +700,10 @@ fn parse_energy_preset(s: &str) -> Result<app::EnergyPreset, String> {
     s.parse().map_err(|e: app::AppError| e.to_string())
 }
 
+fn parse_wind(s: &str) -> Result<app::Wind, String> {
+    app::wind::parse(s).map_err(|e| e.to_string())
+}
+
 fn parse_objective(s: &str) -> Result<app::Objective, String> {
     s.parse().map_err(|e: app::AppError| e.to_string())
 }
@@ -926,6 +942,7 @@ fn run(cli: Cli) -> Result<()> {
             sorties,
             energy_preset,
             objective,
+            wind,
         } => {
             let mut p = project.open()?;
             let planned = app::plan_with_preset(
@@ -942,6 +959,7 @@ fn run(cli: Cli) -> Result<()> {
                     dry_run,
                     sorties: Some(sorties),
                     objective,
+                    wind,
                 },
                 energy_preset.map(app::EnergyPreset::name),
                 clock_now(),
@@ -963,6 +981,7 @@ fn run(cli: Cli) -> Result<()> {
                     );
                     // The sorties of one day are chosen together from the same cells.
                     doc.candidates = Some(planned.candidates);
+                    doc.wind = Some(gleaner_wire::convert::wind(&e.wind));
                     doc
                 }));
                 json.emit(&docs, "serialising the sorties", || {
@@ -1019,6 +1038,7 @@ fn run(cli: Cli) -> Result<()> {
             seed,
             time_limit,
             iterations,
+            wind,
             json,
         } => {
             let p = project.open()?;
@@ -1031,6 +1051,7 @@ fn run(cli: Cli) -> Result<()> {
                     seed,
                     iterations: Some(iterations),
                     time_limit_s: Some(time_limit),
+                    wind,
                 },
             )?;
             let dir = out.unwrap_or_else(|| {

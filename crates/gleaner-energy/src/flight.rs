@@ -31,6 +31,7 @@ use crate::error::{EnergyError, non_negative, positive};
 use crate::link::{DataLogging, HoverConfig, LinkConfig};
 use crate::mission::{CellService, CellVisit, MissionEnergy, MissionEnergyModel};
 use crate::propulsion::PowerParameters;
+use crate::wind::Wind;
 
 /// Resolution of a commanded hold time, s. Exact in binary (`f64` and `float32`).
 pub const HOLD_STEP_S: f64 = 0.25;
@@ -127,12 +128,17 @@ pub struct FlightEnergyModel {
     pub vertical: Option<VerticalConfig>,
     /// Usable battery energy, J.
     pub usable_budget_j: f64,
+    /// The steady wind the flight was planned in (the forecast plus the planning margin;
+    /// [`Wind::CALM`] for a still-air plan): the writers price the file in it.
+    pub wind: Wind,
 }
 
 impl FlightEnergyModel {
     /// The mission energy model flying at `speed_mps` (m/s) and `altitude_m` (m above home)
-    /// with these parameters — built by [`MissionEnergyModel::new`] itself, so a route priced
-    /// by the planner at the same speed and altitude gets the same joules to the last bit.
+    /// in [`FlightEnergyModel::wind`] with these parameters — built by
+    /// [`MissionEnergyModel::new`] and [`MissionEnergyModel::with_wind`] themselves, so a
+    /// route priced by the planner at the same speed, altitude and wind gets the same joules
+    /// to the last bit.
     ///
     /// # Errors
     /// [`EnergyError::InvalidParameter`] for a parameter out of range (speed, altitude,
@@ -162,7 +168,8 @@ impl FlightEnergyModel {
             vertical: self.vertical,
             linear: self.linear,
         };
-        MissionEnergyModel::new(&config)
+        crate::wind::Wind::new(self.wind.speed_mps, self.wind.from_deg)?;
+        Ok(MissionEnergyModel::new(&config)?.with_wind(self.wind))
     }
 
     /// The energy breakdown of `flight` as commanded: from its home through its waypoints and
@@ -253,6 +260,7 @@ impl MissionEnergyModel {
             linear: self.linear(),
             vertical: self.vertical(),
             usable_budget_j: self.usable_budget_j(),
+            wind: self.wind(),
         }
     }
 }
@@ -411,9 +419,13 @@ mod tests {
         fn a_commanded_flight_costs_what_the_planner_priced(
             stops in proptest::collection::vec((-800.0f64..800.0, -800.0f64..800.0, 30.0f64..60.0), 1..12),
             vertical in any::<bool>(),
+            wind in (0.0f64..14.0, 0.0f64..360.0),
+            calm in any::<bool>(),
         ) {
             let cfg = EnergyConfig { vertical: vertical.then(VerticalConfig::default), ..EnergyConfig::paper() };
-            let m = MissionEnergyModel::new(&cfg).unwrap().for_flight().unwrap();
+            // In still air or in a wind: the writers price the file in the plan's wind.
+            let wind = if calm { Wind::CALM } else { Wind::new(wind.0, wind.1).unwrap() };
+            let m = MissionEnergyModel::new(&cfg).unwrap().for_flight().unwrap().with_wind(wind);
             let origin = LatLon::new(46.78, -117.08).unwrap();
             let frame = TransverseMercator::local(origin);
             let home = flight_position(origin);

@@ -59,4 +59,6 @@ pub use mission::{
     TravelCostMatrix, path_length_m,
 };
 pub use propulsion::{Airframe, OptimalSpeed, PowerModel, PowerParameters};
-pub use wind::{Wind, WindLeg};
+pub use wind::{
+    STRONGEST_WIND_CAP_MPS, STRONGEST_WIND_STEP_MPS, Wind, WindLeg, WindTolerance, strongest_wind,
+};

@@ -7,6 +7,7 @@ use crate::config::{CruiseSpeed, EnergyConfig, LinearEnergy, VerticalConfig};
 use crate::error::{EnergyError, finite, non_negative};
 use crate::link::{DataLogging, HoverConfig, LinkConfig, SensorBacklog};
 use crate::propulsion::PowerModel;
+use crate::wind::Wind;
 
 /// Euclidean distance between two local points, metres: sqrt(Δe² + Δn²). Used for every
 /// distance in this crate so that the planner costs and the breakdown agree to the last bit.
@@ -61,15 +62,24 @@ pub struct CellService {
     pub energy_j: f64,
 }
 
-/// One flight leg at cruise speed.
+/// One flight leg at the cruise ground speed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LegEnergy {
     /// Leg length, metres.
     pub distance_m: f64,
-    /// Flight time at cruise speed, seconds.
+    /// Flight time at the cruise ground speed, seconds.
     pub time_s: f64,
-    /// Propulsion energy P(V)·distance/V, J.
+    /// Propulsion energy P(V_air)·distance/V (still air: P(V)·distance/V), J.
     pub energy_j: f64,
+    /// Wind against the track, m/s (> 0 a head wind, < 0 a tail wind; distance-weighted
+    /// mean over a polyline's segments; 0 in still air).
+    pub headwind_mps: f64,
+    /// Wind across the track, m/s (> 0 from the left, < 0 from the right; distance-weighted
+    /// mean over a polyline's segments; 0 in still air).
+    pub crosswind_mps: f64,
+    /// Airspeed that holds the track at the ground speed, m/s (distance-weighted mean over a
+    /// polyline's segments; the ground speed in still air).
+    pub airspeed_mps: f64,
 }
 
 /// Energy spent at one visited cell.
@@ -189,7 +199,12 @@ pub struct MissionEnergyModel {
     cruise_speed_mps: f64,
     cruise_power_w: f64,
     energy_per_metre_j: f64,
+    /// Hover power in still air P(0), W: the climb and descent.
+    calm_hover_power_w: f64,
+    /// Hover power at a stop in the model's wind P(|w|), W (P(0) in still air).
     hover_power_w: f64,
+    /// The steady wind the legs and stops are priced in (calm by default).
+    wind: Wind,
     rx_power_w: f64,
     budget_j: f64,
     vertical_j: f64,
@@ -246,7 +261,9 @@ impl MissionEnergyModel {
             per_cell_j: config.linear.map(|l| l.j_per_cell),
             linear: config.linear,
             vertical: config.vertical,
+            calm_hover_power_w: hover_power_w,
             hover_power_w,
+            wind: Wind::CALM,
             rx_power_w: config.rx_power_w,
             budget_j: config.battery.usable_j(),
             vertical_j,
@@ -272,6 +289,34 @@ impl MissionEnergyModel {
             .linear
             .map_or(m.cruise_power_w / speed_mps, |l| l.j_per_m);
         Ok(m)
+    }
+
+    /// This model in a steady `wind` (the wind is replaced, not added): every leg then flies
+    /// the airspeed and heading that hold its track at the cruise ground speed and costs
+    /// P(V_air)·d/V (docs/method.md §3, wind), every stop hovers at P(|w|); take-off, climb
+    /// and descent stay as in still air. [`Wind::CALM`] gives back the still-air model to
+    /// the last bit. The linear model has no airspeed: its energies do not depend on the
+    /// wind.
+    pub fn with_wind(&self, wind: Wind) -> Self {
+        let mut m = self.clone();
+        m.wind = wind;
+        m.hover_power_w = if wind.is_calm() {
+            m.calm_hover_power_w
+        } else {
+            m.power.hover_power_in_wind_w(wind)
+        };
+        m
+    }
+
+    /// The wind the model prices legs and stops in.
+    pub fn wind(&self) -> Wind {
+        self.wind
+    }
+
+    /// True when the wind changes any energy: a wind that is not calm over the physical
+    /// model. Then a leg's cost depends on its direction (an asymmetric cost matrix).
+    pub fn wind_applies(&self) -> bool {
+        !self.wind.is_calm() && self.linear.is_none()
     }
 
     /// The linear model in place of the physical one, if configured.
@@ -304,9 +349,14 @@ impl MissionEnergyModel {
         self.energy_per_metre_j
     }
 
-    /// Hover power P(0), W.
+    /// Hover power at a stop, W: P(|w|) in the model's wind, P(0) in still air.
     pub fn hover_power_w(&self) -> f64 {
         self.hover_power_w
+    }
+
+    /// Hover power in still air P(0), W (climb and descent are priced with it).
+    pub fn calm_hover_power_w(&self) -> f64 {
+        self.calm_hover_power_w
     }
 
     /// Receiver power P_rx, W.
@@ -340,10 +390,91 @@ impl MissionEnergyModel {
         &self.hover
     }
 
-    /// Travel energy between two points at cruise speed, P(V)·distance/V (the linear model:
-    /// its energy per metre · distance), J.
+    /// Travel energy from `from` to `to` (local frame, m) at the cruise ground speed,
+    /// P(V)·distance/V in still air (the linear model: its energy per metre · distance), J.
+    /// In wind ([`MissionEnergyModel::wind_applies`]) P(V_air)·distance/V with the airspeed
+    /// that holds the track: it then depends on the direction.
     pub fn travel_energy_j(&self, from: LocalPoint, to: LocalPoint) -> f64 {
+        if self.wind_applies() {
+            return self.segment_in_wind(from, to).energy_j;
+        }
         self.energy_per_metre_j * distance_m(&from, &to)
+    }
+
+    /// Travel energy (J) along the polyline `points` (local frame, m) flown in their order:
+    /// in still air energy per metre times [`path_length_m`] (the same for both directions),
+    /// in wind the sum of its segments' [`MissionEnergyModel::travel_energy_j`] from the
+    /// first point. What a leg around no-fly zones costs in the breakdown, to the bit.
+    pub fn polyline_energy_j(&self, points: &[LocalPoint]) -> f64 {
+        if self.wind_applies() {
+            return points
+                .windows(2)
+                .map(|w| self.segment_in_wind(w[0], w[1]).energy_j)
+                .sum();
+        }
+        self.energy_per_metre_j * path_length_m(points)
+    }
+
+    /// One straight segment in the model's wind at the cruise ground speed (finite points:
+    /// the callers check them; a non-finite one gives NaN energies, refused downstream).
+    fn segment_in_wind(&self, from: LocalPoint, to: LocalPoint) -> crate::wind::WindLeg {
+        self.power
+            .leg_in_wind(from, to, self.cruise_speed_mps, self.wind)
+            .unwrap_or(crate::wind::WindLeg {
+                distance_m: f64::NAN,
+                ground_speed_mps: self.cruise_speed_mps,
+                airspeed_mps: f64::NAN,
+                track_deg: f64::NAN,
+                heading_deg: f64::NAN,
+                headwind_mps: f64::NAN,
+                crosswind_mps: f64::NAN,
+                time_s: f64::NAN,
+                power_w: f64::NAN,
+                energy_j: f64::NAN,
+            })
+    }
+
+    /// The leg through `polyline` (start, turn points, end; local frame, m) as the breakdown
+    /// prices it: distance [`path_length_m`], time distance / V, energy
+    /// [`MissionEnergyModel::polyline_energy_j`], and the wind's distance-weighted mean
+    /// components.
+    fn leg(&self, polyline: &[LocalPoint]) -> LegEnergy {
+        let distance_m = if polyline.len() == 2 {
+            distance_m(&polyline[0], &polyline[1])
+        } else {
+            path_length_m(polyline)
+        };
+        let time_s = distance_m / self.cruise_speed_mps;
+        if !self.wind_applies() {
+            return LegEnergy {
+                distance_m,
+                time_s,
+                energy_j: self.energy_per_metre_j * distance_m,
+                headwind_mps: 0.0,
+                crosswind_mps: 0.0,
+                airspeed_mps: self.cruise_speed_mps,
+            };
+        }
+        let (mut energy_j, mut head, mut cross, mut air, mut length) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for w in polyline.windows(2) {
+            let s = self.segment_in_wind(w[0], w[1]);
+            energy_j += s.energy_j;
+            head += s.headwind_mps * s.distance_m;
+            cross += s.crosswind_mps * s.distance_m;
+            air += s.airspeed_mps * s.distance_m;
+            length += s.distance_m;
+        }
+        let mean = |x: f64| if length > 0.0 { x / length } else { 0.0 };
+        // A leg of zero length: the wind as it meets a hovering aircraft.
+        let zero = length == 0.0;
+        LegEnergy {
+            distance_m,
+            time_s,
+            energy_j,
+            headwind_mps: mean(head),
+            crosswind_mps: mean(cross),
+            airspeed_mps: if zero { self.wind.speed_mps } else { mean(air) },
+        }
     }
 
     /// Service energy of hovering `hover_s` seconds at a cell, (P(0) + P_rx)·hover_s, J (the
@@ -437,12 +568,21 @@ impl MissionEnergyModel {
             .collect()
     }
 
-    /// The symmetric matrix of travel energies between all pairs of `points`, J (for an
-    /// orienteering cost matrix; put the base among the points).
+    /// The matrix of travel energies between all pairs of `points`, J (entry (i, j): from
+    /// `points[i]` to `points[j]`; for an orienteering cost matrix, put the base among the
+    /// points). Symmetric in still air; in wind ([`MissionEnergyModel::wind_applies`]) each
+    /// entry is [`MissionEnergyModel::travel_energy_j`] and depends on the direction.
     pub fn travel_cost_matrix(&self, points: &[LocalPoint]) -> TravelCostMatrix {
+        let n = points.len();
+        if self.wind_applies() {
+            let mut costs = Vec::with_capacity(n * n);
+            for a in points {
+                costs.extend(points.iter().map(|b| self.travel_energy_j(*a, *b)));
+            }
+            return TravelCostMatrix { n, costs };
+        }
         // Row by row (each pair computed twice, in the same operand order so the matrix is
         // exactly symmetric): sequential writes are faster than mirroring.
-        let n = points.len();
         let mut costs = Vec::with_capacity(n * n);
         for a in points {
             costs.extend(points.iter().map(|b| {
@@ -539,7 +679,7 @@ impl MissionEnergyModel {
             None => (0.0, 0.0),
             Some(v) => {
                 let t = self.link.altitude_m / v.descent_speed_mps;
-                (self.hover_power_w * t, t)
+                (self.calm_hover_power_w * t, t)
             }
         }
     }
@@ -574,21 +714,13 @@ impl MissionEnergyModel {
         let stops = route.iter().map(|v| v.centre).chain(home.then_some(end));
         let mut polyline = Vec::new();
         for (k, to) in stops.enumerate() {
-            let distance_m = match via.get(k) {
-                Some(turns) if !turns.is_empty() => {
-                    polyline.clear();
-                    polyline.push(previous);
-                    polyline.extend_from_slice(turns);
-                    polyline.push(to);
-                    path_length_m(&polyline)
-                }
-                _ => distance_m(&previous, &to),
-            };
-            legs.push(LegEnergy {
-                distance_m,
-                time_s: distance_m / self.cruise_speed_mps,
-                energy_j: self.energy_per_metre_j * distance_m,
-            });
+            polyline.clear();
+            polyline.push(previous);
+            if let Some(turns) = via.get(k) {
+                polyline.extend_from_slice(turns);
+            }
+            polyline.push(to);
+            legs.push(self.leg(&polyline));
             previous = to;
         }
         for v in route {

@@ -185,6 +185,77 @@ impl MissionEnergyModel {
     }
 }
 
+/// Wind speeds tried by [`strongest_wind`] before bisecting, m/s: 0, 0.5, 1, … up to
+/// [`STRONGEST_WIND_CAP_MPS`].
+pub const STRONGEST_WIND_STEP_MPS: f64 = 0.5;
+/// The strongest wind [`strongest_wind`] looks at, m/s (a multicopter does not fly above it).
+pub const STRONGEST_WIND_CAP_MPS: f64 = 40.0;
+/// Bisection steps of [`strongest_wind`]: the step of 0.5 m/s halved 40 times.
+const STRONGEST_WIND_BISECTIONS: usize = 40;
+
+/// The strongest wind from one direction at which a flight stays within its budget.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindTolerance {
+    /// Wind speed, m/s: the flight is within budget at every speed tried up to it.
+    pub speed_mps: f64,
+    /// Direction the wind blows from, degrees clockwise from north.
+    pub from_deg: f64,
+    /// True when the flight is still within budget at [`STRONGEST_WIND_CAP_MPS`] (the speed
+    /// is then the cap).
+    pub capped: bool,
+}
+
+/// The strongest wind from `from_deg` (degrees clockwise from north) at which `feasible`
+/// holds: wind speeds from 0 m/s upwards in steps of [`STRONGEST_WIND_STEP_MPS`] until the
+/// first at which it fails, then bisection (40 halvings) between that speed and the last
+/// that held. `None` when it fails in still air. A flight's energy need not grow with every
+/// wind speed (the power curve has a bucket), so the scan from 0 m/s finds the first failure,
+/// not merely some failure.
+///
+/// # Errors
+/// The first error `feasible` returns.
+pub fn strongest_wind<E>(
+    from_deg: f64,
+    mut feasible: impl FnMut(Wind) -> Result<bool, E>,
+) -> Result<Option<WindTolerance>, E> {
+    let at = |speed_mps: f64| Wind {
+        speed_mps,
+        from_deg,
+    };
+    if !feasible(Wind::CALM)? {
+        return Ok(None);
+    }
+    let steps = (STRONGEST_WIND_CAP_MPS / STRONGEST_WIND_STEP_MPS) as usize;
+    for k in 1..=steps {
+        let (lo, hi) = (
+            (k - 1) as f64 * STRONGEST_WIND_STEP_MPS,
+            k as f64 * STRONGEST_WIND_STEP_MPS,
+        );
+        if feasible(at(hi))? {
+            continue;
+        }
+        let (mut lo, mut hi) = (lo, hi);
+        for _ in 0..STRONGEST_WIND_BISECTIONS {
+            let mid = 0.5 * (lo + hi);
+            if feasible(at(mid))? {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        return Ok(Some(WindTolerance {
+            speed_mps: lo,
+            from_deg,
+            capped: false,
+        }));
+    }
+    Ok(Some(WindTolerance {
+        speed_mps: STRONGEST_WIND_CAP_MPS,
+        from_deg,
+        capped: true,
+    }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -269,8 +340,190 @@ mod tests {
         );
     }
 
+    fn visits(points: &[(f64, f64)], hover_s: f64) -> Vec<crate::CellVisit> {
+        points
+            .iter()
+            .map(|&(e, n)| crate::CellVisit {
+                centre: p(e, n),
+                hover_s,
+            })
+            .collect()
+    }
+
+    /// In wind a tour costs more one way round than the other, the planner's directed costs
+    /// add up to the breakdown, stops hover at P(|w|) and the climb is still air's.
+    #[test]
+    fn a_tour_in_wind_depends_on_its_direction() {
+        let cfg = EnergyConfig {
+            vertical: Some(crate::VerticalConfig::default()),
+            ..EnergyConfig::paper()
+        };
+        let still = MissionEnergyModel::new(&cfg).unwrap();
+        let m = still.with_wind(Wind::new(8.0, 270.0).unwrap());
+        assert!(m.wind_applies() && !still.wind_applies());
+        let base = p(0.0, 0.0);
+        let route = visits(&[(600.0, 0.0), (0.0, 300.0), (-100.0, 100.0)], 30.0);
+        let mut back = route.clone();
+        back.reverse();
+        let (a, b) = (
+            m.breakdown(base, &route).unwrap(),
+            m.breakdown(base, &back).unwrap(),
+        );
+        assert!(
+            (a.total_j - b.total_j).abs() > 1.0,
+            "{} {}",
+            a.total_j,
+            b.total_j
+        );
+        // East first: a tail wind on the first leg, a head wind on the way back west.
+        assert!(
+            (a.legs[0].headwind_mps + 8.0).abs() < 1e-9,
+            "{:?}",
+            a.legs[0]
+        );
+        assert!(a.legs[1].headwind_mps > 0.0 && a.legs[1].crosswind_mps.abs() > 0.0);
+        let mut stops = vec![base];
+        stops.extend(route.iter().map(|v| v.centre));
+        stops.push(base);
+        let travel: f64 = stops
+            .windows(2)
+            .map(|w| m.travel_energy_j(w[0], w[1]))
+            .sum();
+        let service: f64 = route.iter().map(|v| m.service_energy_j(v.hover_s)).sum();
+        assert!((m.sortie_fixed_j() + travel + service - a.total_j).abs() < 1e-9 * a.total_j);
+        let pw = m.power_model().power_w(8.0);
+        assert_eq!(m.hover_power_w(), pw);
+        assert!((a.hover_j - 90.0 * pw).abs() < 1e-9);
+        assert_eq!(m.sortie_fixed_j(), still.sortie_fixed_j());
+        assert_eq!(m.descent(), still.descent());
+        // The matrix is the directed leg energies.
+        let pts = [base, p(600.0, 0.0), p(0.0, 300.0)];
+        let c = m.travel_cost_matrix(&pts);
+        assert!((c.get(0, 1) - c.get(1, 0)).abs() > 1.0);
+        assert_eq!(c.get(0, 1), m.travel_energy_j(pts[0], pts[1]));
+        assert_eq!(c.get(2, 2), 0.0);
+        // A polyline in wind: the sum of its segments as flown.
+        let poly = [base, p(300.0, 200.0), p(600.0, 0.0)];
+        let e = m.polyline_energy_j(&poly);
+        let sum = m.travel_energy_j(poly[0], poly[1]) + m.travel_energy_j(poly[1], poly[2]);
+        assert_eq!(e, sum);
+        // The linear model has no airspeed: the wind changes nothing.
+        let lin = MissionEnergyModel::new(&EnergyConfig {
+            linear: Some(crate::LinearEnergy {
+                j_per_m: 10.0,
+                j_per_cell: 100.0,
+            }),
+            ..EnergyConfig::paper()
+        })
+        .unwrap();
+        let windy = lin.with_wind(Wind::new(8.0, 270.0).unwrap());
+        assert!(!windy.wind_applies());
+        assert_eq!(
+            windy.breakdown(base, &route).unwrap().total_j,
+            lin.breakdown(base, &route).unwrap().total_j
+        );
+    }
+
+    #[test]
+    fn the_strongest_wind_is_where_the_route_stops_fitting() {
+        let m = model();
+        let base = p(0.0, 0.0);
+        let route = visits(&[(900.0, 0.0), (900.0, 900.0), (0.0, 900.0)], 20.0);
+        let fits = |w: Wind| -> Result<bool, EnergyError> {
+            Ok(m.with_wind(w).breakdown(base, &route)?.feasible)
+        };
+        let t = strongest_wind(90.0, fits).unwrap().unwrap();
+        assert!(!t.capped && t.from_deg == 90.0);
+        assert!(
+            t.speed_mps > 0.0 && t.speed_mps < STRONGEST_WIND_CAP_MPS,
+            "{t:?}"
+        );
+        assert!(fits(Wind::new(t.speed_mps, 90.0).unwrap()).unwrap());
+        assert!(!fits(Wind::new(t.speed_mps + 1e-6, 90.0).unwrap()).unwrap());
+        // Every scanned speed below it fits.
+        let mut w = 0.0;
+        while w < t.speed_mps {
+            assert!(fits(Wind::new(w, 90.0).unwrap()).unwrap(), "{w}");
+            w += STRONGEST_WIND_STEP_MPS;
+        }
+        // A route over budget in still air stands no wind; one that fits anything is capped.
+        let never = strongest_wind(0.0, |_| Ok::<_, EnergyError>(false)).unwrap();
+        assert_eq!(never, None);
+        let always = strongest_wind(0.0, |_| Ok::<_, EnergyError>(true))
+            .unwrap()
+            .unwrap();
+        assert!(always.capped && always.speed_mps == STRONGEST_WIND_CAP_MPS);
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(256))]
+
+        /// A model put in still air is the still-air model to the last bit: every leg, stop,
+        /// polyline and matrix entry, with or without climb and descent.
+        #[test]
+        fn calm_wind_is_the_still_air_model_to_the_bit(
+            stops in prop::collection::vec((-2e3f64..2e3, -2e3f64..2e3, 0.0f64..120.0), 0..12),
+            turns in prop::collection::vec((-2e3f64..2e3, -2e3f64..2e3), 0..4),
+            from in 0.0f64..360.0,
+            vertical in any::<bool>(),
+        ) {
+            let cfg = EnergyConfig {
+                vertical: vertical.then(crate::VerticalConfig::default),
+                ..EnergyConfig::paper()
+            };
+            let still = MissionEnergyModel::new(&cfg).unwrap().for_flight().unwrap();
+            let calm = still.with_wind(Wind { speed_mps: 0.0, from_deg: from });
+            let route: Vec<crate::CellVisit> = stops
+                .iter()
+                .map(|&(e, n, h)| crate::CellVisit { centre: p(e, n), hover_s: h })
+                .collect();
+            let via: Vec<Vec<LocalPoint>> = (0..=route.len())
+                .map(|k| if k % 2 == 0 { turns.iter().map(|&(e, n)| p(e, n)).collect() } else { Vec::new() })
+                .collect();
+            let base = p(0.0, 0.0);
+            prop_assert_eq!(calm.breakdown(base, &route).unwrap(), still.breakdown(base, &route).unwrap());
+            prop_assert_eq!(
+                calm.breakdown_paths(base, &route, &via).unwrap(),
+                still.breakdown_paths(base, &route, &via).unwrap()
+            );
+            prop_assert_eq!(
+                calm.continuation(p(10.0, 20.0), base, &route, 5e4).unwrap(),
+                still.continuation(p(10.0, 20.0), base, &route, 5e4).unwrap()
+            );
+            let pts: Vec<LocalPoint> = route.iter().map(|v| v.centre).collect();
+            prop_assert_eq!(calm.travel_cost_matrix(&pts), still.travel_cost_matrix(&pts));
+            let mut poly = vec![base];
+            poly.extend(turns.iter().map(|&(e, n)| p(e, n)));
+            prop_assert_eq!(calm.polyline_energy_j(&poly).to_bits(), still.polyline_energy_j(&poly).to_bits());
+            prop_assert_eq!(calm.service_energy_j(31.25).to_bits(), still.service_energy_j(31.25).to_bits());
+        }
+
+        /// In any wind the breakdown's parts add up, and so do the planner's directed costs.
+        #[test]
+        fn a_breakdown_in_wind_adds_up(
+            stops in prop::collection::vec((-2e3f64..2e3, -2e3f64..2e3, 0.0f64..120.0), 1..12),
+            speed in 0.0f64..15.0,
+            from in 0.0f64..360.0,
+        ) {
+            let m = model().with_wind(Wind::new(speed, from).unwrap());
+            let base = p(0.0, 0.0);
+            let route: Vec<crate::CellVisit> = stops
+                .iter()
+                .map(|&(e, n, h)| crate::CellVisit { centre: p(e, n), hover_s: h })
+                .collect();
+            let b = m.breakdown(base, &route).unwrap();
+            let tol = 1e-9 * (1.0 + b.total_j);
+            prop_assert!((b.travel_j + b.hover_j + b.comm_j + b.return_j - b.total_j).abs() <= tol);
+            let mut pts = vec![base];
+            pts.extend(route.iter().map(|v| v.centre));
+            pts.push(base);
+            let travel: f64 = pts.windows(2).map(|w| m.travel_energy_j(w[0], w[1])).sum();
+            let service: f64 = route.iter().map(|v| m.service_energy_j(v.hover_s)).sum();
+            prop_assert!((travel + service - b.total_j).abs() <= tol);
+            for l in &b.legs {
+                prop_assert!(l.headwind_mps.abs() <= speed + 1e-9 && l.crosswind_mps.abs() <= speed + 1e-9);
+            }
+        }
 
         /// Still air gives today's travel energy to the last bit, on any leg.
         #[test]

@@ -3,7 +3,8 @@
 //! [`plan_mission`] takes scored cells ([`Candidate`]: centre in the local frame, score S,
 //! hover time) and a [`MissionEnergyModel`], builds an orienteering instance — node 0 is the
 //! base station (start and end), every cell with S > 0 is a node whose reward is S and whose
-//! service cost is its hover + receiver energy, travel costs are propulsion energies in J, the
+//! service cost is its hover + receiver energy, travel costs are propulsion energies in J
+//! (directed in a wind, [`MissionEnergyModel::with_wind`]: the way out and the way back differ), the
 //! budget is the usable battery energy less the fixed take-off/landing energy — solves it, and
 //! re-checks the chosen route with the energy model's own breakdown ([`MissionPlan::energy`]).
 //!
@@ -219,7 +220,8 @@ pub fn plan_sorties(
 
 /// [`plan_sorties`] with legs flown around no-fly zones: `detours` (over the base and
 /// `candidates`, in order) gives every leg's polyline; the travel costs are the energy per
-/// metre times their lengths (a dense matrix, not assumed metric), unreachable candidates
+/// metre times their lengths (a dense matrix, not assumed metric; in a wind each polyline's
+/// energy in the direction flown, a directed matrix), unreachable candidates
 /// are left out, and every sortie is re-checked along its polylines
 /// ([`MissionEnergyModel::breakdown_paths`]). `None` is [`plan_sorties`].
 ///
@@ -402,10 +404,9 @@ pub fn replan(
             [c.e, c.n]
         }));
         let (rewards, service) = node_values(model, remaining, &chosen, 2);
-        let problem = Problem::from_scaled_points(
+        let problem = point_problem(
+            model,
             &points,
-            Metric::Euclidean,
-            model.energy_per_metre_j(),
             rewards,
             (budget_j - model.descent().0).max(0.0),
         )?
@@ -471,14 +472,46 @@ fn instance(
             .collect();
         let epm = model.energy_per_metre_j();
         let mut cost = Vec::with_capacity(nodes.len() * nodes.len());
-        for &a in &nodes {
-            cost.extend(nodes.iter().map(|&b| epm * d.length_m(a, b)));
+        if model.wind_applies() {
+            // In wind each leg is priced along its polyline in the direction flown, as the
+            // breakdown prices it: a directed matrix.
+            let at = |node: usize| {
+                if node == 0 {
+                    base
+                } else {
+                    candidates[node - 1].centre
+                }
+            };
+            let mut polyline = Vec::new();
+            for &a in &nodes {
+                for &b in &nodes {
+                    polyline.clear();
+                    polyline.push(at(a));
+                    if a != b {
+                        polyline.extend_from_slice(d.via(a, b));
+                    }
+                    polyline.push(at(b));
+                    cost.push(if a == b {
+                        0.0
+                    } else {
+                        model.polyline_energy_j(&polyline)
+                    });
+                }
+            }
+        } else {
+            for &a in &nodes {
+                cost.extend(nodes.iter().map(|&b| epm * d.length_m(a, b)));
+            }
         }
         let (rewards, service) = node_values(model, candidates, chosen, 1);
-        let problem = Problem::new(cost, rewards, budget)?
-            .with_service_costs(service)?
-            .with_endpoints(0, 0)?
-            .with_vehicles(sorties)?;
+        let problem = if model.wind_applies() {
+            Problem::new_directed(cost, rewards, budget)?
+        } else {
+            Problem::new(cost, rewards, budget)?
+        }
+        .with_service_costs(service)?
+        .with_endpoints(0, 0)?
+        .with_vehicles(sorties)?;
         return Ok(Some(problem));
     }
     // Travel costs: energy per metre times the straight-line distance (m), evaluated on
@@ -491,17 +524,43 @@ fn instance(
         [c.e, c.n]
     }));
     let (rewards, service) = node_values(model, candidates, chosen, 1);
-    let problem = Problem::from_scaled_points(
-        &points,
+    let problem = point_problem(model, &points, rewards, budget)?
+        .with_service_costs(service)?
+        .with_endpoints(0, 0)?
+        .with_vehicles(sorties)?;
+    Ok(Some(problem))
+}
+
+/// The solver's instance over `points` (local frame, m) with the model's travel energies
+/// (J): in still air energy per metre times the straight-line distance, evaluated on demand
+/// (exactly the entries of `travel_cost_matrix`, without its n² memory: 800 MB for 10,000
+/// cells); in wind ([`MissionEnergyModel::wind_applies`]) the directed energy of each
+/// displacement, [`MissionEnergyModel::travel_energy_j`] — the breakdown's leg energies to
+/// the bit.
+fn point_problem(
+    model: &MissionEnergyModel,
+    points: &[[f64; 2]],
+    rewards: Vec<f64>,
+    budget: f64,
+) -> Result<Problem, ProblemError> {
+    if model.wind_applies() {
+        let m = model.clone();
+        let origin = LocalPoint::new(0.0, 0.0);
+        let cost = move |de: f64, dn: f64| m.travel_energy_j(origin, LocalPoint::new(de, dn));
+        return Problem::from_displacement_costs(
+            points,
+            std::sync::Arc::new(cost),
+            rewards,
+            budget,
+        );
+    }
+    Problem::from_scaled_points(
+        points,
         Metric::Euclidean,
         model.energy_per_metre_j(),
         rewards,
         budget,
-    )?
-    .with_service_costs(service)?
-    .with_endpoints(0, 0)?
-    .with_vehicles(sorties)?;
-    Ok(Some(problem))
+    )
 }
 
 /// Detours over the base and every candidate, if any.
@@ -947,17 +1006,61 @@ mod tests {
             prop_assert!(d.total_score >= g.total_score - 1e-9);
         }
 
+        /// In a wind every sortie (straight legs, or around obstacles) is re-priced in that
+        /// wind and fits; a calm wind plans exactly what still air plans.
         #[test]
-        fn a_replan_never_exceeds_the_energy_left(
-            cells in proptest::collection::vec((0.0f64..800.0, 0.0f64..500.0, -0.5f64..3.0, 30.0f64..90.0), 0..30),
-            at in (0.0f64..800.0, 0.0f64..500.0),
-            left in 0.0f64..70_000.0,
+        fn routes_in_wind_fit_and_calm_is_still_air(
+            cells in proptest::collection::vec((0.0f64..800.0, 0.0f64..500.0, -0.5f64..3.0, 30.0f64..90.0), 1..30),
+            speed in 0.5f64..12.0,
+            from in 0.0f64..360.0,
+            planner in prop_oneof![Just(Planner::Greedy), Just(Planner::Default)],
+            routed in any::<bool>(),
         ) {
             let cands: Vec<Candidate> = cells
                 .iter()
                 .map(|&(e, n, score, hover_s)| Candidate { centre: LocalPoint::new(e, n), score, hover_s })
                 .collect();
-            let m = model();
+            let base = LocalPoint::default();
+            let mut nodes = vec![base];
+            nodes.extend(cands.iter().map(|c| c.centre));
+            // A detour: every leg through a turn point 10 m east of its midpoint.
+            let detours = Detours::new(&nodes, |i, j| {
+                let (a, b) = (nodes[i], nodes[j]);
+                Some(vec![LocalPoint::new((a.e + b.e) / 2.0 + 10.0, (a.n + b.n) / 2.0)])
+            });
+            let d = routed.then_some(&detours);
+            let still = model();
+            let windy = still.with_wind(gleaner_energy::Wind::new(speed, from).unwrap());
+            let calm = still.with_wind(gleaner_energy::Wind { speed_mps: 0.0, from_deg: from });
+            let o = opts(planner);
+            let w = plan_sorties_routed(&windy, base, &cands, &o, 2, d).unwrap();
+            for p in &w {
+                let visits: Vec<CellVisit> = p.order.iter().map(|&k| CellVisit { centre: cands[k].centre, hover_s: cands[k].hover_s }).collect();
+                let again = windy.breakdown_paths(base, &visits, &p.via).unwrap();
+                prop_assert_eq!(again.total_j, p.energy.total_j);
+                prop_assert!(again.feasible && again.total_j <= again.budget_j);
+            }
+            let a = plan_sorties_routed(&still, base, &cands, &o, 2, d).unwrap();
+            let b = plan_sorties_routed(&calm, base, &cands, &o, 2, d).unwrap();
+            for (x, y) in a.iter().zip(&b) {
+                prop_assert_eq!(&x.order, &y.order);
+                prop_assert_eq!(x.energy.total_j.to_bits(), y.energy.total_j.to_bits());
+            }
+        }
+
+        #[test]
+        fn a_replan_never_exceeds_the_energy_left(
+            cells in proptest::collection::vec((0.0f64..800.0, 0.0f64..500.0, -0.5f64..3.0, 30.0f64..90.0), 0..30),
+            at in (0.0f64..800.0, 0.0f64..500.0),
+            left in 0.0f64..70_000.0,
+            wind in (0.0f64..10.0, 0.0f64..360.0),
+        ) {
+            let cands: Vec<Candidate> = cells
+                .iter()
+                .map(|&(e, n, score, hover_s)| Candidate { centre: LocalPoint::new(e, n), score, hover_s })
+                .collect();
+            // Still air or a wind (directed costs from the aircraft to the base).
+            let m = model().with_wind(gleaner_energy::Wind::new(wind.0, wind.1).unwrap());
             let start = LocalPoint::new(at.0, at.1);
             match replan(&m, (start, LocalPoint::default()), &cands, left, &opts(Planner::Default)) {
                 Ok(p) => {

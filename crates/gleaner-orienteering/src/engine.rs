@@ -36,6 +36,42 @@ pub(crate) struct Ctx<'a> {
     /// Travel costs satisfy the triangle inequality, so an insertion costs at least the
     /// node's service cost: nodes whose service exceeds a route's slack are skipped.
     metric: bool,
+    /// Costs are the same both ways: reversing a segment keeps its inner cost. When false
+    /// (a directed instance) every reversing move adds the change of the reversed inner
+    /// arcs to its gain.
+    symmetric: bool,
+}
+
+/// Prefix sums of a route's arc costs both ways: `fwd[k]` is the cost of the route's first
+/// `k` arcs as flown, `bwd[k]` of the same arcs flown backwards (budget unit). Reversing the
+/// segment `route[lo..=hi]` changes its inner cost by `(bwd[hi] − bwd[lo]) − (fwd[hi] −
+/// fwd[lo])` — 0 on a symmetric instance.
+#[derive(Default)]
+struct Arcs {
+    fwd: Vec<f64>,
+    bwd: Vec<f64>,
+}
+
+impl Arcs {
+    fn build(&mut self, ctx: &Ctx, route: &[usize]) {
+        self.fwd.clear();
+        self.bwd.clear();
+        let (mut f, mut b) = (0.0, 0.0);
+        self.fwd.push(f);
+        self.bwd.push(b);
+        for w in route.windows(2) {
+            f += ctx.c(w[0], w[1]);
+            b += ctx.c(w[1], w[0]);
+            self.fwd.push(f);
+            self.bwd.push(b);
+        }
+    }
+
+    /// Change of the inner cost of `route[lo..=hi]` when it is reversed.
+    #[inline]
+    fn reversal(&self, lo: usize, hi: usize) -> f64 {
+        (self.bwd[hi] - self.bwd[lo]) - (self.fwd[hi] - self.fwd[lo])
+    }
 }
 
 impl<'a> Ctx<'a> {
@@ -65,6 +101,7 @@ impl<'a> Ctx<'a> {
             restricted: false,
             by_reward,
             metric: p.is_metric(),
+            symmetric: p.is_symmetric(),
         }
     }
 
@@ -87,6 +124,17 @@ impl<'a> Ctx<'a> {
         }
         let room = self.p.budget() + 2.0 * self.p.tolerance();
         state.cost.iter().any(|&c| self.p.service(v) <= room - c)
+    }
+
+    /// Gain (negative: cheaper) of reversing `route[lo..=hi]` (1 <= lo < hi < len − 1) on a
+    /// directed instance: the two new boundary arcs less the two old, plus the reversed
+    /// inner arcs' change (`arcs` built over `route`).
+    #[inline]
+    fn reversal_gain(&self, route: &[usize], arcs: &Arcs, lo: usize, hi: usize) -> f64 {
+        let (x, y) = (route[lo - 1], route[hi + 1]);
+        let (first, last) = (route[lo], route[hi]);
+        self.c(x, last) + self.c(first, y) - self.c(x, first) - self.c(last, y)
+            + arcs.reversal(lo, hi)
     }
 
     #[inline]
@@ -482,9 +530,13 @@ impl State {
         }
         let mut any = false;
         let ru = r as u32;
+        let mut arcs = Arcs::default();
         loop {
             let mut improved = false;
             let m = self.routes[r].len();
+            if !ctx.symmetric {
+                arcs.build(ctx, &self.routes[r]);
+            }
             let mut i = 0;
             while i < m {
                 let a = self.routes[r][i];
@@ -499,24 +551,37 @@ impl State {
                     let mut moved = None;
                     // Successor variant: new edges (a, c), (a+, c+).
                     if i + 1 < m && j + 1 < m && j != i + 1 && j != i {
-                        let (an, cn) = (route[i + 1], route[j + 1]);
-                        let g = dac + ctx.c(an, cn) - ctx.c(a, an) - ctx.c(c, cn);
+                        let (lo, hi) = if i < j { (i + 1, j) } else { (j + 1, i) };
+                        let g = if ctx.symmetric {
+                            let (an, cn) = (route[i + 1], route[j + 1]);
+                            dac + ctx.c(an, cn) - ctx.c(a, an) - ctx.c(c, cn)
+                        } else {
+                            ctx.reversal_gain(route, &arcs, lo, hi)
+                        };
                         if g < -ctx.eps {
-                            moved = Some((g, if i < j { (i + 1, j) } else { (j + 1, i) }));
+                            moved = Some((g, (lo, hi)));
                         }
                     }
                     // Predecessor variant: new edges (a, c), (a-, c-).
                     if moved.is_none() && i > 0 && j > 0 && j + 1 != i && j != i + 1 {
-                        let (ap, cp) = (route[i - 1], route[j - 1]);
-                        let g = dac + ctx.c(ap, cp) - ctx.c(ap, a) - ctx.c(cp, c);
+                        let (lo, hi) = if i < j { (i, j - 1) } else { (j, i - 1) };
+                        let g = if ctx.symmetric {
+                            let (ap, cp) = (route[i - 1], route[j - 1]);
+                            dac + ctx.c(ap, cp) - ctx.c(ap, a) - ctx.c(cp, c)
+                        } else {
+                            ctx.reversal_gain(route, &arcs, lo, hi)
+                        };
                         if g < -ctx.eps {
-                            moved = Some((g, if i < j { (i, j - 1) } else { (j, i - 1) }));
+                            moved = Some((g, (lo, hi)));
                         }
                     }
                     if let Some((g, (lo, hi))) = moved {
                         self.routes[r][lo..=hi].reverse();
                         self.refresh_range(r, lo, hi);
                         self.cost[r] += g;
+                        if !ctx.symmetric {
+                            arcs.build(ctx, &self.routes[r]);
+                        }
                         improved = true;
                         break;
                     }
@@ -535,17 +600,25 @@ impl State {
     /// lists miss on clustered instances).
     fn two_opt_full(&mut self, ctx: &Ctx, r: usize) -> bool {
         let mut any = false;
+        let mut arcs = Arcs::default();
         loop {
             let mut improved = false;
             let m = self.routes[r].len();
+            if !ctx.symmetric {
+                arcs.build(ctx, &self.routes[r]);
+            }
             for i in 0..m.saturating_sub(3) {
                 let route = &self.routes[r];
                 let (a, an) = (route[i], route[i + 1]);
                 let dan = ctx.c(a, an);
                 let mut found = None;
                 for j in (i + 2)..(m - 1) {
-                    let (c, cn) = (route[j], route[j + 1]);
-                    let g = ctx.c(a, c) + ctx.c(an, cn) - dan - ctx.c(c, cn);
+                    let g = if ctx.symmetric {
+                        let (c, cn) = (route[j], route[j + 1]);
+                        ctx.c(a, c) + ctx.c(an, cn) - dan - ctx.c(c, cn)
+                    } else {
+                        ctx.reversal_gain(route, &arcs, i + 1, j)
+                    };
                     if g < -ctx.eps {
                         found = Some((g, j));
                         break;
@@ -555,6 +628,9 @@ impl State {
                     self.routes[r][i + 1..=j].reverse();
                     self.refresh_range(r, i + 1, j);
                     self.cost[r] += g;
+                    if !ctx.symmetric {
+                        arcs.build(ctx, &self.routes[r]);
+                    }
                     improved = true;
                 }
             }
@@ -585,6 +661,15 @@ impl State {
                         i += 1;
                         continue;
                     }
+                    // Directed: what flying the segment backwards adds to its inner arcs.
+                    let inner = if ctx.symmetric {
+                        0.0
+                    } else {
+                        route[i..i + len]
+                            .windows(2)
+                            .map(|w| ctx.c(w[1], w[0]) - ctx.c(w[0], w[1]))
+                            .sum()
+                    };
                     let mut found: Option<(f64, usize, bool)> = None;
                     for &end in [s0, sl].iter() {
                         for &x in ctx.neighbours(end) {
@@ -605,7 +690,7 @@ impl State {
                                 let (u, w) = (route[t], route[t + 1]);
                                 let base = ctx.c(u, w);
                                 let fwd = ctx.c(u, s0) + ctx.c(sl, w) - base;
-                                let rev = ctx.c(u, sl) + ctx.c(s0, w) - base;
+                                let rev = ctx.c(u, sl) + ctx.c(s0, w) - base + inner;
                                 let (ins, reversed) =
                                     if rev < fwd { (rev, true) } else { (fwd, false) };
                                 let g = ins - removal;

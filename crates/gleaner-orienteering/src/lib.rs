@@ -1,8 +1,10 @@
 //! Orienteering (OP) and team orienteering (TOP) solvers.
 //!
 //! A pure, generic optimisation core: nodes with rewards and service costs, a symmetric travel
-//! cost matrix (or planar points and a [`Metric`]), start and end nodes, a per-route budget
-//! and a number of vehicles. It knows nothing about what the nodes are; costs, service costs
+//! cost matrix (or planar points and a [`Metric`]) or a directed one ([`Problem::new_directed`],
+//! or points and a cost of the displacement, [`Problem::from_displacement_costs`]: going one
+//! way may cost more than coming back), start and end nodes, a per-route budget and a number
+//! of vehicles. It knows nothing about what the nodes are; costs, service costs
 //! and the budget share one unit of the caller's choice (metres, seconds, joules...).
 //!
 //! - [`Problem`] — a validated instance ([`ProblemError`] for bad input).
@@ -89,6 +91,14 @@
 //!   then the best feasible subset (or, for several vehicles, the best combination of
 //!   disjoint feasible subsets by subset convolution); up to [`EXACT_MAX_NODES`] candidates.
 //!
+//! - **Directed costs**: every move reads the costs in the direction flown. A reversal
+//!   (2-opt, Or-opt's reversed segments) also changes the cost of the arcs inside the reversed
+//!   segment; on a directed instance its gain adds that change (prefix sums of the route's arcs
+//!   both ways, O(1) per evaluation), and pruning measures the way to the end over the
+//!   reversed arcs. Symmetric instances take exactly the code paths they always took. On
+//!   drift costs (a steady wind) the search alone still equals the exact optimum of one route
+//!   in the property tests (`tests/directed.rs`).
+//!
 //! Determinism: every random choice comes from `ChaCha8Rng::seed_from_u64(options.seed)`.
 //! With `max_iterations` or `max_stall` as the binding limit, results do not depend on the
 //! machine; the time limit only stops the search early.
@@ -122,6 +132,6 @@ pub use error::{ProblemError, SolutionError, SolveError};
 pub use exact::{EXACT_MAX_NODES, EXACT_MAX_NODES_TEAM, exact};
 pub use improve::{ImproveOptions, improve_routes};
 pub use marginal::{MarginalOptions, MarginalSolution, solve_marginal};
-pub use problem::{Metric, Problem};
+pub use problem::{DisplacementCost, Metric, Problem};
 pub use solution::{Solution, evaluate, route_cost};
 pub use solve::{SolveOptions, SolverKind, greedy, solve, solve_default, time_limit_from_secs};

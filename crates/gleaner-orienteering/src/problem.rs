@@ -1,5 +1,7 @@
 //! The orienteering problem instance: costs, rewards, service costs, endpoints, budget.
 
+use std::sync::Arc;
+
 use crate::error::ProblemError;
 
 /// Tolerance (relative to the matrix scale) under which `c[i][j]` and `c[j][i]` count as equal.
@@ -29,15 +31,51 @@ impl Metric {
     }
 }
 
+/// A directed travel cost that depends only on the displacement between two points: `f(dx,
+/// dy)` for going from `p_i` to `p_j = p_i + (dx, dy)` (same unit as the budget). See
+/// [`Problem::from_displacement_costs`].
+pub type DisplacementCost = Arc<dyn Fn(f64, f64) -> f64 + Send + Sync>;
+
 /// Travel costs: a dense matrix, or points, a metric and a cost per unit of distance
-/// evaluated on demand (so 10,000-node instances do not need an 800 MB matrix).
-#[derive(Debug, Clone)]
+/// evaluated on demand (so 10,000-node instances do not need an 800 MB matrix), or points
+/// and a directed cost of the displacement.
+#[derive(Clone)]
 enum Costs {
     Dense(Vec<f64>),
     /// Points, metric, cost per unit of distance (1 for [`Problem::from_points`]), and for
     /// up to [`TABULATED_NODES`] nodes every pair's cost computed once (row-major): the same
     /// expression's value, so the same bits as evaluating it on demand.
     Points(Vec<[f64; 2]>, Metric, f64, Option<Vec<f64>>),
+    /// Points and a directed cost of the displacement `f(p_j − p_i)`, tabulated like
+    /// `Points` for up to [`TABULATED_NODES`] nodes.
+    Displacement(Vec<[f64; 2]>, DisplacementCost, Option<Vec<f64>>),
+}
+
+impl std::fmt::Debug for Costs {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Costs::Dense(m) => f.debug_tuple("Dense").field(&m.len()).finish(),
+            Costs::Points(p, metric, scale, table) => f
+                .debug_tuple("Points")
+                .field(&p.len())
+                .field(metric)
+                .field(scale)
+                .field(&table.is_some())
+                .finish(),
+            Costs::Displacement(p, _, table) => f
+                .debug_tuple("Displacement")
+                .field(&p.len())
+                .field(&table.is_some())
+                .finish(),
+        }
+    }
+}
+
+/// `f(p_j − p_i)`: the cost of a displacement problem, the one expression both its table and
+/// the on-demand evaluation use.
+#[inline]
+fn displacement_cost(points: &[[f64; 2]], f: &DisplacementCost, i: usize, j: usize) -> f64 {
+    f(points[j][0] - points[i][0], points[j][1] - points[i][1])
 }
 
 /// Largest number of nodes whose point costs are tabulated (n² values: 8 MiB at 1,024).
@@ -48,6 +86,26 @@ const TABULATED_NODES: usize = 1_024;
 #[inline]
 fn point_cost(points: &[[f64; 2]], metric: Metric, scale: f64, i: usize, j: usize) -> f64 {
     scale * metric.distance(points[i], points[j])
+}
+
+/// The points of a points problem: one per reward, finite, at least one.
+fn check_points(points: &[[f64; 2]], nodes: usize) -> Result<(), ProblemError> {
+    if points.len() != nodes {
+        return Err(ProblemError::LengthMismatch {
+            what: "points",
+            len: points.len(),
+            nodes,
+        });
+    }
+    for (node, p) in points.iter().enumerate() {
+        if !p[0].is_finite() || !p[1].is_finite() {
+            return Err(ProblemError::BadPoint { node });
+        }
+    }
+    if points.is_empty() {
+        return Err(ProblemError::Empty);
+    }
+    Ok(())
 }
 
 /// A validated (team) orienteering problem.
@@ -68,6 +126,8 @@ pub struct Problem {
     end: usize,
     budget: f64,
     vehicles: usize,
+    /// `cost(i, j) == cost(j, i)` for every pair (within 1e-9 relative for a matrix).
+    symmetric: bool,
 }
 
 impl Problem {
@@ -116,6 +176,104 @@ impl Problem {
         Problem::assemble(n, Costs::Dense(cost), rewards, budget)
     }
 
+    /// Builds a problem like [`Problem::new`] from a dense row-major `n × n` cost matrix that
+    /// need not be symmetric: entry `i·n + j` is the cost of going from `i` to `j` (a
+    /// directed instance, e.g. travel in a wind). Every solver reads the costs in the
+    /// direction of travel; reversing part of a route changes its cost, and the moves that
+    /// reverse segments account for it.
+    ///
+    /// Errors: as [`Problem::new`] but for the symmetry check.
+    pub fn new_directed(
+        cost: Vec<f64>,
+        rewards: Vec<f64>,
+        budget: f64,
+    ) -> Result<Problem, ProblemError> {
+        let n = rewards.len();
+        if n == 0 {
+            return Err(ProblemError::Empty);
+        }
+        if cost.len() != n * n {
+            return Err(ProblemError::MatrixSize {
+                len: cost.len(),
+                nodes: n,
+            });
+        }
+        if let Some((k, &c)) = cost
+            .iter()
+            .enumerate()
+            .find(|(_, c)| !c.is_finite() || **c < 0.0)
+        {
+            return Err(ProblemError::BadCost {
+                from: k / n,
+                to: k % n,
+                value: c,
+            });
+        }
+        let mut p = Problem::assemble(n, Costs::Dense(cost), rewards, budget)?;
+        p.symmetric = false;
+        Ok(p)
+    }
+
+    /// Builds a directed problem from planar points `[x, y]` and a cost of the displacement:
+    /// going from `p_i` to `p_j` costs `cost(x_j − x_i, y_j − y_i)` (budget unit), which may
+    /// differ from the way back (a steady wind, a slope, a current). Like
+    /// [`Problem::from_scaled_points`] the costs are tabulated once for up to 1,024 nodes and
+    /// evaluated on demand above, the same value either way. `cost` must return a finite
+    /// value >= 0 for any displacement between the points and 0 for (0, 0); the tabulated
+    /// entries are checked. Costs are not assumed to satisfy the triangle inequality.
+    ///
+    /// Errors: as [`Problem::from_points`]; [`ProblemError::BadCost`] for a tabulated entry
+    /// that is negative or not finite, or a cost of (0, 0) that is not 0.
+    pub fn from_displacement_costs(
+        points: &[[f64; 2]],
+        cost: DisplacementCost,
+        rewards: Vec<f64>,
+        budget: f64,
+    ) -> Result<Problem, ProblemError> {
+        check_points(points, rewards.len())?;
+        let zero = cost(0.0, 0.0);
+        if zero != 0.0 {
+            return Err(ProblemError::BadCost {
+                from: 0,
+                to: 0,
+                value: zero,
+            });
+        }
+        let n = points.len();
+        let table: Option<Vec<f64>> = (n <= TABULATED_NODES).then(|| {
+            (0..n * n)
+                .map(|ij| displacement_cost(points, &cost, ij / n, ij % n))
+                .collect()
+        });
+        if let Some((k, &c)) = table
+            .iter()
+            .flatten()
+            .enumerate()
+            .find(|(_, c)| !c.is_finite() || **c < 0.0)
+        {
+            return Err(ProblemError::BadCost {
+                from: k / n,
+                to: k % n,
+                value: c,
+            });
+        }
+        let mut p = Problem::assemble(
+            n,
+            Costs::Displacement(points.to_vec(), cost, table),
+            rewards,
+            budget,
+        )?;
+        p.symmetric = false;
+        Ok(p)
+    }
+
+    /// True when going from `i` to `j` costs what going back does, for every pair
+    /// ([`Problem::new`], points and a metric); false for a directed instance
+    /// ([`Problem::new_directed`], [`Problem::from_displacement_costs`]), whatever its values.
+    pub fn is_symmetric(&self) -> bool {
+        self.symmetric
+    }
+
     fn assemble(
         n: usize,
         cost: Costs,
@@ -139,6 +297,7 @@ impl Problem {
             end: 0,
             budget,
             vehicles: 1,
+            symmetric: true,
         };
         p.check_budget()?;
         Ok(p)
@@ -176,21 +335,7 @@ impl Problem {
                 value: cost_per_unit,
             });
         }
-        if points.len() != rewards.len() {
-            return Err(ProblemError::LengthMismatch {
-                what: "points",
-                len: points.len(),
-                nodes: rewards.len(),
-            });
-        }
-        for (node, p) in points.iter().enumerate() {
-            if !p[0].is_finite() || !p[1].is_finite() {
-                return Err(ProblemError::BadPoint { node });
-            }
-        }
-        if points.is_empty() {
-            return Err(ProblemError::Empty);
-        }
+        check_points(points, rewards.len())?;
         let n = points.len();
         let table = (n <= TABULATED_NODES).then(|| {
             (0..n * n)
@@ -304,6 +449,8 @@ impl Problem {
             Costs::Dense(m) => m[i * self.n + j],
             Costs::Points(_, _, _, Some(table)) => table[i * self.n + j],
             Costs::Points(p, metric, scale, None) => point_cost(p, *metric, *scale, i, j),
+            Costs::Displacement(_, _, Some(table)) => table[i * self.n + j],
+            Costs::Displacement(p, f, None) => displacement_cost(p, f, i, j),
         }
     }
 
@@ -311,7 +458,7 @@ impl Problem {
     /// or [`Problem::from_scaled_points`].
     pub fn points(&self) -> Option<(&[[f64; 2]], Metric)> {
         match &self.cost {
-            Costs::Dense(_) => None,
+            Costs::Dense(_) | Costs::Displacement(..) => None,
             Costs::Points(p, m, _, _) => Some((p, *m)),
         }
     }
@@ -320,7 +467,7 @@ impl Problem {
     /// [`Problem::from_points`]); `None` for a cost matrix.
     pub fn cost_per_unit(&self) -> Option<f64> {
         match &self.cost {
-            Costs::Dense(_) => None,
+            Costs::Dense(_) | Costs::Displacement(..) => None,
             Costs::Points(_, _, scale, _) => Some(*scale),
         }
     }
@@ -399,11 +546,12 @@ impl Problem {
                 (0..n).map(|v| p.cost(v, e)).collect::<Vec<f64>>(),
             )
         } else {
-            let ds = p.shortest_costs(s);
-            let de = if e == s {
+            let ds = p.shortest_costs(s, false);
+            let de = if e == s && p.symmetric {
                 ds.clone()
             } else {
-                p.shortest_costs(e)
+                // Into the end: over the reversed arcs when the costs are directed.
+                p.shortest_costs(e, !p.symmetric)
             };
             (ds, de)
         };
@@ -415,12 +563,14 @@ impl Problem {
             .collect()
     }
 
-    /// Shortest-path travel cost from `source` to every node over the (symmetric) cost
-    /// matrix: Dijkstra's algorithm with an array, O(n²).
-    fn shortest_costs(&self, source: usize) -> Vec<f64> {
+    /// Shortest-path travel cost from `source` to every node (`into`: from every node to
+    /// `source`, over the reversed arcs) over the cost matrix: Dijkstra's algorithm with an
+    /// array, O(n²).
+    fn shortest_costs(&self, source: usize, into: bool) -> Vec<f64> {
         let p = self;
         let n = p.len();
-        let mut dist: Vec<f64> = (0..n).map(|v| p.cost(source, v)).collect();
+        let arc = |u: usize, v: usize| if into { p.cost(v, u) } else { p.cost(u, v) };
+        let mut dist: Vec<f64> = (0..n).map(|v| arc(source, v)).collect();
         dist[source] = 0.0;
         let mut done = vec![false; n];
         done[source] = true;
@@ -437,7 +587,7 @@ impl Problem {
             done[u] = true;
             for v in 0..n {
                 if !done[v] {
-                    let via = dist[u] + p.cost(u, v);
+                    let via = dist[u] + arc(u, v);
                     if via < dist[v] {
                         dist[v] = via;
                     }

@@ -127,6 +127,8 @@ fn profile() -> ProfileDoc {
         base_alt_m: 780.0,
         altitude_m: 30.0,
         cruise_speed_mps: 10.0,
+        wind_mps: 0.0,
+        wind_from_deg: 0.0,
     }
 }
 
@@ -210,6 +212,7 @@ fn mission_doc(
         return_via_lon_lat: Vec::new(),
         zones: Vec::new(),
         unreachable: Vec::new(),
+        wind: None,
     }
 }
 

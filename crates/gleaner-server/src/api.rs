@@ -96,6 +96,20 @@ pub struct PlanBody {
     /// reduction of the dynamic field model's posterior variance over the whole field)
     /// [default: the project's `[planner] objective`].
     pub objective: Option<String>,
+    /// Forecast wind at the flight altitude [default: the project's `[flight] wind_mps` and
+    /// `wind_from_deg`]; the legs are priced in it plus `[flight] wind_margin_mps`.
+    pub wind: Option<WindBody>,
+}
+
+/// A forecast wind.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct WindBody {
+    /// Wind speed, m/s, in [0, 40].
+    pub speed_mps: f64,
+    /// Direction the wind blows from, degrees clockwise from north, in [0, 360] (270: a
+    /// west wind).
+    pub from_deg: f64,
 }
 
 /// A re-planning request in the air (`gleaner replan`).
@@ -113,6 +127,9 @@ pub struct ReplanBody {
     pub iterations: Option<u64>,
     /// Planner time limit, s [default: 1; at most the server's maximum].
     pub time_limit_s: Option<f64>,
+    /// The wind now [default: the wind the mission was planned in]; `[flight]
+    /// wind_margin_mps` is added to it.
+    pub wind: Option<WindBody>,
 }
 
 /// A continuation re-planned in the air: the mission document (status `continuation`, its

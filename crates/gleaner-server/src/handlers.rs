@@ -826,6 +826,7 @@ pub async fn replan(
         seed: b.seed,
         iterations: b.iterations,
         time_limit_s: b.time_limit_s,
+        wind: wind(b.wind)?,
     };
     let doc = s
         .run(move |p| {
@@ -893,6 +894,13 @@ fn search_limits(
     Ok(())
 }
 
+/// A request's wind, checked (400 naming `wind`).
+fn wind(w: Option<crate::api::WindBody>) -> ApiResult<Option<app::Wind>> {
+    w.map(|w| app::wind::forecast(w.speed_mps, w.from_deg, "wind"))
+        .transpose()
+        .map_err(|e| ApiError::from(e).in_field("wind"))
+}
+
 async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Vec<MissionDoc>> {
     if !b.dry_run {
         caller.require_write(s)?;
@@ -926,6 +934,7 @@ async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Ve
             .map(str::parse::<app::Objective>)
             .transpose()
             .map_err(|e| ApiError::from(e).in_field("objective"))?,
+        wind: wind(b.wind)?,
     };
     let preset = energy_preset(b.energy_preset.as_deref())?;
     let job = Job {
@@ -937,12 +946,14 @@ async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Ve
         let planned = app::plan_with_preset(p, &request, preset.as_deref(), clock_now())?;
         let mut docs = vec![gleaner_wire::convert::planned_mission(&planned)];
         docs.extend(planned.extra_sorties.iter().map(|e| {
-            gleaner_wire::convert::mission_doc(
+            let mut doc = gleaner_wire::convert::mission_doc(
                 e.id,
                 &e.mission,
                 if e.id.is_some() { "planned" } else { "dry-run" },
                 None,
-            )
+            );
+            doc.wind = Some(gleaner_wire::convert::wind(&e.wind));
+            doc
         }));
         Ok(docs)
     })

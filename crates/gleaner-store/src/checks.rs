@@ -62,6 +62,8 @@ pub(crate) fn validate_mission(m: &NewMission) -> Result<()> {
         ("base_alt_m", p.base_alt_m),
         ("altitude_m", p.altitude_m),
         ("cruise_speed_mps", p.cruise_speed_mps),
+        ("wind_mps", p.wind_mps),
+        ("wind_from_deg", p.wind_from_deg),
         ("travel_j", e.travel_j),
         ("hover_j", e.hover_j),
         ("comm_j", e.comm_j),
@@ -73,6 +75,12 @@ pub(crate) fn validate_mission(m: &NewMission) -> Result<()> {
         ("return_distance_m", m.return_distance_m),
     ] {
         finite("mission", name, v)?;
+    }
+    if p.wind_mps < 0.0 {
+        return Err(invalid(
+            "mission",
+            format!("wind_mps {} is negative", p.wind_mps),
+        ));
     }
     let mut orders = HashSet::new();
     for s in &m.stops {

@@ -252,6 +252,8 @@ fn new_mission(kind: MissionKind) -> NewMission {
             base_alt_m: 790.5,
             altitude_m: 30.0,
             cruise_speed_mps: 10.2,
+            wind_mps: 6.5,
+            wind_from_deg: 292.5,
         },
         energy: EnergyBreakdown {
             travel_j: 30_000.125,
@@ -1279,6 +1281,12 @@ pub fn invalid_missions_write_nothing<S: Store>(store: &mut S) {
     bad.push(m);
     let mut m = new_mission(MissionKind::Adaptive);
     m.profile.cruise_speed_mps = f64::NEG_INFINITY;
+    bad.push(m);
+    let mut m = new_mission(MissionKind::Adaptive);
+    m.profile.wind_mps = -1.0;
+    bad.push(m);
+    let mut m = new_mission(MissionKind::Adaptive);
+    m.profile.wind_from_deg = f64::NAN;
     bad.push(m);
     for m in &bad {
         let err = w(store, |tx| tx.create_mission(m)).unwrap_err();

@@ -162,7 +162,18 @@ CREATE TABLE config (
         description: "typed missions (profile, energy breakdown, flown_at) with their stops; blobs",
         sql: MIGRATION_2,
     },
+    Migration {
+        description: "the wind each mission was planned in (missions.wind_mps, wind_from_deg)",
+        sql: MIGRATION_3,
+    },
 ];
+
+/// Version 3: the steady wind a mission's legs were priced in (m/s, and the direction it
+/// blows from, degrees from north); missions planned before are still-air plans (0, 0).
+const MIGRATION_3: &str = r#"
+ALTER TABLE missions ADD COLUMN wind_mps      REAL NOT NULL DEFAULT 0 CHECK (wind_mps >= 0);
+ALTER TABLE missions ADD COLUMN wind_from_deg REAL NOT NULL DEFAULT 0;
+"#;
 
 /// Version 2: typed missions with their stops, and blobs.
 ///

@@ -121,7 +121,7 @@ fn migration_from_empty_creates_every_table() {
     let dir = tempfile::tempdir().unwrap();
     let store = SqliteStore::open(&dir.path().join("g.db")).unwrap();
     assert_eq!(store.schema_version().unwrap(), schema_version_supported());
-    assert_eq!(schema_version_supported(), 2);
+    assert_eq!(schema_version_supported(), 3);
     assert_eq!(
         count(&store, "PRAGMA user_version"),
         schema_version_supported()
@@ -351,7 +351,7 @@ fn migration_2_converts_legacy_missions() {
     let path = dir.path().join("g.db");
     legacy_v1_database(&path);
     let store = SqliteStore::open(&path).unwrap();
-    assert_eq!(store.schema_version().unwrap(), 2);
+    assert_eq!(store.schema_version().unwrap(), 3);
     let missions = store.missions().unwrap();
     assert_eq!(missions.len(), 3);
 
@@ -365,6 +365,8 @@ fn migration_2_converts_legacy_missions() {
     assert_eq!((n.anomaly_form.as_str(), n.total_score), ("raw", 3.5));
     assert_eq!(n.profile.base, LatLon::new(46.7788, -117.0867).unwrap());
     assert_eq!(n.profile.cruise_speed_mps, 10.2);
+    // Migration 3: missions planned before winds were planned are still-air plans.
+    assert_eq!((n.profile.wind_mps, n.profile.wind_from_deg), (0.0, 0.0));
     assert_eq!(
         n.energy,
         EnergyBreakdown {

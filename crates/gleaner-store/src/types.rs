@@ -447,6 +447,11 @@ pub struct FlightProfile {
     pub altitude_m: f64,
     /// Cruise ground speed between cells, m/s.
     pub cruise_speed_mps: f64,
+    /// The steady wind the legs were priced in (the forecast plus the planning margin), m/s
+    /// (>= 0; 0: still air, and every mission stored before winds were planned).
+    pub wind_mps: f64,
+    /// Direction that wind blows from, degrees clockwise from north (meteorological).
+    pub wind_from_deg: f64,
 }
 
 /// One planned stop of a mission, in visiting order.

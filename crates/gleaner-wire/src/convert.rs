@@ -84,6 +84,8 @@ pub fn mission_doc(
             base_alt_m: m.profile.base_alt_m,
             altitude_m: m.profile.altitude_m,
             cruise_speed_mps: m.profile.cruise_speed_mps,
+            wind_mps: m.profile.wind_mps,
+            wind_from_deg: m.profile.wind_from_deg,
         },
         stops: m
             .stops
@@ -127,6 +129,7 @@ pub fn mission_doc(
         greedy_baseline: None,
         energy_model: None,
         continuation: None,
+        wind: None,
     }
 }
 
@@ -161,7 +164,32 @@ pub fn replanned_mission(r: &gleaner_app::Replan) -> MissionDoc {
         energy_left_j: r.energy_left_j,
         reserve_j: r.reserve_j,
     });
+    doc.wind = Some(wind(&r.wind));
     doc
+}
+
+/// The wind of a planned route.
+pub fn wind(w: &gleaner_app::wind::RouteWind) -> crate::WindDoc {
+    crate::WindDoc {
+        forecast_mps: w.wind.forecast.speed_mps,
+        from_deg: w.wind.forecast.from_deg,
+        margin_mps: w.wind.margin_mps,
+        planned_mps: w.wind.planned.speed_mps,
+        strongest_feasible_mps: w.strongest.map(|s| s.speed_mps),
+        strongest_capped: w.strongest.is_some_and(|s| s.capped),
+        legs: w
+            .legs
+            .iter()
+            .map(|l| crate::LegWindDoc {
+                distance_m: l.distance_m,
+                headwind_mps: l.headwind_mps,
+                tailwind_mps: l.tailwind_mps,
+                crosswind_mps: l.crosswind_mps,
+                airspeed_mps: l.airspeed_mps,
+                energy_j: l.energy_j,
+            })
+            .collect(),
+    }
 }
 
 /// A mission just planned (with the candidates and the greedy baseline).
@@ -181,6 +209,7 @@ pub fn planned_mission(p: &PlannedMission) -> MissionDoc {
         total_score: p.greedy.total_score,
         energy_j: p.greedy.energy_j,
     });
+    doc.wind = Some(wind(&p.wind));
     doc
 }
 

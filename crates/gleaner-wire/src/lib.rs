@@ -164,8 +164,60 @@ pub struct ProfileDoc {
     pub base_alt_m: f64,
     /// Flight altitude above the base, m.
     pub altitude_m: f64,
-    /// Cruise ground speed between cells, m/s.
+    /// Cruise ground speed between cells, m/s (what the files command: a ground speed).
     pub cruise_speed_mps: f64,
+    /// The steady wind the legs were priced in (the forecast plus the margin), m/s; absent:
+    /// still air.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub wind_mps: f64,
+    /// Direction that wind blows from, degrees clockwise from north; absent: 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub wind_from_deg: f64,
+}
+
+/// The wind a mission was planned in and what it means for the route (plan and replan
+/// output).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct WindDoc {
+    /// Forecast wind speed, m/s (0: still air).
+    pub forecast_mps: f64,
+    /// Direction the forecast wind blows from, degrees clockwise from north.
+    pub from_deg: f64,
+    /// Margin added to a forecast above 0 m/s, m/s (`[flight] wind_margin_mps`).
+    pub margin_mps: f64,
+    /// The wind speed the legs and hovers are priced in, m/s, from `from_deg`.
+    pub planned_mps: f64,
+    /// The strongest wind from `from_deg` at which the route, as its files command it,
+    /// stays within the budget, m/s (absent for an empty route or one over budget in
+    /// still air).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strongest_feasible_mps: Option<f64>,
+    /// True when `strongest_feasible_mps` is the search's cap (40 m/s): the route stands
+    /// any wind up to it.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub strongest_capped: bool,
+    /// Each leg at the planned wind: one per stop (the leg arriving there), then the return
+    /// leg.
+    pub legs: Vec<LegWindDoc>,
+}
+
+/// One leg's wind at the planned wind.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct LegWindDoc {
+    /// Leg length, m.
+    pub distance_m: f64,
+    /// Head-wind component, m/s (>= 0).
+    pub headwind_mps: f64,
+    /// Tail-wind component, m/s (>= 0).
+    pub tailwind_mps: f64,
+    /// Cross-wind component, m/s: > 0 from the left of the track, < 0 from the right.
+    pub crosswind_mps: f64,
+    /// Airspeed that holds the track at the planned ground speed, m/s.
+    pub airspeed_mps: f64,
+    /// Propulsion energy of the leg, J.
+    pub energy_j: f64,
 }
 
 /// One stop of a mission, in visiting order.
@@ -367,6 +419,10 @@ pub struct MissionDoc {
     /// where the aircraft is, with no take-off.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub continuation: Option<ContinuationDoc>,
+    /// The wind it was planned in, per leg, and the strongest wind it stands (plan and
+    /// replan output only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wind: Option<WindDoc>,
 }
 
 /// A continuation's origin: the mission it continues, where the aircraft is and the energy
@@ -421,6 +477,19 @@ pub struct EnergyModelDoc {
     pub descent_speed_mps: Option<f64>,
     /// Usable battery energy, J.
     pub usable_budget_j: f64,
+    /// The steady wind the mission was planned in (the forecast plus the planning margin),
+    /// m/s; absent: still air. The writers price the file in this wind.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub wind_mps: f64,
+    /// Direction that wind blows from, degrees clockwise from north (meteorological).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub wind_from_deg: f64,
+}
+
+/// Serde helper: leave out a zero (still air keeps documents as they were).
+#[allow(clippy::trivially_copy_pass_by_ref)]
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 impl From<gleaner_energy::FlightEnergyModel> for EnergyModelDoc {
@@ -439,6 +508,8 @@ impl From<gleaner_energy::FlightEnergyModel> for EnergyModelDoc {
             climb_speed_mps: m.vertical.map(|v| v.climb_speed_mps),
             descent_speed_mps: m.vertical.map(|v| v.descent_speed_mps),
             usable_budget_j: m.usable_budget_j,
+            wind_mps: m.wind.speed_mps,
+            wind_from_deg: m.wind.from_deg,
         }
     }
 }
@@ -474,6 +545,10 @@ impl EnergyModelDoc {
                 _ => None,
             },
             usable_budget_j: self.usable_budget_j,
+            wind: gleaner_energy::Wind {
+                speed_mps: self.wind_mps,
+                from_deg: self.wind_from_deg,
+            },
         }
     }
 }

@@ -111,6 +111,7 @@ fn paper_model() -> EnergyModelDoc {
         linear: None,
         vertical: None,
         usable_budget_j: 66_500.0,
+        wind: gleaner_energy::Wind::CALM,
     }
     .into()
 }
@@ -121,6 +122,8 @@ fn profile() -> ProfileDoc {
         base_alt_m: BASE_ALT_M,
         altitude_m: 30.0,
         cruise_speed_mps: 10.25,
+        wind_mps: 0.0,
+        wind_from_deg: 0.0,
     }
 }
 
@@ -206,6 +209,7 @@ pub fn adaptive_mission() -> MissionDoc {
         return_via_lon_lat: Vec::new(),
         zones: Vec::new(),
         unreachable: Vec::new(),
+        wind: None,
     }
 }
 
@@ -245,6 +249,7 @@ pub fn exploration_sortie() -> MissionDoc {
         zones: Vec::new(),
         unreachable: Vec::new(),
         continuation: None,
+        wind: None,
     }
 }
 

@@ -44,6 +44,8 @@ struct Farm {
     /// One score per cell, cycled.
     scores: Vec<f64>,
     sorties: usize,
+    /// The forecast wind the mission is planned in (the margin is added), or still air.
+    wind: Option<gleaner_app::Wind>,
 }
 
 /// Planning time t, s (2014-05-14).
@@ -101,6 +103,7 @@ fn export_farm(farm: &Farm) -> Vec<Exported> {
             max_iterations: Some(60),
             time_limit_s: Some(30.0),
             sorties: Some(farm.sorties),
+            wind: farm.wind,
             ..PlanRequest::default()
         },
         T,
@@ -264,13 +267,19 @@ fn random_farm(rng: &mut ChaCha8Rng) -> Farm {
             .collect(),
         scores: (0..7).map(|_| rng.random_range(-0.5..3.0)).collect(),
         sorties: if rng.random_bool(0.2) { 2 } else { 1 },
+        // Half the missions planned in a wind: the files are priced in it.
+        wind: rng.random_bool(0.5).then(|| {
+            gleaner_app::Wind::new(rng.random_range(0.0..10.0), rng.random_range(0.0..360.0))
+                .unwrap()
+        }),
     }
 }
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 
-    /// Energy recomputed from each exported file's values <= the usable budget.
+    /// Energy recomputed from each exported file's values (at the wind the mission was
+    /// planned in, stored with it) <= the usable budget.
     #[test]
     fn exported_files_command_at_most_the_budget(seed in any::<u64>()) {
         let farm = random_farm(&mut ChaCha8Rng::seed_from_u64(seed));

@@ -96,6 +96,65 @@ pub fn table(m: &MissionDoc) -> String {
         ));
     }
     out.push_str(&unreachable_lines(&m.unreachable));
+    if let Some(w) = &m.wind {
+        out.push_str(&wind_lines(w));
+    }
+    out
+}
+
+/// The wind a plan was made for, each leg's components when it is not still air, and the
+/// strongest wind the route stands (from the forecast's direction).
+pub fn wind_lines(w: &gleaner_wire::WindDoc) -> String {
+    let dir = format!("{:.0}°", w.from_deg);
+    let mut out = if w.forecast_mps > 0.0 {
+        format!(
+            "wind: forecast {:.1} m/s from {dir} + {:.1} m/s margin: legs priced at {:.1} m/s from {dir} (airspeed holding each track at the planned ground speed)
+",
+            w.forecast_mps, w.margin_mps, w.planned_mps
+        )
+    } else {
+        format!(
+            "wind: planned in still air (no forecast: --wind SPEED@FROM or [flight] wind_mps); direction {dir} from [flight] wind_from_deg
+"
+        )
+    };
+    if w.planned_mps > 0.0 {
+        out.push_str(&format!(
+            "{:>3} {:>8} {:>9} {:>9} {:>9} {:>8} {:>9}
+",
+            "leg", "leg_m", "head_mps", "tail_mps", "cross_mps", "air_mps", "leg_J"
+        ));
+        let n = w.legs.len();
+        for (k, l) in w.legs.iter().enumerate() {
+            let name = if k + 1 == n {
+                "ret".to_string()
+            } else {
+                (k + 1).to_string()
+            };
+            out.push_str(&format!(
+                "{:>3} {:>8.1} {:>9.2} {:>9.2} {:>9.2} {:>8.2} {:>9.1}
+",
+                name,
+                l.distance_m,
+                l.headwind_mps,
+                l.tailwind_mps,
+                l.crosswind_mps,
+                l.airspeed_mps,
+                l.energy_j
+            ));
+        }
+    }
+    match (w.strongest_feasible_mps, w.strongest_capped) {
+        (Some(v), false) => out.push_str(&format!(
+            "strongest wind it stays within the battery in: {v:.1} m/s from {dir} (the forecast's direction)
+"
+        )),
+        (Some(v), true) => out.push_str(&format!(
+            "strongest wind it stays within the battery in: at least {v:.0} m/s from {dir} (the forecast's direction; the search stops there)
+"
+        )),
+        (None, _) => {}
+    }
     out
 }
 

@@ -504,7 +504,7 @@ pub(super) fn missions(
                     weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form,
                     total_score, base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
                     travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m,
-                    flight_time_s, return_distance_m, status, flown_at
+                    flight_time_s, return_distance_m, status, flown_at, wind_mps, wind_from_deg
              FROM missions WHERE $1::BIGINT = -1 OR id = $1::BIGINT ORDER BY id",
             &[&only],
         )
@@ -592,6 +592,8 @@ pub(super) fn missions(
                     base_alt_m: r.get(14),
                     altitude_m: r.get(15),
                     cruise_speed_mps: r.get(16),
+                    wind_mps: r.get(28),
+                    wind_from_deg: r.get(29),
                 },
                 energy: EnergyBreakdown {
                     travel_j: r.get(17),

@@ -25,10 +25,11 @@ pub(super) struct Migration {
 }
 
 /// All migrations, oldest first.
-pub(super) const MIGRATIONS: &[Migration] = &[Migration {
-    version: 2,
-    description: "initial PostgreSQL schema (the SQLite schema of version 2): sensors, modalities, readings, ingests, cells, cell metadata, typed missions with stops and visits, config, blobs",
-    sql: r#"
+pub(super) const MIGRATIONS: &[Migration] = &[
+    Migration {
+        version: 2,
+        description: "initial PostgreSQL schema (the SQLite schema of version 2): sensors, modalities, readings, ingests, cells, cell metadata, typed missions with stops and visits, config, blobs",
+        sql: r#"
 CREATE TABLE sensors (
     id          BIGINT GENERATED ALWAYS AS IDENTITY PRIMARY KEY,
     name        TEXT             NOT NULL UNIQUE,
@@ -212,7 +213,20 @@ CREATE TABLE blobs (
     value BYTEA NOT NULL
 );
 "#,
-}];
+    },
+    MIGRATION_3,
+];
+
+/// Version 3 (as SQLite's): the steady wind a mission's legs were priced in.
+const MIGRATION_3: Migration = Migration {
+    version: 3,
+    description: "the wind each mission was planned in (missions.wind_mps, wind_from_deg)",
+    sql: r#"
+ALTER TABLE missions
+    ADD COLUMN wind_mps      DOUBLE PRECISION NOT NULL DEFAULT 0 CHECK (wind_mps >= 0),
+    ADD COLUMN wind_from_deg DOUBLE PRECISION NOT NULL DEFAULT 0;
+"#,
+};
 
 /// The latest schema version (the same number as SQLite's latest).
 pub(super) fn latest_version() -> i64 {

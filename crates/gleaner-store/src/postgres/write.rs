@@ -413,10 +413,11 @@ fn insert_mission(c: &mut Transaction<'_>, m: &NewMission, id: Option<i64>) -> R
                  weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form, total_score,
                  base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
                  travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m,
-                 flight_time_s, return_distance_m, status, flown_at, summary_json, id)
+                 flight_time_s, return_distance_m, status, flown_at, summary_json, id,
+                 wind_mps, wind_from_deg)
              VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17,
                      $18, $19, $20, $21, $22, $23, $24, $25, $26, NULL, NULL,
-                     COALESCE($27, (SELECT COALESCE(MAX(id), 0) + 1 FROM missions)))
+                     COALESCE($27, (SELECT COALESCE(MAX(id), 0) + 1 FROM missions)), $28, $29)
              RETURNING id",
             &[
                 &m.created_at,
@@ -446,6 +447,8 @@ fn insert_mission(c: &mut Transaction<'_>, m: &NewMission, id: Option<i64>) -> R
                 &m.return_distance_m,
                 &MissionStatus::Planned.as_str(),
                 &id,
+                &p.wind_mps,
+                &p.wind_from_deg,
             ],
         )
         .db()?

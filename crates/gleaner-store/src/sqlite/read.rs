@@ -468,6 +468,7 @@ struct MissionRow {
     return_distance_m: f64,
     status: String,
     flown_at: Option<i64>,
+    wind: (f64, f64),
 }
 
 impl TryFrom<&Row<'_>> for MissionRow {
@@ -501,6 +502,7 @@ impl TryFrom<&Row<'_>> for MissionRow {
             return_distance_m: r.get(25)?,
             status: r.get(26)?,
             flown_at: r.get(27)?,
+            wind: (r.get(28)?, r.get(29)?),
         })
     }
 }
@@ -513,7 +515,7 @@ pub(super) fn missions(c: &Connection, id: Option<MissionId>) -> Result<Vec<Miss
                     weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form,
                     total_score, base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
                     travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m,
-                    flight_time_s, return_distance_m, status, flown_at
+                    flight_time_s, return_distance_m, status, flown_at, wind_mps, wind_from_deg
              FROM missions WHERE ?1 IS NULL OR id = ?1 ORDER BY id",
         [id.map(|m| m.0)],
     )?;
@@ -603,6 +605,8 @@ pub(super) fn missions(c: &Connection, id: Option<MissionId>) -> Result<Vec<Miss
                     base_alt_m: m.base_alt_m,
                     altitude_m: m.altitude_m,
                     cruise_speed_mps: m.cruise_speed_mps,
+                    wind_mps: m.wind.0,
+                    wind_from_deg: m.wind.1,
                 },
                 energy: m.energy,
                 return_distance_m: m.return_distance_m,

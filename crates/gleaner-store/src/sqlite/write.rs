@@ -313,9 +313,9 @@ fn insert_mission(c: &Connection, m: &NewMission, id: Option<i64>) -> Result<Mis
              weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form, total_score,
              base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
              travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m, flight_time_s,
-             return_distance_m, status, flown_at, summary_json, id)
+             return_distance_m, status, flown_at, summary_json, id, wind_mps, wind_from_deg)
          VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18,
-                 ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, NULL, NULL, ?27)",
+                 ?19, ?20, ?21, ?22, ?23, ?24, ?25, ?26, NULL, NULL, ?27, ?28, ?29)",
         params![
             m.created_at,
             m.kind.as_str(),
@@ -345,6 +345,8 @@ fn insert_mission(c: &Connection, m: &NewMission, id: Option<i64>) -> Result<Mis
             m.return_distance_m,
             MissionStatus::Planned.as_str(),
             id,
+            p.wind_mps,
+            p.wind_from_deg,
         ],
     )
     .db()?;
