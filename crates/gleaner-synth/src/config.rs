@@ -114,24 +114,24 @@ impl Default for SynthConfig {
 #[derive(Debug, Clone, PartialEq)]
 pub struct FaultRates {
     /// Probability, per sensor and sampling step, that a dropout (the whole station silent:
-    /// every modality missing) starts (default 0.003 per step). In [0, 1).
+    /// every modality missing) starts (default 0.0025 per step). In [0, 1).
     pub dropout_per_step: f64,
-    /// Mean length of a dropout, sampling steps (geometric; default 60). At least 1.
+    /// Mean length of a dropout, sampling steps (geometric; default 40). At least 1.
     pub dropout_mean_steps: f64,
     /// Probability that a single soil-water reading is a spike (default 0.0001): a jump of
     /// 0.05..0.15 m³/m³, up or down, clamped to the physical range. In [0, 1).
     pub spike_per_reading: f64,
     /// Probability, per sensor, modality and step, that the modality gets stuck (repeats its
-    /// last value) (default 0.0005 per step). In [0, 1).
+    /// last value; soil water only) (default 0.0025 per step). In [0, 1).
     pub stuck_per_step: f64,
-    /// Mean length of a stuck stretch, steps (geometric; default 10). At least 1.
+    /// Mean length of a stuck stretch, steps (geometric; default 20). At least 1.
     pub stuck_mean_steps: f64,
     /// Probability, per sensor, modality and step, that one modality alone falls silent (a
-    /// dead probe at one depth while the station keeps reporting the others; default 0.0011
+    /// dead probe at one depth while the station keeps reporting the others; default 0.0015
     /// per step). Recorded as a [`crate::FaultKind::Dropout`] with `modality = Some(m)`. In
     /// [0, 1).
     pub probe_dropout_per_step: f64,
-    /// Mean length of a single-probe dropout, steps (geometric; default 90). At least 1.
+    /// Mean length of a single-probe dropout, steps (geometric; default 45). At least 1.
     pub probe_dropout_mean_steps: f64,
     /// Probability, per day, that a network-wide outage starts (the logger network or its
     /// telemetry down: most stations silent at once; default 0.0035 per day, about 1.3 a
