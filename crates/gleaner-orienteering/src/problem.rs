@@ -130,6 +130,33 @@ pub struct Problem {
     symmetric: bool,
 }
 
+/// Checks a dense row-major cost matrix for `n` nodes: at least one node, `n²` entries, each
+/// finite and >= 0 (the first bad one in row-major order is reported). Returns the largest
+/// entry (budget unit).
+fn check_matrix(cost: &[f64], n: usize) -> Result<f64, ProblemError> {
+    if n == 0 {
+        return Err(ProblemError::Empty);
+    }
+    if cost.len() != n * n {
+        return Err(ProblemError::MatrixSize {
+            len: cost.len(),
+            nodes: n,
+        });
+    }
+    let mut scale = 0.0f64;
+    for (k, &c) in cost.iter().enumerate() {
+        if !c.is_finite() || c < 0.0 {
+            return Err(ProblemError::BadCost {
+                from: k / n,
+                to: k % n,
+                value: c,
+            });
+        }
+        scale = scale.max(c);
+    }
+    Ok(scale)
+}
+
 impl Problem {
     /// Builds a single-vehicle closed-tour problem (start = end = node 0, no service costs)
     /// from a dense row-major `n × n` symmetric cost matrix, the node rewards and the budget
@@ -139,26 +166,7 @@ impl Problem {
     /// relative tolerance of 1e-9, negative or non-finite rewards or budget, no nodes.
     pub fn new(cost: Vec<f64>, rewards: Vec<f64>, budget: f64) -> Result<Problem, ProblemError> {
         let n = rewards.len();
-        if n == 0 {
-            return Err(ProblemError::Empty);
-        }
-        if cost.len() != n * n {
-            return Err(ProblemError::MatrixSize {
-                len: cost.len(),
-                nodes: n,
-            });
-        }
-        let mut scale = 0.0f64;
-        for (k, &c) in cost.iter().enumerate() {
-            if !c.is_finite() || c < 0.0 {
-                return Err(ProblemError::BadCost {
-                    from: k / n,
-                    to: k % n,
-                    value: c,
-                });
-            }
-            scale = scale.max(c);
-        }
+        let scale = check_matrix(&cost, n)?;
         let tol = SYMMETRY_TOLERANCE * scale.max(1.0);
         for i in 0..n {
             for j in (i + 1)..n {
@@ -189,26 +197,7 @@ impl Problem {
         budget: f64,
     ) -> Result<Problem, ProblemError> {
         let n = rewards.len();
-        if n == 0 {
-            return Err(ProblemError::Empty);
-        }
-        if cost.len() != n * n {
-            return Err(ProblemError::MatrixSize {
-                len: cost.len(),
-                nodes: n,
-            });
-        }
-        if let Some((k, &c)) = cost
-            .iter()
-            .enumerate()
-            .find(|(_, c)| !c.is_finite() || **c < 0.0)
-        {
-            return Err(ProblemError::BadCost {
-                from: k / n,
-                to: k % n,
-                value: c,
-            });
-        }
+        check_matrix(&cost, n)?;
         let mut p = Problem::assemble(n, Costs::Dense(cost), rewards, budget)?;
         p.symmetric = false;
         Ok(p)
