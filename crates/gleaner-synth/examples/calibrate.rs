@@ -10,9 +10,29 @@
 mod caf;
 
 use gleaner_synth::{
-    DayTruth, DetectionScore, EventKind, NetworkPanel, NetworkStats, SynthConfig, generate,
-    neighbour_z, network_stats, own_z, score_detection,
+    DayTruth, DetectionScore, EventKind, FidelityStats, NetworkPanel, NetworkStats, SynthConfig,
+    fidelity_checks, fidelity_stats, generate, neighbour_z, network_stats, own_z, score_detection,
 };
+
+/// CAF's single years inside the tuning window, shown beside the two-year target: the spread
+/// that justifies the tolerance bands.
+const CAF_YEARS: [i64; 3] = [2011, 2012, 2013];
+
+/// The modalities of the network table (as before the per-depth statistics were added).
+const NETWORK_MODALITIES: [&str; 4] = ["vw@30cm", "vw@60cm", "vw@90cm", "t@30cm"];
+
+/// `panel` with only the modalities named in `names`.
+fn only(panel: &NetworkPanel, names: &[&str]) -> NetworkPanel {
+    NetworkPanel {
+        modalities: panel
+            .modalities
+            .iter()
+            .filter(|m| names.contains(&m.name.as_str()))
+            .cloned()
+            .collect(),
+        ..panel.clone()
+    }
+}
 
 /// Neighbourhood sizes of the neighbour-relative measure compared.
 const NEIGHBOURS: [usize; 2] = [3, 8];
@@ -59,11 +79,13 @@ fn parse_args() -> Result<(Vec<u64>, Vec<u64>), String> {
     Ok((seeds, detection))
 }
 
-/// The synthetic configuration compared with CAF.
+/// The synthetic configuration compared with CAF: every depth CAF has.
 fn config(seed: u64) -> SynthConfig {
     SynthConfig {
         seed,
         days: 730,
+        vw_depths_cm: vec![30, 60, 90, 120, 150],
+        t_depths_cm: vec![30, 60, 90, 120, 150],
         ..SynthConfig::default()
     }
 }
@@ -139,19 +161,24 @@ fn network_rows() -> Vec<Row> {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (seeds, detection_seeds) = parse_args()?;
     let dir = caf::data_dir();
-    let caf = caf::caf_network(&dir, (2012, 1, 1), (2013, 12, 31)).map_err(|e| {
+    let caf_all = caf::caf_network_columns(&dir, (2012, 1, 1), (2013, 12, 31), &caf::ALL_COLUMNS)
+        .map_err(|e| {
         format!(
             "CAF data under {} (set GLEANER_DATA_DIR): {e}",
             dir.display()
         )
     })?;
+    let caf = only(&caf_all, &NETWORK_MODALITIES);
     let caf_stats = network_stats(&caf);
     let farms = seeds
         .iter()
         .map(|&s| generate(&config(s)))
         .collect::<Result<Vec<_>, _>>()?;
     let panels: Vec<NetworkPanel> = farms.iter().map(|f| f.network_panel()).collect();
-    let stats: Vec<NetworkStats> = panels.iter().map(network_stats).collect();
+    let stats: Vec<NetworkStats> = panels
+        .iter()
+        .map(|p| network_stats(&only(p, &NETWORK_MODALITIES)))
+        .collect();
     let seed_list = seeds
         .iter()
         .map(u64::to_string)
@@ -170,8 +197,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "CAF: the Cook Agronomy Farm daily record (Gasch & Brown 2017, doi:10.15482/USDA.ADC/1349683), \
          2012-01-01 .. 2013-12-31, {} stations. Synthetic: `SynthConfig::default()` with `days = 730` \
-         (from 2014-01-01), one column per seed. Every number on both sides comes from the same code \
-         (`gleaner_synth::network_stats`).\n",
+         (from 2014-01-01) and every CAF depth (VW and T at 30, 60, 90, 120, 150 cm), one column per \
+         seed. Every number on both sides comes from the same code (`gleaner_synth::network_stats`, \
+         `gleaner_synth::fidelity_stats`); the tables before the per-depth section use VW 30/60/90 cm \
+         and T 30 cm.\n",
         caf.positions.len()
     );
     let header = |first: &str| {
@@ -250,7 +279,148 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let _ = k;
     }
 
+    fidelity_section(&dir, &caf_all, &seeds, &panels)?;
     detection_section(&detection_seeds, &caf)?;
+    Ok(())
+}
+
+/// Formats a fidelity value: percentages for shares, else a few significant digits.
+fn fv(statistic: &str, x: f64) -> String {
+    if x.is_nan() {
+        "-".to_string()
+    } else if statistic.contains("days with") {
+        format!("{x:.0}")
+    } else if statistic.starts_with("zero") || statistic.starts_with("stuck") {
+        pct(x)
+    } else if statistic.contains("kurtosis") {
+        format!("{x:.0}")
+    } else if x.abs() >= 10.0 {
+        format!("{x:.1}")
+    } else if x.abs() >= 1.0 {
+        format!("{x:.2}")
+    } else {
+        format!("{x:.3}")
+    }
+}
+
+/// Prints the per-depth fidelity tables: CAF 2012-13 (the target), CAF's single years, the
+/// band and every seed, each synthetic value marked when outside its band.
+fn fidelity_section(
+    dir: &std::path::Path,
+    caf_all: &NetworkPanel,
+    seeds: &[u64],
+    panels: &[NetworkPanel],
+) -> Result<(), Box<dyn std::error::Error>> {
+    let caf = fidelity_stats(caf_all);
+    let years: Vec<FidelityStats> = CAF_YEARS
+        .iter()
+        .map(|&y| {
+            caf::caf_network_columns(dir, (y, 1, 1), (y, 12, 31), &caf::ALL_COLUMNS)
+                .map(|p| fidelity_stats(&p))
+        })
+        .collect::<Result<_, _>>()?;
+    let synth: Vec<FidelityStats> = panels.iter().map(fidelity_stats).collect();
+    let checks: Vec<_> = synth.iter().map(|s| fidelity_checks(&caf, s)).collect();
+    // CAF's single years against the two-year target (same bands; a year's outage days are
+    // scaled to its length).
+    let year_checks: Vec<_> = years.iter().map(|y| fidelity_checks(&caf, y)).collect();
+    println!("\n## Per-depth fidelity\n");
+    println!(
+        "Every statistic for every depth, CAF 2012-13 (the target) beside CAF's single years {} \
+         (their spread is what the bands allow for) and the synthetic seeds. *band*: the accepted \
+         range (`gleaner_synth::fidelity_checks`); a synthetic value outside it is marked ✗ \
+         (a single CAF year is checked against the same bands: where one falls outside, the band is \
+         tighter than CAF's own year-to-year spread). Definitions are in the notes below.\n",
+        CAF_YEARS
+            .iter()
+            .map(i64::to_string)
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let mut h = "| modality | statistic | band | CAF 2012-13 |".to_string();
+    let mut sep = "|---|---|---|---|".to_string();
+    for y in CAF_YEARS {
+        h.push_str(&format!(" CAF {y} |"));
+        sep.push_str("---|");
+    }
+    for s in seeds {
+        h.push_str(&format!(" seed {s} |"));
+        sep.push_str("---|");
+    }
+    println!("{h}\n{sep}");
+    let mut failures = vec![0usize; seeds.len()];
+    for (k, c) in checks.first().map_or(&Vec::new(), |v| v).iter().enumerate() {
+        let band = format!("{} .. {}", fv(c.statistic, c.lo), fv(c.statistic, c.hi));
+        let mut line = format!(
+            "| {} | {} | {band} | {} |",
+            c.modality,
+            c.statistic,
+            fv(c.statistic, c.caf)
+        );
+        let cell = |x: &gleaner_synth::FidelityCheck| {
+            format!(
+                " {}{} |",
+                fv(x.statistic, x.synth),
+                if x.passes() { "" } else { " ✗" }
+            )
+        };
+        for yc in &year_checks {
+            match yc
+                .iter()
+                .find(|x| x.modality == c.modality && x.statistic == c.statistic)
+            {
+                Some(x) => line.push_str(&cell(x)),
+                None => line.push_str(" - |"),
+            }
+        }
+        for (i, sc) in checks.iter().enumerate() {
+            let x = &sc[k];
+            failures[i] += usize::from(!x.passes());
+            line.push_str(&cell(x));
+        }
+        println!("{line}");
+    }
+    let n = checks.first().map_or(0, Vec::len);
+    println!(
+        "\nOutside the band: {} (of {n} checks per seed).\n",
+        seeds
+            .iter()
+            .zip(&failures)
+            .map(|(s, f)| format!("seed {s}: {f}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    println!("Wetting front: correlation of 30 cm and 90 cm 7-day changes by lag (days).\n");
+    let lags = [0usize, 5, 10, 15, 20, 25, 28, 30, 35, 45, 60];
+    let mut h = "| source |".to_string();
+    let mut sep = "|---|".to_string();
+    for l in lags {
+        h.push_str(&format!(" {l} |"));
+        sep.push_str("---|");
+    }
+    h.push_str(" peak in 20-35 |");
+    sep.push_str("---|");
+    println!("{h}\n{sep}");
+    let row = |name: String, f: &FidelityStats| {
+        let mut line = format!("| {name} |");
+        for &l in &lags {
+            line.push_str(&format!(
+                " {} |",
+                f.front_curve
+                    .get(l)
+                    .map_or("-".into(), |r| format!("{r:.2}"))
+            ));
+        }
+        line.push_str(&format!(" {:.2} at {} |", f.front_corr, f.front_lag_days));
+        println!("{line}");
+    };
+    row("CAF 2012-13".into(), &caf);
+    for (y, f) in CAF_YEARS.iter().zip(&years) {
+        row(format!("CAF {y}"), f);
+    }
+    for (s, f) in seeds.iter().zip(&synth) {
+        row(format!("seed {s}"), f);
+    }
     Ok(())
 }
 

@@ -114,25 +114,34 @@ impl Default for SynthConfig {
 #[derive(Debug, Clone, PartialEq)]
 pub struct FaultRates {
     /// Probability, per sensor and sampling step, that a dropout (the whole station silent:
-    /// every modality missing) starts (default 0.003 per step). In [0, 1).
+    /// every modality missing) starts (default 0.0025 per step). In [0, 1).
     pub dropout_per_step: f64,
-    /// Mean length of a dropout, sampling steps (geometric; default 60). At least 1.
+    /// Mean length of a dropout, sampling steps (geometric; default 40). At least 1.
     pub dropout_mean_steps: f64,
-    /// Probability that a single reading is a spike (default 0.0001): a jump of 0.05..0.15 m³/m³
-    /// (VW) or 3..8 °C (T), up or down, clamped to the physical range. In [0, 1).
+    /// Probability that a single soil-water reading is a spike (default 0.0001): a jump of
+    /// 0.05..0.15 m³/m³, up or down, clamped to the physical range. In [0, 1).
     pub spike_per_reading: f64,
     /// Probability, per sensor, modality and step, that the modality gets stuck (repeats its
-    /// last value) (default 0.0005 per step). In [0, 1).
+    /// last value; soil water only) (default 0.0025 per step). In [0, 1).
     pub stuck_per_step: f64,
-    /// Mean length of a stuck stretch, steps (geometric; default 10). At least 1.
+    /// Mean length of a stuck stretch, steps (geometric; default 20). At least 1.
     pub stuck_mean_steps: f64,
     /// Probability, per sensor, modality and step, that one modality alone falls silent (a
-    /// dead probe at one depth while the station keeps reporting the others; default 0.0011
+    /// dead probe at one depth while the station keeps reporting the others; default 0.0015
     /// per step). Recorded as a [`crate::FaultKind::Dropout`] with `modality = Some(m)`. In
     /// [0, 1).
     pub probe_dropout_per_step: f64,
-    /// Mean length of a single-probe dropout, steps (geometric; default 90). At least 1.
+    /// Mean length of a single-probe dropout, steps (geometric; default 45). At least 1.
     pub probe_dropout_mean_steps: f64,
+    /// Probability, per day, that a network-wide outage starts (the logger network or its
+    /// telemetry down: most stations silent at once; default 0.0035 per day, about 1.3 a
+    /// year). Outages are drawn on a daily grid whatever the sampling interval. In [0, 1).
+    pub outage_per_day: f64,
+    /// Mean length of a network-wide outage, days (geometric; default 22). At least 1.
+    pub outage_mean_days: f64,
+    /// Probability that a given station goes silent in a network-wide outage (default 0.85;
+    /// recorded per station as a [`crate::FaultKind::Dropout`] of the whole station). In [0, 1].
+    pub outage_share: f64,
 }
 
 impl FaultRates {
@@ -146,6 +155,9 @@ impl FaultRates {
             stuck_mean_steps: 1.0,
             probe_dropout_per_step: 0.0,
             probe_dropout_mean_steps: 1.0,
+            outage_per_day: 0.0,
+            outage_mean_days: 1.0,
+            outage_share: 0.0,
         }
     }
 }
@@ -153,13 +165,16 @@ impl FaultRates {
 impl Default for FaultRates {
     fn default() -> Self {
         Self {
-            dropout_per_step: 0.003,
-            dropout_mean_steps: 60.0,
+            dropout_per_step: 0.0025,
+            dropout_mean_steps: 40.0,
             spike_per_reading: 0.0001,
-            stuck_per_step: 0.0005,
-            stuck_mean_steps: 10.0,
-            probe_dropout_per_step: 0.0011,
-            probe_dropout_mean_steps: 90.0,
+            stuck_per_step: 0.0025,
+            stuck_mean_steps: 20.0,
+            probe_dropout_per_step: 0.0015,
+            probe_dropout_mean_steps: 45.0,
+            outage_per_day: 0.005,
+            outage_mean_days: 25.0,
+            outage_share: 0.85,
         }
     }
 }
@@ -362,6 +377,15 @@ impl SynthConfig {
             f.probe_dropout_mean_steps,
             1.0,
         )?;
+        check_probability("faults.outage_per_day", f.outage_per_day)?;
+        check_at_least("faults.outage_mean_days", f.outage_mean_days, 1.0)?;
+        if !(f.outage_share.is_finite() && (0.0..=1.0).contains(&f.outage_share)) {
+            return Err(invalid(
+                "faults.outage_share",
+                f.outage_share,
+                "must be a probability in [0, 1]",
+            ));
+        }
         if self.event_count > 10_000 {
             return Err(invalid("event_count", self.event_count, "at most 10000"));
         }

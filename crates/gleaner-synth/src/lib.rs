@@ -156,6 +156,7 @@ mod config;
 mod detection;
 mod error;
 mod farm;
+mod fidelity;
 mod model;
 mod network;
 mod random;
@@ -170,6 +171,12 @@ pub use detection::{
 pub use error::SynthError;
 pub use farm::{
     EventKind, FaultKind, FaultRecord, GroundTruthEvent, ModalitySpec, Reading, SynthFarm,
+};
+pub use fidelity::{
+    ChangeShape, DISTANCE_BANDS_M, DepthFidelity, FRONT_LAGS_DAYS, FRONT_WINDOW_DAYS,
+    FidelityCheck, FidelityStats, GapShape, STUCK_MIN_DAYS, change_correlation_by_distance,
+    change_shape, fidelity_checks, fidelity_stats, gap_shape, lagged_window_change_correlation,
+    mean_and_amplitude, network_down_days, peak_in, stuck_share,
 };
 pub use model::generate;
 pub use network::{

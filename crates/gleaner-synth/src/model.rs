@@ -17,38 +17,57 @@ use gleaner_field::time::day_of_year;
 /// interpolate linearly and clamp at the ends.
 const TABLE_DEPTHS_CM: [f64; 5] = [30.0, 60.0, 90.0, 120.0, 150.0];
 /// Mean wilting baseline (dry end) of volumetric water, m³/m³.
-const WILT_MEAN: [f64; 5] = [0.155, 0.16, 0.18, 0.185, 0.19];
+const WILT_MEAN: [f64; 5] = [0.17, 0.2, 0.21, 0.225, 0.25];
 /// Between-sensor standard deviation of the wilting baseline, m³/m³.
 const WILT_SD: [f64; 5] = [0.045, 0.055, 0.06, 0.07, 0.07];
 /// Mean range from wilting baseline to field capacity, m³/m³.
-const RANGE_MEAN: [f64; 5] = [0.19, 0.25, 0.25, 0.25, 0.25];
+const RANGE_MEAN: [f64; 5] = [0.21, 0.27, 0.25, 0.22, 0.2];
 /// Between-sensor coefficient of variation (log-normal) of the range, dimensionless.
 const RANGE_CV: [f64; 5] = [0.12, 0.14, 0.15, 0.16, 0.16];
 /// Drying rate of the slow store at the peak of the growing season, 1/day.
-const DRYING_RATE: [f64; 5] = [0.025, 0.022, 0.02, 0.018, 0.015];
+const DRYING_RATE: [f64; 5] = [0.025, 0.045, 0.026, 0.02, 0.016];
 /// Slow-store filling per millimetre of rain reaching the layer (times the room left), 1/mm.
-const RAIN_GAIN: [f64; 5] = [0.0035, 0.0033, 0.003, 0.0028, 0.0028];
-/// Time constant of the rain's arrival at the layer's slow store (lag and damping), days.
-const INFILTRATION_TAU_DAYS: [f64; 5] = [1.2, 12.0, 30.0, 40.0, 50.0];
-/// Time constant of the rain's arrival as a fast pulse (wetting front), days.
-const PULSE_IN_TAU_DAYS: [f64; 5] = [0.7, 3.0, 10.0, 15.0, 20.0];
+const RAIN_GAIN: [f64; 5] = [0.0035, 0.008, 0.008, 0.008, 0.008];
+/// Travel time of the wetting front from the surface to the layer's slow store, days (a pure
+/// delay: the water that soaks in below the root zone arrives this long after the rain).
+const FRONT_DELAY_DAYS: [f64; 5] = [0.0, 11.0, 24.0, 31.0, 38.0];
+/// Time constant of the front's arrival once it is there (its sharpness), days.
+const INFILTRATION_TAU_DAYS: [f64; 5] = [1.2, 1.0, 1.0, 1.2, 1.5];
+/// Log-normal spread of each sensor's front delay (a spatial field, exponential covariance
+/// over [`FRONT_CORRELATION_M`]): nearby stations see a front the same day, distant ones days
+/// apart, so the correlation of deep daily changes falls with distance.
+const FRONT_DELAY_SD: f64 = 0.5;
+/// Correlation length of the front-delay field, metres.
+const FRONT_CORRELATION_M: f64 = 250.0;
+/// Time constant of the rain's arrival as a fast pulse (preferential flow, undelayed), days.
+const PULSE_IN_TAU_DAYS: [f64; 5] = [0.7, 1.0, 1.5, 2.0, 2.0];
 /// Fast pulse per millimetre of rain, m³/m³ per mm.
-const PULSE_GAIN: [f64; 5] = [0.00125, 0.0008, 0.0003, 0.0002, 0.0001];
+const PULSE_GAIN: [f64; 5] = [0.00125, 0.0002, 0.00004, 0.00003, 0.00002];
 /// Time constant of the fast pulse's drainage, days.
 const PULSE_TAU_DAYS: [f64; 5] = [3.0, 4.0, 5.0, 6.0, 6.0];
 /// Lag of the growing season's water uptake behind its peak at 30 cm, days.
 const ET_LAG_DAYS: [f64; 5] = [0.0, 15.0, 30.0, 40.0, 50.0];
 /// Time constant of a leak's or dry patch's arrival at the layer, days.
 const EVENT_TAU_DAYS: [f64; 5] = [1.0, 2.0, 4.0, 6.0, 8.0];
-/// White measurement noise of volumetric water, m³/m³.
-const VW_NOISE: [f64; 5] = [0.003, 0.0042, 0.004, 0.004, 0.004];
+/// White measurement noise of a daily volumetric water value, m³/m³ (a daily mean of many
+/// readings: below the sensor's resolution step, so deep layers repeat their value on most
+/// days, as at CAF).
+const VW_NOISE: [f64; 5] = [0.0002, 0.0001, 0.0001, 0.0001, 0.0001];
 /// Field-wide white measurement artefact of volumetric water (shared by every station on a
 /// given day, e.g. the probes' temperature sensitivity), m³/m³.
-const VW_COMMON_NOISE: [f64; 5] = [0.0015, 0.0025, 0.0028, 0.0028, 0.0028];
+const VW_COMMON_NOISE: [f64; 5] = [0.0006, 0.00045, 0.0, 0.0, 0.0];
+/// Resolution step of a volumetric water value, m³/m³ (CAF reports 0.001).
+pub(crate) const VW_RESOLUTION: f64 = 0.001;
+/// Resolution step of a soil temperature value, °C (CAF reports 0.01).
+pub(crate) const T_RESOLUTION: f64 = 0.01;
 /// Amplitude of the spatially correlated moving anomaly, m³/m³.
-const ANOMALY_SD: [f64; 5] = [0.02, 0.025, 0.03, 0.03, 0.03];
+const ANOMALY_SD: [f64; 5] = [0.02, 0.02, 0.025, 0.025, 0.025];
+/// Time constant of a further low-pass of the moving anomaly at the layer, days (0: none):
+/// deep layers follow it slowly, so it shapes their levels (correlation falling with
+/// distance) without moving them on most days.
+const ANOMALY_FILTER_DAYS: [f64; 5] = [0.0, 60.0, 120.0, 150.0, 180.0];
 /// Amplitude of each sensor's own slow anomaly, m³/m³.
-const LOCAL_SD: [f64; 5] = [0.025, 0.03, 0.04, 0.045, 0.045];
+const LOCAL_SD: [f64; 5] = [0.025, 0.025, 0.025, 0.025, 0.025];
 /// Log-normal spread of each sensor's response to a storm (infiltration, interception).
 const STORM_RESPONSE_SD: f64 = 0.8;
 /// Soil temperatures below this knee approach 0 °C without reaching it: `T = knee x exp((T -
@@ -61,8 +80,11 @@ const RAIN_INTERCEPTION: f64 = 0.8;
 const SPATIAL_SHARE: f64 = 0.7;
 /// Time constant of the moving anomaly, days.
 const ANOMALY_TAU_DAYS: f64 = 60.0;
-/// Time constant of each sensor's own slow anomaly, days.
-const LOCAL_TAU_DAYS: f64 = 20.0;
+/// Time constant of each sensor's own slow anomaly, days (slower with depth).
+const LOCAL_TAU_DAYS: [f64; 5] = [20.0, 90.0, 200.0, 250.0, 300.0];
+/// Percolation below the top layer scales as the topsoil's wetness to this power: deep
+/// layers are recharged in the wet season, hardly in summer.
+const PERCOLATION_POWER: f64 = 1.0;
 /// Number of latent processes in the moving anomaly.
 const ANOMALY_FIELDS: usize = 4;
 /// A failed sensor stays silent this long after its event ends before it is replaced (it then
@@ -87,8 +109,9 @@ const T_WEATHER_DAMPING_CM: f64 = 70.0;
 const T_OFFSET_SD: f64 = 0.8;
 /// Between-sensor coefficient of variation of the annual amplitude.
 const T_AMPLITUDE_CV: f64 = 0.04;
-/// White measurement noise of soil temperature, °C.
-const T_NOISE_SD: f64 = 0.015;
+/// White measurement noise of a daily soil temperature, °C (each probe's own day-to-day
+/// scatter: it is what keeps deep stations' daily changes from being perfectly alike).
+const T_NOISE_SD: f64 = 0.02;
 
 /// Physical clamp of volumetric water content, m³/m³ (inside [0, 0.6] even as f32).
 const VW_RANGE: (f64, f64) = (0.01, 0.58);
@@ -197,7 +220,10 @@ struct Context<'a> {
     gain_field: SpatialField,
     t_field: SpatialField,
     anomaly_fields: Vec<SpatialField>,
+    front_field: SpatialField,
     effects: Vec<Vec<EventEffect>>,
+    /// Network-wide outages, `[start, end)` steps.
+    outages: Vec<(usize, usize)>,
     modalities: &'a [ModalitySpec],
 }
 
@@ -236,15 +262,15 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
 
     let mut modalities = Vec::new();
     // Soil moisture (water) first, then soil temperature.
-    for (depths, quantity, unit, is_water) in [
-        (&config.vw_depths_cm, "vw", "m3/m3", true),
-        (&config.t_depths_cm, "t", "degC", false),
+    for (depths, quantity, unit, is_water, decimals) in [
+        (&config.vw_depths_cm, "vw", "m3/m3", true, 3),
+        (&config.t_depths_cm, "t", "degC", false, 2),
     ] {
         for &d in depths {
             modalities.push(ModalitySpec {
                 modality: Modality::at_depth(quantity, Some(d))?,
                 unit,
-                decimals: 4,
+                decimals,
                 depth_cm: d,
                 is_water,
             });
@@ -291,15 +317,19 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
     // Static spatial fields, drawn in a fixed order.
     let mut frng = stream(config.seed, Domain::Fields, 0);
     let l = config.correlation_length_m;
-    let wilt_field = SpatialField::new(&mut frng, l);
-    let range_field = SpatialField::new(&mut frng, l);
-    let drying_field = SpatialField::new(&mut frng, l);
-    let gain_field = SpatialField::new(&mut frng, l);
-    let t_field = SpatialField::new(&mut frng, l);
+    // Standardised over the farm's own sensors: the fields describe variation within the
+    // farm, so every seed's farm has the calibrated mean and spread (no wet or dry seeds).
+    let field = |rng: &mut ChaCha8Rng, l: f64| SpatialField::new(rng, l).standardized_over(&local);
+    let wilt_field = field(&mut frng, l);
+    let range_field = field(&mut frng, l);
+    let drying_field = field(&mut frng, l);
+    let gain_field = field(&mut frng, l);
+    let t_field = field(&mut frng, l);
     let elevation_field = SpatialField::new(&mut frng, 2.0 * l);
-    let anomaly_fields: Vec<SpatialField> = (0..ANOMALY_FIELDS)
-        .map(|_| SpatialField::new(&mut frng, l))
-        .collect();
+    let anomaly_fields: Vec<SpatialField> =
+        (0..ANOMALY_FIELDS).map(|_| field(&mut frng, l)).collect();
+    let front_field =
+        SpatialField::exponential(&mut frng, FRONT_CORRELATION_M).standardized_over(&local);
 
     let width = n.to_string().len().max(5);
     let sensors: Vec<Sensor> = local
@@ -355,6 +385,7 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
     let common: Vec<f64> = (0..steps).map(|_| normal(&mut wrng)).collect();
 
     let (events, effects) = place_events(config, &sensors, &local, &frame, &times);
+    let outages = network_outages(config, steps);
 
     let ctx = Context {
         config,
@@ -376,7 +407,9 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
         gain_field,
         t_field,
         anomaly_fields,
+        front_field,
         effects,
+        outages,
         modalities: &modalities,
     };
 
@@ -567,6 +600,9 @@ struct WaterLayer {
     noise: f64,
     common_noise: f64,
     anomaly_sd: f64,
+    /// Low-pass rate of the moving anomaly (1 = none) and its state.
+    anomaly_alpha: f64,
+    anomaly_state: f64,
     local_sd: f64,
     /// Slow store (seasonal wetness), in [0, 1].
     store: f64,
@@ -575,17 +611,101 @@ struct WaterLayer {
     pulse: f64,
     pulse_inflow: f64,
     local: SmoothProcess,
+    /// True below the top layer: fed by the delayed, wetness-gated percolation rather than
+    /// by the rain itself.
+    percolates: bool,
+    /// The wetting front on its way to the layer (daily during the spin-up, then per step).
+    front: DelayLine,
+    /// Front delay of this sensor at this depth, days.
+    front_delay_days: f64,
     /// Leak / dry-patch offsets, m³/m³ (>= 0).
     leak: f64,
     dry: f64,
 }
 
+/// A pure delay of a fixed number of steps (a ring buffer; zero steps passes values through).
+#[derive(Debug, Clone)]
+struct DelayLine {
+    buf: Vec<f64>,
+    pos: usize,
+}
+
+impl DelayLine {
+    fn new(steps: usize) -> Self {
+        Self {
+            buf: vec![0.0; steps],
+            pos: 0,
+        }
+    }
+
+    /// Pushes `x` and returns the value pushed `steps` steps ago (0 before that).
+    fn step(&mut self, x: f64) -> f64 {
+        if self.buf.is_empty() {
+            return x;
+        }
+        let out = std::mem::replace(&mut self.buf[self.pos], x);
+        self.pos = (self.pos + 1) % self.buf.len();
+        out
+    }
+
+    /// The same history on a grid `steps_per_old` times finer, `steps` long: each new slot
+    /// takes the old slot covering its time (rates, so no rescaling).
+    fn resampled(&self, steps: usize, steps_per_old: usize) -> DelayLine {
+        let old = self.buf.len();
+        // Oldest first.
+        let seq: Vec<f64> = (0..old).map(|k| self.buf[(self.pos + k) % old]).collect();
+        let buf = (0..steps)
+            .map(|k| {
+                // Slot k (oldest first) is (steps - k) new steps ago.
+                let ago_old = (steps - k).div_ceil(steps_per_old.max(1));
+                if old == 0 || ago_old > old {
+                    0.0
+                } else {
+                    seq[old - ago_old]
+                }
+            })
+            .collect();
+        DelayLine { buf, pos: 0 }
+    }
+}
+
+/// The topsoil's wetness, in [0, 1]: a slow store with the mean 30 cm parameters, used only
+/// to gate the percolation that recharges the deeper layers.
+#[derive(Debug, Clone, Copy)]
+struct Topsoil {
+    store: f64,
+    inflow: f64,
+}
+
+impl Topsoil {
+    fn step(&mut self, rain: f64, et: f64, dt: f64, alpha: f64) {
+        self.inflow += alpha * (rain / dt - self.inflow);
+        let fill = (RAIN_GAIN[0] * self.inflow * dt).min(1.0);
+        self.store = (self.store * (-DRYING_RATE[0] * et * dt).exp()) * (1.0 - fill) + fill;
+    }
+
+    /// Water percolating below the top layer out of `rain` mm.
+    fn percolation(&self, rain: f64) -> f64 {
+        rain * self.store.powf(PERCOLATION_POWER)
+    }
+}
+
 impl WaterLayer {
-    /// One step of `dt` days with `rain` mm reaching the surface (per step) and uptake factor
-    /// `et`; `alphas` are the layer's (slow, pulse) arrival rates and `decay` the pulse's
-    /// survival for this step length.
-    fn water_step(&mut self, rain: f64, et: f64, dt: f64, alphas: (f64, f64), decay: f64) {
-        self.inflow += alphas.0 * (rain / dt - self.inflow);
+    /// One step of `dt` days with `rain` mm reaching the surface and `percolation` mm
+    /// leaving the topsoil (per step) and uptake factor `et`; `alphas` are the layer's (slow,
+    /// pulse) arrival rates and `decay` the pulse's survival for this step length.
+    fn water_step(
+        &mut self,
+        rain: f64,
+        percolation: f64,
+        et: f64,
+        dt: f64,
+        alphas: (f64, f64),
+        decay: f64,
+    ) {
+        let feed = if self.percolates { percolation } else { rain };
+        let arriving = self.front.step(feed / dt);
+        self.inflow += alphas.0 * (arriving - self.inflow);
         self.pulse_inflow += alphas.1 * (rain / dt - self.pulse_inflow);
         let fill = (self.gain * self.inflow * dt).min(1.0);
         self.store = (self.store * (-self.drying * et * dt).exp()) * (1.0 - fill) + fill;
@@ -615,6 +735,7 @@ fn simulate_sensor(
     let f_dry = ctx.drying_field.at(p);
     let f_gain = ctx.gain_field.at(p);
     let f_t = ctx.t_field.at(p);
+    let f_front = ctx.front_field.at(p);
     let loadings: Vec<f64> = ctx
         .anomaly_fields
         .iter()
@@ -626,6 +747,7 @@ fn simulate_sensor(
         .map(|&d| {
             let d = f64::from(d);
             let tau = interp(&INFILTRATION_TAU_DAYS, d);
+            let front_delay_days = interp(&FRONT_DELAY_DAYS, d) * (FRONT_DELAY_SD * f_front).exp();
             let pulse_in = interp(&PULSE_IN_TAU_DAYS, d);
             let pulse_tau = interp(&PULSE_TAU_DAYS, d);
             let gain = (0.3 * mix(f_gain, &mut rng)).exp();
@@ -646,12 +768,20 @@ fn simulate_sensor(
                 noise: interp(&VW_NOISE, d),
                 common_noise: interp(&VW_COMMON_NOISE, d),
                 anomaly_sd: interp(&ANOMALY_SD, d),
+                anomaly_alpha: match interp(&ANOMALY_FILTER_DAYS, d) {
+                    tau if tau > 0.0 => 1.0 - (-dt / tau).exp(),
+                    _ => 1.0,
+                },
+                anomaly_state: f64::NAN,
                 local_sd: interp(&LOCAL_SD, d),
                 store: 0.5,
                 inflow: 0.0,
                 pulse: 0.0,
                 pulse_inflow: 0.0,
-                local: SmoothProcess::new(dt, LOCAL_TAU_DAYS, normal(&mut rng)),
+                local: SmoothProcess::new(dt, interp(&LOCAL_TAU_DAYS, d), normal(&mut rng)),
+                percolates: d > TABLE_DEPTHS_CM[0],
+                front: DelayLine::new(front_delay_days.round() as usize),
+                front_delay_days,
                 leak: 0.0,
                 dry: 0.0,
             }
@@ -661,13 +791,27 @@ fn simulate_sensor(
     let t_amp = 1.0 + T_AMPLITUDE_CV * normal(&mut rng);
 
     // Spin-up, daily steps, no events, the field's mean storm response.
+    let mut topsoil = Topsoil {
+        store: 0.5,
+        inflow: 0.0,
+    };
+    let top_tau = INFILTRATION_TAU_DAYS[0];
+    let (spin_top_alpha, top_alpha) = (1.0 - (-1.0 / top_tau).exp(), 1.0 - (-dt / top_tau).exp());
     for k in 0..ctx.spin_up_rain_mm.len() {
         let rain = ctx.spin_up_rain_mm[k] * (1.0 - RAIN_INTERCEPTION * ctx.spin_up_et_surface[k]);
+        let percolation = topsoil.percolation(rain);
+        topsoil.step(rain, ctx.spin_up_et_surface[k], 1.0, spin_top_alpha);
         for (j, layer) in layers.iter_mut().enumerate() {
             let alphas = (layer.spin_alpha, layer.spin_pulse_alpha);
             let decay = layer.spin_pulse_decay;
-            layer.water_step(rain, ctx.spin_up_et[j][k], 1.0, alphas, decay);
+            layer.water_step(rain, percolation, ctx.spin_up_et[j][k], 1.0, alphas, decay);
         }
+    }
+    // The fronts still on their way, moved onto the sampling grid.
+    let per_day = (1.0 / dt).round().max(1.0) as usize;
+    for layer in &mut layers {
+        let steps = (layer.front_delay_days / dt).round() as usize;
+        layer.front = layer.front.resampled(steps, per_day);
     }
 
     let effects = &ctx.effects[index];
@@ -697,6 +841,8 @@ fn simulate_sensor(
             1.0
         };
         let rain = ctx.rain_mm[t] * storm_response * (1.0 - RAIN_INTERCEPTION * ctx.et_surface[t]);
+        let percolation = topsoil.percolation(rain);
+        topsoil.step(rain, ctx.et_surface[t], dt, top_alpha);
         // Leak water and drying patches arrive with the layer's own lag; they fade over
         // about ten days after the event ends.
         let fade = 1.0 - (-dt / 10.0).exp();
@@ -707,13 +853,18 @@ fn simulate_sensor(
             layer.dry += rate(dry_target, layer.dry) * (dry_target - layer.dry);
             let alphas = (layer.alpha, layer.pulse_alpha);
             let decay = layer.pulse_decay;
-            layer.water_step(rain, ctx.et[j][t], dt, alphas, decay);
+            layer.water_step(rain, percolation, ctx.et[j][t], dt, alphas, decay);
+            layer.anomaly_state = if layer.anomaly_state.is_nan() {
+                anomaly
+            } else {
+                layer.anomaly_state + layer.anomaly_alpha * (anomaly - layer.anomaly_state)
+            };
             let local = layer.local.step(fast_normal(&mut rng));
             let wet = layer.store;
             let mut v = layer.wilt
                 + layer.range * wet
                 + layer.pulse
-                + layer.anomaly_sd * anomaly * (0.3 + wet)
+                + layer.anomaly_sd * layer.anomaly_state * (0.3 + wet)
                 + layer.local_sd * local
                 + layer.noise * fast_normal(&mut rng)
                 + layer.common_noise * ctx.common[t];
@@ -764,23 +915,63 @@ fn simulate_sensor(
         }
     }
 
-    let faults = apply_faults(config, index, ctx.modalities, out, steps, &mut rng);
+    let faults = apply_faults(
+        config,
+        index,
+        ctx.modalities,
+        &ctx.outages,
+        out,
+        steps,
+        &mut rng,
+    );
 
+    // The sensor's resolution step: values are multiples of it (CAF: 0.001 m³/m³, 0.01 °C).
     for (m, spec) in ctx.modalities.iter().enumerate() {
+        let step = if spec.is_water {
+            VW_RESOLUTION
+        } else {
+            T_RESOLUTION
+        };
         for v in &mut out[m * steps..(m + 1) * steps] {
             if !v.is_nan() {
-                *v = round_to(f64::from(*v), spec.decimals) as f32;
+                let q = (f64::from(*v) / step).round() * step;
+                *v = round_to(q, spec.decimals) as f32;
             }
         }
     }
     faults
 }
 
-/// Applies random dropouts, stuck stretches and spikes in place; returns what was done.
+/// The network-wide outages, `[start, end)` sampling steps: drawn day by day (a new one can
+/// start only after the last has ended), from their own random stream.
+fn network_outages(config: &SynthConfig, steps: usize) -> Vec<(usize, usize)> {
+    let f = &config.faults;
+    let mut out = Vec::new();
+    if f.outage_per_day <= 0.0 || f.outage_share <= 0.0 {
+        return out;
+    }
+    let per_day = (86_400 / config.interval_s.max(1)) as usize;
+    let mut rng = stream(config.seed, Domain::Outages, 0);
+    let mut day = 0usize;
+    while day < config.days as usize {
+        if uniform(&mut rng) < f.outage_per_day {
+            let len = geometric_len(&mut rng, f.outage_mean_days);
+            out.push((day * per_day, ((day + len) * per_day).min(steps)));
+            day += len;
+        } else {
+            day += 1;
+        }
+    }
+    out
+}
+
+/// Applies network outages, random dropouts, stuck stretches and spikes in place; returns
+/// what was done.
 fn apply_faults(
     config: &SynthConfig,
     sensor: usize,
     modalities: &[ModalitySpec],
+    outages: &[(usize, usize)],
     out: &mut [f32],
     steps: usize,
     rng: &mut ChaCha8Rng,
@@ -788,6 +979,20 @@ fn apply_faults(
     let f = &config.faults;
     let mut records = Vec::new();
     let time_at = |s: usize| config.start + s as i64 * config.interval_s;
+    // The outages this station takes part in, one draw each, in order.
+    let mut silent = vec![false; if outages.is_empty() { 0 } else { steps }];
+    for &(a, b) in outages {
+        if uniform(rng) < f.outage_share {
+            records.push(FaultRecord {
+                sensor,
+                kind: FaultKind::Dropout,
+                modality: None,
+                start: time_at(a),
+                end: time_at(b),
+            });
+            silent[a..b].iter_mut().for_each(|x| *x = true);
+        }
+    }
     let mods = modalities.len();
     let mut dropout_left = 0usize;
     let mut probe_left = vec![0usize; mods];
@@ -823,7 +1028,8 @@ fn apply_faults(
                 });
                 probe_left[m] = len;
             }
-            if stuck_left[m] == 0 && t > 0 && uniform(rng) < f.stuck_per_step {
+            // Stuck stretches hit soil water only (CAF's temperatures hardly repeat).
+            if stuck_left[m] == 0 && t > 0 && uniform(rng) < f.stuck_per_step && spec.is_water {
                 let len = geometric_len(rng, f.stuck_mean_steps).min(steps - t);
                 records.push(FaultRecord {
                     sensor,
@@ -834,7 +1040,8 @@ fn apply_faults(
                 });
                 stuck_left[m] = len;
             }
-            let spike = uniform(rng) < f.spike_per_reading;
+            // Spikes hit soil water only (CAF's temperatures show none).
+            let spike = uniform(rng) < f.spike_per_reading && spec.is_water;
             if stuck_left[m] > 0 {
                 stuck_left[m] -= 1;
                 // A reading that is missing anyway (a dead sensor) stays missing.
@@ -846,7 +1053,7 @@ fn apply_faults(
                 let (size, (lo, hi)) = if spec.is_water {
                     (0.05 + 0.10 * uniform(rng), VW_RANGE)
                 } else {
-                    (3.0 + 5.0 * uniform(rng), T_RANGE)
+                    (0.5 + 1.0 * uniform(rng), T_RANGE)
                 };
                 // Soil temperature spikes do not cross 0 °C (the frost floor): they go up.
                 if !spec.is_water && f64::from(out[at]) - size < T_FREEZE_KNEE_C {
@@ -862,7 +1069,7 @@ fn apply_faults(
                     end: time_at(t + 1),
                 });
             }
-            if dropout_left > 0 || probe_left[m] > 0 {
+            if dropout_left > 0 || probe_left[m] > 0 || silent.get(t).copied().unwrap_or(false) {
                 out[at] = f32::NAN;
             } else if !out[at].is_nan() {
                 last_reported[m] = out[at];

@@ -16,6 +16,7 @@ pub(crate) enum Domain {
     Weather = 3,
     Events = 4,
     Sensor = 5,
+    Outages = 6,
 }
 
 fn splitmix64(mut x: u64) -> u64 {
@@ -80,11 +81,24 @@ const FEATURES: usize = 48;
 /// A zero-mean, unit-variance Gaussian random field over the plane with Gaussian covariance
 /// `exp(-r^2 / (2 l^2))`, approximated by random Fourier features: evaluation costs
 /// O(features) per point, so a field over N sensors is O(N).
+///
+/// [`SpatialField::exponential`] draws the exponential covariance `exp(-r / l)` instead (its
+/// spectral measure is a bivariate Cauchy: rougher fields whose correlation falls linearly at
+/// short range). [`SpatialField::standardized_over`] rescales a field to mean 0 and sd 1 over
+/// a farm's sensors, so that it describes variation *within* the farm: without it a field
+/// whose correlation length exceeds the farm is nearly constant over it, and each seed's farm
+/// is shifted as a whole (one seed wetter, another drier).
 #[derive(Debug, Clone)]
 pub(crate) struct SpatialField {
     /// (omega_e, omega_n, phase) per feature; omega in rad/m.
     features: Vec<(f64, f64, f64)>,
+    /// Subtracted from the raw value, then divided by `scale`.
+    offset: f64,
+    scale: f64,
 }
+
+/// Points per block when standardising a field (fixed, so sums do not depend on threads).
+const BLOCK: usize = 4096;
 
 impl SpatialField {
     pub(crate) fn new(rng: &mut ChaCha8Rng, correlation_length_m: f64) -> Self {
@@ -96,16 +110,72 @@ impl SpatialField {
                 (we, wn, phase)
             })
             .collect();
-        Self { features }
+        Self {
+            features,
+            offset: 0.0,
+            scale: 1.0,
+        }
     }
 
-    pub(crate) fn at(&self, p: LocalPoint) -> f64 {
+    /// A field with covariance `exp(-r / l)`, `l` = `correlation_length_m`.
+    pub(crate) fn exponential(rng: &mut ChaCha8Rng, correlation_length_m: f64) -> Self {
+        let features = (0..FEATURES)
+            .map(|_| {
+                // Bivariate Cauchy: a Gaussian direction over |N(0, 1)| (a chi with 1 dof).
+                let w = normal(rng).abs().max(1.0e-3) * correlation_length_m;
+                let we = normal(rng) / w;
+                let wn = normal(rng) / w;
+                let phase = uniform(rng) * std::f64::consts::TAU;
+                (we, wn, phase)
+            })
+            .collect();
+        Self {
+            features,
+            offset: 0.0,
+            scale: 1.0,
+        }
+    }
+
+    /// The field rescaled to mean 0 and standard deviation 1 over `points` (only centred with
+    /// fewer than three points or a flat field). Deterministic whatever the thread count.
+    pub(crate) fn standardized_over(mut self, points: &[LocalPoint]) -> Self {
+        use rayon::prelude::*;
+        if points.is_empty() {
+            return self;
+        }
+        let partial: Vec<(f64, f64)> = points
+            .par_chunks(BLOCK)
+            .map(|c| {
+                c.iter().fold((0.0, 0.0), |(s, q), &p| {
+                    let v = self.raw(p);
+                    (s + v, q + v * v)
+                })
+            })
+            .collect();
+        let (s, q) = partial
+            .iter()
+            .fold((0.0, 0.0), |(a, b), &(s, q)| (a + s, b + q));
+        let n = points.len() as f64;
+        let mean = s / n;
+        let var = (q / n - mean * mean).max(0.0);
+        self.offset = mean;
+        if points.len() >= 3 && var > 1.0e-12 {
+            self.scale = var.sqrt();
+        }
+        self
+    }
+
+    fn raw(&self, p: LocalPoint) -> f64 {
         let sum: f64 = self
             .features
             .iter()
             .map(|&(we, wn, ph)| (we * p.e + wn * p.n + ph).cos())
             .sum();
         sum * (2.0 / self.features.len() as f64).sqrt()
+    }
+
+    pub(crate) fn at(&self, p: LocalPoint) -> f64 {
+        (self.raw(p) - self.offset) / self.scale
     }
 }
 
@@ -142,6 +212,31 @@ mod tests {
         assert_eq!(a, a2);
         assert_ne!(a, b);
         assert_ne!(a, c);
+    }
+
+    #[test]
+    fn exponential_field_has_exponential_covariance_and_standardizes() {
+        let mut rng = stream(4, Domain::Fields, 0);
+        let (mut var, mut cov) = (0.0, 0.0);
+        let m = 600;
+        for _ in 0..m {
+            let f = SpatialField::exponential(&mut rng, 100.0);
+            let a = f.at(LocalPoint::new(0.0, 0.0));
+            let b = f.at(LocalPoint::new(100.0, 0.0));
+            var += a * a;
+            cov += a * b;
+        }
+        let (var, cov) = (var / m as f64, cov / m as f64);
+        assert!((var - 1.0).abs() < 0.2, "{var}");
+        assert!((cov - (-1.0f64).exp()).abs() < 0.12, "{cov}");
+        let points: Vec<LocalPoint> = (0..50)
+            .map(|i| LocalPoint::new(10.0 * i as f64, 3.0 * i as f64))
+            .collect();
+        let f = SpatialField::new(&mut rng, 1000.0).standardized_over(&points);
+        let v: Vec<f64> = points.iter().map(|&p| f.at(p)).collect();
+        let mean = v.iter().sum::<f64>() / 50.0;
+        let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / 50.0).sqrt();
+        assert!(mean.abs() < 1e-9 && (sd - 1.0).abs() < 1e-9, "{mean} {sd}");
     }
 
     #[test]

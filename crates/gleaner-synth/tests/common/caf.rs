@@ -117,15 +117,36 @@ pub fn caf_network(
     from: (i64, i64, i64),
     to: (i64, i64, i64),
 ) -> Result<gleaner_synth::NetworkPanel, String> {
-    let columns = ["VW_30cm", "VW_60cm", "VW_90cm", "T_30cm"];
-    let names = ["vw@30cm", "vw@60cm", "vw@90cm", "t@30cm"];
-    let panels = caf_panels(dir, &columns)?;
+    caf_network_columns(dir, from, to, &["VW_30cm", "VW_60cm", "VW_90cm", "T_30cm"])
+}
+
+/// Every CAF column: VW and soil temperature at 30, 60, 90, 120 and 150 cm.
+#[allow(dead_code)]
+pub const ALL_COLUMNS: [&str; 10] = [
+    "VW_30cm", "VW_60cm", "VW_90cm", "VW_120cm", "VW_150cm", "T_30cm", "T_60cm", "T_90cm",
+    "T_120cm", "T_150cm",
+];
+
+/// The CAF daily network between two civil dates (inclusive) with the given columns (e.g.
+/// [`ALL_COLUMNS`]), named as modalities (`VW_30cm` -> `vw@30cm`).
+#[allow(dead_code)]
+pub fn caf_network_columns(
+    dir: &Path,
+    from: (i64, i64, i64),
+    to: (i64, i64, i64),
+    columns: &[&str],
+) -> Result<gleaner_synth::NetworkPanel, String> {
+    let names: Vec<String> = columns
+        .iter()
+        .map(|c| c.to_lowercase().replacen('_', "@", 1))
+        .collect();
+    let panels = caf_panels(dir, columns)?;
     let first = first_day(dir)?;
     let (a, b) = (days(from.0, from.1, from.2), days(to.0, to.1, to.2));
     let (i, j) = ((a - first).max(0) as usize, (b - first + 1).max(0) as usize);
     let modalities = panels
         .iter()
-        .zip(names)
+        .zip(&names)
         .map(|(p, name)| gleaner_synth::PanelModality {
             name: name.to_string(),
             is_water: name.starts_with("vw"),
