@@ -248,12 +248,14 @@ proptest! {
         }
     }
 
-    /// The pruned search (the default) never returns an infeasible route, and on small
-    /// instances scores at least as much as the same search over every candidate
-    /// (`prune: false`) — no tolerance: both reach the exact optimum here, which is checked
-    /// too for one vehicle on Euclidean costs.
+    /// The pruned search (the default) never returns an infeasible route, never less than
+    /// its greedy start nor more than the exact optimum, and the unpruned search
+    /// (`prune: false`) only ever visits nodes pruning kept. Which of the two scores more is
+    /// not an invariant: pruning changes the random moves' trajectory, and on non-metric
+    /// instances either can stop one unit short of the optimum (seen: 43 against 44).
+    /// Pruning's soundness itself is `pruning_keeps_every_node_of_a_feasible_route`.
     #[test]
-    fn pruned_search_is_feasible_and_no_worse(
+    fn pruned_search_is_feasible_and_bounded(
         p in prop_oneof![non_metric_instance(10), instance()],
         seed in 0u64..3,
     ) {
@@ -263,13 +265,15 @@ proptest! {
         let pruned = solve_default(&p, &opts);
         let checked = evaluate(&p, &pruned.routes);
         prop_assert!(checked.is_ok(), "{:?}", checked);
+        prop_assert!(pruned.reward >= greedy(&p).reward - 1e-9);
         let full = solve_default(&p, &SolveOptions { prune: false, ..opts });
         prop_assert!(evaluate(&p, &full.routes).is_ok());
-        prop_assert!(
-            pruned.reward >= full.reward - 1e-9,
-            "pruned {} < unpruned {} ({:?} vs {:?})", pruned.reward, full.reward, pruned.routes, full.routes
-        );
+        let kept = p.reachable_candidates();
+        for v in full.routes.iter().flatten().filter(|&&v| !p.is_terminal(v) && p.reward(v) > 0.0) {
+            prop_assert!(kept.contains(v), "unpruned search visits {v}, which pruning left out");
+        }
         let x = exact(&p).unwrap();
+        prop_assert!(full.reward <= x.reward + 1e-9);
         prop_assert!(pruned.reward <= x.reward + 1e-9);
     }
 }
