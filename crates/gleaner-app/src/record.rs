@@ -250,3 +250,109 @@ pub(crate) fn record_parsed<S: Store>(
         amended: mission.status == MissionStatus::Flown,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plan::{PlanRequest, plan};
+    use gleaner_store::StoreRead;
+
+    const DAY: UnixSeconds = 86_400;
+
+    /// A synthetic farm with every reading ingested and one mission planned 30 days in.
+    fn farm_with_a_mission() -> (crate::test_farm::SynthProject, MissionId, UnixSeconds) {
+        let mut p = crate::test_farm::ingested_synth_project(&gleaner_synth::SynthConfig {
+            seed: 3,
+            sensor_count: 12,
+            days: 40,
+            vw_depths_cm: vec![30],
+            t_depths_cm: vec![],
+            ..gleaner_synth::SynthConfig::default()
+        });
+        let at = p.farm.times()[0] + 30 * DAY;
+        let planned = plan(
+            &mut p.project,
+            &PlanRequest {
+                at: Some(at),
+                max_iterations: Some(50),
+                ..Default::default()
+            },
+            UnixSeconds::MAX / 4,
+        )
+        .unwrap();
+        let id = planned.id.expect("stored");
+        assert!(!planned.mission.stops.is_empty());
+        (p, id, at)
+    }
+
+    fn record(
+        p: &mut crate::test_farm::SynthProject,
+        mission: MissionId,
+        at: Option<UnixSeconds>,
+        cells: Option<Vec<String>>,
+    ) -> Result<RecordOutcome> {
+        record_flight(
+            &mut p.project,
+            &RecordRequest {
+                mission,
+                at,
+                cells,
+                readings: None,
+                amend: false,
+            },
+            UnixSeconds::MAX / 4,
+            &crate::Silent,
+        )
+    }
+
+    fn still_planned(p: &crate::test_farm::SynthProject, mission: MissionId) -> bool {
+        let m = p.project.store().mission(mission).unwrap().unwrap();
+        m.status == MissionStatus::Planned
+    }
+
+    #[test]
+    fn a_cell_of_the_grid_that_is_not_a_stop_is_refused_and_nothing_recorded() {
+        let (mut p, id, _) = farm_with_a_mission();
+        let stops: HashSet<CellIndex> = p
+            .project
+            .store()
+            .mission(id)
+            .unwrap()
+            .unwrap()
+            .mission
+            .stops
+            .iter()
+            .map(|s| s.cell)
+            .collect();
+        let other = p
+            .project
+            .store()
+            .cells()
+            .unwrap()
+            .into_iter()
+            .find(|c| !stops.contains(&c.index))
+            .expect("a cell the mission does not visit")
+            .index;
+        let err = record(&mut p, id, None, Some(vec![other.to_string()])).unwrap_err();
+        assert!(matches!(err, AppError::Invalid(_)), "{err:?}");
+        assert!(
+            err.to_string().contains("is not a stop of mission"),
+            "{err}"
+        );
+        assert!(still_planned(&p, id));
+    }
+
+    #[test]
+    fn implausible_collection_times_are_refused_and_nothing_recorded() {
+        let (mut p, id, planned_at) = farm_with_a_mission();
+        // 0001-01-01, 9999-12-31, and a day before the mission was planned.
+        for at in [-62_135_596_800, 253_402_214_400, planned_at - DAY] {
+            let err = record(&mut p, id, Some(at), None).unwrap_err();
+            assert!(matches!(err, AppError::Invalid(_)), "{at}: {err:?}");
+            assert!(still_planned(&p, id), "{at} recorded");
+        }
+        let ok = record(&mut p, id, Some(planned_at + 3600), None).unwrap();
+        assert_eq!(ok.at, planned_at + 3600);
+        assert!(!still_planned(&p, id));
+    }
+}

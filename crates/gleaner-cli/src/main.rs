@@ -1297,12 +1297,74 @@ fn error_report(e: &anyhow::Error) -> String {
     out
 }
 
+/// `text` with every run of more than 30 digits cut to its first 6 and its length, so an
+/// argument error does not echo a number typed with hundreds of digits in full.
+fn shorten_long_numbers(text: &str) -> String {
+    const LONGEST: usize = 30;
+    let mut out = String::with_capacity(text.len().min(4096));
+    let mut digits = String::new();
+    let flush = |digits: &mut String, out: &mut String| {
+        if digits.len() > LONGEST {
+            out.push_str(&digits[..6]);
+            out.push_str(&format!("…({} digits)", digits.len()));
+        } else {
+            out.push_str(digits);
+        }
+        digits.clear();
+    };
+    for c in text.chars() {
+        if c.is_ascii_digit() {
+            digits.push(c);
+        } else {
+            flush(&mut digits, &mut out);
+            out.push(c);
+        }
+    }
+    flush(&mut digits, &mut out);
+    out
+}
+
+/// The command line, or clap's message (help, version, usage error) and its exit code; a
+/// usage error's long numbers shortened.
+fn parse_cli() -> std::result::Result<Cli, ExitCode> {
+    Cli::try_parse().map_err(|e| {
+        let text = e.to_string();
+        let short = shorten_long_numbers(&text);
+        if short == text {
+            e.exit()
+        }
+        eprint!("{short}");
+        ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2))
+    })
+}
+
 fn main() -> ExitCode {
-    match run(Cli::parse()) {
+    let cli = match parse_cli() {
+        Ok(cli) => cli,
+        Err(code) => return code,
+    };
+    match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", error_report(&e));
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shorten_long_numbers;
+
+    #[test]
+    fn only_runs_of_more_than_30_digits_are_shortened() {
+        let long = "1".repeat(301);
+        assert_eq!(
+            shorten_long_numbers(&format!("invalid value '{long}' for '--at <AT>'")),
+            "invalid value '111111…(301 digits)' for '--at <AT>'"
+        );
+        let kept = format!("2014-01-20 x3y-1 {}", "9".repeat(30));
+        assert_eq!(shorten_long_numbers(&kept), kept);
+        assert_eq!(shorten_long_numbers(""), "");
     }
 }

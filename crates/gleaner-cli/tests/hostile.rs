@@ -847,6 +847,26 @@ fn out_of_range_numbers_are_not_echoed_in_full() {
     }
 }
 
+/// A number typed with hundreds of digits is not echoed back in full by the usage error.
+#[test]
+fn numbers_typed_with_hundreds_of_digits_are_echoed_short() {
+    let bases = bases();
+    let project = farm_copy(&bases);
+    let p = s(project.path());
+    let long = format!("1{}", "0".repeat(300));
+    for args in [
+        vec!["score", "--project", p, "--at", &long],
+        vec!["plan", "--project", p, "--seed", &long],
+        vec!["missions", "--project", p, "--mission", &long],
+    ] {
+        let out = gleaner(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("100000…(301 digits)"), "{args:?}: {err}");
+        assert!(!err.contains(&"0".repeat(31)), "{args:?}: {err}");
+    }
+}
+
 /// `toml` with `line` (`key = value`) in `section`: replacing the key's line, else added
 /// at the top of the section.
 fn set_setting(toml: &str, section: &str, line: &str) -> String {
