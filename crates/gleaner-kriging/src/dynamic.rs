@@ -500,6 +500,78 @@ impl FieldFilter<'_> {
     }
 }
 
+/// Learns the growth rates (unit²/s) of the unshared per-sensor component
+/// ([`DynamicModel::with_own_rates`]) from history: for each sensor, the variance of the
+/// one-step change of its deviation from the field mean (the mean over the sensors read at
+/// that time), per second, halved (a change of a difference of two independent walks counts
+/// each once), shrunk towards the pooled rate of all sensors with weight `prior_weight`
+/// pseudo-changes: `r_i = (k_i·r̂_i + w·r̄)/(k_i + w)`. Steps whose two ends are not
+/// `step_s` apart are skipped; a sensor with no usable change gets the pooled rate; no
+/// usable change anywhere gives all zeros.
+///
+/// Errors: a non-positive step, a negative or non-finite prior weight.
+pub fn fit_own_rates(
+    series: &[SensorSeries<'_>],
+    step_s: i64,
+    prior_weight: f64,
+) -> Result<Vec<f64>, KrigingError> {
+    check("step_s", step_s as f64, step_s > 0, "> 0")?;
+    check(
+        "prior weight",
+        prior_weight,
+        prior_weight >= 0.0 && prior_weight.is_finite(),
+        ">= 0",
+    )?;
+    let mut field: std::collections::BTreeMap<i64, (f64, usize)> = Default::default();
+    for s in series {
+        for (&t, &v) in s.times.iter().zip(s.values) {
+            if v.is_finite() {
+                let e = field.entry(t).or_insert((0.0, 0));
+                e.0 += v;
+                e.1 += 1;
+            }
+        }
+    }
+    let dev = |t: i64, v: f64| field.get(&t).map(|&(sum, k)| v - sum / k as f64);
+    let mut per: Vec<(f64, usize)> = Vec::with_capacity(series.len());
+    for s in series {
+        let (mut sq, mut k) = (0.0, 0usize);
+        for w in 0..s.times.len().saturating_sub(1) {
+            let (t0, t1) = (s.times[w], s.times[w + 1]);
+            let (v0, v1) = (s.values[w], s.values[w + 1]);
+            if t1 - t0 != step_s || !v0.is_finite() || !v1.is_finite() {
+                continue;
+            }
+            if let (Some(d0), Some(d1)) = (dev(t0, v0), dev(t1, v1)) {
+                sq += (d1 - d0) * (d1 - d0);
+                k += 1;
+            }
+        }
+        let rate = if k > 0 {
+            0.5 * sq / k as f64 / step_s as f64
+        } else {
+            0.0
+        };
+        per.push((rate, k));
+    }
+    let total: usize = per.iter().map(|p| p.1).sum();
+    if total == 0 {
+        return Ok(vec![0.0; series.len()]);
+    }
+    let pooled = per.iter().map(|&(r, k)| r * k as f64).sum::<f64>() / total as f64;
+    Ok(per
+        .iter()
+        .map(|&(r, k)| {
+            let k = k as f64;
+            if k + prior_weight == 0.0 {
+                pooled
+            } else {
+                (k * r + prior_weight * pooled) / (k + prior_weight)
+            }
+        })
+        .collect())
+}
+
 /// Fits a [`DynamicModel`] from sensor series (positions are not used: the covariance is
 /// learned, not assumed to follow distance).
 ///
@@ -821,6 +893,44 @@ mod tests {
         f2.advance(86400.0);
         f2.observe(0, 0.3);
         assert!(f2.information(&[1]) >= 2.0 * rate * 86400.0);
+    }
+
+    #[test]
+    fn own_rates_come_from_the_deviations_changes_and_shrink_to_the_pool() {
+        // Sensor 0 jumps by ±0.02 against the field every day, sensor 1 follows the field
+        // exactly with sensor 2: a quiet pair and one drifting sensor.
+        let times: Vec<i64> = (0..50).map(|d| d * 86_400).collect();
+        let field: Vec<f64> = (0..50).map(|d| 0.3 + 0.001 * d as f64).collect();
+        let s0: Vec<f64> = (0..50)
+            .map(|d| field[d] + if d % 2 == 0 { 0.02 } else { -0.02 })
+            .collect();
+        let series: Vec<SensorSeries<'_>> = [&s0, &field, &field]
+            .into_iter()
+            .map(|v| SensorSeries {
+                position: [0.0, 0.0],
+                times: &times,
+                values: v,
+            })
+            .collect();
+        let raw = fit_own_rates(&series, 86_400, 0.0).unwrap();
+        // The field mean holds a third of sensor 0's jump: its deviation moves twice as far
+        // as the others' (four times the rate).
+        assert!((raw[0] / raw[1] - 4.0).abs() < 1e-9, "{raw:?}");
+        assert!(raw.iter().all(|&r| r > 0.0 && r.is_finite()));
+        let shrunk = fit_own_rates(&series, 86_400, 1e9).unwrap();
+        assert!(
+            (shrunk[0] - shrunk[1]).abs() < 1e-6 * shrunk[0],
+            "{shrunk:?}"
+        );
+        // Nothing usable: zeros; bad options: errors.
+        let lone = [SensorSeries {
+            position: [0.0, 0.0],
+            times: &[0],
+            values: &[0.3],
+        }];
+        assert_eq!(fit_own_rates(&lone, 86_400, 5.0).unwrap(), vec![0.0]);
+        assert!(fit_own_rates(&series, 0, 5.0).is_err());
+        assert!(fit_own_rates(&series, 86_400, -1.0).is_err());
     }
 
     #[test]
