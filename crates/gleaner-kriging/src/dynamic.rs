@@ -87,6 +87,8 @@ pub struct DynamicModel {
     /// Stationary variance (unit²) and per-step persistence of the common level (0, 0: none).
     common_var: f64,
     common_phi: f64,
+    /// Per-sensor growth rate (unit²/s) of the unshared component's variance (empty: none).
+    own_rate: Vec<f64>,
 }
 
 impl DynamicModel {
@@ -146,6 +148,7 @@ impl DynamicModel {
             shrinkage: 0.0,
             common_var: 0.0,
             common_phi: 0.0,
+            own_rate: Vec::new(),
         })
     }
 
@@ -165,6 +168,37 @@ impl DynamicModel {
         self.common_var = var;
         self.common_phi = phi;
         Ok(self)
+    }
+
+    /// The same model with an unshared per-sensor component: a random walk per sensor whose
+    /// variance grows by `rates[i]` (unit²/s) for every second since sensor `i` was last
+    /// read, added to that sensor's predictive variance. A reading of a sensor removes its
+    /// own unshared uncertainty and says nothing about the other sensors' unshared parts.
+    /// All rates 0 gives the model without the component exactly.
+    ///
+    /// Errors: a length other than the number of sensors, a negative or non-finite rate.
+    pub fn with_own_rates(mut self, rates: Vec<f64>) -> Result<Self, KrigingError> {
+        if rates.len() != self.len() {
+            return Err(KrigingError::Length {
+                what: "unshared rates",
+                got: rates.len(),
+                expected: self.len(),
+            });
+        }
+        for &r in &rates {
+            check("unshared rate", r, r >= 0.0 && r.is_finite(), ">= 0")?;
+        }
+        self.own_rate = if rates.iter().all(|&r| r == 0.0) {
+            Vec::new()
+        } else {
+            rates
+        };
+        Ok(self)
+    }
+
+    /// Per-sensor growth rates (unit²/s) of the unshared component (empty when none).
+    pub fn own_rates(&self) -> &[f64] {
+        &self.own_rate
     }
 
     /// The common level's stationary variance (unit²) and per-step persistence (0, 0 when
@@ -241,6 +275,7 @@ impl DynamicModel {
             time_s,
             mean: vec![0.0; m],
             cov,
+            own_var: vec![0.0; self.own_rate.len()],
         }
     }
 
@@ -304,6 +339,9 @@ pub struct FieldFilter<'m> {
     time_s: f64,
     mean: Vec<f64>,
     cov: Vec<f64>,
+    /// Unshared variance (unit²) each sensor has gathered since its last reading (empty when
+    /// the model has no unshared component).
+    own_var: Vec<f64>,
 }
 
 impl FieldFilter<'_> {
@@ -322,6 +360,9 @@ impl FieldFilter<'_> {
         }
         self.time_s = time_s;
         let model = self.model;
+        for (v, r) in self.own_var.iter_mut().zip(&model.own_rate) {
+            *v += r * dt;
+        }
         let n = model.len();
         let m = n + 1;
         let a = model.persistence(dt);
@@ -361,6 +402,7 @@ impl FieldFilter<'_> {
                 *m += g * innovation;
             }
         }
+        self.reset_own(sensor);
     }
 
     /// The covariance part of [`Self::observe`] only (the variance a reading leaves does not
@@ -369,6 +411,19 @@ impl FieldFilter<'_> {
         if sensor < self.model.len() {
             self.update(sensor);
         }
+    }
+
+    /// Clears `sensor`'s unshared variance (a reading of it removes its own drift).
+    fn reset_own(&mut self, sensor: usize) {
+        if let Some(v) = self.own_var.get_mut(sensor) {
+            *v = 0.0;
+        }
+    }
+
+    /// The unshared variance (unit²) `sensor` has gathered since its last reading (0 when
+    /// the model has no unshared component or the sensor is out of range).
+    pub fn own_variance(&self, sensor: usize) -> f64 {
+        self.own_var.get(sensor).copied().unwrap_or(0.0)
     }
 
     /// Rank-one covariance update for a reading of `sensor` (observation vector: its
@@ -414,8 +469,10 @@ impl FieldFilter<'_> {
             return (f64::NAN, f64::NAN);
         }
         let m = n + 1;
-        let var =
-            self.cov[sensor * m + sensor] + 2.0 * self.cov[sensor * m + n] + self.cov[n * m + n];
+        let var = self.cov[sensor * m + sensor]
+            + 2.0 * self.cov[sensor * m + n]
+            + self.cov[n * m + n]
+            + self.own_variance(sensor);
         (
             self.model.means[sensor] + self.mean[sensor] + self.mean[n],
             var.max(0.0),
@@ -437,9 +494,82 @@ impl FieldFilter<'_> {
         let mut after = self.clone();
         for &i in sensors {
             after.observe_variance_only(i);
+            after.reset_own(i);
         }
         (before - after.total_variance()).max(0.0)
     }
+}
+
+/// Learns the growth rates (unit²/s) of the unshared per-sensor component
+/// ([`DynamicModel::with_own_rates`]) from history: for each sensor, the variance of the
+/// one-step change of its deviation from the field mean (the mean over the sensors read at
+/// that time), per second, halved (a change of a difference of two independent walks counts
+/// each once), shrunk towards the pooled rate of all sensors with weight `prior_weight`
+/// pseudo-changes: `r_i = (k_i·r̂_i + w·r̄)/(k_i + w)`. Steps whose two ends are not
+/// `step_s` apart are skipped; a sensor with no usable change gets the pooled rate; no
+/// usable change anywhere gives all zeros.
+///
+/// Errors: a non-positive step, a negative or non-finite prior weight.
+pub fn fit_own_rates(
+    series: &[SensorSeries<'_>],
+    step_s: i64,
+    prior_weight: f64,
+) -> Result<Vec<f64>, KrigingError> {
+    check("step_s", step_s as f64, step_s > 0, "> 0")?;
+    check(
+        "prior weight",
+        prior_weight,
+        prior_weight >= 0.0 && prior_weight.is_finite(),
+        ">= 0",
+    )?;
+    let mut field: std::collections::BTreeMap<i64, (f64, usize)> = Default::default();
+    for s in series {
+        for (&t, &v) in s.times.iter().zip(s.values) {
+            if v.is_finite() {
+                let e = field.entry(t).or_insert((0.0, 0));
+                e.0 += v;
+                e.1 += 1;
+            }
+        }
+    }
+    let dev = |t: i64, v: f64| field.get(&t).map(|&(sum, k)| v - sum / k as f64);
+    let mut per: Vec<(f64, usize)> = Vec::with_capacity(series.len());
+    for s in series {
+        let (mut sq, mut k) = (0.0, 0usize);
+        for w in 0..s.times.len().saturating_sub(1) {
+            let (t0, t1) = (s.times[w], s.times[w + 1]);
+            let (v0, v1) = (s.values[w], s.values[w + 1]);
+            if t1 - t0 != step_s || !v0.is_finite() || !v1.is_finite() {
+                continue;
+            }
+            if let (Some(d0), Some(d1)) = (dev(t0, v0), dev(t1, v1)) {
+                sq += (d1 - d0) * (d1 - d0);
+                k += 1;
+            }
+        }
+        let rate = if k > 0 {
+            0.5 * sq / k as f64 / step_s as f64
+        } else {
+            0.0
+        };
+        per.push((rate, k));
+    }
+    let total: usize = per.iter().map(|p| p.1).sum();
+    if total == 0 {
+        return Ok(vec![0.0; series.len()]);
+    }
+    let pooled = per.iter().map(|&(r, k)| r * k as f64).sum::<f64>() / total as f64;
+    Ok(per
+        .iter()
+        .map(|&(r, k)| {
+            let k = k as f64;
+            if k + prior_weight == 0.0 {
+                pooled
+            } else {
+                (k * r + prior_weight * pooled) / (k + prior_weight)
+            }
+        })
+        .collect())
 }
 
 /// Fits a [`DynamicModel`] from sensor series (positions are not used: the covariance is
@@ -729,6 +859,112 @@ mod tests {
             0.0,
         )
         .unwrap()
+    }
+
+    #[test]
+    fn unshared_variance_grows_with_time_since_reading_and_a_reading_resets_it() {
+        let rate = 1e-9; // unit²/s
+        let m = two_sensor(0.9, 0.99)
+            .with_own_rates(vec![rate, 2.0 * rate])
+            .unwrap();
+        let base = two_sensor(0.9, 0.99);
+        let mut f = m.filter(0.0);
+        let mut g = base.filter(0.0);
+        for t in [3600.0, 7200.0, 36000.0] {
+            f.advance(t);
+            g.advance(t);
+            for i in 0..2 {
+                let expect = g.estimate(i).1 + (i as f64 + 1.0) * rate * t;
+                assert!((f.estimate(i).1 - expect).abs() < 1e-18, "t {t} sensor {i}");
+            }
+        }
+        // Reading sensor 0 removes its own unshared part only.
+        let info = f.information(&[0]);
+        assert!((info - (g.information(&[0]) + rate * 36000.0)).abs() < 1e-18);
+        f.observe(0, 0.31);
+        g.observe(0, 0.31);
+        assert_eq!(f.own_variance(0), 0.0);
+        assert!((f.own_variance(1) - 2.0 * rate * 36000.0).abs() < 1e-18);
+        assert!((f.estimate(0).1 - g.estimate(0).1).abs() < 1e-18);
+        f.advance(36000.0 + 100.0);
+        assert!((f.own_variance(0) - rate * 100.0).abs() < 1e-18);
+        // A sensor correlated with one just read still gains information from its own part.
+        let mut f2 = m.filter(0.0);
+        f2.advance(86400.0);
+        f2.observe(0, 0.3);
+        assert!(f2.information(&[1]) >= 2.0 * rate * 86400.0);
+    }
+
+    #[test]
+    fn own_rates_come_from_the_deviations_changes_and_shrink_to_the_pool() {
+        // Sensor 0 jumps by ±0.02 against the field every day, sensor 1 follows the field
+        // exactly with sensor 2: a quiet pair and one drifting sensor.
+        let times: Vec<i64> = (0..50).map(|d| d * 86_400).collect();
+        let field: Vec<f64> = (0..50).map(|d| 0.3 + 0.001 * d as f64).collect();
+        let s0: Vec<f64> = (0..50)
+            .map(|d| field[d] + if d % 2 == 0 { 0.02 } else { -0.02 })
+            .collect();
+        let series: Vec<SensorSeries<'_>> = [&s0, &field, &field]
+            .into_iter()
+            .map(|v| SensorSeries {
+                position: [0.0, 0.0],
+                times: &times,
+                values: v,
+            })
+            .collect();
+        let raw = fit_own_rates(&series, 86_400, 0.0).unwrap();
+        // The field mean holds a third of sensor 0's jump: its deviation moves twice as far
+        // as the others' (four times the rate).
+        assert!((raw[0] / raw[1] - 4.0).abs() < 1e-9, "{raw:?}");
+        assert!(raw.iter().all(|&r| r > 0.0 && r.is_finite()));
+        let shrunk = fit_own_rates(&series, 86_400, 1e9).unwrap();
+        assert!(
+            (shrunk[0] - shrunk[1]).abs() < 1e-6 * shrunk[0],
+            "{shrunk:?}"
+        );
+        // Nothing usable: zeros; bad options: errors.
+        let lone = [SensorSeries {
+            position: [0.0, 0.0],
+            times: &[0],
+            values: &[0.3],
+        }];
+        assert_eq!(fit_own_rates(&lone, 86_400, 5.0).unwrap(), vec![0.0]);
+        assert!(fit_own_rates(&series, 0, 5.0).is_err());
+        assert!(fit_own_rates(&series, 86_400, -1.0).is_err());
+    }
+
+    #[test]
+    fn zero_unshared_rates_give_todays_model_exactly() {
+        let base = two_sensor(0.6, 0.9);
+        let zero = two_sensor(0.6, 0.9).with_own_rates(vec![0.0, 0.0]).unwrap();
+        assert_eq!(base, zero);
+        let mut f = zero.filter(0.0);
+        let mut g = base.filter(0.0);
+        for (t, i, v) in [(3600.0, 0, 0.32), (9000.0, 1, 0.18), (90000.0, 0, 0.29)] {
+            f.advance(t);
+            g.advance(t);
+            f.observe(i, v);
+            g.observe(i, v);
+            for j in 0..2 {
+                assert_eq!(f.estimate(j), g.estimate(j));
+            }
+            assert_eq!(f.information(&[1 - i]), g.information(&[1 - i]));
+        }
+    }
+
+    #[test]
+    fn bad_unshared_rates_are_refused() {
+        assert!(two_sensor(0.5, 0.9).with_own_rates(vec![1e-9]).is_err());
+        assert!(
+            two_sensor(0.5, 0.9)
+                .with_own_rates(vec![1e-9, -1e-9])
+                .is_err()
+        );
+        assert!(
+            two_sensor(0.5, 0.9)
+                .with_own_rates(vec![f64::NAN, 0.0])
+                .is_err()
+        );
     }
 
     #[test]

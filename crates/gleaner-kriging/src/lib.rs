@@ -52,6 +52,7 @@ mod dynamic;
 mod increments;
 pub use dynamic::{
     DynamicFitOptions, DynamicModel, FieldFilter, MAX_DYNAMIC_SENSORS, Shrinkage, fit_dynamic,
+    fit_own_rates,
 };
 pub use increments::{
     Change, ChangeEstimate, IncrementFitOptions, IncrementModel, Variogram, estimate_change,
