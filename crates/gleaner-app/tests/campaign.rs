@@ -41,6 +41,7 @@ fn request(
         estimator: gleaner_app::Estimator::Changes,
         jobs: 2,
         clock_now: 0,
+        flight: Default::default(),
     }
 }
 
