@@ -205,7 +205,7 @@ fn wind_of_velocity(e: f64, n: f64) -> Wind {
     if from < 0.0 {
         from += 360.0;
     }
-    if speed == 0.0 {
+    if speed == 0.0 || from >= 360.0 - 1e-9 {
         from = 0.0;
     }
     Wind {
