@@ -20,6 +20,7 @@ use gleaner_kriging::{Covariance, FieldModel, IncrementModel, variance_reduction
 use gleaner_mission::Planner;
 use gleaner_store::{SqliteStore, Store, StoreRead};
 
+use crate::campaign_flight::{FlightConditions, FlightDay, fly_in_wind};
 use crate::error::{AppError, Result};
 use crate::explore::{ExplorationMemo, ExploreRequest, explore, explore_with};
 use crate::ingest::{Format, IngestRequest, Parsed, ingest_parsed};
@@ -32,7 +33,7 @@ use crate::reconstruct::{
 };
 use crate::score::{ScoreRequest, compute, score};
 use crate::settings::Settings;
-use crate::simulate::{Truth, fly_buffered};
+use crate::simulate::{Truth, fly_buffered, fly_cells};
 
 /// A utility term, for ablations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -429,6 +430,9 @@ pub struct CampaignRequest {
     pub jobs: usize,
     /// Provenance time stamped on missions, seconds.
     pub clock_now: UnixSeconds,
+    /// The wind and batteries the flights meet [default: still air, full batteries: flown
+    /// as planned]; every run meets the same.
+    pub flight: FlightConditions,
 }
 
 /// A dataset as a campaign takes it: the truth, the sensors, the settings, and the dataset's
@@ -497,6 +501,8 @@ pub struct ReplayOptions {
     pub jobs: usize,
     /// Energy preset (`paper`, `large-pack`) instead of the dataset's settings'.
     pub energy_preset: Option<String>,
+    /// The wind and batteries the flights meet.
+    pub flight: FlightConditions,
 }
 
 impl Default for ReplayOptions {
@@ -520,6 +526,7 @@ impl Default for ReplayOptions {
             buffer: None,
             jobs: 2,
             energy_preset: None,
+            flight: FlightConditions::default(),
         }
     }
 }
@@ -577,6 +584,7 @@ pub fn replay(
             estimator: options.estimator,
             jobs: options.jobs,
             clock_now,
+            flight: options.flight.clone(),
         },
         truth,
     })
@@ -631,6 +639,9 @@ pub struct MissionMetrics {
     pub lost_readings: u64,
     /// Events first caught at this mission.
     pub events_caught: usize,
+    /// How its sorties flew: wind, batteries, re-plans, energy against the battery (`None`
+    /// in results files written before flights were simulated).
+    pub flight: Option<FlightDay>,
 }
 
 /// A run's identity.
@@ -841,6 +852,15 @@ pub fn run_campaign(
             request.sorties,
             crate::plan::MAX_SORTIES
         )));
+    }
+    request.flight.check(&request.schedule)?;
+    let airspace = &request.settings.field;
+    if !request.flight.is_still() && (airspace.geofence.is_some() || airspace.no_fly.is_some()) {
+        return Err(AppError::Invalid(
+            "a campaign in wind or with weak batteries re-plans in the air with straight legs, \
+             and these settings set [field] geofence or no_fly: simulate it in still air"
+                .into(),
+        ));
     }
     let mut history = truth.available_by(request.history_until);
     if let Some(from) = request.history_from {
@@ -1228,6 +1248,8 @@ fn run_one(
             _ => None,
         };
         let accuracy = classifier_accuracy(&scoring, &cells, &shared.class_series, t - period);
+        // The day's forecast (planned for) and the wind the sorties meet.
+        let day = request.flight.day(t)?;
         let mut flown = Vec::new();
         let (mut energy_j, mut budget_j) = (0.0, 0.0);
         // The pre-flight scoring, handed to the planner when it scores by the utility engine
@@ -1262,6 +1284,10 @@ fn run_one(
                     max_iterations: Some(request.planner_iterations),
                     time_limit_s: Some(3_600.0),
                     sorties: Some(request.sorties),
+                    wind: match request.flight.wind {
+                        crate::campaign_flight::WindSource::Still => None,
+                        _ => Some(day.forecast),
+                    },
                     objective: Some(if key.strategy.selection() == Some(Strategy::Information) {
                         Objective::Information
                     } else {
@@ -1304,8 +1330,33 @@ fn run_one(
         let mut visited: HashSet<SensorId> = HashSet::new();
         let mut cells_visited = 0;
         let mut lost_readings = 0;
-        for id in &flown {
-            let (outcome, lost) = fly_buffered(&mut project, truth, *id, t, request.clock_now)?;
+        let mut flight = FlightDay::new(day);
+        for (sortie, id) in flown.iter().enumerate() {
+            let (outcome, lost) = if request.flight.is_still() {
+                // Flown exactly as planned.
+                let e = crate::view::mission(&project, *id)?.mission.energy;
+                flight.add((e.total_j, e.budget_j), 1.0, false, 0);
+                fly_buffered(&mut project, truth, *id, t, request.clock_now)?
+            } else {
+                let factor = request.flight.battery_factor(t, sortie);
+                let f = fly_in_wind(
+                    &project,
+                    *id,
+                    day.actual,
+                    factor,
+                    request.planner_iterations,
+                )?;
+                flight.add((f.energy_j, f.usable_j), factor, f.replanned, f.dropped);
+                fly_cells(
+                    &mut project,
+                    truth,
+                    *id,
+                    Some(&f.cells),
+                    t,
+                    request.clock_now,
+                )?
+            };
+            flight.readings += outcome.readings_inserted;
             lost_readings += lost;
             cells_visited += outcome.cells.len();
             for c in &outcome.cells {
@@ -1377,6 +1428,7 @@ fn run_one(
             classifier_accuracy: accuracy,
             lost_readings,
             events_caught,
+            flight: Some(flight),
         });
         progress.advance(1);
     }
@@ -1954,6 +2006,7 @@ mod tests {
             estimator: crate::reconstruct::Estimator::Changes,
             jobs: 1,
             clock_now: 0,
+            flight: FlightConditions::default(),
         };
         let all = run_keys(&request);
         let same = same_runs(&request, &all).unwrap();

@@ -15,11 +15,9 @@ pub struct CellRow {
     pub values: Vec<f64>,
 }
 
-/// Reads the file; a field that is not a finite number is an error naming file, line and
-/// column (from the header), as is a row with another number of fields than the header, a
-/// header naming a column twice and bytes that are not UTF-8. Only regular files are read (a
-/// FIFO would block). Blank lines are skipped; a UTF-8 BOM and CRLF are accepted.
-pub fn read(path: &Path) -> Result<Vec<CellRow>> {
+/// The text of the regular file `path`: a pipe, FIFO, device or stdin (`-`) is refused, as
+/// are bytes that are not UTF-8 (the error names the file and line).
+pub(crate) fn read_text(path: &Path) -> Result<String> {
     if gleaner_ingest::is_stdin(path) {
         return Err(AppError::io(path, gleaner_ingest::STDIN_NOT_READ));
     }
@@ -31,20 +29,27 @@ pub fn read(path: &Path) -> Result<Vec<CellRow>> {
         ));
     }
     let bytes = std::fs::read(path).map_err(|e| AppError::io(path, e))?;
-    let text = match std::str::from_utf8(&bytes) {
-        Ok(t) => t,
+    match String::from_utf8(bytes) {
+        Ok(t) => Ok(t),
         Err(e) => {
-            let line = bytes[..e.valid_up_to()]
-                .iter()
-                .filter(|&&b| b == b'\n')
-                .count()
-                + 1;
-            return Err(AppError::Invalid(format!(
+            let bytes = e.as_bytes();
+            let valid = e.utf8_error().valid_up_to();
+            let line = bytes[..valid].iter().filter(|&&b| b == b'\n').count() + 1;
+            Err(AppError::Invalid(format!(
                 "{}:{line}: not valid UTF-8",
                 path.display()
-            )));
+            )))
         }
-    };
+    }
+}
+
+/// Reads the file; a field that is not a finite number is an error naming file, line and
+/// column (from the header), as is a row with another number of fields than the header, a
+/// header naming a column twice and bytes that are not UTF-8. Only regular files are read (a
+/// FIFO would block). Blank lines are skipped; a UTF-8 BOM and CRLF are accepted.
+pub fn read(path: &Path) -> Result<Vec<CellRow>> {
+    let text = read_text(path)?;
+    let text = text.as_str();
     let bad =
         |line: usize, what: String| AppError::Invalid(format!("{}:{line}: {what}", path.display()));
     let mut lines = text.trim_start_matches('\u{feff}').lines().enumerate();

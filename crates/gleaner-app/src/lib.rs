@@ -42,6 +42,7 @@
 
 pub mod airspace;
 pub mod campaign;
+pub mod campaign_flight;
 pub mod cell_csv;
 mod cell_detail;
 mod choices;

@@ -333,6 +333,22 @@ pub fn fly_buffered<S: Store>(
     at: UnixSeconds,
     clock_now: UnixSeconds,
 ) -> Result<(RecordOutcome, u64)> {
+    fly_cells(project, truth, id, None, at, clock_now)
+}
+
+/// [`fly_buffered`] of a flight that visited only `cells` (in the order flown, each one of
+/// the mission's stops: a flight that re-planned in the air) [default: every planned stop].
+///
+/// # Errors
+/// As [`fly_buffered`]; a cell that is not one of the mission's stops, or no cell at all.
+pub fn fly_cells<S: Store>(
+    project: &mut Project<S>,
+    truth: &Truth,
+    id: MissionId,
+    cells: Option<&[gleaner_field::CellIndex]>,
+    at: UnixSeconds,
+    clock_now: UnixSeconds,
+) -> Result<(RecordOutcome, u64)> {
     let mission = project
         .store()
         .mission(id)?
@@ -340,7 +356,10 @@ pub fn fly_buffered<S: Store>(
             what: "mission",
             id: format!("#{id}"),
         })?;
-    let visited: HashSet<_> = mission.mission.stops.iter().map(|s| s.cell).collect();
+    let visited: HashSet<_> = match cells {
+        Some(c) => c.iter().copied().collect(),
+        None => mission.mission.stops.iter().map(|s| s.cell).collect(),
+    };
     let sensors: HashSet<SensorId> = project
         .store()
         .cells()?
@@ -393,7 +412,7 @@ pub fn fly_buffered<S: Store>(
         &RecordRequest {
             mission: id,
             at: Some(at),
-            cells: None,
+            cells: cells.map(|c| c.iter().map(ToString::to_string).collect()),
             readings: None,
             amend: false,
         },

@@ -41,6 +41,7 @@ fn request(
         estimator: gleaner_app::Estimator::Changes,
         jobs: 2,
         clock_now: 0,
+        flight: Default::default(),
     }
 }
 
@@ -375,4 +376,125 @@ fn identical_runs_share_results_equal_to_their_own_runs() {
     assert_eq!(text(&together.runs[1]), text(&alone.runs[0]));
     assert_eq!(text(&together.runs[0]), text(&alone.runs[0]));
     assert_ne!(text(&together.runs[2]), text(&together.runs[0]));
+}
+
+/// A synthetic farm (seed `seed`, 24 sensors) with its truth and init request: 50 days of
+/// history.
+fn small_farm(
+    seed: u64,
+    tmp: &std::path::Path,
+) -> (app::InitRequest, app::Project<app::AnyStore>, Truth, i64) {
+    use gleaner_synth::{SynthConfig, generate, write_readings_csv, write_sensors_csv};
+    let farm = generate(&SynthConfig {
+        seed,
+        sensor_count: 24,
+        days: 70,
+        vw_depths_cm: vec![30],
+        t_depths_cm: vec![30],
+        ..SynthConfig::default()
+    })
+    .unwrap();
+    let sensors = tmp.join("sensors.csv");
+    write_sensors_csv(&farm, &mut std::fs::File::create(&sensors).unwrap()).unwrap();
+    let readings = tmp.join("readings.csv");
+    write_readings_csv(&farm, &mut std::fs::File::create(&readings).unwrap()).unwrap();
+    let init = app::InitRequest {
+        dir: tmp.join("farm"),
+        sensors,
+        base: Some(farm.base()),
+        ..Default::default()
+    };
+    let (project, _) = app::init(&init).unwrap();
+    let truth = Truth::from_files(
+        &project,
+        &app::IngestRequest {
+            files: vec![readings],
+            ..Default::default()
+        },
+        DAY,
+        &Silent,
+    )
+    .unwrap();
+    (init, project, truth, farm.times()[0] + 50 * DAY)
+}
+
+/// In random daily winds with forecast errors and weaker batteries, no sortie flies more than
+/// its battery gives above the reserve: those that cannot fly the rest re-plan in the air.
+/// The same seed gives the same campaign, at any thread count; another weather seed, another.
+#[test]
+fn campaigns_in_random_winds_never_fly_over_budget() {
+    use gleaner_app::campaign_flight::{FlightConditions, WindSource};
+    let tmp = tempfile::tempdir().unwrap();
+    let (init, project, truth, history_until) = small_farm(11, tmp.path());
+    let schedule = every(history_until, history_until + 9 * DAY, DAY).unwrap();
+    let mut req = request(
+        "synthetic",
+        &project,
+        init,
+        history_until,
+        schedule,
+        vec![Strategy::Gleaner, Strategy::Nearest, Strategy::Exhaustive],
+    );
+    req.events = Some(Vec::new());
+    req.flight = FlightConditions {
+        wind: WindSource::Weibull {
+            mean_mps: 6.0,
+            shape: 2.0,
+        },
+        gust_sd_mps: 2.5,
+        battery_weakening: 0.25,
+        seed: 4,
+    };
+    let (mut replanned, mut missions, mut dropped) = (0, 0, 0);
+    let first = run_campaign(&req, &truth, &Silent).unwrap();
+    for run in &first.runs {
+        for m in &run.missions {
+            let f = m.flight.as_ref().expect("a flight record");
+            missions += 1;
+            assert_eq!(f.over_budget, 0, "{} {m:?}", run.key.strategy.name());
+            assert!(f.max_excess_j <= 0.0, "{f:?}");
+            assert!(f.energy_j > 0.0, "{f:?}");
+            replanned += f.replanned;
+            dropped += f.cells_dropped;
+            assert!(f.wind.actual != f.wind.forecast);
+        }
+    }
+    assert_eq!(missions, 30);
+    // The test means something: some sorties had to re-plan and dropped stops.
+    assert!(replanned > 0 && dropped > 0, "{replanned} {dropped}");
+    req.jobs = 1;
+    let again = run_campaign(&req, &truth, &Silent).unwrap();
+    for (a, b) in first.runs.iter().zip(&again.runs) {
+        assert_eq!(a.missions, b.missions);
+        assert_eq!(a.visits, b.visits);
+    }
+    req.flight.seed = 5;
+    let other = run_campaign(&req, &truth, &Silent).unwrap();
+    assert_ne!(first.runs[0].missions, other.runs[0].missions);
+}
+
+/// Still air, the default: every mission is flown as planned, its flight record at the
+/// planned energy, never re-planned.
+#[test]
+fn still_air_campaigns_fly_as_planned() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (init, project, truth, history_until) = small_farm(12, tmp.path());
+    let schedule = every(history_until, history_until + 2 * DAY, DAY).unwrap();
+    let mut req = request(
+        "synthetic",
+        &project,
+        init,
+        history_until,
+        schedule,
+        vec![Strategy::Gleaner],
+    );
+    req.events = Some(Vec::new());
+    let result = run_campaign(&req, &truth, &Silent).unwrap();
+    for m in &result.runs[0].missions {
+        let f = m.flight.as_ref().unwrap();
+        assert_eq!((f.replanned, f.cells_dropped, f.over_budget), (0, 0, 0));
+        assert_eq!(f.energy_j, m.energy_j);
+        assert!(f.wind.forecast.is_calm() && f.wind.actual.is_calm());
+        assert!(f.max_excess_j <= 0.0);
+    }
 }

@@ -2106,3 +2106,65 @@ fn caf_with_no_fly_zones_plans_around_them() {
     assert_eq!(holds.len(), stops + vias);
     assert_eq!(holds.iter().filter(|&&h| h == 0.0).count(), vias);
 }
+
+/// `simulate --wind` flies the missions in drawn winds: flights.csv and the report's Flights
+/// section, none over budget; a bad winds file is refused with its file, line and field.
+#[test]
+fn simulate_flies_in_wind_and_reads_observed_winds() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sim = dir.path().join("sim");
+    ok(&small_farm_simulation(
+        &sim,
+        &[
+            "--farm-events",
+            "2",
+            "--strategies",
+            "gleaner,nearest",
+            "--planner-iterations",
+            "50",
+            "--wind",
+            "weibull:5",
+            "--gust",
+            "2",
+            "--weak-battery",
+            "0.2",
+        ],
+    ));
+    let flights = std::fs::read_to_string(sim.join("flights.csv")).expect("flights.csv");
+    // A header, then 2 strategies x 3 missions, none over budget.
+    assert_eq!(flights.lines().count(), 7, "{flights}");
+    assert!(
+        flights
+            .lines()
+            .skip(1)
+            .all(|l| l.split(',').nth(14) == Some("0")),
+        "{flights}"
+    );
+    let report = std::fs::read_to_string(sim.join("report.md")).expect("report.md");
+    assert!(
+        report.contains("## Flights") && report.contains("| nearest | 3 |"),
+        "{report}"
+    );
+    // The report is rebuilt from the files, flights included.
+    std::fs::remove_file(sim.join("report.md")).expect("remove");
+    ok(&["report", s(&sim)]);
+    let again = std::fs::read_to_string(sim.join("report.md")).expect("report.md");
+    assert!(again.contains("## Flights"), "{again}");
+
+    let winds = dir.path().join("winds.csv");
+    std::fs::write(
+        &winds,
+        "date,speed_mps,from_deg\n2020-01-01,3,90\n2020-01-02,fast,90\n",
+    )
+    .expect("write");
+    let err = fail(&small_farm_simulation(
+        &dir.path().join("sim2"),
+        &["--wind-csv", s(&winds)],
+    ));
+    assert!(err.contains("winds.csv:3: speed_mps \"fast\""), "{err}");
+    let err = fail(&small_farm_simulation(
+        &dir.path().join("sim3"),
+        &["--wind", "gale"],
+    ));
+    assert!(err.contains("weibull:MEAN"), "{err}");
+}

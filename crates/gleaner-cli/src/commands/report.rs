@@ -23,6 +23,8 @@ const EVENTS: &str = "events.csv";
 const CATCHES: &str = "catches.csv";
 const COMMAND: &str = "command.txt";
 const VISITS: &str = "visits.csv";
+const FLIGHTS: &str = "flights.csv";
+const FLIGHTS_HEADER: &str = "label,strategy,seed,budget,index,forecast_mps,forecast_from_deg,actual_mps,actual_from_deg,battery_factor,replanned,cells_dropped,readings,energy_j,over_budget,max_excess_j";
 
 const MISSIONS_HEADER: &str = "label,strategy,seed,budget,index,t,sorties,cells,energy_j,budget_j,rmse_carried,mae_carried,rmse_kriged,mae_kriged,mean_variance,evaluated,staleness_mean_s,staleness_max_s,classifier_accuracy,lost_readings,events_caught,rmse_carried_before,rmse_kriged_before,coverage90";
 /// Columns of `missions.csv` before the pre-flight errors were added (still read).
@@ -45,6 +47,7 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
     let mut events = String::from("label,event,sensors,start,end\n");
     let mut catches = String::from("label,strategy,seed,budget,event,caught_at\n");
     let mut visits = String::from("label,strategy,seed,budget,index,cell,age_days,f,a,u,r,s\n");
+    let mut flights = format!("{FLIGHTS_HEADER}\n");
     for r in results {
         let c = r.covariance;
         write!(
@@ -121,6 +124,29 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
                     m.coverage90.map_or(String::new(), |c| c.to_string())
                 )?;
             }
+            for (m, f) in run
+                .missions
+                .iter()
+                .filter_map(|m| Some((m, m.flight.as_ref()?)))
+            {
+                let w = &f.wind;
+                writeln!(
+                    flights,
+                    "{head},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    m.index,
+                    w.forecast.speed_mps,
+                    w.forecast.from_deg,
+                    w.actual.speed_mps,
+                    w.actual.from_deg,
+                    f.battery_factor,
+                    f.replanned,
+                    f.cells_dropped,
+                    f.readings,
+                    f.energy_j,
+                    f.over_budget,
+                    f.max_excess_j
+                )?;
+            }
             for v in &run.visits {
                 writeln!(
                     visits,
@@ -143,6 +169,7 @@ pub fn write_results(dir: &Path, results: &[CampaignResult], command: &str) -> R
     write(&dir.join(EVENTS), &events)?;
     write(&dir.join(CATCHES), &catches)?;
     write(&dir.join(VISITS), &visits)?;
+    write(&dir.join(FLIGHTS), &flights)?;
     write(&dir.join(COMMAND), &format!("{command}\n"))?;
     Ok(())
 }
@@ -316,6 +343,7 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
             } else {
                 f64::NAN
             },
+            flight: None,
         };
         let n_events = results[r].events.len();
         let runs = &mut results[r].runs;
@@ -327,6 +355,47 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
                 caught: vec![None; n_events],
                 visits: Vec::new(),
             }),
+        }
+    }
+    // Flights (files written before flights were simulated have none).
+    let p = dir.join(FLIGHTS);
+    if p.exists() {
+        for (line, c) in rows(&p, FLIGHTS_HEADER.split(',').count())? {
+            let r = find(&mut results, &c[0], &p, line)?;
+            let strategy =
+                Strategy::parse(&c[1]).with_context(|| format!("{}:{line}", p.display()))?;
+            let seed: u64 = num(&p, line, "seed", &c[2])?;
+            let budget: f64 = num(&p, line, "budget", &c[3])?;
+            let index: usize = num(&p, line, "index", &c[4])?;
+            let f = |k: usize, name: &str| num::<f64>(&p, line, name, &c[k]);
+            let wind = |k: usize, what: &str| -> Result<gleaner_app::Wind> {
+                gleaner_app::Wind::new(f(k, what)?, f(k + 1, what)?)
+                    .map_err(|e| anyhow::anyhow!("{}:{line}: {what}: {e}", p.display()))
+            };
+            let day = gleaner_app::campaign_flight::FlightDay {
+                wind: gleaner_app::campaign_flight::DayWind {
+                    forecast: wind(5, "forecast")?,
+                    actual: wind(7, "actual")?,
+                },
+                battery_factor: f(9, "battery_factor")?,
+                replanned: num(&p, line, "replanned", &c[10])?,
+                cells_dropped: num(&p, line, "cells_dropped", &c[11])?,
+                readings: num(&p, line, "readings", &c[12])?,
+                energy_j: f(13, "energy_j")?,
+                over_budget: num(&p, line, "over_budget", &c[14])?,
+                max_excess_j: f(15, "max_excess_j")?,
+            };
+            let mission = results[r]
+                .runs
+                .iter_mut()
+                .find(|x| {
+                    x.key.strategy == strategy && x.key.seed == seed && x.key.budget == budget
+                })
+                .and_then(|run| run.missions.iter_mut().find(|m| m.index == index));
+            match mission {
+                Some(m) => m.flight = Some(day),
+                None => bail!("{}:{line}: no such mission in {MISSIONS}", p.display()),
+            }
         }
     }
     let p = dir.join(CATCHES);
@@ -351,6 +420,49 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
         }
     }
     Ok(results)
+}
+
+/// "Flights": per strategy, the winds met, the sorties that re-planned in the air, the stops
+/// they dropped, the data brought back and the energy flown against each battery. Nothing
+/// when the files hold no flights.
+fn flights_section(md: &mut String, results: &[CampaignResult]) -> Result<()> {
+    use gleaner_app::campaign_flight::{CALM_DAY_MPS, flight_summaries};
+    let rows = flight_summaries(results);
+    if rows.is_empty() {
+        return Ok(());
+    }
+    writeln!(md, "## Flights\n")?;
+    writeln!(
+        md,
+        "Each mission is planned for its forecast wind plus the margin and flown in the wind of \
+         the day (the forecast plus its error) on its sortie's battery; over each stop a sortie \
+         whose energy left cannot fly the rest with the reserve re-plans from there (dropping \
+         and reordering the remaining stops). Over budget: missions of which a sortie flew more \
+         than its battery could give above the reserve (must be 0); max excess: the largest \
+         flown energy less that, over every sortie (< 0: energy to spare).\n"
+    )?;
+    writeln!(
+        md,
+        "| strategy | missions | mean forecast (m/s) | re-planned | stops dropped | readings | readings, days < {CALM_DAY_MPS} m/s | over budget | max excess (J) |\n|---|---|---|---|---|---|---|---|---|"
+    )?;
+    for f in &rows {
+        writeln!(
+            md,
+            "| {} | {} | {:.2} | {} | {} | {} | {} ({} days) | {} | {:.1} |",
+            f.strategy.name(),
+            f.missions,
+            f.mean_forecast_mps,
+            f.replanned,
+            f.cells_dropped,
+            f.readings,
+            f.readings_calm_days,
+            f.calm_days,
+            f.over_budget,
+            f.max_excess_j
+        )?;
+    }
+    writeln!(md)?;
+    Ok(())
 }
 
 fn fmt_iv(i: &Interval, scale: f64, d: usize) -> String {
@@ -946,6 +1058,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
             writeln!(md, "![{title} against the budget](figures/{file})\n")?;
         }
     }
+    flights_section(&mut md, &results)?;
     writeln!(md, "## Definitions\n")?;
     // The model-based estimate ("kriging" columns) the simulation used.
     // Recorded with the results; older results: named on the command line.

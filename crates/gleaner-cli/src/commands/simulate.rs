@@ -145,6 +145,56 @@ pub struct SimulateArgs {
     /// Synthetic: grow the field with the sensor count (CAF's density).
     #[arg(long)]
     pub farm_scale_extent: bool,
+    /// Each mission's forecast wind at the flight altitude: `still` (the default) or
+    /// `weibull:MEAN[:SHAPE]`, a speed drawn from a Weibull distribution with that mean (m/s)
+    /// and shape (default 2) from a direction drawn uniformly, seeded (--weather-seed). Each
+    /// mission is planned for its forecast plus `[flight] wind_margin_mps` and flown in the
+    /// forecast plus the error (--gust); a sortie that finds over a stop that its energy left
+    /// cannot fly the rest with the reserve re-plans from there (as `gleaner replan`).
+    #[arg(long, conflicts_with = "wind_csv")]
+    pub wind: Option<String>,
+    /// Observed daily winds instead of drawn ones: a CSV with a header and the columns
+    /// `date` (YYYY-MM-DD), `speed_mps` (m/s) and `from_deg` (degrees clockwise from north
+    /// the wind blows from), a row for every mission day; each day's row is its forecast.
+    #[arg(long)]
+    pub wind_csv: Option<PathBuf>,
+    /// The forecast's error: the wind flown in is the forecast plus a vector whose east and
+    /// north components are normal with this standard deviation, m/s [default: 1 with --wind
+    /// weibull:… or --wind-csv, else 0].
+    #[arg(long)]
+    pub gust: Option<f64>,
+    /// Weaker batteries: each sortie's battery holds a share of its rated capacity drawn
+    /// uniformly in [1 − W, 1] (W in [0, 0.5]; 0: every battery as rated).
+    #[arg(long, default_value_t = 0.0)]
+    pub weak_battery: f64,
+    /// Seed of the wind, forecast-error and battery draws (the same weather for every
+    /// strategy and replicate).
+    #[arg(long, default_value_t = 1)]
+    pub weather_seed: u64,
+}
+
+/// The flight conditions the arguments give.
+fn flight_conditions(args: &SimulateArgs) -> Result<app::campaign_flight::FlightConditions> {
+    use app::campaign_flight::{DEFAULT_GUST_SD_MPS, FlightConditions, WindSource};
+    let wind = match (&args.wind, &args.wind_csv) {
+        (_, Some(path)) => WindSource::Observed {
+            path: path.clone(),
+            days: app::campaign_flight::read_wind_csv(path)?,
+        },
+        (Some(text), None) => WindSource::parse(text)?,
+        (None, None) => WindSource::Still,
+    };
+    let gust_sd_mps = args.gust.unwrap_or(if wind == WindSource::Still {
+        0.0
+    } else {
+        DEFAULT_GUST_SD_MPS
+    });
+    Ok(FlightConditions {
+        wind,
+        gust_sd_mps,
+        battery_weakening: args.weak_battery,
+        seed: args.weather_seed,
+    })
 }
 
 fn day(s: &str) -> i64 {
@@ -244,6 +294,7 @@ fn options(args: &SimulateArgs) -> Result<ReplayOptions> {
         buffer: args.buffer,
         jobs: args.jobs,
         energy_preset: args.energy_preset.clone(),
+        flight: flight_conditions(args)?,
     })
 }
 

@@ -1,0 +1,932 @@
+//! A campaign's flight days: each mission's wind — drawn from a distribution or read from a
+//! file of observed daily winds — which is the forecast the mission is planned for, the wind
+//! its sorties are flown in (the forecast plus a seeded error), each sortie's battery (a
+//! seeded share of its rated capacity), and the simulated flight that re-plans in the air
+//! ([`crate::replan`]) when the energy left cannot fly the rest of the route with the reserve.
+//!
+//! Every draw is a function of the conditions' seed and the mission time (and the sortie), so
+//! every strategy, replicate and thread count meets the same weather on the same day.
+
+use std::path::{Path, PathBuf};
+
+use gleaner_energy::{CellVisit, MissionEnergyModel, Wind};
+use gleaner_field::{CellIndex, LocalPoint, UnixSeconds};
+use gleaner_store::{MissionId, Store};
+
+use crate::error::{AppError, Result};
+use crate::project::Project;
+use crate::replan::{ReplanRequest, replan};
+use crate::wind::MAX_WIND_MPS;
+
+/// Seconds in a day.
+const DAY_S: i64 = 86_400;
+
+/// Where a campaign's daily winds come from.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum WindSource {
+    /// Still air every day (the forecast is 0 m/s).
+    #[default]
+    Still,
+    /// A speed drawn from a Weibull distribution with this mean (m/s) and shape (k; about 2
+    /// for surface winds, the Rayleigh case), from a direction drawn uniformly in [0, 360).
+    Weibull {
+        /// Mean speed, m/s.
+        mean_mps: f64,
+        /// Shape k (dimensionless).
+        shape: f64,
+    },
+    /// Observed daily winds, read from a file ([`read_wind_csv`]).
+    Observed {
+        /// The file (named in errors).
+        path: PathBuf,
+        /// One row per day, ascending.
+        days: Vec<DailyWind>,
+    },
+}
+
+/// The Weibull shape used when `weibull:MEAN` gives none.
+pub const DEFAULT_WEIBULL_SHAPE: f64 = 2.0;
+
+/// The forecast error's standard deviation (m/s) when a daily wind is drawn or read and the
+/// request gives none.
+pub const DEFAULT_GUST_SD_MPS: f64 = 1.0;
+
+/// Largest battery weakening a campaign may ask for (a sortie's battery holds at least half
+/// its rated capacity).
+pub const MAX_BATTERY_WEAKENING: f64 = 0.5;
+
+/// One day of an observed-winds file.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DailyWind {
+    /// The day's midnight UTC, seconds.
+    pub day: UnixSeconds,
+    /// Mean wind speed at the flight altitude, m/s.
+    pub speed_mps: f64,
+    /// Direction it blows from, degrees clockwise from north.
+    pub from_deg: f64,
+    /// The file's line (1-based), for errors.
+    pub line: usize,
+}
+
+/// The weather and batteries a campaign's flights meet (`simulate --wind`, `--wind-csv`,
+/// `--gust`, `--weak-battery`). The default is still air, exact forecasts and full batteries:
+/// missions are flown exactly as planned.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FlightConditions {
+    /// Each mission's forecast wind.
+    pub wind: WindSource,
+    /// The forecast's error: the wind flown in is the forecast plus a vector whose east and
+    /// north components are independent normal draws with this standard deviation, m/s
+    /// (>= 0; 0: the forecast is exact).
+    pub gust_sd_mps: f64,
+    /// Each sortie's battery holds a share of its rated capacity drawn uniformly in
+    /// [1 − this, 1] (in [0, [`MAX_BATTERY_WEAKENING`]]; 0: every battery is as rated).
+    pub battery_weakening: f64,
+    /// Seed of the draws.
+    pub seed: u64,
+}
+
+/// One mission's wind: what it was planned for and what it was flown in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DayWind {
+    /// The forecast (the plan adds `[flight] wind_margin_mps` to it).
+    pub forecast: Wind,
+    /// The wind the sorties are flown in.
+    pub actual: Wind,
+}
+
+/// How one mission's sorties flew in the simulated flight.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlightDay {
+    /// The forecast it was planned for and the wind it was flown in.
+    pub wind: DayWind,
+    /// The weakest of its sorties' batteries, as a share of the rated capacity (1 with no
+    /// sortie).
+    pub battery_factor: f64,
+    /// Sorties that re-planned in the air (or turned home early).
+    pub replanned: usize,
+    /// Planned stops the re-plans dropped.
+    pub cells_dropped: usize,
+    /// Readings brought back (newly stored).
+    pub readings: u64,
+    /// Energy flown, all sorties, J.
+    pub energy_j: f64,
+    /// Sorties whose flown energy exceeded what their battery could give above the reserve.
+    pub over_budget: usize,
+    /// The largest flown energy less the battery's usable energy over its sorties, J (< 0:
+    /// energy to spare; −∞ with no sortie).
+    pub max_excess_j: f64,
+}
+
+impl FlightDay {
+    /// A mission day in `wind` before any sortie.
+    pub fn new(wind: DayWind) -> Self {
+        Self {
+            wind,
+            battery_factor: 1.0,
+            replanned: 0,
+            cells_dropped: 0,
+            readings: 0,
+            energy_j: 0.0,
+            over_budget: 0,
+            max_excess_j: f64::NEG_INFINITY,
+        }
+    }
+
+    /// Adds a sortie flown with `energy_j` against `usable_j` (J) on a battery of
+    /// `battery_factor`, which re-planned or not and dropped `dropped` stops.
+    pub fn add(
+        &mut self,
+        (energy_j, usable_j): (f64, f64),
+        battery_factor: f64,
+        replanned: bool,
+        dropped: usize,
+    ) {
+        self.energy_j += energy_j;
+        self.battery_factor = self.battery_factor.min(battery_factor);
+        self.replanned += usize::from(replanned);
+        self.cells_dropped += dropped;
+        self.over_budget += usize::from(energy_j > usable_j);
+        self.max_excess_j = self.max_excess_j.max(energy_j - usable_j);
+    }
+}
+
+/// A small deterministic generator (SplitMix64).
+fn splitmix(mut x: u64) -> u64 {
+    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^ (x >> 31)
+}
+
+/// A uniform draw in (0, 1) of stream `stream`, time `t` and index `k` under `seed`.
+fn uniform(seed: u64, stream: u64, t: UnixSeconds, k: u64) -> f64 {
+    let x = splitmix(seed ^ splitmix(stream ^ splitmix(t as u64 ^ splitmix(k))));
+    ((x >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+}
+
+/// Two independent standard normal draws (Box–Muller) of `stream` at `t`.
+fn normals(seed: u64, stream: u64, t: UnixSeconds) -> (f64, f64) {
+    let (u1, u2) = (uniform(seed, stream, t, 0), uniform(seed, stream, t, 1));
+    let r = (-2.0 * u1.ln()).sqrt();
+    let a = std::f64::consts::TAU * u2;
+    (r * a.cos(), r * a.sin())
+}
+
+/// Γ(x) for x in [1, 3] (Lanczos, g = 7, 9 terms: relative error < 1e-13).
+fn gamma(x: f64) -> f64 {
+    const G: f64 = 7.0;
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    let x = x - 1.0;
+    let mut a = C[0];
+    let t = x + G + 0.5;
+    for (k, c) in C.iter().enumerate().skip(1) {
+        a += c / (x + k as f64);
+    }
+    (std::f64::consts::TAU).sqrt() * t.powf(x + 0.5) * (-t).exp() * a
+}
+
+/// The wind whose air moves by (`e`, `n`) m/s (east, north), speed capped at
+/// [`MAX_WIND_MPS`].
+fn wind_of_velocity(e: f64, n: f64) -> Wind {
+    let speed = e.hypot(n).min(MAX_WIND_MPS);
+    // It blows from the opposite of where it moves to.
+    let mut from = (-e).atan2(-n).to_degrees();
+    if from < 0.0 {
+        from += 360.0;
+    }
+    if speed == 0.0 || from >= 360.0 - 1e-9 {
+        from = 0.0;
+    }
+    Wind {
+        speed_mps: speed,
+        from_deg: from.min(359.999_999),
+    }
+}
+
+impl WindSource {
+    /// Parses `still` or `weibull:MEAN[:SHAPE]` (mean speed in m/s, shape k [default 2]),
+    /// as `simulate --wind` takes it.
+    ///
+    /// # Errors
+    /// [`AppError::Invalid`] quoting the text, for a malformed value or one out of range
+    /// (mean in [0, 20] m/s, shape in [1, 10]).
+    pub fn parse(text: &str) -> Result<Self> {
+        let t = text.trim();
+        let bad = |why: &str| {
+            AppError::Invalid(format!(
+                "--wind {:?}: {why}; expected `still` or `weibull:MEAN[:SHAPE]`, the mean speed \
+                 in m/s and the Weibull shape (default {DEFAULT_WEIBULL_SHAPE}), e.g. weibull:4",
+                gleaner_ingest::shorten(text)
+            ))
+        };
+        if t.eq_ignore_ascii_case("still") {
+            return Ok(Self::Still);
+        }
+        let Some(rest) = t.strip_prefix("weibull:") else {
+            return Err(bad("unknown wind model"));
+        };
+        let mut parts = rest.split(':');
+        let mean_mps: f64 = parts
+            .next()
+            .and_then(|m| m.trim().parse().ok())
+            .ok_or_else(|| bad("the mean is not a number"))?;
+        let shape: f64 = match parts.next() {
+            None => DEFAULT_WEIBULL_SHAPE,
+            Some(k) => k
+                .trim()
+                .parse()
+                .map_err(|_| bad("the shape is not a number"))?,
+        };
+        if parts.next().is_some() {
+            return Err(bad("too many fields"));
+        }
+        if !(mean_mps.is_finite() && (0.0..=20.0).contains(&mean_mps)) {
+            return Err(bad("the mean must be in [0, 20] m/s"));
+        }
+        if !(shape.is_finite() && (1.0..=10.0).contains(&shape)) {
+            return Err(bad("the shape must be in [1, 10]"));
+        }
+        Ok(Self::Weibull { mean_mps, shape })
+    }
+}
+
+/// Reads a file of observed daily winds: a header line naming the columns `date`
+/// (`YYYY-MM-DD` or `MM/DD/YYYY`), `speed_mps` (m/s, in [0, 40]) and `from_deg` (degrees
+/// clockwise from north the wind blows from, in [0, 360]), in any order, other columns
+/// ignored; one row per day. Blank lines are skipped; a UTF-8 BOM and CRLF are accepted.
+///
+/// # Errors
+/// [`AppError::Invalid`] naming the file, the line and the field: a missing column, a row
+/// with another number of fields than the header, a date, speed or direction that does not
+/// parse or is out of range, a day given twice; an empty file. [`AppError::Io`] when the file
+/// cannot be read.
+pub fn read_wind_csv(path: &Path) -> Result<Vec<DailyWind>> {
+    let text = crate::cell_csv::read_text(path)?;
+    let bad =
+        |line: usize, what: String| AppError::Invalid(format!("{}:{line}: {what}", path.display()));
+    let mut lines = text.trim_start_matches('\u{feff}').lines().enumerate();
+    let header: Vec<String> = lines
+        .next()
+        .filter(|(_, h)| !h.trim().is_empty())
+        .map(|(_, h)| {
+            h.split(',')
+                .map(|c| c.trim().to_ascii_lowercase())
+                .collect()
+        })
+        .ok_or_else(|| {
+            AppError::Invalid(format!(
+                "{}: empty file: expected a header line `date,speed_mps,from_deg`",
+                path.display()
+            ))
+        })?;
+    let column = |name: &str| {
+        header.iter().position(|h| h == name).ok_or_else(|| {
+            bad(
+                1,
+                format!("no column {name:?} in the header (expected date, speed_mps and from_deg)"),
+            )
+        })
+    };
+    let (c_date, c_speed, c_from) = (column("date")?, column("speed_mps")?, column("from_deg")?);
+    let mut days: Vec<DailyWind> = Vec::new();
+    for (k, raw) in lines {
+        let line = k + 1;
+        if raw.trim().is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = raw.split(',').map(str::trim).collect();
+        if fields.len() != header.len() {
+            return Err(bad(
+                line,
+                format!(
+                    "{} fields, but the header has {}",
+                    fields.len(),
+                    header.len()
+                ),
+            ));
+        }
+        let field = |c: usize| fields[c];
+        let day = gleaner_ingest::time::parse_date(field(c_date)).ok_or_else(|| {
+            bad(
+                line,
+                format!(
+                    "date {:?}: expected YYYY-MM-DD or MM/DD/YYYY",
+                    gleaner_ingest::shorten(field(c_date))
+                ),
+            )
+        })?;
+        let number = |c: usize, name: &str, range: (f64, f64), unit: &str| -> Result<f64> {
+            let text = field(c);
+            match text.parse::<f64>() {
+                Ok(x) if x.is_finite() && (range.0..=range.1).contains(&x) => Ok(x),
+                _ => Err(bad(
+                    line,
+                    format!(
+                        "{name} {:?}: expected a number in [{}, {}] {unit}",
+                        gleaner_ingest::shorten(text),
+                        range.0,
+                        range.1
+                    ),
+                )),
+            }
+        };
+        let speed_mps = number(c_speed, "speed_mps", (0.0, MAX_WIND_MPS), "m/s")?;
+        let from_deg = number(c_from, "from_deg", (0.0, 360.0), "degrees")?;
+        days.push(DailyWind {
+            day,
+            speed_mps,
+            from_deg: if from_deg == 360.0 { 0.0 } else { from_deg },
+            line,
+        });
+    }
+    if days.is_empty() {
+        return Err(AppError::Invalid(format!(
+            "{}: no rows after the header",
+            path.display()
+        )));
+    }
+    days.sort_by_key(|d| (d.day, d.line));
+    if let Some(w) = days.windows(2).find(|w| w[0].day == w[1].day) {
+        return Err(bad(
+            w[1].line,
+            format!(
+                "date {}: given twice (first on line {})",
+                &crate::format_rfc3339(w[1].day)[..10],
+                w[0].line
+            ),
+        ));
+    }
+    Ok(days)
+}
+
+impl FlightConditions {
+    /// Whether flights are flown exactly as planned: still air, exact forecasts, full
+    /// batteries.
+    pub fn is_still(&self) -> bool {
+        self.wind == WindSource::Still && self.gust_sd_mps == 0.0 && self.battery_weakening == 0.0
+    }
+
+    /// Checks the settings and that an observed-winds file covers every mission's day.
+    ///
+    /// # Errors
+    /// [`AppError::Invalid`] naming the setting, or the file and the first day it lacks.
+    pub fn check(&self, schedule: &[UnixSeconds]) -> Result<()> {
+        if !(self.gust_sd_mps.is_finite() && (0.0..=10.0).contains(&self.gust_sd_mps)) {
+            return Err(AppError::Invalid(format!(
+                "--gust {}: the forecast error's standard deviation must be in [0, 10] m/s",
+                gleaner_ingest::number(self.gust_sd_mps)
+            )));
+        }
+        if !(self.battery_weakening.is_finite()
+            && (0.0..=MAX_BATTERY_WEAKENING).contains(&self.battery_weakening))
+        {
+            return Err(AppError::Invalid(format!(
+                "--weak-battery {}: the share a battery may lack must be in [0, \
+                 {MAX_BATTERY_WEAKENING}]",
+                gleaner_ingest::number(self.battery_weakening)
+            )));
+        }
+        if let WindSource::Observed { path, days } = &self.wind {
+            for &t in schedule {
+                let day = t.div_euclid(DAY_S) * DAY_S;
+                if days.binary_search_by_key(&day, |d| d.day).is_err() {
+                    return Err(AppError::Invalid(format!(
+                        "{}: no wind for {} (a mission day): give a row for every day of the \
+                         campaign",
+                        path.display(),
+                        &crate::format_rfc3339(day)[..10]
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The wind of the mission at `t` (s): its forecast (drawn, read for its day, or still
+    /// air) and the wind flown in (the forecast plus the error).
+    ///
+    /// # Errors
+    /// [`AppError::Invalid`] when an observed-winds file has no row for the day.
+    pub fn day(&self, t: UnixSeconds) -> Result<DayWind> {
+        let forecast = match &self.wind {
+            WindSource::Still => Wind::CALM,
+            WindSource::Weibull { mean_mps, shape } => {
+                let scale = mean_mps / gamma(1.0 + 1.0 / shape);
+                let u = uniform(self.seed, 1, t, 0);
+                let speed = (scale * (-u.ln()).powf(1.0 / shape)).min(MAX_WIND_MPS);
+                let from = 360.0 * uniform(self.seed, 2, t, 0);
+                Wind {
+                    speed_mps: speed,
+                    from_deg: if speed == 0.0 { 0.0 } else { from },
+                }
+            }
+            WindSource::Observed { path, days } => {
+                let day = t.div_euclid(DAY_S) * DAY_S;
+                let d = days
+                    .binary_search_by_key(&day, |d| d.day)
+                    .map(|k| days[k])
+                    .map_err(|_| {
+                        AppError::Invalid(format!(
+                            "{}: no wind for {}",
+                            path.display(),
+                            &crate::format_rfc3339(day)[..10]
+                        ))
+                    })?;
+                Wind {
+                    speed_mps: d.speed_mps,
+                    from_deg: d.from_deg,
+                }
+            }
+        };
+        let actual = if self.gust_sd_mps > 0.0 {
+            let (ze, zn) = normals(self.seed, 3, t);
+            let (e, n) = forecast.velocity_mps();
+            wind_of_velocity(e + self.gust_sd_mps * ze, n + self.gust_sd_mps * zn)
+        } else {
+            forecast
+        };
+        Ok(DayWind { forecast, actual })
+    }
+
+    /// The share of its rated capacity the battery of sortie `sortie` (from 0) of the mission
+    /// at `t` holds, in [1 − [`FlightConditions::battery_weakening`], 1].
+    pub fn battery_factor(&self, t: UnixSeconds, sortie: usize) -> f64 {
+        if self.battery_weakening == 0.0 {
+            return 1.0;
+        }
+        1.0 - self.battery_weakening * uniform(self.seed, 4, t, sortie as u64)
+    }
+}
+
+/// How one sortie went in the simulated flight.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SortieFlight {
+    /// The cells visited, in the order flown.
+    pub cells: Vec<CellIndex>,
+    /// Whether it re-planned in the air (or turned home early).
+    pub replanned: bool,
+    /// Planned stops it did not visit.
+    pub dropped: usize,
+    /// Energy flown in the actual wind, J (climb, legs, hovers, return, descent).
+    pub energy_j: f64,
+    /// What its battery could give above the reserve, J: capacity × battery factor − reserve.
+    pub usable_j: f64,
+}
+
+/// Energy of the sortie `base` → `route` → `base` in `model`, J.
+fn route_j(model: &MissionEnergyModel, base: LocalPoint, route: &[CellVisit]) -> Result<f64> {
+    model
+        .breakdown(base, route)
+        .map(|e| e.total_j)
+        .map_err(|e| AppError::core("simulated flight", e))
+}
+
+/// Flies the stored mission `id` in `actual` wind on a battery holding `battery_factor` of
+/// its rated capacity. The aircraft learns the wind on its first leg and reads the energy
+/// left from its battery: over each stop, done collecting, it prices the rest of its route in
+/// that wind, and when the energy left less the reserve cannot fly it, it re-plans from that
+/// stop with [`crate::replan`] (the wind now plus `[flight] wind_margin_mps`; the remaining
+/// stops dropped and reordered), once; when the re-planned route is still short, or no
+/// continuation exists, it flies home from the stop it is over. Records nothing.
+///
+/// # Errors
+/// An unknown mission, invalid `[energy]` settings, a project with a geofence or no-fly zones
+/// (the continuation's legs are straight), a battery factor outside (0, 1].
+pub fn fly_in_wind<S: Store>(
+    project: &Project<S>,
+    id: MissionId,
+    actual: Wind,
+    battery_factor: f64,
+    planner_iterations: u64,
+) -> Result<SortieFlight> {
+    if !(battery_factor > 0.0 && battery_factor <= 1.0) {
+        return Err(AppError::Invalid(format!(
+            "battery factor {}: must be in (0, 1]",
+            gleaner_ingest::number(battery_factor)
+        )));
+    }
+    let f = &project.settings().field;
+    if f.geofence.is_some() || f.no_fly.is_some() {
+        return Err(AppError::Invalid(
+            "flights in a simulated wind re-plan with straight legs, and this project sets \
+             [field] geofence or no_fly: simulate it in still air"
+                .into(),
+        ));
+    }
+    let mission = crate::view::mission(project, id)?;
+    let profile = mission.mission.profile;
+    let export = crate::view::export_energy_model(project, &mission)?;
+    let model = gleaner_energy::FlightEnergyModel {
+        wind: actual,
+        ..export
+    }
+    .model(profile.cruise_speed_mps, profile.altitude_m)
+    .map_err(|e| AppError::core("energy model", e))?;
+    let battery = project.settings().energy.to_core()?.battery;
+    let capacity_j = battery.capacity_j * battery_factor;
+    let reserve_j = battery.capacity_j * battery.reserve_fraction;
+    let usable_j = capacity_j - reserve_j;
+    let (_, field) = project.field()?;
+    let frame = field.frame();
+    let base = gleaner_energy::flight_point(frame, field.base());
+    let visit = |s: &gleaner_store::StopRecord| {
+        (
+            s.cell,
+            CellVisit {
+                centre: frame.forward(s.centre),
+                hover_s: s.hover_s,
+            },
+        )
+    };
+    let mut route: Vec<(CellIndex, CellVisit)> = mission.mission.stops.iter().map(visit).collect();
+    let planned = route.len();
+    let visits = |r: &[(CellIndex, CellVisit)]| r.iter().map(|p| p.1).collect::<Vec<_>>();
+    let mut replanned = false;
+    // Over stop k (1-based), done collecting: can the rest be flown?
+    let mut k = 1;
+    while k < route.len() {
+        if route_j(&model, base, &visits(&route))? <= usable_j {
+            k += 1;
+            continue;
+        }
+        if replanned {
+            route.truncate(k);
+            break;
+        }
+        replanned = true;
+        let flown = model
+            .breakdown(base, &visits(&route[..k]))
+            .map_err(|e| AppError::core("simulated flight", e))?;
+        let used_j = flown.total_j - flown.return_j - model.descent().0;
+        let left_j = (capacity_j - used_j).min(battery.capacity_j);
+        let continuation = if left_j > 0.0 {
+            replan(
+                project,
+                &ReplanRequest {
+                    mission: id,
+                    after_stop: k,
+                    energy_left_j: left_j,
+                    seed: None,
+                    iterations: Some(planner_iterations),
+                    time_limit_s: Some(3_600.0),
+                    wind: Some(actual),
+                },
+            )
+            .ok()
+        } else {
+            None
+        };
+        route.truncate(k);
+        if let Some(c) = continuation {
+            route.extend(c.mission.stops.iter().map(visit));
+        }
+        k += 1;
+    }
+    let energy_j = route_j(&model, base, &visits(&route))?;
+    Ok(SortieFlight {
+        dropped: planned - route.len(),
+        cells: route.into_iter().map(|p| p.0).collect(),
+        replanned,
+        energy_j,
+        usable_j,
+    })
+}
+
+/// One strategy's flights over every run and dataset given (missions with a flight record).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlightSummary {
+    /// Strategy.
+    pub strategy: crate::campaign::Strategy,
+    /// Missions with a flight record.
+    pub missions: usize,
+    /// Mean forecast wind, m/s.
+    pub mean_forecast_mps: f64,
+    /// Missions of which a sortie re-planned in the air.
+    pub replanned: usize,
+    /// Planned stops the re-plans dropped.
+    pub cells_dropped: usize,
+    /// Readings brought back.
+    pub readings: u64,
+    /// Readings brought back on missions whose forecast was below [`CALM_DAY_MPS`].
+    pub readings_calm_days: u64,
+    /// Missions whose forecast was below [`CALM_DAY_MPS`].
+    pub calm_days: usize,
+    /// Missions of which a sortie flew more energy than its battery could give above the
+    /// reserve (must be 0).
+    pub over_budget: usize,
+    /// The largest flown energy less the usable energy over every sortie, J (< 0: every
+    /// sortie landed with at least that much to spare above the reserve).
+    pub max_excess_j: f64,
+}
+
+/// Forecast speed below which a mission day counts as moderate, m/s (the flight-day target:
+/// data within 10% of still air's on such days).
+pub const CALM_DAY_MPS: f64 = 6.0;
+
+/// [`FlightSummary`] per strategy, in order of first appearance.
+pub fn flight_summaries(results: &[crate::campaign::CampaignResult]) -> Vec<FlightSummary> {
+    let mut out: Vec<FlightSummary> = Vec::new();
+    let mut wind_sum: Vec<f64> = Vec::new();
+    for run in results.iter().flat_map(|r| &r.runs) {
+        let k = match out.iter().position(|f| f.strategy == run.key.strategy) {
+            Some(k) => k,
+            None => {
+                out.push(FlightSummary {
+                    strategy: run.key.strategy,
+                    missions: 0,
+                    mean_forecast_mps: f64::NAN,
+                    replanned: 0,
+                    cells_dropped: 0,
+                    readings: 0,
+                    readings_calm_days: 0,
+                    calm_days: 0,
+                    over_budget: 0,
+                    max_excess_j: f64::NEG_INFINITY,
+                });
+                wind_sum.push(0.0);
+                out.len() - 1
+            }
+        };
+        let f = &mut out[k];
+        for d in run.missions.iter().filter_map(|m| m.flight.as_ref()) {
+            f.missions += 1;
+            wind_sum[k] += d.wind.forecast.speed_mps;
+            f.replanned += usize::from(d.replanned > 0);
+            f.cells_dropped += d.cells_dropped;
+            f.readings += d.readings;
+            if d.wind.forecast.speed_mps < CALM_DAY_MPS {
+                f.calm_days += 1;
+                f.readings_calm_days += d.readings;
+            }
+            f.over_budget += usize::from(d.over_budget > 0);
+            f.max_excess_j = f.max_excess_j.max(d.max_excess_j);
+        }
+    }
+    for (f, w) in out.iter_mut().zip(wind_sum) {
+        if f.missions > 0 {
+            f.mean_forecast_mps = w / f.missions as f64;
+        }
+    }
+    out.retain(|f| f.missions > 0);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gamma_matches_known_values() {
+        assert!((gamma(1.0) - 1.0).abs() < 1e-12);
+        assert!((gamma(2.0) - 1.0).abs() < 1e-12);
+        assert!((gamma(3.0) - 2.0).abs() < 1e-12);
+        assert!((gamma(1.5) - std::f64::consts::PI.sqrt() / 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn parses_wind_models() {
+        assert_eq!(WindSource::parse("still").unwrap(), WindSource::Still);
+        assert_eq!(
+            WindSource::parse("weibull:4").unwrap(),
+            WindSource::Weibull {
+                mean_mps: 4.0,
+                shape: 2.0
+            }
+        );
+        assert_eq!(
+            WindSource::parse(" weibull:5.5:1.8 ").unwrap(),
+            WindSource::Weibull {
+                mean_mps: 5.5,
+                shape: 1.8
+            }
+        );
+        for bad in [
+            "",
+            "weibull",
+            "weibull:",
+            "weibull:x",
+            "weibull:4:y",
+            "weibull:4:2:1",
+            "weibull:-1",
+            "weibull:30",
+            "weibull:4:0.5",
+            "normal:4",
+        ] {
+            let e = WindSource::parse(bad).unwrap_err().to_string();
+            assert!(
+                e.contains("--wind") && e.contains("weibull:MEAN"),
+                "{bad}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn weibull_draws_have_the_mean_and_are_seeded() {
+        let c = FlightConditions {
+            wind: WindSource::Weibull {
+                mean_mps: 4.0,
+                shape: 2.0,
+            },
+            seed: 7,
+            ..FlightConditions::default()
+        };
+        let days: Vec<DayWind> = (0..20_000).map(|d| c.day(d * DAY_S).unwrap()).collect();
+        let mean = days.iter().map(|d| d.forecast.speed_mps).sum::<f64>() / days.len() as f64;
+        assert!((mean - 4.0).abs() < 0.05, "mean {mean}");
+        // Rayleigh (k = 2): P(v > 6) = exp(−(6/λ)²), λ = 4/Γ(1.5).
+        let above = days.iter().filter(|d| d.forecast.speed_mps > 6.0).count() as f64;
+        let lambda = 4.0 / gamma(1.5);
+        let want = (-(6.0f64 / lambda).powi(2)).exp();
+        assert!((above / days.len() as f64 - want).abs() < 0.01);
+        let north_half = days.iter().filter(|d| d.forecast.from_deg < 180.0).count() as f64;
+        assert!((north_half / days.len() as f64 - 0.5).abs() < 0.02);
+        // No forecast error: flown in the forecast.
+        assert!(days.iter().all(|d| d.actual == d.forecast));
+        // Same seed, same weather; another seed, another.
+        assert_eq!(c.day(5 * DAY_S).unwrap(), days[5]);
+        let other = FlightConditions { seed: 8, ..c };
+        assert_ne!(other.day(5 * DAY_S).unwrap(), days[5]);
+    }
+
+    #[test]
+    fn the_error_has_its_standard_deviation() {
+        let c = FlightConditions {
+            wind: WindSource::Weibull {
+                mean_mps: 4.0,
+                shape: 2.0,
+            },
+            gust_sd_mps: 1.5,
+            battery_weakening: 0.2,
+            seed: 3,
+        };
+        let n = 20_000;
+        let mut sq = 0.0;
+        for d in 0..n {
+            let w = c.day(d * DAY_S).unwrap();
+            let (fe, f_n) = w.forecast.velocity_mps();
+            let (ae, an) = w.actual.velocity_mps();
+            sq += (ae - fe).powi(2) + (an - f_n).powi(2);
+            let b = c.battery_factor(d * DAY_S, 1);
+            assert!((0.8..=1.0).contains(&b));
+        }
+        let sd = (sq / (2.0 * n as f64)).sqrt();
+        assert!((sd - 1.5).abs() < 0.03, "sd {sd}");
+        assert_eq!(FlightConditions::default().battery_factor(0, 0), 1.0);
+        assert!(FlightConditions::default().is_still());
+        assert!(!c.is_still());
+    }
+
+    #[test]
+    fn wind_of_velocity_inverts_velocity() {
+        for (s, from) in [(3.0, 0.0), (5.0, 90.0), (2.0, 225.0), (7.5, 359.0)] {
+            let w = Wind::new(s, from).unwrap();
+            let (e, n) = w.velocity_mps();
+            let back = wind_of_velocity(e, n);
+            assert!((back.speed_mps - s).abs() < 1e-9);
+            assert!(
+                (back.from_deg - from).abs() < 1e-9,
+                "{from} -> {}",
+                back.from_deg
+            );
+        }
+        assert_eq!(wind_of_velocity(0.0, 0.0), Wind::CALM);
+        assert_eq!(wind_of_velocity(100.0, 0.0).speed_mps, MAX_WIND_MPS);
+    }
+
+    fn csv(text: &str) -> (tempfile::TempDir, PathBuf) {
+        let tmp = tempfile::tempdir().unwrap();
+        let p = tmp.path().join("winds.csv");
+        std::fs::write(&p, text).unwrap();
+        (tmp, p)
+    }
+
+    #[test]
+    fn reads_observed_winds() {
+        let (_t, p) = csv(
+            "\u{feff}from_deg,date,speed_mps,gust\r\n270,2014-01-02,6.5,9\r\n\r\n0,2014-01-01,0,0\n360,01/03/2014,3,4\n",
+        );
+        let days = read_wind_csv(&p).unwrap();
+        let d0 = gleaner_ingest::time::parse_date("2014-01-01").unwrap();
+        assert_eq!(days.len(), 3);
+        assert_eq!(
+            (days[0].day, days[0].speed_mps, days[0].from_deg),
+            (d0, 0.0, 0.0)
+        );
+        assert_eq!(
+            (
+                days[1].day,
+                days[1].speed_mps,
+                days[1].from_deg,
+                days[1].line
+            ),
+            (d0 + DAY_S, 6.5, 270.0, 2)
+        );
+        assert_eq!((days[2].day, days[2].from_deg), (d0 + 2 * DAY_S, 0.0));
+        let c = FlightConditions {
+            wind: WindSource::Observed {
+                path: p.clone(),
+                days,
+            },
+            ..FlightConditions::default()
+        };
+        let w = c.day(d0 + DAY_S + 3_600).unwrap();
+        assert_eq!((w.forecast.speed_mps, w.forecast.from_deg), (6.5, 270.0));
+        assert!(c.check(&[d0, d0 + 2 * DAY_S]).is_ok());
+        let e = c.check(&[d0, d0 + 3 * DAY_S]).unwrap_err().to_string();
+        assert!(e.contains("winds.csv") && e.contains("2014-01-04"), "{e}");
+    }
+
+    #[test]
+    fn observed_winds_errors_name_file_line_and_field() {
+        let cases = [
+            ("", "empty file"),
+            (
+                "date,speed_mps\n2014-01-01,3\n",
+                ":1: no column \"from_deg\"",
+            ),
+            ("date,speed_mps,from_deg\n", "no rows"),
+            (
+                "date,speed_mps,from_deg\n2014-01-01,3\n",
+                ":2: 2 fields, but the header has 3",
+            ),
+            (
+                "date,speed_mps,from_deg\n2014-01-01,3,90\nJan 2,3,90\n",
+                ":3: date \"Jan 2\"",
+            ),
+            (
+                "date,speed_mps,from_deg\n2014-01-01,fast,90\n",
+                ":2: speed_mps \"fast\"",
+            ),
+            (
+                "date,speed_mps,from_deg\n2014-01-01,-1,90\n",
+                ":2: speed_mps \"-1\"",
+            ),
+            (
+                "date,speed_mps,from_deg\n2014-01-01,41,90\n",
+                ":2: speed_mps \"41\"",
+            ),
+            (
+                "date,speed_mps,from_deg\n2014-01-01,3,NaN\n",
+                ":2: from_deg \"NaN\"",
+            ),
+            (
+                "date,speed_mps,from_deg\n2014-01-01,3,361\n",
+                ":2: from_deg \"361\"",
+            ),
+            (
+                "date,speed_mps,from_deg\n2014-01-01,3,90\n2014-01-01,4,90\n",
+                ":3: date 2014-01-01: given twice (first on line 2)",
+            ),
+        ];
+        for (text, want) in cases {
+            let (_t, p) = csv(text);
+            let e = read_wind_csv(&p).unwrap_err().to_string();
+            assert!(e.contains("winds.csv") && e.contains(want), "{text:?}: {e}");
+        }
+        let (_t, p) = csv("x");
+        std::fs::write(&p, b"date,speed_mps,from_deg\n\xff\n").unwrap();
+        let e = read_wind_csv(&p).unwrap_err().to_string();
+        assert!(e.contains(":2: not valid UTF-8"), "{e}");
+        let e = read_wind_csv(Path::new("/nonexistent/winds.csv"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("/nonexistent/winds.csv"), "{e}");
+    }
+
+    #[test]
+    fn conditions_are_checked() {
+        let bad_gust = FlightConditions {
+            gust_sd_mps: -1.0,
+            ..FlightConditions::default()
+        };
+        assert!(
+            bad_gust
+                .check(&[])
+                .unwrap_err()
+                .to_string()
+                .contains("--gust")
+        );
+        let bad_battery = FlightConditions {
+            battery_weakening: 0.7,
+            ..FlightConditions::default()
+        };
+        assert!(
+            bad_battery
+                .check(&[])
+                .unwrap_err()
+                .to_string()
+                .contains("--weak-battery")
+        );
+    }
+}
