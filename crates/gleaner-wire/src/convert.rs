@@ -135,10 +135,7 @@ pub fn mission_doc(
 
 /// A stored mission.
 pub fn stored_mission(m: &MissionRecord) -> MissionDoc {
-    let status = match m.status {
-        MissionStatus::Planned => "planned",
-        MissionStatus::Flown => "flown",
-    };
+    let status = m.status.as_str();
     mission_doc(Some(m.id), &m.mission, status, m.flown_at)
 }
 
