@@ -236,7 +236,7 @@ fn stop(order: u32, i: i32, j: i32, terms: Option<[f64; 4]>) -> StopRecord {
 }
 
 /// An adaptive mission with two scored stops (or an exploration sortie without terms).
-fn new_mission(kind: MissionKind) -> NewMission {
+pub fn new_mission(kind: MissionKind) -> NewMission {
     let scored = kind == MissionKind::Adaptive;
     let terms = |k: f64| scored.then_some([0.5, 0.25 + k, 1.75, 0.125]);
     NewMission {
