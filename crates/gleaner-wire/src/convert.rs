@@ -2,8 +2,8 @@
 
 use gleaner_app::{
     CellView, Exploration, FieldView, MissionExport, MissionId, MissionKind, MissionRecord,
-    MissionStatus, NewMission, PlannedMission, Reconstruction, ReconstructionMap,
-    ReconstructionSeries, Scoring, driver,
+    NewMission, PlannedMission, Reconstruction, ReconstructionMap, ReconstructionSeries, Scoring,
+    driver,
 };
 use gleaner_ingest::time::format_rfc3339;
 
