@@ -85,7 +85,7 @@ pub trait StoreRead {
     fn missions_page(&self, before: Option<MissionId>, limit: usize) -> Result<Vec<MissionRecord>> {
         let mut all = self.missions()?;
         all.retain(|m| before.is_none_or(|b| m.id < b));
-        all.sort_by(|a, b| b.id.cmp(&a.id));
+        all.sort_by_key(|m| std::cmp::Reverse(m.id));
         all.truncate(limit);
         Ok(all)
     }
