@@ -54,6 +54,7 @@ mod ingest;
 mod init;
 mod knowledge;
 mod migrate;
+pub mod missions;
 mod plan;
 mod progress;
 mod project;
@@ -83,6 +84,7 @@ pub use init::{
 };
 pub use knowledge::{History, Knowledge, knowledge};
 pub use migrate::{MigrateOutcome, migrate};
+pub use missions::{MissionPage, cancel_mission, delete_mission, missions_page};
 pub use plan::{
     Baseline, ExtraSortie, MAX_SORTIES, Objective, PlanRequest, PlannedMission, energy_model,
     flight_profile, parse_planner, plan, plan_with_preset,

@@ -88,6 +88,7 @@ pub(crate) fn record_parsed<S: Store>(
             what: "mission",
             id: format!("#{}", request.mission),
         })?;
+    crate::missions::refuse_cancelled(&mission, "recorded")?;
     if mission.status == MissionStatus::Flown && !request.amend {
         return Err(AppError::Conflict(format!(
             "mission #{} was already recorded as flown{}; pass --amend to replace that record",

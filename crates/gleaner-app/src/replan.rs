@@ -73,6 +73,7 @@ pub use gleaner_mission::{REPLAN_ITERATIONS, REPLAN_TIME_LIMIT_S};
 /// energy for the leg home with the reserve (land now), invalid `[energy]` settings.
 pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result<Replan> {
     let parent: MissionRecord = crate::view::mission(project, request.mission)?;
+    crate::missions::refuse_cancelled(&parent, "re-planned")?;
     if parent.status == MissionStatus::Flown {
         return Err(AppError::Invalid(format!(
             "mission #{} was already recorded as flown: nothing to re-plan",

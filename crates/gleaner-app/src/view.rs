@@ -150,6 +150,7 @@ pub struct MissionExport {
 /// any check is refused: no flight file is ever written for a route the battery cannot carry.
 pub fn export<S: Store>(project: &Project<S>, id: MissionId) -> Result<MissionExport> {
     let mission = mission(project, id)?;
+    crate::missions::refuse_cancelled(&mission, "exported")?;
     check_flyable(&mission)?;
     let energy = export_energy_model(project, &mission)?;
     let via = match crate::airspace::of_project(project)? {

@@ -365,19 +365,46 @@ enum Command {
         /// come from a sensor in a visited cell and be dated no later than the collection.
         files: Vec<PathBuf>,
     },
-    /// List the missions (planned and flown), or show one with its stops.
+    /// List the missions (planned, flown and cancelled), or show one with its stops.
     #[command(
-        after_help = "Examples:\n  gleaner missions --project farm\n  gleaner missions --project farm --mission 3 --json"
+        after_help = "Without --limit or --before every mission is listed, oldest first. With either, one page is listed, newest first (by id, so missions planned meanwhile never shift a page), followed by the --before of the next page.\n\nExamples:\n  gleaner missions --project farm\n  gleaner missions --project farm --limit 20\n  gleaner missions --project farm --limit 20 --before 41\n  gleaner missions --project farm --mission 3 --json"
     )]
     Missions {
         #[command(flatten)]
         project: ProjectArg,
         /// Show this mission with its stops and energy breakdown.
-        #[arg(long)]
+        #[arg(long, conflicts_with_all = ["limit", "before"])]
         mission: Option<i64>,
+        /// List one page of at most this many missions (1 to 500), newest first [default with
+        /// --before: 20].
+        #[arg(long)]
+        limit: Option<usize>,
+        /// List only missions with an id below this one (the next page's cursor).
+        #[arg(long)]
+        before: Option<i64>,
         /// Print JSON (the `gleaner.mission` document) instead of text.
         #[arg(long)]
         json: bool,
+    },
+    /// Cancel a planned mission: it stays in the history, marked cancelled, and can no longer
+    /// be recorded, exported or re-planned. A flown mission cannot be cancelled.
+    #[command(after_help = "Examples:\n  gleaner cancel --project farm --mission 3")]
+    Cancel {
+        #[command(flatten)]
+        project: ProjectArg,
+        /// The mission to cancel.
+        #[arg(long)]
+        mission: i64,
+    },
+    /// Delete a mission that was never flown (planned or cancelled) with its stops. A flown
+    /// mission, the record of stored readings, is kept.
+    #[command(after_help = "Examples:\n  gleaner delete --project farm --mission 3")]
+    Delete {
+        #[command(flatten)]
+        project: ProjectArg,
+        /// The mission to delete.
+        #[arg(long)]
+        mission: i64,
     },
     /// Benchmarks.
     #[command(subcommand)]
@@ -1112,9 +1139,30 @@ fn run(cli: Cli) -> Result<()> {
         Command::Missions {
             project,
             mission,
+            limit,
+            before,
             json,
         } => {
             let p = project.open()?;
+            if limit.is_some() || before.is_some() {
+                let page = app::missions_page(&p, before.map(MissionId), limit.unwrap_or(20))?;
+                if json {
+                    let docs: Vec<_> = page
+                        .missions
+                        .iter()
+                        .map(gleaner_wire::convert::stored_mission)
+                        .collect();
+                    let doc = serde_json::json!({"missions": docs, "next": page.next.map(|m| m.0)});
+                    emit(true, &doc, "serialising missions", String::new)?;
+                } else {
+                    out(&missions_table(&page.missions))?;
+                    match page.next {
+                        Some(n) => outln(&format!("next page: --before {n}"))?,
+                        None => outln("no older missions")?,
+                    }
+                }
+                return Ok(());
+            }
             match mission {
                 Some(id) => {
                     let m = app::mission(&p, MissionId(id))?;
@@ -1130,6 +1178,19 @@ fn run(cli: Cli) -> Result<()> {
                     emit(json, &docs, "serialising missions", || missions_table(&all))?;
                 }
             }
+        }
+        Command::Cancel { project, mission } => {
+            let mut p = project.open()?;
+            let m = app::cancel_mission(&mut p, MissionId(mission))?;
+            outln(&format!(
+                "cancelled mission #{}: it stays in the history and can no longer be recorded or exported",
+                m.id
+            ))?;
+        }
+        Command::Delete { project, mission } => {
+            let mut p = project.open()?;
+            app::delete_mission(&mut p, MissionId(mission))?;
+            outln(&format!("deleted mission #{mission}"))?;
         }
         Command::Bench(BenchCommand::Op(args)) => {
             let (_, table) = bench::run(&args)?;

@@ -2168,3 +2168,44 @@ fn simulate_flies_in_wind_and_reads_observed_winds() {
     ));
     assert!(err.contains("weibull:MEAN"), "{err}");
 }
+
+#[test]
+fn missions_page_cancel_and_delete() {
+    let dir = small_project();
+    let p = s(dir.path());
+    ok(&["ingest", "--project", p, s(&data("readings.csv"))]);
+    for _ in 0..3 {
+        ok(&[
+            "plan",
+            "--project",
+            p,
+            "--at",
+            "2014-01-25",
+            "--solver",
+            "greedy",
+        ]);
+    }
+    let page: serde_json::Value =
+        serde_json::from_str(&ok(&["missions", "--project", p, "--limit", "2", "--json"]))
+            .expect("json");
+    let ids: Vec<i64> = page["missions"]
+        .as_array()
+        .expect("missions")
+        .iter()
+        .map(|m| m["mission_id"].as_i64().expect("id"))
+        .collect();
+    assert_eq!((ids, page["next"].as_i64()), (vec![3, 2], Some(2)));
+    let text = ok(&["missions", "--project", p, "--before", "2"]);
+    assert!(text.contains("no older missions"), "{text}");
+    ok(&["cancel", "--project", p, "--mission", "1"]);
+    let err = fail(&["cancel", "--project", p, "--mission", "1"]);
+    assert!(err.contains("already cancelled"), "{err}");
+    let err = fail(&["record", "--project", p, "--mission", "1"]);
+    assert!(err.contains("was cancelled"), "{err}");
+    ok(&["record", "--project", p, "--mission", "2"]);
+    let err = fail(&["delete", "--project", p, "--mission", "2"]);
+    assert!(err.contains("recorded as flown"), "{err}");
+    ok(&["delete", "--project", p, "--mission", "1"]);
+    let err = fail(&["delete", "--project", p, "--mission", "1"]);
+    assert!(err.contains("no mission #1"), "{err}");
+}

@@ -16,9 +16,9 @@ use gleaner_wire::docs::{
     CampaignDoc, CellRowDoc, ExplorationDoc, ReconstructionDoc, ReconstructionSeriesDoc, ScoringDoc,
 };
 use gleaner_wire::{FieldDoc, MissionDoc};
-use serde::Deserialize;
 use serde::de::DeserializeOwned;
-use utoipa::{IntoParams, OpenApi};
+use serde::{Deserialize, Serialize};
+use utoipa::{IntoParams, OpenApi, ToSchema};
 
 use crate::api::{
     CellDetailDoc, ExploreBody, IngestDoc, PlanBody, ProjectDoc, RecordDoc, ReplanBody, ReplanDoc,
@@ -753,6 +753,115 @@ pub async fn missions(State(s): State<AppState>) -> ApiResult<Json<Vec<MissionDo
         })
         .await?;
     Ok(Json(docs))
+}
+
+/// Which page of the mission history: `limit` missions below `before`, newest first.
+#[derive(Debug, Deserialize, IntoParams)]
+#[into_params(parameter_in = Query)]
+#[serde(deny_unknown_fields)]
+pub struct MissionsPageQuery {
+    /// Most missions on the page, 1 to 500 [default: 20].
+    pub limit: Option<usize>,
+    /// Only missions with an id below this one (the `next` of the previous page)
+    /// [default: from the newest].
+    pub before: Option<i64>,
+}
+
+/// One page of the mission history, newest first.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct MissionsPageDoc {
+    /// The missions, in descending id order.
+    pub missions: Vec<MissionDoc>,
+    /// The `before` of the next (older) page; null on the last page.
+    pub next: Option<i64>,
+}
+
+/// A page of the mission history, newest first, in a stable order (by id): `next` is the
+/// `before` of the following page, null on the last one. A mission planned while paging
+/// appears on no later page.
+#[utoipa::path(get, path = "/api/v1/missions/page", tag = "missions", params(MissionsPageQuery),
+    responses((status = 200, body = MissionsPageDoc), (status = 400, body = ErrorBody)))]
+pub async fn missions_page(
+    State(s): State<AppState>,
+    RawQuery(q): RawQuery,
+) -> ApiResult<Json<MissionsPageDoc>> {
+    let q = query::<MissionsPageQuery>(q)?;
+    let limit = q.limit.unwrap_or(20);
+    if !(1..=app::missions::MAX_PAGE).contains(&limit) {
+        return Err(ApiError::bad_request(
+            Some("limit"),
+            format!(
+                "limit = {limit}: a page holds 1 to {} missions",
+                app::missions::MAX_PAGE
+            ),
+        ));
+    }
+    if let Some(b) = q.before
+        && b < 1
+    {
+        return Err(ApiError::bad_request(
+            Some("before"),
+            format!("before = {b}: mission ids start at 1"),
+        ));
+    }
+    let before = q.before.map(MissionId);
+    let doc = s
+        .run(move |p| {
+            let page = app::missions_page(p, before, limit)?;
+            Ok(MissionsPageDoc {
+                missions: page
+                    .missions
+                    .iter()
+                    .map(gleaner_wire::convert::stored_mission)
+                    .collect(),
+                next: page.next.map(|m| m.0),
+            })
+        })
+        .await?;
+    Ok(Json(doc))
+}
+
+/// Cancels a planned mission: it stays in the history with status `cancelled` and can no
+/// longer be recorded, exported or re-planned. 409 when it was already flown or cancelled.
+#[utoipa::path(post, path = "/api/v1/missions/{id}/cancel", tag = "missions",
+    params(("id" = i64, Path, description = "Mission id")),
+    security(("bearer" = [])),
+    responses((status = 200, body = MissionDoc), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody)))]
+pub async fn cancel_mission(
+    State(s): State<AppState>,
+    _: Writing,
+    Path(id): Path<String>,
+) -> ApiResult<Json<MissionDoc>> {
+    let id = mission_id(&id)?;
+    let doc = s
+        .run_write(false, move |p| {
+            Ok(gleaner_wire::convert::stored_mission(&app::cancel_mission(
+                p, id,
+            )?))
+        })
+        .await?;
+    Ok(Json(doc))
+}
+
+/// Deletes a mission that has no recorded flight (planned or cancelled), with its stops.
+/// 409 for a flown mission: its record is the provenance of stored readings. 204 when done.
+#[utoipa::path(delete, path = "/api/v1/missions/{id}", tag = "missions",
+    params(("id" = i64, Path, description = "Mission id")),
+    security(("bearer" = [])),
+    responses((status = 204, description = "Deleted"), (status = 400, body = ErrorBody),
+        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 409, body = ErrorBody)))]
+pub async fn delete_mission(
+    State(s): State<AppState>,
+    _: Writing,
+    Path(id): Path<String>,
+) -> ApiResult<StatusCode> {
+    let id = mission_id(&id)?;
+    s.run_write(false, move |p| Ok(app::delete_mission(p, id)?))
+        .await?;
+    Ok(StatusCode::NO_CONTENT)
 }
 
 /// One mission with its stops and energy breakdown.

@@ -233,6 +233,12 @@ impl StoreWrite for AnyTx<'_> {
     ) -> Result<()> {
         self.inner.record_visits(mission, visits, flown_at, amend)
     }
+    fn cancel_mission(&mut self, mission: MissionId) -> Result<()> {
+        self.inner.cancel_mission(mission)
+    }
+    fn delete_mission(&mut self, mission: MissionId) -> Result<()> {
+        self.inner.delete_mission(mission)
+    }
     fn import_mission(&mut self, record: &MissionRecord) -> Result<()> {
         self.inner.import_mission(record)
     }

@@ -400,15 +400,27 @@ pub(crate) fn check_visits(mission: MissionId, visits: &[VisitRecord]) -> Result
     Ok(())
 }
 
-/// The flight part of [`crate::StoreWrite::import_mission`]: records the visits of a flown
-/// mission with `record(flown_at)`; a planned one has none to record.
-pub(crate) fn import_flight(
-    record: &crate::MissionRecord,
-    record_visits: impl FnOnce(i64) -> Result<()>,
-) -> Result<()> {
+/// What [`crate::StoreWrite::import_mission`] does after inserting a mission.
+pub(crate) enum ImportFlight {
+    /// Nothing: a planned mission has no flight.
+    Nothing,
+    /// Records its visits as flown at this time (s).
+    Record(i64),
+    /// Flags it cancelled.
+    Cancel,
+}
+
+/// The flight part of [`crate::StoreWrite::import_mission`]: a flown mission's visits are
+/// recorded at its `flown_at`; a planned one has none to record; a cancelled one is flagged.
+pub(crate) fn import_flight(record: &crate::MissionRecord) -> Result<ImportFlight> {
     match (record.status, record.flown_at) {
-        (crate::MissionStatus::Planned, None) if record.visits.is_empty() => Ok(()),
-        (crate::MissionStatus::Flown, Some(flown_at)) => record_visits(flown_at),
+        (crate::MissionStatus::Planned, None) if record.visits.is_empty() => {
+            Ok(ImportFlight::Nothing)
+        }
+        (crate::MissionStatus::Cancelled, None) if record.visits.is_empty() => {
+            Ok(ImportFlight::Cancel)
+        }
+        (crate::MissionStatus::Flown, Some(flown_at)) => Ok(ImportFlight::Record(flown_at)),
         _ => Err(invalid(
             "mission record",
             format!(
@@ -420,4 +432,13 @@ pub(crate) fn import_flight(
             ),
         )),
     }
+}
+
+/// The store's refusal to cancel `mission`: it does not exist or is not planned (the use case
+/// checks first and names the reason; this guards a direct caller).
+pub(crate) fn not_cancellable(mission: crate::MissionId) -> crate::StoreError {
+    invalid(
+        "mission",
+        format!("mission {mission} does not exist or is not a planned mission"),
+    )
 }

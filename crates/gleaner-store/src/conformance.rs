@@ -67,6 +67,7 @@ pub fn run_all<S: Store>(mut fresh: impl FnMut() -> S) {
         replace_cells_keeps_or_deletes_metadata,
         missions_round_trip_with_stops,
         record_visits_refuses_a_flown_mission_unless_amend,
+        missions_cancel_delete_and_page,
         invalid_missions_write_nothing,
         results_come_in_a_deterministic_order,
         inserting_twice_inserts_nothing_the_second_time,
@@ -235,7 +236,7 @@ fn stop(order: u32, i: i32, j: i32, terms: Option<[f64; 4]>) -> StopRecord {
 }
 
 /// An adaptive mission with two scored stops (or an exploration sortie without terms).
-fn new_mission(kind: MissionKind) -> NewMission {
+pub fn new_mission(kind: MissionKind) -> NewMission {
     let scored = kind == MissionKind::Adaptive;
     let terms = |k: f64| scored.then_some([0.5, 0.25 + k, 1.75, 0.125]);
     NewMission {
@@ -1262,6 +1263,63 @@ pub fn record_visits_refuses_a_flown_mission_unless_amend<S: Store>(store: &mut 
     nan[0].energy_j = Some(f64::NAN);
     assert!(w(store, |tx| tx.record_visits(id, &nan, T0, true)).is_err());
     assert_eq!(store.missions().unwrap(), before);
+}
+
+/// A planned mission can be cancelled once (status `Cancelled`, nothing else changes) and a
+/// cancelled one never recorded; a flown one cannot be cancelled. Deleting removes a mission
+/// with its stops and visits; an unknown id is refused. A cancelled mission survives an
+/// import. Pages are newest first, below `before`, at most `limit` long.
+pub fn missions_cancel_delete_and_page<S: Store>(store: &mut S) {
+    let new = new_mission(MissionKind::Adaptive);
+    let ids = w(store, |tx| {
+        (0..5)
+            .map(|_| tx.create_mission(&new))
+            .collect::<Result<Vec<_>>>()
+    })
+    .unwrap();
+    let v = visits();
+    w(store, |tx| tx.record_visits(ids[1], &v, T0 + 900, false)).unwrap();
+
+    w(store, |tx| tx.cancel_mission(ids[0])).unwrap();
+    let cancelled = store.mission(ids[0]).unwrap().unwrap();
+    assert_eq!(cancelled.status, MissionStatus::Cancelled);
+    assert_eq!((cancelled.flown_at, cancelled.visits.len()), (None, 0));
+    assert_eq!(cancelled.mission, new);
+    // Not twice, not a flown one, not an unknown one; and never recorded once cancelled.
+    assert!(w(store, |tx| tx.cancel_mission(ids[0])).is_err());
+    assert!(w(store, |tx| tx.cancel_mission(ids[1])).is_err());
+    assert!(w(store, |tx| tx.cancel_mission(MissionId(777))).is_err());
+    assert!(w(store, |tx| tx.record_visits(ids[0], &v, T0, true)).is_err());
+    assert_eq!(store.mission(ids[0]).unwrap().unwrap(), cancelled);
+    assert_eq!(
+        store.mission(ids[1]).unwrap().unwrap().status,
+        MissionStatus::Flown
+    );
+
+    // Delete a flown one (the store does not judge) and a cancelled one, then import it back.
+    w(store, |tx| tx.delete_mission(ids[1])).unwrap();
+    assert_eq!(store.mission(ids[1]).unwrap(), None);
+    let err = w(store, |tx| tx.delete_mission(ids[1])).unwrap_err();
+    assert!(err.to_string().contains(&ids[1].to_string()), "{err}");
+    w(store, |tx| tx.delete_mission(ids[0])).unwrap();
+    w(store, |tx| tx.import_mission(&cancelled)).unwrap();
+    assert_eq!(store.mission(ids[0]).unwrap().unwrap(), cancelled);
+
+    // Pages: newest first, no gap and no repeat.
+    let left: Vec<MissionId> = [ids[4], ids[3], ids[2], ids[0]].into();
+    let page = |before, limit| -> Vec<MissionId> {
+        store
+            .missions_page(before, limit)
+            .unwrap()
+            .iter()
+            .map(|m| m.id)
+            .collect()
+    };
+    assert_eq!(page(None, 10), left);
+    assert_eq!(page(None, 2), left[..2]);
+    assert_eq!(page(Some(ids[3]), 2), left[2..]);
+    assert_eq!(page(Some(ids[0]), 2), Vec::<MissionId>::new());
+    assert_eq!(page(None, 0), Vec::<MissionId>::new());
 }
 
 /// Missions with a non-finite number or a stop order used twice are refused, nothing written.

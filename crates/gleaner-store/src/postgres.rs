@@ -449,6 +449,12 @@ impl StoreWrite for PgTx<'_> {
         self.atomically(|c| write::record_visits(c, mission, visits, flown_at, amend))
     }
 
+    fn cancel_mission(&mut self, mission: MissionId) -> Result<()> {
+        self.atomically(|c| write::cancel_mission(c, mission))
+    }
+    fn delete_mission(&mut self, mission: MissionId) -> Result<()> {
+        self.atomically(|c| write::delete_mission(c, mission))
+    }
     fn import_mission(&mut self, record: &MissionRecord) -> Result<()> {
         self.atomically(|c| write::import_mission(c, record))
     }

@@ -166,7 +166,18 @@ CREATE TABLE config (
         description: "the wind each mission was planned in (missions.wind_mps, wind_from_deg)",
         sql: MIGRATION_3,
     },
+    Migration {
+        description: "cancelled missions (missions.cancelled)",
+        sql: MIGRATION_4,
+    },
 ];
+
+/// Version 4: a planned mission can be cancelled: it stays in the history, flagged, and is
+/// never recorded or exported (`cancelled` is 0 or 1, and 1 only on a planned mission).
+const MIGRATION_4: &str = r#"
+ALTER TABLE missions ADD COLUMN cancelled INTEGER NOT NULL DEFAULT 0
+    CHECK (cancelled IN (0, 1) AND (cancelled = 0 OR status = 'planned'));
+"#;
 
 /// Version 3: the steady wind a mission's legs were priced in (m/s, and the direction it
 /// blows from, degrees from north); missions planned before are still-air plans (0, 0).

@@ -78,6 +78,17 @@ pub trait StoreRead {
     fn missions(&self) -> Result<Vec<MissionRecord>>;
     /// One mission with its stops and visits, if it exists.
     fn mission(&self, id: MissionId) -> Result<Option<MissionRecord>>;
+    /// One page of the mission history, newest first: at most `limit` missions with an id
+    /// below `before` (all ids when `None`), in descending id order, so that the last id of a
+    /// page is the `before` of the next one and a mission planned meanwhile never shifts a
+    /// page.
+    fn missions_page(&self, before: Option<MissionId>, limit: usize) -> Result<Vec<MissionRecord>> {
+        let mut all = self.missions()?;
+        all.retain(|m| before.is_none_or(|b| m.id < b));
+        all.sort_by_key(|m| std::cmp::Reverse(m.id));
+        all.truncate(limit);
+        Ok(all)
+    }
 
     /// A project setting, if set.
     fn config_get(&self, key: &str) -> Result<Option<String>>;
@@ -132,6 +143,13 @@ pub trait StoreWrite: StoreRead {
         flown_at: UnixSeconds,
         amend: bool,
     ) -> Result<()>;
+
+    /// Flags a planned mission cancelled (it keeps its id, stops and place in the history).
+    /// Fails when the mission does not exist or is not planned (flown or already cancelled).
+    fn cancel_mission(&mut self, mission: MissionId) -> Result<()>;
+    /// Deletes a mission with its stops and visits. Fails with [`StoreError::Unknown`] when
+    /// it does not exist. Whether it may be deleted is the caller's rule.
+    fn delete_mission(&mut self, mission: MissionId) -> Result<()>;
 
     /// Stores a mission exactly as read from another store (for copying a project between
     /// backends): same id, status, `flown_at`, stops and visits. Fails when a mission with

@@ -121,7 +121,7 @@ fn migration_from_empty_creates_every_table() {
     let dir = tempfile::tempdir().unwrap();
     let store = SqliteStore::open(&dir.path().join("g.db")).unwrap();
     assert_eq!(store.schema_version().unwrap(), schema_version_supported());
-    assert_eq!(schema_version_supported(), 3);
+    assert_eq!(schema_version_supported(), 4);
     assert_eq!(
         count(&store, "PRAGMA user_version"),
         schema_version_supported()
@@ -351,7 +351,7 @@ fn migration_2_converts_legacy_missions() {
     let path = dir.path().join("g.db");
     legacy_v1_database(&path);
     let store = SqliteStore::open(&path).unwrap();
-    assert_eq!(store.schema_version().unwrap(), 3);
+    assert_eq!(store.schema_version().unwrap(), 4);
     let missions = store.missions().unwrap();
     assert_eq!(missions.len(), 3);
 

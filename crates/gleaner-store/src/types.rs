@@ -382,6 +382,8 @@ pub enum MissionStatus {
     Planned,
     /// Flown: its visits have been recorded.
     Flown,
+    /// Cancelled before it was flown: kept in the history, never recorded or exported.
+    Cancelled,
 }
 
 impl MissionStatus {
@@ -390,6 +392,7 @@ impl MissionStatus {
         match self {
             Self::Planned => "planned",
             Self::Flown => "flown",
+            Self::Cancelled => "cancelled",
         }
     }
     /// Parses [`Self::as_str`].
@@ -397,6 +400,7 @@ impl MissionStatus {
         match s {
             "planned" => Some(Self::Planned),
             "flown" => Some(Self::Flown),
+            "cancelled" => Some(Self::Cancelled),
             _ => None,
         }
     }
@@ -517,7 +521,7 @@ pub struct MissionRecord {
     pub id: MissionId,
     /// The fields it was created with.
     pub mission: NewMission,
-    /// Planned or flown.
+    /// Planned, flown or cancelled.
     pub status: MissionStatus,
     /// When it was recorded as flown, seconds since the Unix epoch (UTC).
     pub flown_at: Option<UnixSeconds>,

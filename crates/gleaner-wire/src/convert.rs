@@ -2,8 +2,8 @@
 
 use gleaner_app::{
     CellView, Exploration, FieldView, MissionExport, MissionId, MissionKind, MissionRecord,
-    MissionStatus, NewMission, PlannedMission, Reconstruction, ReconstructionMap,
-    ReconstructionSeries, Scoring, driver,
+    NewMission, PlannedMission, Reconstruction, ReconstructionMap, ReconstructionSeries, Scoring,
+    driver,
 };
 use gleaner_ingest::time::format_rfc3339;
 
@@ -135,10 +135,7 @@ pub fn mission_doc(
 
 /// A stored mission.
 pub fn stored_mission(m: &MissionRecord) -> MissionDoc {
-    let status = match m.status {
-        MissionStatus::Planned => "planned",
-        MissionStatus::Flown => "flown",
-    };
+    let status = m.status.as_str();
     mission_doc(Some(m.id), &m.mission, status, m.flown_at)
 }
 

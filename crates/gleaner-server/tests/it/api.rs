@@ -9,7 +9,7 @@ use gleaner_server::handlers::MISSION_FILES;
 use crate::common::{Server, TOKEN, caf_project, flight_csv};
 
 /// Every API route (method, path as in the OpenAPI document).
-const ROUTES: [(&str, &str); 21] = [
+const ROUTES: [(&str, &str); 24] = [
     ("get", "/api/v1/openapi.json"),
     ("get", "/api/v1/project"),
     ("get", "/api/v1/field"),
@@ -21,7 +21,10 @@ const ROUTES: [(&str, &str); 21] = [
     ("get", "/api/v1/reconstruct/map.png"),
     ("post", "/api/v1/simulate"),
     ("get", "/api/v1/missions"),
+    ("get", "/api/v1/missions/page"),
     ("get", "/api/v1/missions/{id}"),
+    ("delete", "/api/v1/missions/{id}"),
+    ("post", "/api/v1/missions/{id}/cancel"),
     ("post", "/api/v1/plan"),
     ("post", "/api/v1/plan/sorties"),
     ("post", "/api/v1/explore"),

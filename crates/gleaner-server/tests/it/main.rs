@@ -10,3 +10,4 @@ mod concurrency;
 mod defects;
 mod farms;
 mod hardening;
+mod missions;

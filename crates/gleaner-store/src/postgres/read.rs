@@ -504,7 +504,8 @@ pub(super) fn missions(
                     weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form,
                     total_score, base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
                     travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m,
-                    flight_time_s, return_distance_m, status, flown_at, wind_mps, wind_from_deg
+                    flight_time_s, return_distance_m, status, flown_at, wind_mps, wind_from_deg,
+                    cancelled
              FROM missions WHERE $1::BIGINT = -1 OR id = $1::BIGINT ORDER BY id",
             &[&only],
         )
@@ -538,8 +539,16 @@ pub(super) fn missions(
         let kind = MissionKind::parse(kind_s)
             .ok_or_else(|| corrupt(format!("mission {id}: unknown kind {kind_s:?}")))?;
         let status_s: &str = r.get(26);
-        let status = MissionStatus::parse(status_s)
-            .ok_or_else(|| corrupt(format!("mission {id}: unknown status {status_s:?}")))?;
+        let cancelled: bool = r.get(30);
+        let status = match MissionStatus::parse(status_s) {
+            Some(MissionStatus::Planned) if cancelled => MissionStatus::Cancelled,
+            Some(s @ (MissionStatus::Planned | MissionStatus::Flown)) => s,
+            _ => {
+                return Err(corrupt(format!(
+                    "mission {id}: unknown status {status_s:?}"
+                )));
+            }
+        };
         let mut stop_list = Vec::new();
         for s in stops.remove(&id).unwrap_or_default() {
             let terms = match (

@@ -215,7 +215,20 @@ CREATE TABLE blobs (
 "#,
     },
     MIGRATION_3,
+    MIGRATION_4,
 ];
+
+/// Version 4 (as SQLite's): a planned mission can be cancelled; it stays in the history,
+/// flagged, and is never recorded or exported.
+const MIGRATION_4: Migration = Migration {
+    version: 4,
+    description: "cancelled missions (missions.cancelled)",
+    sql: r#"
+ALTER TABLE missions
+    ADD COLUMN cancelled BOOLEAN NOT NULL DEFAULT FALSE
+        CHECK (NOT cancelled OR status = 'planned');
+"#,
+};
 
 /// Version 3 (as SQLite's): the steady wind a mission's legs were priced in.
 const MIGRATION_3: Migration = Migration {

@@ -11,8 +11,8 @@ use postgres::Transaction;
 use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
 use crate::checks::{
-    as_i64, check_cells, check_modality_list, check_sensor_list, check_visits, import_flight, keys,
-    plan_insert, validate_metadata, validate_mission,
+    ImportFlight, as_i64, check_cells, check_modality_list, check_sensor_list, check_visits,
+    import_flight, keys, not_cancellable, plan_insert, validate_metadata, validate_mission,
 };
 use crate::{
     CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionRecord,
@@ -724,7 +724,40 @@ pub(super) fn import_mission(c: &mut Transaction<'_>, record: &MissionRecord) ->
         &[],
     )
     .db()?;
-    import_flight(record, |flown_at| {
-        record_visits(c, record.id, &record.visits, flown_at, false)
-    })
+    match import_flight(record)? {
+        ImportFlight::Nothing => Ok(()),
+        ImportFlight::Record(flown_at) => {
+            record_visits(c, record.id, &record.visits, flown_at, false)
+        }
+        ImportFlight::Cancel => cancel_mission(c, record.id),
+    }
+}
+
+/// [`crate::StoreWrite::cancel_mission`].
+pub(super) fn cancel_mission(c: &mut Transaction<'_>, mission: MissionId) -> Result<()> {
+    let n = c
+        .execute(
+            "UPDATE missions SET cancelled = TRUE
+             WHERE id = $1 AND status = 'planned' AND NOT cancelled",
+            &[&mission.0],
+        )
+        .db()?;
+    if n == 0 {
+        return Err(not_cancellable(mission));
+    }
+    Ok(())
+}
+
+/// [`crate::StoreWrite::delete_mission`].
+pub(super) fn delete_mission(c: &mut Transaction<'_>, mission: MissionId) -> Result<()> {
+    let n = c
+        .execute("DELETE FROM missions WHERE id = $1", &[&mission.0])
+        .db()?;
+    if n == 0 {
+        return Err(StoreError::Unknown {
+            what: "mission",
+            name: mission.to_string(),
+        });
+    }
+    Ok(())
 }

@@ -469,6 +469,7 @@ struct MissionRow {
     status: String,
     flown_at: Option<i64>,
     wind: (f64, f64),
+    cancelled: bool,
 }
 
 impl TryFrom<&Row<'_>> for MissionRow {
@@ -503,6 +504,7 @@ impl TryFrom<&Row<'_>> for MissionRow {
             status: r.get(26)?,
             flown_at: r.get(27)?,
             wind: (r.get(28)?, r.get(29)?),
+            cancelled: r.get(30)?,
         })
     }
 }
@@ -515,7 +517,8 @@ pub(super) fn missions(c: &Connection, id: Option<MissionId>) -> Result<Vec<Miss
                     weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form,
                     total_score, base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
                     travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m,
-                    flight_time_s, return_distance_m, status, flown_at, wind_mps, wind_from_deg
+                    flight_time_s, return_distance_m, status, flown_at, wind_mps, wind_from_deg,
+                    cancelled
              FROM missions WHERE ?1 IS NULL OR id = ?1 ORDER BY id",
         [id.map(|m| m.0)],
     )?;
@@ -527,8 +530,16 @@ pub(super) fn missions(c: &Connection, id: Option<MissionId>) -> Result<Vec<Miss
         };
         let kind = MissionKind::parse(&m.kind)
             .ok_or_else(|| corrupt(format!("mission {}: unknown kind {:?}", m.id, m.kind)))?;
-        let status = MissionStatus::parse(&m.status)
-            .ok_or_else(|| corrupt(format!("mission {}: unknown status {:?}", m.id, m.status)))?;
+        let status = match MissionStatus::parse(&m.status) {
+            Some(MissionStatus::Planned) if m.cancelled => MissionStatus::Cancelled,
+            Some(s @ (MissionStatus::Planned | MissionStatus::Flown)) => s,
+            _ => {
+                return Err(corrupt(format!(
+                    "mission {}: unknown status {:?}",
+                    m.id, m.status
+                )));
+            }
+        };
         let mut stop_list = Vec::new();
         type StopRow = (
             u32,

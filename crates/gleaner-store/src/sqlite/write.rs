@@ -9,8 +9,8 @@ use rusqlite::{Connection, OptionalExtension, params};
 use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
 use crate::checks::{
-    as_i64, check_cells, check_modality_list, check_sensor_list, check_visits, import_flight, keys,
-    plan_insert, validate_metadata, validate_mission,
+    ImportFlight, as_i64, check_cells, check_modality_list, check_sensor_list, check_visits,
+    import_flight, keys, not_cancellable, plan_insert, validate_metadata, validate_mission,
 };
 use crate::{
     CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionRecord,
@@ -670,7 +670,40 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
 /// [`crate::StoreWrite::import_mission`]: the mission with its own id, then its visits.
 pub(super) fn import_mission(c: &Connection, record: &MissionRecord) -> Result<()> {
     insert_mission(c, &record.mission, Some(record.id.0))?;
-    import_flight(record, |flown_at| {
-        record_visits(c, record.id, &record.visits, flown_at, false)
-    })
+    match import_flight(record)? {
+        ImportFlight::Nothing => Ok(()),
+        ImportFlight::Record(flown_at) => {
+            record_visits(c, record.id, &record.visits, flown_at, false)
+        }
+        ImportFlight::Cancel => cancel_mission(c, record.id),
+    }
+}
+
+/// [`crate::StoreWrite::cancel_mission`].
+pub(super) fn cancel_mission(c: &Connection, mission: MissionId) -> Result<()> {
+    let n = c
+        .execute(
+            "UPDATE missions SET cancelled = 1
+             WHERE id = ?1 AND status = 'planned' AND cancelled = 0",
+            [mission.0],
+        )
+        .db()?;
+    if n == 0 {
+        return Err(not_cancellable(mission));
+    }
+    Ok(())
+}
+
+/// [`crate::StoreWrite::delete_mission`].
+pub(super) fn delete_mission(c: &Connection, mission: MissionId) -> Result<()> {
+    let n = c
+        .execute("DELETE FROM missions WHERE id = ?1", [mission.0])
+        .db()?;
+    if n == 0 {
+        return Err(StoreError::Unknown {
+            what: "mission",
+            name: mission.to_string(),
+        });
+    }
+    Ok(())
 }
