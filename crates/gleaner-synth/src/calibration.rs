@@ -95,7 +95,8 @@ fn mean_std(xs: &[f64]) -> (f64, f64) {
     (m, var.sqrt())
 }
 
-fn pearson(xs: &[f64], ys: &[f64]) -> Option<f64> {
+/// Pearson's correlation of paired samples; `None` when either has no spread.
+pub(crate) fn pearson(xs: &[f64], ys: &[f64]) -> Option<f64> {
     let n = xs.len() as f64;
     let mx = xs.iter().sum::<f64>() / n;
     let my = ys.iter().sum::<f64>() / n;

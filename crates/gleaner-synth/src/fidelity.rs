@@ -105,20 +105,10 @@ pub fn change_shape(series: &[Vec<f64>]) -> ChangeShape {
 }
 
 fn pearson(xs: &[f64], ys: &[f64]) -> Option<f64> {
-    let n = xs.len() as f64;
     if xs.len() < 3 {
         return None;
     }
-    let mx = xs.iter().sum::<f64>() / n;
-    let my = ys.iter().sum::<f64>() / n;
-    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-    for (x, y) in xs.iter().zip(ys) {
-        let (a, b) = (x - mx, y - my);
-        sxy += a * b;
-        sxx += a * a;
-        syy += b * b;
-    }
-    (sxx > 0.0 && syy > 0.0).then(|| sxy / (sxx * syy).sqrt())
+    crate::calibration::pearson(xs, ys)
 }
 
 /// Mean correlation of same-day day-to-day changes over the station pairs in each band of
