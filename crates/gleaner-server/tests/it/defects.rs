@@ -292,9 +292,7 @@ fn every_400_names_its_field_and_nonsense_is_refused() {
 fn method_not_allowed_is_json_and_the_favicon_is_served() {
     let server = Server::caf();
     let mut c = server.client();
-    let r = c
-        .request("DELETE", "/api/v1/missions/1", &[], None)
-        .unwrap();
+    let r = c.request("PUT", "/api/v1/missions/1", &[], None).unwrap();
     let (status, code, field, _) = error(&r);
     assert_eq!(
         (status, code.as_str(), field.as_deref()),

@@ -350,7 +350,7 @@ fn the_farms_openapi_document_lists_every_farm_route() {
             .collect();
         assert_eq!(
             methods.len(),
-            [&item.get, &item.post]
+            [&item.get, &item.post, &item.delete]
                 .iter()
                 .filter(|o| o.is_some())
                 .count(),
