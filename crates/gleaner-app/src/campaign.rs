@@ -715,8 +715,9 @@ pub struct CampaignResult {
     pub runs: Vec<RunResult>,
 }
 
-/// A small deterministic generator (SplitMix64) for the random strategy.
-fn splitmix(mut x: u64) -> u64 {
+/// A small deterministic generator (SplitMix64): the random strategy's and the campaign
+/// weather's draws.
+pub(crate) fn splitmix(mut x: u64) -> u64 {
     x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
     x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);

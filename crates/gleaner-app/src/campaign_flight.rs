@@ -13,6 +13,7 @@ use gleaner_energy::{CellVisit, MissionEnergyModel, Wind};
 use gleaner_field::{CellIndex, LocalPoint, UnixSeconds};
 use gleaner_store::{MissionId, Store};
 
+use crate::campaign::splitmix;
 use crate::error::{AppError, Result};
 use crate::project::Project;
 use crate::replan::{ReplanRequest, replan};
@@ -149,14 +150,6 @@ impl FlightDay {
         self.over_budget += usize::from(energy_j > usable_j);
         self.max_excess_j = self.max_excess_j.max(energy_j - usable_j);
     }
-}
-
-/// A small deterministic generator (SplitMix64).
-fn splitmix(mut x: u64) -> u64 {
-    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    x ^ (x >> 31)
 }
 
 /// A uniform draw in (0, 1) of stream `stream`, time `t` and index `k` under `seed`.
