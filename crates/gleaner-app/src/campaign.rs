@@ -88,6 +88,12 @@ pub enum Strategy {
     /// 14-day freshness half-life and the bounded anomaly, the project's γ and δ), the
     /// default planner.
     Gated,
+    /// gleaner's score and the information objective together
+    /// ([`crate::plan::Objective::Hybrid`]): gleaner's utility settings, a route worth its
+    /// cells' share of the total S blended with the share of the dynamic field model's
+    /// posterior variance its readings remove (`[planner] information_weight`), marginal-gain
+    /// orienteering.
+    Hybrid,
     /// A clairvoyant yardstick, not a strategy a UAV could fly: each cell is worth the squared
     /// error its sensors' pre-flight model-based estimates have against the values the flight
     /// will bring back (the truth stamped T − period, (m³/m³)² ×10⁶ for soil water), routed by
@@ -99,7 +105,7 @@ pub enum Strategy {
 
 impl Strategy {
     /// Every strategy, ablations included, in report order.
-    pub const ALL: [Strategy; 15] = [
+    pub const ALL: [Strategy; 16] = [
         Strategy::Gleaner,
         Strategy::Paper,
         Strategy::Variance,
@@ -115,6 +121,7 @@ impl Strategy {
         Strategy::Without(Term::Redundancy),
         Strategy::Gated,
         Strategy::Expected,
+        Strategy::Hybrid,
     ];
 
     /// The main strategies (`main`): gleaner, paper, variance, information, freshness,
@@ -146,6 +153,7 @@ impl Strategy {
             Strategy::Without(Term::Redundancy) => "no-redundancy",
             Strategy::Variance => "variance",
             Strategy::Information => "information",
+            Strategy::Hybrid => "hybrid",
             Strategy::Expected => "expected-error",
             Strategy::Gated => "gated",
             Strategy::Oracle => "oracle",
@@ -191,7 +199,9 @@ impl Strategy {
         let mut s = base.clone();
         match self {
             Strategy::Paper => s.utility = s.utility.paper(),
-            Strategy::Gleaner | Strategy::Without(_) => s.utility = s.utility.gleaner(),
+            Strategy::Gleaner | Strategy::Without(_) | Strategy::Hybrid => {
+                s.utility = s.utility.gleaner()
+            }
             Strategy::Gated => s.utility = s.utility.gated(),
             _ => {}
         }
@@ -217,7 +227,7 @@ impl Strategy {
     fn expected_cost(self) -> u8 {
         match self {
             Strategy::Exhaustive => 4,
-            Strategy::Gleaner | Strategy::Without(_) => 3,
+            Strategy::Gleaner | Strategy::Without(_) | Strategy::Hybrid => 3,
             Strategy::Freshness | Strategy::Gated | Strategy::Paper | Strategy::Information => 2,
             Strategy::Variance
             | Strategy::RoundRobin
@@ -247,6 +257,7 @@ impl Strategy {
             | Strategy::Nearest
             | Strategy::Variance
             | Strategy::Information
+            | Strategy::Hybrid
             | Strategy::Expected
             | Strategy::Oracle => Some(self),
             Strategy::Freshness
@@ -503,6 +514,12 @@ pub struct ReplayOptions {
     pub energy_preset: Option<String>,
     /// The wind and batteries the flights meet.
     pub flight: FlightConditions,
+    /// `[planner] unshared_weight` instead of the dataset's settings' (the dynamic field
+    /// model's unshared per-sensor drift; 0: none).
+    pub unshared_weight: Option<f64>,
+    /// `[planner] information_weight` instead of the dataset's settings' (the hybrid
+    /// objective's weight on information, in [0, 1]).
+    pub information_weight: Option<f64>,
 }
 
 impl Default for ReplayOptions {
@@ -527,6 +544,8 @@ impl Default for ReplayOptions {
             jobs: 2,
             energy_preset: None,
             flight: FlightConditions::default(),
+            unshared_weight: None,
+            information_weight: None,
         }
     }
 }
@@ -550,6 +569,12 @@ pub fn replay(
     let mut settings = dataset.settings;
     if let Some(preset) = &options.energy_preset {
         settings.energy.preset = preset.clone();
+    }
+    if let Some(w) = options.unshared_weight {
+        settings.planner.unshared_weight = w;
+    }
+    if let Some(w) = options.information_weight {
+        settings.planner.information_weight = w;
     }
     settings.validate()?;
     let history_until = match (options.history_until, options.start) {
@@ -1289,10 +1314,10 @@ fn run_one(
                         crate::campaign_flight::WindSource::Still => None,
                         _ => Some(day.forecast),
                     },
-                    objective: Some(if key.strategy.selection() == Some(Strategy::Information) {
-                        Objective::Information
-                    } else {
-                        Objective::Score
+                    objective: Some(match key.strategy.selection() {
+                        Some(Strategy::Information) => Objective::Information,
+                        Some(Strategy::Hybrid) => Objective::Hybrid,
+                        _ => Objective::Score,
                     }),
                     ..PlanRequest::default()
                 },

@@ -51,13 +51,14 @@ impl FromStr for Estimator {
 
 impl Objective {
     /// Every objective, the default first.
-    pub const ALL: [Self; 2] = [Self::Score, Self::Information];
+    pub const ALL: [Self; 3] = [Self::Score, Self::Information, Self::Hybrid];
 
-    /// Its name in settings and requests: `score` or `information`.
+    /// Its name in settings and requests: `score`, `information` or `hybrid`.
     pub fn name(self) -> &'static str {
         match self {
             Self::Score => "score",
             Self::Information => "information",
+            Self::Hybrid => "hybrid",
         }
     }
 }
@@ -71,7 +72,7 @@ impl FromStr for Objective {
             .find(|o| o.name() == s)
             .ok_or_else(|| {
                 AppError::Invalid(format!(
-                    "objective {:?}: expected score or information",
+                    "objective {:?}: expected score, information or hybrid",
                     gleaner_ingest::shorten(s)
                 ))
             })

@@ -21,6 +21,9 @@ pub(crate) struct CellInformation<'m> {
     cells: Vec<Vec<usize>>,
     /// The field's total posterior variance before the flight, unit² (> 0).
     total: f64,
+    /// The hybrid objective's blend: each cell's share of the field's total score, and the
+    /// weight on information ([`CellInformation::blended`]).
+    blend: Option<(Vec<f64>, f64)>,
 }
 
 impl<'m> CellInformation<'m> {
@@ -79,11 +82,33 @@ impl<'m> CellInformation<'m> {
             filter,
             cells: k.field.cells().iter().map(|c| c.sensors.clone()).collect(),
             total,
+            blend: None,
         })
     }
 
-    /// The share of the field's posterior variance (in [0, 1]) that reading every sensor of
-    /// `cells` (positions in field order) would remove.
+    /// The hybrid objective's worth: `(1 − weight)·ΣS/ΣS_all + weight·I` with `scores` the
+    /// cells' S in field order (negative or non-finite counted as 0) and `weight` in [0, 1];
+    /// all scores 0 leaves the information alone.
+    pub(crate) fn blended(mut self, scores: &[f64], weight: f64) -> Self {
+        let clean = |s: f64| if s.is_finite() { s.max(0.0) } else { 0.0 };
+        let total: f64 = scores.iter().map(|&s| clean(s)).sum();
+        let shares = if total > 0.0 {
+            scores.iter().map(|&s| clean(s) / total).collect()
+        } else {
+            vec![0.0; scores.len()]
+        };
+        let weight = if total > 0.0 {
+            weight.clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        self.blend = Some((shares, weight));
+        self
+    }
+
+    /// The route's worth (in [0, 1]) of reading every sensor of `cells` (positions in field
+    /// order): the share of the field's posterior variance it would remove, blended with the
+    /// cells' share of the total score under the hybrid objective.
     pub(crate) fn value(&self, cells: &[usize]) -> f64 {
         let sensors: Vec<usize> = cells
             .iter()
@@ -91,7 +116,14 @@ impl<'m> CellInformation<'m> {
             .flatten()
             .copied()
             .collect();
-        (self.filter.information(&sensors) / self.total).clamp(0.0, 1.0)
+        let info = (self.filter.information(&sensors) / self.total).clamp(0.0, 1.0);
+        match &self.blend {
+            None => info,
+            Some((shares, w)) => {
+                let score: f64 = cells.iter().filter_map(|&c| shares.get(c)).sum();
+                (1.0 - w) * score + w * info
+            }
+        }
     }
 
     /// Every cell's value alone, in field order.

@@ -81,6 +81,10 @@ pub enum Objective {
     /// share of the field's total (non-additive: planned with marginal gains). Cells are
     /// eligible when their reading would reduce it; S is still computed and reported.
     Information,
+    /// Both: a route is worth `(1 − w)·ΣS/ΣS_all + w·I` with `I` the information share above,
+    /// `ΣS/ΣS_all` its cells' share of the field's total score and `w` the `[planner]
+    /// information_weight` (non-additive through `I`: planned with marginal gains).
+    Hybrid,
 }
 
 /// Most sorties one `plan` may ask for.
@@ -539,9 +543,10 @@ pub(crate) fn plan_scored<S: Store>(
     // The information objective: the filter at t over what is known, the model fitted on it
     // unless the caller (a campaign) hands its own.
     let fitted;
-    let information = match request.objective.unwrap_or(settings.planner.objective) {
+    let objective = request.objective.unwrap_or(settings.planner.objective);
+    let information = match objective {
         Objective::Score => None,
-        Objective::Information => {
+        Objective::Information | Objective::Hybrid => {
             let name = score::condition_modality(&settings, &k.modalities).ok_or_else(|| {
                 AppError::Invalid(
                     "the information objective needs a soil-moisture modality; plan by score"
@@ -562,19 +567,27 @@ pub(crate) fn plan_scored<S: Store>(
                     &fitted
                 }
             };
-            Some(crate::information::CellInformation::at(
+            let info = crate::information::CellInformation::at(
                 project,
                 k,
                 request.history,
                 &modality,
                 model,
                 t,
-            )?)
+            )?;
+            Some(match objective {
+                Objective::Hybrid => info.blended(&scores, settings.planner.information_weight),
+                _ => info,
+            })
         }
     };
-    let anomaly_form = match &information {
-        Some(_) => format!("{anomaly_form}; routed by information (dynamic field model)"),
-        None => anomaly_form,
+    let anomaly_form = match (&information, objective) {
+        (Some(_), Objective::Hybrid) => format!(
+            "{anomaly_form}; routed by score and information (dynamic field model, weight {})",
+            settings.planner.information_weight
+        ),
+        (Some(_), _) => format!("{anomaly_form}; routed by information (dynamic field model)"),
+        (None, _) => anomaly_form,
     };
     let prizes: Vec<f64> = match &information {
         Some(info) => info.singletons(),

@@ -13,7 +13,7 @@ use gleaner_field::{CellIndex, LatLon, Modality, SensorId, UnixSeconds};
 use gleaner_kriging::{
     Change, DynamicFitOptions, DynamicModel, FieldModel, FitOptions, IncrementFitOptions,
     IncrementModel, Mean, Observation, SensorSeries, Shrinkage, estimate_change, fit, fit_dynamic,
-    fit_increments, krige_with,
+    fit_increments, fit_own_rates, krige_with,
 };
 use gleaner_store::{ReadingBatch, Store};
 
@@ -263,15 +263,25 @@ pub(crate) fn fit_dynamic_model<S: Store>(
         let times: Vec<Vec<UnixSeconds>> = columns.iter().map(|c| c.0.clone()).collect();
         sampling_step(&times).max(1)
     });
-    Ok(dynamic_from_columns(&columns, step_s))
+    dynamic_from_columns(&columns, step_s, project.settings().planner.unshared_weight)
 }
 
+/// Pseudo-changes of the pooled rate each sensor's unshared drift rate is shrunk towards
+/// ([`fit_own_rates`]'s prior weight): a month of daily readings.
+pub const UNSHARED_PRIOR_CHANGES: f64 = 30.0;
+
 /// The dynamic model fitted on per-sensor columns (times in seconds, ascending) at sampling
-/// step `step_s` (seconds); None over [`gleaner_kriging::MAX_DYNAMIC_SENSORS`] sensors or
-/// without two distinct readings.
-fn dynamic_from_columns(columns: &Columns, step_s: i64) -> Option<DynamicModel> {
+/// step `step_s` (seconds), with the unshared per-sensor drift (rates fitted on the same
+/// columns, times `unshared_weight`; `[planner] unshared_weight`) when the weight is above 0;
+/// None over [`gleaner_kriging::MAX_DYNAMIC_SENSORS`] sensors or without two distinct
+/// readings.
+fn dynamic_from_columns(
+    columns: &Columns,
+    step_s: i64,
+    unshared_weight: f64,
+) -> Result<Option<DynamicModel>> {
     if columns.len() > gleaner_kriging::MAX_DYNAMIC_SENSORS {
-        return None;
+        return Ok(None);
     }
     let series: Vec<SensorSeries<'_>> = columns
         .iter()
@@ -281,7 +291,18 @@ fn dynamic_from_columns(columns: &Columns, step_s: i64) -> Option<DynamicModel> 
             values: v,
         })
         .collect();
-    fit_dynamic(&series, &dynamic_fit_options(step_s)).ok()
+    let Ok(model) = fit_dynamic(&series, &dynamic_fit_options(step_s)) else {
+        return Ok(None);
+    };
+    if unshared_weight <= 0.0 {
+        return Ok(Some(model));
+    }
+    let rates = fit_own_rates(&series, step_s.max(1), UNSHARED_PRIOR_CHANGES)
+        .map_err(|e| AppError::core("unshared drift rates", e))?;
+    let model = model
+        .with_own_rates(rates.into_iter().map(|r| r * unshared_weight).collect())
+        .map_err(|e| AppError::core("unshared drift rates", e))?;
+    Ok(Some(model))
 }
 
 /// How far back the dynamic estimator reads, seconds: three persistence times
@@ -1068,7 +1089,9 @@ pub fn reconstruct_series<S: Store>(
     // The dynamic model from the columns just read (they are every reading up to the
     // range's end), when it is asked for.
     let dynamic = match request.estimator {
-        Estimator::Dynamic => dynamic_from_columns(&columns, step),
+        Estimator::Dynamic => {
+            dynamic_from_columns(&columns, step, project.settings().planner.unshared_weight)?
+        }
         _ => None,
     };
     let estimator = request.estimator.resolve(dynamic.as_ref());
@@ -1163,6 +1186,44 @@ mod tests {
     use super::*;
 
     const DAY: i64 = 86_400;
+
+    /// `[planner] unshared_weight` scales the fitted unshared drift rates; 0 leaves the model
+    /// without them (the model as before, to the bit).
+    #[test]
+    fn unshared_weight_scales_the_fitted_rates() {
+        let times: Vec<i64> = (0..60).map(|d| d * DAY).collect();
+        let columns: Columns = (0..4)
+            .map(|i| {
+                let values = times
+                    .iter()
+                    .enumerate()
+                    .map(|(d, _)| {
+                        0.25 + 0.01 * ((d as f64) * 0.3 + i as f64).sin()
+                            + 0.002 * (i * d % 7) as f64
+                    })
+                    .collect();
+                (times.clone(), values)
+            })
+            .collect();
+        let off = dynamic_from_columns(&columns, DAY, 0.0).unwrap().unwrap();
+        assert!(off.own_rates().is_empty());
+        let series: Vec<SensorSeries<'_>> = columns
+            .iter()
+            .map(|(t, v)| SensorSeries {
+                position: [0.0, 0.0],
+                times: t,
+                values: v,
+            })
+            .collect();
+        let fitted = fit_own_rates(&series, DAY, UNSHARED_PRIOR_CHANGES).unwrap();
+        assert!(fitted.iter().all(|&r| r > 0.0));
+        let on = dynamic_from_columns(&columns, DAY, 2.5).unwrap().unwrap();
+        for (got, want) in on.own_rates().iter().zip(&fitted) {
+            assert_eq!(*got, want * 2.5);
+        }
+        // The shared part is the same fit.
+        assert_eq!(on.phi(), off.phi());
+    }
 
     /// The split-conformal multiplier: the ⌈0.9 (n + 1)⌉-th smallest error; the Gaussian
     /// multiplier below [`BACKTEST_MIN`] errors; non-finite errors left out.

@@ -467,6 +467,11 @@ impl Default for EnergySection {
     }
 }
 
+/// Whether a weight is exactly 0 (left out of a written `gleaner.toml`).
+fn is_zero(w: &f64) -> bool {
+    *w == 0.0
+}
+
 /// `[planner]`: route planner defaults.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -481,6 +486,26 @@ pub struct PlannerSection {
     /// (the expected reduction of the dynamic field model's posterior variance over the whole
     /// field, docs/method.md §7).
     pub objective: crate::plan::Objective,
+    /// Weight of the dynamic field model's unshared per-sensor component: each sensor's own
+    /// random-walk drift since its last reading, its rate (unit²/s) fitted on the history
+    /// (half the variance per second of the one-step change of the sensor's deviation from
+    /// the field mean, shrunk towards the pooled rate) and multiplied by this weight. 0 (the
+    /// default): no such component. It widens the posterior variance of sensors unread for
+    /// long, so the information objective and the dynamic estimator's intervals count it.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub unshared_weight: f64,
+    /// The hybrid objective's weight on information, in [0, 1]: a route is worth
+    /// `(1 − w)·ΣS/ΣS_all + w·I`, its cells' share of the field's total S plus the share of
+    /// the field's posterior variance its readings remove [default 0.5].
+    #[serde(skip_serializing_if = "is_default_information_weight")]
+    pub information_weight: f64,
+}
+
+/// The hybrid objective's default weight on information.
+pub const DEFAULT_INFORMATION_WEIGHT: f64 = 0.5;
+
+fn is_default_information_weight(w: &f64) -> bool {
+    *w == DEFAULT_INFORMATION_WEIGHT
 }
 
 impl Default for PlannerSection {
@@ -492,6 +517,8 @@ impl Default for PlannerSection {
             time_limit_s: core.time_limit.as_secs_f64(),
             seed: core.seed,
             objective: crate::plan::Objective::default(),
+            unshared_weight: 0.0,
+            information_weight: DEFAULT_INFORMATION_WEIGHT,
         }
     }
 }
@@ -785,7 +812,7 @@ impl Settings {
         let e = &self.energy;
         let p = &self.planner;
         let fl = &self.flight;
-        let values: [(&str, Option<f64>); 41] = [
+        let values: [(&str, Option<f64>); 43] = [
             ("flight.wind_mps", Some(fl.wind_mps)),
             ("flight.wind_from_deg", Some(fl.wind_from_deg)),
             ("flight.wind_margin_mps", Some(fl.wind_margin_mps)),
@@ -837,6 +864,8 @@ impl Settings {
             ("energy.reading_interval_s", e.reading_interval_s),
             ("energy.bytes_per_reading", e.bytes_per_reading),
             ("planner.time_limit_s", Some(p.time_limit_s)),
+            ("planner.unshared_weight", Some(p.unshared_weight)),
+            ("planner.information_weight", Some(p.information_weight)),
             (
                 "energy.cruise",
                 e.cruise
@@ -982,6 +1011,8 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ("energy.bytes_per_reading", 0.0, 1e6, true, "bytes"),
     ("energy.cruise", 0.0, 50.0, true, "m/s"),
     ("planner.time_limit_s", 0.0, 86_400.0, false, "s"),
+    ("planner.unshared_weight", 0.0, 100.0, false, ""),
+    ("planner.information_weight", 0.0, 1.0, false, ""),
     ("flight.wind_mps", 0.0, 40.0, false, "m/s"),
     (
         "flight.wind_from_deg",

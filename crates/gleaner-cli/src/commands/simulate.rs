@@ -121,6 +121,16 @@ pub struct SimulateArgs {
     /// `levels` or `simple` (kriging of levels).
     #[arg(long, default_value = "changes", conflicts_with_all = ["simple_kriging", "level_kriging"])]
     pub estimator: app::Estimator,
+    /// Weight of the dynamic field model's unshared per-sensor drift (`[planner]
+    /// unshared_weight`: each sensor's own random walk since its last reading, its rate
+    /// fitted on the history times this weight; 0 = none) [default: the dataset's settings'].
+    #[arg(long)]
+    pub unshared_weight: Option<f64>,
+    /// The `hybrid` strategy's weight on information, in [0, 1] (`[planner]
+    /// information_weight`: a route is worth (1 − w)·its share of the total S + w·the share
+    /// of the field model's variance it removes) [default: the dataset's settings', 0.5].
+    #[arg(long)]
+    pub information_weight: Option<f64>,
     /// Runs in parallel.
     #[arg(long, default_value_t = 2)]
     pub jobs: usize,
@@ -295,6 +305,8 @@ fn options(args: &SimulateArgs) -> Result<ReplayOptions> {
         jobs: args.jobs,
         energy_preset: args.energy_preset.clone(),
         flight: flight_conditions(args)?,
+        unshared_weight: args.unshared_weight,
+        information_weight: args.information_weight,
     })
 }
 
