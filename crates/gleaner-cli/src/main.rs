@@ -232,7 +232,9 @@ enum Command {
         /// What the route maximises: `score` (the sum of the visited cells' S) or
         /// `information` (the expected reduction of the dynamic field model's posterior
         /// variance over the whole field, non-additive: correlated cells share information)
-        /// [default: [planner] objective, score].
+        /// or `hybrid` (the route's share of the total S and its information share, blended
+        /// by [planner] information_weight, default 0.5) [default: [planner] objective,
+        /// score].
         #[arg(long, value_parser = parse_objective)]
         objective: Option<app::Objective>,
         /// Forecast wind at the flight altitude as SPEED@FROM: m/s @ degrees clockwise from

@@ -92,9 +92,10 @@ pub struct PlanBody {
     /// Disjoint sorties on this mission day (battery swaps), 1..=20, each a battery's worth
     /// and stored as its own mission: only with `POST /api/v1/plan/sorties` [default: 1].
     pub sorties: Option<usize>,
-    /// What the route maximises: `score` (the sum of S) or `information` (the expected
-    /// reduction of the dynamic field model's posterior variance over the whole field)
-    /// [default: the project's `[planner] objective`].
+    /// What the route maximises: `score` (the sum of S), `information` (the expected
+    /// reduction of the dynamic field model's posterior variance over the whole field) or
+    /// `hybrid` (both shares blended by `[planner] information_weight`) [default: the
+    /// project's `[planner] objective`].
     pub objective: Option<String>,
     /// Forecast wind at the flight altitude [default: the project's `[flight] wind_mps` and
     /// `wind_from_deg`]; the legs are priced in it plus `[flight] wind_margin_mps`.
