@@ -1,12 +1,32 @@
 // gleaner dashboard: talks only to this server's /api/v1. Written for gleaner; no libraries.
 "use strict";
 
-const API = "/api/v1";
+// A farms server (`gleaner serve --farms`) marks the page: a farm picker, and the chosen
+// farm's routes under /api/v1/farms/{farm} with that farm's token.
+const FARMS = document.body.hasAttribute("data-farms");
+// Missions per page of the missions panel.
+const PAGE = 8;
+// Smallest tap target on a phone, CSS px (the map's cells when "tap-size" is on).
+const TAP_PX = 44;
+// Smallest text on a phone, CSS px (the maps are enlarged until theirs is this big).
+const TEXT_PX = 12;
 const state = {
-  project: null, field: null, missions: [], preview: null, previewBody: null,
+  project: null, field: null, preview: null, previewBody: null,
   selected: null, shown: null, colourBy: "s",
+  // The missions panel: the page shown (`before` cursor, the cursors of the newer pages,
+  // its missions, the `next` cursor), and the newest mission's id.
+  page: { before: null, newer: [], missions: [], next: null },
+  newest: null,
+  farm: null, zoom: false,
 };
+// Farm tokens given to this page: farm -> {token, scope}.
+const farmTokens = {};
 const $ = (id) => document.getElementById(id);
+
+// The API's base path: one project's, or the chosen farm's.
+function apiBase() {
+  return FARMS ? "/api/v1/farms/" + encodeURIComponent(state.farm || "") : "/api/v1";
+}
 
 // ---- helpers -------------------------------------------------------------------------
 
@@ -26,6 +46,7 @@ function el(tag, attrs, ...children) {
 }
 
 function token() {
+  if (FARMS) return state.farm && farmTokens[state.farm] ? farmTokens[state.farm].token : "";
   return $("token").value.trim();
 }
 
@@ -45,16 +66,20 @@ async function call(method, path, body, { raw = false } = {}) {
     headers["Content-Type"] = "application/json";
     payload = JSON.stringify(body);
   }
-  const r = await fetch(API + path, { method, headers, body: payload });
-  if (!r.ok) {
-    let msg = r.status + " " + r.statusText;
-    try {
-      const e = await r.json();
-      msg = e.reason + (e.field ? " (" + e.field + ")" : "");
-    } catch (_) { /* not JSON */ }
-    throw new Error(msg);
-  }
+  const r = await fetch(apiBase() + path, { method, headers, body: payload });
+  if (!r.ok) throw new Error(await failure(r));
+  if (r.status === 204) return null;
   return raw ? r.text() : r.json();
+}
+
+// A refused request's reason, as the API words it.
+async function failure(r) {
+  let msg = r.status + " " + r.statusText;
+  try {
+    const e = await r.json();
+    msg = e.reason + (e.field ? " (" + e.field + ")" : "");
+  } catch (_) { /* not JSON */ }
+  return msg;
 }
 
 const kJ = (j) => (j / 1000).toFixed(2);
@@ -128,12 +153,68 @@ function showSvg(text, caption) {
   $("map-caption").textContent = caption || "";
   colourCells();
   drawBasemap(svg);
+  fitMap($("map"), mapSizes());
+}
+
+// The main map: tap-size cells when asked (by default on a narrow screen), and then text
+// at least TEXT_PX on a narrow screen; "Fit the map" shows the whole field in the box.
+function mapSizes() {
+  return { cells: state.zoom, text: state.zoom && narrow.matches };
+}
+
+// ---- phone sizes: maps enlarged (and scrolled in their box) so that cells are tap-sized --------
+
+// An SVG text's size on the screen, CSS px: its font size times the scale it is drawn at.
+function shownTextPx(t) {
+  const m = t.getScreenCTM();
+  const scale = m ? Math.hypot(m.a, m.b) : 1;
+  return parseFloat(getComputedStyle(t).fontSize) * scale;
+}
+
+// Draws the SVG in `box` fitted to its width, then enlarged until its smallest cell is TAP_PX
+// wide and high (`cells`) and its smallest text TEXT_PX high (`text`). An enlarged map
+// scrolls inside its box (centred at first).
+function fitMap(box, { cells, text: readable }) {
+  const svg = box.querySelector("svg");
+  if (!svg) return;
+  svg.style.width = "";
+  box.classList.remove("zoomed");
+  const fitted = svg.getBoundingClientRect().width;
+  if (!fitted) return;
+  let factor = 1;
+  if (cells) {
+    let side = Infinity;
+    svg.querySelectorAll("path.cell").forEach((p) => {
+      const r = p.getBoundingClientRect();
+      side = Math.min(side, r.width, r.height);
+    });
+    if (side > 0 && Number.isFinite(side)) factor = Math.max(factor, (TAP_PX + 1) / side);
+  }
+  if (readable) {
+    let text = Infinity;
+    svg.querySelectorAll("text, tspan").forEach((t) => { if (t.textContent.trim()) text = Math.min(text, shownTextPx(t)); });
+    if (text > 0 && Number.isFinite(text)) factor = Math.max(factor, (TEXT_PX + 0.5) / text);
+  }
+  if (factor <= 1) return;
+  box.classList.add("zoomed");
+  svg.style.width = Math.ceil(fitted * factor) + "px";
+  box.scrollLeft = (box.scrollWidth - box.clientWidth) / 2;
+  box.scrollTop = (box.scrollHeight - box.clientHeight) / 2;
+}
+
+function setZoom(on) {
+  state.zoom = on;
+  const b = $("map-zoom");
+  b.setAttribute("aria-pressed", String(on));
+  b.textContent = on ? "Fit the map" : "Tap-size cells";
+  fitMap($("map"), mapSizes());
 }
 
 async function loadMap(missionId) {
-  const q = missionId ? "?mission=" + missionId : "";
+  const id = missionId || state.newest;
+  const q = id ? "?mission=" + id : "";
   const text = await call("GET", "/map.svg" + q, undefined, { raw: true });
-  state.shown = missionId || (state.missions.length ? state.missions[state.missions.length - 1].mission_id : null);
+  state.shown = id;
   showSvg(text, state.shown ? "Mission " + state.shown : "No mission yet");
   renderMissions();
   if (!performance.getEntriesByName("map-ready").length) performance.mark("map-ready");
@@ -292,7 +373,8 @@ function niceTicks(lo, hi, n) {
 // One sensor's chart: the 90% interval as a band, the mean as a line, readings as dots,
 // dated x axis and a y axis in the modality's unit.
 function bandChart(sensor, times, mean, lo, hi, readings, quantity, unit, estimator) {
-  const W = 360, H = 190, L = 46, R = 8, T = 16, B = 34;
+  // Text is 14 units high (app.css), at least 12 px where the chart is 310 px wide or more.
+  const W = 360, H = 206, L = 58, R = 10, T = 26, B = 44;
   const svg = svgEl("svg", { viewBox: `0 0 ${W} ${H}`, class: "estimate", "data-sensor": sensor, role: "img" });
   const t0 = times[0], t1 = times[times.length - 1];
   const values = lo.concat(hi, readings.map((r) => r[1])).filter((v) => Number.isFinite(v));
@@ -303,7 +385,7 @@ function bandChart(sensor, times, mean, lo, hi, readings, quantity, unit, estima
   const x = (t) => L + (t1 > t0 ? (t - t0) / (t1 - t0) : 0.5) * (W - L - R);
   const y = (v) => T + (1 - (v - v0) / (v1 - v0)) * (H - T - B);
   const f = (n) => n.toFixed(1);
-  svg.append(svgEl("text", { x: L, y: 11 }, `${sensor} · ${quantity} · ${estimator}`));
+  svg.append(svgEl("text", { x: L, y: 16 }, `${sensor} · ${quantity} · ${estimator}`));
   // Band: upper edge forwards, lower edge back.
   let d = times.map((t, i) => (i ? "L" : "M") + f(x(t)) + " " + f(y(hi[i]))).join("");
   for (let i = times.length - 1; i >= 0; i--) d += "L" + f(x(times[i])) + " " + f(y(lo[i]));
@@ -316,14 +398,14 @@ function bandChart(sensor, times, mean, lo, hi, readings, quantity, unit, estima
   const xa = svgEl("g", { class: "axis x-axis" });
   xa.append(svgEl("path", { d: `M${L} ${H - B}H${W - R}` }));
   const days = (t1 - t0) / 86400e3;
-  const stepDays = days > 120 ? 30 : days > 45 ? 14 : days > 14 ? 7 : days > 4 ? 2 : 1;
+  const stepDays = days > 120 ? 30 : days > 45 ? 21 : days > 14 ? 7 : days > 4 ? 2 : 1;
   const first = Math.ceil(t0 / 86400e3 / stepDays) * stepDays;
   for (let k = first; k * 86400e3 <= t1; k += stepDays) {
     const t = k * 86400e3, px = x(t);
     xa.append(svgEl("line", { x1: f(px), y1: H - B, x2: f(px), y2: H - B + 3 }));
-    xa.append(svgEl("text", { x: f(px), y: H - B + 12, "text-anchor": "middle" }, new Date(t).toISOString().slice(5, 10)));
+    xa.append(svgEl("text", { x: f(px), y: H - B + 17, "text-anchor": "middle" }, new Date(t).toISOString().slice(5, 10)));
   }
-  xa.append(svgEl("text", { x: f((L + W - R) / 2), y: H - 4, "text-anchor": "middle" },
+  xa.append(svgEl("text", { x: f((L + W - R) / 2), y: H - 5, "text-anchor": "middle" },
     `date (UTC), ${new Date(t0).toISOString().slice(0, 10)} to ${new Date(t1).toISOString().slice(0, 10)}`));
   svg.append(xa);
   const ya = svgEl("g", { class: "axis y-axis" });
@@ -332,10 +414,10 @@ function bandChart(sensor, times, mean, lo, hi, readings, quantity, unit, estima
   const dec = Math.max(0, Math.min(6, -Math.floor(Math.log10((ticks[1] - ticks[0]) || 1))));
   for (const v of ticks) {
     ya.append(svgEl("line", { x1: L - 3, y1: f(y(v)), x2: L, y2: f(y(v)) }));
-    ya.append(svgEl("text", { x: L - 5, y: f(y(v) + 3), "text-anchor": "end" }, v.toFixed(dec)));
+    ya.append(svgEl("text", { x: L - 5, y: f(y(v) + 5), "text-anchor": "end" }, v.toFixed(dec)));
   }
   const label = quantity.toUpperCase() + (unit ? ` (${unit})` : "");
-  ya.append(svgEl("text", { x: 10, y: f((T + H - B) / 2), "text-anchor": "middle", transform: `rotate(-90 10 ${f((T + H - B) / 2)})` }, label));
+  ya.append(svgEl("text", { x: 12, y: f((T + H - B) / 2), "text-anchor": "middle", transform: `rotate(-90 12 ${f((T + H - B) / 2)})` }, label));
   svg.append(ya);
   return svg;
 }
@@ -392,13 +474,19 @@ async function estimatedSeries(cellId, body) {
 async function fetchBlob(path) {
   const headers = {};
   if (token()) headers["Authorization"] = "Bearer " + token();
-  const r = await fetch(API + path, { headers });
-  if (!r.ok) {
-    let msg = r.status + " " + r.statusText;
-    try { const e = await r.json(); msg = e.reason + (e.field ? " (" + e.field + ")" : ""); } catch (_) { /* not JSON */ }
-    throw new Error(msg);
-  }
+  const r = await fetch(apiBase() + path, { headers });
+  if (!r.ok) throw new Error(await failure(r));
   return r.blob();
+}
+
+// Saves a blob as a file through a temporary link.
+function saveBlob(blob, name) {
+  const url = URL.createObjectURL(blob);
+  const a = el("a", { href: url, download: name });
+  document.body.append(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 10000);
 }
 
 function fieldMapQuery() {
@@ -421,6 +509,7 @@ async function showFieldMap(at) {
     svg.setAttribute("role", "img");
     svg.setAttribute("id", "field-map-svg-figure");
     box.replaceChildren(svg);
+    fitMap(box, { cells: false, text: narrow.matches });
     pane.scrollIntoView({ block: "nearest" });
   } catch (e) {
     box.replaceChildren(el("p", { class: "error" }, e.message));
@@ -429,13 +518,7 @@ async function showFieldMap(at) {
 
 async function downloadFieldMap(ext) {
   try {
-    const blob = await fetchBlob("/reconstruct/map." + ext + fieldMapQuery());
-    const url = URL.createObjectURL(blob);
-    const a = el("a", { href: url, download: "field-map." + ext });
-    document.body.append(a);
-    a.click();
-    a.remove();
-    setTimeout(() => URL.revokeObjectURL(url), 10000);
+    saveBlob(await fetchBlob("/reconstruct/map." + ext + fieldMapQuery()), "field-map." + ext);
   } catch (e) {
     status("Field map: " + e.message, "error");
   }
@@ -510,6 +593,7 @@ async function save() {
   try {
     const m = await call("POST", "/plan", { ...state.previewBody, dry_run: false });
     $("plan-result").replaceChildren(el("p", { class: "ok", id: "saved" }, "Saved as mission " + m.mission_id + "."), energyView(m));
+    state.page = { before: null, newer: [], missions: [], next: null };
     await refresh();
     await loadMap(m.mission_id);
     if (state.selected) await selectCell(state.selected);
@@ -521,38 +605,153 @@ async function save() {
   }
 }
 
-// ---- missions and downloads ------------------------------------------------------------------
+// ---- missions: pages, cancel, delete, downloads -------------------------------------------------
+
+// What a mission's status is called on the page.
+const STATUS = { planned: "planned", flown: "recorded", cancelled: "cancelled" };
+
+// Loads the page of missions below `state.page.before` (newest first).
+async function loadPage() {
+  const before = state.page.before;
+  const p = await call("GET", `/missions/page?limit=${PAGE}` + (before ? `&before=${before}` : ""));
+  state.page.missions = p.missions;
+  state.page.next = p.next;
+  if (before === null) state.newest = p.missions.length ? p.missions[0].mission_id : null;
+}
+
+function missionsError(text) {
+  const e = $("missions-error");
+  e.textContent = text || "";
+  e.hidden = !text;
+}
+
+async function turnPage(older) {
+  const pg = state.page;
+  const before = pg.before;
+  if (older) {
+    if (pg.next === null) return;
+    pg.newer.push(pg.before);
+    pg.before = pg.next;
+  } else {
+    if (!pg.newer.length) return;
+    pg.before = pg.newer.pop();
+  }
+  try {
+    await loadPage();
+    missionsError("");
+  } catch (e) {
+    // Stay where we were.
+    if (older) pg.before = pg.newer.pop(); else { pg.newer.push(pg.before); pg.before = before; }
+    missionsError("Cannot load the missions: " + e.message);
+  }
+  renderMissions();
+}
+
+// Asks on the page (not a browser dialog) whether to go on; resolves true or false. A new
+// question answers the previous one "no".
+let pendingConfirm = null;
+function confirmOnPage(text, yes) {
+  if (pendingConfirm) pendingConfirm(false);
+  const box = $("missions-confirm");
+  $("missions-confirm-text").textContent = text;
+  $("confirm-yes").textContent = yes;
+  box.hidden = false;
+  return new Promise((resolve) => {
+    pendingConfirm = (answer) => {
+      pendingConfirm = null;
+      box.hidden = true;
+      resolve(answer);
+    };
+    $("confirm-yes").focus();
+  });
+}
+
+// Cancels (`cancel`) or deletes a mission after asking, then shows the page again.
+async function changeMission(id, cancel) {
+  const question = cancel
+    ? `Cancel mission #${id}? It stays in the history as cancelled and can no longer be recorded or exported.`
+    : `Delete mission #${id}? Its plan and stops are removed for good.`;
+  if (!(await confirmOnPage(question, cancel ? "Yes, cancel it" : "Yes, delete it"))) return;
+  status((cancel ? "Cancelling" : "Deleting") + " mission " + id + "…");
+  try {
+    if (cancel) await call("POST", `/missions/${id}/cancel`, {});
+    else await call("DELETE", `/missions/${id}`);
+    missionsError("");
+    status(`Mission ${id} ${cancel ? "cancelled" : "deleted"}.`, "ok");
+  } catch (e) {
+    missionsError(`${cancel ? "Cancelling" : "Deleting"} mission #${id} failed: ${e.message}`);
+    status("Mission " + id + " unchanged.", "error");
+    return;
+  }
+  try {
+    await refresh();
+    // A page emptied by the delete: show the newer one.
+    while (!state.page.missions.length && state.page.newer.length) {
+      state.page.before = state.page.newer.pop();
+      await loadPage();
+    }
+    if (state.shown === id) await loadMap(null); else renderMissions();
+  } catch (e) {
+    missionsError("Cannot load the missions: " + e.message);
+  }
+}
+
+function missionRow(m) {
+  const id = m.mission_id;
+  const actions = [];
+  if (m.status === "planned") {
+    actions.push(el("button", { type: "button", class: "secondary cancel", title: "Cancel mission " + id, onclick: () => changeMission(id, true) }, "Cancel"));
+  }
+  if (m.status !== "flown") {
+    actions.push(el("button", { type: "button", class: "secondary delete", title: "Delete mission " + id, onclick: () => changeMission(id, false) }, "Delete"));
+  }
+  return el("li", { class: "mission" + (id === state.shown ? " current" : ""), "data-mission": id, "data-status": m.status },
+    el("button", { type: "button", class: "show", title: "Show mission " + id + " on the map", onclick: () => loadMap(id) },
+      el("strong", {}, "#" + id), " ", m.kind, " ",
+      el("span", { class: "status " + m.status }, STATUS[m.status] || m.status),
+      el("span", { class: "facts" }, `${m.planned_at.slice(0, 10)} · ${m.stops.length} cells · ${pct(m.energy.utilisation)}`)),
+    el("span", { class: "actions" }, actions));
+}
 
 function renderMissions() {
+  const pg = state.page;
   const box = $("missions");
-  if (!state.missions.length) {
+  if (!pg.missions.length) {
     box.replaceChildren(el("p", { class: "muted" }, "No missions yet."));
   } else {
-    const t = el("table", {}, el("tr", {}, ...["id", "kind", "status", "t", "cells", "energy"].map((h) => el("th", {}, h))));
-    for (const m of [...state.missions].reverse()) {
-      t.append(el("tr", {
-        class: "clickable" + (m.mission_id === state.shown ? " current" : ""),
-        "data-mission": m.mission_id,
-        onclick: () => loadMap(m.mission_id),
-      }, el("td", {}, "#" + m.mission_id), el("td", {}, m.kind), el("td", {}, m.status),
-        el("td", {}, m.planned_at.slice(0, 10)), el("td", {}, m.stops.length), el("td", {}, pct(m.energy.utilisation))));
-    }
-    box.replaceChildren(t);
+    box.replaceChildren(el("ul", { class: "mission-list" }, pg.missions.map(missionRow)));
   }
+  const total = state.project ? state.project.missions : pg.missions.length;
+  $("missions-range").textContent = pg.missions.length
+    ? `#${pg.missions[0].mission_id} to #${pg.missions[pg.missions.length - 1].mission_id} · ${total} in all`
+    : "";
+  $("missions-newer").disabled = !pg.newer.length;
+  $("missions-older").disabled = pg.next === null;
+
   const dl = $("downloads");
   dl.replaceChildren();
-  if (state.shown) {
+  const shown = pg.missions.find((m) => m.mission_id === state.shown);
+  if (state.shown && shown && shown.status === "cancelled") {
+    dl.append(el("span", { class: "muted" }, `Mission ${state.shown} is cancelled: no flight files.`));
+  } else if (state.shown) {
     const files = [["mission.plan", ".plan"], ["mission.kmz", "DJI .kmz"], ["mission.waypoints", "WPL"], ["mission.geojson", "GeoJSON"], ["mission.svg", "SVG"], ["mission.png", "PNG"]];
     dl.append(el("span", { class: "muted" }, "Mission " + state.shown + ":"));
     for (const [name, label] of files) {
-      dl.append(el("a", { href: `${API}/missions/${state.shown}/files/${name}`, download: `mission-${state.shown}.${name.slice(8)}`, id: "dl-" + name.slice(8) }, label));
+      const path = `/missions/${state.shown}/files/${name}`, file = `mission-${state.shown}.${name.slice(8)}`;
+      // A farm's files need its token: fetched, then saved.
+      const onclick = FARMS ? async (e) => {
+        e.preventDefault();
+        try { saveBlob(await fetchBlob(path), file); } catch (err) { status("Download: " + err.message, "error"); }
+      } : null;
+      dl.append(el("a", { href: apiBase() + path, download: file, id: "dl-" + name.slice(8), onclick }, label));
     }
   }
   const target = $("upload-target");
   const keep = target.value;
+  const recordable = pg.missions.filter((m) => m.status !== "cancelled");
   target.replaceChildren(el("option", { value: "" }, "no mission: ingest readings"),
-    ...state.missions.map((m) => el("option", { value: m.mission_id }, `mission #${m.mission_id} (${m.status})`)));
-  if (keep) target.value = keep;
+    ...recordable.map((m) => el("option", { value: m.mission_id }, `mission #${m.mission_id} (${STATUS[m.status] || m.status})`)));
+  if (keep && recordable.some((m) => String(m.mission_id) === keep)) target.value = keep;
 }
 
 // ---- uploads -----------------------------------------------------------------------------------
@@ -597,34 +796,96 @@ function wireUpload() {
 // ---- start ---------------------------------------------------------------------------------------
 
 async function refresh() {
-  const [project, field, missions] = await Promise.all([
-    call("GET", "/project"), call("GET", "/field"), call("GET", "/missions"),
-  ]);
+  const [project, field] = await Promise.all([call("GET", "/project"), call("GET", "/field"), loadPage()]);
   state.project = project;
   state.field = field;
-  state.missions = missions;
-  $("project-name").textContent = "· " + project.name;
+  // A farm is named by its farm name (its project's own name after it, when different).
+  $("project-name").textContent = "· " + (FARMS ? state.farm + (project.name !== state.farm ? ` (${project.name})` : "") : project.name);
+  const scope = FARMS && farmTokens[state.farm] ? ` · ${farmTokens[state.farm].scope} token` : "";
   $("project-facts").textContent = `${field.cells.length} cells of ${project.cell_size_m} m · ${project.sensors} sensors · ` +
-    `${project.readings.toLocaleString("en")} readings to ${project.latest_reading || "–"} · ${missions.length} missions · energy preset ${project.energy_preset}` +
-    (project.writable ? "" : " · read-only server");
+    `${project.readings.toLocaleString("en")} readings to ${project.latest_reading || "–"} · ${project.missions} missions · energy preset ${project.energy_preset}` +
+    (project.writable ? "" : " · read-only server") + scope;
 }
 
-async function start() {
-  const m = /token=([^&]+)/.exec(location.hash);
-  if (m) {
-    sessionStorage.setItem("gleaner-token", decodeURIComponent(m[1]));
-    history.replaceState(null, "", location.pathname + location.search);
+// ---- farms (a farms server): the picker ------------------------------------------------------
+
+const FARM_TOKENS_KEY = "gleaner-farm-tokens";
+
+// Which farm a token opens, as the server says (GET /api/v1/farms names the token's own farm
+// and scope, never another).
+async function addFarmToken(tok) {
+  const r = await fetch("/api/v1/farms", { headers: { Authorization: "Bearer " + tok } });
+  if (!r.ok) throw new Error(await failure(r));
+  const farms = await r.json();
+  for (const f of farms) farmTokens[f.farm] = { token: tok, scope: f.scope };
+  sessionStorage.setItem(FARM_TOKENS_KEY, JSON.stringify(Object.values(farmTokens).map((f) => f.token)));
+  renderFarms();
+  return farms.map((f) => f.farm);
+}
+
+function renderFarms() {
+  const sel = $("farm");
+  const names = Object.keys(farmTokens).sort();
+  sel.replaceChildren(...(names.length
+    ? names.map((n) => el("option", { value: n }, `${n} (${farmTokens[n].scope})`))
+    : [el("option", { value: "" }, "no farm token yet")]));
+  sel.value = state.farm || "";
+}
+
+// Shows `farm`: its project, map and missions, from the first page.
+async function openFarm(farm) {
+  state.farm = farm;
+  sessionStorage.setItem("gleaner-farm", farm);
+  renderFarms();
+  Object.assign(state, { project: null, field: null, preview: null, previewBody: null, selected: null, shown: null, newest: null });
+  state.page = { before: null, newer: [], missions: [], next: null };
+  $("save").disabled = true;
+  $("plan-result").replaceChildren();
+  $("upload-result").replaceChildren();
+  $("cell-body").replaceChildren();
+  $("cell-hint").textContent = "Click a cell on the map.";
+  $("field-map-pane").hidden = true;
+  missionsError("");
+  $("map").replaceChildren(el("p", { class: "muted" }, "Loading " + farm + "…"));
+  await load();
+}
+
+async function startFarms() {
+  $("farm-picker").hidden = false;
+  $("token-label").hidden = true;
+  const given = [];
+  for (const [k, v] of new URLSearchParams(location.hash.slice(1))) if (k === "token" && v) given.push(v);
+  if (given.length) history.replaceState(null, "", location.pathname + location.search);
+  let stored = [];
+  try { stored = JSON.parse(sessionStorage.getItem(FARM_TOKENS_KEY) || "[]"); } catch (_) { /* none */ }
+  for (const tok of [...new Set([...stored, ...given])]) {
+    try { await addFarmToken(tok); } catch (e) { status("A farm token was refused: " + e.message, "error"); }
   }
-  $("token").value = sessionStorage.getItem("gleaner-token") || "";
-  $("token").addEventListener("change", () => sessionStorage.setItem("gleaner-token", token()));
-  $("colour-by").addEventListener("change", (e) => { state.colourBy = e.target.value; colourCells(); });
-  $("plan-form").addEventListener("submit", preview);
-  $("save").addEventListener("click", save);
-  $("field-map-button").addEventListener("click", () => showFieldMap());
-  $("field-map-redraw").addEventListener("click", () => showFieldMap());
-  $("field-map-png").addEventListener("click", () => downloadFieldMap("png"));
-  $("field-map-svg").addEventListener("click", () => downloadFieldMap("svg"));
-  wireUpload();
+  $("farm").addEventListener("change", (e) => { if (e.target.value) openFarm(e.target.value); });
+  $("farm-token-form").addEventListener("submit", async (e) => {
+    e.preventDefault();
+    const tok = $("farm-token").value.trim();
+    if (!tok) return;
+    try {
+      const farms = await addFarmToken(tok);
+      $("farm-token").value = "";
+      if (farms.length) await openFarm(farms[0]);
+    } catch (err) {
+      status("The farm token was refused: " + err.message, "error");
+    }
+  });
+  const names = Object.keys(farmTokens).sort();
+  if (!names.length) {
+    $("map").replaceChildren(el("p", { class: "muted" }, "Add a farm token (above) to open its farm."));
+    status("No farm open: add a farm token.");
+    return;
+  }
+  const last = sessionStorage.getItem("gleaner-farm");
+  await openFarm(names.includes(last) ? last : names[0]);
+}
+
+// Loads the project (or farm) and draws its map.
+async function load() {
   try {
     await refresh();
     const f = $("plan-form");
@@ -633,8 +894,42 @@ async function start() {
     await loadMap(null);
     status("Ready.");
   } catch (e) {
-    status("Cannot load the project: " + e.message, "error");
+    status("Cannot load the " + (FARMS ? "farm" : "project") + ": " + e.message, "error");
   }
+}
+
+// Narrow screens (the one-column layout): tap-size cells by default, maps' text enlarged.
+const narrow = matchMedia("(max-width: 60rem)");
+
+async function start() {
+  $("colour-by").addEventListener("change", (e) => { state.colourBy = e.target.value; colourCells(); });
+  $("plan-form").addEventListener("submit", preview);
+  $("save").addEventListener("click", save);
+  $("field-map-button").addEventListener("click", () => showFieldMap());
+  $("field-map-redraw").addEventListener("click", () => showFieldMap());
+  $("field-map-png").addEventListener("click", () => downloadFieldMap("png"));
+  $("field-map-svg").addEventListener("click", () => downloadFieldMap("svg"));
+  $("missions-older").addEventListener("click", () => turnPage(true));
+  $("missions-newer").addEventListener("click", () => turnPage(false));
+  $("confirm-yes").addEventListener("click", () => pendingConfirm && pendingConfirm(true));
+  $("confirm-no").addEventListener("click", () => pendingConfirm && pendingConfirm(false));
+  $("map-zoom").addEventListener("click", () => setZoom(!state.zoom));
+  state.zoom = narrow.matches;
+  setZoom(state.zoom);
+  narrow.addEventListener("change", (e) => setZoom(e.matches));
+  wireUpload();
+  if (FARMS) {
+    await startFarms();
+    return;
+  }
+  const m = /token=([^&]+)/.exec(location.hash);
+  if (m) {
+    sessionStorage.setItem("gleaner-token", decodeURIComponent(m[1]));
+    history.replaceState(null, "", location.pathname + location.search);
+  }
+  $("token").value = sessionStorage.getItem("gleaner-token") || "";
+  $("token").addEventListener("change", () => sessionStorage.setItem("gleaner-token", token()));
+  await load();
 }
 
 start();

@@ -6,13 +6,17 @@
 //! Every asset is served with a Content-Security-Policy that allows only this server (and
 //! the configured basemap's origin for images), so the page cannot load or send anything
 //! elsewhere.
+//!
+//! A farms server (`gleaner serve --farms DIR`) serves the same page marked
+//! `<body data-farms>`: the script then shows a farm picker, asks `GET /api/v1/farms` which
+//! farm each farm token given to the page opens, and talks to the chosen farm's routes
+//! (`/api/v1/farms/{farm}/...`) with that farm's token.
 
 use axum::Router;
+use axum::body::Bytes;
 use axum::http::{HeaderName, HeaderValue, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::get;
-
-use crate::state::AppState;
 
 /// The page.
 pub const INDEX_HTML: &str = include_str!("../assets/index.html");
@@ -30,7 +34,13 @@ fn origin(url: &str) -> Option<&str> {
     Some(&url[..url.len() - rest.len() + host_len])
 }
 
-fn asset(body: &'static str, media: &'static str, csp: &HeaderValue) -> Response {
+/// The page as a farms server serves it: `<body data-farms>`, which makes the script show the
+/// farm picker and use the farms' routes.
+pub fn farms_index_html() -> String {
+    INDEX_HTML.replacen("<body>", "<body data-farms>", 1)
+}
+
+fn asset(body: Bytes, media: &'static str, csp: &HeaderValue) -> Response {
     let mut r = body.into_response();
     let h = r.headers_mut();
     h.insert(header::CONTENT_TYPE, HeaderValue::from_static(media));
@@ -48,8 +58,11 @@ fn asset(body: &'static str, media: &'static str, csp: &HeaderValue) -> Response
 }
 
 /// The dashboard's routes: `/`, `/app.js`, `/app.css`, `/favicon.svg` (and `/favicon.ico`,
-/// 204).
-pub fn routes(basemap_url: Option<&str>) -> Router<AppState> {
+/// 204); with `farms`, the page of a farms server ([`farms_index_html`]).
+pub fn routes<S: Clone + Send + Sync + 'static>(
+    basemap_url: Option<&str>,
+    farms: bool,
+) -> Router<S> {
     let img = match basemap_url.and_then(origin) {
         Some(o) => format!("'self' data: blob: {o}"),
         None => "'self' data: blob:".to_string(),
@@ -59,22 +72,38 @@ pub fn routes(basemap_url: Option<&str>) -> Router<AppState> {
     ))
     .unwrap_or_else(|_| HeaderValue::from_static("default-src 'self'"));
     let (c1, c2, c3, c4) = (csp.clone(), csp.clone(), csp.clone(), csp);
+    let index = match farms {
+        true => Bytes::from(farms_index_html()),
+        false => Bytes::from_static(INDEX_HTML.as_bytes()),
+    };
+    let page = |body: Bytes, media: &'static str, csp: HeaderValue| {
+        get(move || async move { asset(body, media, &csp) })
+    };
     Router::new()
-        .route(
-            "/",
-            get(move || async move { asset(INDEX_HTML, "text/html; charset=utf-8", &c1) }),
-        )
+        .route("/", page(index, "text/html; charset=utf-8", c1))
         .route(
             "/app.js",
-            get(move || async move { asset(APP_JS, "text/javascript; charset=utf-8", &c2) }),
+            page(
+                Bytes::from_static(APP_JS.as_bytes()),
+                "text/javascript; charset=utf-8",
+                c2,
+            ),
         )
         .route(
             "/app.css",
-            get(move || async move { asset(APP_CSS, "text/css; charset=utf-8", &c3) }),
+            page(
+                Bytes::from_static(APP_CSS.as_bytes()),
+                "text/css; charset=utf-8",
+                c3,
+            ),
         )
         .route(
             "/favicon.svg",
-            get(move || async move { asset(FAVICON_SVG, "image/svg+xml", &c4) }),
+            page(
+                Bytes::from_static(FAVICON_SVG.as_bytes()),
+                "image/svg+xml",
+                c4,
+            ),
         )
         // Browsers ask for it whatever the page says: nothing to show, and no 404 in the log.
         .route(
@@ -92,6 +121,13 @@ mod tests {
             Some("https://tiles.example")
         );
         assert_eq!(super::origin("http://h:8000"), Some("http://h:8000"));
+    }
+
+    #[test]
+    fn the_farms_page_is_marked() {
+        let page = super::farms_index_html();
+        assert_eq!(page.matches("<body data-farms>").count(), 1);
+        assert!(!super::INDEX_HTML.contains("data-farms>"));
     }
 
     #[test]

@@ -205,7 +205,7 @@ pub async fn project(State(s): State<AppState>) -> ApiResult<Response> {
     let writable = s.0.token.is_some() || s.0.farm;
     let (max_upload_bytes, max_time_limit_s) = (s.0.max_upload_bytes as u64, s.0.max_time_limit_s);
     let bytes = s
-        .cached("project", move |p| {
+        .cached_eager("project", move |p| {
             let view = app::field_view(p)?;
             let settings = p.settings();
             let u = &settings.utility;
@@ -225,7 +225,7 @@ pub async fn project(State(s): State<AppState>) -> ApiResult<Response> {
                 time_limit_s: settings.planner.time_limit_s,
                 max_time_limit_s,
                 seed: settings.planner.seed,
-                basemap_url,
+                basemap_url: basemap_url.clone(),
                 writable,
                 max_upload_bytes,
             })
@@ -240,7 +240,7 @@ pub async fn project(State(s): State<AppState>) -> ApiResult<Response> {
     responses((status = 200, body = FieldDoc), (status = 500, body = ErrorBody)))]
 pub async fn field(State(s): State<AppState>) -> ApiResult<Response> {
     let bytes = s
-        .cached("field", |p| {
+        .cached_eager("field", |p| {
             to_json(&gleaner_wire::convert::field(&app::field_view(p)?))
         })
         .await?;
@@ -267,7 +267,7 @@ fn json_response(bytes: Bytes) -> Response {
     responses((status = 200, body = Vec<CellRowDoc>), (status = 500, body = ErrorBody)))]
 pub async fn cells(State(s): State<AppState>) -> ApiResult<Response> {
     let bytes = s
-        .cached("cells", |p| {
+        .cached_eager("cells", |p| {
             let view = app::field_view(p)?;
             let rows: Vec<CellRowDoc> = view
                 .cells

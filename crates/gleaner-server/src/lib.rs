@@ -404,7 +404,7 @@ pub(crate) fn project_router(
 ) -> Router {
     let (api, _) = api_routes(config.max_upload_bytes);
     let app = match dashboard {
-        true => api.merge(dashboard::routes(config.basemap_url.as_deref())),
+        true => api.merge(dashboard::routes(config.basemap_url.as_deref(), false)),
         false => api,
     };
     app.fallback(|| async {
@@ -426,7 +426,8 @@ pub fn router(state: AppState, config: &ServerConfig) -> Router {
 
 /// A farms server's application: `GET /api/v1/farms`, every farm's API under
 /// `/api/v1/farms/{farm}/` ([`Farms`]), the farms' OpenAPI document at
-/// `/api/v1/openapi.json`, with the same security layers as [`router`].
+/// `/api/v1/openapi.json` and the dashboard with its farm picker, with the same security
+/// layers as [`router`].
 pub fn farms_router(farms: &Farms, config: &ServerConfig) -> Router {
     let doc_json: Arc<str> = farms_openapi()
         .to_json()
@@ -434,6 +435,7 @@ pub fn farms_router(farms: &Farms, config: &ServerConfig) -> Router {
         .into();
     let app = farms
         .router()
+        .merge(dashboard::routes(config.basemap_url.as_deref(), true))
         .route(
             "/api/v1/openapi.json",
             axum::routing::get(handlers::openapi_json),

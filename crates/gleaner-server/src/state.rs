@@ -161,12 +161,18 @@ const CACHE_ENTRIES: usize = 1024;
 
 type Fill = watch::Receiver<Option<ApiResult<Bytes>>>;
 
+/// How an answer kept fresh by the writes is computed ([`AppState::cached_eager`]).
+type Refill = Arc<dyn Fn(&mut Opened) -> ApiResult<Vec<u8>> + Send + Sync>;
+
 #[derive(Default)]
 struct CacheSlot {
-    /// The latest answer: the write generation it was computed at, when it was started.
+    /// The latest answer: the write generation it was computed at (or, when a write refilled
+    /// it, the generation that write ends), when it was started.
     current: Option<(u64, Instant, Bytes)>,
     /// The recomputation in flight, for the generation it serves.
     filling: Option<(u64, Fill)>,
+    /// Set for the answers every write recomputes before it ends.
+    refill: Option<Refill>,
 }
 
 enum Next {
@@ -356,6 +362,9 @@ impl AppState {
             state.event(Event::Started(job.kind));
             let out = state.take().and_then(|mut p| {
                 let out = f(&mut p, &cancel);
+                if job.write && out.is_ok() {
+                    state.refill(&mut p);
+                }
                 state.give_back(p);
                 out
             });
@@ -369,6 +378,52 @@ impl AppState {
             .map_err(|e| ApiError::internal(format!("the request's worker failed: {e}")))?;
         guard.armed = false;
         out
+    }
+
+    /// Recomputes, after a write and before its generation is published, every answer of
+    /// [`AppState::cached_eager`] that is cached, and keeps it under the generation the
+    /// write ends: readers get the previous answer until the write ends and the new one from
+    /// then on, and none waits for a computation after a write. Runs on the write's thread
+    /// with its project and writer permit (no other write can interleave). A failed
+    /// computation leaves the answer to be computed by the next reader.
+    fn refill(&self, p: &mut Opened) {
+        let next = self.0.generation.load(Ordering::SeqCst) + 1;
+        let refills: Vec<(String, Refill)> = match self.0.cache.lock() {
+            Ok(cache) => cache
+                .iter()
+                .filter(|(_, s)| s.current.is_some())
+                .filter_map(|(k, s)| s.refill.clone().map(|r| (k.clone(), r)))
+                .collect(),
+            Err(_) => return,
+        };
+        for (key, refill) in refills {
+            let started = Instant::now();
+            let Ok(bytes) = refill(p) else { continue };
+            if let Ok(mut cache) = self.0.cache.lock() {
+                let slot = cache.entry(key).or_default();
+                if slot.current.as_ref().is_none_or(|c| c.0 <= next) {
+                    slot.current = Some((next, started, Bytes::from(bytes)));
+                }
+            }
+        }
+    }
+
+    /// [`AppState::cached`] for an answer that every write through this server recomputes
+    /// before it ends ([`AppState::refill`]), once a reader has asked for it: the project,
+    /// the field and the cell table, which readers poll while plans are saved.
+    pub async fn cached_eager(
+        &self,
+        key: &str,
+        f: impl Fn(&mut Opened) -> ApiResult<Vec<u8>> + Send + Sync + 'static,
+    ) -> ApiResult<Bytes> {
+        let f: Refill = Arc::new(f);
+        if let Ok(mut cache) = self.0.cache.lock() {
+            let slot = cache.entry(key.to_string()).or_default();
+            if slot.refill.is_none() {
+                slot.refill = Some(Arc::clone(&f));
+            }
+        }
+        self.cached(key, move |p| f(p)).await
     }
 
     /// The serialised answer of the read `key`, computed by `f` once per write through this
@@ -389,14 +444,15 @@ impl AppState {
                 .map_err(|_| ApiError::internal("the read cache was poisoned"))?;
             if cache.len() >= CACHE_ENTRIES && !cache.contains_key(key) {
                 cache.retain(|_, s| {
-                    s.filling.is_some() || s.current.as_ref().is_some_and(|c| c.0 == generation)
+                    s.filling.is_some() || s.current.as_ref().is_some_and(|c| c.0 >= generation)
                 });
             }
             let slot = cache.entry(key.to_string()).or_default();
+            // An answer refilled by a write that is ending is newer than `generation`: fine.
             let current = slot
                 .current
                 .as_ref()
-                .filter(|c| c.0 == generation)
+                .filter(|c| c.0 >= generation)
                 .map(|c| (c.1.elapsed() < self.0.cache_ttl, c.2.clone()));
             let filling = slot
                 .filling

@@ -368,7 +368,7 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         "/app.css",
         "/api/v1/project",
         "/api/v1/field",
-        "/api/v1/missions",
+        "/api/v1/missions/page?limit=8",
         "/api/v1/map.svg",
     ] {
         let n = c.get(path)?.body.len();

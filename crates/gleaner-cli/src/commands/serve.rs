@@ -14,7 +14,8 @@ pub struct ServeArgs {
     #[arg(long, value_name = "PROJECT", default_value = ".")]
     project: PathBuf,
     /// Serve many farms: every subdirectory of DIR holding a gleaner.toml is a farm, served
-    /// under /api/v1/farms/{farm}/ to the holders of its tokens (no dashboard).
+    /// under /api/v1/farms/{farm}/ to the holders of its tokens; the dashboard at / picks a
+    /// farm among those of the farm tokens given to it.
     #[arg(long, value_name = "DIR", conflicts_with_all = ["project", "token_file", "read_only"])]
     farms: Option<PathBuf>,
     /// The farms' tokens file (lines `farm scope sha256-hex`; `gleaner farm-token` adds

@@ -1,5 +1,7 @@
 //! The read cache: an answer is computed once per write through the server, however many
-//! clients ask for it meanwhile, and a write makes the next answer new.
+//! clients ask for it meanwhile, and a write makes the next answer new: the project, field
+//! and cell table are recomputed by the write itself before it answers (no reader waits
+//! after it), a mission's answer by its next reader.
 
 use std::time::Duration;
 
@@ -40,7 +42,8 @@ fn an_answer_is_computed_once_per_change_however_many_ask() {
         .count();
     assert_eq!(fills, 0, "one computation for eight readers");
 
-    // A write through the server: the next answer is computed again, once, and new.
+    // A write through the server: the next answer is new, and was computed by the write
+    // (before it answered), so no reader computes it or waits for it.
     let project = |server: &Watched| {
         let addr = server.addr;
         let r = std::thread::spawn(move || Client::new(addr).get("/api/v1/project").unwrap());
@@ -55,10 +58,19 @@ fn an_answer_is_computed_once_per_change_however_many_ask() {
         .post_json("/api/v1/plan", &json!({"solver": "greedy"}), Some(TOKEN))
         .unwrap();
     assert_eq!(r.status, 200, "{}", r.text());
-    assert_eq!(project(&server)["missions"], 1);
-    // Unchanged since: answered from the cache (a computation would be let through, and
-    // seen).
+    // (A computation would be let through, and seen.)
     server.so_far();
+    server.release();
+    let after = Client::new(addr).get("/api/v1/project").unwrap();
+    assert_eq!(after.json().unwrap()["missions"], 1, "the write's answer");
+    let cells = Client::new(addr).get("/api/v1/cells").unwrap();
+    assert_eq!(cells.status, 200);
+    assert_ne!(cells.body, answers[0].body, "the plan stored new scores");
+    assert!(
+        !server.so_far().contains(&Event::Started("cache-fill")),
+        "computed by a reader after the write"
+    );
+    // Unchanged since: answered from the cache.
     server.release();
     let again = Client::new(addr).get("/api/v1/project").unwrap();
     assert_eq!(again.json().unwrap()["missions"], 1);
