@@ -1877,7 +1877,10 @@ fn plan_by_information_reports_the_share_of_variance_removed() {
     let doc: serde_json::Value = serde_json::from_str(&ok(&hybrid)).expect("json");
     let blended = doc["total_score"].as_f64().expect("total_score");
     assert!(blended > 0.0 && blended <= 1.0 + 1e-12, "{blended}");
-    assert!(doc.to_string().contains("routed by score and information"), "{doc}");
+    assert!(
+        doc.to_string().contains("routed by score and information"),
+        "{doc}"
+    );
     let toml = dir.path().join("gleaner.toml");
     let text = std::fs::read_to_string(&toml).expect("settings");
     std::fs::write(
@@ -1887,9 +1890,15 @@ fn plan_by_information_reports_the_share_of_variance_removed() {
     .expect("settings");
     let doc: serde_json::Value = serde_json::from_str(&ok(&hybrid)).expect("json");
     let all_information = doc["total_score"].as_f64().expect("total_score");
-    assert!((all_information - value).abs() < 1e-9, "{all_information} vs {value}");
+    assert!(
+        (all_information - value).abs() < 1e-9,
+        "{all_information} vs {value}"
+    );
     let err = fail(&["plan", "--project", p, "--objective", "entropy"]);
-    assert!(err.contains("expected score, information or hybrid"), "{err}");
+    assert!(
+        err.contains("expected score, information or hybrid"),
+        "{err}"
+    );
 }
 
 /// `synth --layout`: a synthetic farm laid on CAF's own 42 stations keeps their ids and

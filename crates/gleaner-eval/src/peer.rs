@@ -381,6 +381,11 @@ pub struct Protocol {
     pub fit: DynamicFitOptions,
     /// Seed of the orienteering search (count planner).
     pub seed: u64,
+    /// Weight of the unshared per-sensor drift in the information planner's value (0: none):
+    /// a visited sensor also removes its own drift variance over the test, its fitted rate
+    /// (unit²/s) × the mean time from the last training row to the test rows (s) × this
+    /// weight.
+    pub unshared_weight: f64,
 }
 
 impl Protocol {
@@ -395,6 +400,7 @@ impl Protocol {
             free_visits: 1,
             fit,
             seed: 1,
+            unshared_weight: 0.0,
         }
     }
 }
@@ -427,6 +433,8 @@ pub struct Fitted {
     protocol: Protocol,
     dynamic: DynamicModel,
     peer: DynamicModel,
+    /// Each sensor's unshared drift variance over the test, unit² (rate × mean horizon).
+    own_drift: Vec<f64>,
 }
 
 fn series(matrix: &Matrix, rows: Range<usize>) -> (Vec<Vec<i64>>, Vec<Vec<f64>>) {
@@ -476,11 +484,26 @@ impl Fitted {
             common_mode: false,
             ..protocol.fit
         })?;
+        let rates = gleaner_kriging::fit_own_rates(&input, protocol.fit.step_s.max(1), 30.0)
+            .map_err(|e| EvalError::Data(e.to_string()))?;
+        let last_train = matrix.times[protocol.train.end - 1] as f64;
+        let horizon = if protocol.test.is_empty() {
+            0.0
+        } else {
+            protocol
+                .test
+                .clone()
+                .map(|t| matrix.times[t] as f64 - last_train)
+                .sum::<f64>()
+                / protocol.test.len() as f64
+        };
+        let own_drift = rates.iter().map(|r| r * horizon.max(0.0)).collect();
         Ok(Fitted {
             matrix,
             protocol,
             dynamic,
             peer,
+            own_drift,
         })
     }
 
@@ -528,9 +551,11 @@ impl Fitted {
             Planner::Information => {
                 let model = &self.dynamic;
                 let prior: f64 = (0..n).map(|i| model.covariance()[i * n + i]).sum();
+                let w = p.unshared_weight;
                 let value = |visited: &[usize]| {
                     let sensors: Vec<usize> = visited.iter().map(|v| v - 1).collect();
-                    prior - model.remaining_variance(&sensors)
+                    let own: f64 = sensors.iter().filter_map(|&i| self.own_drift.get(i)).sum();
+                    prior - model.remaining_variance(&sensors) + w * own
                 };
                 solve_marginal(&problem, value, &MarginalOptions::default())
                     .solution
@@ -985,6 +1010,33 @@ mod tests {
             },
             ..Protocol::peer_hourly(DynamicFitOptions::default())
         }
+    }
+
+    /// The unshared drift over the test: each sensor's fitted rate times the mean time from
+    /// the last training row to the test rows.
+    #[test]
+    fn unshared_drift_is_rate_times_the_mean_horizon() {
+        let fitted = Fitted::new(toy_matrix(), protocol()).unwrap();
+        let (times, values) = series(&fitted.matrix, fitted.protocol.train.clone());
+        let input: Vec<SensorSeries<'_>> = times
+            .iter()
+            .zip(&values)
+            .map(|(t, v)| SensorSeries {
+                position: [0.0, 0.0],
+                times: t,
+                values: v,
+            })
+            .collect();
+        let rates = gleaner_kriging::fit_own_rates(&input, 3600, 30.0).unwrap();
+        // Test rows 200..400 at one hour: the mean horizon is 100.5 hours.
+        let horizon = 100.5 * 3600.0;
+        for (d, r) in fitted.own_drift.iter().zip(&rates) {
+            assert!(
+                (d - r * horizon).abs() <= 1e-12 * d.abs().max(1e-300),
+                "{d} vs {r}"
+            );
+        }
+        assert!(fitted.own_drift.iter().any(|&d| d > 0.0));
     }
 
     #[test]

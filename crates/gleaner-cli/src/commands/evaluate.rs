@@ -28,6 +28,11 @@ pub struct PeerArgs {
     /// Data to run on.
     #[arg(long, value_enum, default_value_t = PeerData::Holdout)]
     pub on: PeerData,
+    /// Weight of the unshared per-sensor drift in the `information` planner's value (a visited
+    /// sensor also removes its own drift over the test: fitted rate × mean horizon × weight;
+    /// 0 = none, the registered pipeline).
+    #[arg(long, default_value_t = 0.0)]
+    pub unshared_weight: f64,
 }
 
 /// Runs the protocol; returns the summary text.
@@ -36,8 +41,15 @@ pub fn run_peer(args: &PeerArgs) -> Result<String> {
         PeerData::Holdout => Dataset::Hourly2015,
         PeerData::Tuning => Dataset::TuningDaily,
     };
-    let (matrix, layouts, results, protocol) = peer::load(&args.data, dataset)
+    let (matrix, layouts, results, mut protocol) = peer::load(&args.data, dataset)
         .with_context(|| format!("{} (set GLEANER_DATA_DIR)", args.data.display()))?;
+    if !(args.unshared_weight.is_finite() && args.unshared_weight >= 0.0) {
+        anyhow::bail!(
+            "--unshared-weight {}: expected a number >= 0",
+            args.unshared_weight
+        );
+    }
+    protocol.unshared_weight = args.unshared_weight;
     let planners = [Planner::Count, Planner::Information];
     let bar = crate::progress::bar(layouts.len() as u64, "layouts");
     let report = peer::run_protocol(
