@@ -17,7 +17,7 @@ pub struct CellRow {
 
 /// The text of the regular file `path`: a pipe, FIFO, device or stdin (`-`) is refused, as
 /// are bytes that are not UTF-8 (the error names the file and line).
-pub(crate) fn read_text(path: &Path) -> Result<String> {
+pub fn read_text(path: &Path) -> Result<String> {
     if gleaner_ingest::is_stdin(path) {
         return Err(AppError::io(path, gleaner_ingest::STDIN_NOT_READ));
     }

@@ -522,7 +522,7 @@ pub fn is_exploration(m: &MissionRecord) -> bool {
 }
 
 /// A mean with its interval; non-finite numbers become `null`.
-fn interval(i: &gleaner_app::campaign::Interval) -> IntervalDoc {
+fn interval(i: &gleaner_campaign::campaign::Interval) -> IntervalDoc {
     let finite = |x: f64| x.is_finite().then_some(x);
     IntervalDoc {
         mean: finite(i.mean),
@@ -533,7 +533,7 @@ fn interval(i: &gleaner_app::campaign::Interval) -> IntervalDoc {
 }
 
 /// A campaign's summary: per strategy and budget, every metric with its interval.
-pub fn campaign(c: &gleaner_app::campaign::CampaignSummary) -> CampaignDoc {
+pub fn campaign(c: &gleaner_campaign::campaign::CampaignSummary) -> CampaignDoc {
     CampaignDoc {
         format: CAMPAIGN_FORMAT.into(),
         version: VERSION,

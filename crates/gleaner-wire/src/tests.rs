@@ -718,7 +718,7 @@ fn reconstruction_document() {
 
 #[test]
 fn campaign_document() {
-    use gleaner_app::campaign::{CampaignSummary, Interval, Strategy, Summary};
+    use gleaner_campaign::campaign::{CampaignSummary, Interval, Strategy, Summary};
     let i = |mean: f64, low: f64, high: f64, n: usize| Interval { mean, low, high, n };
     let summary = |strategy, rmse: Interval, vs: Option<Interval>| Summary {
         strategy,

@@ -6,11 +6,11 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use gleaner_app::campaign::{
+use gleaner_app::format_rfc3339;
+use gleaner_campaign::campaign::{
     CampaignResult, Interval, METRICS, MissionMetrics, RunKey, RunResult, Strategy, Summary,
     TruthEvent, metric, summarise,
 };
-use gleaner_app::format_rfc3339;
 use gleaner_field::SensorId;
 use gleaner_kriging::{Covariance, IncrementModel, Variogram};
 use gleaner_render::{
@@ -372,8 +372,8 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
                 gleaner_app::Wind::new(f(k, what)?, f(k + 1, what)?)
                     .map_err(|e| anyhow::anyhow!("{}:{line}: {what}: {e}", p.display()))
             };
-            let day = gleaner_app::campaign_flight::FlightDay {
-                wind: gleaner_app::campaign_flight::DayWind {
+            let day = gleaner_campaign::campaign_flight::FlightDay {
+                wind: gleaner_campaign::campaign_flight::DayWind {
                     forecast: wind(5, "forecast")?,
                     actual: wind(7, "actual")?,
                 },
@@ -426,7 +426,7 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
 /// they dropped, the data brought back and the energy flown against each battery. Nothing
 /// when the files hold no flights.
 fn flights_section(md: &mut String, results: &[CampaignResult]) -> Result<()> {
-    use gleaner_app::campaign_flight::{CALM_DAY_MPS, flight_summaries};
+    use gleaner_campaign::campaign_flight::{CALM_DAY_MPS, flight_summaries};
     let rows = flight_summaries(results);
     if rows.is_empty() {
         return Ok(());
@@ -846,8 +846,8 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
          {unit} ×1000 against the true reading stamped T − period of every sensor that has one; \
          ΔRMSE is the strategy's kriging RMSE minus gleaner's, paired by mission; Δdelay is the \
          strategy's catch delay minus gleaner's over the events both caught (t over events).\n",
-        gleaner_app::campaign::BLOCK_DAYS,
-        gleaner_app::campaign::MIN_BLOCKS,
+        gleaner_campaign::campaign::BLOCK_DAYS,
+        gleaner_campaign::campaign::MIN_BLOCKS,
     )?;
     writeln!(
         md,

@@ -9,11 +9,9 @@ use gleaner_field::{SensorId, UnixSeconds};
 use gleaner_ingest::{IngestReport, ModalityInfo, Readings, Row};
 use gleaner_store::{MissionId, Store};
 
-use crate::error::{AppError, Result};
-use crate::ingest::{Format, IngestRequest, Parsed, known_sensors, parse_files};
-use crate::progress::Progress;
-use crate::project::Project;
-use crate::record::{RecordOutcome, RecordRequest, record_parsed};
+use gleaner_app::shortcuts::{Parsed, known_sensors, parse_files, record_parsed};
+use gleaner_app::{AppError, Result};
+use gleaner_app::{Format, IngestRequest, Progress, Project, RecordOutcome, RecordRequest};
 
 /// Everything the sensors logged, whether collected or not (seconds, modality units).
 pub struct Truth {
@@ -43,7 +41,7 @@ pub struct ProjectRecord {
     /// The project's sensors, WGS84.
     pub sensors: Vec<gleaner_field::Sensor>,
     /// The project's settings (grid, base, energy, planner; the strategies set the utility).
-    pub settings: crate::settings::Settings,
+    pub settings: gleaner_app::settings::Settings,
     /// Every stored reading; its period is the sampling step.
     pub truth: Truth,
     /// Default end of the history and first mission, s: the last reading's availability
@@ -61,9 +59,9 @@ impl ProjectRecord {
     pub fn into_parts(self, dir: &std::path::Path) -> crate::campaign::DatasetParts {
         crate::campaign::DatasetParts {
             label: self.name,
-            init: crate::init::InitRequest {
+            init: gleaner_app::InitRequest {
                 dir: dir.to_path_buf(),
-                ..crate::init::InitRequest::default()
+                ..gleaner_app::InitRequest::default()
             },
             sensors: Some(self.sensors),
             settings: self.settings,
@@ -179,8 +177,9 @@ impl Truth {
         for (_, t) in &mut times {
             t.sort_unstable();
         }
-        let period_s =
-            crate::knowledge::sampling_step(&times.into_iter().map(|p| p.1).collect::<Vec<_>>());
+        let period_s = gleaner_app::shortcuts::sampling_step(
+            &times.into_iter().map(|p| p.1).collect::<Vec<_>>(),
+        );
         let readings = Readings {
             modalities: batch
                 .modalities
