@@ -10,6 +10,9 @@
 //! - [`simulate`]: [`Truth`] (what is available when), [`fly`] (a mission flown in
 //!   simulation, recorded like a real flight), [`ProjectRecord`] (a project's own record as
 //!   a dataset).
+//! - [`results`]: the results format (CSV files a simulation writes and the report reads).
+//! - [`report`]: the campaign report, Markdown with SVG charts.
+//! - [`doc`]: a campaign's summary as the `gleaner.campaign` document.
 //!
 //! It reaches the application layer only through `gleaner_app`'s public API, and the few
 //! shortcuts a long replay needs through [`gleaner_app::shortcuts`].
@@ -19,7 +22,13 @@
 
 pub mod campaign;
 pub mod campaign_flight;
+pub mod doc;
+mod error;
+pub mod report;
+pub mod results;
 pub mod simulate;
+
+pub use error::{Error, Result};
 
 pub use simulate::{ProjectRecord, REPLAY_DEFAULT_DAYS, Truth, fly, fly_buffered};
 

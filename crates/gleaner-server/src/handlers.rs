@@ -730,7 +730,7 @@ pub async fn simulate(
             }
             let result =
                 gleaner_campaign::campaign::run_campaign(&replay.request, &replay.truth, cancel)?;
-            Ok(gleaner_wire::convert::campaign(
+            Ok(gleaner_campaign::doc::campaign_doc(
                 &gleaner_campaign::campaign::campaign_summary(&replay.request, &result),
             ))
         })

@@ -455,8 +455,8 @@ pub fn run(
             }
         }
     }
-    super::report::write_results(&args.out, &results, command_line)?;
-    let report = super::report::write_report(&args.out)?;
+    gleaner_campaign::results::write_results(&args.out, &results, command_line)?;
+    let report = gleaner_campaign::report::write_report(&args.out)?;
     let mut out = String::new();
     writeln!(
         out,
