@@ -265,24 +265,14 @@ impl WindSource {
 /// parse or is out of range, a day given twice; an empty file. [`AppError::Io`] when the file
 /// cannot be read.
 pub fn read_wind_csv(path: &Path) -> Result<Vec<DailyWind>> {
-    let text = gleaner_app::cell_csv::read_text(path)?;
+    let table = gleaner_app::cell_csv::read_table(path, " `date,speed_mps,from_deg`")?;
     let bad =
         |line: usize, what: String| AppError::Invalid(format!("{}:{line}: {what}", path.display()));
-    let mut lines = text.trim_start_matches('\u{feff}').lines().enumerate();
-    let header: Vec<String> = lines
-        .next()
-        .filter(|(_, h)| !h.trim().is_empty())
-        .map(|(_, h)| {
-            h.split(',')
-                .map(|c| c.trim().to_ascii_lowercase())
-                .collect()
-        })
-        .ok_or_else(|| {
-            AppError::Invalid(format!(
-                "{}: empty file: expected a header line `date,speed_mps,from_deg`",
-                path.display()
-            ))
-        })?;
+    let header: Vec<String> = table
+        .header
+        .iter()
+        .map(|c| c.to_ascii_lowercase())
+        .collect();
     let column = |name: &str| {
         header.iter().position(|h| h == name).ok_or_else(|| {
             bad(
@@ -293,23 +283,9 @@ pub fn read_wind_csv(path: &Path) -> Result<Vec<DailyWind>> {
     };
     let (c_date, c_speed, c_from) = (column("date")?, column("speed_mps")?, column("from_deg")?);
     let mut days: Vec<DailyWind> = Vec::new();
-    for (k, raw) in lines {
-        let line = k + 1;
-        if raw.trim().is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = raw.split(',').map(str::trim).collect();
-        if fields.len() != header.len() {
-            return Err(bad(
-                line,
-                format!(
-                    "{} fields, but the header has {}",
-                    fields.len(),
-                    header.len()
-                ),
-            ));
-        }
-        let field = |c: usize| fields[c];
+    for (line, fields) in &table.rows {
+        let line = *line;
+        let field = |c: usize| fields[c].as_str();
         let day = gleaner_ingest::time::parse_date(field(c_date)).ok_or_else(|| {
             bad(
                 line,
