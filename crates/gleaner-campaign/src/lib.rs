@@ -8,8 +8,8 @@
 //! - [`campaign_flight`]: a campaign's daily wind, forecast error and batteries; the
 //!   simulated flight that re-plans in the air.
 //! - [`simulate`]: [`Truth`] (what is available when), [`fly`] (a mission flown in
-//!   simulation, recorded like a real flight), [`ProjectRecord`] (a project's own record as
-//!   a dataset).
+//!   simulation, recorded like a real flight).
+//! - [`replay`]: [`ProjectRecord`], a project's own record as a dataset.
 //! - [`results`]: the results format (CSV files a simulation writes and the report reads).
 //! - [`report`]: the campaign report, Markdown with SVG charts.
 //! - [`doc`]: a campaign's summary as the `gleaner.campaign` document.
@@ -24,13 +24,15 @@ pub mod campaign;
 pub mod campaign_flight;
 pub mod doc;
 mod error;
+pub mod replay;
 pub mod report;
 pub mod results;
 pub mod simulate;
 
 pub use error::{Error, Result};
 
-pub use simulate::{ProjectRecord, REPLAY_DEFAULT_DAYS, Truth, fly, fly_buffered};
+pub use replay::{ProjectRecord, REPLAY_DEFAULT_DAYS};
+pub use simulate::{Truth, fly, fly_buffered};
 
 impl std::str::FromStr for campaign::Strategy {
     type Err = gleaner_app::AppError;
