@@ -1,5 +1,6 @@
 //! Small per-cell CSV files users hand in (`cell_id,<numbers>...` with a header line): scores
-//! for `plan --scores`, class probabilities for `score --probabilities`.
+//! for `plan --scores`, class probabilities for `score --probabilities`; and the reader of a
+//! small header-line table ([`read_table`]) they share with a campaign's wind file.
 
 use std::path::Path;
 
@@ -17,7 +18,7 @@ pub struct CellRow {
 
 /// The text of the regular file `path`: a pipe, FIFO, device or stdin (`-`) is refused, as
 /// are bytes that are not UTF-8 (the error names the file and line).
-pub(crate) fn read_text(path: &Path) -> Result<String> {
+pub fn read_text(path: &Path) -> Result<String> {
     if gleaner_ingest::is_stdin(path) {
         return Err(AppError::io(path, gleaner_ingest::STDIN_NOT_READ));
     }
@@ -43,15 +44,24 @@ pub(crate) fn read_text(path: &Path) -> Result<String> {
     }
 }
 
-/// Reads the file; a field that is not a finite number is an error naming file, line and
-/// column (from the header), as is a row with another number of fields than the header, a
-/// header naming a column twice and bytes that are not UTF-8. Only regular files are read (a
-/// FIFO would block). Blank lines are skipped; a UTF-8 BOM and CRLF are accepted.
-pub fn read(path: &Path) -> Result<Vec<CellRow>> {
+/// A small CSV file with a header line: the header's column names and the data rows.
+pub struct Table {
+    /// The header's names, trimmed, as written.
+    pub header: Vec<String>,
+    /// Per data row: its 1-based line (the header is line 1) and its trimmed fields, as many
+    /// as the header's.
+    pub rows: Vec<(usize, Vec<String>)>,
+}
+
+/// Reads a small comma-separated file with a header line (a regular file only: see
+/// [`read_text`]). Blank lines are skipped; a UTF-8 BOM and CRLF are accepted.
+///
+/// # Errors
+/// [`AppError::Invalid`] naming the file and line: an empty file (the message ends with
+/// `expected`, e.g. the header the caller wants), a row with another number of fields than
+/// the header; bytes that are not UTF-8. [`AppError::Io`] when the file cannot be read.
+pub fn read_table(path: &Path, expected: &str) -> Result<Table> {
     let text = read_text(path)?;
-    let text = text.as_str();
-    let bad =
-        |line: usize, what: String| AppError::Invalid(format!("{}:{line}: {what}", path.display()));
     let mut lines = text.trim_start_matches('\u{feff}').lines().enumerate();
     let header: Vec<String> = lines
         .next()
@@ -59,10 +69,41 @@ pub fn read(path: &Path) -> Result<Vec<CellRow>> {
         .map(|(_, h)| h.split(',').map(|c| c.trim().to_string()).collect())
         .ok_or_else(|| {
             AppError::Invalid(format!(
-                "{}: empty file: expected a header line",
+                "{}: empty file: expected a header line{expected}",
                 path.display()
             ))
         })?;
+    let mut rows = Vec::new();
+    for (k, line) in lines {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let fields: Vec<String> = line.split(',').map(|f| f.trim().to_string()).collect();
+        if fields.len() != header.len() {
+            return Err(AppError::Invalid(format!(
+                "{}:{}: {} fields, but the header has {}",
+                path.display(),
+                k + 1,
+                fields.len(),
+                header.len()
+            )));
+        }
+        rows.push((k + 1, fields));
+    }
+    Ok(Table { header, rows })
+}
+
+/// Reads the file; a field that is not a finite number is an error naming file, line and
+/// column (from the header), as is a row with another number of fields than the header, a
+/// header naming a column twice and bytes that are not UTF-8. Only regular files are read (a
+/// FIFO would block). Blank lines are skipped; a UTF-8 BOM and CRLF are accepted.
+pub fn read(path: &Path) -> Result<Vec<CellRow>> {
+    let Table {
+        header,
+        rows: table,
+    } = read_table(path, "")?;
+    let bad =
+        |line: usize, what: String| AppError::Invalid(format!("{}:{line}: {what}", path.display()));
     for (k, name) in header.iter().enumerate() {
         if let Some(first) = header[..k]
             .iter()
@@ -80,22 +121,7 @@ pub fn read(path: &Path) -> Result<Vec<CellRow>> {
         }
     }
     let mut rows = Vec::new();
-    for (k, line) in lines {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if fields.len() != header.len() {
-            return Err(bad(
-                k + 1,
-                format!(
-                    "{} fields, but the header has {}",
-                    fields.len(),
-                    header.len()
-                ),
-            ));
-        }
-        let cell = fields[0].to_string();
+    for (line, fields) in table {
         let values = fields[1..]
             .iter()
             .enumerate()
@@ -106,7 +132,7 @@ pub fn read(path: &Path) -> Result<Vec<CellRow>> {
                     .filter(|x| x.is_finite())
                     .ok_or_else(|| {
                         bad(
-                            k + 1,
+                            line,
                             format!(
                                 "column `{}`: not a finite number: {}",
                                 gleaner_ingest::shorten(column),
@@ -117,8 +143,8 @@ pub fn read(path: &Path) -> Result<Vec<CellRow>> {
             })
             .collect::<Result<Vec<f64>>>()?;
         rows.push(CellRow {
-            line: k + 1,
-            cell,
+            line,
+            cell: fields[0].clone(),
             values,
         });
     }

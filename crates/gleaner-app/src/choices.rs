@@ -1,12 +1,11 @@
 //! Choices named in requests, parsed by `FromStr`, each spelled once: the reconstruction's
-//! estimator and the campaign's strategy (the energy preset is
+//! estimator and the planning objective (the energy preset is
 //! [`EnergyPreset`](crate::settings::EnergyPreset), next to the settings it names).
 
 use std::str::FromStr;
 
 use gleaner_kriging::Mean;
 
-use crate::campaign::Strategy;
 use crate::error::AppError;
 use crate::plan::Objective;
 use crate::reconstruct::Estimator;
@@ -79,15 +78,6 @@ impl FromStr for Objective {
     }
 }
 
-impl FromStr for Strategy {
-    type Err = AppError;
-
-    /// [`Strategy::parse`].
-    fn from_str(s: &str) -> Result<Self, AppError> {
-        Strategy::parse(s)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -97,9 +87,6 @@ mod tests {
     fn every_choice_parses_back_from_its_name_and_others_are_refused() {
         for e in Estimator::ALL {
             assert_eq!(e.name().parse::<Estimator>().expect("estimator"), e);
-        }
-        for s in Strategy::ALL.iter().chain(&Strategy::YARDSTICKS) {
-            assert_eq!(s.name().parse::<Strategy>().expect("strategy"), *s);
         }
         for p in EnergyPreset::ALL {
             assert_eq!(p.name().parse::<EnergyPreset>().expect("preset"), p);
@@ -116,7 +103,6 @@ mod tests {
             e.contains("expected dynamic, changes, levels or simple"),
             "{e}"
         );
-        assert!("best".parse::<Strategy>().is_err());
         let p = "huge"
             .parse::<EnergyPreset>()
             .expect_err("unknown")

@@ -61,14 +61,14 @@ pub enum AppError {
 
 impl AppError {
     /// A core error in `context`.
-    pub(crate) fn core(context: &'static str, e: impl std::fmt::Display) -> Self {
+    pub fn core(context: &'static str, e: impl std::fmt::Display) -> Self {
         Self::Core {
             context,
             message: e.to_string(),
         }
     }
     /// An IO error on `path`.
-    pub(crate) fn io(path: &std::path::Path, e: impl std::fmt::Display) -> Self {
+    pub fn io(path: &std::path::Path, e: impl std::fmt::Display) -> Self {
         Self::Io {
             path: path.display().to_string(),
             message: e.to_string(),

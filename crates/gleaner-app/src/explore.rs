@@ -75,7 +75,7 @@ pub fn explore<S: Store>(
 /// compute again. A campaign's exhaustive run keeps one: once every sensor is collected
 /// daily, the service energies repeat and so does the tour.
 #[derive(Debug, Default)]
-pub(crate) struct ExplorationMemo {
+pub struct ExplorationMemo {
     last: Option<(String, Vec<u64>, ExplorationPlan)>,
 }
 
@@ -109,7 +109,7 @@ impl ExplorationMemo {
 }
 
 /// [`explore`] with a memo of the last plan (see [`ExplorationMemo`]): the same result.
-pub(crate) fn explore_with<S: Store>(
+pub fn explore_with<S: Store>(
     project: &mut Project<S>,
     request: &ExploreRequest,
     clock_now: UnixSeconds,

@@ -88,7 +88,7 @@ pub struct IngestOutcome {
 }
 
 /// Files read and parsed, ready to store.
-pub(crate) struct Parsed {
+pub struct Parsed {
     /// Per file: path, format, readings, reader counts.
     pub files: Vec<(PathBuf, Format, Readings, IngestReport)>,
     /// Reader counts summed over files.
@@ -99,6 +99,10 @@ impl Parsed {
     /// Number of readings over all files.
     pub fn len(&self) -> usize {
         self.files.iter().map(|f| f.2.rows.len()).sum()
+    }
+    /// Whether no file holds a reading.
+    pub fn is_empty(&self) -> bool {
+        self.files.iter().all(|f| f.2.rows.is_empty())
     }
     /// The latest reading's time, seconds.
     pub fn latest(&self) -> Option<UnixSeconds> {
@@ -168,7 +172,7 @@ pub fn detect(path: &Path) -> Result<Format> {
 }
 
 /// The ids of the project's sensors: readings of any other sensor are refused.
-pub(crate) fn known_sensors<R: gleaner_store::StoreRead>(store: &R) -> Result<HashSet<String>> {
+pub fn known_sensors<R: gleaner_store::StoreRead>(store: &R) -> Result<HashSet<String>> {
     Ok(store
         .sensors()?
         .into_iter()
@@ -177,7 +181,7 @@ pub(crate) fn known_sensors<R: gleaner_store::StoreRead>(store: &R) -> Result<Ha
 }
 
 /// Reads and checks every file; stores nothing.
-pub(crate) fn parse_files(
+pub fn parse_files(
     request: &IngestRequest,
     known: HashSet<String>,
     value_limits: &gleaner_ingest::limits::ValueLimits,
@@ -447,7 +451,7 @@ pub fn ingest<S: Store>(
 }
 
 /// [`ingest`] with the readings already read (from files, or a simulation's history).
-pub(crate) fn ingest_parsed<S: Store>(
+pub fn ingest_parsed<S: Store>(
     project: &mut Project<S>,
     parsed: Parsed,
     request: &IngestRequest,

@@ -50,7 +50,7 @@ pub struct Knowledge {
 }
 
 /// The median spacing of consecutive readings, seconds (the dataset's sampling interval).
-pub(crate) fn sampling_step(times: &[Vec<UnixSeconds>]) -> i64 {
+pub fn sampling_step(times: &[Vec<UnixSeconds>]) -> i64 {
     let mut gaps: Vec<i64> = times
         .iter()
         .flat_map(|t| t.windows(2).map(|w| w[1] - w[0]))

@@ -2,7 +2,7 @@
 //! [`gleaner_store::Store`].
 //!
 //! This crate plays the role rust-analyzer's `ide` crate plays: adapters (the CLI, the HTTP
-//! server, the campaign simulator) call these functions and translate their plain typed
+//! server, the campaign simulator `gleaner-campaign`) call these functions and translate their plain typed
 //! results into text, JSON or files. Nothing here parses arguments, prints, reads the wall
 //! clock or knows SQL: the clock comes in as an argument (`clock_now`, seconds since the Unix
 //! epoch, recorded as provenance only, never used for results), progress goes out through
@@ -28,8 +28,9 @@
 //! always reads the history. Both give the same scores within 1e-9 relative.
 //!
 //! Evaluation: [`reconstruct`] estimates every sensor's current value (last value carried
-//! forward, and space-time kriging with its variance) from what is known; [`campaign`]
-//! replays a dataset as a campaign of missions per strategy through these same use cases.
+//! forward, and space-time kriging with its variance) from what is known; the campaign
+//! simulator (`gleaner-campaign`) replays a dataset as a campaign of missions per strategy
+//! through these same use cases and the few [`shortcuts`] a long replay needs.
 //!
 //! Read models: [`field_view`] (the cell table), [`missions`], [`mission`], [`cell_detail`]
 //! (one cell's weighted terms, rank and recent series).
@@ -41,8 +42,6 @@
 #![deny(missing_docs)]
 
 pub mod airspace;
-pub mod campaign;
-pub mod campaign_flight;
 pub mod cell_csv;
 mod cell_detail;
 mod choices;
@@ -64,7 +63,7 @@ mod record;
 mod replan;
 mod score;
 pub mod settings;
-mod simulate;
+pub mod shortcuts;
 mod state;
 mod summaries;
 #[cfg(test)]
@@ -101,7 +100,6 @@ pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use replan::{REPLAN_ITERATIONS, REPLAN_TIME_LIMIT_S, Replan, ReplanRequest, replan};
 pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};
 pub use settings::{EnergyPreset, Settings};
-pub use simulate::{ProjectRecord, REPLAY_DEFAULT_DAYS, Truth, fly, fly_buffered};
 pub use summaries::{pending_bytes, series_summary};
 pub use view::{
     CellView, FieldView, MissionExport, cell_reading_counts, check_flyable, export,

@@ -429,7 +429,7 @@ pub fn plan_with_preset<S: Store>(
 /// cell within the battery's reach) is refused unless a dry run — or, with `!refuse_empty`
 /// (a campaign's mission day), stores only the scoring and returns the empty mission
 /// without an id.
-pub(crate) fn plan_scored<S: Store>(
+pub fn plan_scored<S: Store>(
     project: &mut Project<S>,
     request: &PlanRequest,
     energy_preset: Option<&str>,

@@ -113,7 +113,7 @@ pub struct Reconstruction {
 }
 
 /// The modality a reconstruction is about: the requested one, else the condition modality.
-pub(crate) fn target_modality<S: Store>(
+pub fn target_modality<S: Store>(
     project: &Project<S>,
     requested: Option<&str>,
 ) -> Result<Modality> {
@@ -183,7 +183,7 @@ pub(crate) fn fit_model<S: Store>(
 
 /// Fits the field model of `modality` and its model of changes on everything known at or
 /// before `at` (seconds); also returns the sampling step, seconds.
-pub(crate) fn fit_models<S: Store>(
+pub fn fit_models<S: Store>(
     project: &Project<S>,
     modality: &Modality,
     at: UnixSeconds,
@@ -201,7 +201,7 @@ pub(crate) fn fit_models<S: Store>(
 
 /// The fitted models of one modality.
 #[derive(Debug, Clone)]
-pub(crate) struct Models {
+pub struct Models {
     /// Means and the parametric covariance of levels.
     pub levels: FieldModel,
     /// The model of changes.
@@ -474,7 +474,7 @@ pub(crate) fn estimate<S: Store>(
 /// [`from`, `at`] and, for the kriging of changes, every sensor's readings in [`needed`, `at`]
 /// (seconds), with the store's reading count when read.
 #[derive(Debug, Default)]
-pub(crate) struct EstimateReads {
+pub struct EstimateReads {
     kept: Option<KeptReads>,
     /// Estimates that used kept reads instead of reading the store.
     reused: usize,
@@ -499,7 +499,7 @@ struct KeptReads {
 /// then, when the store's reading count is the kept one and the windows nest (this estimate's
 /// look-back and change window start no earlier than the kept ones), the kept reads
 /// restricted to this estimate's windows are what the store would return, and are used.
-pub(crate) fn estimate_with<S: Store>(
+pub fn estimate_with<S: Store>(
     project: &Project<S>,
     modality: &Modality,
     (model, changes, dynamic): (&FieldModel, &IncrementModel, Option<&DynamicModel>),
@@ -1261,18 +1261,24 @@ mod tests {
             t_depths_cm: vec![30],
             ..gleaner_synth::SynthConfig::default()
         });
-        let truth = crate::simulate::Truth::from_files(
-            &project,
+        let mut known = gleaner_ingest::Readings::default();
+        for (_, _, r, _) in crate::ingest::parse_files(
             &crate::ingest::IngestRequest {
                 files: vec![readings],
                 ..Default::default()
             },
-            DAY,
+            crate::ingest::known_sensors(project.store()).unwrap(),
+            &project.settings().ingest.value_limits(),
             &crate::Silent,
         )
-        .unwrap();
+        .unwrap()
+        .files
+        {
+            known.append(r);
+        }
         let cut = farm.times()[0] + 45 * DAY;
-        let mut known = truth.available_by(cut);
+        // What a daily log holds by the cut: a reading stamped t is available from t + 1 day.
+        known.rows.retain(|r| r.t + DAY <= cut);
         // Every third sensor stops 10 days before the cut.
         known
             .rows

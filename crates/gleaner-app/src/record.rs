@@ -75,7 +75,7 @@ pub fn record_flight<S: Store>(
 }
 
 /// [`record_flight`] with the readings already read (from files, or from a simulated flight).
-pub(crate) fn record_parsed<S: Store>(
+pub fn record_parsed<S: Store>(
     project: &mut Project<S>,
     request: &RecordRequest,
     parsed: Option<Parsed>,

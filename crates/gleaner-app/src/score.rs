@@ -116,7 +116,7 @@ pub(crate) fn neighbour_lists(field: &Field) -> Vec<Vec<usize>> {
 
 /// The modality the condition classes come from: `utility.condition_modality`, else
 /// `vw@30cm`, else the first `vw@...` of `modalities` (sorted names); `None` without one.
-pub(crate) fn condition_modality(settings: &Settings, modalities: &[String]) -> Option<String> {
+pub fn condition_modality(settings: &Settings, modalities: &[String]) -> Option<String> {
     match &settings.utility.condition_modality {
         Some(m) => Some(m.clone()),
         None => modalities

@@ -520,7 +520,7 @@ pub(crate) fn invalidate_cache<W: StoreWrite>(tx: &mut W) -> Result<()> {
 /// Builds the summary cache from the store unless it is current (same cells, same reading
 /// count), so the next recorded flight only adds its own readings. O(stored readings) when
 /// it builds.
-pub(crate) fn prepare_cache<W: StoreWrite>(tx: &mut W) -> Result<()> {
+pub fn prepare_cache<W: StoreWrite>(tx: &mut W) -> Result<()> {
     let cells = tx.cells()?;
     let count = tx.reading_count()?;
     let fp = cells_fingerprint(&cells);

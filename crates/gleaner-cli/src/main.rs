@@ -16,7 +16,7 @@ use gleaner_app as app;
 use gleaner_app::{MissionId, Project};
 
 use commands::{
-    bench, cells, crash, demo, evaluate, export, migrate, plan, reconstruct, report, score, serve,
+    bench, cells, crash, demo, evaluate, export, migrate, plan, reconstruct, score, serve,
     simulate, synth,
 };
 
@@ -1222,7 +1222,11 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Evaluate(EvaluateCommand::Peer(args)) => print!("{}", evaluate::run_peer(&args)?),
         Command::Report { dir } => {
-            outln(&report::write_report(&dir)?.display().to_string())?;
+            outln(
+                &gleaner_campaign::report::write_report(&dir)?
+                    .display()
+                    .to_string(),
+            )?;
         }
         Command::Reconstruct {
             project,

@@ -659,13 +659,13 @@ pub async fn simulate(
     body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<Json<CampaignDoc>> {
     let b: SimulateBody = json_body(body)?;
-    let defaults = app::campaign::ReplayOptions::default();
+    let defaults = gleaner_campaign::campaign::ReplayOptions::default();
     let names = b.strategies.unwrap_or_else(|| {
         ["gleaner", "round-robin", "freshness"]
             .map(String::from)
             .to_vec()
     });
-    let strategies = app::campaign::Strategy::parse_list(&names)
+    let strategies = gleaner_campaign::campaign::Strategy::parse_list(&names)
         .map_err(|e| ApiError::from(e).in_field("strategies"))?;
     let every_hours = b.every_hours.unwrap_or(defaults.every_s as f64 / 3_600.0);
     if !(every_hours > 0.0 && every_hours <= 8_760.0) {
@@ -696,7 +696,7 @@ pub async fn simulate(
         ));
     }
     let energy_preset = energy_preset(b.energy_preset.as_deref())?;
-    let options = app::campaign::ReplayOptions {
+    let options = gleaner_campaign::campaign::ReplayOptions {
         history_until: parse_time("history_until", b.history_until.as_deref())?,
         start: parse_time("start", b.start.as_deref())?,
         end: parse_time("end", b.end.as_deref())?,
@@ -715,8 +715,8 @@ pub async fn simulate(
     };
     let doc = s
         .run_job(simulation, move |p, cancel| {
-            let parts = app::ProjectRecord::read(p)?.into_parts(p.dir());
-            let replay = app::campaign::replay(parts, &options, clock_now())?;
+            let parts = gleaner_campaign::ProjectRecord::read(p)?.into_parts(p.dir());
+            let replay = gleaner_campaign::campaign::replay(parts, &options, clock_now())?;
             let missions = replay.request.mission_runs();
             if missions > MAX_SIMULATED_MISSIONS {
                 return Err(ApiError::bad_request(
@@ -728,9 +728,10 @@ pub async fn simulate(
                     ),
                 ));
             }
-            let result = app::campaign::run_campaign(&replay.request, &replay.truth, cancel)?;
-            Ok(gleaner_wire::convert::campaign(
-                &app::campaign::campaign_summary(&replay.request, &result),
+            let result =
+                gleaner_campaign::campaign::run_campaign(&replay.request, &replay.truth, cancel)?;
+            Ok(gleaner_campaign::doc::campaign_doc(
+                &gleaner_campaign::campaign::campaign_summary(&replay.request, &result),
             ))
         })
         .await?;

@@ -442,3 +442,15 @@ pub(crate) fn not_cancellable(mission: crate::MissionId) -> crate::StoreError {
         format!("mission {mission} does not exist or is not a planned mission"),
     )
 }
+
+/// The outcome of deleting `mission` when the statement removed `rows` rows: an unknown
+/// mission when none.
+pub(crate) fn mission_deleted(mission: MissionId, rows: u64) -> Result<()> {
+    if rows == 0 {
+        return Err(StoreError::Unknown {
+            what: "mission",
+            name: mission.to_string(),
+        });
+    }
+    Ok(())
+}

@@ -8,14 +8,13 @@ use gleaner_app::{
 use gleaner_ingest::time::format_rfc3339;
 
 use crate::docs::{
-    CampaignDoc, CellRowDoc, CellScoresDoc, ConditionDoc, CorrelationDoc, ExplorationDoc,
-    IntervalDoc, ReconstructionDoc, ReconstructionModelDoc, ScoreRowDoc, ScoringDoc,
-    SensorEstimateDoc, StrategySummaryDoc, SummaryDoc, VariogramDoc,
+    CellRowDoc, CellScoresDoc, ConditionDoc, CorrelationDoc, ExplorationDoc, ReconstructionDoc,
+    ReconstructionModelDoc, ScoreRowDoc, ScoringDoc, SensorEstimateDoc, SummaryDoc, VariogramDoc,
 };
 use crate::{
-    BaselineDoc, CAMPAIGN_FORMAT, CellDoc, EnergyDoc, FIELD_FORMAT, FieldDoc, MISSION_FORMAT,
-    MissionDoc, ProfileDoc, RECONSTRUCTION_FORMAT, ScoresDoc, SensorDoc, StopDoc, UnreachableDoc,
-    VERSION, ZoneDoc,
+    BaselineDoc, CellDoc, EnergyDoc, FIELD_FORMAT, FieldDoc, MISSION_FORMAT, MissionDoc,
+    ProfileDoc, RECONSTRUCTION_FORMAT, ScoresDoc, SensorDoc, StopDoc, UnreachableDoc, VERSION,
+    ZoneDoc,
 };
 
 fn lon_lat(p: gleaner_field::LatLon) -> [f64; 2] {
@@ -519,51 +518,4 @@ pub fn reconstruction(r: &Reconstruction) -> ReconstructionDoc {
 /// Whether a mission is an exploration sortie.
 pub fn is_exploration(m: &MissionRecord) -> bool {
     m.mission.kind == MissionKind::Exploration
-}
-
-/// A mean with its interval; non-finite numbers become `null`.
-fn interval(i: &gleaner_app::campaign::Interval) -> IntervalDoc {
-    let finite = |x: f64| x.is_finite().then_some(x);
-    IntervalDoc {
-        mean: finite(i.mean),
-        low: finite(i.low),
-        high: finite(i.high),
-        n: i.n,
-    }
-}
-
-/// A campaign's summary: per strategy and budget, every metric with its interval.
-pub fn campaign(c: &gleaner_app::campaign::CampaignSummary) -> CampaignDoc {
-    CampaignDoc {
-        format: CAMPAIGN_FORMAT.into(),
-        version: VERSION,
-        label: c.label.clone(),
-        modality: c.modality.clone(),
-        period_s: c.period_s,
-        history_until: format_rfc3339(c.history_until),
-        missions: c.schedule.len(),
-        first_mission: c.schedule.first().map(|&t| format_rfc3339(t)),
-        last_mission: c.schedule.last().map(|&t| format_rfc3339(t)),
-        events: c.events,
-        reference: c.reference.name().into(),
-        strategies: c
-            .summaries
-            .iter()
-            .map(|s| StrategySummaryDoc {
-                strategy: s.strategy.name().into(),
-                budget: s.budget,
-                runs: s.runs,
-                metrics: s
-                    .metrics
-                    .iter()
-                    .map(|(name, i)| (name.to_string(), interval(i)))
-                    .collect(),
-                events_caught: s.events_caught.0,
-                events: s.events_caught.1,
-                delay_days: interval(&s.delay_days),
-                rmse_vs_reference: s.rmse_vs_reference.as_ref().map(interval),
-                delay_vs_reference: s.delay_vs_reference.as_ref().map(interval),
-            })
-            .collect(),
-    }
 }

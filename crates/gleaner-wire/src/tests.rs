@@ -717,62 +717,6 @@ fn reconstruction_document() {
 }
 
 #[test]
-fn campaign_document() {
-    use gleaner_app::campaign::{CampaignSummary, Interval, Strategy, Summary};
-    let i = |mean: f64, low: f64, high: f64, n: usize| Interval { mean, low, high, n };
-    let summary = |strategy, rmse: Interval, vs: Option<Interval>| Summary {
-        strategy,
-        budget: 1.0,
-        runs: 1,
-        metrics: vec![
-            ("rmse_kriged", rmse),
-            ("energy_kj", i(65.7, 65.1, 66.2, 5)),
-            // One block only: a mean without an interval.
-            ("classifier_accuracy", i(0.95, f64::NAN, f64::NAN, 1)),
-        ],
-        events_caught: (3, 4),
-        delay_days: i(1.5, 0.5, 2.5, 3),
-        rmse_vs_reference: vs,
-        delay_vs_reference: vs.map(|_| i(0.25, -0.5, 1.0, 3)),
-    };
-    let c = CampaignSummary {
-        label: "north-field".into(),
-        modality: "vw@30cm".into(),
-        period_s: 86_400,
-        history_until: 1_400_000_000 - 1_400_000_000 % 86_400,
-        schedule: vec![1_399_939_200, 1_400_025_600],
-        events: 4,
-        reference: Strategy::Gleaner,
-        summaries: vec![
-            summary(Strategy::Gleaner, i(0.004, 0.003, 0.005, 5), None),
-            summary(
-                Strategy::RoundRobin,
-                i(0.005, 0.004, 0.006, 5),
-                Some(i(0.001, -0.0002, 0.0022, 5)),
-            ),
-        ],
-    };
-    let doc = crate::convert::campaign(&c);
-    assert_eq!(doc.format, CAMPAIGN_FORMAT);
-    assert_eq!(doc.missions, 2);
-    assert_eq!(doc.reference, "gleaner");
-    assert_eq!(doc.strategies[1].strategy, "round-robin");
-    assert_eq!(
-        (doc.strategies[0].events_caught, doc.strategies[0].events),
-        (3, 4)
-    );
-    // Undefined ends are null, not NaN (JSON has none).
-    let acc = &doc.strategies[0].metrics["classifier_accuracy"];
-    assert_eq!((acc.mean, acc.low, acc.high), (Some(0.95), None, None));
-    assert!(doc.strategies[0].rmse_vs_reference.is_none());
-    let text = serde_json::to_string_pretty(&doc).unwrap();
-    assert!(!text.contains("NaN"));
-    let back: docs::CampaignDoc = serde_json::from_str(&text).unwrap();
-    assert_eq!(back, doc);
-    insta::assert_snapshot!("campaign.json", text);
-}
-
-#[test]
 fn reconstruction_map_document() {
     use gleaner_app::{MapCell, ReconstructionMap};
     use gleaner_field::{CellIndex, LatLon};

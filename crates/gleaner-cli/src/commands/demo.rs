@@ -124,7 +124,7 @@ pub fn run(args: &DemoArgs) -> Result<String> {
     )?;
     for (id, _) in &exploration.sorties {
         let id = id.context("the sortie was stored")?;
-        let rec = app::fly(&mut project, &truth, id, t0, clock_now())?;
+        let rec = gleaner_campaign::fly(&mut project, &truth, id, t0, clock_now())?;
         let flown = app::export(&project, id)?;
         let files = export::write_files(&flown, &dir.join("missions").join(id.to_string()))?;
         writeln!(
@@ -169,7 +169,7 @@ pub fn run(args: &DemoArgs) -> Result<String> {
             &app::export(&project, id)?,
             &dir.join("missions").join(id.to_string()),
         )?;
-        let rec = app::fly(&mut project, &truth, id, t, clock_now())?;
+        let rec = gleaner_campaign::fly(&mut project, &truth, id, t, clock_now())?;
         writeln!(
             out,
             "   mission #{id} at {}: {}; total S = {:.3} (paper's greedy {:.3}); brought back {} readings; files in {}",
@@ -233,7 +233,7 @@ fn synthetic(
     args: &DemoArgs,
     out: &mut String,
     progress: &Terminal,
-) -> Result<(Project<AnyStore>, app::Truth, i64)> {
+) -> Result<(Project<AnyStore>, gleaner_campaign::Truth, i64)> {
     let (farm, files) = synth::run(&synth::SynthArgs {
         out: args.dir.join("data"),
         seed: args.seed,
@@ -293,9 +293,9 @@ fn project_and_truth(
     files: Vec<PathBuf>,
     format: app::Format,
     progress: &Terminal,
-) -> Result<(Project<AnyStore>, app::InitOutcome, app::Truth)> {
+) -> Result<(Project<AnyStore>, app::InitOutcome, gleaner_campaign::Truth)> {
     let (project, outcome) = app::init(init)?;
-    let truth = app::Truth::from_files(
+    let truth = gleaner_campaign::Truth::from_files(
         &project,
         &app::IngestRequest {
             files,
@@ -323,7 +323,7 @@ fn caf(
     data: &Path,
     out: &mut String,
     progress: &Terminal,
-) -> Result<(Project<AnyStore>, app::Truth, i64)> {
+) -> Result<(Project<AnyStore>, gleaner_campaign::Truth, i64)> {
     let caf = data.join("caf");
     let sensors = caf.join("sensors").join("CAF_sensor_locations.csv");
     let mut daily: Vec<PathBuf> = std::fs::read_dir(caf.join("Daily"))

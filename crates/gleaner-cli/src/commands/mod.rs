@@ -10,7 +10,6 @@ pub mod export;
 pub mod migrate;
 pub mod plan;
 pub mod reconstruct;
-pub mod report;
 pub mod score;
 pub mod serve;
 pub mod simulate;

@@ -6,10 +6,11 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use gleaner_app::campaign::{
+use gleaner_app::{self as app, Format, IngestRequest, InitRequest, Project};
+use gleaner_campaign::Truth;
+use gleaner_campaign::campaign::{
     CampaignResult, DatasetParts, Replay, ReplayOptions, Strategy, TruthEvent, replay, run_campaign,
 };
-use gleaner_app::{self as app, Format, IngestRequest, InitRequest, Project, Truth};
 
 use super::synth::{self, SynthArgs};
 
@@ -184,12 +185,14 @@ pub struct SimulateArgs {
 }
 
 /// The flight conditions the arguments give.
-fn flight_conditions(args: &SimulateArgs) -> Result<app::campaign_flight::FlightConditions> {
-    use app::campaign_flight::{DEFAULT_GUST_SD_MPS, FlightConditions, WindSource};
+fn flight_conditions(
+    args: &SimulateArgs,
+) -> Result<gleaner_campaign::campaign_flight::FlightConditions> {
+    use gleaner_campaign::campaign_flight::{DEFAULT_GUST_SD_MPS, FlightConditions, WindSource};
     let wind = match (&args.wind, &args.wind_csv) {
         (_, Some(path)) => WindSource::Observed {
             path: path.clone(),
-            days: app::campaign_flight::read_wind_csv(path)?,
+            days: gleaner_campaign::campaign_flight::read_wind_csv(path)?,
         },
         (Some(text), None) => WindSource::parse(text)?,
         (None, None) => WindSource::Still,
@@ -273,7 +276,7 @@ fn prepare(
 /// only read.
 fn project_record(args: &SimulateArgs, dir: &Path) -> Result<Replay> {
     let project = Project::open(dir)?;
-    let parts = app::ProjectRecord::read(&project)?.into_parts(dir);
+    let parts = gleaner_campaign::ProjectRecord::read(&project)?.into_parts(dir);
     Ok(replay(parts, &options(args)?, crate::clock_now())?)
 }
 
@@ -464,8 +467,8 @@ pub fn run(
             }
         }
     }
-    super::report::write_results(&args.out, &results, command_line)?;
-    let report = super::report::write_report(&args.out)?;
+    gleaner_campaign::results::write_results(&args.out, &results, command_line)?;
+    let report = gleaner_campaign::report::write_report(&args.out)?;
     let mut out = String::new();
     writeln!(
         out,

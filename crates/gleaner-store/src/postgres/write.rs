@@ -12,7 +12,8 @@ use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
 use crate::checks::{
     ImportFlight, as_i64, check_cells, check_modality_list, check_sensor_list, check_visits,
-    import_flight, keys, not_cancellable, plan_insert, validate_metadata, validate_mission,
+    import_flight, keys, mission_deleted, not_cancellable, plan_insert, validate_metadata,
+    validate_mission,
 };
 use crate::{
     CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionRecord,
@@ -753,11 +754,5 @@ pub(super) fn delete_mission(c: &mut Transaction<'_>, mission: MissionId) -> Res
     let n = c
         .execute("DELETE FROM missions WHERE id = $1", &[&mission.0])
         .db()?;
-    if n == 0 {
-        return Err(StoreError::Unknown {
-            what: "mission",
-            name: mission.to_string(),
-        });
-    }
-    Ok(())
+    mission_deleted(mission, n)
 }

@@ -20,19 +20,21 @@ use gleaner_kriging::{Covariance, FieldModel, IncrementModel, variance_reduction
 use gleaner_mission::Planner;
 use gleaner_store::{SqliteStore, Store, StoreRead};
 
-use crate::campaign_flight::{FlightConditions, FlightDay, fly_in_wind};
-use crate::error::{AppError, Result};
-use crate::explore::{ExplorationMemo, ExploreRequest, explore, explore_with};
-use crate::ingest::{Format, IngestRequest, Parsed, ingest_parsed};
-use crate::init::{InitRequest, init_store, init_store_with};
-use crate::plan::{Objective, PlanRequest, plan_scored};
-use crate::progress::{Progress, Silent};
-use crate::project::Project;
-use crate::reconstruct::{
-    EstimateReads, SensorEstimate, estimate_with, fit_models, target_modality,
+use gleaner_app::settings::Settings;
+use gleaner_app::shortcuts::{
+    EstimateReads, ExplorationMemo, Parsed, estimate_with, explore_with, fit_models, ingest_parsed,
+    plan_scored, target_modality,
 };
-use crate::score::{ScoreRequest, compute, score};
-use crate::settings::Settings;
+use gleaner_app::{AppError, Result};
+use gleaner_app::{ExploreRequest, explore};
+use gleaner_app::{Format, IngestRequest};
+use gleaner_app::{InitRequest, init_store, init_store_with};
+use gleaner_app::{Objective, PlanRequest};
+use gleaner_app::{Progress, Silent};
+use gleaner_app::{Project, SensorEstimate};
+use gleaner_app::{ScoreRequest, compute, score};
+
+use crate::campaign_flight::{FlightConditions, FlightDay, fly_in_wind};
 use crate::simulate::{Truth, fly_buffered, fly_cells};
 
 /// A utility term, for ablations.
@@ -62,10 +64,10 @@ pub enum Strategy {
     /// Every cell worth the same, the paper's greedy insertion: the nearest cells first.
     Nearest,
     /// The paper's method: its S (docs/method.md §2 at the paper's values,
-    /// [`crate::settings::UtilitySection::paper`], whatever the project's), its greedy planner.
+    /// [`gleaner_app::settings::UtilitySection::paper`], whatever the project's), its greedy planner.
     Paper,
     /// gleaner's method: the project's utility settings made gleaner's
-    /// ([`crate::settings::UtilitySection::gleaner`]: gated S with the drift freshness, the
+    /// ([`gleaner_app::settings::UtilitySection::gleaner`]: gated S with the drift freshness, the
     /// bounded anomaly, γ = δ = 0; plus η·V when `[utility] variance_weight` is set), the
     /// default planner.
     Gleaner,
@@ -78,13 +80,13 @@ pub enum Strategy {
     /// The information objective (docs/method.md §7): the route whose readings remove the
     /// most posterior variance of the dynamic field model (fitted on the history, run as a
     /// filter over what is known at each mission), summed over every sensor; marginal-gain
-    /// orienteering ([`crate::plan::Objective::Information`]).
+    /// orienteering ([`gleaner_app::Objective::Information`]).
     Information,
     /// The oracle's flyable twin: each cell worth its sensors' *predicted* squared error
     /// before the flight — the campaign estimator's variance from what is known, nothing
     /// clairvoyant — routed by the default planner.
     Expected,
-    /// gleaner's earlier method ([`crate::settings::UtilitySection::gated`]: gated S with a
+    /// gleaner's earlier method ([`gleaner_app::settings::UtilitySection::gated`]: gated S with a
     /// 14-day freshness half-life and the bounded anomaly, the project's γ and δ), the
     /// default planner.
     Gated,
@@ -316,7 +318,7 @@ pub fn rule_events(truth: &Truth, modality: &str, z_threshold: f64) -> Vec<Truth
     let series = truth_series(truth, modality);
     let mut events = Vec::new();
     for (sensor, (times, values)) in &series {
-        let step = crate::knowledge::sampling_step(std::slice::from_ref(times)).max(1);
+        let step = gleaner_app::shortcuts::sampling_step(std::slice::from_ref(times)).max(1);
         let changes: Vec<(UnixSeconds, f64)> = times
             .windows(2)
             .zip(values.windows(2))
@@ -429,14 +431,14 @@ pub struct CampaignRequest {
     /// Planner iteration cap (results independent of the machine's speed).
     pub planner_iterations: u64,
     /// Sorties per mission of the planned strategies (battery swaps, each within the budget,
-    /// planned together by `plan`'s team solver), in 1..=[`crate::plan::MAX_SORTIES`];
+    /// planned together by `plan`'s team solver), in 1..=[`gleaner_app::MAX_SORTIES`];
     /// exhaustive collection flies as many as it takes whatever this says.
     pub sorties: usize,
     /// Observations per kriging estimate.
     pub neighbours: usize,
     /// The reconstruction's model-based estimator (the `kriged` metrics): kriging of changes
     /// (the default), the dynamic field model or kriging of levels.
-    pub estimator: crate::reconstruct::Estimator,
+    pub estimator: gleaner_app::Estimator,
     /// Runs in parallel (threads; 0 = rayon's default).
     pub jobs: usize,
     /// Provenance time stamped on missions, seconds.
@@ -505,7 +507,7 @@ pub struct ReplayOptions {
     /// Observations per model-based estimate.
     pub neighbours: usize,
     /// The model-based estimator.
-    pub estimator: crate::reconstruct::Estimator,
+    pub estimator: gleaner_app::Estimator,
     /// Sensor buffers' capacity in readings per modality [default: unlimited].
     pub buffer: Option<usize>,
     /// Runs in parallel (0 = rayon's default).
@@ -538,8 +540,8 @@ impl Default for ReplayOptions {
             event_z: 3.0,
             planner_iterations: 300,
             sorties: 1,
-            neighbours: crate::reconstruct::DEFAULT_NEIGHBOURS,
-            estimator: crate::reconstruct::Estimator::default(),
+            neighbours: gleaner_app::DEFAULT_NEIGHBOURS,
+            estimator: gleaner_app::Estimator::default(),
             buffer: None,
             jobs: 2,
             energy_preset: None,
@@ -733,7 +735,7 @@ pub struct CampaignResult {
     pub changes: Option<IncrementModel>,
     /// The estimator every run was judged by, resolved against the fitted models (`None` in
     /// results written before it was recorded).
-    pub estimator: Option<crate::reconstruct::Estimator>,
+    pub estimator: Option<gleaner_app::Estimator>,
     /// Events that became available during the campaign.
     pub events: Vec<TruthEvent>,
     /// One per (strategy, seed, budget), in that order.
@@ -765,8 +767,8 @@ struct Shared<'a> {
     changes: IncrementModel,
     /// The dynamic field model fitted on the history (None when it cannot be fitted).
     dynamic: Option<gleaner_kriging::DynamicModel>,
-    /// The request's estimator, resolved against the models ([`crate::Estimator::resolve`]).
-    estimator: crate::reconstruct::Estimator,
+    /// The request's estimator, resolved against the models ([`gleaner_app::Estimator::resolve`]).
+    estimator: gleaner_app::Estimator,
     step_s: i64,
     /// The store every run starts from (the history ingested, the utility state built),
     /// copied for each run.
@@ -872,11 +874,11 @@ pub fn run_campaign(
             "budgets must be positive fractions".into(),
         ));
     }
-    if !(1..=crate::plan::MAX_SORTIES).contains(&request.sorties) {
+    if !(1..=gleaner_app::MAX_SORTIES).contains(&request.sorties) {
         return Err(AppError::Invalid(format!(
             "sorties = {}: allowed 1..={}",
             request.sorties,
-            crate::plan::MAX_SORTIES
+            gleaner_app::MAX_SORTIES
         )));
     }
     request.flight.check(&request.schedule)?;
@@ -924,7 +926,7 @@ pub fn run_campaign(
         new_run_project(&shared0, request.settings.clone())?
     };
     let modality = target_modality(&probe, request.modality.as_deref())?;
-    let crate::reconstruct::Models {
+    let gleaner_app::shortcuts::Models {
         levels: model,
         changes,
         dynamic,
@@ -936,7 +938,7 @@ pub fn run_campaign(
         .into_iter()
         .map(|m| m.modality.to_string())
         .collect();
-    let class_name = crate::score::condition_modality(probe.settings(), &names);
+    let class_name = gleaner_app::shortcuts::condition_modality(probe.settings(), &names);
     let (dir, probe_settings, mut template) = probe.into_parts();
     // Exhaustive collection must reach every cell within one battery: refuse a budget that
     // cannot, now rather than when its run fails after the others have run for minutes.
@@ -966,7 +968,7 @@ pub fn run_campaign(
     }
     // Every run's first recorded flight would otherwise rebuild the cell-summary cache from
     // the whole history; built once here, every copy starts with it.
-    template.write(|tx| crate::summaries::prepare_cache(tx))?;
+    template.write(|tx| gleaner_app::shortcuts::prepare_cache(tx))?;
     let series = truth_series(truth, &modality.to_string());
     let class_series = match &class_name {
         Some(c) if *c != modality.to_string() => truth_series(truth, c),
@@ -1093,7 +1095,7 @@ fn same_runs(request: &CampaignRequest, keys: &[RunKey]) -> Result<Vec<usize>> {
 
 /// The predicted (argmax) and true class of every cell, as a share right.
 fn classifier_accuracy(
-    scoring: &crate::score::Scoring,
+    scoring: &gleaner_app::Scoring,
     cells: &[(CellIndex, Vec<SensorId>)],
     class_series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
     at: UnixSeconds,
@@ -1360,7 +1362,7 @@ fn run_one(
         for (sortie, id) in flown.iter().enumerate() {
             let (outcome, lost) = if request.flight.is_still() {
                 // Flown exactly as planned.
-                let e = crate::view::mission(&project, *id)?.mission.energy;
+                let e = gleaner_app::mission(&project, *id)?.mission.energy;
                 flight.add((e.total_j, e.budget_j), 1.0, false, 0);
                 fly_buffered(&mut project, truth, *id, t, request.clock_now)?
             } else {
@@ -1930,7 +1932,7 @@ mod tests {
             carried: 0.0,
             kriged,
             variance: 1.0,
-            half90: crate::reconstruct::Z90,
+            half90: gleaner_app::Z90,
         };
         let estimates = [est("a", 0.10), est("b", 0.20), est("c", 0.30)];
         let mut series = BTreeMap::new();
@@ -1979,7 +1981,7 @@ mod tests {
 
     #[test]
     fn paper_and_gleaner_strategies_score_their_own_way() {
-        let mut base = crate::settings::Settings::parse(
+        let mut base = gleaner_app::settings::Settings::parse(
             "[project]\nname = \"p\"\ndatabase = \"g.db\"\n[field]\nbase_lat = 38.7\n\
              base_lon = -117.1\ncell_size_m = 40.0\n[sensors]\nfile = \"s.csv\"\n",
         )
@@ -2007,14 +2009,14 @@ mod tests {
     /// U and R ablations gleaner itself; every other strategy, seed and budget runs alone.
     #[test]
     fn only_identical_runs_share_a_run() {
-        let settings = crate::settings::Settings::parse(
+        let settings = gleaner_app::settings::Settings::parse(
             "[project]\nname = \"p\"\ndatabase = \"g.db\"\n[field]\nbase_lat = 38.7\n\
              base_lon = -117.1\ncell_size_m = 40.0\n[sensors]\nfile = \"s.csv\"\n",
         )
         .unwrap();
         let mut request = CampaignRequest {
             label: "t".into(),
-            init: crate::init::InitRequest::default(),
+            init: gleaner_app::InitRequest::default(),
             sensors: None,
             settings,
             history_until: 0,
@@ -2029,7 +2031,7 @@ mod tests {
             planner_iterations: 100,
             sorties: 1,
             neighbours: 16,
-            estimator: crate::reconstruct::Estimator::Changes,
+            estimator: gleaner_app::Estimator::Changes,
             jobs: 1,
             clock_now: 0,
             flight: FlightConditions::default(),

@@ -2,12 +2,14 @@
 //! synthetic farm whose future is rewritten plans and scores the same until the rewrite
 //! becomes available), and an end-to-end campaign on the real CAF network.
 
-use gleaner_app::campaign::{
+use gleaner_app::{self as app, Silent};
+use gleaner_campaign::Truth;
+use gleaner_campaign::campaign::{
     CampaignRequest, CampaignResult, Strategy, every, run_campaign, summarise,
 };
-use gleaner_app::{self as app, Silent, Truth};
 
 #[allow(dead_code)] // the fixtures this test does not use
+#[path = "../../gleaner-app/tests/common/mod.rs"]
 mod common;
 use common::{caf_files, shared_data};
 
@@ -310,7 +312,7 @@ fn the_oracle_bounds_the_error_a_choice_of_cells_leaves() {
             .missions
     };
     let (rr, oracle) = (run(Strategy::RoundRobin), run(Strategy::Oracle));
-    let sq = |m: &[gleaner_app::campaign::MissionMetrics]| -> f64 {
+    let sq = |m: &[gleaner_campaign::campaign::MissionMetrics]| -> f64 {
         m.iter().map(|m| m.rmse_kriged.powi(2)).sum()
     };
     for m in oracle {
@@ -336,7 +338,7 @@ fn campaign_missions_fly_several_sorties() {
         );
         assert!(b.cells > a.cells + a.cells / 2, "{a:?} {b:?}");
     }
-    let mean = |m: &[gleaner_app::campaign::MissionMetrics]| {
+    let mean = |m: &[gleaner_campaign::campaign::MissionMetrics]| {
         m.iter().map(|m| m.rmse_carried).sum::<f64>() / m.len() as f64
     };
     assert!(mean(two) < mean(one), "{} vs {}", mean(two), mean(one));
@@ -355,7 +357,7 @@ fn campaign_missions_fly_several_sorties() {
 /// the bit, those of the ablation run on its own; other strategies still run their own.
 #[test]
 fn identical_runs_share_results_equal_to_their_own_runs() {
-    use gleaner_app::campaign::Term;
+    use gleaner_campaign::campaign::Term;
     let together = caf_campaign_with(
         vec![
             Strategy::Gleaner,
@@ -366,7 +368,7 @@ fn identical_runs_share_results_equal_to_their_own_runs() {
         2,
     );
     let alone = caf_campaign_with(vec![Strategy::Without(Term::Redundancy)], 1, 1);
-    let text = |r: &gleaner_app::campaign::RunResult| {
+    let text = |r: &gleaner_campaign::campaign::RunResult| {
         format!("{:?} {:?} {:?}", r.missions, r.visits, r.caught)
     };
     assert_eq!(
@@ -423,7 +425,7 @@ fn small_farm(
 /// The same seed gives the same campaign, at any thread count; another weather seed, another.
 #[test]
 fn campaigns_in_random_winds_never_fly_over_budget() {
-    use gleaner_app::campaign_flight::{FlightConditions, WindSource};
+    use gleaner_campaign::campaign_flight::{FlightConditions, WindSource};
     let tmp = tempfile::tempdir().unwrap();
     let (init, project, truth, history_until) = small_farm(11, tmp.path());
     let schedule = every(history_until, history_until + 9 * DAY, DAY).unwrap();

@@ -2,7 +2,7 @@
 //! file of observed daily winds — which is the forecast the mission is planned for, the wind
 //! its sorties are flown in (the forecast plus a seeded error), each sortie's battery (a
 //! seeded share of its rated capacity), and the simulated flight that re-plans in the air
-//! ([`crate::replan`]) when the energy left cannot fly the rest of the route with the reserve.
+//! ([`gleaner_app::replan`]) when the energy left cannot fly the rest of the route with the reserve.
 //!
 //! Every draw is a function of the conditions' seed and the mission time (and the sortie), so
 //! every strategy, replicate and thread count meets the same weather on the same day.
@@ -14,10 +14,10 @@ use gleaner_field::{CellIndex, LocalPoint, UnixSeconds};
 use gleaner_store::{MissionId, Store};
 
 use crate::campaign::splitmix;
-use crate::error::{AppError, Result};
-use crate::project::Project;
-use crate::replan::{ReplanRequest, replan};
-use crate::wind::MAX_WIND_MPS;
+use gleaner_app::Project;
+use gleaner_app::wind::MAX_WIND_MPS;
+use gleaner_app::{AppError, Result};
+use gleaner_app::{ReplanRequest, replan};
 
 /// Seconds in a day.
 const DAY_S: i64 = 86_400;
@@ -265,24 +265,14 @@ impl WindSource {
 /// parse or is out of range, a day given twice; an empty file. [`AppError::Io`] when the file
 /// cannot be read.
 pub fn read_wind_csv(path: &Path) -> Result<Vec<DailyWind>> {
-    let text = crate::cell_csv::read_text(path)?;
+    let table = gleaner_app::cell_csv::read_table(path, " `date,speed_mps,from_deg`")?;
     let bad =
         |line: usize, what: String| AppError::Invalid(format!("{}:{line}: {what}", path.display()));
-    let mut lines = text.trim_start_matches('\u{feff}').lines().enumerate();
-    let header: Vec<String> = lines
-        .next()
-        .filter(|(_, h)| !h.trim().is_empty())
-        .map(|(_, h)| {
-            h.split(',')
-                .map(|c| c.trim().to_ascii_lowercase())
-                .collect()
-        })
-        .ok_or_else(|| {
-            AppError::Invalid(format!(
-                "{}: empty file: expected a header line `date,speed_mps,from_deg`",
-                path.display()
-            ))
-        })?;
+    let header: Vec<String> = table
+        .header
+        .iter()
+        .map(|c| c.to_ascii_lowercase())
+        .collect();
     let column = |name: &str| {
         header.iter().position(|h| h == name).ok_or_else(|| {
             bad(
@@ -293,23 +283,9 @@ pub fn read_wind_csv(path: &Path) -> Result<Vec<DailyWind>> {
     };
     let (c_date, c_speed, c_from) = (column("date")?, column("speed_mps")?, column("from_deg")?);
     let mut days: Vec<DailyWind> = Vec::new();
-    for (k, raw) in lines {
-        let line = k + 1;
-        if raw.trim().is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = raw.split(',').map(str::trim).collect();
-        if fields.len() != header.len() {
-            return Err(bad(
-                line,
-                format!(
-                    "{} fields, but the header has {}",
-                    fields.len(),
-                    header.len()
-                ),
-            ));
-        }
-        let field = |c: usize| fields[c];
+    for (line, fields) in &table.rows {
+        let line = *line;
+        let field = |c: usize| fields[c].as_str();
         let day = gleaner_ingest::time::parse_date(field(c_date)).ok_or_else(|| {
             bad(
                 line,
@@ -355,7 +331,7 @@ pub fn read_wind_csv(path: &Path) -> Result<Vec<DailyWind>> {
             w[1].line,
             format!(
                 "date {}: given twice (first on line {})",
-                &crate::format_rfc3339(w[1].day)[..10],
+                &gleaner_app::format_rfc3339(w[1].day)[..10],
                 w[0].line
             ),
         ));
@@ -398,7 +374,7 @@ impl FlightConditions {
                         "{}: no wind for {} (a mission day): give a row for every day of the \
                          campaign",
                         path.display(),
-                        &crate::format_rfc3339(day)[..10]
+                        &gleaner_app::format_rfc3339(day)[..10]
                     )));
                 }
             }
@@ -433,7 +409,7 @@ impl FlightConditions {
                         AppError::Invalid(format!(
                             "{}: no wind for {}",
                             path.display(),
-                            &crate::format_rfc3339(day)[..10]
+                            &gleaner_app::format_rfc3339(day)[..10]
                         ))
                     })?;
                 Wind {
@@ -489,7 +465,7 @@ fn route_j(model: &MissionEnergyModel, base: LocalPoint, route: &[CellVisit]) ->
 /// its rated capacity. The aircraft learns the wind on its first leg and reads the energy
 /// left from its battery: over each stop, done collecting, it prices the rest of its route in
 /// that wind, and when the energy left less the reserve cannot fly it, it re-plans from that
-/// stop with [`crate::replan`] (the wind now plus `[flight] wind_margin_mps`; the remaining
+/// stop with [`gleaner_app::replan`] (the wind now plus `[flight] wind_margin_mps`; the remaining
 /// stops dropped and reordered), once; when the re-planned route is still short, or no
 /// continuation exists, it flies home from the stop it is over. Records nothing.
 ///
@@ -517,9 +493,9 @@ pub fn fly_in_wind<S: Store>(
                 .into(),
         ));
     }
-    let mission = crate::view::mission(project, id)?;
+    let mission = gleaner_app::mission(project, id)?;
     let profile = mission.mission.profile;
-    let export = crate::view::export_energy_model(project, &mission)?;
+    let export = gleaner_app::export_energy_model(project, &mission)?;
     let model = gleaner_energy::FlightEnergyModel {
         wind: actual,
         ..export
