@@ -91,7 +91,7 @@ pub enum Strategy {
     /// default planner.
     Gated,
     /// gleaner's score and the information objective together
-    /// ([`crate::plan::Objective::Hybrid`]): gleaner's utility settings, a route worth its
+    /// ([`gleaner_app::Objective::Hybrid`]): gleaner's utility settings, a route worth its
     /// cells' share of the total S blended with the share of the dynamic field model's
     /// posterior variance its readings remove (`[planner] information_weight`), marginal-gain
     /// orienteering.
