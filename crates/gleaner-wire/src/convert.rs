@@ -9,8 +9,8 @@ use gleaner_ingest::time::format_rfc3339;
 
 use crate::docs::{
     CampaignDoc, CellRowDoc, CellScoresDoc, ConditionDoc, CorrelationDoc, ExplorationDoc,
-    IntervalDoc, ReconstructionDoc, ReconstructionModelDoc, ScoreRowDoc, ScoringDoc,
-    SensorEstimateDoc, StrategySummaryDoc, SummaryDoc, VariogramDoc,
+    FlightSummaryDoc, IntervalDoc, ReconstructionDoc, ReconstructionModelDoc, ScoreRowDoc,
+    ScoringDoc, SensorEstimateDoc, StrategySummaryDoc, SummaryDoc, VariogramDoc,
 };
 use crate::{
     BaselineDoc, CAMPAIGN_FORMAT, CellDoc, EnergyDoc, FIELD_FORMAT, FieldDoc, MISSION_FORMAT,
@@ -532,7 +532,26 @@ fn interval(i: &gleaner_app::campaign::Interval) -> IntervalDoc {
     }
 }
 
-/// A campaign's summary: per strategy and budget, every metric with its interval.
+/// Per strategy, how a campaign's sorties flew in its weather (`CampaignDoc::flights`).
+pub fn flights(f: &[gleaner_app::campaign_flight::FlightSummary]) -> Vec<FlightSummaryDoc> {
+    f.iter()
+        .map(|f| FlightSummaryDoc {
+            strategy: f.strategy.name().into(),
+            missions: f.missions,
+            mean_forecast_mps: f.mean_forecast_mps,
+            replanned: f.replanned,
+            cells_dropped: f.cells_dropped,
+            readings: f.readings,
+            readings_calm_days: f.readings_calm_days,
+            calm_days: f.calm_days,
+            over_budget: f.over_budget,
+            max_excess_j: f.max_excess_j.is_finite().then_some(f.max_excess_j),
+        })
+        .collect()
+}
+
+/// A campaign's summary: per strategy and budget, every metric with its interval (without
+/// flights: see [`flights`]).
 pub fn campaign(c: &gleaner_app::campaign::CampaignSummary) -> CampaignDoc {
     CampaignDoc {
         format: CAMPAIGN_FORMAT.into(),
@@ -565,5 +584,6 @@ pub fn campaign(c: &gleaner_app::campaign::CampaignSummary) -> CampaignDoc {
                 delay_vs_reference: s.delay_vs_reference.as_ref().map(interval),
             })
             .collect(),
+        flights: Vec::new(),
     }
 }
