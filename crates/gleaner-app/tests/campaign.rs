@@ -509,7 +509,7 @@ fn leg_by_leg_gusts_change_the_flights_but_never_the_budget() {
         r.runs[0]
             .missions
             .iter()
-            .map(|m| m.flight.clone().expect("a flight record"))
+            .map(|m| m.flight.expect("a flight record"))
             .collect::<Vec<_>>()
     };
     let (a, b) = (flights(&steady), flights(&gusty));
