@@ -27,6 +27,10 @@ pub struct ExploreRequest {
     pub at: Option<UnixSeconds>,
     /// Plan only; write nothing.
     pub dry_run: bool,
+    /// The forecast wind (m/s, and the direction it blows from) [default: the project's
+    /// `[flight] wind_mps` and `wind_from_deg`]; `[flight] wind_margin_mps` is added to it,
+    /// as for `plan`.
+    pub wind: Option<gleaner_energy::Wind>,
 }
 
 /// The exploration plan.
@@ -50,6 +54,31 @@ pub struct Exploration {
     /// Cells the flight cannot reach (inside a buffered no-fly zone, outside the geofence, or
     /// cut off): left out of the sorties.
     pub unreachable: Vec<crate::airspace::Unreachable>,
+    /// The wind the sorties were planned in (forecast, margin, the wind the legs are priced
+    /// in).
+    pub wind: crate::wind::PlanWind,
+}
+
+/// Budget margins an exploration in wind tries, in order, until every sortie passes the
+/// energy model's re-check in the wind: `k/8` of the margin that always suffices (see
+/// [`exploration_margins`]), k = 0..=8.
+const WIND_MARGIN_STEPS: usize = 8;
+
+/// The relative budget margins (in [0, 1)) the exploration planner is given, in order. The
+/// planner prices legs by their length at the still-air energy per metre; in wind a metre
+/// costs at most `r` times that (r = [`MissionEnergyModel::worst_energy_per_metre_j`] over
+/// the still-air figure), so a margin of 1 − 1/r always gives sorties within the budget in
+/// the wind. Tried from the smallest. Still air: the default margin alone.
+fn exploration_margins(model: &MissionEnergyModel) -> Vec<f64> {
+    let default = ExplorationOptions::default().budget_margin;
+    if !model.wind_applies() {
+        return vec![default];
+    }
+    let r = model.worst_energy_per_metre_j() / model.energy_per_metre_j();
+    let sufficient = (1.0 - 1.0 / r).clamp(0.0, 0.99);
+    (0..=WIND_MARGIN_STEPS)
+        .map(|k| (sufficient * k as f64 / WIND_MARGIN_STEPS as f64).max(default))
+        .collect()
 }
 
 /// The use case: plans the exploration sorties and, unless a dry run, stores them as
@@ -117,7 +146,15 @@ pub fn explore_with<S: Store>(
 ) -> Result<Exploration> {
     let k = crate::state::collection_knowledge(project, request.at, History::default())?;
     let t = crate::when::mission_time(request.at, k.latest)?;
-    let model = energy_model(project)?;
+    // Legs and hovers priced in the forecast wind plus the margin, as `plan` prices them
+    // (still air: the model as it is).
+    let plan_wind = crate::wind::PlanWind::of(&project.settings().flight, request.wind)?;
+    let still = energy_model(project)?;
+    let model = if plan_wind.planned.is_calm() {
+        still
+    } else {
+        still.with_wind(plan_wind.planned)
+    };
     let profile = flight_profile(project, &model)?;
     let svc = services(&model, &k, t)?;
     let points = FlightPoints::of(&k.field);
@@ -125,20 +162,13 @@ pub fn explore_with<S: Store>(
     let service_j: Vec<f64> = svc.iter().map(|s| s.energy_j).collect();
     let base = points.base;
     let routed = routing(project, &k, &points)?;
-    let (plan, detours, unreachable) = match &routed {
-        None => (
-            memo.plan(
-                &model,
-                base,
-                centres,
-                &service_j,
-                &ExplorationOptions::default(),
-            )
-            .map_err(|e| AppError::core("exploration", e))?,
-            None,
-            Vec::new(),
-        ),
-        Some((_, all, unreachable)) => {
+    let (detours, unreachable) = match &routed {
+        None => (None, Vec::new()),
+        Some((_, all, unreachable)) => (Some(all), unreachable.clone()),
+    };
+    let mut plan_with = |options: &ExplorationOptions| match &routed {
+        None => memo.plan(&model, base, centres, &service_j, options),
+        Some((_, all, _)) => {
             // The reachable cells only, with their legs; cell indices mapped back after.
             let keep: Vec<usize> = (0..centres.len())
                 .filter(|&c| all.reachable(c + 1))
@@ -156,18 +186,39 @@ pub fn explore_with<S: Store>(
                 base,
                 &kept_centres,
                 &kept_service,
-                &ExplorationOptions::default(),
+                options,
                 Some(&sub),
-            )
-            .map_err(|e| AppError::core("exploration", e))?;
+            )?;
             for s in &mut plan.sorties {
                 for c in &mut s.cells {
                     *c = keep[*c];
                 }
             }
-            (plan, Some(all), unreachable.clone())
+            Ok(plan)
         }
     };
+    // In wind the planner's length-based split may leave a sortie over the budget in the
+    // wind: a larger margin then, up to one that always suffices.
+    let margins = exploration_margins(&model);
+    let mut found = None;
+    for (k, &budget_margin) in margins.iter().enumerate() {
+        let options = ExplorationOptions {
+            budget_margin,
+            ..ExplorationOptions::default()
+        };
+        match plan_with(&options) {
+            Ok(plan) => {
+                found = Some(plan);
+                break;
+            }
+            Err(ExplorationError::Infeasible { .. }) if k + 1 < margins.len() => continue,
+            Err(e) => return Err(AppError::core("exploration", e)),
+        }
+    }
+    let plan = found.ok_or_else(|| AppError::Core {
+        context: "exploration",
+        message: "no budget margin gave sorties within the battery".into(),
+    })?;
     let zeros = vec![0.0; centres.len()];
     let mut sorties = Vec::with_capacity(plan.sorties.len());
     let mut vias = Vec::with_capacity(plan.sorties.len());
@@ -238,6 +289,7 @@ pub fn explore_with<S: Store>(
         sorties,
         via: vias,
         unreachable,
+        wind: plan_wind,
     })
 }
 
@@ -245,6 +297,64 @@ pub fn explore_with<S: Store>(
 mod tests {
     use super::*;
     use gleaner_energy::EnergyConfig;
+
+    /// Exploration in wind: every sortie is priced in the forecast plus the margin and
+    /// within the battery there, every cell is visited, the profile carries that wind; a
+    /// calm forecast is still air.
+    #[test]
+    fn explores_in_the_forecast_wind_plus_the_margin() {
+        let mut p = crate::test_farm::ingested_synth_project(&gleaner_synth::SynthConfig {
+            seed: 5,
+            sensor_count: 40,
+            days: 20,
+            vw_depths_cm: vec![30],
+            t_depths_cm: vec![],
+            ..gleaner_synth::SynthConfig::default()
+        });
+        let at = p.farm.times()[0] + 10 * 86_400;
+        let ask = |wind| ExploreRequest {
+            at: Some(at),
+            dry_run: true,
+            wind,
+        };
+        let still = explore(&mut p.project, &ask(None), 0).unwrap();
+        let calm = explore(&mut p.project, &ask(Some(gleaner_energy::Wind::CALM)), 0).unwrap();
+        assert_eq!(
+            format!("{:?}", still.sorties),
+            format!("{:?}", calm.sorties)
+        );
+        assert!(still.wind.planned.is_calm());
+        let forecast = gleaner_energy::Wind::new(9.0, 250.0).unwrap();
+        let windy = explore(&mut p.project, &ask(Some(forecast)), 0).unwrap();
+        assert_eq!(windy.wind.forecast, forecast);
+        let margin = p.project.settings().flight.wind_margin_mps;
+        assert_eq!(windy.wind.planned.speed_mps, 9.0 + margin);
+        // Priced otherwise: legs cost more, hovers less (induced power falls with airspeed).
+        assert_ne!(windy.total_energy_j, still.total_energy_j);
+        let covered: usize = windy.sorties.iter().map(|(_, m)| m.stops.len()).sum();
+        assert_eq!(covered, windy.cells);
+        let model = energy_model(&p.project)
+            .unwrap()
+            .with_wind(windy.wind.planned);
+        let (_, field) = p.project.field().unwrap();
+        let base = FlightPoints::of(&field).base;
+        for (_, m) in &windy.sorties {
+            assert_eq!(m.profile.wind_mps, 9.0 + margin);
+            assert_eq!(m.profile.wind_from_deg, 250.0);
+            assert!(m.energy.total_j <= m.energy.budget_j, "{:?}", m.energy);
+            // Re-priced in the wind from the stops: the stored total.
+            let visits: Vec<CellVisit> = m
+                .stops
+                .iter()
+                .map(|s| CellVisit {
+                    centre: field.frame().forward(s.centre),
+                    hover_s: s.hover_s,
+                })
+                .collect();
+            let e = model.breakdown(base, &visits).unwrap();
+            assert!((e.total_j - m.energy.total_j).abs() < 1e-6 * e.total_j);
+        }
+    }
 
     /// The memo gives what the planner computes, for repeated and for changed inputs (one
     /// service energy one ulp larger is already a new plan's inputs).

@@ -29,6 +29,9 @@ pub struct ReplanRequest {
     /// The wind now (m/s, and the direction it blows from), to which `[flight]
     /// wind_margin_mps` is added [default: the wind the mission was planned in, as stored].
     pub wind: Option<gleaner_energy::Wind>,
+    /// Added to `wind`'s speed, m/s (>= 0) [default: `[flight] wind_margin_mps`]; a
+    /// simulated flight passes the margin of the gusts still to come. Ignored without `wind`.
+    pub wind_margin_mps: Option<f64>,
 }
 
 /// A continuation: the stops kept, in their new order, from where the aircraft is.
@@ -114,7 +117,13 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
     let stored = crate::view::export_energy_model(project, &parent)?;
     // The wind now, if given (plus the margin), else the one the mission was planned in.
     let plan_wind = match request.wind {
-        Some(w) => crate::wind::PlanWind::of(&project.settings().flight, Some(w))?,
+        Some(w) => {
+            let mut flight = project.settings().flight;
+            if let Some(m) = request.wind_margin_mps {
+                flight.wind_margin_mps = m;
+            }
+            crate::wind::PlanWind::of(&flight, Some(w))?
+        }
         None => crate::wind::PlanWind {
             forecast: stored.wind,
             margin_mps: 0.0,

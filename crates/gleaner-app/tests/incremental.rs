@@ -96,6 +96,7 @@ fn record_first_sortie<S: app::Store>(
         &app::ExploreRequest {
             at: Some(at),
             dry_run: false,
+            wind: None,
         },
         0,
     )

@@ -145,6 +145,7 @@ fn lifecycle(database: Option<String>) -> (tempfile::TempDir, app::Project<app::
         &app::ExploreRequest {
             at: Some(t),
             dry_run: true,
+            wind: None,
         },
         0,
     )

@@ -279,6 +279,9 @@ fn run_settings(request: &CampaignRequest, key: &RunKey) -> Result<Settings> {
     settings.energy.battery_j = Some(battery * key.budget);
     settings.planner.solver = key.strategy.planner().name().to_string();
     settings.planner.seed = key.seed;
+    settings.flight.wind_margin_mps = request
+        .flight
+        .planning_margin_mps(settings.flight.wind_margin_mps);
     Ok(settings)
 }
 
@@ -953,6 +956,7 @@ pub fn run_campaign(
                 &ExploreRequest {
                     at: Some(request.history_until),
                     dry_run: true,
+                    wind: None,
                 },
                 request.clock_now,
             );
@@ -1289,6 +1293,7 @@ fn run_one(
                 &ExploreRequest {
                     at: Some(t),
                     dry_run: false,
+                    wind: request.flight.plan_wind(&day),
                 },
                 request.clock_now,
                 &mut exploration_memo,
@@ -1370,7 +1375,7 @@ fn run_one(
                 let f = fly_in_wind(
                     &project,
                     *id,
-                    day.actual,
+                    request.flight.sortie(t, sortie, day.actual),
                     factor,
                     request.planner_iterations,
                 )?;

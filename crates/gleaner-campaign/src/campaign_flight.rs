@@ -4,14 +4,25 @@
 //! seeded share of its rated capacity), and the simulated flight that re-plans in the air
 //! ([`gleaner_app::replan`]) when the energy left cannot fly the rest of the route with the reserve.
 //!
-//! Every draw is a function of the conditions' seed and the mission time (and the sortie), so
-//! every strategy, replicate and thread count meets the same weather on the same day.
+//! Every draw is a function of the conditions' seed and the mission time (and the sortie and
+//! the leg), so every strategy, replicate and thread count meets the same weather on the same
+//! day: each draw seeds its own ChaCha8 generator from a SplitMix64 hash of those keys and
+//! samples `rand_distr`'s distributions (Weibull, normal, uniform) from it.
+//!
+//! The plan's margin is tied to the forecast error ([`FlightConditions::planning_margin_mps`]):
+//! a mission is planned for the forecast speed plus the `q`-quantile of the error's component
+//! along the wind (σ·Φ⁻¹(q)). In the air the day's wind is known from the first leg, so a
+//! re-plan adds only a margin for the gusts still to come ([`FlightConditions::air_margin_mps`]).
 
 use std::path::{Path, PathBuf};
 
-use gleaner_energy::{CellVisit, MissionEnergyModel, Wind};
-use gleaner_field::{CellIndex, LocalPoint, UnixSeconds};
+use gleaner_energy::{CellVisit, Wind};
+use gleaner_field::{CellIndex, UnixSeconds};
 use gleaner_store::{MissionId, Store};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal, Weibull};
+use statrs::distribution::{ContinuousCDF, Normal};
 
 use crate::campaign::splitmix;
 use gleaner_app::Project;
@@ -52,6 +63,14 @@ pub const DEFAULT_WEIBULL_SHAPE: f64 = 2.0;
 /// request gives none.
 pub const DEFAULT_GUST_SD_MPS: f64 = 1.0;
 
+/// The default [`FlightConditions::margin_quantile`]: the share of forecast errors along the
+/// wind the plan's margin covers (chosen on CAF 2013; docs/method.md §3, wind).
+pub const DEFAULT_MARGIN_QUANTILE: f64 = 0.95;
+
+/// The quantile of the leg-by-leg gusts the in-air checks and re-plans cover
+/// ([`FlightConditions::air_margin_mps`]): 97.5%, about two standard deviations.
+pub const AIR_MARGIN_QUANTILE: f64 = 0.975;
+
 /// Largest battery weakening a campaign may ask for (a sortie's battery holds at least half
 /// its rated capacity).
 pub const MAX_BATTERY_WEAKENING: f64 = 0.5;
@@ -70,9 +89,9 @@ pub struct DailyWind {
 }
 
 /// The weather and batteries a campaign's flights meet (`simulate --wind`, `--wind-csv`,
-/// `--gust`, `--weak-battery`). The default is still air, exact forecasts and full batteries:
-/// missions are flown exactly as planned.
-#[derive(Debug, Clone, PartialEq, Default)]
+/// `--gust`, `--leg-gust`, `--weak-battery`, `--margin-quantile`). The default is still air,
+/// exact forecasts and full batteries: missions are flown exactly as planned.
+#[derive(Debug, Clone, PartialEq)]
 pub struct FlightConditions {
     /// Each mission's forecast wind.
     pub wind: WindSource,
@@ -85,6 +104,27 @@ pub struct FlightConditions {
     pub battery_weakening: f64,
     /// Seed of the draws.
     pub seed: u64,
+    /// Gusts met leg by leg: each leg of a flown sortie (and the hover at its end) meets the
+    /// day's wind plus a vector whose east and north components are independent normal
+    /// draws with this standard deviation, m/s (>= 0; 0: every leg in the day's wind).
+    pub leg_gust_sd_mps: f64,
+    /// The plan's margin: the quantile q of the forecast error along the wind that the margin
+    /// covers, in [0.5, 0.999] (the margin is σ·Φ⁻¹(q), σ = [`FlightConditions::gust_sd_mps`]);
+    /// `None`: the project's `[flight] wind_margin_mps` as it is.
+    pub margin_quantile: Option<f64>,
+}
+
+impl Default for FlightConditions {
+    fn default() -> Self {
+        Self {
+            wind: WindSource::Still,
+            gust_sd_mps: 0.0,
+            battery_weakening: 0.0,
+            seed: 0,
+            leg_gust_sd_mps: 0.0,
+            margin_quantile: Some(DEFAULT_MARGIN_QUANTILE),
+        }
+    }
 }
 
 /// One mission's wind: what it was planned for and what it was flown in.
@@ -152,41 +192,29 @@ impl FlightDay {
     }
 }
 
-/// A uniform draw in (0, 1) of stream `stream`, time `t` and index `k` under `seed`.
+/// The generator of draw `k` of stream `stream` at time `t` under `seed`: ChaCha8 seeded
+/// with a SplitMix64 hash of the four keys.
+fn rng(seed: u64, stream: u64, t: UnixSeconds, k: u64) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(splitmix(
+        seed ^ splitmix(stream ^ splitmix(t as u64 ^ splitmix(k))),
+    ))
+}
+
+/// A uniform draw in [0, 1) of stream `stream`, time `t` and index `k` under `seed`.
 fn uniform(seed: u64, stream: u64, t: UnixSeconds, k: u64) -> f64 {
-    let x = splitmix(seed ^ splitmix(stream ^ splitmix(t as u64 ^ splitmix(k))));
-    ((x >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    rng(seed, stream, t, k).random::<f64>()
 }
 
-/// Two independent standard normal draws (Box–Muller) of `stream` at `t`.
-fn normals(seed: u64, stream: u64, t: UnixSeconds) -> (f64, f64) {
-    let (u1, u2) = (uniform(seed, stream, t, 0), uniform(seed, stream, t, 1));
-    let r = (-2.0 * u1.ln()).sqrt();
-    let a = std::f64::consts::TAU * u2;
-    (r * a.cos(), r * a.sin())
+/// The next two independent standard normal draws of `rng` (east, north).
+fn normal_pair(rng: &mut ChaCha8Rng) -> (f64, f64) {
+    let e: f64 = StandardNormal.sample(rng);
+    let n: f64 = StandardNormal.sample(rng);
+    (e, n)
 }
 
-/// Γ(x) for x in [1, 3] (Lanczos, g = 7, 9 terms: relative error < 1e-13).
-fn gamma(x: f64) -> f64 {
-    const G: f64 = 7.0;
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    let x = x - 1.0;
-    let mut a = C[0];
-    let t = x + G + 0.5;
-    for (k, c) in C.iter().enumerate().skip(1) {
-        a += c / (x + k as f64);
-    }
-    (std::f64::consts::TAU).sqrt() * t.powf(x + 0.5) * (-t).exp() * a
+/// Φ⁻¹(q): the standard normal quantile of `q` in (0, 1).
+fn normal_quantile(q: f64) -> f64 {
+    Normal::standard().inverse_cdf(q)
 }
 
 /// The wind whose air moves by (`e`, `n`) m/s (east, north), speed capped at
@@ -251,6 +279,27 @@ impl WindSource {
             return Err(bad("the shape must be in [1, 10]"));
         }
         Ok(Self::Weibull { mean_mps, shape })
+    }
+}
+
+/// Parses a planning-margin quantile as `simulate --margin-quantile` takes it: a number in
+/// [0.5, 0.999], or `settings` (`None`: the project's `[flight] wind_margin_mps`).
+///
+/// # Errors
+/// [`AppError::Invalid`] quoting the text, for anything else.
+pub fn parse_margin_quantile(text: &str) -> Result<Option<f64>> {
+    let t = text.trim();
+    if t.eq_ignore_ascii_case("settings") {
+        return Ok(None);
+    }
+    match t.parse::<f64>() {
+        Ok(q) if q.is_finite() && (0.5..=0.999).contains(&q) => Ok(Some(q)),
+        _ => Err(AppError::Invalid(format!(
+            "--margin-quantile {:?}: expected a number in [0.5, 0.999] (the share of forecast \
+             errors along the wind the planning margin covers) or `settings` ([flight] \
+             wind_margin_mps)",
+            gleaner_ingest::shorten(text)
+        ))),
     }
 }
 
@@ -340,10 +389,61 @@ pub fn read_wind_csv(path: &Path) -> Result<Vec<DailyWind>> {
 }
 
 impl FlightConditions {
-    /// Whether flights are flown exactly as planned: still air, exact forecasts, full
-    /// batteries.
+    /// Whether flights are flown exactly as planned: still air, exact forecasts, no gusts,
+    /// full batteries.
     pub fn is_still(&self) -> bool {
-        self.wind == WindSource::Still && self.gust_sd_mps == 0.0 && self.battery_weakening == 0.0
+        self.wind == WindSource::Still
+            && self.gust_sd_mps == 0.0
+            && self.leg_gust_sd_mps == 0.0
+            && self.battery_weakening == 0.0
+    }
+
+    /// The margin a mission is planned with, m/s: added to its forecast speed (not to still
+    /// air). With [`FlightConditions::margin_quantile`] q, σ·Φ⁻¹(q) (σ the forecast error's
+    /// standard deviation, Φ the standard normal distribution function): the q-quantile of
+    /// the error's component along the forecast wind, 0 for q = 0.5 or an exact forecast.
+    /// Without one, or when flights are flown as planned, `settings_margin_mps` (`[flight]
+    /// wind_margin_mps`) as it is.
+    pub fn planning_margin_mps(&self, settings_margin_mps: f64) -> f64 {
+        match self.margin_quantile {
+            Some(q) if !self.is_still() => self.gust_sd_mps * normal_quantile(q).max(0.0),
+            _ => settings_margin_mps,
+        }
+    }
+
+    /// The forecast a mission of `day` is planned (and explored) for: `None` in still air
+    /// (the project's `[flight]` settings), else the day's forecast.
+    pub fn plan_wind(&self, day: &DayWind) -> Option<Wind> {
+        match self.wind {
+            WindSource::Still => None,
+            _ => Some(day.forecast),
+        }
+    }
+
+    /// The margin the aircraft adds in the air to the day's wind it has met, m/s, when it
+    /// checks the rest of its route and when it re-plans: the [`AIR_MARGIN_QUANTILE`]
+    /// quantile of the leg-by-leg gusts' component along the wind (σ_leg·Φ⁻¹(0.975) ≈
+    /// 2 σ_leg); 0 without gusts (the day's wind is known once airborne).
+    pub fn air_margin_mps(&self) -> f64 {
+        self.leg_gust_sd_mps * normal_quantile(AIR_MARGIN_QUANTILE)
+    }
+
+    /// The winds sortie `sortie` (from 0) of the mission at `t` meets leg by leg: `day` plus
+    /// the `legs` first gusts of its own seeded sequence (leg i of the route flown, the return
+    /// last; the same leg index always meets the same gust), each speed capped at
+    /// [`MAX_WIND_MPS`]. All `day` without leg gusts.
+    pub fn leg_winds(&self, t: UnixSeconds, sortie: usize, day: Wind, legs: usize) -> Vec<Wind> {
+        if self.leg_gust_sd_mps == 0.0 {
+            return vec![day; legs];
+        }
+        let mut r = rng(self.seed, 5, t, sortie as u64);
+        let (e, n) = day.velocity_mps();
+        (0..legs)
+            .map(|_| {
+                let (ge, gn) = normal_pair(&mut r);
+                wind_of_velocity(e + self.leg_gust_sd_mps * ge, n + self.leg_gust_sd_mps * gn)
+            })
+            .collect()
     }
 
     /// Checks the settings and that an observed-winds file covers every mission's day.
@@ -355,6 +455,21 @@ impl FlightConditions {
             return Err(AppError::Invalid(format!(
                 "--gust {}: the forecast error's standard deviation must be in [0, 10] m/s",
                 gleaner_ingest::number(self.gust_sd_mps)
+            )));
+        }
+        if !(self.leg_gust_sd_mps.is_finite() && (0.0..=10.0).contains(&self.leg_gust_sd_mps)) {
+            return Err(AppError::Invalid(format!(
+                "--leg-gust {}: the gusts' standard deviation must be in [0, 10] m/s",
+                gleaner_ingest::number(self.leg_gust_sd_mps)
+            )));
+        }
+        if let Some(q) = self.margin_quantile
+            && !(q.is_finite() && (0.5..=0.999).contains(&q))
+        {
+            return Err(AppError::Invalid(format!(
+                "--margin-quantile {}: the share of forecast errors the margin covers must be \
+                 in [0.5, 0.999]",
+                gleaner_ingest::number(q)
             )));
         }
         if !(self.battery_weakening.is_finite()
@@ -391,9 +506,12 @@ impl FlightConditions {
         let forecast = match &self.wind {
             WindSource::Still => Wind::CALM,
             WindSource::Weibull { mean_mps, shape } => {
-                let scale = mean_mps / gamma(1.0 + 1.0 / shape);
-                let u = uniform(self.seed, 1, t, 0);
-                let speed = (scale * (-u.ln()).powf(1.0 / shape)).min(MAX_WIND_MPS);
+                let scale = mean_mps / statrs::function::gamma::gamma(1.0 + 1.0 / shape);
+                let speed = match Weibull::new(scale, *shape) {
+                    Ok(w) => w.sample(&mut rng(self.seed, 1, t, 0)).min(MAX_WIND_MPS),
+                    // A mean of 0 m/s: still air every day.
+                    Err(_) => 0.0,
+                };
                 let from = 360.0 * uniform(self.seed, 2, t, 0);
                 Wind {
                     speed_mps: speed,
@@ -419,7 +537,7 @@ impl FlightConditions {
             }
         };
         let actual = if self.gust_sd_mps > 0.0 {
-            let (ze, zn) = normals(self.seed, 3, t);
+            let (ze, zn) = normal_pair(&mut rng(self.seed, 3, t, 0));
             let (e, n) = forecast.velocity_mps();
             wind_of_velocity(e + self.gust_sd_mps * ze, n + self.gust_sd_mps * zn)
         } else {
@@ -453,21 +571,51 @@ pub struct SortieFlight {
     pub usable_j: f64,
 }
 
-/// Energy of the sortie `base` → `route` → `base` in `model`, J.
-fn route_j(model: &MissionEnergyModel, base: LocalPoint, route: &[CellVisit]) -> Result<f64> {
-    model
-        .breakdown(base, route)
-        .map(|e| e.total_j)
-        .map_err(|e| AppError::core("simulated flight", e))
+/// The weather one sortie meets in the air: the day's wind, the gusts leg by leg, and the
+/// margin it adds to the day's wind when it checks the rest of its route and re-plans.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SortieWeather<'a> {
+    /// The campaign's conditions (seed, gusts).
+    pub conditions: &'a FlightConditions,
+    /// The mission's time, s.
+    pub t: UnixSeconds,
+    /// The sortie, from 0.
+    pub sortie: usize,
+    /// The day's wind (the forecast plus its error).
+    pub day: Wind,
 }
 
-/// Flies the stored mission `id` in `actual` wind on a battery holding `battery_factor` of
-/// its rated capacity. The aircraft learns the wind on its first leg and reads the energy
-/// left from its battery: over each stop, done collecting, it prices the rest of its route in
-/// that wind, and when the energy left less the reserve cannot fly it, it re-plans from that
-/// stop with [`gleaner_app::replan`] (the wind now plus `[flight] wind_margin_mps`; the remaining
-/// stops dropped and reordered), once; when the re-planned route is still short, or no
-/// continuation exists, it flies home from the stop it is over. Records nothing.
+impl FlightConditions {
+    /// The weather sortie `sortie` (from 0) of the mission at `t` (s) meets in `day` wind.
+    pub fn sortie(&self, t: UnixSeconds, sortie: usize, day: Wind) -> SortieWeather<'_> {
+        SortieWeather {
+            conditions: self,
+            t,
+            sortie,
+            day,
+        }
+    }
+}
+
+/// `wind`'s speed plus `margin_mps` (m/s, may be < 0; the speed kept in [0, 40] m/s), from
+/// the same direction.
+fn plus(wind: Wind, margin_mps: f64) -> Wind {
+    Wind {
+        speed_mps: (wind.speed_mps + margin_mps).clamp(0.0, MAX_WIND_MPS),
+        from_deg: wind.from_deg,
+    }
+}
+
+/// Flies the stored mission `id` in `weather` on a battery holding `battery_factor` of its
+/// rated capacity. Each leg (and the hover at its end) meets the day's wind plus that leg's
+/// gust ([`FlightConditions::leg_winds`]). The aircraft learns the day's wind on its first
+/// leg and reads the energy left from its battery: over each stop, done collecting, it prices
+/// the rest of its route in the day's wind with [`FlightConditions::air_margin_mps`] added and
+/// taken off (a stronger wind costs more on the legs, a weaker one more at the hovers: the
+/// dearer of the two), and when the energy left less the reserve cannot fly it, it re-plans
+/// from that stop with [`gleaner_app::replan`] (in the dearer wind; the remaining stops dropped and
+/// reordered), once; when the re-planned route is still short, or no continuation exists, it
+/// flies home from the stop it is over. Records nothing.
 ///
 /// # Errors
 /// An unknown mission, invalid `[energy]` settings, a project with a geofence or no-fly zones
@@ -475,7 +623,7 @@ fn route_j(model: &MissionEnergyModel, base: LocalPoint, route: &[CellVisit]) ->
 pub fn fly_in_wind<S: Store>(
     project: &Project<S>,
     id: MissionId,
-    actual: Wind,
+    weather: SortieWeather<'_>,
     battery_factor: f64,
     planner_iterations: u64,
 ) -> Result<SortieFlight> {
@@ -497,11 +645,25 @@ pub fn fly_in_wind<S: Store>(
     let profile = mission.mission.profile;
     let export = gleaner_app::export_energy_model(project, &mission)?;
     let model = gleaner_energy::FlightEnergyModel {
-        wind: actual,
+        wind: weather.day,
         ..export
     }
     .model(profile.cruise_speed_mps, profile.altitude_m)
     .map_err(|e| AppError::core("energy model", e))?;
+    let margin_mps = weather.conditions.air_margin_mps();
+    // What the aircraft prices the rest of its route in: the day's wind, or with gusts to
+    // come the dearer of that wind plus and less the margin.
+    let priced: Vec<(Wind, gleaner_energy::MissionEnergyModel)> = if margin_mps > 0.0 {
+        [
+            plus(weather.day, margin_mps),
+            plus(weather.day, -margin_mps),
+        ]
+        .into_iter()
+        .map(|w| (w, model.with_wind(w)))
+        .collect()
+    } else {
+        vec![(weather.day, model.clone())]
+    };
     let battery = project.settings().energy.to_core()?.battery;
     let capacity_j = battery.capacity_j * battery_factor;
     let reserve_j = battery.capacity_j * battery.reserve_fraction;
@@ -520,12 +682,35 @@ pub fn fly_in_wind<S: Store>(
     };
     let mut route: Vec<(CellIndex, CellVisit)> = mission.mission.stops.iter().map(visit).collect();
     let planned = route.len();
+    // A re-plan never lengthens the route: planned + 1 legs at most.
+    let winds = weather
+        .conditions
+        .leg_winds(weather.t, weather.sortie, weather.day, planned + 1);
     let visits = |r: &[(CellIndex, CellVisit)]| r.iter().map(|p| p.1).collect::<Vec<_>>();
+    let core = |e| AppError::core("simulated flight", e);
+    // Energy flown from take-off to over stop k (1-based), done collecting: the climb, k legs
+    // and k hovers in their winds.
+    let spent_j = |r: &[(CellIndex, CellVisit)], k: usize| -> Result<f64> {
+        let s = model
+            .sortie_in_winds(base, &visits(&r[..k]), &winds[..=k])
+            .map_err(core)?;
+        Ok(s.total_j - s.legs_j[k] - model.descent().0)
+    };
     let mut replanned = false;
     // Over stop k (1-based), done collecting: can the rest be flown?
     let mut k = 1;
     while k < route.len() {
-        if route_j(&model, base, &visits(&route))? <= usable_j {
+        let spent = spent_j(&route, k)?;
+        let mut rest = (f64::NEG_INFINITY, weather.day);
+        for (w, m) in &priced {
+            let e = m
+                .continuation(route[k - 1].1.centre, base, &visits(&route[k..]), usable_j)
+                .map_err(core)?;
+            if e.total_j > rest.0 {
+                rest = (e.total_j, *w);
+            }
+        }
+        if spent + rest.0 <= usable_j {
             k += 1;
             continue;
         }
@@ -534,11 +719,7 @@ pub fn fly_in_wind<S: Store>(
             break;
         }
         replanned = true;
-        let flown = model
-            .breakdown(base, &visits(&route[..k]))
-            .map_err(|e| AppError::core("simulated flight", e))?;
-        let used_j = flown.total_j - flown.return_j - model.descent().0;
-        let left_j = (capacity_j - used_j).min(battery.capacity_j);
+        let left_j = (capacity_j - spent).min(battery.capacity_j);
         let continuation = if left_j > 0.0 {
             replan(
                 project,
@@ -549,7 +730,8 @@ pub fn fly_in_wind<S: Store>(
                     seed: None,
                     iterations: Some(planner_iterations),
                     time_limit_s: Some(3_600.0),
-                    wind: Some(actual),
+                    wind: Some(rest.1),
+                    wind_margin_mps: Some(0.0),
                 },
             )
             .ok()
@@ -562,12 +744,14 @@ pub fn fly_in_wind<S: Store>(
         }
         k += 1;
     }
-    let energy_j = route_j(&model, base, &visits(&route))?;
+    let flown = model
+        .sortie_in_winds(base, &visits(&route), &winds[..=route.len()])
+        .map_err(core)?;
     Ok(SortieFlight {
         dropped: planned - route.len(),
         cells: route.into_iter().map(|p| p.0).collect(),
         replanned,
-        energy_j,
+        energy_j: flown.total_j,
         usable_j,
     })
 }
@@ -656,11 +840,105 @@ mod tests {
     use super::*;
 
     #[test]
-    fn gamma_matches_known_values() {
-        assert!((gamma(1.0) - 1.0).abs() < 1e-12);
-        assert!((gamma(2.0) - 1.0).abs() < 1e-12);
-        assert!((gamma(3.0) - 2.0).abs() < 1e-12);
-        assert!((gamma(1.5) - std::f64::consts::PI.sqrt() / 2.0).abs() < 1e-12);
+    fn the_margin_is_a_quantile_of_the_forecast_error() {
+        let windy = FlightConditions {
+            wind: WindSource::Weibull {
+                mean_mps: 4.0,
+                shape: 2.0,
+            },
+            gust_sd_mps: 1.5,
+            ..FlightConditions::default()
+        };
+        // Φ⁻¹(0.95) ≈ 1.6449.
+        let m = windy.planning_margin_mps(2.0);
+        assert!((m - 1.5 * 1.644_853_626_951).abs() < 1e-6, "{m}");
+        let q84 = FlightConditions {
+            margin_quantile: Some(0.84),
+            ..windy.clone()
+        };
+        // Φ⁻¹(0.84) ≈ 0.9945: about one standard deviation.
+        assert!((q84.planning_margin_mps(2.0) - 1.5 * 0.994_457_883_209_753).abs() < 1e-6);
+        let median = FlightConditions {
+            margin_quantile: Some(0.5),
+            ..windy.clone()
+        };
+        assert_eq!(median.planning_margin_mps(2.0), 0.0);
+        let q975 = FlightConditions {
+            margin_quantile: Some(0.975),
+            ..windy.clone()
+        };
+        assert!((q975.planning_margin_mps(2.0) - 1.5 * 1.959_963_985).abs() < 1e-6);
+        // Without a quantile, or flown as planned: the settings' margin.
+        let settings = FlightConditions {
+            margin_quantile: None,
+            ..windy.clone()
+        };
+        assert_eq!(settings.planning_margin_mps(2.0), 2.0);
+        assert_eq!(FlightConditions::default().planning_margin_mps(2.0), 2.0);
+        // An exact forecast needs no margin.
+        let exact = FlightConditions {
+            gust_sd_mps: 0.0,
+            ..windy.clone()
+        };
+        assert_eq!(exact.planning_margin_mps(2.0), 0.0);
+        // In the air: nothing to add without gusts, about 2 σ of them with.
+        assert_eq!(windy.air_margin_mps(), 0.0);
+        let gusty = FlightConditions {
+            leg_gust_sd_mps: 0.5,
+            ..windy
+        };
+        assert!((gusty.air_margin_mps() - 0.5 * 1.959_963_985).abs() < 1e-6);
+        assert!(!gusty.is_still());
+        let only_gusts = FlightConditions {
+            leg_gust_sd_mps: 0.5,
+            ..FlightConditions::default()
+        };
+        assert!(!only_gusts.is_still());
+    }
+
+    #[test]
+    fn parses_margin_quantiles() {
+        assert_eq!(parse_margin_quantile("0.84").unwrap(), Some(0.84));
+        assert_eq!(parse_margin_quantile(" 0.5 ").unwrap(), Some(0.5));
+        assert_eq!(parse_margin_quantile("Settings").unwrap(), None);
+        for bad in ["", "0.3", "1", "x", "NaN"] {
+            let e = parse_margin_quantile(bad).unwrap_err().to_string();
+            assert!(
+                e.contains("--margin-quantile") && e.contains("0.999"),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
+    fn leg_gusts_have_their_spread_and_are_seeded() {
+        let day = Wind::new(5.0, 250.0).unwrap();
+        let calm = FlightConditions::default();
+        assert_eq!(calm.leg_winds(0, 0, day, 4), vec![day; 4]);
+        let c = FlightConditions {
+            leg_gust_sd_mps: 1.2,
+            seed: 9,
+            ..FlightConditions::default()
+        };
+        let legs = c.leg_winds(7 * DAY_S, 1, day, 20_000);
+        let (de, dn) = day.velocity_mps();
+        let (mut sum_e, mut sq) = (0.0, 0.0);
+        for w in &legs {
+            let (e, n) = w.velocity_mps();
+            sum_e += e - de;
+            sq += (e - de).powi(2) + (n - dn).powi(2);
+        }
+        let n = legs.len() as f64;
+        assert!((sum_e / n).abs() < 0.03, "mean {}", sum_e / n);
+        let sd = (sq / (2.0 * n)).sqrt();
+        assert!((sd - 1.2).abs() < 0.03, "sd {sd}");
+        // The first legs are the same whatever the number asked for; another sortie, time or
+        // seed meets other gusts.
+        assert_eq!(c.leg_winds(7 * DAY_S, 1, day, 5)[..], legs[..5]);
+        assert_ne!(c.leg_winds(7 * DAY_S, 2, day, 5)[..], legs[..5]);
+        assert_ne!(c.leg_winds(8 * DAY_S, 1, day, 5)[..], legs[..5]);
+        let other = FlightConditions { seed: 10, ..c };
+        assert_ne!(other.leg_winds(7 * DAY_S, 1, day, 5)[..], legs[..5]);
     }
 
     #[test]
@@ -715,7 +993,7 @@ mod tests {
         assert!((mean - 4.0).abs() < 0.05, "mean {mean}");
         // Rayleigh (k = 2): P(v > 6) = exp(−(6/λ)²), λ = 4/Γ(1.5).
         let above = days.iter().filter(|d| d.forecast.speed_mps > 6.0).count() as f64;
-        let lambda = 4.0 / gamma(1.5);
+        let lambda = 4.0 / statrs::function::gamma::gamma(1.5);
         let want = (-(6.0f64 / lambda).powi(2)).exp();
         assert!((above / days.len() as f64 - want).abs() < 0.01);
         let north_half = days.iter().filter(|d| d.forecast.from_deg < 180.0).count() as f64;
@@ -738,6 +1016,7 @@ mod tests {
             gust_sd_mps: 1.5,
             battery_weakening: 0.2,
             seed: 3,
+            ..FlightConditions::default()
         };
         let n = 20_000;
         let mut sq = 0.0;
@@ -897,5 +1176,25 @@ mod tests {
                 .to_string()
                 .contains("--weak-battery")
         );
+        let bad_leg = FlightConditions {
+            leg_gust_sd_mps: f64::NAN,
+            ..FlightConditions::default()
+        };
+        assert!(
+            bad_leg
+                .check(&[])
+                .unwrap_err()
+                .to_string()
+                .contains("--leg-gust")
+        );
+        for q in [0.4, 1.0, f64::NAN] {
+            let bad_q = FlightConditions {
+                margin_quantile: Some(q),
+                ..FlightConditions::default()
+            };
+            let e = bad_q.check(&[]).unwrap_err().to_string();
+            assert!(e.contains("--margin-quantile"), "{e}");
+        }
+        assert!(FlightConditions::default().check(&[]).is_ok());
     }
 }

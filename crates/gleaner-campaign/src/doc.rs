@@ -2,7 +2,7 @@
 //! ([`gleaner_wire::docs::CampaignDoc`], served by `POST /api/v1/simulate`).
 
 use gleaner_app::format_rfc3339;
-use gleaner_wire::docs::{CampaignDoc, IntervalDoc, StrategySummaryDoc};
+use gleaner_wire::docs::{CampaignDoc, FlightSummaryDoc, IntervalDoc, StrategySummaryDoc};
 use gleaner_wire::{CAMPAIGN_FORMAT, VERSION};
 
 use crate::campaign::{CampaignSummary, Interval};
@@ -18,7 +18,26 @@ fn interval(i: &Interval) -> IntervalDoc {
     }
 }
 
-/// A campaign's summary: per strategy and budget, every metric with its interval.
+/// Per strategy, how a campaign's sorties flew in its weather (`CampaignDoc::flights`).
+pub fn flights(f: &[crate::campaign_flight::FlightSummary]) -> Vec<FlightSummaryDoc> {
+    f.iter()
+        .map(|f| FlightSummaryDoc {
+            strategy: f.strategy.name().into(),
+            missions: f.missions,
+            mean_forecast_mps: f.mean_forecast_mps,
+            replanned: f.replanned,
+            cells_dropped: f.cells_dropped,
+            readings: f.readings,
+            readings_calm_days: f.readings_calm_days,
+            calm_days: f.calm_days,
+            over_budget: f.over_budget,
+            max_excess_j: f.max_excess_j.is_finite().then_some(f.max_excess_j),
+        })
+        .collect()
+}
+
+/// A campaign's summary: per strategy and budget, every metric with its interval (without
+/// flights: see [`flights`]).
 pub fn campaign_doc(c: &CampaignSummary) -> CampaignDoc {
     CampaignDoc {
         format: CAMPAIGN_FORMAT.into(),
@@ -51,6 +70,7 @@ pub fn campaign_doc(c: &CampaignSummary) -> CampaignDoc {
                 delay_vs_reference: s.delay_vs_reference.as_ref().map(interval),
             })
             .collect(),
+        flights: Vec::new(),
     }
 }
 

@@ -446,6 +446,7 @@ fn campaigns_in_random_winds_never_fly_over_budget() {
         gust_sd_mps: 2.5,
         battery_weakening: 0.25,
         seed: 4,
+        ..FlightConditions::default()
     };
     let (mut replanned, mut missions, mut dropped) = (0, 0, 0);
     let first = run_campaign(&req, &truth, &Silent).unwrap();
@@ -473,6 +474,60 @@ fn campaigns_in_random_winds_never_fly_over_budget() {
     req.flight.seed = 5;
     let other = run_campaign(&req, &truth, &Silent).unwrap();
     assert_ne!(first.runs[0].missions, other.runs[0].missions);
+}
+
+/// Gusts leg by leg: every leg meets the day's wind plus its own seeded gust, and the
+/// aircraft checks the rest of its route in the day's wind plus a margin for them; no sortie
+/// flies over its battery, the flown energies differ from the steady day's, and the same seed
+/// gives the same flights.
+#[test]
+fn leg_by_leg_gusts_change_the_flights_but_never_the_budget() {
+    use gleaner_campaign::campaign_flight::{FlightConditions, WindSource};
+    let tmp = tempfile::tempdir().unwrap();
+    let (init, project, truth, history_until) = small_farm(13, tmp.path());
+    let schedule = every(history_until, history_until + 4 * DAY, DAY).unwrap();
+    let mut req = request(
+        "synthetic",
+        &project,
+        init,
+        history_until,
+        schedule,
+        vec![Strategy::Gleaner],
+    );
+    req.events = Some(Vec::new());
+    req.flight = FlightConditions {
+        wind: WindSource::Weibull {
+            mean_mps: 5.0,
+            shape: 2.0,
+        },
+        gust_sd_mps: 1.0,
+        seed: 2,
+        ..FlightConditions::default()
+    };
+    let steady = run_campaign(&req, &truth, &Silent).unwrap();
+    req.flight.leg_gust_sd_mps = 2.0;
+    let gusty = run_campaign(&req, &truth, &Silent).unwrap();
+    let flights = |r: &gleaner_campaign::campaign::CampaignResult| {
+        r.runs[0]
+            .missions
+            .iter()
+            .map(|m| m.flight.expect("a flight record"))
+            .collect::<Vec<_>>()
+    };
+    let (a, b) = (flights(&steady), flights(&gusty));
+    assert_eq!(a.len(), 5);
+    for (s, g) in a.iter().zip(&b) {
+        // The same day's wind; the gusts come on top.
+        assert_eq!(s.wind, g.wind);
+        assert_eq!(g.over_budget, 0, "{g:?}");
+        assert!(g.max_excess_j <= 0.0, "{g:?}");
+    }
+    assert!(
+        a.iter().zip(&b).any(|(s, g)| s.energy_j != g.energy_j),
+        "gusts changed no flight"
+    );
+    let again = run_campaign(&req, &truth, &Silent).unwrap();
+    assert_eq!(flights(&again), b);
 }
 
 /// Still air, the default: every mission is flown as planned, its flight record at the

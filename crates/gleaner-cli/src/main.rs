@@ -262,6 +262,11 @@ enum Command {
         /// Do not store the sorties.
         #[arg(long)]
         dry_run: bool,
+        /// Forecast wind at the flight altitude as SPEED@FROM (m/s @ degrees clockwise from
+        /// north it blows from, e.g. 6@270) [default: [flight] wind_mps@wind_from_deg, still
+        /// air]. The sorties are planned in it plus [flight] wind_margin_mps, as `plan`'s.
+        #[arg(long, value_name = "SPEED@FROM", value_parser = parse_wind)]
+        wind: Option<app::Wind>,
     },
     /// Export a planned mission for flying and mapping: GeoJSON (cells with their scores, the
     /// route, the base), a QGroundControl .plan, a QGC WPL 110 waypoint file, a DJI WPML
@@ -1023,9 +1028,14 @@ fn run(cli: Cli) -> Result<()> {
             at,
             json,
             dry_run,
+            wind,
         } => {
             let mut p = project.open()?;
-            let e = app::explore(&mut p, &app::ExploreRequest { at, dry_run }, clock_now())?;
+            let e = app::explore(
+                &mut p,
+                &app::ExploreRequest { at, dry_run, wind },
+                clock_now(),
+            )?;
             let doc = gleaner_wire::convert::exploration(&e);
             json.emit(&doc, "serialising the plan", || {
                 plan::exploration_table(&doc)
@@ -1081,6 +1091,7 @@ fn run(cli: Cli) -> Result<()> {
                     iterations: Some(iterations),
                     time_limit_s: Some(time_limit),
                     wind,
+                    wind_margin_mps: None,
                 },
             )?;
             let dir = out.unwrap_or_else(|| {

@@ -2153,6 +2153,10 @@ fn simulate_flies_in_wind_and_reads_observed_winds() {
             "weibull:5",
             "--gust",
             "2",
+            "--leg-gust",
+            "1",
+            "--margin-quantile",
+            "0.9",
             "--weak-battery",
             "0.2",
         ],
@@ -2194,6 +2198,11 @@ fn simulate_flies_in_wind_and_reads_observed_winds() {
         &["--wind", "gale"],
     ));
     assert!(err.contains("weibull:MEAN"), "{err}");
+    let err = fail(&small_farm_simulation(
+        &dir.path().join("sim4"),
+        &["--wind", "weibull:4", "--margin-quantile", "0.2"],
+    ));
+    assert!(err.contains("--margin-quantile \"0.2\""), "{err}");
 }
 
 #[test]

@@ -60,5 +60,6 @@ pub use mission::{
 };
 pub use propulsion::{Airframe, OptimalSpeed, PowerModel, PowerParameters};
 pub use wind::{
-    STRONGEST_WIND_CAP_MPS, STRONGEST_WIND_STEP_MPS, Wind, WindLeg, WindTolerance, strongest_wind,
+    GustySortie, STRONGEST_WIND_CAP_MPS, STRONGEST_WIND_STEP_MPS, Wind, WindLeg, WindTolerance,
+    strongest_wind,
 };

@@ -17,7 +17,7 @@
 use gleaner_field::LocalPoint;
 
 use crate::error::{EnergyError, finite, non_negative, positive};
-use crate::mission::MissionEnergyModel;
+use crate::mission::{CellVisit, MissionEnergyModel};
 use crate::propulsion::PowerModel;
 
 /// A steady horizontal wind.
@@ -185,6 +185,112 @@ impl MissionEnergyModel {
     }
 }
 
+/// A sortie flown in winds that change from leg to leg (a gusty day), J.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GustySortie {
+    /// Propulsion energy of each leg, J: `legs_j[i]` arrives at stop i, the last one is the
+    /// return leg.
+    pub legs_j: Vec<f64>,
+    /// Service energy at each stop (hover in that stop's wind, receiver), J.
+    pub services_j: Vec<f64>,
+    /// Climb and descent, J (as in still air; 0 unless modelled or for an empty route).
+    pub vertical_j: f64,
+    /// Everything: `vertical_j + Σ legs_j + Σ services_j`, J.
+    pub total_j: f64,
+}
+
+impl MissionEnergyModel {
+    /// The sortie `base` → `route[0]` → … → `base` (local frame, m) when each leg meets its
+    /// own wind: `winds[i]` is the wind of the leg arriving at stop i and of the hover there,
+    /// `winds[route.len()]` that of the return leg (each leg as
+    /// [`MissionEnergyModel::travel_energy_j`] in its wind, each stop as
+    /// [`MissionEnergyModel::service_energy_j`] in its wind). With every wind equal to `w`
+    /// it is `self.with_wind(w).breakdown(base, route)` (within rounding: the parts are
+    /// summed in another order). An empty route costs 0 J.
+    ///
+    /// # Errors
+    /// [`EnergyError::LengthMismatch`] unless `winds` has `route.len() + 1` entries (none for
+    /// an empty route is also accepted); [`EnergyError::InvalidParameter`] for a non-finite
+    /// position, a negative or non-finite hover time or wind speed, a non-finite direction.
+    pub fn sortie_in_winds(
+        &self,
+        base: LocalPoint,
+        route: &[CellVisit],
+        winds: &[Wind],
+    ) -> Result<GustySortie, EnergyError> {
+        if route.is_empty() && winds.len() <= 1 {
+            return Ok(GustySortie {
+                legs_j: Vec::new(),
+                services_j: Vec::new(),
+                vertical_j: 0.0,
+                total_j: 0.0,
+            });
+        }
+        if winds.len() != route.len() + 1 {
+            return Err(EnergyError::LengthMismatch {
+                what: "winds (one per leg, the return included) and stops + 1",
+                left: winds.len(),
+                right: route.len() + 1,
+            });
+        }
+        finite("base easting (m)", base.e)?;
+        finite("base northing (m)", base.n)?;
+        for w in winds {
+            non_negative("wind speed (m/s)", w.speed_mps)?;
+            finite("wind direction (degrees from north)", w.from_deg)?;
+        }
+        let mut legs_j = Vec::with_capacity(route.len() + 1);
+        let mut services_j = Vec::with_capacity(route.len());
+        let mut previous = base;
+        for (v, w) in route.iter().zip(winds) {
+            finite("cell easting (m)", v.centre.e)?;
+            finite("cell northing (m)", v.centre.n)?;
+            non_negative("hover time (s)", v.hover_s)?;
+            let m = self.with_wind(*w);
+            legs_j.push(m.travel_energy_j(previous, v.centre));
+            services_j.push(m.service_energy_j(v.hover_s));
+            previous = v.centre;
+        }
+        legs_j.push(
+            self.with_wind(winds[route.len()])
+                .travel_energy_j(previous, base),
+        );
+        let vertical_j = self.sortie_fixed_j();
+        let total_j = vertical_j + legs_j.iter().sum::<f64>() + services_j.iter().sum::<f64>();
+        Ok(GustySortie {
+            legs_j,
+            services_j,
+            vertical_j,
+            total_j,
+        })
+    }
+}
+
+/// Directions [`MissionEnergyModel::worst_energy_per_metre_j`] tries: every quarter degree.
+const WORST_DIRECTIONS: usize = 1_440;
+
+impl MissionEnergyModel {
+    /// The most a metre of straight leg costs in this model's wind over every track
+    /// direction (every quarter degree), J/m: the energy per metre of still air when the
+    /// wind does not apply. Bounds what any route of a given length costs in this wind
+    /// (up to the sampling between tried directions), so a planner that knows only lengths
+    /// can plan within a budget scaled by [`MissionEnergyModel::energy_per_metre_j`] over
+    /// this.
+    pub fn worst_energy_per_metre_j(&self) -> f64 {
+        if !self.wind_applies() {
+            return self.energy_per_metre_j();
+        }
+        let origin = LocalPoint::new(0.0, 0.0);
+        (0..WORST_DIRECTIONS)
+            .map(|k| {
+                let a = (k as f64 * 360.0 / WORST_DIRECTIONS as f64).to_radians();
+                let to = LocalPoint::new(1_000.0 * a.sin(), 1_000.0 * a.cos());
+                self.travel_energy_j(origin, to) / 1_000.0
+            })
+            .fold(self.energy_per_metre_j(), f64::max)
+    }
+}
+
 /// Wind speeds tried by [`strongest_wind`] before bisecting, m/s: 0, 0.5, 1, … up to
 /// [`STRONGEST_WIND_CAP_MPS`].
 pub const STRONGEST_WIND_STEP_MPS: f64 = 0.5;
@@ -292,6 +398,69 @@ mod tests {
             .leg_in_wind(p(5.0, 5.0), p(5.0, 5.0), Wind::new(6.0, 90.0).unwrap())
             .unwrap();
         assert_eq!((z.distance_m, z.time_s, z.energy_j), (0.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn the_worst_direction_bounds_every_leg() {
+        let m = model();
+        assert_eq!(m.worst_energy_per_metre_j(), m.energy_per_metre_j());
+        let w = m.with_wind(Wind::new(7.0, 200.0).unwrap());
+        let worst = w.worst_energy_per_metre_j();
+        assert!(worst > m.energy_per_metre_j());
+        for k in 0..97 {
+            let a = (k as f64 * 3.7_f64).to_radians();
+            let to = p(500.0 * a.sin(), 500.0 * a.cos());
+            let per_m = w.travel_energy_j(p(0.0, 0.0), to) / 500.0;
+            assert!(per_m <= worst * (1.0 + 1e-6), "{k}: {per_m} > {worst}");
+        }
+        // The worst is a straight head or tail wind (the airspeed at an end of its range).
+        let along = |deg: f64| {
+            let a = deg.to_radians();
+            w.travel_energy_j(p(0.0, 0.0), p(1000.0 * a.sin(), 1000.0 * a.cos())) / 1000.0
+        };
+        assert!((along(200.0).max(along(20.0)) - worst).abs() <= 1e-9 * worst);
+    }
+
+    #[test]
+    fn a_gusty_sortie_needs_a_wind_per_leg() {
+        let m = model();
+        let route = [CellVisit {
+            centre: p(100.0, 0.0),
+            hover_s: 10.0,
+        }];
+        let e = m
+            .sortie_in_winds(p(0.0, 0.0), &route, &[Wind::CALM])
+            .unwrap_err();
+        assert!(matches!(
+            e,
+            EnergyError::LengthMismatch {
+                left: 1,
+                right: 2,
+                ..
+            }
+        ));
+        let bad = Wind {
+            speed_mps: f64::NAN,
+            from_deg: 0.0,
+        };
+        assert!(
+            m.sortie_in_winds(p(0.0, 0.0), &route, &[Wind::CALM, bad])
+                .is_err()
+        );
+        assert_eq!(
+            m.sortie_in_winds(p(0.0, 0.0), &[], &[]).unwrap().total_j,
+            0.0
+        );
+        // A stronger head-wind gust on the way out costs more on that leg only.
+        let east = Wind::new(5.0, 90.0).unwrap();
+        let windy = m
+            .sortie_in_winds(p(0.0, 0.0), &route, &[east, east])
+            .unwrap();
+        let gusty = m
+            .sortie_in_winds(p(0.0, 0.0), &route, &[Wind::new(8.0, 90.0).unwrap(), east])
+            .unwrap();
+        assert!(gusty.legs_j[0] > windy.legs_j[0]);
+        assert_eq!(gusty.legs_j[1], windy.legs_j[1]);
     }
 
     #[test]
@@ -496,6 +665,55 @@ mod tests {
             poly.extend(turns.iter().map(|&(e, n)| p(e, n)));
             prop_assert_eq!(calm.polyline_energy_j(&poly).to_bits(), still.polyline_energy_j(&poly).to_bits());
             prop_assert_eq!(calm.service_energy_j(31.25).to_bits(), still.service_energy_j(31.25).to_bits());
+        }
+
+        /// One wind on every leg of a gusty sortie is the steady-wind breakdown; a gust on
+        /// one leg changes that leg and its stop only.
+        #[test]
+        fn a_sortie_in_one_wind_is_the_breakdown(
+            stops in prop::collection::vec((-2e3f64..2e3, -2e3f64..2e3, 0.0f64..120.0), 0..12),
+            speed in 0.0f64..15.0,
+            from in 0.0f64..360.0,
+            gust in 0.5f64..5.0,
+            vertical in any::<bool>(),
+        ) {
+            let cfg = EnergyConfig {
+                vertical: vertical.then(crate::VerticalConfig::default),
+                ..EnergyConfig::paper()
+            };
+            let m = MissionEnergyModel::new(&cfg).unwrap();
+            let w = Wind::new(speed, from).unwrap();
+            let base = p(0.0, 0.0);
+            let route: Vec<crate::CellVisit> = stops
+                .iter()
+                .map(|&(e, n, h)| crate::CellVisit { centre: p(e, n), hover_s: h })
+                .collect();
+            let winds = vec![w; route.len() + 1];
+            let g = m.sortie_in_winds(base, &route, &winds).unwrap();
+            let b = m.with_wind(w).breakdown(base, &route).unwrap();
+            prop_assert!((g.total_j - b.total_j).abs() <= 1e-9 * (1.0 + b.total_j));
+            for (leg, want) in g.legs_j.iter().zip(&b.legs) {
+                prop_assert_eq!(leg.to_bits(), want.energy_j.to_bits());
+            }
+            for (svc, want) in g.services_j.iter().zip(&b.cells) {
+                // (P + P_rx)·h against P·h + P_rx·h: the same to rounding.
+                prop_assert!((svc - want.service_j).abs() <= 1e-12 * (1.0 + want.service_j));
+            }
+            prop_assert_eq!(g.vertical_j, b.vertical_j);
+            if !route.is_empty() {
+                let k = route.len() / 2;
+                let mut gusty = winds.clone();
+                gusty[k] = Wind::new(speed + gust, from).unwrap();
+                let h = m.sortie_in_winds(base, &route, &gusty).unwrap();
+                for i in 0..=route.len() {
+                    if i != k {
+                        prop_assert_eq!(h.legs_j[i].to_bits(), g.legs_j[i].to_bits());
+                    }
+                    if i != k && i < route.len() {
+                        prop_assert_eq!(h.services_j[i].to_bits(), g.services_j[i].to_bits());
+                    }
+                }
+            }
         }
 
         /// In any wind the breakdown's parts add up, and so do the planner's directed costs.

@@ -179,6 +179,26 @@ pub struct SimulateBody {
     pub energy_preset: Option<String>,
     /// Planner iteration cap per mission, 1..=10000 [default: 300].
     pub planner_iterations: Option<u64>,
+    /// Each mission's forecast wind: `still` or `weibull:MEAN[:SHAPE]` (mean speed in m/s,
+    /// Weibull shape, default 2; direction uniform), drawn with `weather_seed` [default:
+    /// still air]. Missions are planned for the forecast plus a margin tied to the forecast
+    /// error (`margin_quantile`) and flown in it with the error and the gusts; a sortie
+    /// short of energy re-plans in the air. The answer's `flights` tell how they flew.
+    pub wind: Option<String>,
+    /// The forecast error's standard deviation (east and north components), m/s, in
+    /// [0, 10] [default: 1 with a drawn wind, else 0].
+    pub gust: Option<f64>,
+    /// Gusts leg by leg: each leg's wind is the day's plus a vector with this standard
+    /// deviation per component, m/s, in [0, 10] [default: 0].
+    pub leg_gust: Option<f64>,
+    /// Each sortie's battery holds a share of its rated capacity drawn uniformly in
+    /// [1 − this, 1], in [0, 0.5] [default: 0].
+    pub weak_battery: Option<f64>,
+    /// Seed of the wind, error, gust and battery draws [default: 1].
+    pub weather_seed: Option<u64>,
+    /// The share of forecast errors along the wind the planning margin covers, in
+    /// [0.5, 0.999] [default: 0.95].
+    pub margin_quantile: Option<f64>,
 }
 
 /// An exploration request (`gleaner explore`).
@@ -190,6 +210,9 @@ pub struct ExploreBody {
     /// Plan without storing the sorties.
     #[serde(default)]
     pub dry_run: bool,
+    /// Forecast wind at the flight altitude [default: the project's `[flight] wind_mps` and
+    /// `wind_from_deg`]; the sorties are planned in it plus `[flight] wind_margin_mps`.
+    pub wind: Option<WindBody>,
 }
 
 /// The weighted terms of S for one cell.

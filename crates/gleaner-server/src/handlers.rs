@@ -659,6 +659,7 @@ pub async fn simulate(
     body: Result<Bytes, BytesRejection>,
 ) -> ApiResult<Json<CampaignDoc>> {
     let b: SimulateBody = json_body(body)?;
+    let flight = simulated_weather(&b)?;
     let defaults = gleaner_campaign::campaign::ReplayOptions::default();
     let names = b.strategies.unwrap_or_else(|| {
         ["gleaner", "round-robin", "freshness"]
@@ -706,6 +707,7 @@ pub async fn simulate(
         budgets,
         planner_iterations,
         energy_preset,
+        flight,
         ..defaults
     };
     let simulation = Job {
@@ -730,12 +732,86 @@ pub async fn simulate(
             }
             let result =
                 gleaner_campaign::campaign::run_campaign(&replay.request, &replay.truth, cancel)?;
-            Ok(gleaner_campaign::doc::campaign_doc(
+            let mut doc = gleaner_campaign::doc::campaign_doc(
                 &gleaner_campaign::campaign::campaign_summary(&replay.request, &result),
-            ))
+            );
+            if !replay.request.flight.is_still() {
+                doc.flights = gleaner_campaign::doc::flights(
+                    &gleaner_campaign::campaign_flight::flight_summaries(std::slice::from_ref(
+                        &result,
+                    )),
+                );
+            }
+            Ok(doc)
         })
         .await?;
     Ok(Json(doc))
+}
+
+/// The weather a simulation's flights meet, from its body (as `simulate --wind`, `--gust`,
+/// `--leg-gust`, `--weak-battery`, `--weather-seed`, `--margin-quantile`); each value checked
+/// on its own so that a refusal names its field.
+fn simulated_weather(
+    b: &SimulateBody,
+) -> ApiResult<gleaner_campaign::campaign_flight::FlightConditions> {
+    use gleaner_campaign::campaign_flight::{DEFAULT_GUST_SD_MPS, FlightConditions, WindSource};
+    let wind = match &b.wind {
+        None => WindSource::Still,
+        Some(text) => WindSource::parse(text).map_err(|e| ApiError::from(e).in_field("wind"))?,
+    };
+    let still = FlightConditions::default();
+    let gust_sd_mps = b.gust.unwrap_or(if wind == WindSource::Still {
+        0.0
+    } else {
+        DEFAULT_GUST_SD_MPS
+    });
+    let one = |field: &str, c: FlightConditions| {
+        c.check(&[])
+            .map_err(|e| ApiError::from(e).in_field(field))
+            .map(|_| ())
+    };
+    one(
+        "gust",
+        FlightConditions {
+            gust_sd_mps,
+            ..still.clone()
+        },
+    )?;
+    let leg_gust_sd_mps = b.leg_gust.unwrap_or(0.0);
+    one(
+        "leg_gust",
+        FlightConditions {
+            leg_gust_sd_mps,
+            ..still.clone()
+        },
+    )?;
+    let battery_weakening = b.weak_battery.unwrap_or(0.0);
+    one(
+        "weak_battery",
+        FlightConditions {
+            battery_weakening,
+            ..still.clone()
+        },
+    )?;
+    let margin_quantile = Some(
+        b.margin_quantile
+            .unwrap_or(gleaner_campaign::campaign_flight::DEFAULT_MARGIN_QUANTILE),
+    );
+    one(
+        "margin_quantile",
+        FlightConditions {
+            margin_quantile,
+            ..still
+        },
+    )?;
+    Ok(FlightConditions {
+        wind,
+        gust_sd_mps,
+        battery_weakening,
+        seed: b.weather_seed.unwrap_or(1),
+        leg_gust_sd_mps,
+        margin_quantile,
+    })
 }
 
 /// Most observations per estimate a request may ask for (the kriging system is this size).
@@ -937,6 +1013,7 @@ pub async fn replan(
         iterations: b.iterations,
         time_limit_s: b.time_limit_s,
         wind: wind(b.wind)?,
+        wind_margin_mps: None,
     };
     let doc = s
         .run(move |p| {
@@ -1089,6 +1166,7 @@ pub async fn explore(
     let request = app::ExploreRequest {
         at: parse_time("at", b.at.as_deref())?,
         dry_run: b.dry_run,
+        wind: wind(b.wind)?,
     };
     let job = Job {
         kind: "explore",

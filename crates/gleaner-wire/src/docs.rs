@@ -456,4 +456,36 @@ pub struct CampaignDoc {
     pub reference: String,
     /// Per strategy and budget, in the request's order.
     pub strategies: Vec<StrategySummaryDoc>,
+    /// How each strategy's sorties flew in the simulated weather (wind, gusts, weak
+    /// batteries), in order of first appearance; left out in still air.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub flights: Vec<FlightSummaryDoc>,
+}
+
+/// One strategy's flights in a campaign's weather: every run and mission.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct FlightSummaryDoc {
+    /// The strategy.
+    pub strategy: String,
+    /// Missions with a flight record.
+    pub missions: usize,
+    /// Mean forecast wind speed, m/s.
+    pub mean_forecast_mps: f64,
+    /// Missions of which a sortie re-planned in the air (or turned home early).
+    pub replanned: usize,
+    /// Planned stops the re-plans dropped.
+    pub cells_dropped: usize,
+    /// Readings brought back.
+    pub readings: u64,
+    /// Readings brought back on missions whose forecast was under 6 m/s.
+    pub readings_calm_days: u64,
+    /// Missions whose forecast was under 6 m/s.
+    pub calm_days: usize,
+    /// Missions of which a sortie flew more energy than its battery gives above the
+    /// reserve (0 when the margins hold).
+    pub over_budget: usize,
+    /// The largest flown energy less the usable energy over every sortie, J (< 0: energy to
+    /// spare); `null` without a sortie.
+    pub max_excess_j: Option<f64>,
 }

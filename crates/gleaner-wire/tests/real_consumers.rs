@@ -195,6 +195,7 @@ fn zoned_caf_exports() -> (tempfile::TempDir, Vec<(FieldDoc, MissionDoc)>) {
         &app::ExploreRequest {
             at: Some(1_393_632_000),
             dry_run: false,
+            wind: None,
         },
         0,
     )

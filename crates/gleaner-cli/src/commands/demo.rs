@@ -109,6 +109,7 @@ pub fn run(args: &DemoArgs) -> Result<String> {
         &app::ExploreRequest {
             at: Some(t0),
             dry_run: false,
+            wind: None,
         },
         clock_now(),
     )?;

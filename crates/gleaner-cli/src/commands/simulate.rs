@@ -159,9 +159,10 @@ pub struct SimulateArgs {
     /// Each mission's forecast wind at the flight altitude: `still` (the default) or
     /// `weibull:MEAN[:SHAPE]`, a speed drawn from a Weibull distribution with that mean (m/s)
     /// and shape (default 2) from a direction drawn uniformly, seeded (--weather-seed). Each
-    /// mission is planned for its forecast plus `[flight] wind_margin_mps` and flown in the
-    /// forecast plus the error (--gust); a sortie that finds over a stop that its energy left
-    /// cannot fly the rest with the reserve re-plans from there (as `gleaner replan`).
+    /// mission is planned for its forecast plus a margin tied to the forecast error
+    /// (--margin-quantile) and flown in the forecast plus the error (--gust) and the gusts
+    /// (--leg-gust); a sortie that finds over a stop that its energy left cannot fly the rest
+    /// with the reserve re-plans from there (as `gleaner replan`).
     #[arg(long, conflicts_with = "wind_csv")]
     pub wind: Option<String>,
     /// Observed daily winds instead of drawn ones: a CSV with a header and the columns
@@ -174,6 +175,22 @@ pub struct SimulateArgs {
     /// weibull:… or --wind-csv, else 0].
     #[arg(long)]
     pub gust: Option<f64>,
+    /// Gusts leg by leg: each leg of a flown sortie (and the hover at its end) meets the
+    /// day's wind plus a vector whose east and north components are normal with this
+    /// standard deviation, m/s, seeded; in the air a sortie checks the rest of its route and
+    /// re-plans in the day's wind plus about 2 of these standard deviations.
+    #[arg(long, default_value_t = 0.0, value_name = "SIGMA")]
+    pub leg_gust: f64,
+    /// The planning margin: each mission is planned for its forecast speed plus the
+    /// Q-quantile of the forecast error along the wind, σ·Φ⁻¹(Q) (σ = --gust; Q in
+    /// [0.5, 0.999]; 0.5 plans at the forecast), or `settings` for `[flight]
+    /// wind_margin_mps` as it is.
+    #[arg(
+        long,
+        value_name = "Q|settings",
+        default_value_t = gleaner_campaign::campaign_flight::DEFAULT_MARGIN_QUANTILE.to_string()
+    )]
+    pub margin_quantile: String,
     /// Weaker batteries: each sortie's battery holds a share of its rated capacity drawn
     /// uniformly in [1 − W, 1] (W in [0, 0.5]; 0: every battery as rated).
     #[arg(long, default_value_t = 0.0)]
@@ -207,6 +224,10 @@ fn flight_conditions(
         gust_sd_mps,
         battery_weakening: args.weak_battery,
         seed: args.weather_seed,
+        leg_gust_sd_mps: args.leg_gust,
+        margin_quantile: gleaner_campaign::campaign_flight::parse_margin_quantile(
+            &args.margin_quantile,
+        )?,
     })
 }
 

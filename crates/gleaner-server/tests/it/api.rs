@@ -491,6 +491,150 @@ fn simulates_the_projects_recent_past_and_refuses_bad_requests_naming_the_field(
     }
 }
 
+/// `POST /api/v1/simulate` in wind (`wind`, `gust`, `leg_gust`, `weak_battery`,
+/// `weather_seed`, `margin_quantile`, as the command line's flags): the answer tells how the
+/// sorties flew, none over its battery; the same weather seed gives the same answer; a bad
+/// value names its field; the OpenAPI document lists the fields.
+#[test]
+fn simulates_in_wind_and_names_bad_weather_fields() {
+    let server = Server::caf();
+    let mut c = server.client();
+    let post = |c: &mut gleaner_server::client::Client, body: &Value| {
+        c.request(
+            "POST",
+            "/api/v1/simulate",
+            &[("content-type", "application/json")],
+            Some(body.to_string().as_bytes()),
+        )
+        .unwrap()
+    };
+    let still = json!({
+        "strategies": ["gleaner"],
+        "start": "2013-12-28",
+        "planner_iterations": 50
+    });
+    let r = post(&mut c, &still);
+    assert_eq!(r.status, 200, "{}", r.text());
+    let calm: Value = r.json().unwrap();
+    assert!(
+        calm.get("flights").is_none(),
+        "still air: no flights section"
+    );
+    let mut body = still.clone();
+    for (k, v) in [
+        ("wind", json!("weibull:6")),
+        ("gust", json!(1.5)),
+        ("leg_gust", json!(0.5)),
+        ("weak_battery", json!(0.1)),
+        ("weather_seed", json!(3)),
+        ("margin_quantile", json!(0.9)),
+    ] {
+        body[k] = v;
+    }
+    let r = post(&mut c, &body);
+    assert_eq!(r.status, 200, "{}", r.text());
+    let doc: Value = r.json().unwrap();
+    let flights = doc["flights"].as_array().expect("flights");
+    assert_eq!(flights.len(), 1);
+    let f = &flights[0];
+    assert_eq!(f["strategy"], "gleaner");
+    assert_eq!(f["missions"], doc["missions"]);
+    assert_eq!(f["over_budget"], 0, "{f}");
+    assert!(f["max_excess_j"].as_f64().unwrap() <= 0.0, "{f}");
+    assert!(f["mean_forecast_mps"].as_f64().unwrap() > 0.0, "{f}");
+    let again: Value = post(&mut c, &body).json().unwrap();
+    assert_eq!(again, doc);
+    body["weather_seed"] = json!(4);
+    let other: Value = post(&mut c, &body).json().unwrap();
+    assert_ne!(other["flights"], doc["flights"]);
+
+    for (bad, field) in [
+        (json!({"wind": "gale"}), "wind"),
+        (json!({"wind": "weibull:50"}), "wind"),
+        (json!({"gust": -1}), "gust"),
+        (json!({"leg_gust": 11}), "leg_gust"),
+        (json!({"weak_battery": 0.9}), "weak_battery"),
+        (json!({"margin_quantile": 0.2}), "margin_quantile"),
+        (json!({"weather_seed": -1}), "weather_seed"),
+    ] {
+        let r = post(&mut c, &bad);
+        assert_eq!(r.status, 400, "{bad}: {}", r.text());
+        let (code, f, reason) = error(&r);
+        assert_eq!(code, "bad_request", "{bad}");
+        assert_eq!(f.as_deref(), Some(field), "{bad}: {reason}");
+    }
+
+    let api = server.get_json("/api/v1/openapi.json");
+    let schemas = &api["components"]["schemas"];
+    for field in [
+        "wind",
+        "gust",
+        "leg_gust",
+        "weak_battery",
+        "weather_seed",
+        "margin_quantile",
+    ] {
+        assert!(
+            schemas["SimulateBody"]["properties"][field].is_object(),
+            "{field}"
+        );
+    }
+    assert!(schemas["ExploreBody"]["properties"]["wind"].is_object());
+    assert!(schemas["CampaignDoc"]["properties"]["flights"].is_object());
+    assert!(schemas["FlightSummaryDoc"].is_object());
+}
+
+/// `POST /api/v1/explore` with a forecast wind plans every sortie in it plus the margin.
+#[test]
+fn explores_in_the_forecast_wind() {
+    let server = Server::caf();
+    let mut c = server.client();
+    let r = c
+        .post_json("/api/v1/explore", &json!({"dry_run": true}), None)
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    let still: Value = r.json().unwrap();
+    let r = c
+        .post_json(
+            "/api/v1/explore",
+            &json!({"dry_run": true, "wind": {"speed_mps": 8, "from_deg": 270}}),
+            None,
+        )
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    let windy: Value = r.json().unwrap();
+    // Priced otherwise (legs dearer, hovers cheaper), every cell still visited.
+    assert_ne!(windy["total_energy_j"], still["total_energy_j"]);
+    let stops = |d: &Value| {
+        d["sorties"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s["stops"].as_array().unwrap().len())
+            .sum::<usize>()
+    };
+    assert_eq!(stops(&windy), stops(&still));
+    for s in windy["sorties"].as_array().unwrap() {
+        // The forecast plus `[flight] wind_margin_mps` (2 m/s by default).
+        assert_eq!(s["profile"]["wind_mps"], 10.0, "{}", s["profile"]);
+        assert_eq!(s["profile"]["wind_from_deg"], 270.0);
+        let e = &s["energy"];
+        assert!(
+            e["total_j"].as_f64().unwrap() <= e["budget_j"].as_f64().unwrap(),
+            "{e}"
+        );
+    }
+    let r = c
+        .post_json(
+            "/api/v1/explore",
+            &json!({"dry_run": true, "wind": {"speed_mps": 99, "from_deg": 270}}),
+            None,
+        )
+        .unwrap();
+    assert_eq!(r.status, 400, "{}", r.text());
+    assert_eq!(error(&r).1.as_deref(), Some("wind"));
+}
+
 #[test]
 fn reads_project_field_cells_cell_and_map() {
     let server = Server::caf();
