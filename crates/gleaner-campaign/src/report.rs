@@ -241,6 +241,36 @@ fn same_runs(results: &[CampaignResult], summaries: &[Summary]) -> Vec<(Strategy
     out
 }
 
+/// How many of `strategy`'s runs at `budget` differ: runs of one campaign with the same
+/// results mission by mission and event by event (a planner deterministic on the case,
+/// whatever its seed) count once; runs of different campaigns always differ. Floats compare
+/// by their printed value.
+fn distinct_runs(results: &[CampaignResult], strategy: Strategy, budget: f64) -> usize {
+    let mut seen: Vec<(usize, String)> = Vec::new();
+    for (c, campaign) in results.iter().enumerate() {
+        for r in &campaign.runs {
+            if r.key.strategy != strategy || r.key.budget != budget {
+                continue;
+            }
+            let print = (c, format!("{:?} {:?}", r.missions, r.caught));
+            if !seen.contains(&print) {
+                seen.push(print);
+            }
+        }
+    }
+    seen.len()
+}
+
+/// A summary's runs for the table: `n`, or `n (k distinct)` when replicates coincide.
+fn runs_cell(results: &[CampaignResult], s: &Summary) -> String {
+    let distinct = distinct_runs(results, s.strategy, s.budget);
+    if distinct < s.runs {
+        format!("{} ({distinct} distinct)", s.runs)
+    } else {
+        s.runs.to_string()
+    }
+}
+
 /// The method's target ratio to exhaustive collection's error.
 const WITHIN: f64 = 1.2;
 
@@ -438,7 +468,9 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         md,
         "Means over missions with 95% intervals: Student's t over the means of blocks of {} days \
          of missions (runs and campaigns averaged within a block, so replicates of one dataset \
-         do not count as independent evidence), given only with at least {} blocks. RMSE/MAE in \
+         do not count as independent evidence; `n (k distinct)` runs: only k of the n seeds' \
+         campaigns differ, the planner being deterministic on the case), given only with at \
+         least {} blocks. RMSE/MAE in \
          {unit} ×1000 against the true reading stamped T − period of every sensor that has one; \
          ΔRMSE is the strategy's kriging RMSE minus gleaner's, paired by mission; Δdelay is the \
          strategy's catch delay minus gleaner's over the events both caught (t over events).\n",
@@ -462,7 +494,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
             md,
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {caught}/{total} | {} | {} | {} | {} |",
             s.strategy.name(),
-            s.runs,
+            runs_cell(&results, s),
             fmt_iv(get(s, "rmse_kriged"), 1000.0, 2),
             s.rmse_vs_reference
                 .as_ref()

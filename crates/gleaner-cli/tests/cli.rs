@@ -1038,6 +1038,27 @@ fn small_farm_simulation<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
     args
 }
 
+/// Seeds whose campaigns coincide are counted once: `nearest` (equal scores, greedy insertion)
+/// flies the same cells whatever its seed, so its two runs are one distinct run.
+#[test]
+fn report_counts_identical_replicates_once() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sim = dir.path().join("sim");
+    ok(&small_farm_simulation(
+        &sim,
+        &[
+            "--strategies",
+            "nearest",
+            "--seeds",
+            "1,2",
+            "--planner-iterations",
+            "50",
+        ],
+    ));
+    let report = std::fs::read_to_string(sim.join("report.md")).expect("report.md");
+    assert!(report.contains("| nearest | 2 (1 distinct) | "), "{report}");
+}
+
 /// The report names runs with identical results (gleaner's no-redundancy ablation is gleaner's
 /// run: γ = δ = 0) and, with several budgets, where each strategy comes within 20% of
 /// exhaustive collection.
