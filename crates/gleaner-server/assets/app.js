@@ -532,7 +532,23 @@ function planBody(dryRun) {
   for (const k of ["at", "history_until", "solver", "energy_preset"]) if (f.get(k)) b[k] = f.get(k);
   for (const k of ["time_limit_s"]) if (f.get(k) !== "") b[k] = Number(f.get(k));
   for (const k of ["seed", "iterations"]) if (f.get(k) !== "") b[k] = parseInt(f.get(k), 10);
+  // A forecast wind (m/s, degrees clockwise from north it blows from); the project's when empty.
+  if (f.get("wind_mps") !== "") {
+    b.wind = { speed_mps: Number(f.get("wind_mps")), from_deg: Number(f.get("wind_from_deg") || 0) };
+  }
   return b;
+}
+
+// The wind a route was planned in and the strongest it stands (m/s; directions in degrees).
+function windView(w) {
+  if (!w) return null;
+  const stands = w.strongest_feasible_mps === undefined ? "" :
+    w.strongest_capped ? " · stands any wind up to " + w.strongest_feasible_mps + " m/s" :
+    " · stays within the battery up to " + w.strongest_feasible_mps.toFixed(1) + " m/s from there";
+  return el("p", { id: "wind-summary" },
+    w.forecast_mps > 0
+      ? `Wind ${w.forecast_mps} m/s from ${w.from_deg}° (priced at ${w.planned_mps} m/s with the margin)${stands}`
+      : `Still air${stands}`);
 }
 
 function energyView(m) {
@@ -556,6 +572,7 @@ function energyView(m) {
     bar, keys,
     el("p", {}, "Energy ", el("strong", { id: "energy-total", "data-joules": e.total_j }, kJ(e.total_j) + " kJ"),
       ` of ${kJ(e.budget_j)} kJ usable (${pct(e.utilisation)}) · ${(e.distance_m / 1000).toFixed(2)} km · ${(e.flight_time_s / 60).toFixed(1)} min`),
+    windView(m.wind),
     el("p", { class: "muted" }, "Route: base → " + m.stops.map((s) => s.cell).join(" → ") + " → base"));
 }
 

@@ -374,12 +374,28 @@ async fn drive(c: &fantoccini::Client, server: &Server, downloads: &Path) -> Res
         "Save is enabled after a failed preview"
     );
     assert_eq!(server.get_json("/api/v1/missions"), json!([]));
+    // A forecast wind goes with the plan; the preview says what it was priced in (the
+    // forecast plus the project's 2 m/s margin).
     form.set_by_name("at", "").await?;
+    form.set_by_name("wind_mps", "6").await?;
+    form.set_by_name("wind_from_deg", "270").await?;
     c.find(Locator::Id("preview")).await?.click().await?;
     c.wait()
         .at_most(wait)
-        .for_element(Locator::Css("#plan-result #energy-total"))
+        .for_element(Locator::Css("#plan-result #wind-summary"))
         .await?;
+    let said = c.find(Locator::Id("wind-summary")).await?.text().await?;
+    assert!(said.contains("Wind 6 m/s from 270°"), "{said}");
+    assert!(said.contains("priced at 8 m/s with the margin"), "{said}");
+    form.set_by_name("wind_mps", "").await?;
+    form.set_by_name("wind_from_deg", "").await?;
+    c.find(Locator::Id("preview")).await?.click().await?;
+    // The still-air preview has replaced the windy one before it is saved.
+    until(
+        c,
+        "(document.getElementById('wind-summary') || {}).textContent?.startsWith('Still air')",
+    )
+    .await?;
     c.find(Locator::Id("save")).await?.click().await?;
     c.wait()
         .at_most(wait)
