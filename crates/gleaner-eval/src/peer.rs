@@ -778,6 +778,30 @@ impl Report {
             .and_then(|o| o.mse.iter().find(|(x, _)| *x == e).map(|(_, v)| *v))
     }
 
+    /// The mean error of (`planner`, `estimator`) over the random layouts (`map_*`) and the
+    /// capacities in `from_j..=to_j` (J) they were run at, unit²; `None` when there is none or
+    /// one is infinite.
+    pub fn mean_error(
+        &self,
+        planner: Planner,
+        estimator: Estimator,
+        from_j: f64,
+        to_j: f64,
+    ) -> Option<f64> {
+        let v: Vec<f64> = self
+            .outcomes
+            .iter()
+            .filter(|o| {
+                o.planner == planner
+                    && o.layout.starts_with("map_")
+                    && (from_j..=to_j).contains(&o.capacity_j)
+            })
+            .filter_map(|o| o.mse.iter().find(|(e, _)| *e == estimator).map(|x| x.1))
+            .collect();
+        (!v.is_empty() && v.iter().all(|x| x.is_finite()))
+            .then(|| v.iter().sum::<f64>() / v.len() as f64)
+    }
+
     fn peer_mse(&self, layout: &str, cap: f64, method: &str) -> Option<f64> {
         self.peer
             .iter()
@@ -791,16 +815,36 @@ impl Report {
     /// `mysolu`; coverage of the 90% intervals.
     pub fn summary(&self, planner: Planner, estimator: Estimator) -> String {
         let mut s = String::new();
-        let layouts: Vec<String> = {
-            let mut v: Vec<String> = self.peer.iter().map(|r| r.layout.clone()).collect();
-            v.sort();
-            v.dedup();
-            v
+        // Without the peer's results (a data set they did not run), the random layouts and
+        // the capacities gleaner ran.
+        let from_outcomes = self.peer.is_empty();
+        let mut layouts: Vec<String> = if from_outcomes {
+            self.outcomes
+                .iter()
+                .filter(|o| o.layout.starts_with("map_"))
+                .map(|o| o.layout.clone())
+                .collect()
+        } else {
+            self.peer.iter().map(|r| r.layout.clone()).collect()
         };
-        let mut caps: Vec<f64> = self.peer.iter().map(|r| r.capacity_j).collect();
+        layouts.sort();
+        layouts.dedup();
+        let mut caps: Vec<f64> = if from_outcomes {
+            self.outcomes
+                .iter()
+                .filter(|o| layouts.contains(&o.layout))
+                .map(|o| o.capacity_j)
+                .collect()
+        } else {
+            self.peer.iter().map(|r| r.capacity_j).collect()
+        };
         caps.sort_by(f64::total_cmp);
         caps.dedup();
-        let methods = ["mysolu", "baseline_ml", "baseline_fs"];
+        let methods: &[&str] = if from_outcomes {
+            &[]
+        } else {
+            &["mysolu", "baseline_ml", "baseline_fs"]
+        };
         let _ = writeln!(
             s,
             "Mean over {} layouts of the summed squared error over unvisited sensors, ×10⁻³ (m³/m³)²; gleaner = planner `{}`, columns = its estimators:\n",
@@ -851,13 +895,24 @@ impl Report {
                 }
             }
         }
-        let _ = writeln!(
-            s,
-            "\ngleaner (`{}` + `{}`) at or below the peer's `mysolu` at {wins} of {pairs} (layout, capacity) pairs where the peer visits a sensor ({:.0}%).",
-            planner.name(),
-            estimator.name(),
-            100.0 * wins as f64 / pairs.max(1) as f64
-        );
+        if pairs > 0 {
+            let _ = writeln!(
+                s,
+                "\ngleaner (`{}` + `{}`) at or below the peer's `mysolu` at {wins} of {pairs} (layout, capacity) pairs where the peer visits a sensor ({:.0}%).",
+                planner.name(),
+                estimator.name(),
+                100.0 * wins as f64 / pairs.max(1) as f64
+            );
+        }
+        if let Some(m) = self.mean_error(planner, estimator, 8e3, 32e3) {
+            let _ = writeln!(
+                s,
+                "\nMean of `{}` + `{}` over those layouts and the capacities from 8 to 32 kJ: {:.3}.",
+                planner.name(),
+                estimator.name(),
+                m * 1e3
+            );
+        }
         let cov: Vec<f64> = self
             .outcomes
             .iter()
@@ -910,6 +965,124 @@ pub enum Dataset {
     TuningDaily,
 }
 
+/// Rolling windows at the peer's horizon on CAF daily VW at 30 cm (every reading, gaps kept):
+/// test windows of [`WINDOW_TEST_DAYS`] days (the peer's 500 test hours ≈ 20.8 days) one after
+/// another from 1 January of a year, each trained on the [`WINDOW_TRAIN_DAYS`] days before it.
+/// The year 2013 is tuning data; later years are hold-outs.
+pub const WINDOW_TEST_DAYS: i64 = 21;
+/// Training span of each rolling window, days.
+pub const WINDOW_TRAIN_DAYS: i64 = 365;
+/// A window is kept when it has at least this many test rows and 4× as many training rows.
+pub const WINDOW_MIN_TEST_ROWS: usize = 10;
+
+/// The rolling-window protocols of `year` (see [`WINDOW_TEST_DAYS`]) over `matrix` (rows =
+/// days), each a copy of `base` with its own train and test rows; windows run from 1 January
+/// while a whole window fits before 1 January of the next year and before the data's end.
+pub fn window_protocols(matrix: &Matrix, base: &Protocol, year: i32) -> Vec<Protocol> {
+    let day = 86_400i64;
+    let jan1 = |y: i32| gleaner_field::time::days_from_civil(i64::from(y), 1, 1);
+    let (Some(start), Some(end)) = (jan1(year), jan1(year + 1)) else {
+        return Vec::new();
+    };
+    let (start, end) = (start * day, end * day);
+    let last = matrix.times.last().copied().unwrap_or(i64::MIN);
+    let mut out = Vec::new();
+    let mut s = start;
+    while s + WINDOW_TEST_DAYS * day <= end && s + WINDOW_TEST_DAYS * day <= last + day {
+        let train = matrix.rows_between(s - WINDOW_TRAIN_DAYS * day, s);
+        let test = matrix.rows_between(s, s + WINDOW_TEST_DAYS * day);
+        if test.len() >= WINDOW_MIN_TEST_ROWS && train.len() >= 4 * WINDOW_MIN_TEST_ROWS {
+            out.push(Protocol {
+                train,
+                test,
+                ..base.clone()
+            });
+        }
+        s += WINDOW_TEST_DAYS * day;
+    }
+    out
+}
+
+/// Runs [`run_protocol`] once per window and averages: each (layout, capacity, planner)'s
+/// error and coverage are the means over the windows where they are finite; its tour, length
+/// and energy are the first window's. Returns the mean report and each window's. With several
+/// windows the peer's results are dropped from the reports (they ran other data); with one
+/// protocol this is [`run_protocol`].
+pub fn run_windows(
+    matrix: &Matrix,
+    layouts: &[Layout],
+    peer: &[PeerResult],
+    protocols: &[Protocol],
+    default_capacities: &[f64],
+    planners: &[Planner],
+    mut progress: impl FnMut(usize, usize),
+) -> Result<(Report, Vec<Report>), EvalError> {
+    if let [one] = protocols {
+        let r = run_protocol(
+            matrix,
+            layouts,
+            peer,
+            one,
+            default_capacities,
+            planners,
+            progress,
+        )?;
+        return Ok((r.clone(), vec![r]));
+    }
+    let total = protocols.len() * layouts.len();
+    let mut each = Vec::with_capacity(protocols.len());
+    for (w, p) in protocols.iter().enumerate() {
+        let mut r = run_protocol(
+            matrix,
+            layouts,
+            peer,
+            p,
+            default_capacities,
+            planners,
+            |k, _| progress(w * layouts.len() + k, total),
+        )?;
+        // The peer ran other data: their errors are not comparable with these windows'.
+        r.peer.clear();
+        each.push(r);
+    }
+    progress(total, total);
+    let Some(first) = each.first() else {
+        return Err(EvalError::Data("no window has enough rows".into()));
+    };
+    let mut mean = first.clone();
+    for (k, o) in mean.outcomes.iter_mut().enumerate() {
+        for (e, v) in o.mse.iter_mut() {
+            let xs: Vec<f64> = each
+                .iter()
+                .filter_map(|r| r.outcomes.get(k))
+                .filter_map(|x| x.mse.iter().find(|(f, _)| f == e).map(|(_, v)| *v))
+                .filter(|v| v.is_finite())
+                .collect();
+            *v = if xs.is_empty() {
+                f64::INFINITY
+            } else {
+                xs.iter().sum::<f64>() / xs.len() as f64
+            };
+        }
+        let cs: Vec<f64> = each
+            .iter()
+            .filter_map(|r| r.outcomes.get(k))
+            .map(|x| x.coverage90)
+            .filter(|c| c.is_finite())
+            .collect();
+        o.coverage90 = if cs.is_empty() {
+            f64::NAN
+        } else {
+            cs.iter().sum::<f64>() / cs.len() as f64
+        };
+    }
+    mean.notes = vec![format!(
+        "{} windows of {WINDOW_TEST_DAYS} test days, each trained on the {WINDOW_TRAIN_DAYS} days before it",
+        protocols.len()
+    )];
+    Ok((mean, each))
+}
+
 /// The frozen settings of gleaner's pipeline on this protocol, chosen on
 /// [`Dataset::TuningDaily`] only (see the evaluation page in the docs): the dynamic model
 /// with automatic shrinkage, reading noise 0.1% of the variance, lags up to 14 days; the
@@ -924,17 +1097,11 @@ pub fn load(
     data: &Path,
     dataset: Dataset,
 ) -> Result<(Matrix, Vec<Layout>, Vec<PeerResult>, Protocol), EvalError> {
-    use gleaner_ingest::{IngestOptions, OnError, WideOptions, read_caf_daily, read_wide_csv};
+    use gleaner_ingest::{IngestOptions, WideOptions, read_wide_csv};
     let (maps, results, hourly) = peer_files(data);
     let layouts = read_layouts(&maps)?;
     let peer = read_results(&results)?;
     let labels = layouts[0].labels.clone();
-    let fit = DynamicFitOptions {
-        max_lag_s: 14 * 86_400,
-        shrinkage: Shrinkage::Auto,
-        noise_share: 1e-3,
-        ..DynamicFitOptions::default()
-    };
     let vw30 =
         gleaner_field::Modality::new("vw@30cm").map_err(|e| EvalError::Data(e.to_string()))?;
     match dataset {
@@ -942,36 +1109,71 @@ pub fn load(
             let (r, _) =
                 read_wide_csv(&hourly, &WideOptions::new(vw30), &IngestOptions::default())?;
             let m = Matrix::from_readings(&[r], "vw@30cm", &labels)?.complete_rows();
-            let protocol = Protocol::peer_hourly(DynamicFitOptions {
-                step_s: 3_600,
-                ..fit
-            });
+            let protocol = Protocol::peer_hourly(frozen_fit(3_600));
             Ok((m, layouts, peer, protocol))
         }
         Dataset::TuningDaily => {
-            let options = IngestOptions {
-                on_error: OnError::Skip,
-                ..IngestOptions::default()
-            };
-            let mut batches = Vec::new();
-            for l in &labels {
-                let (r, _) = read_caf_daily(&data.join(format!("caf/Daily/{l}.txt")), &options)?;
-                batches.push(r);
-            }
-            let m = Matrix::from_readings(&batches, "vw@30cm", &labels)?;
+            let m = daily_matrix(data, &labels)?;
             // 2012-01-01 and 2013-01-01, 00:00 UTC.
             let (y2012, y2013) = (1_325_376_000, 1_356_998_400);
             let protocol = Protocol {
                 train: m.rows_between(y2012, y2013),
                 test: m.rows_between(y2013, y2013 + 250 * 86_400),
-                ..Protocol::peer_hourly(DynamicFitOptions {
-                    step_s: 86_400,
-                    ..fit
-                })
+                ..Protocol::peer_hourly(frozen_fit(86_400))
             };
             Ok((m, layouts, peer, protocol))
         }
     }
+}
+
+/// The frozen fit of the dynamic model on this protocol with a time step of `step_s` seconds:
+/// automatic shrinkage, reading noise 0.1% of the variance, lags up to 14 days.
+fn frozen_fit(step_s: i64) -> DynamicFitOptions {
+    DynamicFitOptions {
+        max_lag_s: 14 * 86_400,
+        shrinkage: Shrinkage::Auto,
+        noise_share: 1e-3,
+        step_s,
+        ..DynamicFitOptions::default()
+    }
+}
+
+/// CAF daily VW at 30 cm of `labels` (one file per station under `caf/Daily/`, rows that do
+/// not parse skipped, gaps kept as NaN).
+fn daily_matrix(data: &Path, labels: &[String]) -> Result<Matrix, EvalError> {
+    use gleaner_ingest::{IngestOptions, OnError, read_caf_daily};
+    let options = IngestOptions {
+        on_error: OnError::Skip,
+        ..IngestOptions::default()
+    };
+    let mut batches = Vec::new();
+    for l in labels {
+        let (r, _) = read_caf_daily(&data.join(format!("caf/Daily/{l}.txt")), &options)?;
+        batches.push(r);
+    }
+    Matrix::from_readings(&batches, "vw@30cm", labels)
+}
+
+/// Loads the rolling-window protocol of `year` ([`window_protocols`]) on CAF daily VW at 30 cm:
+/// the matrix, the layouts, the peer's results (their capacities are the ones run) and one
+/// protocol per window, with the same fit and energy accounting as the peer protocol.
+pub fn load_windows(
+    data: &Path,
+    year: i32,
+) -> Result<(Matrix, Vec<Layout>, Vec<PeerResult>, Vec<Protocol>), EvalError> {
+    let (maps, results, _) = peer_files(data);
+    let layouts = read_layouts(&maps)?;
+    let peer = read_results(&results)?;
+    let labels = layouts[0].labels.clone();
+    let m = daily_matrix(data, &labels)?;
+    let base = Protocol::peer_hourly(frozen_fit(86_400));
+    let windows = window_protocols(&m, &base, year);
+    if windows.is_empty() {
+        return Err(EvalError::Data(format!(
+            "no {WINDOW_TEST_DAYS}-day window of {year} has enough readings"
+        )));
+    }
+    Ok((m, layouts, peer, windows))
 }
 
 #[cfg(test)]
@@ -1037,6 +1239,40 @@ mod tests {
             );
         }
         assert!(fitted.own_drift.iter().any(|&d| d > 0.0));
+    }
+
+    fn daily_matrix_between(from: i64, to: i64) -> Matrix {
+        let times: Vec<i64> = (from..to).step_by(86_400).collect();
+        Matrix {
+            labels: vec!["A".into()],
+            values: vec![0.3; times.len()],
+            times,
+        }
+    }
+
+    #[test]
+    fn rolling_windows_tile_the_year_and_stop_at_the_data_end() {
+        // 2012-01-01 .. 2014-01-10 daily: 2013 holds 17 whole 21-day windows.
+        let (y2012, y2013) = (1_325_376_000, 1_356_998_400);
+        let m = daily_matrix_between(y2012, y2013 + 375 * 86_400);
+        let base = protocol();
+        let w = window_protocols(&m, &base, 2013);
+        assert_eq!(w.len(), 17);
+        for (k, p) in w.iter().enumerate() {
+            assert_eq!(p.test.len(), 21, "window {k}");
+            assert_eq!(p.train.len(), 365, "window {k}");
+            assert_eq!(p.train.end, p.test.start);
+            assert_eq!(m.times[p.test.start], y2013 + 21 * 86_400 * k as i64);
+            assert_eq!(p.fit, base.fit);
+        }
+        // Data ending 2013-03-01: windows from 1 Jan and 22 Jan; the third would end 5 Mar.
+        let short = daily_matrix_between(y2012, y2013 + 60 * 86_400);
+        assert_eq!(window_protocols(&short, &base, 2013).len(), 2);
+        // In the data's first year a window needs 40 training rows: the first two are dropped.
+        let first = window_protocols(&m, &base, 2012);
+        assert_eq!(first.len(), 15);
+        assert_eq!(m.times[first[0].test.start], y2012 + 42 * 86_400);
+        assert_eq!(first[0].train, 0..42);
     }
 
     #[test]

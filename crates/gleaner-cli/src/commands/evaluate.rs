@@ -14,6 +14,42 @@ pub enum PeerData {
     Holdout,
     /// The tuning twin: CAF daily VW 30 cm, train 2012, test 2013.
     Tuning,
+    /// Tuning at the hold-out's horizon: CAF daily VW 30 cm, 21-day test windows through
+    /// 2013, each trained on the 365 days before it (errors are means over the windows).
+    TuningWindows,
+    /// Hold-out windows of 2014 (as `tuning-windows`).
+    Windows2014,
+    /// Hold-out windows of 2015.
+    Windows2015,
+    /// Hold-out windows of 2016 (to the data's end, 16 June).
+    Windows2016,
+}
+
+impl PeerData {
+    /// The year of a rolling-window data set.
+    fn windows_year(self) -> Option<i32> {
+        match self {
+            PeerData::TuningWindows => Some(2013),
+            PeerData::Windows2014 => Some(2014),
+            PeerData::Windows2015 => Some(2015),
+            PeerData::Windows2016 => Some(2016),
+            PeerData::Holdout | PeerData::Tuning => None,
+        }
+    }
+
+    fn title(self) -> String {
+        match self {
+            PeerData::Holdout => "hold-out: hourly VW 30 cm, Jan-Apr 2015".into(),
+            PeerData::Tuning => "tuning: CAF daily VW 30 cm, train 2012, test 2013".into(),
+            PeerData::TuningWindows => {
+                "tuning: CAF daily VW 30 cm, 21-day windows through 2013".into()
+            }
+            d => format!(
+                "hold-out: CAF daily VW 30 cm, 21-day windows through {}",
+                d.windows_year().unwrap_or_default()
+            ),
+        }
+    }
 }
 
 /// Arguments of `gleaner evaluate peer`.
@@ -37,26 +73,35 @@ pub struct PeerArgs {
 
 /// Runs the protocol; returns the summary text.
 pub fn run_peer(args: &PeerArgs) -> Result<String> {
-    let dataset = match args.on {
-        PeerData::Holdout => Dataset::Hourly2015,
-        PeerData::Tuning => Dataset::TuningDaily,
+    let context = || format!("{} (set GLEANER_DATA_DIR)", args.data.display());
+    let (matrix, layouts, results, mut protocols) = match args.on.windows_year() {
+        Some(year) => peer::load_windows(&args.data, year).with_context(context)?,
+        None => {
+            let dataset = match args.on {
+                PeerData::Holdout => Dataset::Hourly2015,
+                _ => Dataset::TuningDaily,
+            };
+            let (m, l, r, p) = peer::load(&args.data, dataset).with_context(context)?;
+            (m, l, r, vec![p])
+        }
     };
-    let (matrix, layouts, results, mut protocol) = peer::load(&args.data, dataset)
-        .with_context(|| format!("{} (set GLEANER_DATA_DIR)", args.data.display()))?;
     if !(args.unshared_weight.is_finite() && args.unshared_weight >= 0.0) {
         anyhow::bail!(
             "--unshared-weight {}: expected a number >= 0",
             args.unshared_weight
         );
     }
-    protocol.unshared_weight = args.unshared_weight;
+    for p in &mut protocols {
+        p.unshared_weight = args.unshared_weight;
+    }
     let planners = [Planner::Count, Planner::Information];
-    let bar = crate::progress::bar(layouts.len() as u64, "layouts");
-    let report = peer::run_protocol(
+    let total = (layouts.len() * protocols.len()) as u64;
+    let bar = crate::progress::bar(total, "layouts");
+    let (report, _) = peer::run_windows(
         &matrix,
         &layouts,
         &results,
-        &protocol,
+        &protocols,
         &peer::PEER_CAPACITIES_J,
         &planners,
         |done, _| bar.set_position(done as u64),
@@ -66,10 +111,7 @@ pub fn run_peer(args: &PeerArgs) -> Result<String> {
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut summary = format!(
         "# gleaner on the peer protocol ({})\n\nFrozen pipeline: planner `{}`, estimator `{}`.\n\n",
-        match args.on {
-            PeerData::Holdout => "hold-out: hourly VW 30 cm, Jan-Apr 2015",
-            PeerData::Tuning => "tuning: CAF daily VW 30 cm, train 2012, test 2013",
-        },
+        args.on.title(),
         FROZEN_PLANNER.name(),
         FROZEN_ESTIMATOR.name()
     );
