@@ -1161,10 +1161,7 @@ pub type WindowsData = (Matrix, Vec<Layout>, Vec<PeerResult>, Vec<Protocol>);
 /// Loads the rolling-window protocol of `year` ([`window_protocols`]) on CAF daily VW at 30 cm:
 /// the matrix, the layouts, the peer's results (their capacities are the ones run) and one
 /// protocol per window, with the same fit and energy accounting as the peer protocol.
-pub fn load_windows(
-    data: &Path,
-    year: i32,
-) -> Result<WindowsData, EvalError> {
+pub fn load_windows(data: &Path, year: i32) -> Result<WindowsData, EvalError> {
     let (maps, results, _) = peer_files(data);
     let layouts = read_layouts(&maps)?;
     let peer = read_results(&results)?;
