@@ -18,10 +18,13 @@ pub enum PeerData {
     /// 2013, each trained on the 365 days before it (errors are means over the windows).
     TuningWindows,
     /// Hold-out windows of 2014 (as `tuning-windows`).
+    #[value(name = "windows-2014")]
     Windows2014,
     /// Hold-out windows of 2015.
+    #[value(name = "windows-2015")]
     Windows2015,
     /// Hold-out windows of 2016 (to the data's end, 16 June).
+    #[value(name = "windows-2016")]
     Windows2016,
 }
 
