@@ -1154,6 +1154,65 @@ fn daily_matrix(data: &Path, labels: &[String]) -> Result<Matrix, EvalError> {
     Matrix::from_readings(&batches, "vw@30cm", labels)
 }
 
+/// One window's mean error of each planner (see [`Report::mean_error`]) over the capacities
+/// `from_j..=to_j` (J), for the windows' table and the paired comparison.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WindowMeans {
+    /// The window's first test time, seconds since the epoch.
+    pub start: i64,
+    /// Per planner, the mean error (unit²), `None` when one was infinite.
+    pub means: Vec<(Planner, Option<f64>)>,
+}
+
+/// Each window's [`WindowMeans`] for `estimator`.
+pub fn window_means(
+    matrix: &Matrix,
+    protocols: &[Protocol],
+    each: &[Report],
+    planners: &[Planner],
+    estimator: Estimator,
+    (from_j, to_j): (f64, f64),
+) -> Vec<WindowMeans> {
+    protocols
+        .iter()
+        .zip(each)
+        .map(|(p, r)| WindowMeans {
+            start: matrix.times.get(p.test.start).copied().unwrap_or_default(),
+            means: planners
+                .iter()
+                .map(|&k| (k, r.mean_error(k, estimator, from_j, to_j)))
+                .collect(),
+        })
+        .collect()
+}
+
+/// The paired difference `a − b` of two planners' window means: (mean, 95% interval low,
+/// high, windows) with Student's t over the windows where both are finite; `None` with fewer
+/// than two such windows.
+pub fn paired_difference(
+    windows: &[WindowMeans],
+    a: Planner,
+    b: Planner,
+) -> Option<(f64, f64, f64, usize)> {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    let get = |w: &WindowMeans, k: Planner| w.means.iter().find(|m| m.0 == k).and_then(|m| m.1);
+    let d: Vec<f64> = windows
+        .iter()
+        .filter_map(|w| Some(get(w, a)? - get(w, b)?))
+        .collect();
+    let n = d.len();
+    if n < 2 {
+        return None;
+    }
+    let mean = d.iter().sum::<f64>() / n as f64;
+    let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    let t = StudentsT::new(0.0, 1.0, (n - 1) as f64)
+        .ok()?
+        .inverse_cdf(0.975);
+    let half = t * (var / n as f64).sqrt();
+    Some((mean, mean - half, mean + half, n))
+}
+
 /// A rolling-window data set: the matrix, the layouts, the peer's results, one protocol per
 /// window.
 pub type WindowsData = (Matrix, Vec<Layout>, Vec<PeerResult>, Vec<Protocol>);
@@ -1274,6 +1333,29 @@ mod tests {
         assert_eq!(first.len(), 15);
         assert_eq!(m.times[first[0].test.start], y2012 + 42 * 86_400);
         assert_eq!(first[0].train, 0..42);
+    }
+
+    #[test]
+    fn paired_difference_is_students_t_over_the_windows() {
+        let w = |start, a: f64, b: Option<f64>| WindowMeans {
+            start,
+            means: vec![(Planner::Count, Some(a)), (Planner::Information, b)],
+        };
+        // Differences 1, 2, 3 (the window without an information mean is left out): mean 2,
+        // sd 1, t(0.975; 2 df) = 4.302653.
+        let windows = [
+            w(0, 2.0, Some(1.0)),
+            w(1, 2.0, Some(0.0)),
+            w(2, 5.0, None),
+            w(3, 4.0, Some(1.0)),
+        ];
+        let (d, lo, hi, n) =
+            paired_difference(&windows, Planner::Count, Planner::Information).unwrap();
+        assert_eq!(n, 3);
+        assert!((d - 2.0).abs() < 1e-12);
+        let half = 4.302_652_729_911_275 / 3f64.sqrt();
+        assert!((hi - 2.0 - half).abs() < 1e-6 && (2.0 - lo - half).abs() < 1e-6);
+        assert!(paired_difference(&windows[..1], Planner::Count, Planner::Information).is_none());
     }
 
     #[test]

@@ -100,7 +100,7 @@ pub fn run_peer(args: &PeerArgs) -> Result<String> {
     let planners = [Planner::Count, Planner::Information];
     let total = (layouts.len() * protocols.len()) as u64;
     let bar = crate::progress::bar(total, "layouts");
-    let (report, _) = peer::run_windows(
+    let (report, each) = peer::run_windows(
         &matrix,
         &layouts,
         &results,
@@ -121,6 +121,36 @@ pub fn run_peer(args: &PeerArgs) -> Result<String> {
     for p in planners {
         summary.push_str(&report.summary(p, FROZEN_ESTIMATOR));
         summary.push('\n');
+    }
+    if each.len() > 1 {
+        let windows = peer::window_means(
+            &matrix,
+            &protocols,
+            &each,
+            &planners,
+            FROZEN_ESTIMATOR,
+            (8e3, 32e3),
+        );
+        let mut table = String::from("window_start,planner,mean_error_8_32kJ\n");
+        for w in &windows {
+            for (p, m) in &w.means {
+                let m = m.map_or("inf".to_string(), |x| x.to_string());
+                let day = gleaner_field::time::format_rfc3339(w.start);
+                table.push_str(&format!("{},{},{m}\n", &day[..10], p.name()));
+            }
+        }
+        let path = args.out.join("windows.csv");
+        std::fs::write(&path, table).with_context(|| format!("cannot write {}", path.display()))?;
+        if let Some((d, lo, hi, n)) =
+            peer::paired_difference(&windows, Planner::Count, Planner::Information)
+        {
+            summary.push_str(&format!(
+                "Paired over {n} windows, `count` − `information` (mean 8–32 kJ, ×10⁻³): {:.3} [{:.3}, {:.3}] (95%, Student's t).\n",
+                d * 1e3,
+                lo * 1e3,
+                hi * 1e3
+            ));
+        }
     }
     let csv = args.out.join("outcomes.csv");
     std::fs::write(&csv, report.outcomes_csv())
