@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use gleaner_app::format_rfc3339;
+use gleaner_app::{AppError, format_rfc3339};
 use gleaner_kriging::Variogram;
 use gleaner_render::{
     IntervalChart, IntervalRow, Line, LineChart, XAxis, interval_chart_svg, line_chart_svg,
@@ -367,6 +367,15 @@ fn describe(name: &str, unit: &str) -> (&'static str, String, f64, usize) {
     }
 }
 
+/// A campaign report in memory: the Markdown text and its charts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderedReport {
+    /// `report.md`'s text; charts are linked as `figures/NAME.svg`.
+    pub markdown: String,
+    /// Each chart: (file name under `figures/`, SVG document).
+    pub figures: Vec<(String, String)>,
+}
+
 /// Reads the results in `dir` and writes `report.md` with its charts under `figures/`.
 pub fn write_report(dir: &Path) -> Result<PathBuf> {
     let results = read_results(dir)?;
@@ -374,9 +383,30 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         return Err(Error::file(dir, format!("no campaigns in {CAMPAIGN}")));
     }
     let command = std::fs::read_to_string(dir.join(COMMAND)).unwrap_or_default();
+    let report = render_report(&results, &command)?;
     let figures = dir.join("figures");
     std::fs::create_dir_all(&figures)
         .map_err(|e| Error::file(&figures, format!("cannot create: {e}")))?;
+    for (name, svg) in &report.figures {
+        write(&figures.join(name), svg)?;
+    }
+    let path = dir.join("report.md");
+    write(&path, &report.markdown)?;
+    Ok(path)
+}
+
+/// The report of `results` (at least one campaign) made by `command` (quoted in the report to
+/// reproduce it): what `write_report` writes, in memory (the server's simulation report).
+///
+/// # Errors
+/// No campaign in `results`; a chart that cannot be drawn.
+pub fn render_report(results: &[CampaignResult], command: &str) -> Result<RenderedReport> {
+    if results.is_empty() {
+        return Err(Error::App(AppError::Invalid(
+            "no campaigns to report".into(),
+        )));
+    }
+    let mut charts: Vec<(String, String)> = Vec::new();
     let summaries = summarise(&results, Strategy::Gleaner);
     let unit = "m³/m³";
     let modality = &results[0].modality;
@@ -554,7 +584,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
         x_label: format!("RMSE, {unit} ×1000"),
         rows,
     })?;
-    write(&figures.join("rmse_intervals.svg"), &svg)?;
+    charts.push(("rmse_intervals.svg".into(), svg));
     writeln!(
         md,
         "![RMSE with 95% intervals](figures/rmse_intervals.svg)\n"
@@ -612,8 +642,8 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
             lines,
         })?;
         let file = format!("{name}_over_campaign.svg");
-        write(&figures.join(&file), &svg)?;
         writeln!(md, "![{title}](figures/{file})\n")?;
+        charts.push((file, svg));
     }
     if budgets.len() > 1 {
         writeln!(md, "## Each metric against the budget\n")?;
@@ -681,8 +711,8 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
                 lines,
             })?;
             let file = format!("{name}_vs_budget.svg");
-            write(&figures.join(&file), &svg)?;
             writeln!(md, "![{title} against the budget](figures/{file})\n")?;
+            charts.push((file, svg));
         }
     }
     flights_section(&mut md, &results)?;
@@ -755,9 +785,10 @@ pub fn write_report(dir: &Path) -> Result<PathBuf> {
          flight against the class of the cell's true value (the model's own thresholds).\n\
          - Staleness: mission time minus each sensor's last collection."
     )?;
-    let path = dir.join("report.md");
-    write(&path, &md)?;
-    Ok(path)
+    Ok(RenderedReport {
+        markdown: md,
+        figures: charts,
+    })
 }
 
 #[cfg(test)]

@@ -295,6 +295,36 @@ fn caf_campaign_end_to_end() {
             .filter(|s| s.strategy != Strategy::Gleaner)
             .all(|s| s.rmse_vs_reference.is_some())
     );
+    // The report in memory (what the server returns) is what `write_report` writes to disk.
+    let report =
+        gleaner_campaign::report::render_report(std::slice::from_ref(&result), "gleaner test")
+            .unwrap();
+    assert!(report.markdown.starts_with("# Campaign report: "));
+    assert!(report.markdown.contains("gleaner test"));
+    assert!(!report.figures.is_empty());
+    for (name, svg) in &report.figures {
+        assert!(name.ends_with(".svg") && svg.starts_with("<svg"), "{name}");
+        assert!(
+            report.markdown.contains(&format!("figures/{name}")),
+            "{name}"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    gleaner_campaign::results::write_results(
+        dir.path(),
+        std::slice::from_ref(&result),
+        "gleaner test",
+    )
+    .unwrap();
+    let path = gleaner_campaign::report::write_report(dir.path()).unwrap();
+    let read_back = gleaner_campaign::results::read_results(dir.path()).unwrap();
+    let again = gleaner_campaign::report::render_report(&read_back, "gleaner test").unwrap();
+    assert_eq!(std::fs::read_to_string(path).unwrap(), again.markdown);
+    for (name, svg) in &again.figures {
+        let written = std::fs::read_to_string(dir.path().join("figures").join(name)).unwrap();
+        assert_eq!(&written, svg, "{name}");
+    }
+    assert!(gleaner_campaign::report::render_report(&[], "x").is_err());
 }
 
 /// The oracle yardstick (each cell worth its sensors' squared pre-flight error against what
