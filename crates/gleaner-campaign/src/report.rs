@@ -407,7 +407,7 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
         )));
     }
     let mut charts: Vec<(String, String)> = Vec::new();
-    let summaries = summarise(&results, Strategy::Gleaner);
+    let summaries = summarise(results, Strategy::Gleaner);
     let unit = "m³/m³";
     let modality = &results[0].modality;
     let mut budgets: Vec<f64> = summaries.iter().map(|s| s.budget).collect();
@@ -524,7 +524,7 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
             md,
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {caught}/{total} | {} | {} | {} | {} |",
             s.strategy.name(),
-            runs_cell(&results, s),
+            runs_cell(results, s),
             fmt_iv(get(s, "rmse_kriged"), 1000.0, 2),
             s.rmse_vs_reference
                 .as_ref()
@@ -546,7 +546,7 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
         )?;
     }
     writeln!(md)?;
-    let shared = same_runs(&results, &summaries);
+    let shared = same_runs(results, &summaries);
     if !shared.is_empty() {
         let text: Vec<String> = shared
             .iter()
@@ -715,7 +715,7 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
             charts.push((file, svg));
         }
     }
-    flights_section(&mut md, &results)?;
+    flights_section(&mut md, results)?;
     writeln!(md, "## Definitions\n")?;
     // The model-based estimate ("kriging" columns) the simulation used.
     // Recorded with the results; older results: named on the command line.
