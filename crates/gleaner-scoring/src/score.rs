@@ -435,7 +435,7 @@ fn score_held<S: Store>(project: &mut Project<S>, request: &ScoreRequest) -> Res
 
 /// Writes scoring rows, carrying over what scoring does not compute (the pending volume, and an
 /// expected energy the caller did not set) from the stored rows.
-pub(crate) fn write_scoring<W: StoreWrite>(
+pub fn write_scoring<W: StoreWrite>(
     tx: &mut W,
     mut rows: Vec<CellMetadata>,
 ) -> std::result::Result<(), AppError> {
@@ -458,7 +458,7 @@ pub(crate) fn write_scoring<W: StoreWrite>(
 /// The cell metadata rows of a scoring: terms, class probabilities, correlations with every
 /// neighbour, the latest anomaly per modality, and the series summaries; with
 /// `expected_energy_j` (J, one per cell in field order), each cell's expected collection energy.
-pub(crate) fn metadata_rows<S: Store>(
+pub fn metadata_rows<S: Store>(
     project: &Project<S>,
     s: &Scoring,
     expected_energy_j: Option<&[f64]>,

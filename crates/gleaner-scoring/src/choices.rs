@@ -6,9 +6,42 @@ use std::str::FromStr;
 
 use gleaner_kriging::Mean;
 
-use crate::error::AppError;
-use crate::plan::Objective;
+use gleaner_mission::Planner;
+
+use crate::error::{AppError, Result};
 use crate::reconstruct::Estimator;
+
+/// Parses a planner name: `default`, `greedy` or `exact`.
+pub fn parse_planner(name: &str) -> Result<Planner> {
+    Ok(match name {
+        "default" => Planner::Default,
+        "greedy" => Planner::Greedy,
+        "exact" => Planner::Exact,
+        other => {
+            return Err(AppError::Invalid(format!(
+                "unknown solver {other:?}: expected default, greedy or exact"
+            )));
+        }
+    })
+}
+
+/// What the planner maximises (docs/method.md §4, §7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Objective {
+    /// The sum of the visited cells' scores (S, or the scores given).
+    #[default]
+    Score,
+    /// The information the route's readings bring: the expected reduction of the dynamic
+    /// field model's posterior variance over every sensor of the condition modality, as a
+    /// share of the field's total (non-additive: planned with marginal gains). Cells are
+    /// eligible when their reading would reduce it; S is still computed and reported.
+    Information,
+    /// Both: a route is worth `(1 − w)·ΣS/ΣS_all + w·I` with `I` the information share above,
+    /// `ΣS/ΣS_all` its cells' share of the field's total score and `w` the `[planner]
+    /// information_weight` (non-additive through `I`: planned with marginal gains).
+    Hybrid,
+}
 
 impl Estimator {
     /// Every estimator, in the order they are listed.

@@ -37,6 +37,7 @@
 use std::collections::{BTreeMap, HashMap, HashSet};
 
 use gleaner_field::{Field, Modality, Sensor, SensorId, UnixSeconds};
+use gleaner_ingest::Readings;
 use gleaner_store::{
     CellMetadata, Correlation, ModalitySummary, ReadingBatch, SeriesStats, StoreRead, StoreWrite,
 };
@@ -46,7 +47,6 @@ use gleaner_utility::{
 };
 
 use crate::error::{AppError, Result};
-use crate::ingest::Parsed;
 use crate::knowledge::{Columns, Knowledge, cell_series_of, columns};
 use crate::project::Project;
 use crate::score::{
@@ -116,7 +116,7 @@ fn get_fit(i: &mut In<'_>) -> Option<Fit> {
 
 /// Everything persisted (see the module docs).
 #[derive(Debug, Clone)]
-pub(crate) struct Persisted {
+pub struct Persisted {
     field_fp: u64,
     settings_fp: u64,
     reading_count: u64,
@@ -663,7 +663,7 @@ fn rebuild_keeping<R: StoreRead>(
 }
 
 /// Marks the persisted state stale (an empty blob): the next `score` rebuilds it.
-pub(crate) fn invalidate<W: StoreWrite>(tx: &mut W) -> Result<()> {
+pub fn invalidate<W: StoreWrite>(tx: &mut W) -> Result<()> {
     write_blob(tx, None)
 }
 
@@ -674,10 +674,10 @@ fn write_blob<W: StoreWrite>(tx: &mut W, p: Option<&Persisted>) -> Result<()> {
 }
 
 /// A new reading: sensor id, modality name, time (s), value.
-pub(crate) type Row = (SensorId, String, UnixSeconds, f64);
+pub type Row = (SensorId, String, UnixSeconds, f64);
 
 /// What to do after the readings are inserted.
-pub(crate) enum Plan {
+pub enum Plan {
     /// Rebuild from the store.
     Rebuild,
     /// Add these readings (new to the store) to the persisted state.
@@ -686,7 +686,7 @@ pub(crate) enum Plan {
 
 impl Plan {
     /// The readings new to the store, when the plan computed them (an update).
-    pub(crate) fn new_rows(&self) -> Option<&[Row]> {
+    pub fn new_rows(&self) -> Option<&[Row]> {
         match self {
             Plan::Rebuild => None,
             Plan::Update(_, rows) => Some(rows),
@@ -694,26 +694,26 @@ impl Plan {
     }
 }
 
-/// Before inserting `parsed`: loads the state and works out which readings are new to the
+/// Before inserting `files` (each parsed file's readings): loads the state and works out which readings are new to the
 /// store (the first of several with the same key; one already stored is not). Costs in
 /// proportion to the stored readings of the batch's sensors within its time span.
-pub(crate) fn before_insert<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Plan> {
+pub fn before_insert<R: StoreRead>(tx: &R, files: &[&Readings]) -> Result<Plan> {
     let Some(p) = tx
         .blob_get(BLOB_KEY)?
         .and_then(|b| Persisted::from_bytes(&b))
     else {
         return Ok(Plan::Rebuild);
     };
-    Ok(Plan::Update(Box::new(p), new_rows(tx, parsed)?))
+    Ok(Plan::Update(Box::new(p), new_rows(tx, files)?))
 }
 
-/// The readings of `parsed` that are not yet in the store (one per sensor, modality and
+/// The readings of `files` that are not yet in the store (one per sensor, modality and
 /// time, in the files' order): what an insert will add. Reads the stored readings of those
 /// sensors between the parsed readings' first and last time (s) only.
-pub(crate) fn new_rows<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Vec<Row>> {
+pub fn new_rows<R: StoreRead>(tx: &R, files: &[&Readings]) -> Result<Vec<Row>> {
     let mut seen: HashSet<(SensorId, String, UnixSeconds)> = HashSet::new();
     let mut rows: Vec<Row> = Vec::new();
-    for (_, _, readings, _) in &parsed.files {
+    for readings in files {
         for r in &readings.rows {
             let (Some(s), Some(m)) = (
                 readings.sensors.get(r.sensor as usize),
@@ -753,11 +753,7 @@ pub(crate) fn new_rows<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Vec<Row>
 
 /// After inserting: brings the persisted state up to date (see the module docs), in the
 /// caller's transaction.
-pub(crate) fn after_insert<W: StoreWrite>(
-    tx: &mut W,
-    plan: Plan,
-    settings: &Settings,
-) -> Result<()> {
+pub fn after_insert<W: StoreWrite>(tx: &mut W, plan: Plan, settings: &Settings) -> Result<()> {
     let mut carry = None;
     let updated = match plan {
         Plan::Rebuild => None,
@@ -1148,7 +1144,7 @@ pub(crate) fn fast_scoring_from<S: Store>(
 /// first readings, the newest reading): from the persisted state when it describes the store
 /// (see [`fast_scoring`]), else from the history ([`knowledge`](crate::knowledge())). From
 /// the state, the series hold only the retained recent points: callers must not use them.
-pub(crate) fn collection_knowledge<S: Store>(
+pub fn collection_knowledge<S: Store>(
     project: &Project<S>,
     at: Option<UnixSeconds>,
     history: History,

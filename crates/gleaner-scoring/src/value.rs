@@ -22,7 +22,7 @@ use crate::reconstruct::fit_model;
 /// largest one (so in [0, 1]); or why it cannot be computed (no soil-moisture modality, too
 /// little history to fit the field model, more than [`MAX_VARIANCE_CELLS`] cells), which the
 /// caller reports as a warning and plans by S alone.
-pub(crate) fn variance_gains<S: Store>(
+pub fn variance_gains<S: Store>(
     project: &Project<S>,
     k: &Knowledge,
     t: UnixSeconds,
