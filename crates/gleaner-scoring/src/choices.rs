@@ -9,7 +9,6 @@ use gleaner_kriging::Mean;
 use gleaner_mission::Planner;
 
 use crate::error::{AppError, Result};
-use crate::reconstruct::Estimator;
 
 /// Parses a planner name: `default`, `greedy` or `exact`.
 pub fn parse_planner(name: &str) -> Result<Planner> {
@@ -41,6 +40,27 @@ pub enum Objective {
     /// `ΣS/ΣS_all` its cells' share of the field's total score and `w` the `[planner]
     /// information_weight` (non-additive through `I`: planned with marginal gains).
     Hybrid,
+}
+
+/// The model-based estimate of a reconstruction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Estimator {
+    /// Kriging of changes ([`gleaner_kriging::estimate_change`]): each sensor's last known
+    /// reading plus its change since, estimated from the changes its neighbours are known to
+    /// have made over (part of) that interval; exactly the last value carried forward when no
+    /// neighbour's change is known. A sensor never read gets the kriging of levels (ordinary).
+    /// The default: the dynamic model did not beat it on the tuning years (docs/evaluation/).
+    #[default]
+    Changes,
+    /// Space-time kriging of levels (residuals from each sensor's mean) from every sensor's
+    /// latest known reading: ordinary ([`Mean::Unknown`]) or simple ([`Mean::Known`]).
+    Levels(Mean),
+    /// The dynamic field model ([`gleaner_kriging::DynamicModel`]): a learned, shrunk
+    /// covariance of levels between sensors with AR(1) dynamics of the deviations, run as a
+    /// Kalman filter over every reading known in the window [`dynamic_window_s`](crate::dynamic_window_s) before the
+    /// estimation time. Where the model cannot be fitted ([`Estimator::resolve`](Estimator::resolve)) kriging of
+    /// changes answers instead.
+    Dynamic,
 }
 
 impl Estimator {

@@ -20,6 +20,8 @@
 
 pub mod cell_csv;
 mod choices;
+mod codec;
+mod condition;
 mod drift;
 mod error;
 mod information;
@@ -34,22 +36,20 @@ pub mod summaries;
 mod value;
 pub mod when;
 
-pub use choices::{Objective, parse_planner};
+pub use choices::{Estimator, Objective, parse_planner};
+pub use condition::{Condition, ScoreRequest, Scoring, condition_modality, driver};
 pub use error::{AppError, Result};
 pub use information::CellInformation;
 pub use knowledge::{History, Knowledge, knowledge, sampling_step};
 pub use project::{Project, database};
 pub use reconstruct::{
-    DEFAULT_NEIGHBOURS, EstimateReads, Estimator, MAX_SERIES_TIMES, Models, ReconstructRequest,
+    DEFAULT_NEIGHBOURS, EstimateReads, MAX_SERIES_TIMES, Models, ReconstructRequest,
     ReconstructSeriesRequest, Reconstruction, ReconstructionSeries, SensorEstimate, Z90,
     dynamic_fit_options, dynamic_window_s, estimate_with, fit_dynamic_model, fit_models,
     reconstruct, reconstruct_series, target_modality, unfit_dynamic,
 };
 pub use reconstruct_map::{MapCell, ReconstructMapRequest, ReconstructionMap, reconstruct_map};
-pub use score::{
-    Condition, ScoreRequest, Scoring, compute, compute_full, condition_modality, driver,
-    metadata_rows, score, write_scoring,
-};
+pub use score::{compute, compute_full, metadata_rows, score, write_scoring};
 pub use settings::{EnergyPreset, Settings};
 pub use value::variance_gains;
 

@@ -17,6 +17,7 @@ use gleaner_kriging::{
 };
 use gleaner_store::{ReadingBatch, Store};
 
+use crate::choices::Estimator;
 use crate::error::{AppError, Result};
 use crate::knowledge::sampling_step;
 use crate::project::Project;
@@ -35,27 +36,6 @@ pub struct ReconstructRequest {
     pub neighbours: Option<usize>,
     /// The model-based estimator [default: [`Estimator::Changes`]].
     pub estimator: Estimator,
-}
-
-/// The model-based estimate of a reconstruction.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Estimator {
-    /// Kriging of changes ([`gleaner_kriging::estimate_change`]): each sensor's last known
-    /// reading plus its change since, estimated from the changes its neighbours are known to
-    /// have made over (part of) that interval; exactly the last value carried forward when no
-    /// neighbour's change is known. A sensor never read gets the kriging of levels (ordinary).
-    /// The default: the dynamic model did not beat it on the tuning years (docs/evaluation/).
-    #[default]
-    Changes,
-    /// Space-time kriging of levels (residuals from each sensor's mean) from every sensor's
-    /// latest known reading: ordinary ([`Mean::Unknown`]) or simple ([`Mean::Known`]).
-    Levels(Mean),
-    /// The dynamic field model ([`gleaner_kriging::DynamicModel`]): a learned, shrunk
-    /// covariance of levels between sensors with AR(1) dynamics of the deviations, run as a
-    /// Kalman filter over every reading known in the window [`dynamic_window_s`] before the
-    /// estimation time. Where the model cannot be fitted ([`Estimator::resolve`]) kriging of
-    /// changes answers instead.
-    Dynamic,
 }
 
 impl Estimator {
@@ -126,7 +106,7 @@ pub fn target_modality<S: Store>(
                 .into_iter()
                 .map(|m| m.modality.to_string())
                 .collect();
-            crate::score::condition_modality(project.settings(), &names).ok_or_else(|| {
+            crate::condition::condition_modality(project.settings(), &names).ok_or_else(|| {
                 AppError::Invalid(
                     "no soil-moisture modality to reconstruct: give one (e.g. vw@30cm)".into(),
                 )

@@ -1097,7 +1097,7 @@ mod tests {
         assert_eq!(default.anomaly_reference, "own");
         let core = default.to_core(&modalities).unwrap();
         assert_eq!(core.anomaly_reference, AnomalyReference::OwnHistory);
-        assert_eq!(crate::score::anomaly_label(&core), "raw");
+        assert_eq!(crate::condition::anomaly_label(&core), "raw");
         let section: UtilitySection =
             toml::from_str("anomaly_reference = \"neighbours\"\nanomaly_min_neighbours = 3\n")
                 .unwrap();
@@ -1106,7 +1106,10 @@ mod tests {
             core.anomaly_reference,
             AnomalyReference::Neighbours { min_neighbours: 3 }
         );
-        assert_eq!(crate::score::anomaly_label(&core), "raw, neighbours(min=3)");
+        assert_eq!(
+            crate::condition::anomaly_label(&core),
+            "raw, neighbours(min=3)"
+        );
         let bad = UtilitySection {
             anomaly_reference: "nearby".into(),
             ..UtilitySection::default()

@@ -38,21 +38,20 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 use gleaner_field::{Field, Modality, Sensor, SensorId, UnixSeconds};
 use gleaner_ingest::Readings;
-use gleaner_store::{
-    CellMetadata, Correlation, ModalitySummary, ReadingBatch, SeriesStats, StoreRead, StoreWrite,
-};
+use gleaner_store::{ReadingBatch, StoreRead, StoreWrite};
 use gleaner_utility::{
     ConditionConfig, ConditionModel, HistoryWindow, IncrementalState, OwnedSeries, Reading, Series,
     TimeGrid,
 };
 
-use crate::error::{AppError, Result};
-use crate::knowledge::{Columns, Knowledge, cell_series_of, columns};
-use crate::project::Project;
-use crate::score::{
+use crate::codec::{Fnv, In, Out};
+use crate::condition::{
     NO_MODALITY, ScoreRequest, Scoring, condition_modality, condition_output, fit_condition_from,
     neighbour_lists,
 };
+use crate::error::{AppError, Result};
+use crate::knowledge::{Columns, Knowledge, cell_series_of, columns};
+use crate::project::Project;
 use crate::settings::Settings;
 use crate::{History, Store};
 
@@ -136,28 +135,6 @@ pub struct Persisted {
 // ---------------------------------------------------------------------------------------
 // Fingerprints
 
-/// FNV-1a, 64 bits: a deterministic hash that does not depend on the Rust version.
-pub(crate) struct Fnv(pub(crate) u64);
-
-impl Fnv {
-    pub(crate) fn new() -> Self {
-        Self(0xcbf2_9ce4_8422_2325)
-    }
-    pub(crate) fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 ^= u64::from(x);
-            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    pub(crate) fn u64(&mut self, v: u64) {
-        self.bytes(&v.to_le_bytes());
-    }
-    pub(crate) fn str(&mut self, s: &str) {
-        self.u64(s.len() as u64);
-        self.bytes(s.as_bytes());
-    }
-}
-
 fn field_fingerprint(sensors: &[Sensor], field: &Field) -> u64 {
     let mut h = Fnv::new();
     h.u64(sensors.len() as u64);
@@ -192,77 +169,6 @@ fn settings_fingerprint(settings: &Settings) -> u64 {
         ConditionConfig::default()
     ));
     h.0
-}
-
-// ---------------------------------------------------------------------------------------
-// Encoding
-
-pub(crate) struct Out(pub(crate) Vec<u8>);
-
-impl Out {
-    pub(crate) fn u8(&mut self, v: u8) {
-        self.0.push(v);
-    }
-    pub(crate) fn u64(&mut self, v: u64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    pub(crate) fn i64(&mut self, v: i64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    pub(crate) fn opt(&mut self, v: Option<i64>) {
-        match v {
-            Some(x) => {
-                self.u8(1);
-                self.i64(x);
-            }
-            None => self.u8(0),
-        }
-    }
-    pub(crate) fn bytes(&mut self, b: &[u8]) {
-        self.u64(b.len() as u64);
-        self.0.extend_from_slice(b);
-    }
-}
-
-pub(crate) struct In<'a>(pub(crate) &'a [u8]);
-
-impl<'a> In<'a> {
-    pub(crate) fn take(&mut self, n: usize) -> Option<&'a [u8]> {
-        if n > self.0.len() {
-            return None;
-        }
-        let (a, b) = self.0.split_at(n);
-        self.0 = b;
-        Some(a)
-    }
-    pub(crate) fn u8(&mut self) -> Option<u8> {
-        Some(self.take(1)?[0])
-    }
-    pub(crate) fn u64(&mut self) -> Option<u64> {
-        Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
-    }
-    pub(crate) fn i64(&mut self) -> Option<i64> {
-        Some(i64::from_le_bytes(self.take(8)?.try_into().ok()?))
-    }
-    pub(crate) fn opt(&mut self) -> Option<Option<i64>> {
-        match self.u8()? {
-            0 => Some(None),
-            1 => Some(Some(self.i64()?)),
-            _ => None,
-        }
-    }
-    /// A count of elements of at least `min` bytes each, checked against the bytes left.
-    pub(crate) fn count(&mut self, min: usize) -> Option<usize> {
-        let n = usize::try_from(self.u64()?).ok()?;
-        (n.checked_mul(min.max(1))? <= self.0.len()).then_some(n)
-    }
-    pub(crate) fn bytes(&mut self) -> Option<&'a [u8]> {
-        let n = self.count(1)?;
-        self.take(n)
-    }
-    pub(crate) fn string(&mut self) -> Option<String> {
-        String::from_utf8(self.bytes()?.to_vec()).ok()
-    }
 }
 
 impl Persisted {
@@ -1160,65 +1066,6 @@ pub fn collection_knowledge<S: Store>(
         }
     }
     crate::knowledge(project, at, history)
-}
-
-/// Fills cell `c`'s correlations, anomalies and series summaries from the persisted
-/// statistics (what `metadata_rows` computes from the full series otherwise).
-pub(crate) fn metadata_from_state(
-    s: &Scoring,
-    state: &IncrementalState,
-    modalities: &[Option<Modality>],
-    c: usize,
-    min_overlap: usize,
-    flag: f64,
-    m: &mut CellMetadata,
-) {
-    let k = &s.knowledge;
-    let neighbours = state.neighbours().get(c).map_or(&[][..], Vec::as_slice);
-    for (pos, &nb) in neighbours.iter().enumerate() {
-        for (mi, modality) in modalities.iter().enumerate() {
-            let Some(modality) = modality else { continue };
-            if state.series_stats(c, mi).all.count() == 0
-                || state.series_stats(nb, mi).all.count() == 0
-            {
-                continue;
-            }
-            let pair = state.neighbour_pair(c, pos, mi);
-            m.correlations.push(Correlation {
-                neighbour: k.field.cells()[nb].index,
-                modality: modality.clone(),
-                correlation: pair.correlation(min_overlap),
-                overlap: pair.count(),
-            });
-        }
-    }
-    if let Some(terms) = s.terms.get(c) {
-        for (mi, a) in terms.a_by_modality.iter().enumerate() {
-            let latest = state.series_stats(c, mi).latest.map(|p| p.0);
-            crate::score::push_anomaly(m, modalities.get(mi), latest, *a, flag);
-        }
-    }
-    m.summaries = modalities
-        .iter()
-        .enumerate()
-        .filter_map(|(mi, modality)| {
-            let st = state.series_stats(c, mi);
-            let (latest_t, latest_value) = st.latest?;
-            let n = st.all.count();
-            Some(ModalitySummary {
-                modality: modality.clone()?,
-                stats: SeriesStats {
-                    count: n,
-                    mean: st.all.mean(),
-                    std: (n >= 2).then(|| st.all.std()),
-                    min: st.min,
-                    max: st.max,
-                    latest_t,
-                    latest_value,
-                },
-            })
-        })
-        .collect();
 }
 
 #[cfg(test)]

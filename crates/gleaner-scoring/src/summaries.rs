@@ -9,9 +9,10 @@ use gleaner_store::{
 };
 use gleaner_utility::{RunningStats, Series};
 
+use crate::codec::{Fnv, In, Out};
 use crate::error::{AppError, Result};
 use crate::settings::Settings;
-use crate::state::{Fnv, In, Out, Row};
+use crate::state::Row;
 
 /// Count, mean, sample std, min, max and latest point of a series; `None` when empty. Values
 /// in the modality's unit, times seconds since the Unix epoch.

@@ -34,7 +34,7 @@ pub fn variance_gains<S: Store>(
             cells.len()
         )));
     }
-    let Some(name) = crate::score::condition_modality(project.settings(), &k.modalities) else {
+    let Some(name) = crate::condition::condition_modality(project.settings(), &k.modalities) else {
         return Ok(Err(
             "no soil-moisture modality for the variance term; planned by S alone".into(),
         ));
