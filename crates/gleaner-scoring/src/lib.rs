@@ -26,6 +26,7 @@ mod drift;
 mod error;
 mod information;
 mod knowledge;
+mod kriging_inputs;
 mod project;
 mod reconstruct;
 mod reconstruct_map;
@@ -41,10 +42,11 @@ pub use condition::{Condition, ScoreRequest, Scoring, condition_modality, driver
 pub use error::{AppError, Result};
 pub use information::CellInformation;
 pub use knowledge::{History, Knowledge, knowledge, sampling_step};
+pub use kriging_inputs::Z90;
 pub use project::{Project, database};
 pub use reconstruct::{
     DEFAULT_NEIGHBOURS, EstimateReads, MAX_SERIES_TIMES, Models, ReconstructRequest,
-    ReconstructSeriesRequest, Reconstruction, ReconstructionSeries, SensorEstimate, Z90,
+    ReconstructSeriesRequest, Reconstruction, ReconstructionSeries, SensorEstimate,
     dynamic_fit_options, dynamic_window_s, estimate_with, fit_dynamic_model, fit_models,
     reconstruct, reconstruct_series, target_modality, unfit_dynamic,
 };
