@@ -21,9 +21,9 @@ use gleaner_energy::flight_point;
 use gleaner_field::{LatLon, LocalPoint, TransverseMercator};
 use gleaner_mission::Detours;
 
-use crate::error::{AppError, Result};
-use crate::project::Project;
-use crate::settings::FieldSection;
+use gleaner_scoring::Project;
+use gleaner_scoring::settings::FieldSection;
+use gleaner_scoring::{AppError, Result};
 
 /// The largest zone file read, bytes (a farm's zones are kilobytes).
 pub const MAX_ZONE_FILE_BYTES: u64 = 16 << 20;

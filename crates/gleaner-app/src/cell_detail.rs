@@ -4,9 +4,9 @@
 use gleaner_field::{CellIndex, Modality, SensorId, UnixSeconds};
 use gleaner_store::Store;
 
-use crate::error::{AppError, Result};
-use crate::project::Project;
 use crate::view::{CellView, field_view};
+use gleaner_scoring::Project;
+use gleaner_scoring::{AppError, Result};
 
 /// The weighted terms of S = α·F + β·A + γ·U − δ·R for one cell (dimensionless).
 #[derive(Debug, Clone, Copy, PartialEq)]

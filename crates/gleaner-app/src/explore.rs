@@ -13,12 +13,12 @@ use gleaner_mission::exploration::{
 };
 use gleaner_store::{MissionId, MissionKind, NewMission, Store, StoreWrite};
 
-use crate::error::{AppError, Result};
-use crate::knowledge::History;
 use crate::plan::{
     FlightPoints, breakdown, energy_model, flight_profile, routing, services, stops, via_positions,
 };
-use crate::project::Project;
+use gleaner_scoring::History;
+use gleaner_scoring::Project;
+use gleaner_scoring::{AppError, Result};
 
 /// What to explore.
 #[derive(Debug, Clone, Default)]
@@ -144,8 +144,8 @@ pub fn explore_with<S: Store>(
     clock_now: UnixSeconds,
     memo: &mut ExplorationMemo,
 ) -> Result<Exploration> {
-    let k = crate::state::collection_knowledge(project, request.at, History::default())?;
-    let t = crate::when::mission_time(request.at, k.latest)?;
+    let k = gleaner_scoring::state::collection_knowledge(project, request.at, History::default())?;
+    let t = gleaner_scoring::when::mission_time(request.at, k.latest)?;
     // Legs and hovers priced in the forecast wind plus the margin, as `plan` prices them
     // (still air: the model as it is).
     let plan_wind = crate::wind::PlanWind::of(&project.settings().flight, request.wind)?;

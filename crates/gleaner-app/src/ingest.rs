@@ -14,11 +14,11 @@ use gleaner_store::{
     StoreError, StoreWrite,
 };
 
-use crate::error::{AppError, Result};
 use crate::progress::Progress;
-use crate::project::Project;
-use crate::state;
-use crate::summaries;
+use gleaner_scoring::Project;
+use gleaner_scoring::state;
+use gleaner_scoring::summaries;
+use gleaner_scoring::{AppError, Result};
 
 /// A readings file format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -96,6 +96,10 @@ pub struct Parsed {
 }
 
 impl Parsed {
+    /// Every file's readings, in the files' order.
+    pub fn readings(&self) -> Vec<&Readings> {
+        self.files.iter().map(|f| &f.2).collect()
+    }
     /// Number of readings over all files.
     pub fn len(&self) -> usize {
         self.files.iter().map(|f| f.2.rows.len()).sum()
@@ -311,19 +315,19 @@ pub(crate) fn store_parsed<W: StoreWrite>(
     policy: ConflictPolicy,
     at: UnixSeconds,
     now: UnixSeconds,
-    settings: &crate::settings::Settings,
+    settings: &gleaner_scoring::settings::Settings,
     state_policy: StatePolicy,
 ) -> std::result::Result<(InsertStats, usize, Vec<state::Row>), AppError> {
     let mut stats = InsertStats::default();
     let plan = match state_policy {
-        StatePolicy::Maintain => Some(state::before_insert(&*tx, parsed)?),
+        StatePolicy::Maintain => Some(state::before_insert(&*tx, &parsed.readings())?),
         StatePolicy::Invalidate => None,
     };
     // What the insert adds, for the caller's incremental cell summaries (a flight's).
     let added = match &plan {
         Some(plan) => match plan.new_rows() {
             Some(rows) => rows.to_vec(),
-            None => state::new_rows(&*tx, parsed)?,
+            None => state::new_rows(&*tx, &parsed.readings())?,
         },
         None => Vec::new(),
     };

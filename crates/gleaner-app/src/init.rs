@@ -13,12 +13,12 @@ use gleaner_store::{
     UpsertStats,
 };
 
-use crate::error::{AppError, Result};
-use crate::project::Project;
-use crate::settings::{
+use gleaner_scoring::Project;
+use gleaner_scoring::settings::{
     CONFIG_FILE, FieldSection, IngestSection, ProjectSection, SensorsSection, Settings,
     parse_utm_zone,
 };
+use gleaner_scoring::{AppError, Result};
 
 /// Default cell side, metres: the paper scenario's 40 m cells.
 pub const DEFAULT_CELL_SIZE_M: f64 = 40.0;
@@ -54,7 +54,7 @@ pub struct InitRequest {
     /// `postgres://...[#project]` URL [default: `gleaner.db`].
     pub database: Option<String>,
     /// Write gleaner's method as the project's `[utility]` (the gated score with each sensor's
-    /// drift as F and the bounded anomaly, [`crate::settings::UtilitySection::gleaner`])
+    /// drift as F and the bounded anomaly, [`gleaner_scoring::settings::UtilitySection::gleaner`])
     /// instead of the paper's S (docs/method.md §2, the default).
     pub gleaner_method: bool,
     /// GeoJSON file of the geofence (`[field] geofence`): the polygons the flight stays inside.
@@ -93,7 +93,7 @@ pub fn init(request: &InitRequest) -> Result<(Project<AnyStore>, InitOutcome)> {
     // Read and check everything before creating anything: a refused init leaves no trace.
     let settings = settings_for(request)?;
     let created_dir = !request.dir.exists();
-    let database = crate::project::database(&request.dir, &settings, None)?;
+    let database = gleaner_scoring::database(&request.dir, &settings, None)?;
     let db_path = match &database {
         gleaner_store::Database::Sqlite(path) => Some(path.clone()),
         gleaner_store::Database::Postgres { .. } => None,
@@ -154,7 +154,7 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
     let defaults = gleaner_field::FieldConfig::default();
     // Hubbard Brook's probes sit at many depths, few at 30 cm: its condition (and evaluated)
     // modality is the soil moisture at the depth most of its water-content probes share.
-    let mut utility = crate::settings::UtilitySection::default();
+    let mut utility = gleaner_scoring::settings::UtilitySection::default();
     if request.hubbard_brook {
         utility.condition_modality =
             hubbard_brook_main_water_depth(&request.sensors)?.map(|depth| format!("vw@{depth}cm"));
@@ -177,7 +177,7 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
                 // The default radius, within the 100 cell sides allowed for small cells.
                 defaults
                     .fallback_radius_m
-                    .min(crate::settings::MAX_RADIUS_CELLS * cell_size_m),
+                    .min(gleaner_scoring::settings::MAX_RADIUS_CELLS * cell_size_m),
             ),
             geofence: request
                 .geofence
@@ -189,7 +189,7 @@ fn settings_for(request: &InitRequest) -> Result<Settings> {
                 .map(|p| relative_to(p, &request.dir)),
             no_fly_buffer_m: request
                 .no_fly_buffer_m
-                .unwrap_or(crate::settings::DEFAULT_NO_FLY_BUFFER_M),
+                .unwrap_or(gleaner_scoring::settings::DEFAULT_NO_FLY_BUFFER_M),
         },
         sensors: SensorsSection {
             file: relative_to(&request.sensors, &request.dir),
@@ -321,8 +321,8 @@ pub fn init_store_with<S: Store>(
             // ingest describes them), not only after a scoring.
             let now = latest_reading(&*tx)?;
             let ids: Vec<gleaner_field::SensorId> = sensors.iter().map(|s| s.id.clone()).collect();
-            crate::summaries::refresh_cells(tx, &ids, now, &settings)?;
-            crate::summaries::invalidate_cache(tx)?;
+            gleaner_scoring::summaries::refresh_cells(tx, &ids, now, &settings)?;
+            gleaner_scoring::summaries::invalidate_cache(tx)?;
         }
         Ok::<_, AppError>((upsert, replaced))
     })?;

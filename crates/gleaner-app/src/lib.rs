@@ -42,68 +42,59 @@
 #![deny(missing_docs)]
 
 pub mod airspace;
-pub mod cell_csv;
 mod cell_detail;
-mod choices;
-mod drift;
-mod error;
 mod explore;
-mod information;
 mod ingest;
 mod init;
-mod knowledge;
 mod migrate;
 pub mod missions;
 mod plan;
 mod progress;
-mod project;
-mod reconstruct;
-mod reconstruct_map;
 mod record;
 mod replan;
-mod score;
-pub mod settings;
+#[cfg(test)]
+mod scoring_tests;
 pub mod shortcuts;
-mod state;
-mod summaries;
 #[cfg(test)]
 mod test_farm;
-mod value;
 mod view;
-mod when;
 pub mod wind;
 
 pub use cell_detail::{CellDetail, Contributions, SeriesPoint, cell_detail};
-pub use error::{AppError, Result};
 pub use explore::{Exploration, ExploreRequest, explore};
 pub use ingest::{Format, IngestOutcome, IngestRequest, batch_of, detect, ingest};
 pub use init::{
     DEFAULT_CELL_SIZE_M, InitOutcome, InitRequest, init, init_store, init_store_with,
     read_sensors_file, relative_to,
 };
-pub use knowledge::{History, Knowledge, knowledge};
 pub use migrate::{MigrateOutcome, migrate};
 pub use missions::{MissionPage, cancel_mission, delete_mission, missions_page};
 pub use plan::{
-    Baseline, ExtraSortie, MAX_SORTIES, Objective, PlanRequest, PlannedMission, energy_model,
-    flight_profile, parse_planner, plan, plan_with_preset,
+    Baseline, ExtraSortie, MAX_SORTIES, PlanRequest, PlannedMission, energy_model, flight_profile,
+    plan, plan_with_preset,
 };
 pub use progress::{Progress, Silent};
-pub use project::{Project, database};
-pub use reconstruct::{
-    DEFAULT_NEIGHBOURS, Estimator, MAX_SERIES_TIMES, ReconstructRequest, ReconstructSeriesRequest,
-    Reconstruction, ReconstructionSeries, SensorEstimate, Z90, dynamic_fit_options,
-    dynamic_window_s, reconstruct, reconstruct_series,
-};
-pub use reconstruct_map::{MapCell, ReconstructMapRequest, ReconstructionMap, reconstruct_map};
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use replan::{REPLAN_ITERATIONS, REPLAN_TIME_LIMIT_S, Replan, ReplanRequest, replan};
-pub use score::{Condition, ScoreRequest, Scoring, compute, compute_full, driver, score};
-pub use settings::{EnergyPreset, Settings};
-pub use summaries::{pending_bytes, series_summary};
 pub use view::{
     CellView, FieldView, MissionExport, cell_reading_counts, check_flyable, export,
     export_energy_model, field_view, mission, missions, newest_reading,
+};
+
+// The scoring machinery (`gleaner-scoring`): the project, its settings and errors, what is
+// known at t, scoring and reconstruction, as the adapters name them.
+/// Per-cell CSV inputs (`plan --scores`, `score --probabilities`) and header-line tables.
+pub use gleaner_scoring::cell_csv;
+/// `gleaner.toml`: its sections, defaults and checks.
+pub use gleaner_scoring::settings;
+pub use gleaner_scoring::summaries::{pending_bytes, series_summary};
+pub use gleaner_scoring::{
+    AppError, Condition, DEFAULT_NEIGHBOURS, EnergyPreset, Estimator, History, Knowledge,
+    MAX_SERIES_TIMES, MapCell, Objective, Project, ReconstructMapRequest, ReconstructRequest,
+    ReconstructSeriesRequest, Reconstruction, ReconstructionMap, ReconstructionSeries, Result,
+    ScoreRequest, Scoring, SensorEstimate, Settings, Z90, compute, compute_full, database, driver,
+    dynamic_fit_options, dynamic_window_s, knowledge, parse_planner, reconstruct, reconstruct_map,
+    reconstruct_series, score,
 };
 
 pub use gleaner_energy::Wind;

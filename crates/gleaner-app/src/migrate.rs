@@ -3,9 +3,9 @@
 
 use gleaner_store::{ConflictPolicy, StoreError};
 
-use crate::error::{AppError, Result};
 use crate::progress::Progress;
 use crate::{Store, StoreRead, StoreWrite};
+use gleaner_scoring::{AppError, Result};
 
 /// What a copy moved.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

@@ -10,8 +10,8 @@
 use gleaner_ingest::time::format_rfc3339;
 use gleaner_store::{MissionId, MissionRecord, MissionStatus, Store, StoreRead, StoreWrite};
 
-use crate::error::{AppError, Result};
-use crate::project::Project;
+use gleaner_scoring::Project;
+use gleaner_scoring::{AppError, Result};
 
 /// The most missions one page holds.
 pub const MAX_PAGE: usize = 500;
@@ -138,7 +138,7 @@ mod tests {
     use gleaner_store::{MissionKind, SqliteStore, VisitRecord};
 
     use super::*;
-    use crate::settings::Settings;
+    use gleaner_scoring::settings::Settings;
 
     fn project(n: usize) -> (tempfile::TempDir, Project<SqliteStore>, Vec<MissionId>) {
         let tmp = tempfile::tempdir().unwrap();

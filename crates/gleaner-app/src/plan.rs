@@ -16,25 +16,11 @@ use gleaner_store::{
     StoreWrite,
 };
 
-use crate::cell_csv;
-use crate::error::{AppError, Result};
-use crate::knowledge::{History, Knowledge};
-use crate::project::Project;
-use crate::score::{self, ScoreRequest, Scoring};
-
-/// Parses a planner name: `default`, `greedy` or `exact`.
-pub fn parse_planner(name: &str) -> Result<Planner> {
-    Ok(match name {
-        "default" => Planner::Default,
-        "greedy" => Planner::Greedy,
-        "exact" => Planner::Exact,
-        other => {
-            return Err(AppError::Invalid(format!(
-                "unknown solver {other:?}: expected default, greedy or exact"
-            )));
-        }
-    })
-}
+use gleaner_scoring::Project;
+use gleaner_scoring::cell_csv;
+use gleaner_scoring::{self as score, Objective, ScoreRequest, Scoring, parse_planner};
+use gleaner_scoring::{AppError, Result};
+use gleaner_scoring::{History, Knowledge};
 
 /// What to plan.
 #[derive(Debug, Clone, Default)]
@@ -67,24 +53,6 @@ pub struct PlanRequest {
     /// The forecast wind (m/s, and the direction it blows from) [default: the project's
     /// `[flight] wind_mps` and `wind_from_deg`]; `[flight] wind_margin_mps` is added to it.
     pub wind: Option<gleaner_energy::Wind>,
-}
-
-/// What the planner maximises (docs/method.md §4, §7).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Objective {
-    /// The sum of the visited cells' scores (S, or the scores given).
-    #[default]
-    Score,
-    /// The information the route's readings bring: the expected reduction of the dynamic
-    /// field model's posterior variance over every sensor of the condition modality, as a
-    /// share of the field's total (non-additive: planned with marginal gains). Cells are
-    /// eligible when their reading would reduce it; S is still computed and reported.
-    Information,
-    /// Both: a route is worth `(1 − w)·ΣS/ΣS_all + w·I` with `I` the information share above,
-    /// `ΣS/ΣS_all` its cells' share of the field's total score and `w` the `[planner]
-    /// information_weight` (non-additive through `I`: planned with marginal gains).
-    Hybrid,
 }
 
 /// Most sorties one `plan` may ask for.
@@ -196,7 +164,7 @@ pub fn energy_model<S: Store>(project: &Project<S>) -> Result<MissionEnergyModel
 
 /// The flight-file model (see [`energy_model`]) of an `[energy]` section.
 pub(crate) fn flight_model(
-    energy: &crate::settings::EnergySection,
+    energy: &gleaner_scoring::settings::EnergySection,
     context: &'static str,
 ) -> Result<MissionEnergyModel> {
     let mut config = energy.to_core()?;
@@ -437,7 +405,7 @@ pub fn plan_scored<S: Store>(
     refuse_empty: bool,
     clock_now: UnixSeconds,
 ) -> Result<PlannedMission> {
-    crate::when::check("mission time", request.at)?;
+    gleaner_scoring::when::check("mission time", request.at)?;
     if let Some(s) = &scored
         && request.at.is_some_and(|at| at != s.t)
     {
@@ -468,8 +436,9 @@ pub fn plan_scored<S: Store>(
     };
     let (file_knowledge, scoring, scores, t, anomaly_form, weights) = match given {
         Some(given) => {
-            let k = crate::state::collection_knowledge(project, request.at, request.history)?;
-            let t = crate::when::mission_time(request.at, k.latest)?;
+            let k =
+                gleaner_scoring::state::collection_knowledge(project, request.at, request.history)?;
+            let t = gleaner_scoring::when::mission_time(request.at, k.latest)?;
             let (s, form) = match given {
                 Given::File(path) => (read_scores(path, &k)?, "n/a (scores from file)"),
                 Given::Values(v) => {
@@ -503,7 +472,7 @@ pub fn plan_scored<S: Store>(
             let eta = settings.utility.variance_weight;
             if eta > 0.0 {
                 // gleaner's variance-reduction term: the planner routes by S + η·V.
-                match crate::value::variance_gains(project, &scoring.knowledge, scoring.t)? {
+                match gleaner_scoring::variance_gains(project, &scoring.knowledge, scoring.t)? {
                     Ok(v) => {
                         for (s, v) in scores.iter_mut().zip(&v) {
                             *s += eta * v;
@@ -559,15 +528,14 @@ pub fn plan_scored<S: Store>(
                 Some(m) => m,
                 None => {
                     let known = t.min(request.history.until);
-                    fitted =
-                        crate::reconstruct::fit_dynamic_model(project, &modality, known, None)?
-                            .ok_or_else(|| {
-                                crate::reconstruct::unfit_dynamic(&modality, "plan by score")
-                            })?;
+                    fitted = gleaner_scoring::fit_dynamic_model(project, &modality, known, None)?
+                        .ok_or_else(|| {
+                        gleaner_scoring::unfit_dynamic(&modality, "plan by score")
+                    })?;
                     &fitted
                 }
             };
-            let info = crate::information::CellInformation::at(
+            let info = gleaner_scoring::CellInformation::at(
                 project,
                 k,
                 request.history,

@@ -7,11 +7,11 @@ use gleaner_field::{CellIndex, SensorId, UnixSeconds};
 use gleaner_ingest::time::format_rfc3339;
 use gleaner_store::{ConflictPolicy, MissionId, MissionStatus, Store, StoreWrite, VisitRecord};
 
-use crate::error::{AppError, Result};
 use crate::ingest::{IngestRequest, Parsed, StatePolicy, known_sensors, parse_files, store_parsed};
 use crate::progress::Progress;
-use crate::project::Project;
-use crate::summaries;
+use gleaner_scoring::Project;
+use gleaner_scoring::summaries;
+use gleaner_scoring::{AppError, Result};
 
 /// A flown mission to record.
 #[derive(Debug, Clone)]
@@ -98,7 +98,7 @@ pub fn record_parsed<S: Store>(
                 .map_or(String::new(), |t| format!(" at {}", format_rfc3339(t)))
         )));
     }
-    crate::when::check("collection time", request.at)?;
+    gleaner_scoring::when::check("collection time", request.at)?;
     let planned_at = mission.mission.planned_at;
     // Without a collection time, the flight was no earlier than the newest reading it
     // brought back (a same-day reading is not "after the flight"), nor than its planned time.

@@ -6,9 +6,9 @@ use gleaner_field::{CellIndex, LatLon};
 use gleaner_mission::{Candidate, PlanOptions, Planner, replan as plan_continuation};
 use gleaner_store::{MissionId, MissionRecord, MissionStatus, NewMission, StopRecord, Store};
 
-use crate::error::{AppError, Result};
 use crate::plan::breakdown;
-use crate::project::Project;
+use gleaner_scoring::Project;
+use gleaner_scoring::{AppError, Result};
 
 /// What to re-plan.
 #[derive(Debug, Clone, PartialEq)]

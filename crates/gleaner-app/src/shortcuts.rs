@@ -20,9 +20,10 @@
 
 pub use crate::explore::{ExplorationMemo, explore_with};
 pub use crate::ingest::{Parsed, ingest_parsed, known_sensors, parse_files};
-pub use crate::knowledge::sampling_step;
 pub use crate::plan::plan_scored;
-pub use crate::reconstruct::{EstimateReads, Models, estimate_with, fit_models, target_modality};
 pub use crate::record::record_parsed;
-pub use crate::score::condition_modality;
-pub use crate::summaries::prepare_cache;
+pub use gleaner_scoring::summaries::prepare_cache;
+pub use gleaner_scoring::{
+    EstimateReads, Models, condition_modality, estimate_with, fit_models, sampling_step,
+    target_modality,
+};

@@ -6,7 +6,7 @@ use gleaner_store::AnyStore;
 use gleaner_synth::{SynthConfig, SynthFarm, generate, write_readings_csv, write_sensors_csv};
 
 use crate::init::{InitRequest, init};
-use crate::project::Project;
+use gleaner_scoring::Project;
 
 /// A synthetic farm written to a temporary directory and a new project on its sensors (no
 /// readings ingested yet).

@@ -6,8 +6,8 @@ use gleaner_energy::FlightEnergyModel;
 use gleaner_field::{CellId, CellIndex, LatLon, SensorId};
 use gleaner_store::{CellMetadata, MissionId, MissionRecord, Store};
 
-use crate::error::{AppError, Result};
-use crate::project::Project;
+use gleaner_scoring::Project;
+use gleaner_scoring::{AppError, Result};
 
 /// One cell with its metadata (docs/method.md §5).
 #[derive(Debug, Clone, PartialEq)]

@@ -7,8 +7,8 @@ use gleaner_energy::{
 };
 use gleaner_field::LocalPoint;
 
-use crate::error::{AppError, Result};
-use crate::settings::FlightSection;
+use gleaner_scoring::settings::FlightSection;
+use gleaner_scoring::{AppError, Result};
 
 /// Strongest forecast wind a plan may be asked for, m/s (`[flight] wind_mps`'s range).
 pub const MAX_WIND_MPS: f64 = 40.0;

@@ -22,6 +22,8 @@
 
 pub mod campaign;
 pub mod campaign_flight;
+pub mod datasets;
+pub mod demo;
 pub mod doc;
 mod error;
 pub mod replay;

@@ -1,18 +1,14 @@
-//! `gleaner simulate`: translates the arguments into campaign requests (a dataset preset is
-//! only where its files are and how to read them), runs them through the application layer,
-//! and writes the results as CSV files plus the report.
+//! `gleaner simulate`: translates the arguments into replay options and a dataset
+//! (`gleaner_campaign::datasets`: the presets, synthetic farms, a project's record), runs the
+//! campaigns and writes the results as CSV files plus the report.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
-use gleaner_app::{self as app, Format, IngestRequest, InitRequest, Project};
-use gleaner_campaign::Truth;
-use gleaner_campaign::campaign::{
-    CampaignResult, DatasetParts, Replay, ReplayOptions, Strategy, TruthEvent, replay, run_campaign,
-};
-
-use super::synth::{self, SynthArgs};
+use anyhow::{Context, Result};
+use gleaner_app as app;
+use gleaner_campaign::campaign::{CampaignResult, Replay, ReplayOptions, Strategy, run_campaign};
+use gleaner_campaign::datasets::{self, Preset};
 
 /// Which data a campaign replays.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -231,76 +227,6 @@ fn flight_conditions(
     })
 }
 
-fn day(s: &str) -> i64 {
-    app::parse_timestamp(s).unwrap_or(0)
-}
-
-fn files_in(dir: &Path, keep: impl Fn(&str) -> bool) -> Result<Vec<PathBuf>> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| format!("{}: cannot list", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.file_name().and_then(|n| n.to_str()).is_some_and(&keep))
-        .collect();
-    v.sort();
-    if v.is_empty() {
-        bail!("{}: no readings files", dir.display());
-    }
-    Ok(v)
-}
-
-#[allow(clippy::too_many_arguments)]
-fn prepare(
-    args: &SimulateArgs,
-    label: &str,
-    project_dir: &Path,
-    init: InitRequest,
-    readings: IngestRequest,
-    period_s: i64,
-    defaults: (i64, Option<i64>, i64),
-    preset: &str,
-    events: Option<Vec<TruthEvent>>,
-) -> Result<Replay> {
-    let (project, _) = if project_dir.join("gleaner.toml").exists() {
-        (Project::open(project_dir)?, ())
-    } else {
-        let (p, _) = app::init(&InitRequest {
-            dir: project_dir.to_path_buf(),
-            cell_size_m: args.cell_size,
-            name: Some(label.to_string()),
-            ..init.clone()
-        })?;
-        (p, ())
-    };
-    let mut settings = project.settings().clone();
-    settings.energy.preset = preset.to_string();
-    let truth = Truth::from_files(&project, &readings, period_s, &app::Silent)?;
-    let (history_until, history_from, end) = defaults;
-    let parts = DatasetParts {
-        label: label.to_string(),
-        init: InitRequest {
-            dir: project_dir.to_path_buf(),
-            ..init
-        },
-        sensors: None,
-        settings,
-        truth,
-        history_until,
-        history_from,
-        end,
-        history_follows_start: false,
-        events,
-    };
-    Ok(replay(parts, &options(args)?, crate::clock_now())?)
-}
-
-/// A project's own record (`--project`): its settings, sensors and readings; the project is
-/// only read.
-fn project_record(args: &SimulateArgs, dir: &Path) -> Result<Replay> {
-    let project = Project::open(dir)?;
-    let parts = gleaner_campaign::ProjectRecord::read(&project)?.into_parts(dir);
-    Ok(replay(parts, &options(args)?, crate::clock_now())?)
-}
-
 /// The replay options the arguments give.
 fn options(args: &SimulateArgs) -> Result<ReplayOptions> {
     Ok(ReplayOptions {
@@ -334,63 +260,6 @@ fn options(args: &SimulateArgs) -> Result<ReplayOptions> {
     })
 }
 
-/// The synthetic farm of one seed: written (small files) under `dir`, with its events.
-fn synthetic(args: &SimulateArgs, seed: u64, dir: &Path) -> Result<Replay> {
-    let farm_dir = dir.join(format!("farm-{seed}"));
-    let (farm, files) = synth::run(&SynthArgs {
-        out: farm_dir.clone(),
-        seed,
-        sensors: args.farm_sensors,
-        days: args.farm_days,
-        interval_s: 86_400,
-        events: args.farm_events,
-        correlation_length_m: 500.0,
-        no_faults: false,
-        scale_extent: args.farm_scale_extent,
-        vw_depths_cm: synth::Depths(vec![30, 60, 90]),
-        t_depths_cm: synth::Depths(vec![30]),
-        layout: None,
-        utm_zone: None,
-    })?;
-    let events: Vec<TruthEvent> = farm
-        .events()
-        .iter()
-        .map(|e| TruthEvent {
-            id: e.id.clone(),
-            sensors: e
-                .affected
-                .iter()
-                .map(|&s| farm.sensors()[s].id.clone())
-                .collect(),
-            start: e.start,
-            end: e.end,
-        })
-        .collect();
-    let t0 = farm.times().first().copied().unwrap_or(0);
-    let t_end = farm.times().last().copied().unwrap_or(0);
-    let until = t0 + i64::from(args.farm_history_days) * 86_400;
-    let prepared = prepare(
-        args,
-        &format!("synthetic-{seed}"),
-        &farm_dir.join("project"),
-        InitRequest {
-            sensors: files.sensors.clone(),
-            ..InitRequest::default()
-        },
-        IngestRequest {
-            files: vec![files.readings.clone()],
-            ..IngestRequest::default()
-        },
-        86_400,
-        (until, None, t_end),
-        "paper",
-        Some(events),
-    )?;
-    // The readings are in memory now; keep only the small files.
-    std::fs::remove_file(&files.readings).ok();
-    Ok(prepared)
-}
-
 /// Runs the campaigns the arguments describe and writes the results into `args.out`.
 pub fn run(
     args: &SimulateArgs,
@@ -399,92 +268,37 @@ pub fn run(
 ) -> Result<String> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create", args.out.display()))?;
-    let data = &args.data_dir;
     let mut results: Vec<CampaignResult> = Vec::new();
     let mut run_one = |p: Replay| -> Result<()> {
-        let r = run_campaign(&p.request, &p.truth, progress)?;
-        results.push(r);
+        results.push(run_campaign(&p.request, &p.truth, progress)?);
         Ok(())
     };
+    let options = options(args)?;
     let project_dir = args.out.join("project");
-    let dataset = match (&args.project, args.dataset) {
-        (Some(dir), _) => {
-            run_one(project_record(args, dir)?)?;
-            None
-        }
-        (None, dataset) => dataset,
+    let setup = datasets::Setup {
+        project_dir: &project_dir,
+        cell_size_m: args.cell_size,
+        options: &options,
+        clock_now: crate::clock_now(),
     };
-    match dataset {
-        None => {}
-        Some(Dataset::CafDaily) => run_one(prepare(
-            args,
-            "caf-daily",
-            &project_dir,
-            InitRequest {
-                sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
-                utm_zone: Some("11N".into()),
-                ..InitRequest::default()
-            },
-            IngestRequest {
-                files: files_in(&data.join("caf/Daily"), |n| n.ends_with(".txt"))?,
-                format: Format::CafDaily,
-                ..IngestRequest::default()
-            },
-            86_400,
-            (
-                day("2014-01-01"),
-                Some(day("2011-01-01")),
-                day("2014-12-31"),
-            ),
-            "paper",
-            None,
-        )?)?,
-        Some(Dataset::CafHourly) => run_one(prepare(
-            args,
-            "caf-hourly",
-            &project_dir,
-            InitRequest {
-                sensors: data.join("caf/sensors/CAF_sensor_locations.csv"),
-                utm_zone: Some("11N".into()),
-                ..InitRequest::default()
-            },
-            IngestRequest {
-                files: vec![data.join("caf/derived/water_content_2015_Jan_April_32_sensors.csv")],
-                format: Format::Wide,
-                modality: Some("vw@30cm".into()),
-                unit: Some("m3/m3".into()),
-                ..IngestRequest::default()
-            },
-            3_600,
-            (day("2015-02-01"), None, day("2015-04-21")),
-            "paper",
-            None,
-        )?)?,
-        Some(Dataset::HubbardBrook) => {
-            let dir = data.join("hubbard_brook");
-            run_one(prepare(
-                args,
-                "hubbard-brook",
-                &project_dir,
-                InitRequest {
-                    sensors: dir.join("sensor_metadata.csv"),
-                    hubbard_brook: true,
-                    ..InitRequest::default()
-                },
-                IngestRequest {
-                    files: files_in(&dir, |n| n.starts_with("z6-") && n.ends_with(".csv"))?,
-                    format: Format::HubbardBrook,
-                    ..IngestRequest::default()
-                },
-                3_600,
-                (day("2024-07-01"), None, day("2025-06-30")),
-                "large-pack",
-                None,
-            )?)?
-        }
-        Some(Dataset::Synthetic) => {
+    let preset = |p| datasets::preset_replay(p, &args.data_dir, &setup);
+    match (&args.project, args.dataset) {
+        (Some(dir), _) => run_one(datasets::project_replay(dir, &options, setup.clock_now)?)?,
+        (None, None) => {}
+        (None, Some(Dataset::CafDaily)) => run_one(preset(Preset::CafDaily)?)?,
+        (None, Some(Dataset::CafHourly)) => run_one(preset(Preset::CafHourly)?)?,
+        (None, Some(Dataset::HubbardBrook)) => run_one(preset(Preset::HubbardBrook)?)?,
+        (None, Some(Dataset::Synthetic)) => {
             for &seed in &args.farm_seeds {
-                run_one(synthetic(args, seed, &args.out)?)?;
+                let farm = datasets::SyntheticFarm {
+                    seed,
+                    sensors: args.farm_sensors,
+                    days: args.farm_days,
+                    events: args.farm_events,
+                    scale_extent: args.farm_scale_extent,
+                    history_days: args.farm_history_days,
+                };
+                run_one(datasets::synthetic_replay(&farm, &args.out, &setup)?)?;
             }
         }
     }

@@ -6,9 +6,62 @@ use std::str::FromStr;
 
 use gleaner_kriging::Mean;
 
-use crate::error::AppError;
-use crate::plan::Objective;
-use crate::reconstruct::Estimator;
+use gleaner_mission::Planner;
+
+use crate::error::{AppError, Result};
+
+/// Parses a planner name: `default`, `greedy` or `exact`.
+pub fn parse_planner(name: &str) -> Result<Planner> {
+    Ok(match name {
+        "default" => Planner::Default,
+        "greedy" => Planner::Greedy,
+        "exact" => Planner::Exact,
+        other => {
+            return Err(AppError::Invalid(format!(
+                "unknown solver {other:?}: expected default, greedy or exact"
+            )));
+        }
+    })
+}
+
+/// What the planner maximises (docs/method.md §4, §7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Objective {
+    /// The sum of the visited cells' scores (S, or the scores given).
+    #[default]
+    Score,
+    /// The information the route's readings bring: the expected reduction of the dynamic
+    /// field model's posterior variance over every sensor of the condition modality, as a
+    /// share of the field's total (non-additive: planned with marginal gains). Cells are
+    /// eligible when their reading would reduce it; S is still computed and reported.
+    Information,
+    /// Both: a route is worth `(1 − w)·ΣS/ΣS_all + w·I` with `I` the information share above,
+    /// `ΣS/ΣS_all` its cells' share of the field's total score and `w` the `[planner]
+    /// information_weight` (non-additive through `I`: planned with marginal gains).
+    Hybrid,
+}
+
+/// The model-based estimate of a reconstruction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Estimator {
+    /// Kriging of changes ([`gleaner_kriging::estimate_change`]): each sensor's last known
+    /// reading plus its change since, estimated from the changes its neighbours are known to
+    /// have made over (part of) that interval; exactly the last value carried forward when no
+    /// neighbour's change is known. A sensor never read gets the kriging of levels (ordinary).
+    /// The default: the dynamic model did not beat it on the tuning years (docs/evaluation/).
+    #[default]
+    Changes,
+    /// Space-time kriging of levels (residuals from each sensor's mean) from every sensor's
+    /// latest known reading: ordinary ([`Mean::Unknown`]) or simple ([`Mean::Known`]).
+    Levels(Mean),
+    /// The dynamic field model ([`gleaner_kriging::DynamicModel`]): a learned, shrunk
+    /// covariance of levels between sensors with AR(1) dynamics of the deviations, run as a
+    /// Kalman filter over every reading known in the window [`dynamic_window_s`](crate::dynamic_window_s) before the
+    /// estimation time. Where the model cannot be fitted ([`Estimator::resolve`](Estimator::resolve)) kriging of
+    /// changes answers instead.
+    Dynamic,
+}
 
 impl Estimator {
     /// Every estimator, in the order they are listed.

@@ -485,7 +485,7 @@ pub struct PlannerSection {
     /// What a route maximises: `score` (the sum of the visited cells' S) or `information`
     /// (the expected reduction of the dynamic field model's posterior variance over the whole
     /// field, docs/method.md §7).
-    pub objective: crate::plan::Objective,
+    pub objective: crate::choices::Objective,
     /// Weight of the dynamic field model's unshared per-sensor component: each sensor's own
     /// random-walk drift since its last reading, its rate (unit²/s) fitted on the history
     /// (half the variance per second of the one-step change of the sensor's deviation from
@@ -516,7 +516,7 @@ impl Default for PlannerSection {
             solver: core.planner.name().into(),
             time_limit_s: core.time_limit.as_secs_f64(),
             seed: core.seed,
-            objective: crate::plan::Objective::default(),
+            objective: crate::choices::Objective::default(),
             unshared_weight: 0.0,
             information_weight: DEFAULT_INFORMATION_WEIGHT,
         }
@@ -791,7 +791,7 @@ impl Settings {
                 self.planner.time_limit_s
             );
         }
-        crate::plan::parse_planner(&self.planner.solver)?;
+        crate::choices::parse_planner(&self.planner.solver)?;
         self.utility.to_core(&[])?;
         let energy = self.energy.to_core()?;
         gleaner_energy::MissionEnergyModel::new(&energy)
@@ -1097,7 +1097,7 @@ mod tests {
         assert_eq!(default.anomaly_reference, "own");
         let core = default.to_core(&modalities).unwrap();
         assert_eq!(core.anomaly_reference, AnomalyReference::OwnHistory);
-        assert_eq!(crate::score::anomaly_label(&core), "raw");
+        assert_eq!(crate::condition::anomaly_label(&core), "raw");
         let section: UtilitySection =
             toml::from_str("anomaly_reference = \"neighbours\"\nanomaly_min_neighbours = 3\n")
                 .unwrap();
@@ -1106,7 +1106,10 @@ mod tests {
             core.anomaly_reference,
             AnomalyReference::Neighbours { min_neighbours: 3 }
         );
-        assert_eq!(crate::score::anomaly_label(&core), "raw, neighbours(min=3)");
+        assert_eq!(
+            crate::condition::anomaly_label(&core),
+            "raw, neighbours(min=3)"
+        );
         let bad = UtilitySection {
             anomaly_reference: "nearby".into(),
             ..UtilitySection::default()

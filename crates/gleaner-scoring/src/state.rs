@@ -37,22 +37,21 @@
 use std::collections::{BTreeMap, HashMap, HashSet};
 
 use gleaner_field::{Field, Modality, Sensor, SensorId, UnixSeconds};
-use gleaner_store::{
-    CellMetadata, Correlation, ModalitySummary, ReadingBatch, SeriesStats, StoreRead, StoreWrite,
-};
+use gleaner_ingest::Readings;
+use gleaner_store::{ReadingBatch, StoreRead, StoreWrite};
 use gleaner_utility::{
     ConditionConfig, ConditionModel, HistoryWindow, IncrementalState, OwnedSeries, Reading, Series,
     TimeGrid,
 };
 
-use crate::error::{AppError, Result};
-use crate::ingest::Parsed;
-use crate::knowledge::{Columns, Knowledge, cell_series_of, columns};
-use crate::project::Project;
-use crate::score::{
+use crate::codec::{Fnv, In, Out};
+use crate::condition::{
     NO_MODALITY, ScoreRequest, Scoring, condition_modality, condition_output, fit_condition_from,
     neighbour_lists,
 };
+use crate::error::{AppError, Result};
+use crate::knowledge::{Columns, Knowledge, cell_series_of, columns};
+use crate::project::Project;
 use crate::settings::Settings;
 use crate::{History, Store};
 
@@ -116,7 +115,7 @@ fn get_fit(i: &mut In<'_>) -> Option<Fit> {
 
 /// Everything persisted (see the module docs).
 #[derive(Debug, Clone)]
-pub(crate) struct Persisted {
+pub struct Persisted {
     field_fp: u64,
     settings_fp: u64,
     reading_count: u64,
@@ -135,28 +134,6 @@ pub(crate) struct Persisted {
 
 // ---------------------------------------------------------------------------------------
 // Fingerprints
-
-/// FNV-1a, 64 bits: a deterministic hash that does not depend on the Rust version.
-pub(crate) struct Fnv(pub(crate) u64);
-
-impl Fnv {
-    pub(crate) fn new() -> Self {
-        Self(0xcbf2_9ce4_8422_2325)
-    }
-    pub(crate) fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 ^= u64::from(x);
-            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    pub(crate) fn u64(&mut self, v: u64) {
-        self.bytes(&v.to_le_bytes());
-    }
-    pub(crate) fn str(&mut self, s: &str) {
-        self.u64(s.len() as u64);
-        self.bytes(s.as_bytes());
-    }
-}
 
 fn field_fingerprint(sensors: &[Sensor], field: &Field) -> u64 {
     let mut h = Fnv::new();
@@ -192,77 +169,6 @@ fn settings_fingerprint(settings: &Settings) -> u64 {
         ConditionConfig::default()
     ));
     h.0
-}
-
-// ---------------------------------------------------------------------------------------
-// Encoding
-
-pub(crate) struct Out(pub(crate) Vec<u8>);
-
-impl Out {
-    pub(crate) fn u8(&mut self, v: u8) {
-        self.0.push(v);
-    }
-    pub(crate) fn u64(&mut self, v: u64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    pub(crate) fn i64(&mut self, v: i64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    pub(crate) fn opt(&mut self, v: Option<i64>) {
-        match v {
-            Some(x) => {
-                self.u8(1);
-                self.i64(x);
-            }
-            None => self.u8(0),
-        }
-    }
-    pub(crate) fn bytes(&mut self, b: &[u8]) {
-        self.u64(b.len() as u64);
-        self.0.extend_from_slice(b);
-    }
-}
-
-pub(crate) struct In<'a>(pub(crate) &'a [u8]);
-
-impl<'a> In<'a> {
-    pub(crate) fn take(&mut self, n: usize) -> Option<&'a [u8]> {
-        if n > self.0.len() {
-            return None;
-        }
-        let (a, b) = self.0.split_at(n);
-        self.0 = b;
-        Some(a)
-    }
-    pub(crate) fn u8(&mut self) -> Option<u8> {
-        Some(self.take(1)?[0])
-    }
-    pub(crate) fn u64(&mut self) -> Option<u64> {
-        Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
-    }
-    pub(crate) fn i64(&mut self) -> Option<i64> {
-        Some(i64::from_le_bytes(self.take(8)?.try_into().ok()?))
-    }
-    pub(crate) fn opt(&mut self) -> Option<Option<i64>> {
-        match self.u8()? {
-            0 => Some(None),
-            1 => Some(Some(self.i64()?)),
-            _ => None,
-        }
-    }
-    /// A count of elements of at least `min` bytes each, checked against the bytes left.
-    pub(crate) fn count(&mut self, min: usize) -> Option<usize> {
-        let n = usize::try_from(self.u64()?).ok()?;
-        (n.checked_mul(min.max(1))? <= self.0.len()).then_some(n)
-    }
-    pub(crate) fn bytes(&mut self) -> Option<&'a [u8]> {
-        let n = self.count(1)?;
-        self.take(n)
-    }
-    pub(crate) fn string(&mut self) -> Option<String> {
-        String::from_utf8(self.bytes()?.to_vec()).ok()
-    }
 }
 
 impl Persisted {
@@ -663,7 +569,7 @@ fn rebuild_keeping<R: StoreRead>(
 }
 
 /// Marks the persisted state stale (an empty blob): the next `score` rebuilds it.
-pub(crate) fn invalidate<W: StoreWrite>(tx: &mut W) -> Result<()> {
+pub fn invalidate<W: StoreWrite>(tx: &mut W) -> Result<()> {
     write_blob(tx, None)
 }
 
@@ -674,10 +580,10 @@ fn write_blob<W: StoreWrite>(tx: &mut W, p: Option<&Persisted>) -> Result<()> {
 }
 
 /// A new reading: sensor id, modality name, time (s), value.
-pub(crate) type Row = (SensorId, String, UnixSeconds, f64);
+pub type Row = (SensorId, String, UnixSeconds, f64);
 
 /// What to do after the readings are inserted.
-pub(crate) enum Plan {
+pub enum Plan {
     /// Rebuild from the store.
     Rebuild,
     /// Add these readings (new to the store) to the persisted state.
@@ -686,7 +592,7 @@ pub(crate) enum Plan {
 
 impl Plan {
     /// The readings new to the store, when the plan computed them (an update).
-    pub(crate) fn new_rows(&self) -> Option<&[Row]> {
+    pub fn new_rows(&self) -> Option<&[Row]> {
         match self {
             Plan::Rebuild => None,
             Plan::Update(_, rows) => Some(rows),
@@ -694,26 +600,26 @@ impl Plan {
     }
 }
 
-/// Before inserting `parsed`: loads the state and works out which readings are new to the
+/// Before inserting `files` (each parsed file's readings): loads the state and works out which readings are new to the
 /// store (the first of several with the same key; one already stored is not). Costs in
 /// proportion to the stored readings of the batch's sensors within its time span.
-pub(crate) fn before_insert<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Plan> {
+pub fn before_insert<R: StoreRead>(tx: &R, files: &[&Readings]) -> Result<Plan> {
     let Some(p) = tx
         .blob_get(BLOB_KEY)?
         .and_then(|b| Persisted::from_bytes(&b))
     else {
         return Ok(Plan::Rebuild);
     };
-    Ok(Plan::Update(Box::new(p), new_rows(tx, parsed)?))
+    Ok(Plan::Update(Box::new(p), new_rows(tx, files)?))
 }
 
-/// The readings of `parsed` that are not yet in the store (one per sensor, modality and
+/// The readings of `files` that are not yet in the store (one per sensor, modality and
 /// time, in the files' order): what an insert will add. Reads the stored readings of those
 /// sensors between the parsed readings' first and last time (s) only.
-pub(crate) fn new_rows<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Vec<Row>> {
+pub fn new_rows<R: StoreRead>(tx: &R, files: &[&Readings]) -> Result<Vec<Row>> {
     let mut seen: HashSet<(SensorId, String, UnixSeconds)> = HashSet::new();
     let mut rows: Vec<Row> = Vec::new();
-    for (_, _, readings, _) in &parsed.files {
+    for readings in files {
         for r in &readings.rows {
             let (Some(s), Some(m)) = (
                 readings.sensors.get(r.sensor as usize),
@@ -753,11 +659,7 @@ pub(crate) fn new_rows<R: StoreRead>(tx: &R, parsed: &Parsed) -> Result<Vec<Row>
 
 /// After inserting: brings the persisted state up to date (see the module docs), in the
 /// caller's transaction.
-pub(crate) fn after_insert<W: StoreWrite>(
-    tx: &mut W,
-    plan: Plan,
-    settings: &Settings,
-) -> Result<()> {
+pub fn after_insert<W: StoreWrite>(tx: &mut W, plan: Plan, settings: &Settings) -> Result<()> {
     let mut carry = None;
     let updated = match plan {
         Plan::Rebuild => None,
@@ -1148,7 +1050,7 @@ pub(crate) fn fast_scoring_from<S: Store>(
 /// first readings, the newest reading): from the persisted state when it describes the store
 /// (see [`fast_scoring`]), else from the history ([`knowledge`](crate::knowledge())). From
 /// the state, the series hold only the retained recent points: callers must not use them.
-pub(crate) fn collection_knowledge<S: Store>(
+pub fn collection_knowledge<S: Store>(
     project: &Project<S>,
     at: Option<UnixSeconds>,
     history: History,
@@ -1164,65 +1066,6 @@ pub(crate) fn collection_knowledge<S: Store>(
         }
     }
     crate::knowledge(project, at, history)
-}
-
-/// Fills cell `c`'s correlations, anomalies and series summaries from the persisted
-/// statistics (what `metadata_rows` computes from the full series otherwise).
-pub(crate) fn metadata_from_state(
-    s: &Scoring,
-    state: &IncrementalState,
-    modalities: &[Option<Modality>],
-    c: usize,
-    min_overlap: usize,
-    flag: f64,
-    m: &mut CellMetadata,
-) {
-    let k = &s.knowledge;
-    let neighbours = state.neighbours().get(c).map_or(&[][..], Vec::as_slice);
-    for (pos, &nb) in neighbours.iter().enumerate() {
-        for (mi, modality) in modalities.iter().enumerate() {
-            let Some(modality) = modality else { continue };
-            if state.series_stats(c, mi).all.count() == 0
-                || state.series_stats(nb, mi).all.count() == 0
-            {
-                continue;
-            }
-            let pair = state.neighbour_pair(c, pos, mi);
-            m.correlations.push(Correlation {
-                neighbour: k.field.cells()[nb].index,
-                modality: modality.clone(),
-                correlation: pair.correlation(min_overlap),
-                overlap: pair.count(),
-            });
-        }
-    }
-    if let Some(terms) = s.terms.get(c) {
-        for (mi, a) in terms.a_by_modality.iter().enumerate() {
-            let latest = state.series_stats(c, mi).latest.map(|p| p.0);
-            crate::score::push_anomaly(m, modalities.get(mi), latest, *a, flag);
-        }
-    }
-    m.summaries = modalities
-        .iter()
-        .enumerate()
-        .filter_map(|(mi, modality)| {
-            let st = state.series_stats(c, mi);
-            let (latest_t, latest_value) = st.latest?;
-            let n = st.all.count();
-            Some(ModalitySummary {
-                modality: modality.clone()?,
-                stats: SeriesStats {
-                    count: n,
-                    mean: st.all.mean(),
-                    std: (n >= 2).then(|| st.all.std()),
-                    min: st.min,
-                    max: st.max,
-                    latest_t,
-                    latest_value,
-                },
-            })
-        })
-        .collect();
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@ use crate::reconstruct::fit_model;
 /// largest one (so in [0, 1]); or why it cannot be computed (no soil-moisture modality, too
 /// little history to fit the field model, more than [`MAX_VARIANCE_CELLS`] cells), which the
 /// caller reports as a warning and plans by S alone.
-pub(crate) fn variance_gains<S: Store>(
+pub fn variance_gains<S: Store>(
     project: &Project<S>,
     k: &Knowledge,
     t: UnixSeconds,
@@ -34,7 +34,7 @@ pub(crate) fn variance_gains<S: Store>(
             cells.len()
         )));
     }
-    let Some(name) = crate::score::condition_modality(project.settings(), &k.modalities) else {
+    let Some(name) = crate::condition::condition_modality(project.settings(), &k.modalities) else {
         return Ok(Err(
             "no soil-moisture modality for the variance term; planned by S alone".into(),
         ));

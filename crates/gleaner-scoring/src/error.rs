@@ -53,7 +53,7 @@ pub enum AppError {
         /// The OS message.
         message: String,
     },
-    /// The caller gave up on the work ([`Progress::cancelled`](crate::Progress::cancelled));
+    /// The caller gave up on the work (the application layer's `Progress::cancelled`);
     /// nothing was written.
     #[error("the work was cancelled")]
     Cancelled,

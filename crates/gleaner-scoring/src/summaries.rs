@@ -9,9 +9,10 @@ use gleaner_store::{
 };
 use gleaner_utility::{RunningStats, Series};
 
+use crate::codec::{Fnv, In, Out};
 use crate::error::{AppError, Result};
 use crate::settings::Settings;
-use crate::state::{Fnv, In, Out, Row};
+use crate::state::Row;
 
 /// Count, mean, sample std, min, max and latest point of a series; `None` when empty. Values
 /// in the modality's unit, times seconds since the Unix epoch.
@@ -68,7 +69,7 @@ pub fn pending_bytes(
 /// Recomputes, inside a write transaction, the series summaries, last collection and pending
 /// volume of every stored cell holding one of `changed` sensors, from the stored readings;
 /// the cells' scores and other fields are kept. Costs in proportion to those cells' readings.
-pub(crate) fn refresh_cells<W: StoreWrite>(
+pub fn refresh_cells<W: StoreWrite>(
     tx: &mut W,
     changed: &[SensorId],
     now: UnixSeconds,
@@ -512,7 +513,7 @@ impl Cache {
 
 /// Marks the summary cache stale (readings were added without maintaining it): the next
 /// recorded flight rebuilds it from the store.
-pub(crate) fn invalidate_cache<W: StoreWrite>(tx: &mut W) -> Result<()> {
+pub fn invalidate_cache<W: StoreWrite>(tx: &mut W) -> Result<()> {
     tx.blob_put(CACHE_KEY, &[])?;
     Ok(())
 }
@@ -545,7 +546,7 @@ pub fn prepare_cache<W: StoreWrite>(tx: &mut W) -> Result<()> {
 /// [`refresh_cells`], except that a mean over points, standard deviation or pending volume
 /// may differ in its last bits (the standard deviation is accumulated by Welford's method,
 /// not in two passes).
-pub(crate) fn refresh_cells_after<W: StoreWrite>(
+pub fn refresh_cells_after<W: StoreWrite>(
     tx: &mut W,
     changed: &[SensorId],
     added: &[Row],

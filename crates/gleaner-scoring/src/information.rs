@@ -16,7 +16,7 @@ use crate::reconstruct::{dynamic_window_s, per_sensor, run_filter};
 
 /// The information a set of cells brings at one time: the filter's posterior given every
 /// reading known then, and each cell's sensors as positions in the model.
-pub(crate) struct CellInformation<'m> {
+pub struct CellInformation<'m> {
     filter: FieldFilter<'m>,
     cells: Vec<Vec<usize>>,
     /// The field's total posterior variance before the flight, unit² (> 0).
@@ -32,7 +32,7 @@ impl<'m> CellInformation<'m> {
     /// `history` admits, and a sensor's later ones up to its last recorded collection
     /// (`k.last_collected`, as scoring counts them); `k`'s cells name the sensors a visit
     /// reads.
-    pub(crate) fn at<S: Store>(
+    pub fn at<S: Store>(
         project: &Project<S>,
         k: &Knowledge,
         history: History,
@@ -89,7 +89,7 @@ impl<'m> CellInformation<'m> {
     /// The hybrid objective's worth: `(1 − weight)·ΣS/ΣS_all + weight·I` with `scores` the
     /// cells' S in field order (negative or non-finite counted as 0) and `weight` in [0, 1];
     /// all scores 0 leaves the information alone.
-    pub(crate) fn blended(mut self, scores: &[f64], weight: f64) -> Self {
+    pub fn blended(mut self, scores: &[f64], weight: f64) -> Self {
         let clean = |s: f64| if s.is_finite() { s.max(0.0) } else { 0.0 };
         let total: f64 = scores.iter().map(|&s| clean(s)).sum();
         let shares = if total > 0.0 {
@@ -109,7 +109,7 @@ impl<'m> CellInformation<'m> {
     /// The route's worth (in [0, 1]) of reading every sensor of `cells` (positions in field
     /// order): the share of the field's posterior variance it would remove, blended with the
     /// cells' share of the total score under the hybrid objective.
-    pub(crate) fn value(&self, cells: &[usize]) -> f64 {
+    pub fn value(&self, cells: &[usize]) -> f64 {
         let sensors: Vec<usize> = cells
             .iter()
             .filter_map(|&c| self.cells.get(c))
@@ -127,7 +127,7 @@ impl<'m> CellInformation<'m> {
     }
 
     /// Every cell's value alone, in field order.
-    pub(crate) fn singletons(&self) -> Vec<f64> {
+    pub fn singletons(&self) -> Vec<f64> {
         (0..self.cells.len()).map(|c| self.value(&[c])).collect()
     }
 }

@@ -2,194 +2,27 @@
 //! (docs/method.md §2), and the cell metadata they become (docs/method.md §5).
 
 use std::collections::HashMap;
-use std::path::PathBuf;
 
-use gleaner_field::{CellId, Field, Modality, UnixSeconds};
+use gleaner_field::{CellId, Modality, UnixSeconds};
 use gleaner_store::{
-    AnomalyRecord, CellMetadata, CellScores, ClassProbability, Correlation, Store, StoreWrite,
+    AnomalyRecord, CellMetadata, CellScores, ClassProbability, Correlation, ModalitySummary,
+    SeriesStats, Store, StoreWrite,
 };
 use gleaner_utility::{
-    CellInputs, CellTerms, ClassThresholds, ConditionConfig, ConditionModel, IncrementalState,
-    OwnedSeries, Series, score_cells_parallel, series_correlation, validate_probabilities,
+    CellInputs, IncrementalState, OwnedSeries, Series, score_cells_parallel, series_correlation,
+    validate_probabilities,
 };
 
 use crate::cell_csv;
+use crate::condition::{
+    Condition, NO_MODALITY, ScoreRequest, Scoring, anomaly_label, class_names, condition_modality,
+    condition_output, fit_condition, modality_without_readings, neighbour_lists,
+};
 use crate::error::{AppError, Result};
 use crate::knowledge::{History, Knowledge, knowledge};
 use crate::project::Project;
-use crate::settings::Settings;
 use crate::state;
 use crate::summaries;
-
-/// What to score.
-#[derive(Debug, Clone, Default)]
-pub struct ScoreRequest {
-    /// Mission time t, seconds since the Unix epoch [default: the latest known reading].
-    pub at: Option<UnixSeconds>,
-    /// Which stored readings count as collected.
-    pub history: History,
-    /// Per-cell class probabilities from the user's own model (CSV `cell_id,p_1,...,p_K`)
-    /// instead of the built-in condition model.
-    pub probabilities: Option<PathBuf>,
-    /// Compute only; write nothing.
-    pub dry_run: bool,
-}
-
-/// The condition model's output: class names and one distribution per cell.
-#[derive(Debug, Clone)]
-pub struct Condition {
-    /// The modality the classes come from (`user` for user probabilities).
-    pub modality: String,
-    /// Class thresholds in the modality's unit (empty for user probabilities).
-    pub thresholds: Vec<f64>,
-    /// Class names.
-    pub classes: Vec<String>,
-    /// One distribution per cell, in field order.
-    pub probabilities: Vec<Vec<f64>>,
-}
-
-/// The result of scoring every cell at t.
-pub struct Scoring {
-    /// Mission time t, seconds since the Unix epoch.
-    pub t: UnixSeconds,
-    /// What was known at t.
-    pub knowledge: Knowledge,
-    /// The terms of every cell, in field order.
-    pub terms: Vec<CellTerms>,
-    /// The condition model's output, if any.
-    pub condition: Option<Condition>,
-    /// Weights alpha, beta, gamma, delta.
-    pub weights: [f64; 4],
-    /// The anomaly form label (`raw` or `bounded(kappa=...)`), followed by `,
-    /// neighbours(min=k)` when the neighbour-relative anomaly is in use.
-    pub anomaly_form: String,
-    /// Things the user should know (e.g. no condition model could be fitted: U = 0).
-    pub warnings: Vec<String>,
-    /// The persisted statistics the scoring came from (the fast path of [`compute`]); then
-    /// `knowledge.series` holds only their retained recent points, and counts, means,
-    /// correlations and latest points come from these statistics.
-    pub incremental: Option<IncrementalState>,
-}
-
-/// The anomaly label of every output: the form, and the reference when it is not the
-/// paper's own history (e.g. `raw, neighbours(min=2)`).
-pub(crate) fn anomaly_label(config: &gleaner_utility::UtilityConfig) -> String {
-    let label = match config.anomaly_reference {
-        gleaner_utility::AnomalyReference::OwnHistory => config.anomaly_form.label(),
-        r => format!("{}, {}", config.anomaly_form.label(), r.label()),
-    };
-    match config.score_form {
-        gleaner_utility::ScoreForm::Additive => label,
-        f => format!("{label}; S {}", f.label()),
-    }
-}
-
-/// Which weighted term contributes most to S: `freshness`, `anomaly`, `uncertainty` or `none`.
-pub fn driver(t: &CellTerms, w: [f64; 4]) -> &'static str {
-    let parts = [
-        ("freshness", w[0] * t.f),
-        ("anomaly", w[1] * t.a),
-        ("uncertainty", w[2] * t.u),
-    ];
-    parts
-        .iter()
-        .filter(|p| p.1 > 0.0)
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-        .map_or("none", |p| p.0)
-}
-
-fn class_names(k: usize) -> Vec<String> {
-    if k == 3 {
-        vec!["dry".into(), "adequate".into(), "wet".into()]
-    } else {
-        (1..=k).map(|c| format!("class_{c}")).collect()
-    }
-}
-
-pub(crate) fn neighbour_lists(field: &Field) -> Vec<Vec<usize>> {
-    field
-        .all_neighbours()
-        .iter()
-        .map(|n| n.iter().map(|c| c.index()).collect())
-        .collect()
-}
-
-/// The modality the condition classes come from: `utility.condition_modality`, else
-/// `vw@30cm`, else the first `vw@...` of `modalities` (sorted names); `None` without one.
-pub fn condition_modality(settings: &Settings, modalities: &[String]) -> Option<String> {
-    match &settings.utility.condition_modality {
-        Some(m) => Some(m.clone()),
-        None => modalities
-            .iter()
-            .find(|m| *m == "vw@30cm")
-            .or_else(|| modalities.iter().find(|m| m.starts_with("vw@")))
-            .cloned(),
-    }
-}
-
-/// The warning given when there is no soil-moisture modality.
-pub(crate) const NO_MODALITY: &str = "no soil-moisture modality: U = 0 for every cell";
-
-/// The error for a configured condition modality without readings.
-pub(crate) fn modality_without_readings(name: &str) -> AppError {
-    AppError::Invalid(format!(
-        "utility.condition_modality = {name:?} has no readings"
-    ))
-}
-
-/// Fits the built-in condition model on the cells' class-modality series (`cells`, field
-/// order) with label times before `t` (s), from the earliest point on; the error becomes the
-/// scoring's warning.
-pub(crate) fn fit_condition(
-    settings: &Settings,
-    cells: &[Series<'_>],
-    neighbours: &[Vec<usize>],
-    t: UnixSeconds,
-) -> std::result::Result<ConditionModel, String> {
-    fit_condition_from(settings, cells, neighbours, t, None)
-}
-
-/// [`fit_condition`], Newton's method warm-started from `start` (the same model to the
-/// solver's tolerance, see [`ConditionModel::fit_from`]).
-pub(crate) fn fit_condition_from(
-    settings: &Settings,
-    cells: &[Series<'_>],
-    neighbours: &[Vec<usize>],
-    t: UnixSeconds,
-    start: Option<&ConditionModel>,
-) -> std::result::Result<ConditionModel, String> {
-    let u = &settings.utility;
-    let config = ConditionConfig {
-        n_classes: u.condition_classes,
-        thresholds: match &u.condition_thresholds {
-            Some(th) => ClassThresholds::Fixed(th.clone()),
-            None => ClassThresholds::Quantiles,
-        },
-        ..ConditionConfig::default()
-    };
-    let from = cells
-        .iter()
-        .filter_map(|s| s.times.first())
-        .min()
-        .copied()
-        .unwrap_or(t);
-    ConditionModel::fit_from(cells, neighbours, from, t, &config, start)
-        .map_err(|e| format!("no condition model ({e}); U = 0 for every cell"))
-}
-
-/// The scoring's condition output from a fitted model.
-pub(crate) fn condition_output(
-    name: String,
-    model: &ConditionModel,
-    probabilities: Vec<Vec<f64>>,
-) -> Condition {
-    Condition {
-        modality: name,
-        thresholds: model.thresholds().to_vec(),
-        classes: class_names(model.n_classes()),
-        probabilities,
-    }
-}
 
 /// Trains the built-in condition model on the collected history and predicts every cell at
 /// `t`; `Ok(None)` with a warning when there is no suitable modality or too little data.
@@ -435,7 +268,7 @@ fn score_held<S: Store>(project: &mut Project<S>, request: &ScoreRequest) -> Res
 
 /// Writes scoring rows, carrying over what scoring does not compute (the pending volume, and an
 /// expected energy the caller did not set) from the stored rows.
-pub(crate) fn write_scoring<W: StoreWrite>(
+pub fn write_scoring<W: StoreWrite>(
     tx: &mut W,
     mut rows: Vec<CellMetadata>,
 ) -> std::result::Result<(), AppError> {
@@ -458,7 +291,7 @@ pub(crate) fn write_scoring<W: StoreWrite>(
 /// The cell metadata rows of a scoring: terms, class probabilities, correlations with every
 /// neighbour, the latest anomaly per modality, and the series summaries; with
 /// `expected_energy_j` (J, one per cell in field order), each cell's expected collection energy.
-pub(crate) fn metadata_rows<S: Store>(
+pub fn metadata_rows<S: Store>(
     project: &Project<S>,
     s: &Scoring,
     expected_energy_j: Option<&[f64]>,
@@ -500,7 +333,7 @@ pub(crate) fn metadata_rows<S: Store>(
                     .collect();
             }
             if let Some(state) = &s.incremental {
-                state::metadata_from_state(s, state, &modalities, c, min_overlap, flag, &mut m);
+                metadata_from_state(s, state, &modalities, c, min_overlap, flag, &mut m);
                 return m;
             }
             for &nb in k.field.neighbours(CellId(c as u32)) {
@@ -535,6 +368,65 @@ pub(crate) fn metadata_rows<S: Store>(
             m
         })
         .collect()
+}
+
+/// Fills cell `c`'s correlations, anomalies and series summaries from the persisted
+/// statistics (what `metadata_rows` computes from the full series otherwise).
+fn metadata_from_state(
+    s: &Scoring,
+    state: &IncrementalState,
+    modalities: &[Option<Modality>],
+    c: usize,
+    min_overlap: usize,
+    flag: f64,
+    m: &mut CellMetadata,
+) {
+    let k = &s.knowledge;
+    let neighbours = state.neighbours().get(c).map_or(&[][..], Vec::as_slice);
+    for (pos, &nb) in neighbours.iter().enumerate() {
+        for (mi, modality) in modalities.iter().enumerate() {
+            let Some(modality) = modality else { continue };
+            if state.series_stats(c, mi).all.count() == 0
+                || state.series_stats(nb, mi).all.count() == 0
+            {
+                continue;
+            }
+            let pair = state.neighbour_pair(c, pos, mi);
+            m.correlations.push(Correlation {
+                neighbour: k.field.cells()[nb].index,
+                modality: modality.clone(),
+                correlation: pair.correlation(min_overlap),
+                overlap: pair.count(),
+            });
+        }
+    }
+    if let Some(terms) = s.terms.get(c) {
+        for (mi, a) in terms.a_by_modality.iter().enumerate() {
+            let latest = state.series_stats(c, mi).latest.map(|p| p.0);
+            push_anomaly(m, modalities.get(mi), latest, *a, flag);
+        }
+    }
+    m.summaries = modalities
+        .iter()
+        .enumerate()
+        .filter_map(|(mi, modality)| {
+            let st = state.series_stats(c, mi);
+            let (latest_t, latest_value) = st.latest?;
+            let n = st.all.count();
+            Some(ModalitySummary {
+                modality: modality.clone()?,
+                stats: SeriesStats {
+                    count: n,
+                    mean: st.all.mean(),
+                    std: (n >= 2).then(|| st.all.std()),
+                    min: st.min,
+                    max: st.max,
+                    latest_t,
+                    latest_value,
+                },
+            })
+        })
+        .collect();
 }
 
 /// Adds the anomaly of one modality at its latest point (time in seconds) to a cell's anomaly

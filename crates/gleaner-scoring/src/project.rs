@@ -85,7 +85,7 @@ impl<S: Store> Project<S> {
     }
 
     /// The store, for a use case's writes.
-    pub(crate) fn store_mut(&mut self) -> &mut S {
+    pub fn store_mut(&mut self) -> &mut S {
         &mut self.store
     }
 
@@ -112,7 +112,7 @@ impl<S: Store> Project<S> {
     /// Refuses a write when `field` (the grid the settings describe) is not the grid the store
     /// holds — `[field] cell_size_m` or the base edited in `gleaner.toml` after `init` — with
     /// the command that re-grids the project.
-    pub(crate) fn check_stored_grid(&self, field: &Field) -> Result<()> {
+    pub fn check_stored_grid(&self, field: &Field) -> Result<()> {
         let stored: std::collections::BTreeSet<gleaner_field::CellIndex> =
             self.store.cells()?.into_iter().map(|c| c.index).collect();
         let missing = field

@@ -11,14 +11,15 @@ use std::collections::HashMap;
 
 use gleaner_field::{CellIndex, LatLon, Modality, SensorId, UnixSeconds};
 use gleaner_kriging::{
-    Change, DynamicFitOptions, DynamicModel, FieldModel, FitOptions, IncrementFitOptions,
-    IncrementModel, Mean, Observation, SensorSeries, Shrinkage, estimate_change, fit, fit_dynamic,
-    fit_increments, fit_own_rates, krige_with,
+    DynamicFitOptions, DynamicModel, FieldModel, FitOptions, IncrementFitOptions, IncrementModel,
+    SensorSeries, Shrinkage, fit, fit_dynamic, fit_increments, fit_own_rates,
 };
 use gleaner_store::{ReadingBatch, Store};
 
+use crate::choices::Estimator;
 use crate::error::{AppError, Result};
 use crate::knowledge::sampling_step;
+use crate::kriging_inputs::{Columns, KrigingInputs, Z90};
 use crate::project::Project;
 
 /// Most observations one kriging estimate uses (the most correlated with the target).
@@ -35,27 +36,6 @@ pub struct ReconstructRequest {
     pub neighbours: Option<usize>,
     /// The model-based estimator [default: [`Estimator::Changes`]].
     pub estimator: Estimator,
-}
-
-/// The model-based estimate of a reconstruction.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Estimator {
-    /// Kriging of changes ([`gleaner_kriging::estimate_change`]): each sensor's last known
-    /// reading plus its change since, estimated from the changes its neighbours are known to
-    /// have made over (part of) that interval; exactly the last value carried forward when no
-    /// neighbour's change is known. A sensor never read gets the kriging of levels (ordinary).
-    /// The default: the dynamic model did not beat it on the tuning years (docs/evaluation/).
-    #[default]
-    Changes,
-    /// Space-time kriging of levels (residuals from each sensor's mean) from every sensor's
-    /// latest known reading: ordinary ([`Mean::Unknown`]) or simple ([`Mean::Known`]).
-    Levels(Mean),
-    /// The dynamic field model ([`gleaner_kriging::DynamicModel`]): a learned, shrunk
-    /// covariance of levels between sensors with AR(1) dynamics of the deviations, run as a
-    /// Kalman filter over every reading known in the window [`dynamic_window_s`] before the
-    /// estimation time. Where the model cannot be fitted ([`Estimator::resolve`]) kriging of
-    /// changes answers instead.
-    Dynamic,
 }
 
 impl Estimator {
@@ -86,7 +66,8 @@ pub struct SensorEstimate {
     pub variance: f64,
     /// Half-width of its 90% prediction interval `kriged ± half90`, the modality's unit: for
     /// the kriging of changes calibrated on the estimator's own out-of-sample errors at past
-    /// reads ([`interval_multiplier`]), otherwise [`Z90`]·√variance.
+    /// reads ([`interval_multiplier`](crate::kriging_inputs::interval_multiplier)), otherwise
+    /// [`Z90`]·√variance.
     pub half90: f64,
 }
 
@@ -126,7 +107,7 @@ pub fn target_modality<S: Store>(
                 .into_iter()
                 .map(|m| m.modality.to_string())
                 .collect();
-            crate::score::condition_modality(project.settings(), &names).ok_or_else(|| {
+            crate::condition::condition_modality(project.settings(), &names).ok_or_else(|| {
                 AppError::Invalid(
                     "no soil-moisture modality to reconstruct: give one (e.g. vw@30cm)".into(),
                 )
@@ -135,12 +116,6 @@ pub fn target_modality<S: Store>(
     };
     Modality::new(&name).map_err(|e| AppError::Invalid(format!("modality {name:?}: {e}")))
 }
-
-/// One sensor's readings: times (seconds, ascending) and values.
-pub(crate) type Column = (Vec<UnixSeconds>, Vec<f64>);
-
-/// Per sensor: the times (seconds, ascending) and values of its readings.
-pub(crate) type Columns = Vec<Column>;
 
 /// Per project sensor (sorted by id): times and values of one batch's readings.
 pub(crate) fn per_sensor(ids: &[SensorId], batch: &ReadingBatch) -> Columns {
@@ -234,7 +209,7 @@ pub fn dynamic_fit_options(step_s: i64) -> DynamicFitOptions {
 }
 
 /// Why the dynamic model is missing for `modality`, and what to do instead (`advice`).
-pub(crate) fn unfit_dynamic(modality: &Modality, advice: &str) -> AppError {
+pub fn unfit_dynamic(modality: &Modality, advice: &str) -> AppError {
     AppError::Invalid(format!(
         "the dynamic field model cannot be fitted on {modality} here (more than {} sensors, or no two distinct readings): {advice}",
         gleaner_kriging::MAX_DYNAMIC_SENSORS
@@ -244,7 +219,7 @@ pub(crate) fn unfit_dynamic(modality: &Modality, advice: &str) -> AppError {
 /// Fits the dynamic model of `modality` on every reading stored at or before `at`
 /// (seconds), at sampling step `step_s` (seconds; `None`: the readings' median spacing);
 /// None when the network is too large for it or has no two distinct readings.
-pub(crate) fn fit_dynamic_model<S: Store>(
+pub fn fit_dynamic_model<S: Store>(
     project: &Project<S>,
     modality: &Modality,
     at: UnixSeconds,
@@ -480,6 +455,13 @@ pub struct EstimateReads {
     reused: usize,
 }
 
+impl EstimateReads {
+    /// Estimates that used kept reads instead of reading the store.
+    pub fn reused(&self) -> usize {
+        self.reused
+    }
+}
+
 #[derive(Debug)]
 struct KeptReads {
     modality: Modality,
@@ -632,275 +614,6 @@ pub fn estimate_with<S: Store>(
     Ok(estimates)
 }
 
-/// A sensor's latest known reading: time (s) and value, if any.
-type Latest = Option<(UnixSeconds, f64)>;
-
-/// What the kriging estimators need at one time: the sensors' positions (east/north m), the
-/// fitted models, each sensor's latest known reading (time s, value) and, for the kriging of
-/// changes, every sensor's readings in the change window (times ascending, s).
-struct KrigingInputs<'a> {
-    positions: &'a [[f64; 2]],
-    /// Each sensor's cell (an index of the field's cells): cell-mates are read together.
-    cells: &'a [usize],
-    model: &'a FieldModel,
-    changes: &'a IncrementModel,
-    latest: &'a [Latest],
-    series: &'a [Column],
-    observations: Vec<Observation>,
-    at: UnixSeconds,
-    neighbours: usize,
-    estimator: Estimator,
-}
-
-impl<'a> KrigingInputs<'a> {
-    fn new(
-        (positions, cells): (&'a [[f64; 2]], &'a [usize]),
-        (model, changes): (&'a FieldModel, &'a IncrementModel),
-        (latest, series): (&'a [Latest], &'a [Column]),
-        at: UnixSeconds,
-        (neighbours, estimator): (usize, Estimator),
-    ) -> Self {
-        let observations: Vec<Observation> = latest
-            .iter()
-            .zip(positions)
-            .zip(&model.means)
-            .filter_map(|((l, p), mean)| {
-                l.map(|(t, v)| Observation {
-                    position: *p,
-                    age_s: (at - t).max(0) as f64,
-                    residual: v - mean,
-                })
-            })
-            .collect();
-        Self {
-            positions,
-            cells,
-            model,
-            changes,
-            latest,
-            series,
-            observations,
-            at,
-            neighbours,
-            estimator,
-        }
-    }
-
-    /// Sensor `k`'s estimate (the modality's unit) and variance (its square) by the kriging
-    /// of changes or of levels; kriging of levels (ordinary) for a sensor never read and for
-    /// [`Estimator::Dynamic`] (whose caller answers from the filter).
-    fn estimate(&self, k: usize) -> (f64, f64) {
-        // Kriging of levels: the estimator itself, or for a sensor never read, ordinary.
-        let level_mean = match self.estimator {
-            Estimator::Levels(mean) => mean,
-            Estimator::Changes | Estimator::Dynamic => Mean::Unknown,
-        };
-        match (self.estimator, self.latest[k]) {
-            (Estimator::Levels(_) | Estimator::Dynamic, _) | (Estimator::Changes, None) => {
-                let e = krige_with(
-                    &self.model.covariance,
-                    &self.observations,
-                    self.positions[k],
-                    self.neighbours,
-                    level_mean,
-                );
-                (self.model.means[k] + e.residual, e.variance)
-            }
-            (Estimator::Changes, Some((t_k, v_k))) => {
-                let known = neighbour_changes(
-                    self.series,
-                    self.positions,
-                    (k, t_k),
-                    self.at,
-                    CHANGE_CANDIDATES.max(4 * self.neighbours),
-                    |_| false,
-                );
-                let e = estimate_change(
-                    self.changes,
-                    &known,
-                    self.positions[k],
-                    ((t_k - self.at) as f64, 0.0),
-                    self.neighbours,
-                );
-                (v_k + e.change, e.variance)
-            }
-        }
-    }
-
-    /// The kriging of changes' standardised out-of-sample errors `|z|`, for the calibration
-    /// of its intervals: the sensors read last (within [`BACKTEST_FRESH_S`] of the latest
-    /// reading), each estimated at its latest reading as if it had been unseen as long as
-    /// the sensors unseen now are (their ages, up to [`BACKTEST_SAMPLES`] pairs in all, the
-    /// ages evenly spread over their sorted list): from its reading at or before that long
-    /// before and the changes then known of the sensors outside its cell (cell-mates are read
-    /// together, so they are never known when it is not), against the reading:
-    /// `|v − v̂| / sd`. Empty for the other estimators, or when no sensor is unseen now.
-    fn backtest(&self) -> Vec<f64> {
-        if self.estimator != Estimator::Changes {
-            return Vec::new();
-        }
-        let Some(newest) = self.latest.iter().flatten().map(|l| l.0).max() else {
-            return Vec::new();
-        };
-        let mut ages: Vec<i64> = self
-            .latest
-            .iter()
-            .flatten()
-            .map(|l| self.at - l.0)
-            .filter(|&a| a > self.at - newest + BACKTEST_FRESH_S)
-            .collect();
-        ages.sort_unstable();
-        let targets: Vec<usize> = (0..self.latest.len())
-            .filter(|&k| self.latest[k].is_some_and(|l| l.0 >= newest - BACKTEST_FRESH_S))
-            .collect();
-        if ages.is_empty() || targets.is_empty() {
-            return Vec::new();
-        }
-        let per = (BACKTEST_SAMPLES / targets.len()).clamp(1, ages.len());
-        let picks: Vec<i64> = (0..per)
-            .map(|i| ages[((2 * i + 1) * ages.len()) / (2 * per)])
-            .collect();
-        let mut errors = Vec::new();
-        for &k in &targets {
-            let (times, values) = &self.series[k];
-            let (Some(&tau), Some(&v)) = (times.last(), values.last()) else {
-                continue;
-            };
-            for &age in &picks {
-                // The same gap before this sensor's last reading as the unseen sensor's
-                // before the estimation time.
-                let gap = age - (self.at - tau);
-                let start = times.partition_point(|&t| t <= tau - gap);
-                if start == 0 {
-                    continue;
-                }
-                let (t0, v0) = (times[start - 1], values[start - 1]);
-                let known = neighbour_changes(
-                    self.series,
-                    self.positions,
-                    (k, t0),
-                    tau,
-                    CHANGE_CANDIDATES.max(4 * self.neighbours),
-                    |j| self.cells[j] == self.cells[k],
-                );
-                let e = estimate_change(
-                    self.changes,
-                    &known,
-                    self.positions[k],
-                    ((t0 - tau) as f64, 0.0),
-                    self.neighbours,
-                );
-                if e.variance > 0.0 && e.variance.is_finite() {
-                    errors.push((v - v0 - e.change).abs() / e.variance.sqrt());
-                }
-            }
-        }
-        errors
-    }
-
-    /// The multiplier of this time's 90% intervals for sensor estimates by the kriging of
-    /// changes ([`interval_multiplier`] of [`Self::backtest`]).
-    fn multiplier(&self) -> f64 {
-        interval_multiplier(&self.backtest())
-    }
-
-    /// Sensor `k`'s 90% half-width for an estimate of variance `variance` (the unit
-    /// squared): `q`·sd for the kriging of changes from a reading, `Z90`·sd otherwise.
-    fn half90(&self, k: usize, variance: f64, q: f64) -> f64 {
-        let calibrated = self.estimator == Estimator::Changes && self.latest[k].is_some();
-        (if calibrated { q } else { Z90 }) * variance.max(0.0).sqrt()
-    }
-}
-
-/// The changes known over the unseen interval of sensor `k` (last read at `t_k`, estimated
-/// at `at`), times in seconds relative to `at`: for the `max_candidates` sensors nearest to it
-/// among those read after `t_k` and by `at` (other than those `skip` names; `k` itself is
-/// always skipped), the latest reading by `at` minus the reading at or just before `t_k` (the
-/// first reading in `series` when there is none by then). `series` per sensor, ascending;
-/// positions metres.
-fn neighbour_changes(
-    series: &[(Vec<UnixSeconds>, Vec<f64>)],
-    positions: &[[f64; 2]],
-    (k, t_k): (usize, UnixSeconds),
-    at: UnixSeconds,
-    max_candidates: usize,
-    skip: impl Fn(usize) -> bool,
-) -> Vec<Change> {
-    let p = positions[k];
-    // The index of each sensor's latest reading by `at`, if any.
-    let last = |times: &[UnixSeconds]| times.partition_point(|&t| t <= at).checked_sub(1);
-    // Squared distance and index of every sensor read after t_k (and by `at`).
-    let mut candidates: Vec<(f64, usize)> = series
-        .iter()
-        .enumerate()
-        .filter(|(j, (times, _))| {
-            *j != k && !skip(*j) && last(times.as_slice()).is_some_and(|b| times[b] > t_k)
-        })
-        .map(|(j, _)| {
-            let q = positions[j];
-            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2), j)
-        })
-        .collect();
-    let m = max_candidates.max(1);
-    if candidates.len() > m {
-        candidates.select_nth_unstable_by(m - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        candidates.truncate(m);
-    }
-    candidates.sort_by_key(|c| c.1);
-    let mut out = Vec::with_capacity(candidates.len());
-    for (_, j) in candidates {
-        let (times, values) = &series[j];
-        let Some(end) = last(times.as_slice()) else {
-            continue;
-        };
-        let (b, vb) = (times[end], values[end]);
-        // Readings at or before t_k: the latest of them, else the first reading.
-        let i = times.partition_point(|&t| t <= t_k).saturating_sub(1);
-        let (a, va) = (times[i], values[i]);
-        if a >= b {
-            continue;
-        }
-        out.push(Change {
-            position: positions[j],
-            from_s: (a - at) as f64,
-            to_s: (b - at) as f64,
-            change: vb - va,
-        });
-    }
-    out
-}
-
-/// At most this many (sensor, unseen interval) pairs are back-tested for the calibration of
-/// the kriging of changes' intervals ([`interval_multiplier`]).
-pub const BACKTEST_SAMPLES: usize = 160;
-
-/// Sensors whose latest reading is within this of the newest one count as read last, s
-/// (readings of one visit are stamped within minutes of each other).
-pub const BACKTEST_FRESH_S: i64 = 3_600;
-
-/// Fewest back-tested errors for a calibrated interval; with fewer, `Z90`·sd.
-pub const BACKTEST_MIN: usize = 20;
-
-/// The multiplier `q` of a 90% prediction interval `estimate ± q·sd` from standardised
-/// out-of-sample errors `|z|`: their split-conformal quantile, the ⌈0.9 (n + 1)⌉-th smallest
-/// (so a new error as exchangeable with them falls inside with probability ≥ 90%); [`Z90`]
-/// (the Gaussian interval) with fewer than [`BACKTEST_MIN`] errors. Non-finite errors are
-/// left out.
-pub fn interval_multiplier(errors: &[f64]) -> f64 {
-    let mut z: Vec<f64> = errors.iter().copied().filter(|z| z.is_finite()).collect();
-    if z.len() < BACKTEST_MIN {
-        return Z90;
-    }
-    z.sort_by(f64::total_cmp);
-    let rank = (0.9 * (z.len() + 1) as f64).ceil() as usize;
-    z[rank.clamp(1, z.len()) - 1]
-}
-
-/// Fewest candidate neighbours (the nearest read after the target) the kriging of changes
-/// weighs for each estimate, before choosing the most informative of them; at least 4 times
-/// the neighbours asked for. Bounds the cost on large networks.
-pub const CHANGE_CANDIDATES: usize = 64;
-
 /// The use case: fits the field model of the modality on everything known at `at` and
 /// estimates every sensor's value then. Writes nothing.
 pub fn reconstruct<S: Store>(
@@ -994,15 +707,13 @@ pub struct ReconstructionSeries {
     /// Half-widths of the 90% prediction intervals, same layout, the modality's unit: under
     /// the dynamic model `Z90`·√(variance + reading noise); under the kriging of changes
     /// calibrated at each time on the estimator's out-of-sample errors at past readings
-    /// ([`interval_multiplier`]); `Z90`·√variance otherwise.
+    /// ([`interval_multiplier`](crate::kriging_inputs::interval_multiplier)); `Z90`·√variance
+    /// otherwise.
     pub half90: Vec<f64>,
     /// The dynamic model (fitted on every reading stamped at or before `to`), when it is
     /// the estimator.
     pub model: Option<DynamicModel>,
 }
-
-/// The standard normal's 95% quantile: a 90% interval is `mean ± Z90·sd`.
-pub const Z90: f64 = 1.644_853_626_951_472_2;
 
 impl ReconstructionSeries {
     /// The 90% prediction interval `mean ± half90` of entry (time index, sensor index).
@@ -1223,336 +934,5 @@ mod tests {
         }
         // The shared part is the same fit.
         assert_eq!(on.phi(), off.phi());
-    }
-
-    /// The split-conformal multiplier: the ⌈0.9 (n + 1)⌉-th smallest error; the Gaussian
-    /// multiplier below [`BACKTEST_MIN`] errors; non-finite errors left out.
-    #[test]
-    fn interval_multiplier_is_the_conformal_quantile() {
-        let errors: Vec<f64> = (1..=99).rev().map(|i| f64::from(i) / 100.0).collect();
-        assert_eq!(interval_multiplier(&errors), 0.90);
-        let mut with_nan = errors.clone();
-        with_nan.push(f64::NAN);
-        assert_eq!(interval_multiplier(&with_nan), 0.90);
-        // n = 19: ⌈0.9·20⌉ = 18 → the 18th smallest; fewer than 20 → Z90.
-        assert_eq!(interval_multiplier(&errors[..19]), Z90);
-        let twenty: Vec<f64> = (1..=20).map(f64::from).collect();
-        assert_eq!(interval_multiplier(&twenty), 19.0);
-        assert_eq!(interval_multiplier(&[]), Z90);
-    }
-
-    /// Estimates reusing the previous estimate's reads (nothing stored after its time, at
-    /// later times with the same look-back) equal, to the bit, estimates reading the store;
-    /// some sensors stop reporting, so their latest readings leave the look-back on the way.
-    #[test]
-    fn estimates_from_kept_reads_are_the_store_estimates() {
-        use gleaner_store::StoreRead;
-        let crate::test_farm::SynthProject {
-            tmp: _tmp,
-            farm,
-            mut project,
-            readings,
-            ..
-        } = crate::test_farm::synth_project(&gleaner_synth::SynthConfig {
-            seed: 5,
-            sensor_count: 18,
-            days: 60,
-            vw_depths_cm: vec![30],
-            t_depths_cm: vec![30],
-            ..gleaner_synth::SynthConfig::default()
-        });
-        let mut known = gleaner_ingest::Readings::default();
-        for (_, _, r, _) in crate::ingest::parse_files(
-            &crate::ingest::IngestRequest {
-                files: vec![readings],
-                ..Default::default()
-            },
-            crate::ingest::known_sensors(project.store()).unwrap(),
-            &project.settings().ingest.value_limits(),
-            &crate::Silent,
-        )
-        .unwrap()
-        .files
-        {
-            known.append(r);
-        }
-        let cut = farm.times()[0] + 45 * DAY;
-        // What a daily log holds by the cut: a reading stamped t is available from t + 1 day.
-        known.rows.retain(|r| r.t + DAY <= cut);
-        // Every third sensor stops 10 days before the cut.
-        known
-            .rows
-            .retain(|r| r.sensor % 3 != 0 || r.t <= cut - 10 * DAY);
-        let report = gleaner_ingest::IngestReport {
-            rows_read: known.rows.len() as u64,
-            readings: known.rows.len() as u64,
-            ..Default::default()
-        };
-        crate::ingest::ingest_parsed(
-            &mut project,
-            crate::ingest::Parsed {
-                files: vec![(
-                    "known".into(),
-                    crate::ingest::Format::Long,
-                    known,
-                    report.clone(),
-                )],
-                report,
-            },
-            &crate::ingest::IngestRequest::default(),
-            0,
-            &crate::Silent,
-        )
-        .unwrap();
-        let modality = Modality::new("vw@30cm").unwrap();
-        let last = project
-            .store()
-            .latest_readings(&modality, 0..=cut)
-            .unwrap()
-            .into_iter()
-            .map(|r| r.1)
-            .max()
-            .unwrap();
-        let models = fit_models(&project, &modality, last).unwrap();
-        let (model, changes) = (&models.levels, &models.changes);
-        let dynamic = models.dynamic.as_ref();
-        assert!(dynamic.is_some(), "the dynamic model fits a synthetic farm");
-        let mut reads = EstimateReads::default();
-        for day in 0..12 {
-            let at = last + day * DAY;
-            let options = (8, Estimator::Changes);
-            let fresh = estimate(
-                &project,
-                &modality,
-                (model, changes, dynamic),
-                at,
-                14 * DAY,
-                options,
-            )
-            .unwrap();
-            let kept = estimate_with(
-                &project,
-                &modality,
-                (model, changes, dynamic),
-                (at, 14 * DAY),
-                options,
-                (&mut reads, true),
-            )
-            .unwrap();
-            assert_eq!(format!("{fresh:?}"), format!("{kept:?}"), "day {day}");
-            if day == 6 {
-                assert!(fresh.iter().any(|e| e.last_time.is_none()), "stale sensors");
-            }
-        }
-        assert_eq!(reads.reused, 11);
-        // The dynamic estimator: a sensor read at the estimation time is known to the
-        // reading noise; one not read lately has a larger variance, within the prior.
-        let dyn_est = estimate(
-            &project,
-            &modality,
-            (model, changes, dynamic),
-            last,
-            UnixSeconds::MAX / 4,
-            (8, Estimator::Dynamic),
-        )
-        .unwrap();
-        let m = dynamic.unwrap();
-        let n = m.len();
-        for (k, e) in dyn_est.iter().enumerate() {
-            let prior = m.covariance()[k * n + k];
-            assert!(
-                e.kriged.is_finite() && e.variance >= 0.0 && e.variance <= prior * (1.0 + 1e-9)
-            );
-            if e.last_time == Some(last) {
-                assert!((e.kriged - e.carried).abs() < 0.1 * prior.sqrt(), "{e:?}");
-                assert!(e.variance < 0.01 * prior, "{e:?}");
-            }
-        }
-        assert!(dyn_est.iter().enumerate().any(|(k, e)| {
-            e.last_time.is_some_and(|t| t < last - 5 * DAY)
-                && e.variance > 0.01 * m.covariance()[k * n + k]
-        }));
-    }
-
-    #[test]
-    fn neighbour_changes_cover_the_targets_unseen_interval() {
-        let at = 100 * DAY;
-        let series = vec![
-            // 0: the target, last read on day 90.
-            (vec![89 * DAY, 90 * DAY], vec![0.20, 0.21]),
-            // 1: read daily to day 99: change from day 90 to day 99.
-            (
-                (85..100).map(|d| d * DAY).collect(),
-                (85..100).map(|d| 0.30 + 0.01 * (d - 85) as f64).collect(),
-            ),
-            // 2: last read on day 90 too: nothing known after the target's last reading.
-            (vec![88 * DAY, 90 * DAY], vec![0.1, 0.4]),
-            // 3: missing on day 90: from day 87 (the latest before) to day 95.
-            (vec![87 * DAY, 95 * DAY], vec![0.10, 0.15]),
-            // 4: first read after day 90 (day 92) and again on day 96.
-            (vec![92 * DAY, 96 * DAY], vec![0.50, 0.45]),
-            // 5: never read.
-            (vec![], vec![]),
-        ];
-        let positions: Vec<[f64; 2]> = (0..6).map(|k| [10.0 * k as f64, 0.0]).collect();
-        let c = neighbour_changes(&series, &positions, (0, 90 * DAY), at, 64, |_| false);
-        // Only the nearest 2 candidates: sensors 1 and 3 (sensor 2 knows nothing newer).
-        let near = neighbour_changes(&series, &positions, (0, 90 * DAY), at, 2, |_| false);
-        assert_eq!(near.len(), 2, "{near:?}");
-        assert_eq!(
-            (near[0].position, near[1].position),
-            ([10.0, 0.0], [30.0, 0.0])
-        );
-        assert_eq!(c.len(), 3, "{c:?}");
-        let rel = |d: i64| ((d * DAY) - at) as f64;
-        assert_eq!((c[0].from_s, c[0].to_s), (rel(90), rel(99)));
-        assert!((c[0].change - 0.09).abs() < 1e-12);
-        assert_eq!(c[0].position, [10.0, 0.0]);
-        assert_eq!((c[1].from_s, c[1].to_s), (rel(87), rel(95)));
-        assert!((c[1].change - 0.05).abs() < 1e-12);
-        assert_eq!((c[2].from_s, c[2].to_s), (rel(92), rel(96)));
-        assert!((c[2].change + 0.05).abs() < 1e-12);
-        // A target read after everyone else: no neighbour knows more.
-        assert!(
-            neighbour_changes(&series, &positions, (1, 99 * DAY), at, 64, |_| false).is_empty()
-        );
-    }
-
-    /// A series over a range: one row per time, every sensor's mean close to its own
-    /// reading at a time it reported, variances within the prior; bad ranges refused.
-    #[test]
-    fn series_over_a_range() {
-        use gleaner_store::StoreRead;
-        let crate::test_farm::SynthProject {
-            tmp: _tmp,
-            farm,
-            project,
-            ..
-        } = crate::test_farm::ingested_synth_project(&gleaner_synth::SynthConfig {
-            seed: 7,
-            sensor_count: 12,
-            days: 50,
-            vw_depths_cm: vec![30],
-            t_depths_cm: vec![],
-            ..gleaner_synth::SynthConfig::default()
-        });
-        let t0 = farm.times()[0];
-        let request = ReconstructSeriesRequest {
-            from: t0 + 30 * DAY,
-            to: t0 + 40 * DAY,
-            every_s: DAY,
-            modality: Some("vw@30cm".into()),
-            estimator: Estimator::Dynamic,
-            ..Default::default()
-        };
-        let series = reconstruct_series(&project, &request).unwrap();
-        let n = series.sensors.len();
-        assert_eq!(series.times.len(), 11);
-        assert_eq!(series.mean.len(), 11 * n);
-        assert_eq!(series.estimator, Estimator::Dynamic);
-        assert_eq!(series.unit.as_deref(), Some("m3/m3"));
-        let model = series.model.as_ref().unwrap();
-        let batch = project
-            .store()
-            .readings_for(
-                Some(&Modality::new("vw@30cm").unwrap()),
-                request.from..=request.from,
-            )
-            .unwrap();
-        assert!(!batch.rows.is_empty());
-        for r in &batch.rows {
-            let id = &batch.sensors[r.sensor as usize];
-            let k = series.sensors.iter().position(|s| &s.0 == id).unwrap();
-            let prior = model.covariance()[k * n + k];
-            assert!((series.mean[k] - r.value).abs() < 0.2 * prior.sqrt());
-            let (lo, hi) = series.interval90(0, k);
-            assert!(lo <= r.value && r.value <= hi);
-        }
-        for (k, v) in series.variance.iter().enumerate() {
-            let s = k % n;
-            assert!(*v >= 0.0 && *v <= model.covariance()[s * n + s] * (1.0 + 1e-9));
-        }
-        for bad in [
-            ReconstructSeriesRequest {
-                to: request.from - 1,
-                ..request.clone()
-            },
-            ReconstructSeriesRequest {
-                every_s: 0,
-                ..request.clone()
-            },
-            ReconstructSeriesRequest {
-                every_s: 1,
-                to: request.from + 10_000_000,
-                ..request.clone()
-            },
-        ] {
-            assert!(matches!(
-                reconstruct_series(&project, &bad),
-                Err(AppError::Invalid(_))
-            ));
-        }
-        // The kriging estimators over a range: at each time what `reconstruct` gives then
-        // with the models fitted up to the range's end; at the end exactly `reconstruct`.
-        for estimator in [
-            Estimator::Changes,
-            Estimator::Levels(Mean::Unknown),
-            Estimator::Levels(Mean::Known),
-        ] {
-            let request = ReconstructSeriesRequest {
-                estimator,
-                ..request.clone()
-            };
-            let series = reconstruct_series(&project, &request).unwrap();
-            assert_eq!(series.estimator, estimator);
-            assert!(series.model.is_none());
-            let last = series.times.len() - 1;
-            let at_end = reconstruct(
-                &project,
-                &ReconstructRequest {
-                    at: Some(request.to),
-                    modality: request.modality.clone(),
-                    neighbours: None,
-                    estimator,
-                },
-            )
-            .unwrap();
-            for (k, e) in at_end.sensors.iter().enumerate() {
-                assert_eq!(series.mean[last * n + k], e.kriged, "{estimator:?} {k}");
-                assert_eq!(series.variance[last * n + k], e.variance);
-                let (lo, hi) = series.interval90(last, k);
-                assert!((hi - lo - 2.0 * e.half90).abs() < 1e-12);
-            }
-            assert!(series.mean.iter().all(|m| m.is_finite()));
-            assert!(series.variance.iter().all(|v| *v >= 0.0));
-        }
-        // One cell's sensors only: the same columns as in the whole field's series.
-        let (_, field) = project.field().unwrap();
-        let cell = &field.cells()[0];
-        let one = reconstruct_series(
-            &project,
-            &ReconstructSeriesRequest {
-                cell: Some(cell.index),
-                ..request.clone()
-            },
-        )
-        .unwrap();
-        assert_eq!(one.sensors.len(), cell.sensors.len());
-        for (j, &k) in cell.sensors.iter().enumerate() {
-            assert_eq!(one.sensors[j], series.sensors[k]);
-            for t in 0..series.times.len() {
-                assert_eq!(one.mean[t * one.sensors.len() + j], series.mean[t * n + k]);
-            }
-        }
-        assert!(matches!(
-            reconstruct_series(
-                &project,
-                &ReconstructSeriesRequest {
-                    cell: Some(CellIndex { i: 9_999, j: 9_999 }),
-                    ..request.clone()
-                }
-            ),
-            Err(AppError::NotFound { what: "cell", .. })
-        ));
     }
 }

@@ -14,7 +14,7 @@ use crate::error::{AppError, Result};
 
 /// Refuses a given time outside the years [`MIN_YEAR`]..=[`MAX_YEAR`]; `what` names it in
 /// the error (e.g. `mission time`).
-pub(crate) fn check(what: &str, t: Option<UnixSeconds>) -> Result<()> {
+pub fn check(what: &str, t: Option<UnixSeconds>) -> Result<()> {
     match t {
         Some(t) if !plausible_time(t) => Err(AppError::Invalid(format!(
             "{what} {}: outside the years {MIN_YEAR}..={MAX_YEAR} gleaner accepts",
@@ -31,10 +31,7 @@ pub(crate) fn check(what: &str, t: Option<UnixSeconds>) -> Result<()> {
 
 /// The mission time of a request: the given one (checked by [`check`]), else the latest
 /// known reading; refused when neither exists.
-pub(crate) fn mission_time(
-    at: Option<UnixSeconds>,
-    latest: Option<UnixSeconds>,
-) -> Result<UnixSeconds> {
+pub fn mission_time(at: Option<UnixSeconds>, latest: Option<UnixSeconds>) -> Result<UnixSeconds> {
     check("mission time", at)?;
     at.or(latest).ok_or_else(|| {
         AppError::Invalid(
