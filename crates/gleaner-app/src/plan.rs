@@ -663,7 +663,7 @@ pub fn plan_scored<S: Store>(
                 base,
                 &visits,
                 &plan.via,
-                plan_wind.forecast.from_deg,
+                (plan_wind.forecast.from_deg, plan_wind.planned.speed_mps),
             )?
         };
         Ok(crate::wind::RouteWind {

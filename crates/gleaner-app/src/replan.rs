@@ -215,7 +215,7 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
             (start_local, base),
             &visits,
             budget_j,
-            plan_wind.forecast.from_deg,
+            (plan_wind.forecast.from_deg, plan_wind.planned.speed_mps),
         )?,
     };
     let mission = NewMission {

@@ -3,7 +3,7 @@
 //! cross-wind, and the strongest wind a planned route stands (docs/method.md §3, wind).
 
 use gleaner_energy::{
-    CellVisit, MissionEnergy, MissionEnergyModel, Wind, WindTolerance, strongest_wind,
+    CellVisit, MissionEnergy, MissionEnergyModel, Wind, WindTolerance, strongest_wind_from,
 };
 use gleaner_field::LocalPoint;
 
@@ -152,9 +152,11 @@ pub fn legs(energy: &MissionEnergy) -> Vec<LegWind> {
 
 /// The strongest wind from `from_deg` (degrees from north) at which the sortie `base` →
 /// `route` → `base` (legs through `via`, as [`MissionEnergyModel::breakdown_paths`]) stays
-/// within the model's usable budget: [`gleaner_energy::strongest_wind`] over the model in
-/// each trial wind. The planner prices the values the files command, so this is the wind the
-/// exported route stands. `None` when it is over budget in still air.
+/// within the model's usable budget, scanned up from `planned_mps` (m/s, the wind it was
+/// priced in): [`gleaner_energy::strongest_wind_from`] over the model in each trial wind
+/// (whether still air is within budget too is [`WindTolerance::still_air`]). The planner
+/// prices the values the files command, so this is the wind the exported route stands.
+/// `None` when it is over budget in the planned wind.
 ///
 /// # Errors
 /// [`AppError::Core`] for invalid positions or hover times.
@@ -163,9 +165,9 @@ pub fn strongest(
     base: LocalPoint,
     route: &[CellVisit],
     via: &[Vec<LocalPoint>],
-    from_deg: f64,
+    (from_deg, planned_mps): (f64, f64),
 ) -> Result<Option<WindTolerance>> {
-    strongest_wind(from_deg, |w| {
+    strongest_wind_from(from_deg, planned_mps, |w| {
         model
             .with_wind(w)
             .breakdown_paths(base, route, via)
@@ -183,9 +185,9 @@ pub fn strongest_continuation(
     (start, base): (LocalPoint, LocalPoint),
     route: &[CellVisit],
     budget_j: f64,
-    from_deg: f64,
+    (from_deg, planned_mps): (f64, f64),
 ) -> Result<Option<WindTolerance>> {
-    strongest_wind(from_deg, |w| {
+    strongest_wind_from(from_deg, planned_mps, |w| {
         model
             .with_wind(w)
             .continuation(start, base, route, budget_j)

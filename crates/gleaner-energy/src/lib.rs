@@ -61,5 +61,5 @@ pub use mission::{
 pub use propulsion::{Airframe, OptimalSpeed, PowerModel, PowerParameters};
 pub use wind::{
     GustySortie, STRONGEST_WIND_CAP_MPS, STRONGEST_WIND_STEP_MPS, Wind, WindLeg, WindTolerance,
-    strongest_wind,
+    strongest_wind, strongest_wind_from,
 };

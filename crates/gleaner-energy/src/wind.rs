@@ -309,38 +309,57 @@ pub struct WindTolerance {
     /// True when the flight is still within budget at [`STRONGEST_WIND_CAP_MPS`] (the speed
     /// is then the cap).
     pub capped: bool,
+    /// Whether the flight is within budget in still air too. A route planned in a wind may
+    /// not be: hovering in a moderate wind takes less power than hovering in still air
+    /// (the power curve's bucket), so the planner can fit more hovering into the battery.
+    pub still_air: bool,
 }
 
 /// The strongest wind from `from_deg` (degrees clockwise from north) at which `feasible`
-/// holds: wind speeds from 0 m/s upwards in steps of [`STRONGEST_WIND_STEP_MPS`] until the
-/// first at which it fails, then bisection (40 halvings) between that speed and the last
-/// that held. `None` when it fails in still air. A flight's energy need not grow with every
-/// wind speed (the power curve has a bucket), so the scan from 0 m/s finds the first failure,
-/// not merely some failure.
+/// holds, from still air upwards: [`strongest_wind_from`] starting at 0 m/s.
 ///
 /// # Errors
 /// The first error `feasible` returns.
 pub fn strongest_wind<E>(
     from_deg: f64,
+    feasible: impl FnMut(Wind) -> Result<bool, E>,
+) -> Result<Option<WindTolerance>, E> {
+    strongest_wind_from(from_deg, 0.0, feasible)
+}
+
+/// The strongest wind from `from_deg` (degrees clockwise from north) at which `feasible`
+/// holds, scanning up from `start_mps` (m/s; the wind a flight was planned in): wind speeds
+/// from `start_mps` upwards in steps of [`STRONGEST_WIND_STEP_MPS`] until the first at which
+/// it fails, then bisection (40 halvings) between that speed and the last that held. `None`
+/// when it fails at `start_mps`. A flight's energy need not grow with every wind speed (the
+/// power curve has a bucket), so the scan finds the first failure above the start, not
+/// merely some failure; and a flight planned in a wind may fail in still air while it
+/// stands stronger winds (reported in [`WindTolerance::still_air`], not as `None`).
+///
+/// # Errors
+/// The first error `feasible` returns.
+pub fn strongest_wind_from<E>(
+    from_deg: f64,
+    start_mps: f64,
     mut feasible: impl FnMut(Wind) -> Result<bool, E>,
 ) -> Result<Option<WindTolerance>, E> {
+    let start_mps = start_mps.clamp(0.0, STRONGEST_WIND_CAP_MPS);
     let at = |speed_mps: f64| Wind {
         speed_mps,
         from_deg,
     };
-    if !feasible(Wind::CALM)? {
+    if !feasible(at(start_mps))? {
         return Ok(None);
     }
-    let steps = (STRONGEST_WIND_CAP_MPS / STRONGEST_WIND_STEP_MPS) as usize;
-    for k in 1..=steps {
-        let (lo, hi) = (
-            (k - 1) as f64 * STRONGEST_WIND_STEP_MPS,
-            k as f64 * STRONGEST_WIND_STEP_MPS,
-        );
+    let still_air = start_mps == 0.0 || feasible(Wind::CALM)?;
+    let mut lo = start_mps;
+    while lo < STRONGEST_WIND_CAP_MPS {
+        let hi = (lo + STRONGEST_WIND_STEP_MPS).min(STRONGEST_WIND_CAP_MPS);
         if feasible(at(hi))? {
+            lo = hi;
             continue;
         }
-        let (mut lo, mut hi) = (lo, hi);
+        let mut hi = hi;
         for _ in 0..STRONGEST_WIND_BISECTIONS {
             let mid = 0.5 * (lo + hi);
             if feasible(at(mid))? {
@@ -353,12 +372,14 @@ pub fn strongest_wind<E>(
             speed_mps: lo,
             from_deg,
             capped: false,
+            still_air,
         }));
     }
     Ok(Some(WindTolerance {
         speed_mps: STRONGEST_WIND_CAP_MPS,
         from_deg,
         capped: true,
+        still_air,
     }))
 }
 
@@ -622,6 +643,38 @@ mod tests {
             .unwrap()
             .unwrap();
         assert!(always.capped && always.speed_mps == STRONGEST_WIND_CAP_MPS);
+        assert!(always.still_air && t.still_air);
+    }
+
+    /// A flight planned in a wind that is over budget in still air (more hovering fits in a
+    /// moderate wind than in still air) still has the strongest wind it stands, scanned up
+    /// from the wind it was planned in, and says that still air is over budget.
+    #[test]
+    fn a_route_over_budget_in_still_air_still_has_its_strongest_wind() {
+        let m = model();
+        let base = p(0.0, 0.0);
+        let route = visits(&[(300.0, 0.0), (300.0, 300.0), (0.0, 300.0)], 60.0);
+        let energy = |w: Wind| m.with_wind(w).breakdown(base, &route).unwrap().total_j;
+        let calm = energy(Wind::CALM);
+        let planned = Wind::new(8.0, 270.0).unwrap();
+        assert!(energy(planned) < calm, "hovering in 8 m/s is cheaper");
+        // A budget between the two: feasible in the planned wind, not in still air.
+        let budget = 0.5 * (energy(planned) + calm);
+        let fits = |w: Wind| -> Result<bool, EnergyError> { Ok(energy(w) <= budget) };
+        assert_eq!(strongest_wind(270.0, fits).unwrap(), None);
+        let t = strongest_wind_from(270.0, 8.0, fits).unwrap().unwrap();
+        assert!(!t.still_air && !t.capped, "{t:?}");
+        assert!(
+            t.speed_mps > 8.0 && t.speed_mps < STRONGEST_WIND_CAP_MPS,
+            "{t:?}"
+        );
+        assert!(fits(Wind::new(t.speed_mps, 270.0).unwrap()).unwrap());
+        assert!(!fits(Wind::new(t.speed_mps + 1e-6, 270.0).unwrap()).unwrap());
+        // Nothing from the start: none.
+        assert_eq!(
+            strongest_wind_from(270.0, 8.0, |_| Ok::<_, EnergyError>(false)).unwrap(),
+            None
+        );
     }
 
     proptest! {

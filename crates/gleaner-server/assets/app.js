@@ -545,10 +545,80 @@ function windView(w) {
   const stands = w.strongest_feasible_mps === undefined ? "" :
     w.strongest_capped ? " · stands any wind up to " + w.strongest_feasible_mps + " m/s" :
     " · stays within the battery up to " + w.strongest_feasible_mps.toFixed(1) + " m/s from there";
+  const calm = w.over_budget_in_still_air
+    ? " · over the battery in still air (hovering costs more without wind)" : "";
   return el("p", { id: "wind-summary" },
     w.forecast_mps > 0
-      ? `Wind ${w.forecast_mps} m/s from ${w.from_deg}° (priced at ${w.planned_mps} m/s with the margin)${stands}`
+      ? `Wind ${w.forecast_mps} m/s from ${w.from_deg}° (priced at ${w.planned_mps} m/s with the margin)${stands}${calm}`
       : `Still air${stands}`);
+}
+
+// ---- simulation ------------------------------------------------------------------------------
+
+// The simulate request the form says: strategies, first mission, planner cap and the weather
+// (a daily Weibull wind of the given mean, m/s, with its forecast error, m/s; still air else).
+function simulateBody() {
+  const f = new FormData($("simulate-form"));
+  const b = {};
+  const names = (f.get("strategies") || "").split(",").map((s) => s.trim()).filter(Boolean);
+  if (names.length) b.strategies = names;
+  if (f.get("start")) b.start = f.get("start");
+  if (f.get("planner_iterations") !== "") b.planner_iterations = parseInt(f.get("planner_iterations"), 10);
+  if (f.get("weather") === "weibull") {
+    b.wind = "weibull:" + (f.get("wind_mean_mps") || "4");
+    if (f.get("gust") !== "") b.gust = Number(f.get("gust"));
+  }
+  return b;
+}
+
+// The campaign's answer: per strategy the error after the flights and the energy; in wind,
+// how the sorties flew (over budget, re-planned in the air, stops dropped).
+function campaignView(doc) {
+  const mean = (m) => (m && m.mean !== null && m.mean !== undefined ? m.mean : null);
+  const rows = doc.strategies.map((x) => el("tr", { "data-strategy": x.strategy },
+    el("td", {}, x.strategy + (doc.strategies.some((y) => y.budget !== x.budget) ? " ×" + x.budget : "")),
+    el("td", {}, fmt(mean(x.metrics.rmse_kriged), 4)),
+    el("td", {}, fmt(mean(x.metrics.energy_kj), 1)),
+    el("td", {}, x.events_caught + " of " + x.events)));
+  const parts = [
+    el("p", {}, `${doc.missions} missions, ${(doc.first_mission || "–").slice(0, 10)} to ${(doc.last_mission || "–").slice(0, 10)}`),
+    el("table", { id: "sim-strategies" },
+      el("tr", {}, el("th", {}, "strategy"), el("th", {}, "RMSE after"), el("th", {}, "energy, kJ"), el("th", {}, "events caught"))),
+  ];
+  parts[1].append(...rows);
+  if (doc.flights && doc.flights.length) {
+    const t = el("table", { id: "sim-flights" },
+      el("tr", {}, el("th", {}, "strategy"), el("th", {}, "mean forecast, m/s"), el("th", {}, "over budget"),
+        el("th", {}, "re-planned"), el("th", {}, "stops dropped")));
+    for (const f of doc.flights) {
+      t.append(el("tr", { "data-strategy": f.strategy },
+        el("td", {}, f.strategy),
+        el("td", {}, fmt(f.mean_forecast_mps, 1)),
+        el("td", { class: "over-budget" }, f.over_budget),
+        el("td", { class: "replanned" }, f.replanned),
+        el("td", { class: "dropped" }, f.cells_dropped)));
+    }
+    parts.push(el("p", { class: "muted" }, "Sorties in the simulated wind:"), t);
+  }
+  return el("div", {}, ...parts);
+}
+
+async function simulate(ev) {
+  ev.preventDefault();
+  const body = simulateBody();
+  status("Simulating…");
+  $("simulate").disabled = true;
+  $("simulate-result").replaceChildren(el("p", { class: "muted" }, "Simulating…"));
+  try {
+    const doc = await call("POST", "/simulate", body);
+    $("simulate-result").replaceChildren(campaignView(doc));
+    status("Simulation done.", "ok");
+  } catch (e) {
+    $("simulate-result").replaceChildren(el("p", { class: "error" }, e.message));
+    status("Simulation failed.", "error");
+  } finally {
+    $("simulate").disabled = false;
+  }
 }
 
 function energyView(m) {
@@ -921,6 +991,7 @@ const narrow = matchMedia("(max-width: 60rem)");
 async function start() {
   $("colour-by").addEventListener("change", (e) => { state.colourBy = e.target.value; colourCells(); });
   $("plan-form").addEventListener("submit", preview);
+  $("simulate-form").addEventListener("submit", simulate);
   $("save").addEventListener("click", save);
   $("field-map-button").addEventListener("click", () => showFieldMap());
   $("field-map-redraw").addEventListener("click", () => showFieldMap());

@@ -199,6 +199,23 @@ pub struct SimulateBody {
     /// The share of forecast errors along the wind the planning margin covers, in
     /// [0.5, 0.999] [default: 0.95].
     pub margin_quantile: Option<f64>,
+    /// Observed daily winds in place of a drawn `wind` (as `simulate --wind-csv`): one per
+    /// day, every mission's day given; each mission is planned for its day's wind (plus the
+    /// margin) and flown in it with the forecast error (`gust`, default 1 m/s). At most
+    /// 36,600 days.
+    pub winds: Option<Vec<WindDayBody>>,
+}
+
+/// One day of observed wind (a row of `simulate --wind-csv`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct WindDayBody {
+    /// The day, `YYYY-MM-DD` (UTC).
+    pub date: String,
+    /// Mean wind speed at the flight altitude, m/s, in [0, 40].
+    pub speed_mps: f64,
+    /// Direction it blows from, degrees clockwise from north, in [0, 360].
+    pub from_deg: f64,
 }
 
 /// An exploration request (`gleaner explore`).

@@ -22,7 +22,7 @@ use utoipa::{IntoParams, OpenApi, ToSchema};
 
 use crate::api::{
     CellDetailDoc, ExploreBody, IngestDoc, PlanBody, ProjectDoc, RecordDoc, ReplanBody, ReplanDoc,
-    ScoreBody, SimulateBody, checked_history, parse_time,
+    ScoreBody, SimulateBody, WindDayBody, checked_history, parse_time,
 };
 use crate::auth::{Caller, Computing, Writing};
 use crate::error::{ApiError, ApiResult, ErrorBody};
@@ -660,6 +660,7 @@ pub async fn simulate(
 ) -> ApiResult<Json<CampaignDoc>> {
     let b: SimulateBody = json_body(body)?;
     let flight = simulated_weather(&b)?;
+    let observed = b.winds.is_some();
     let defaults = gleaner_campaign::campaign::ReplayOptions::default();
     let names = b.strategies.unwrap_or_else(|| {
         ["gleaner", "round-robin", "freshness"]
@@ -719,6 +720,14 @@ pub async fn simulate(
         .run_job(simulation, move |p, cancel| {
             let parts = gleaner_campaign::ProjectRecord::read(p)?.into_parts(p.dir());
             let replay = gleaner_campaign::campaign::replay(parts, &options, clock_now())?;
+            if observed {
+                // Every mission's day must have its wind: a gap names the field.
+                replay
+                    .request
+                    .flight
+                    .check(&replay.request.schedule)
+                    .map_err(|e| ApiError::from(e).in_field("winds"))?;
+            }
             let missions = replay.request.mission_runs();
             if missions > MAX_SIMULATED_MISSIONS {
                 return Err(ApiError::bad_request(
@@ -755,9 +764,21 @@ fn simulated_weather(
     b: &SimulateBody,
 ) -> ApiResult<gleaner_campaign::campaign_flight::FlightConditions> {
     use gleaner_campaign::campaign_flight::{DEFAULT_GUST_SD_MPS, FlightConditions, WindSource};
-    let wind = match &b.wind {
-        None => WindSource::Still,
-        Some(text) => WindSource::parse(text).map_err(|e| ApiError::from(e).in_field("wind"))?,
+    let wind = match (&b.wind, &b.winds) {
+        (Some(_), Some(_)) => {
+            return Err(ApiError::bad_request(
+                Some("winds"),
+                "give either `wind` (a drawn wind) or `winds` (observed days), not both",
+            ));
+        }
+        (_, Some(days)) => WindSource::Observed {
+            path: PathBuf::from("winds"),
+            days: observed_winds(days)?,
+        },
+        (Some(text), None) => {
+            WindSource::parse(text).map_err(|e| ApiError::from(e).in_field("wind"))?
+        }
+        (None, None) => WindSource::Still,
     };
     let still = FlightConditions::default();
     let gust_sd_mps = b.gust.unwrap_or(if wind == WindSource::Still {
@@ -812,6 +833,68 @@ fn simulated_weather(
         leg_gust_sd_mps,
         margin_quantile,
     })
+}
+
+/// Most days of observed wind one simulation request may give.
+const MAX_WIND_DAYS: usize = 36_600;
+
+/// A simulation's observed daily winds, checked as `simulate --wind-csv` checks its file;
+/// each refusal names the entry's field (`winds[3].speed_mps`).
+fn observed_winds(
+    days: &[WindDayBody],
+) -> ApiResult<Vec<gleaner_campaign::campaign_flight::DailyWind>> {
+    use gleaner_app::wind::MAX_WIND_MPS;
+    if days.is_empty() || days.len() > MAX_WIND_DAYS {
+        return Err(ApiError::bad_request(
+            Some("winds"),
+            format!(
+                "expected 1 to {MAX_WIND_DAYS} days of wind, got {}",
+                days.len()
+            ),
+        ));
+    }
+    let mut out = Vec::with_capacity(days.len());
+    for (k, d) in days.iter().enumerate() {
+        let field = |name: &str| format!("winds[{k}].{name}");
+        let day = app::parse_timestamp(&d.date)
+            .filter(|t| t.rem_euclid(86_400) == 0 && d.date.trim().len() == 10)
+            .ok_or_else(|| {
+                ApiError::bad_request(
+                    Some(&field("date")),
+                    format!("expected a date YYYY-MM-DD (UTC), got {:?}", d.date),
+                )
+            })?;
+        let number = |x: f64, name: &str, hi: f64, unit: &str| {
+            if x.is_finite() && (0.0..=hi).contains(&x) {
+                Ok(x)
+            } else {
+                Err(ApiError::bad_request(
+                    Some(&field(name)),
+                    format!("expected a number in [0, {hi}] {unit}, got {x}"),
+                ))
+            }
+        };
+        let speed_mps = number(d.speed_mps, "speed_mps", MAX_WIND_MPS, "m/s")?;
+        let from_deg = number(d.from_deg, "from_deg", 360.0, "degrees")?;
+        out.push(gleaner_campaign::campaign_flight::DailyWind {
+            day,
+            speed_mps,
+            from_deg: if from_deg == 360.0 { 0.0 } else { from_deg },
+            line: k,
+        });
+    }
+    out.sort_by_key(|d| (d.day, d.line));
+    if let Some(w) = out.windows(2).find(|w| w[0].day == w[1].day) {
+        return Err(ApiError::bad_request(
+            Some(&format!("winds[{}].date", w[1].line)),
+            format!(
+                "{}: given twice (also winds[{}])",
+                &app::format_rfc3339(w[1].day)[..10],
+                w[0].line
+            ),
+        ));
+    }
+    Ok(out)
 }
 
 /// Most observations per estimate a request may ask for (the kriging system is this size).

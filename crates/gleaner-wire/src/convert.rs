@@ -173,6 +173,7 @@ pub fn wind(w: &gleaner_app::wind::RouteWind) -> crate::WindDoc {
         planned_mps: w.wind.planned.speed_mps,
         strongest_feasible_mps: w.strongest.map(|s| s.speed_mps),
         strongest_capped: w.strongest.is_some_and(|s| s.capped),
+        over_budget_in_still_air: w.strongest.is_some_and(|s| !s.still_air),
         legs: w
             .legs
             .iter()

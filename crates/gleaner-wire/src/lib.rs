@@ -189,14 +189,19 @@ pub struct WindDoc {
     /// The wind speed the legs and hovers are priced in, m/s, from `from_deg`.
     pub planned_mps: f64,
     /// The strongest wind from `from_deg` at which the route, as its files command it,
-    /// stays within the budget, m/s (absent for an empty route or one over budget in
-    /// still air).
+    /// stays within the budget, m/s, at every speed from `planned_mps` up to it (absent for
+    /// an empty route or one over budget in the planned wind).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub strongest_feasible_mps: Option<f64>,
     /// True when `strongest_feasible_mps` is the search's cap (40 m/s): the route stands
     /// any wind up to it.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub strongest_capped: bool,
+    /// True when the route, planned in a wind, is over budget in still air: hovering in a
+    /// moderate wind takes less power than in still air, so more hovering fits the battery
+    /// in the planned wind than without wind (absent when still air is within budget).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub over_budget_in_still_air: bool,
     /// Each leg at the planned wind: one per stop (the leg arriving there), then the return
     /// leg.
     pub legs: Vec<LegWindDoc>,

@@ -155,6 +155,11 @@ pub fn wind_lines(w: &gleaner_wire::WindDoc) -> String {
         )),
         (None, _) => {}
     }
+    if w.over_budget_in_still_air {
+        out.push_str(
+            "over the battery in still air: hovering costs more without wind than in the planned wind\n",
+        );
+    }
     out
 }
 

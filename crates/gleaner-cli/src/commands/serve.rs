@@ -53,9 +53,40 @@ pub struct ServeArgs {
     max_time_limit: f64,
 }
 
+/// glibc's malloc settings the server runs with unless its environment sets `GLIBC_TUNABLES`
+/// itself: blocks of 128 KiB or more in mappings of their own, returned when freed, and a
+/// heap trimmed when more than 128 KiB is free at its top. With glibc's defaults the mmap
+/// threshold rises to the largest block freed so far (up to 32 MB), so a simulation's large
+/// buffers come back from the arenas and stay there: the resident memory grew by 40% over
+/// repeated simulations with 2.6 MB live (BENCHMARKS.md, "Server memory over repeated
+/// simulations").
+pub const MALLOC_TUNABLES: &str =
+    "glibc.malloc.mmap_threshold=131072:glibc.malloc.trim_threshold=131072";
+
+/// Re-executes this binary, same arguments and process, with [`MALLOC_TUNABLES`] (glibc
+/// reads them only at start-up) unless `GLIBC_TUNABLES` is already set; returns only when
+/// that cannot be done, and the server then runs with glibc's defaults.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn with_malloc_tunables() {
+    use std::os::unix::process::CommandExt as _;
+    if std::env::var_os("GLIBC_TUNABLES").is_some() {
+        return;
+    }
+    let Ok(exe) = std::env::current_exe() else {
+        return;
+    };
+    let err = std::process::Command::new(exe)
+        .args(std::env::args_os().skip(1))
+        .env("GLIBC_TUNABLES", MALLOC_TUNABLES)
+        .exec();
+    eprintln!("gleaner serve: running with glibc's malloc defaults (re-executing failed: {err})");
+}
+
 /// Runs the server until ctrl-c or SIGTERM; prints the dashboard's address (with the token in the URL's
 /// fragment when the token was generated here, so it never reaches a log).
 pub fn run(args: ServeArgs) -> Result<()> {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    with_malloc_tunables();
     let mut generated = false;
     let token = if args.farms.is_some() {
         // Farm tokens only (GLEANER_TOKEN is for one project).

@@ -584,6 +584,132 @@ fn simulates_in_wind_and_names_bad_weather_fields() {
     assert!(schemas["FlightSummaryDoc"].is_object());
 }
 
+/// `POST /api/v1/simulate` in observed daily winds (`winds`, as the command line's
+/// `--wind-csv`): each mission is planned for its day's wind, the answer's flights say so;
+/// a gap in the days, `wind` beside `winds`, or a bad entry is a 400 naming the field.
+#[test]
+fn simulates_in_observed_winds_and_names_bad_entries() {
+    let server = Server::caf();
+    let mut c = server.client();
+    let post = |c: &mut gleaner_server::client::Client, body: &Value| {
+        c.request(
+            "POST",
+            "/api/v1/simulate",
+            &[("content-type", "application/json")],
+            Some(body.to_string().as_bytes()),
+        )
+        .unwrap()
+    };
+    // 2013-12-20 .. 2014-01-05 at 5 m/s from the west, every mission day among them.
+    let days: Vec<Value> = (0..17)
+        .map(|k| {
+            let t = gleaner_app::parse_timestamp("2013-12-20").unwrap() + k * 86_400;
+            json!({"date": &gleaner_app::format_rfc3339(t)[..10], "speed_mps": 5.0, "from_deg": 270})
+        })
+        .collect();
+    let body = json!({
+        "strategies": ["gleaner"],
+        "start": "2013-12-28",
+        "planner_iterations": 50,
+        "winds": days,
+    });
+    let r = post(&mut c, &body);
+    assert_eq!(r.status, 200, "{}", r.text());
+    let doc: Value = r.json().unwrap();
+    let f = &doc["flights"][0];
+    assert_eq!(f["missions"], doc["missions"], "{f}");
+    assert!(doc["missions"].as_u64().unwrap() >= 4, "{doc}");
+    // Every mission was planned for its day's 5 m/s.
+    assert!(
+        (f["mean_forecast_mps"].as_f64().unwrap() - 5.0).abs() < 1e-9,
+        "{f}"
+    );
+    assert_eq!(f["over_budget"], 0, "{f}");
+    let again: Value = post(&mut c, &body).json().unwrap();
+    assert_eq!(again, doc, "the same winds, the same answer");
+
+    let with = |edit: &dyn Fn(&mut Value)| {
+        let mut b = body.clone();
+        edit(&mut b);
+        b
+    };
+    let cases: Vec<(Value, &str)> = vec![
+        // 2013-12-30 missing: a mission day without its wind.
+        (
+            with(&|b| {
+                b["winds"].as_array_mut().unwrap().remove(10);
+            }),
+            "winds",
+        ),
+        (with(&|b| b["wind"] = json!("weibull:4")), "winds"),
+        (with(&|b| b["winds"] = json!([])), "winds"),
+        (
+            with(&|b| b["winds"][1]["date"] = json!("2013-13-01")),
+            "winds[1].date",
+        ),
+        (
+            with(&|b| b["winds"][1]["date"] = json!("2013-12-21T06:00:00Z")),
+            "winds[1].date",
+        ),
+        (
+            with(&|b| b["winds"][0]["speed_mps"] = json!(99)),
+            "winds[0].speed_mps",
+        ),
+        (
+            with(&|b| b["winds"][2]["from_deg"] = json!(-1)),
+            "winds[2].from_deg",
+        ),
+        (
+            with(&|b| b["winds"][3]["date"] = json!("2013-12-20")),
+            "winds[3].date",
+        ),
+        (with(&|b| b["winds"][0]["gust"] = json!(1)), "winds"),
+    ];
+    for (bad, field) in cases {
+        let r = post(&mut c, &bad);
+        assert_eq!(r.status, 400, "{field}: {}", r.text());
+        let (code, f, reason) = error(&r);
+        assert_eq!(code, "bad_request", "{field}");
+        assert_eq!(f.as_deref(), Some(field), "{reason}");
+    }
+    let api = server.get_json("/api/v1/openapi.json");
+    let schemas = &api["components"]["schemas"];
+    assert!(schemas["SimulateBody"]["properties"]["winds"].is_object());
+    assert!(schemas["WindDayBody"]["properties"]["speed_mps"].is_object());
+}
+
+/// A plan previewed in a forecast wind (the dashboard's 6 m/s from the west) says the
+/// strongest wind it stands, scanned up from the wind it was priced in: a route planned in
+/// wind may be over the battery in still air (hovering in wind is cheaper), which is said,
+/// not taken for "stands no wind".
+#[test]
+fn a_windy_plan_says_the_strongest_wind_it_stands() {
+    let server = Server::caf();
+    let mut c = server.client();
+    let body = json!({"dry_run": true, "seed": 1, "iterations": 500, "time_limit_s": 5,
+        "wind": {"speed_mps": 6, "from_deg": 270}});
+    let r = c.post_json("/api/v1/plan", &body, None).unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    let m: Value = r.json().unwrap();
+    let w = &m["wind"];
+    assert_eq!(w["planned_mps"], 8.0, "{w}");
+    let strongest = w["strongest_feasible_mps"]
+        .as_f64()
+        .expect("strongest wind");
+    assert!((8.0..=40.0).contains(&strongest), "{w}");
+    let still = json!({"dry_run": true, "seed": 1, "iterations": 500, "time_limit_s": 5,
+        "wind": {"speed_mps": 0, "from_deg": 270}});
+    let calm: Value = c
+        .post_json("/api/v1/plan", &still, None)
+        .unwrap()
+        .json()
+        .unwrap();
+    assert!(
+        calm["wind"].get("over_budget_in_still_air").is_none(),
+        "a still-air plan is within budget in still air"
+    );
+}
+
 /// `POST /api/v1/explore` with a forecast wind plans every sortie in it plus the margin.
 #[test]
 fn explores_in_the_forecast_wind() {
