@@ -153,7 +153,7 @@ pub fn explore_with<S: Store>(
     let model = if plan_wind.planned.is_calm() {
         still
     } else {
-        still.with_wind(plan_wind.planned)
+        still.with_wind_up_to(plan_wind.planned)
     };
     let profile = flight_profile(project, &model)?;
     let svc = services(&model, &k, t)?;
@@ -335,7 +335,7 @@ mod tests {
         assert_eq!(covered, windy.cells);
         let model = energy_model(&p.project)
             .unwrap()
-            .with_wind(windy.wind.planned);
+            .with_wind_up_to(windy.wind.planned);
         let (_, field) = p.project.field().unwrap();
         let base = FlightPoints::of(&field).base;
         for (_, m) in &windy.sorties {

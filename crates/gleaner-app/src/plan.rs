@@ -502,7 +502,7 @@ pub fn plan_scored<S: Store>(
     // Legs and hovers priced in the forecast wind plus the margin (still air: the model as
     // it was, to the bit).
     let plan_wind = crate::wind::PlanWind::of(&settings.flight, request.wind)?;
-    let model = model.with_wind(plan_wind.planned);
+    let model = model.with_wind_up_to(plan_wind.planned);
     let profile = flight_profile(project, &model)?;
     let services = services(&model, k, t)?;
     let points = FlightPoints::of(&k.field);

@@ -649,7 +649,9 @@ pub fn fly_in_wind<S: Store>(
         ..export
     }
     .model(profile.cruise_speed_mps, profile.altitude_m)
-    .map_err(|e| AppError::core("energy model", e))?;
+    .map_err(|e| AppError::core("energy model", e))?
+    // The air the flight meets, exactly: not the planner's worst case from calm up to it.
+    .with_wind(weather.day);
     let margin_mps = weather.conditions.air_margin_mps();
     // What the aircraft prices the rest of its route in: the day's wind, or with gusts to
     // come the dearer of that wind plus and less the margin.

@@ -169,7 +169,7 @@ impl FlightEnergyModel {
             linear: self.linear,
         };
         crate::wind::Wind::new(self.wind.speed_mps, self.wind.from_deg)?;
-        Ok(MissionEnergyModel::new(&config)?.with_wind(self.wind))
+        Ok(MissionEnergyModel::new(&config)?.with_wind_up_to(self.wind))
     }
 
     /// The energy breakdown of `flight` as commanded: from its home through its waypoints and
@@ -416,6 +416,32 @@ mod tests {
         }
 
         #[test]
+        fn a_route_priced_up_to_a_wind_costs_at_least_its_cost_in_any_weaker_one(
+            stops in proptest::collection::vec((-800.0f64..800.0, -800.0f64..800.0, 30.0f64..60.0), 1..10),
+            wind in (0.5f64..14.0, 0.0f64..360.0),
+            share in 0.0f64..1.0,
+        ) {
+            let still = MissionEnergyModel::new(&EnergyConfig::paper()).unwrap();
+            let planned = Wind::new(wind.0, wind.1).unwrap();
+            let up_to = still.with_wind_up_to(planned);
+            prop_assert!(up_to.priced_up_to_wind());
+            let visits: Vec<CellVisit> = stops.iter().map(|&(e, n, h)| CellVisit { centre: LocalPoint::new(e, n), hover_s: h }).collect();
+            let base = LocalPoint::new(0.0, 0.0);
+            let bound = up_to.breakdown(base, &visits).unwrap().total_j;
+            // Calm, the planned wind, a sampled one and one between the samples.
+            let samples = [0.0, 1.0, 3.0 / crate::mission::UP_TO_SAMPLES as f64, share];
+            for f in samples {
+                let w = Wind { speed_mps: planned.speed_mps * f, from_deg: planned.from_deg };
+                let cost = still.with_wind(w).breakdown(base, &visits).unwrap().total_j;
+                // Between samples the bound is the samples' worst: allow 2% there.
+                let slack = if f == share { 0.02 * bound } else { 1e-9 * bound };
+                prop_assert!(cost <= bound + slack, "{f}: {cost} > {bound}");
+            }
+            // Still air stays the still-air model to the bit.
+            prop_assert_eq!(still.with_wind_up_to(Wind::CALM), still.clone());
+        }
+
+        #[test]
         fn a_commanded_flight_costs_what_the_planner_priced(
             stops in proptest::collection::vec((-800.0f64..800.0, -800.0f64..800.0, 30.0f64..60.0), 1..12),
             vertical in any::<bool>(),
@@ -425,7 +451,7 @@ mod tests {
             let cfg = EnergyConfig { vertical: vertical.then(VerticalConfig::default), ..EnergyConfig::paper() };
             // In still air or in a wind: the writers price the file in the plan's wind.
             let wind = if calm { Wind::CALM } else { Wind::new(wind.0, wind.1).unwrap() };
-            let m = MissionEnergyModel::new(&cfg).unwrap().for_flight().unwrap().with_wind(wind);
+            let m = MissionEnergyModel::new(&cfg).unwrap().for_flight().unwrap().with_wind_up_to(wind);
             let origin = LatLon::new(46.78, -117.08).unwrap();
             let frame = TransverseMercator::local(origin);
             let home = flight_position(origin);

@@ -56,7 +56,7 @@ pub use flight::{
 pub use link::{DataLogging, HoverConfig, LinkConfig, SensorBacklog};
 pub use mission::{
     CellEnergy, CellService, CellVisit, LegEnergy, MissionEnergy, MissionEnergyModel,
-    TravelCostMatrix, path_length_m,
+    TravelCostMatrix, UP_TO_SAMPLES, path_length_m,
 };
 pub use propulsion::{Airframe, OptimalSpeed, PowerModel, PowerParameters};
 pub use wind::{

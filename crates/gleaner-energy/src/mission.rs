@@ -205,6 +205,9 @@ pub struct MissionEnergyModel {
     hover_power_w: f64,
     /// The steady wind the legs and stops are priced in (calm by default).
     wind: Wind,
+    /// True when every leg and stop is priced at the worst of the winds from calm up to
+    /// `wind` (same direction; [`MissionEnergyModel::with_wind_up_to`]).
+    up_to: bool,
     rx_power_w: f64,
     budget_j: f64,
     vertical_j: f64,
@@ -219,6 +222,10 @@ pub struct MissionEnergyModel {
     logging: DataLogging,
     hover: HoverConfig,
 }
+
+/// Winds sampled above calm by [`MissionEnergyModel::with_wind_up_to`] (the speeds
+/// k/8 of the model's wind, k = 0..=8).
+pub const UP_TO_SAMPLES: usize = 8;
 
 impl MissionEnergyModel {
     /// Validates `config` and precomputes the cruise speed and powers.
@@ -264,6 +271,7 @@ impl MissionEnergyModel {
             calm_hover_power_w: hover_power_w,
             hover_power_w,
             wind: Wind::CALM,
+            up_to: false,
             rx_power_w: config.rx_power_w,
             budget_j: config.battery.usable_j(),
             vertical_j,
@@ -300,12 +308,53 @@ impl MissionEnergyModel {
     pub fn with_wind(&self, wind: Wind) -> Self {
         let mut m = self.clone();
         m.wind = wind;
+        m.up_to = false;
         m.hover_power_w = if wind.is_calm() {
             m.calm_hover_power_w
         } else {
             m.power.hover_power_in_wind_w(wind)
         };
         m
+    }
+
+    /// This model priced for any steady wind from calm up to `wind` (from `wind`'s
+    /// direction): every leg costs the most it costs at [`UP_TO_SAMPLES`] + 1 speeds evenly
+    /// spaced from 0 to `wind`'s, every stop hovers at the highest of their hover powers.
+    /// A route it finds feasible stays feasible if the wind drops (hovering in a moderate wind
+    /// takes less power than in still air, and a tail wind near the ground speed leaves the
+    /// aircraft nearly hovering along its leg). Leg breakdowns keep `wind`'s head- and
+    /// cross-wind components. [`Wind::CALM`] gives back the still-air model to the last bit.
+    pub fn with_wind_up_to(&self, wind: Wind) -> Self {
+        let mut m = self.with_wind(wind);
+        if m.wind_applies() {
+            m.up_to = true;
+            m.hover_power_w = (0..=UP_TO_SAMPLES)
+                .map(|k| m.hover_power_at(m.sample(k)))
+                .fold(f64::NEG_INFINITY, f64::max);
+        }
+        m
+    }
+
+    /// True when the model prices the worst wind from calm up to its wind
+    /// ([`MissionEnergyModel::with_wind_up_to`]).
+    pub fn priced_up_to_wind(&self) -> bool {
+        self.up_to
+    }
+
+    /// The `k`-th of the sampled winds from calm (k = 0) to the model's wind.
+    fn sample(&self, k: usize) -> Wind {
+        Wind {
+            speed_mps: self.wind.speed_mps * k as f64 / UP_TO_SAMPLES as f64,
+            from_deg: self.wind.from_deg,
+        }
+    }
+
+    fn hover_power_at(&self, wind: Wind) -> f64 {
+        if wind.is_calm() {
+            self.calm_hover_power_w
+        } else {
+            self.power.hover_power_in_wind_w(wind)
+        }
     }
 
     /// The wind the model prices legs and stops in.
@@ -418,8 +467,28 @@ impl MissionEnergyModel {
     /// One straight segment in the model's wind at the cruise ground speed (finite points:
     /// the callers check them; a non-finite one gives NaN energies, refused downstream).
     fn segment_in_wind(&self, from: LocalPoint, to: LocalPoint) -> crate::wind::WindLeg {
+        let planned = self.segment_at(from, to, self.wind);
+        if !self.up_to {
+            return planned;
+        }
+        // The costliest of the sampled winds, with the planned wind's components.
+        let mut worst = planned;
+        for k in 0..UP_TO_SAMPLES {
+            let leg = self.segment_at(from, to, self.sample(k));
+            if leg.energy_j > worst.energy_j || leg.energy_j.is_nan() {
+                worst = crate::wind::WindLeg {
+                    headwind_mps: planned.headwind_mps,
+                    crosswind_mps: planned.crosswind_mps,
+                    ..leg
+                };
+            }
+        }
+        worst
+    }
+
+    fn segment_at(&self, from: LocalPoint, to: LocalPoint, wind: Wind) -> crate::wind::WindLeg {
         self.power
-            .leg_in_wind(from, to, self.cruise_speed_mps, self.wind)
+            .leg_in_wind(from, to, self.cruise_speed_mps, wind)
             .unwrap_or(crate::wind::WindLeg {
                 distance_m: f64::NAN,
                 ground_speed_mps: self.cruise_speed_mps,
