@@ -309,11 +309,7 @@ impl MissionEnergyModel {
         let mut m = self.clone();
         m.wind = wind;
         m.up_to = false;
-        m.hover_power_w = if wind.is_calm() {
-            m.calm_hover_power_w
-        } else {
-            m.power.hover_power_in_wind_w(wind)
-        };
+        m.hover_power_w = m.hover_power_at(wind);
         m
     }
 
@@ -349,6 +345,7 @@ impl MissionEnergyModel {
         }
     }
 
+    /// Hover power in `wind`, W: P(|w|), or exactly P(0) in calm air.
     fn hover_power_at(&self, wind: Wind) -> f64 {
         if wind.is_calm() {
             self.calm_hover_power_w
