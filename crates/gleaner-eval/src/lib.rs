@@ -10,10 +10,15 @@
 //! over [`gleaner_kriging::DynamicModel::remaining_variance`]) and estimates them with each
 //! estimator side by side.
 //!
+//! [`hubbard`] runs the same protocol on another network's hourly data (Hubbard Brook), a
+//! hold-out no setting was chosen on: windows at the peer's horizon, capacities scaled to
+//! the layout.
+//!
 //! Units: positions metres, energies J, times seconds, values in the modality's unit
 //! (errors in its square).
 #![deny(missing_docs)]
 
+pub mod hubbard;
 pub mod peer;
 
 use std::path::PathBuf;

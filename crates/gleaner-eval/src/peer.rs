@@ -58,7 +58,7 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> EvalError + '_ {
     }
 }
 
-fn bad(path: &Path, line: u64, field: &str, message: impl Into<String>) -> EvalError {
+pub(crate) fn bad(path: &Path, line: u64, field: &str, message: impl Into<String>) -> EvalError {
     EvalError::Bad {
         path: path.to_path_buf(),
         line,
@@ -71,7 +71,7 @@ fn bad(path: &Path, line: u64, field: &str, message: impl Into<String>) -> EvalE
 type CsvTable = (Vec<String>, Vec<(u64, Vec<String>)>);
 
 /// Reads a CSV file with a header into (header, rows with their 1-based line).
-fn read_csv(path: &Path) -> Result<CsvTable, EvalError> {
+pub(crate) fn read_csv(path: &Path) -> Result<CsvTable, EvalError> {
     let text = std::fs::read_to_string(path).map_err(io(path))?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
@@ -81,7 +81,7 @@ fn read_csv(path: &Path) -> Result<CsvTable, EvalError> {
         .headers()
         .map_err(|e| bad(path, 1, "header", e.to_string()))?
         .iter()
-        .map(str::to_string)
+        .map(|h| h.trim_start_matches('\u{feff}').to_string())
         .collect();
     let mut rows = Vec::new();
     for rec in reader.records() {
@@ -95,14 +95,14 @@ fn read_csv(path: &Path) -> Result<CsvTable, EvalError> {
     Ok((header, rows))
 }
 
-fn column(path: &Path, header: &[String], name: &str) -> Result<usize, EvalError> {
+pub(crate) fn column(path: &Path, header: &[String], name: &str) -> Result<usize, EvalError> {
     header
         .iter()
         .position(|h| h == name)
         .ok_or_else(|| bad(path, 1, name, "missing column"))
 }
 
-fn number(path: &Path, line: u64, field: &str, text: &str) -> Result<f64, EvalError> {
+pub(crate) fn number(path: &Path, line: u64, field: &str, text: &str) -> Result<f64, EvalError> {
     let v: f64 = text
         .trim()
         .parse()
@@ -1130,7 +1130,7 @@ pub fn load(
 
 /// The frozen fit of the dynamic model on this protocol with a time step of `step_s` seconds:
 /// automatic shrinkage, reading noise 0.1% of the variance, lags up to 14 days.
-fn frozen_fit(step_s: i64) -> DynamicFitOptions {
+pub(crate) fn frozen_fit(step_s: i64) -> DynamicFitOptions {
     DynamicFitOptions {
         max_lag_s: 14 * 86_400,
         shrinkage: Shrinkage::Auto,
@@ -1196,12 +1196,18 @@ pub fn paired_difference(
     a: Planner,
     b: Planner,
 ) -> Option<(f64, f64, f64, usize)> {
-    use statrs::distribution::{ContinuousCDF, StudentsT};
     let get = |w: &WindowMeans, k: Planner| w.means.iter().find(|m| m.0 == k).and_then(|m| m.1);
     let d: Vec<f64> = windows
         .iter()
         .filter_map(|w| Some(get(w, a)? - get(w, b)?))
         .collect();
+    mean_interval(&d)
+}
+
+/// The mean of `d` and its 95% Student-t interval: (mean, low, high, n); `None` with fewer
+/// than two values.
+pub fn mean_interval(d: &[f64]) -> Option<(f64, f64, f64, usize)> {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
     let n = d.len();
     if n < 2 {
         return None;
