@@ -29,7 +29,7 @@ enum EvaluateCommand {
     /// conditional of levels, gleaner's dynamic field model); writes outcomes.csv and
     /// summary.md beside the peer's published errors.
     #[command(
-        after_help = "The frozen settings and the tuning behind them: docs/evaluation/.\n\nExamples:\n  gleaner evaluate peer --out eval/peer\n  gleaner evaluate peer --on tuning --out eval/peer-tuning"
+        after_help = "The frozen settings and the tuning behind them: docs/evaluation/.\n\nExamples:\n  gleaner evaluate peer --out eval/peer\n  gleaner evaluate peer --on tuning --out eval/peer-tuning\n  gleaner evaluate peer --on hubbard-brook --out eval/peer-hb"
     )]
     Peer(evaluate::PeerArgs),
 }

@@ -2266,3 +2266,33 @@ fn missions_page_cancel_and_delete() {
     let err = fail(&["delete", "--project", p, "--mission", "1"]);
     assert!(err.contains("no mission #1"), "{err}");
 }
+
+/// The peer protocol on Hubbard Brook (a registered hold-out): both depths run from the real
+/// files, the windows and capacities as registered, the outcomes files written.
+#[test]
+fn evaluate_peer_on_hubbard_brook() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("hb");
+    let data = shared_data();
+    let summary = ok(&[
+        "evaluate",
+        "peer",
+        "--on",
+        "hubbard-brook",
+        "--data",
+        s(&data),
+        "--out",
+        s(&out),
+    ]);
+    assert!(summary.contains("water content shallow (10-20 cm)"), "{summary}");
+    assert!(summary.contains("12 sites, 5780 complete hours"), "{summary}");
+    assert!(summary.contains("10 sites, 5778 complete hours"), "{summary}");
+    assert_eq!(summary.matches("9 windows;").count(), 2, "{summary}");
+    assert_eq!(summary.matches("- registration: ").count(), 2, "{summary}");
+    for name in ["outcomes-shallow.csv", "outcomes-50cm.csv"] {
+        let csv = std::fs::read_to_string(out.join(name)).unwrap();
+        // 7 capacities × 2 planners × 3 estimators, and the header.
+        assert_eq!(csv.lines().count(), 1 + 7 * 2 * 3, "{name}");
+    }
+    assert_eq!(std::fs::read_to_string(out.join("summary.md")).unwrap(), summary);
+}

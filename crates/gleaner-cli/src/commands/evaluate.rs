@@ -26,6 +26,10 @@ pub enum PeerData {
     /// Hold-out windows of 2016 (to the data's end, 16 June).
     #[value(name = "windows-2016")]
     Windows2016,
+    /// Hold-out on another network: Hubbard Brook hourly water content (shallow and 50 cm),
+    /// windows of 1,001 training and 500 test hours, capacities 0.2-0.8 of the every-site
+    /// tour's energy (outcomes-shallow.csv, outcomes-50cm.csv, summary.md).
+    HubbardBrook,
 }
 
 impl PeerData {
@@ -36,7 +40,7 @@ impl PeerData {
             PeerData::Windows2014 => Some(2014),
             PeerData::Windows2015 => Some(2015),
             PeerData::Windows2016 => Some(2016),
-            PeerData::Holdout | PeerData::Tuning => None,
+            PeerData::Holdout | PeerData::Tuning | PeerData::HubbardBrook => None,
         }
     }
 
@@ -47,6 +51,7 @@ impl PeerData {
             PeerData::TuningWindows => {
                 "tuning: CAF daily VW 30 cm, 21-day windows through 2013".into()
             }
+            PeerData::HubbardBrook => "hold-out: Hubbard Brook hourly water content".into(),
             d => format!(
                 "hold-out: CAF daily VW 30 cm, 21-day windows through {}",
                 d.windows_year().unwrap_or_default()
@@ -77,6 +82,9 @@ pub struct PeerArgs {
 /// Runs the protocol; returns the summary text.
 pub fn run_peer(args: &PeerArgs) -> Result<String> {
     let context = || format!("{} (set GLEANER_DATA_DIR)", args.data.display());
+    if args.on == PeerData::HubbardBrook {
+        return run_hubbard_brook(args);
+    }
     let (matrix, layouts, results, mut protocols) = match args.on.windows_year() {
         Some(year) => peer::load_windows(&args.data, year).with_context(context)?,
         None => {
@@ -155,6 +163,42 @@ pub fn run_peer(args: &PeerArgs) -> Result<String> {
     let csv = args.out.join("outcomes.csv");
     std::fs::write(&csv, report.outcomes_csv())
         .with_context(|| format!("cannot write {}", csv.display()))?;
+    let md = args.out.join("summary.md");
+    std::fs::write(&md, &summary).with_context(|| format!("cannot write {}", md.display()))?;
+    Ok(summary)
+}
+
+/// `--on hubbard-brook`: both depths, one summary.
+fn run_hubbard_brook(args: &PeerArgs) -> Result<String> {
+    use gleaner_eval::hubbard::{self, Depth};
+    if args.unshared_weight != 0.0 {
+        anyhow::bail!("--unshared-weight is not used with --on hubbard-brook");
+    }
+    let dir = args.data.join("hubbard_brook");
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let mut summary = format!(
+        "# gleaner on the peer protocol ({})\n\nFrozen pipeline: planner `{}`, estimator `{}`.\n\n",
+        args.on.title(),
+        FROZEN_PLANNER.name(),
+        FROZEN_ESTIMATOR.name()
+    );
+    for depth in Depth::ALL {
+        let data = hubbard::load(&dir, depth)
+            .with_context(|| format!("{} (set GLEANER_DATA_DIR)", dir.display()))?;
+        let bar = crate::progress::bar(data.protocols.len() as u64, "windows");
+        let out = hubbard::run(data, |done, _| bar.set_position(done as u64))?;
+        bar.finish_and_clear();
+        summary.push_str(&out.summary());
+        summary.push('\n');
+        let name = match depth {
+            Depth::Shallow => "outcomes-shallow.csv",
+            Depth::Cm50 => "outcomes-50cm.csv",
+        };
+        let csv = args.out.join(name);
+        std::fs::write(&csv, out.mean.outcomes_csv())
+            .with_context(|| format!("cannot write {}", csv.display()))?;
+    }
     let md = args.out.join("summary.md");
     std::fs::write(&md, &summary).with_context(|| format!("cannot write {}", md.display()))?;
     Ok(summary)
