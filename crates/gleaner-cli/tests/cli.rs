@@ -2284,9 +2284,18 @@ fn evaluate_peer_on_hubbard_brook() {
         "--out",
         s(&out),
     ]);
-    assert!(summary.contains("water content shallow (10-20 cm)"), "{summary}");
-    assert!(summary.contains("12 sites, 5780 complete hours"), "{summary}");
-    assert!(summary.contains("10 sites, 5778 complete hours"), "{summary}");
+    assert!(
+        summary.contains("water content shallow (10-20 cm)"),
+        "{summary}"
+    );
+    assert!(
+        summary.contains("12 sites, 5780 complete hours"),
+        "{summary}"
+    );
+    assert!(
+        summary.contains("10 sites, 5778 complete hours"),
+        "{summary}"
+    );
     assert_eq!(summary.matches("9 windows;").count(), 2, "{summary}");
     assert_eq!(summary.matches("- registration: ").count(), 2, "{summary}");
     for name in ["outcomes-shallow.csv", "outcomes-50cm.csv"] {
@@ -2294,5 +2303,8 @@ fn evaluate_peer_on_hubbard_brook() {
         // 7 capacities × 2 planners × 3 estimators, and the header.
         assert_eq!(csv.lines().count(), 1 + 7 * 2 * 3, "{name}");
     }
-    assert_eq!(std::fs::read_to_string(out.join("summary.md")).unwrap(), summary);
+    assert_eq!(
+        std::fs::read_to_string(out.join("summary.md")).unwrap(),
+        summary
+    );
 }
