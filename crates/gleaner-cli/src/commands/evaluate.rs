@@ -118,14 +118,7 @@ pub fn run_peer(args: &PeerArgs) -> Result<String> {
         |done, _| bar.set_position(done as u64),
     )?;
     bar.finish_and_clear();
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let mut summary = format!(
-        "# gleaner on the peer protocol ({})\n\nFrozen pipeline: planner `{}`, estimator `{}`.\n\n",
-        args.on.title(),
-        FROZEN_PLANNER.name(),
-        FROZEN_ESTIMATOR.name()
-    );
+    let mut summary = start_output(args)?;
     for p in planners {
         summary.push_str(&report.summary(p, FROZEN_ESTIMATOR));
         summary.push('\n');
@@ -175,14 +168,7 @@ fn run_hubbard_brook(args: &PeerArgs) -> Result<String> {
         anyhow::bail!("--unshared-weight is not used with --on hubbard-brook");
     }
     let dir = args.data.join("hubbard_brook");
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let mut summary = format!(
-        "# gleaner on the peer protocol ({})\n\nFrozen pipeline: planner `{}`, estimator `{}`.\n\n",
-        args.on.title(),
-        FROZEN_PLANNER.name(),
-        FROZEN_ESTIMATOR.name()
-    );
+    let mut summary = start_output(args)?;
     for depth in Depth::ALL {
         let data = hubbard::load(&dir, depth)
             .with_context(|| format!("{} (set GLEANER_DATA_DIR)", dir.display()))?;
@@ -202,4 +188,16 @@ fn run_hubbard_brook(args: &PeerArgs) -> Result<String> {
     let md = args.out.join("summary.md");
     std::fs::write(&md, &summary).with_context(|| format!("cannot write {}", md.display()))?;
     Ok(summary)
+}
+
+/// Creates the output directory; returns the summary's heading.
+fn start_output(args: &PeerArgs) -> Result<String> {
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    Ok(format!(
+        "# gleaner on the peer protocol ({})\n\nFrozen pipeline: planner `{}`, estimator `{}`.\n\n",
+        args.on.title(),
+        FROZEN_PLANNER.name(),
+        FROZEN_ESTIMATOR.name()
+    ))
 }
