@@ -568,7 +568,31 @@ function simulateBody() {
     b.wind = "weibull:" + (f.get("wind_mean_mps") || "4");
     if (f.get("gust") !== "") b.gust = Number(f.get("gust"));
   }
+  if (f.get("report")) b.report = true;
   return b;
+}
+
+// Object URLs of the report shown (its charts and Markdown), released when it is replaced.
+let reportUrls = [];
+
+// The campaign's report, when asked for: its charts (SVG, drawn as images: no script of
+// theirs runs in the page) and the Markdown to download, as `gleaner simulate` writes them.
+function reportView(report) {
+  for (const u of reportUrls) URL.revokeObjectURL(u);
+  reportUrls = [];
+  if (!report) return null;
+  const url = (text, type) => {
+    const u = URL.createObjectURL(new Blob([text], { type }));
+    reportUrls.push(u);
+    return u;
+  };
+  const figures = report.figures.map((f) => el("figure", { "data-name": f.name },
+    el("img", { src: url(f.svg, "image/svg+xml"), alt: f.name }),
+    el("figcaption", {}, f.name)));
+  return el("div", { id: "sim-report" },
+    el("p", {}, el("a", { class: "link", id: "sim-report-md", href: url(report.markdown, "text/markdown"), download: "report.md" },
+      "Report (Markdown)"), ` · ${report.figures.length} charts`),
+    ...figures);
 }
 
 // The campaign's answer: per strategy the error after the flights and the energy; in wind,
@@ -600,6 +624,8 @@ function campaignView(doc) {
     }
     parts.push(el("p", { class: "muted" }, "Sorties in the simulated wind:"), t);
   }
+  const report = reportView(doc.report);
+  if (report) parts.push(report);
   return el("div", {}, ...parts);
 }
 

@@ -204,6 +204,42 @@ pub struct SimulateBody {
     /// margin) and flown in it with the forecast error (`gust`, default 1 m/s). At most
     /// 36,600 days.
     pub winds: Option<Vec<WindDayBody>>,
+    /// Also render the campaign's report (as `gleaner simulate` writes it: Markdown with its
+    /// tables and SVG charts), returned in the answer's `report` [default: false].
+    #[serde(default)]
+    pub report: bool,
+}
+
+/// What a simulation found (`POST /api/v1/simulate`): the `gleaner.campaign` document, and
+/// its report when the request asked for one.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct SimulationDoc {
+    /// The campaign document's fields.
+    #[serde(flatten)]
+    pub campaign: gleaner_wire::docs::CampaignDoc,
+    /// The report (with `"report": true` only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub report: Option<ReportDoc>,
+}
+
+/// A campaign report, as `gleaner simulate` writes it to `report.md` and `figures/`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct ReportDoc {
+    /// `report.md`'s text (Markdown): the campaign, per strategy and budget each metric with
+    /// its 95% interval, the differences against the reference, the charts linked as
+    /// `figures/NAME` (the names of `figures`).
+    pub markdown: String,
+    /// The charts, in the report's order.
+    pub figures: Vec<FigureDoc>,
+}
+
+/// One chart of a report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct FigureDoc {
+    /// File name the Markdown links it by (`figures/NAME`), e.g. `rmse_kriged.svg`.
+    pub name: String,
+    /// The chart, an SVG document (`image/svg+xml`).
+    pub svg: String,
 }
 
 /// One day of observed wind (a row of `simulate --wind-csv`).

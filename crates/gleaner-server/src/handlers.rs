@@ -13,7 +13,7 @@ use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use gleaner_app::{self as app, MissionId, StoreRead};
 use gleaner_wire::docs::{
-    CampaignDoc, CellRowDoc, ExplorationDoc, ReconstructionDoc, ReconstructionSeriesDoc, ScoringDoc,
+    CellRowDoc, ExplorationDoc, ReconstructionDoc, ReconstructionSeriesDoc, ScoringDoc,
 };
 use gleaner_wire::{FieldDoc, MissionDoc};
 use serde::de::DeserializeOwned;
@@ -22,11 +22,11 @@ use utoipa::{IntoParams, OpenApi, ToSchema};
 
 use crate::api::{
     CellDetailDoc, ExploreBody, IngestDoc, PlanBody, ProjectDoc, RecordDoc, ReplanBody, ReplanDoc,
-    ScoreBody, SimulateBody, WindDayBody, checked_history, parse_time,
+    ReportDoc, ScoreBody, SimulateBody, SimulationDoc, WindDayBody, checked_history, parse_time,
 };
 use crate::auth::{Caller, Computing, Writing};
 use crate::error::{ApiError, ApiResult, ErrorBody};
-use crate::state::{AppState, Job};
+use crate::state::{AppState, Changes, Job};
 
 /// The OpenAPI document's header; the paths come from the handlers (utoipa-axum).
 #[derive(OpenApi)]
@@ -204,32 +204,38 @@ pub async fn project(State(s): State<AppState>) -> ApiResult<Response> {
     let basemap_url = s.0.basemap_url.clone();
     let writable = s.0.token.is_some() || s.0.farm;
     let (max_upload_bytes, max_time_limit_s) = (s.0.max_upload_bytes as u64, s.0.max_time_limit_s);
+    // Reads no cell's description: kept by a scoring.
     let bytes = s
-        .cached_eager("project", move |p| {
-            let view = app::field_view(p)?;
-            let settings = p.settings();
-            let u = &settings.utility;
-            to_json(&ProjectDoc {
-                name: view.project.clone(),
-                version: env!("CARGO_PKG_VERSION").to_string(),
-                base_lon_lat: [view.base.lon(), view.base.lat()],
-                base_alt_m: view.base_alt_m,
-                cell_size_m: view.cell_size_m,
-                sensors: view.sensors.len(),
-                readings: p.store().reading_count().map_err(app::AppError::from)?,
-                latest_reading: app::newest_reading(p)?.map(app::format_rfc3339),
-                missions: app::missions(p)?.len(),
-                weights: [u.alpha, u.beta, u.gamma, u.delta],
-                energy_preset: settings.energy.preset.clone(),
-                solver: settings.planner.solver.clone(),
-                time_limit_s: settings.planner.time_limit_s,
-                max_time_limit_s,
-                seed: settings.planner.seed,
-                basemap_url: basemap_url.clone(),
-                writable,
-                max_upload_bytes,
-            })
-        })
+        .cached_eager(
+            "project",
+            Changes::MISSIONS.and(Changes::DATA),
+            move |p, _| {
+                let (sensors, field) = p.field()?;
+                let settings = p.settings();
+                let base = settings.base()?;
+                let u = &settings.utility;
+                to_json(&ProjectDoc {
+                    name: settings.project.name.clone(),
+                    version: env!("CARGO_PKG_VERSION").to_string(),
+                    base_lon_lat: [base.lon(), base.lat()],
+                    base_alt_m: settings.field.base_alt_m,
+                    cell_size_m: field.cell_size_m(),
+                    sensors: sensors.len(),
+                    readings: p.store().reading_count().map_err(app::AppError::from)?,
+                    latest_reading: app::newest_reading(p)?.map(app::format_rfc3339),
+                    missions: app::missions(p)?.len(),
+                    weights: [u.alpha, u.beta, u.gamma, u.delta],
+                    energy_preset: settings.energy.preset.clone(),
+                    solver: settings.planner.solver.clone(),
+                    time_limit_s: settings.planner.time_limit_s,
+                    max_time_limit_s,
+                    seed: settings.planner.seed,
+                    basemap_url: basemap_url.clone(),
+                    writable,
+                    max_upload_bytes,
+                })
+            },
+        )
         .await?;
     Ok(json_response(bytes))
 }
@@ -239,9 +245,10 @@ pub async fn project(State(s): State<AppState>) -> ApiResult<Response> {
 #[utoipa::path(get, path = "/api/v1/field", tag = "project",
     responses((status = 200, body = FieldDoc), (status = 500, body = ErrorBody)))]
 pub async fn field(State(s): State<AppState>) -> ApiResult<Response> {
+    // Reads no mission: kept by a plan that stores no scoring, a cancellation, a deletion.
     let bytes = s
-        .cached_eager("field", |p| {
-            to_json(&gleaner_wire::convert::field(&app::field_view(p)?))
+        .cached_eager("field", Changes::CELLS.and(Changes::DATA), |p, inputs| {
+            to_json(&gleaner_wire::convert::field(inputs.field_view(p)?))
         })
         .await?;
     Ok(json_response(bytes))
@@ -266,9 +273,11 @@ fn json_response(bytes: Bytes) -> Response {
 #[utoipa::path(get, path = "/api/v1/cells", tag = "project",
     responses((status = 200, body = Vec<CellRowDoc>), (status = 500, body = ErrorBody)))]
 pub async fn cells(State(s): State<AppState>) -> ApiResult<Response> {
+    // Reads no mission (the cells' description only): kept by a cancellation or a deletion;
+    // a stored plan changes it (it stores its scoring and expected energies).
     let bytes = s
-        .cached_eager("cells", |p| {
-            let view = app::field_view(p)?;
+        .cached_eager("cells", Changes::CELLS.and(Changes::DATA), |p, inputs| {
+            let view = inputs.field_view(p)?;
             let rows: Vec<CellRowDoc> = view
                 .cells
                 .iter()
@@ -346,7 +355,8 @@ pub async fn score(
         dry_run: b.dry_run,
     };
     let doc = s
-        .run_write(request.dry_run, move |p| {
+        // A scoring stores the cells' description only.
+        .run_write(Changes::CELLS, request.dry_run, move |p| {
             Ok(gleaner_wire::convert::scoring(&app::score(p, &request)?))
         })
         .await?;
@@ -647,18 +657,25 @@ pub const MAX_SIMULATED_MISSIONS: usize = 5_000;
 /// Replays the served project's own record as a campaign (`gleaner simulate --project`):
 /// each strategy flies the same missions from the same history, each run its own in-memory
 /// copy; the answer compares them (error after the flights, events caught and how soon,
-/// energy, with 95% intervals when the campaign spans 10 weeks or more). Reads only; one
-/// simulation or planning search at a time.
+/// energy, with 95% intervals when the campaign spans 10 weeks or more); with
+/// `"report": true` also its report (Markdown and SVG charts, as `gleaner simulate` writes).
+/// Reads only; one simulation or planning search at a time.
 #[utoipa::path(post, path = "/api/v1/simulate", tag = "data", request_body = SimulateBody,
-    responses((status = 200, body = CampaignDoc), (status = 400, body = ErrorBody),
+    responses((status = 200, body = SimulationDoc), (status = 400, body = ErrorBody),
         (status = 413, body = ErrorBody)))]
 pub async fn simulate(
     State(s): State<AppState>,
     _: Computing,
     _: JsonType,
     body: Result<Bytes, BytesRejection>,
-) -> ApiResult<Json<CampaignDoc>> {
+) -> ApiResult<Json<SimulationDoc>> {
+    // The request as given, quoted by the report to reproduce it.
+    let request = match &body {
+        Ok(bytes) => String::from_utf8_lossy(bytes).trim().to_string(),
+        Err(_) => String::new(),
+    };
     let b: SimulateBody = json_body(body)?;
+    let with_report = b.report;
     let flight = simulated_weather(&b)?;
     let observed = b.winds.is_some();
     let defaults = gleaner_campaign::campaign::ReplayOptions::default();
@@ -714,7 +731,7 @@ pub async fn simulate(
     let simulation = Job {
         kind: "simulate",
         planning: true,
-        write: false,
+        writes: Changes::NOTHING,
     };
     let doc = s
         .run_job(simulation, move |p, cancel| {
@@ -751,10 +768,38 @@ pub async fn simulate(
                     )),
                 );
             }
-            Ok(doc)
+            let report = match with_report {
+                true => Some(report_doc(
+                    gleaner_campaign::report::render_report(
+                        std::slice::from_ref(&result),
+                        &format!("POST /api/v1/simulate {request}"),
+                    )
+                    .map_err(|e| match e {
+                        gleaner_campaign::Error::App(e) => ApiError::from(e),
+                        e => ApiError::internal(format!("the campaign's report: {e}")),
+                    })?,
+                )),
+                false => None,
+            };
+            Ok(SimulationDoc {
+                campaign: doc,
+                report,
+            })
         })
         .await?;
     Ok(Json(doc))
+}
+
+/// A rendered campaign report as the API answers it.
+fn report_doc(r: gleaner_campaign::report::RenderedReport) -> ReportDoc {
+    ReportDoc {
+        markdown: r.markdown,
+        figures: r
+            .figures
+            .into_iter()
+            .map(|(name, svg)| crate::api::FigureDoc { name, svg })
+            .collect(),
+    }
 }
 
 /// The weather a simulation's flights meet, from its body (as `simulate --wind`, `--gust`,
@@ -996,7 +1041,7 @@ pub async fn cancel_mission(
 ) -> ApiResult<Json<MissionDoc>> {
     let id = mission_id(&id)?;
     let doc = s
-        .run_write(false, move |p| {
+        .run_write(Changes::MISSIONS, false, move |p| {
             Ok(gleaner_wire::convert::stored_mission(&app::cancel_mission(
                 p, id,
             )?))
@@ -1019,8 +1064,10 @@ pub async fn delete_mission(
     Path(id): Path<String>,
 ) -> ApiResult<StatusCode> {
     let id = mission_id(&id)?;
-    s.run_write(false, move |p| Ok(app::delete_mission(p, id)?))
-        .await?;
+    s.run_write(Changes::MISSIONS, false, move |p| {
+        Ok(app::delete_mission(p, id)?)
+    })
+    .await?;
     Ok(StatusCode::NO_CONTENT)
 }
 
@@ -1210,7 +1257,12 @@ async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Ve
     let job = Job {
         kind: "plan",
         planning: true,
-        write: !request.dry_run,
+        // The missions, and the scoring at the mission time with each cell's expected
+        // collection energy (the cells' description).
+        writes: match request.dry_run {
+            true => Changes::NOTHING,
+            false => Changes::MISSIONS.and(Changes::CELLS),
+        },
     };
     s.run_job(job, move |p, _| {
         let planned = app::plan_with_preset(p, &request, preset.as_deref(), clock_now())?;
@@ -1254,7 +1306,11 @@ pub async fn explore(
     let job = Job {
         kind: "explore",
         planning: true,
-        write: !request.dry_run,
+        // Its sorties only.
+        writes: match request.dry_run {
+            true => Changes::NOTHING,
+            false => Changes::MISSIONS,
+        },
     };
     let doc = s
         .run_job(job, move |p, _| {
@@ -1673,7 +1729,7 @@ pub async fn ingest(
         now: None,
     };
     let doc = s
-        .run_write(false, move |p| {
+        .run_write(Changes::ALL, false, move |p| {
             let out = app::ingest(p, &request, clock_now(), &app::Silent)
                 .map_err(|e| upload.client_names(e.into()));
             Ok(IngestDoc::from_app(&out?))
@@ -1717,7 +1773,7 @@ pub async fn record(
         amend: flag(&upload, "amend")?,
     };
     let doc = s
-        .run_write(false, move |p| {
+        .run_write(Changes::ALL, false, move |p| {
             let out = app::record_flight(p, &request, clock_now(), &app::Silent)
                 .map_err(|e| upload.client_names(e.into()));
             Ok(RecordDoc::from_app(&out?))

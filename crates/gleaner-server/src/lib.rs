@@ -10,8 +10,9 @@
 //! - Every use case runs on a blocking thread over a small pool of open projects
 //!   ([`AppState`]); planning and exploration searches queue one at a time, so reads keep
 //!   being answered while a mission is planned. Writes through the server run one at a time;
-//!   the large reads (`/cells`, `/field`) are cached until the next write and for at most
-//!   [`state::CACHE_TTL`].
+//!   the reads polled while plans are saved (`/project`, `/field`, `/cells`) are cached
+//!   until a write changes what they read ([`state::Changes`]), which recomputes them before
+//!   it answers, and for at most [`state::CACHE_TTL`].
 //! - Security: [`ServerConfig::check`] refuses a non-loopback address without a token; every
 //!   request that writes needs `Authorization: Bearer <token>` ([`auth`], constant-time
 //!   compare, never logged); uploads are size-limited and saved under sanitised names in a

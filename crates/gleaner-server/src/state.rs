@@ -63,11 +63,46 @@ pub enum Event {
     ShuttingDown,
     /// A read found its cached answer being computed and waits for that computation.
     CacheJoined,
+    /// A write recomputed the cached answer of this key before answering (it changed
+    /// something the answer reads).
+    Refilled(String),
 }
 
 /// A hook called at every [`Event`]. Called on the thread where the event happens (a blocking
 /// thread for `Started`, an async worker otherwise): it may block only at `Started`.
 pub type Hook = Arc<dyn Fn(&Event) + Send + Sync>;
+
+/// What a write through the server may change, and what a cached answer reads: a write
+/// recomputes (or makes outdated) only the cached answers that read something it changes;
+/// the others stay as they are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Changes(u8);
+
+impl Changes {
+    /// Nothing: a read.
+    pub const NOTHING: Self = Self(0);
+    /// The missions: their list, stops, status and visits (plans, explorations,
+    /// cancellations, deletions; a recorded flight).
+    pub const MISSIONS: Self = Self(1);
+    /// The cells' stored description (`/cells`, `/field`): scores and their time, expected
+    /// collection energies, pending volumes, series summaries, correlations, class
+    /// probabilities, last collections (a scoring, a stored plan's scoring, ingests, records).
+    pub const CELLS: Self = Self(2);
+    /// Everything else: readings, sensors, the grid, settings, zones.
+    pub const DATA: Self = Self(4);
+    /// Everything.
+    pub const ALL: Self = Self(7);
+
+    /// Both.
+    pub const fn and(self, other: Self) -> Self {
+        Self(self.0 | other.0)
+    }
+
+    /// Whether the two share something.
+    pub const fn meets(self, other: Self) -> bool {
+        self.0 & other.0 != 0
+    }
+}
 
 /// What a use case needs before it runs.
 #[derive(Debug, Clone, Copy)]
@@ -76,8 +111,10 @@ pub struct Job {
     pub kind: &'static str,
     /// Takes the one planning slot (planning, exploration and simulation searches).
     pub planning: bool,
-    /// Writes: queued behind the other writes; the read cache is invalidated when it ends.
-    pub write: bool,
+    /// What it writes ([`Changes::NOTHING`] for a read): a write is queued behind the other
+    /// writes, and the cached answers that read what it changes are recomputed before it
+    /// answers (or, for those computed on demand, made outdated when it ends).
+    pub writes: Changes,
 }
 
 impl Job {
@@ -86,8 +123,31 @@ impl Job {
         Self {
             kind,
             planning: false,
-            write: false,
+            writes: Changes::NOTHING,
         }
+    }
+
+    fn is_write(&self) -> bool {
+        self.writes != Changes::NOTHING
+    }
+}
+
+/// What the answers recomputed after one write share, each read from the store at most once
+/// (the field view behind both `/field` and `/cells`).
+#[derive(Default)]
+pub struct Inputs {
+    view: Option<gleaner_app::FieldView>,
+}
+
+impl Inputs {
+    /// The project's field view ([`gleaner_app::field_view`]), read once.
+    pub fn field_view(&mut self, p: &Opened) -> ApiResult<&gleaner_app::FieldView> {
+        if self.view.is_none() {
+            self.view = Some(gleaner_app::field_view(p)?);
+        }
+        self.view
+            .as_ref()
+            .ok_or_else(|| ApiError::internal("the field view"))
     }
 }
 
@@ -137,7 +197,8 @@ pub(crate) struct Inner {
     /// One planning, exploration or simulation search at a time: they use a core each for
     /// seconds, and queueing them keeps a core for the reads.
     planning: Arc<Semaphore>,
-    /// Bumped after every write through this server.
+    /// Bumped after every write through this server; an answer it leaves current (it reads
+    /// nothing the write changed) moves to the new generation with it.
     generation: AtomicU64,
     /// Serialised answers of the reads, by key.
     cache: Mutex<HashMap<String, CacheSlot>>,
@@ -162,17 +223,30 @@ const CACHE_ENTRIES: usize = 1024;
 type Fill = watch::Receiver<Option<ApiResult<Bytes>>>;
 
 /// How an answer kept fresh by the writes is computed ([`AppState::cached_eager`]).
-type Refill = Arc<dyn Fn(&mut Opened) -> ApiResult<Vec<u8>> + Send + Sync>;
+type Refill = Arc<dyn Fn(&mut Opened, &mut Inputs) -> ApiResult<Vec<u8>> + Send + Sync>;
 
-#[derive(Default)]
 struct CacheSlot {
-    /// The latest answer: the write generation it was computed at (or, when a write refilled
-    /// it, the generation that write ends), when it was started.
+    /// The latest answer: the write generation it is current at (computed then, refilled
+    /// by the write that ends it, or kept by a write that changed nothing it reads), when it
+    /// was started.
     current: Option<(u64, Instant, Bytes)>,
     /// The recomputation in flight, for the generation it serves.
     filling: Option<(u64, Fill)>,
-    /// Set for the answers every write recomputes before it ends.
+    /// Set for the answers the writes that change what they read recompute before they end.
     refill: Option<Refill>,
+    /// What the answer reads.
+    reads: Changes,
+}
+
+impl Default for CacheSlot {
+    fn default() -> Self {
+        Self {
+            current: None,
+            filling: None,
+            refill: None,
+            reads: Changes::ALL,
+        }
+    }
 }
 
 enum Next {
@@ -297,17 +371,18 @@ impl AppState {
         self.run_job(Job::read("read"), move |p, _| f(p)).await
     }
 
-    /// [`AppState::run`] for a use case that writes (unless `dry_run`): after the writes
-    /// queued before it.
+    /// [`AppState::run`] for a use case that changes `changes` (unless `dry_run`): after the
+    /// writes queued before it.
     pub async fn run_write<T: Send + 'static>(
         &self,
+        changes: Changes,
         dry_run: bool,
         f: impl FnOnce(&mut Opened) -> ApiResult<T> + Send + 'static,
     ) -> ApiResult<T> {
         let job = Job {
             kind: "write",
             planning: false,
-            write: !dry_run,
+            writes: if dry_run { Changes::NOTHING } else { changes },
         };
         self.run_job(job, move |p, _| f(p)).await
     }
@@ -315,7 +390,8 @@ impl AppState {
     /// Runs `f` as `job`: waits for the permits it needs (planning slot, writer slot, a pooled
     /// project), then runs it on a blocking thread that owns them until `f` returns. When the
     /// request is dropped first (its client left), `f` is told through its [`Cancel`] and the
-    /// permits stay with it; a write bumps the cache generation when it ends either way.
+    /// permits stay with it; a write moves the cache to a new generation when it ends either
+    /// way.
     pub async fn run_job<T: Send + 'static>(
         &self,
         job: Job,
@@ -338,7 +414,7 @@ impl AppState {
             ),
             false => None,
         };
-        let writer = match job.write {
+        let writer = match job.is_write() {
             true => Some(
                 Arc::clone(&self.0.writer)
                     .acquire_owned()
@@ -362,8 +438,8 @@ impl AppState {
             state.event(Event::Started(job.kind));
             let out = state.take().and_then(|mut p| {
                 let out = f(&mut p, &cancel);
-                if job.write && out.is_ok() {
-                    state.refill(&mut p);
+                if job.is_write() && out.is_ok() {
+                    state.refill(&mut p, job.writes);
                 }
                 state.give_back(p);
                 out
@@ -380,50 +456,60 @@ impl AppState {
         out
     }
 
-    /// Recomputes, after a write and before its generation is published, every answer of
-    /// [`AppState::cached_eager`] that is cached, and keeps it under the generation the
-    /// write ends: readers get the previous answer until the write ends and the new one from
-    /// then on, and none waits for a computation after a write. Runs on the write's thread
-    /// with its project and writer permit (no other write can interleave). A failed
-    /// computation leaves the answer to be computed by the next reader.
-    fn refill(&self, p: &mut Opened) {
+    /// Recomputes, after a write that changed `changes` and before its generation is
+    /// published, every answer of [`AppState::cached_eager`] that is cached and reads
+    /// something it changed, and keeps it under the generation the write ends: readers get
+    /// the previous answer until the write ends and the new one from then on, and none waits
+    /// for a computation after a write. The answers share their inputs ([`Inputs`]). Runs on
+    /// the write's thread with its project and writer permit (no other write can
+    /// interleave). A failed computation leaves the answer to be computed by the next reader.
+    fn refill(&self, p: &mut Opened, changes: Changes) {
         let next = self.0.generation.load(Ordering::SeqCst) + 1;
-        let refills: Vec<(String, Refill)> = match self.0.cache.lock() {
+        let mut refills: Vec<(String, Refill)> = match self.0.cache.lock() {
             Ok(cache) => cache
                 .iter()
-                .filter(|(_, s)| s.current.is_some())
+                .filter(|(_, s)| s.current.is_some() && s.reads.meets(changes))
                 .filter_map(|(k, s)| s.refill.clone().map(|r| (k.clone(), r)))
                 .collect(),
             Err(_) => return,
         };
+        refills.sort_by(|a, b| a.0.cmp(&b.0));
+        let mut inputs = Inputs::default();
         for (key, refill) in refills {
             let started = Instant::now();
-            let Ok(bytes) = refill(p) else { continue };
+            let Ok(bytes) = refill(p, &mut inputs) else {
+                continue;
+            };
             if let Ok(mut cache) = self.0.cache.lock() {
-                let slot = cache.entry(key).or_default();
+                let slot = cache.entry(key.clone()).or_default();
                 if slot.current.as_ref().is_none_or(|c| c.0 <= next) {
                     slot.current = Some((next, started, Bytes::from(bytes)));
                 }
             }
+            self.event(Event::Refilled(key));
         }
     }
 
-    /// [`AppState::cached`] for an answer that every write through this server recomputes
-    /// before it ends ([`AppState::refill`]), once a reader has asked for it: the project,
-    /// the field and the cell table, which readers poll while plans are saved.
+    /// [`AppState::cached`] for an answer that reads `reads` and that every write through
+    /// this server changing any of it recomputes before it ends ([`AppState::refill`]), once
+    /// a reader has asked for it: the project, the field and the cell table, which readers
+    /// poll while plans are saved. A write that changes none of it keeps the answer.
     pub async fn cached_eager(
         &self,
         key: &str,
-        f: impl Fn(&mut Opened) -> ApiResult<Vec<u8>> + Send + Sync + 'static,
+        reads: Changes,
+        f: impl Fn(&mut Opened, &mut Inputs) -> ApiResult<Vec<u8>> + Send + Sync + 'static,
     ) -> ApiResult<Bytes> {
         let f: Refill = Arc::new(f);
         if let Ok(mut cache) = self.0.cache.lock() {
             let slot = cache.entry(key.to_string()).or_default();
+            slot.reads = reads;
             if slot.refill.is_none() {
                 slot.refill = Some(Arc::clone(&f));
             }
         }
-        self.cached(key, move |p| f(p)).await
+        self.cached(key, move |p| f(p, &mut Inputs::default()))
+            .await
     }
 
     /// The serialised answer of the read `key`, computed by `f` once per write through this
@@ -550,10 +636,29 @@ struct Finish {
 
 impl Drop for Finish {
     fn drop(&mut self) {
-        if self.job.write {
-            // Even a failed write is assumed to have changed something: the cache only costs
-            // a recomputation.
-            self.state.0.generation.fetch_add(1, Ordering::SeqCst);
+        if self.job.is_write() {
+            // Even a failed write is assumed to have changed what it may change: the cache
+            // only costs a recomputation. The answers current now that read none of it stay
+            // current in the next generation; the cache is held so that no reader sees the
+            // new generation before they moved.
+            let inner = &self.state.0;
+            match inner.cache.lock() {
+                Ok(mut cache) => {
+                    let now = inner.generation.load(Ordering::SeqCst);
+                    for slot in cache.values_mut() {
+                        if let Some(c) = slot.current.as_mut()
+                            && c.0 == now
+                            && !slot.reads.meets(self.job.writes)
+                        {
+                            c.0 = now + 1;
+                        }
+                    }
+                    inner.generation.fetch_add(1, Ordering::SeqCst);
+                }
+                Err(_) => {
+                    inner.generation.fetch_add(1, Ordering::SeqCst);
+                }
+            }
         }
         drop(self.permits.take());
         self.state.event(Event::Ended {

@@ -491,6 +491,91 @@ fn simulates_the_projects_recent_past_and_refuses_bad_requests_naming_the_field(
     }
 }
 
+/// `POST /api/v1/simulate` with `"report": true`: the campaign document as without it, plus
+/// the report `gleaner simulate` writes: Markdown with a row per strategy (its error as the
+/// document says) and the charts it links, each a valid SVG document.
+#[test]
+fn simulates_with_the_campaign_report() {
+    let server = Server::caf();
+    let mut c = server.client();
+    let post = |c: &mut gleaner_server::client::Client, body: &Value| {
+        let r = c
+            .request(
+                "POST",
+                "/api/v1/simulate",
+                &[("content-type", "application/json")],
+                Some(body.to_string().as_bytes()),
+            )
+            .unwrap();
+        assert_eq!(r.status, 200, "{body}: {}", r.text());
+        let v: Value = r.json().unwrap();
+        v
+    };
+    let mut body = json!({
+        "strategies": ["gleaner", "round-robin"],
+        "start": "2013-12-25",
+        "planner_iterations": 50
+    });
+    let plain = post(&mut c, &body);
+    assert!(plain.get("report").is_none(), "no report unless asked");
+    body["report"] = json!(true);
+    let mut doc = post(&mut c, &body);
+    let report = doc
+        .as_object_mut()
+        .unwrap()
+        .remove("report")
+        .expect("the report");
+    assert_eq!(
+        doc, plain,
+        "the campaign document is the same with its report"
+    );
+
+    let markdown = report["markdown"].as_str().unwrap();
+    assert!(markdown.starts_with("# Campaign report: caf"), "{markdown}");
+    assert!(
+        markdown.contains("POST /api/v1/simulate {"),
+        "the request to reproduce it"
+    );
+    // The strategies' table: one row each, with the document's kriging RMSE (×1000).
+    for x in doc["strategies"].as_array().unwrap() {
+        let name = x["strategy"].as_str().unwrap();
+        let rmse = x["metrics"]["rmse_kriged"]["mean"].as_f64().unwrap();
+        let row = markdown
+            .lines()
+            .find(|l| l.starts_with(&format!("| {name} | ")))
+            .unwrap_or_else(|| panic!("no row of {name}: {markdown}"));
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        assert_eq!(cells[3], format!("{:.2}", rmse * 1000.0), "{row}");
+    }
+    let figures = report["figures"].as_array().unwrap();
+    assert!(!figures.is_empty());
+    let mut names = Vec::new();
+    for f in figures {
+        let name = f["name"].as_str().unwrap();
+        let svg = f["svg"].as_str().unwrap();
+        assert!(name.ends_with(".svg"), "{name}");
+        assert!(
+            markdown.contains(&format!("](figures/{name})")),
+            "{name} linked"
+        );
+        let tree = gleaner_render::parse_svg(svg).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(
+            tree.size().width() > 0.0 && tree.root().has_children(),
+            "{name}"
+        );
+        names.push(name);
+    }
+    assert!(names.contains(&"rmse_intervals.svg"), "{names:?}");
+
+    // The OpenAPI document names the field and the answer's report.
+    let api = server.get_json("/api/v1/openapi.json");
+    let schemas = &api["components"]["schemas"];
+    assert!(schemas["SimulateBody"]["properties"]["report"].is_object());
+    assert!(schemas["ReportDoc"]["properties"]["figures"].is_object());
+    let answer = api["paths"]["/api/v1/simulate"]["post"]["responses"]["200"].to_string();
+    assert!(answer.contains("SimulationDoc"), "{answer}");
+}
+
 /// `POST /api/v1/simulate` in wind (`wind`, `gust`, `leg_gust`, `weak_battery`,
 /// `weather_seed`, `margin_quantile`, as the command line's flags): the answer tells how the
 /// sorties flew, none over its battery; the same weather seed gives the same answer; a bad

@@ -408,6 +408,46 @@ async fn drive(c: &fantoccini::Client, server: &Server, downloads: &Path) -> Res
         "document.querySelector('#simulate-result #sim-strategies') && !document.querySelector('#simulate-result #sim-flights') && !document.getElementById('simulate').disabled",
     )
     .await?;
+    // The report's charts (asked for by default): each drawn as an image (the SVG decoded by
+    // the browser), as many as the API's report holds, and the Markdown to download.
+    until(
+        c,
+        "[...document.querySelectorAll('#sim-report img')].length > 0 && [...document.querySelectorAll('#sim-report img')].every(i => i.complete && i.naturalWidth > 0)",
+    )
+    .await?;
+    let body = json!({"strategies": ["gleaner"], "start": "2013-12-28", "planner_iterations": 50,
+        "report": true});
+    let r = server
+        .client()
+        .request(
+            "POST",
+            "/api/v1/simulate",
+            &[("content-type", "application/json")],
+            Some(body.to_string().as_bytes()),
+        )
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    let doc: Value = r.json().unwrap();
+    let shown = c
+        .execute(
+            "return [...document.querySelectorAll('#sim-report figure')].map(f => f.dataset.name)",
+            vec![],
+        )
+        .await?;
+    let names: Vec<Value> = doc["report"]["figures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["name"].clone())
+        .collect();
+    assert_eq!(shown, Value::Array(names), "the report's charts, in order");
+    let md = c
+        .execute(
+            "return document.getElementById('sim-report-md').getAttribute('download')",
+            vec![],
+        )
+        .await?;
+    assert_eq!(md, json!("report.md"));
 
     // Plan through the form: preview, then save.
     let form = c.form(Locator::Id("plan-form")).await?;

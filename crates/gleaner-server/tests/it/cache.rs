@@ -86,3 +86,117 @@ fn an_answer_is_computed_once_per_change_however_many_ask() {
     server.release();
     assert_eq!(first.join().unwrap().json().unwrap()["mission_id"], id);
 }
+
+/// The cached `/project`, `/field` and `/cells` answers are recomputed by exactly the writes
+/// that change what they read, before those writes answer (a read that starts after a write's
+/// answer sees it): a stored plan changes the cells' description (it stores its scoring at
+/// the mission time and each cell's expected energy) and the missions; a scoring the cells
+/// only; a cancellation or deletion the missions only, and keeps `/cells` and `/field`.
+#[test]
+fn each_write_recomputes_the_answers_it_changes_and_keeps_the_others() {
+    let server = Watched::start(&[], |c| c.cache_ttl = Duration::from_secs(3600));
+    let addr = server.addr;
+    let get = |path: &str| {
+        let r = Client::new(addr).get(path).unwrap();
+        assert_eq!(r.status, 200, "{path}: {}", r.text());
+        r
+    };
+    // Every cell's stored score time (RFC 3339).
+    let score_times = |cells: &serde_json::Value| -> Vec<String> {
+        cells
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|c| c["scores"]["computed_at"].as_str().map(String::from))
+            .collect()
+    };
+    let first_cells = get("/api/v1/cells");
+    let first_field = get("/api/v1/field");
+    assert_eq!(get("/api/v1/project").json().unwrap()["missions"], 0);
+    // What a write recomputed, and whether a reader computed anything since.
+    let after_write = |server: &Watched| {
+        let events = server.so_far();
+        let mut refilled: Vec<String> = events
+            .iter()
+            .filter_map(|e| match e {
+                Event::Refilled(k) => Some(k.clone()),
+                _ => None,
+            })
+            .collect();
+        refilled.sort();
+        refilled
+    };
+    let no_reader_computed = |server: &Watched| {
+        assert!(
+            !server.so_far().contains(&Event::Started("cache-fill")),
+            "a reader computed an answer after the write"
+        );
+    };
+    server.so_far();
+
+    // A stored plan at a time of its own: its scoring shows in /cells at once.
+    let r = Client::new(addr)
+        .post_json(
+            "/api/v1/plan",
+            &json!({"solver": "greedy", "at": "2013-12-20"}),
+            Some(TOKEN),
+        )
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    let id = r.json().unwrap()["mission_id"].as_i64().unwrap();
+    assert_eq!(after_write(&server), ["cells", "field", "project"]);
+    let cells = get("/api/v1/cells");
+    let times = score_times(&cells.json().unwrap());
+    assert!(!times.is_empty());
+    assert!(
+        times.iter().all(|t| t == "2013-12-20T00:00:00Z"),
+        "the plan's scoring: {times:?}"
+    );
+    assert_ne!(cells.body, first_cells.body);
+    assert_ne!(get("/api/v1/field").body, first_field.body);
+    assert_eq!(get("/api/v1/project").json().unwrap()["missions"], 1);
+    no_reader_computed(&server);
+
+    // Cancelling it changes the missions only: /cells and /field are kept as they are.
+    let (cells_before, field_before) = (cells.body.clone(), get("/api/v1/field").body);
+    let r = Client::new(addr)
+        .request(
+            "POST",
+            &format!("/api/v1/missions/{id}/cancel"),
+            &[("authorization", &format!("Bearer {TOKEN}"))],
+            None,
+        )
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(after_write(&server), ["project"]);
+    assert_eq!(get("/api/v1/cells").body, cells_before);
+    assert_eq!(get("/api/v1/field").body, field_before);
+    let status = get(&format!("/api/v1/missions/{id}")).json().unwrap()["status"].clone();
+    assert_eq!(status, "cancelled");
+    // Deleting it: the project's mission count at once.
+    let r = Client::new(addr)
+        .request(
+            "DELETE",
+            &format!("/api/v1/missions/{id}"),
+            &[("authorization", &format!("Bearer {TOKEN}"))],
+            None,
+        )
+        .unwrap();
+    assert_eq!(r.status, 204, "{}", r.text());
+    assert_eq!(after_write(&server), ["project"]);
+    assert_eq!(get("/api/v1/project").json().unwrap()["missions"], 0);
+    assert_eq!(get("/api/v1/cells").body, cells_before);
+
+    // A scoring at another time: the cells' description, not the project.
+    let r = Client::new(addr)
+        .post_json("/api/v1/score", &json!({"at": "2013-12-24"}), Some(TOKEN))
+        .unwrap();
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(after_write(&server), ["cells", "field"]);
+    let times = score_times(&get("/api/v1/cells").json().unwrap());
+    assert!(
+        !times.is_empty() && times.iter().all(|t| t == "2013-12-24T00:00:00Z"),
+        "the new scoring: {times:?}"
+    );
+    no_reader_computed(&server);
+}
