@@ -1314,7 +1314,7 @@ mod tests {
             n in 1usize..7,
             seed in proptest::collection::vec(-1.0f64..1.0, 64),
             noise in prop_oneof![Just(0.0), 1e-6f64..1e-3],
-            own in prop_oneof![Just(None), Some(1e-10f64..1e-8)],
+            own in proptest::option::of(1e-10f64..1e-8),
             reads in proptest::collection::vec((0usize..8, -0.5f64..0.5), 0..6),
             sensors in proptest::collection::vec(0usize..9, 0..9),
         ) {
