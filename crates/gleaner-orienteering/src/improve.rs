@@ -72,12 +72,24 @@ pub fn improve_routes(
     routes: &[Vec<usize>],
     options: &ImproveOptions,
 ) -> Result<Solution, SolutionError> {
-    let given = evaluate(problem, routes)?;
     let ctx = Ctx::new(problem, options.neighbours.max(1), true);
+    improve_routes_in(&ctx, problem, routes, options)
+}
+
+/// [`improve_routes`] over a context built once by the caller
+/// (`Ctx::new(problem, options.neighbours.max(1), true)`), for callers that shorten many
+/// routes of one problem: the context depends on nothing else, so the same result.
+pub(crate) fn improve_routes_in(
+    ctx: &Ctx<'_>,
+    problem: &Problem,
+    routes: &[Vec<usize>],
+    options: &ImproveOptions,
+) -> Result<Solution, SolutionError> {
+    let given = evaluate(problem, routes)?;
     let mut state = State::from_routes(problem, &given.routes);
     for _ in 0..options.max_rounds {
-        state.improve_tours(&ctx);
-        let moved = options.between_routes && state.routes.len() > 1 && state.relocate(&ctx);
+        state.improve_tours(ctx);
+        let moved = options.between_routes && state.routes.len() > 1 && state.relocate(ctx);
         if !moved {
             break;
         }
@@ -85,7 +97,7 @@ pub fn improve_routes(
     if options.kicks > 0 {
         let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
         for r in 0..state.routes.len() {
-            state.kick_tour(&ctx, r, options.kicks, &mut rng);
+            state.kick_tour(ctx, r, options.kicks, &mut rng);
         }
     }
     state.resync(problem);

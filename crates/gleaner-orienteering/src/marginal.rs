@@ -4,7 +4,8 @@
 //! submodular `f` this is submodular orienteering; the search here is marginal-gain
 //! insertion plus exchange local search, with every route re-checked against the budget.
 
-use crate::improve::{ImproveOptions, improve_routes};
+use crate::engine::Ctx;
+use crate::improve::{ImproveOptions, improve_routes_in};
 use crate::problem::Problem;
 use crate::solution::{Solution, evaluate};
 
@@ -51,12 +52,20 @@ pub fn solve_marginal<F: FnMut(&[usize]) -> f64>(
     options: &MarginalOptions,
 ) -> MarginalSolution {
     let reachable = problem.reachable_candidates();
+    // Route shortening's context (candidates, neighbour lists), built once: it depends only
+    // on the problem and the neighbour count.
+    let ctx = Ctx::new(problem, options.improve.neighbours.max(1), true);
+    let s = Search {
+        problem,
+        ctx: &ctx,
+        options,
+    };
     let empty = vec![problem.start(), problem.end()];
     let mut best: Option<(Vec<usize>, f64)> = None;
     for by_ratio in [true, false] {
         let mut route = empty.clone();
-        grow(problem, &mut route, &reachable, &mut f, by_ratio, options);
-        exchange(problem, &mut route, &reachable, &mut f, options);
+        grow(&s, &mut route, &reachable, &mut f, by_ratio);
+        exchange(&s, &mut route, &reachable, &mut f);
         let value = f(interior(&route));
         if best
             .as_ref()
@@ -98,9 +107,20 @@ fn cheapest(problem: &Problem, route: &[usize], v: usize) -> (usize, f64) {
     best
 }
 
-fn shorten(problem: &Problem, route: &mut Vec<usize>, options: &MarginalOptions) {
-    if let Ok(s) = improve_routes(problem, std::slice::from_ref(route), &options.improve)
-        && let Some(r) = s.routes.into_iter().next()
+/// What every step of the search shares: the problem, route shortening's context, options.
+struct Search<'a> {
+    problem: &'a Problem,
+    ctx: &'a Ctx<'a>,
+    options: &'a MarginalOptions,
+}
+
+fn shorten(search: &Search<'_>, route: &mut Vec<usize>) {
+    if let Ok(s) = improve_routes_in(
+        search.ctx,
+        search.problem,
+        std::slice::from_ref(route),
+        &search.options.improve,
+    ) && let Some(r) = s.routes.into_iter().next()
     {
         *route = r;
     }
@@ -108,13 +128,13 @@ fn shorten(problem: &Problem, route: &mut Vec<usize>, options: &MarginalOptions)
 
 /// Greedy insertion until nothing with a positive gain fits.
 fn grow<F: FnMut(&[usize]) -> f64>(
-    problem: &Problem,
+    search: &Search<'_>,
     route: &mut Vec<usize>,
     candidates: &[usize],
     f: &mut F,
     by_ratio: bool,
-    options: &MarginalOptions,
 ) {
+    let problem = search.problem;
     let limit = problem.budget() + problem.tolerance();
     loop {
         let used = cost(problem, route);
@@ -147,19 +167,19 @@ fn grow<F: FnMut(&[usize]) -> f64>(
         }
         let Some((v, pos, _)) = pick else { break };
         route.insert(pos, v);
-        shorten(problem, route, options);
+        shorten(search, route);
     }
 }
 
 /// Exchange local search: drop one visited node, refill greedily by gain per cost; keep
 /// when the value grows.
 fn exchange<F: FnMut(&[usize]) -> f64>(
-    problem: &Problem,
+    search: &Search<'_>,
     route: &mut Vec<usize>,
     candidates: &[usize],
     f: &mut F,
-    options: &MarginalOptions,
 ) {
+    let (problem, options) = (search.problem, search.options);
     let limit = problem.budget() + problem.tolerance();
     for _ in 0..options.max_rounds {
         let current = f(interior(route));
@@ -177,13 +197,13 @@ fn exchange<F: FnMut(&[usize]) -> f64>(
                     continue;
                 }
                 trial.insert(pos, w);
-                shorten(problem, &mut trial, options);
+                shorten(search, &mut trial);
                 let others: Vec<usize> = candidates
                     .iter()
                     .copied()
                     .filter(|&c| c != removed)
                     .collect();
-                grow(problem, &mut trial, &others, f, true, options);
+                grow(search, &mut trial, &others, f, true);
                 let value = f(interior(&trial));
                 if value > current + 1e-12 * current.abs().max(1e-300) {
                     *route = trial;

@@ -351,4 +351,78 @@ mod tests {
             neighbour_changes(&series, &positions, (1, 99 * DAY), at, 64, |_| false).is_empty()
         );
     }
+
+    /// The back-test replays age differences, not ages: the same reads give the same
+    /// multiplier bit for bit at any later estimation time (what the campaign's kept
+    /// multiplier relies on), and a changed reading changes it.
+    #[test]
+    fn the_multiplier_does_not_depend_on_the_estimation_time() {
+        use gleaner_kriging::{Covariance, Variogram};
+        let n = 30;
+        // Sensors on a line, read daily with staggered last readings: 0..10 read on day 99
+        // (the freshest), the others last read 1..20 days before.
+        let positions: Vec<[f64; 2]> = (0..n)
+            .map(|k| [37.0 * k as f64, 11.0 * (k % 3) as f64])
+            .collect();
+        let cells: Vec<usize> = (0..n).map(|k| k / 2).collect();
+        let series: Vec<Column> = (0..n)
+            .map(|k| {
+                let last = if k < 10 { 99 } else { 99 - (k as i64 - 9) };
+                let days: Vec<i64> = (40..=last).collect();
+                let values = days
+                    .iter()
+                    .map(|&d| {
+                        0.25 + 0.002 * ((d * 7 + k as i64 * 13) % 17) as f64 + 0.001 * k as f64
+                    })
+                    .collect();
+                (days.iter().map(|d| d * DAY).collect(), values)
+            })
+            .collect();
+        let latest: Vec<Latest> = series
+            .iter()
+            .map(|(t, v)| Some((*t.last().unwrap(), *v.last().unwrap())))
+            .collect();
+        let model = FieldModel {
+            covariance: Covariance {
+                sill: 1e-3,
+                nugget: 1e-4,
+                range_m: 500.0,
+                time_scale_s: 20.0 * DAY as f64,
+                temporal_share: 0.9,
+            },
+            means: vec![0.27; n],
+        };
+        let vg = |nugget: f64, partial: f64| Variogram {
+            nugget,
+            partial,
+            scale_s: 10.0 * DAY as f64,
+        };
+        let changes = IncrementModel::new(vg(1e-6, 1e-4), 400.0, vg(1e-6, 5e-5)).unwrap();
+        let q_at = |at: UnixSeconds, latest: &[Latest], series: &[Column]| {
+            KrigingInputs::new(
+                (&positions, &cells),
+                (&model, &changes),
+                (latest, series),
+                at,
+                (8, Estimator::Changes),
+            )
+            .multiplier()
+        };
+        let q = q_at(100 * DAY, &latest, &series);
+        assert_ne!(
+            q, Z90,
+            "enough back-tested errors for a calibrated multiplier"
+        );
+        for at in [100 * DAY + 1, 101 * DAY, 130 * DAY + 3_601] {
+            assert_eq!(q_at(at, &latest, &series).to_bits(), q.to_bits(), "at {at}");
+        }
+        let mut other = series.clone();
+        *other[3].1.last_mut().unwrap() += 0.05;
+        let mut other_latest = latest.clone();
+        other_latest[3] = Some((99 * DAY, *other[3].1.last().unwrap()));
+        assert_ne!(
+            q_at(100 * DAY, &other_latest, &other).to_bits(),
+            q.to_bits()
+        );
+    }
 }

@@ -471,6 +471,24 @@ struct KeptReads {
     latest: Vec<Option<(UnixSeconds, f64)>>,
     needed: Option<UnixSeconds>,
     series: Columns,
+    /// The interval multiplier computed from these reads and what else it depends on.
+    multiplier: MultiplierMemo,
+}
+
+/// What the interval multiplier ([`KrigingInputs::multiplier`]) of an estimate depends on
+/// besides its reads (the latest readings and the change window's series), and its value.
+/// Its back-test does not depend on the estimation time: the gaps it replays are each
+/// sensor's age difference from the freshest (whole seconds, exact), so an estimate at a
+/// later time over the same reads has the same multiplier.
+#[derive(Debug)]
+struct MultiplierMemo {
+    estimator: Estimator,
+    neighbours: usize,
+    /// The model of changes, `Debug` text (every float to the last bit).
+    changes: String,
+    positions: Vec<[u64; 2]>,
+    cells: Vec<usize>,
+    q: f64,
 }
 
 /// [`estimate`] at `at` with look-back `lookback_s` (seconds), keeping its reads in `reads`.
@@ -574,7 +592,37 @@ pub fn estimate_with<S: Store>(
         at,
         (neighbours, estimator),
     );
-    let q = kriging.multiplier();
+    let memo = |q: f64| MultiplierMemo {
+        estimator,
+        neighbours,
+        changes: format!("{changes:?}"),
+        positions: positions.iter().map(|p| p.map(f64::to_bits)).collect(),
+        cells: cells.clone(),
+        q,
+    };
+    // The kept multiplier when this estimate reads exactly what the kept one read (the same
+    // latest readings bit for bit and the same change window: the kept series unrestricted).
+    let kept_q = kept.as_ref().and_then(|k| {
+        let m = &k.multiplier;
+        let same_latest = k.latest.len() == latest.len()
+            && k.latest
+                .iter()
+                .zip(&latest)
+                .all(|(a, b)| a.map(|(t, v)| (t, v.to_bits())) == b.map(|(t, v)| (t, v.to_bits())));
+        let same = same_latest
+            && k.needed == needed
+            && m.estimator == estimator
+            && m.neighbours == neighbours
+            && m.cells == cells
+            && m.positions.len() == positions.len()
+            && m.positions
+                .iter()
+                .zip(&positions)
+                .all(|(a, b)| *a == b.map(f64::to_bits))
+            && m.changes == format!("{changes:?}");
+        same.then_some(m.q)
+    });
+    let q = kept_q.unwrap_or_else(|| kriging.multiplier());
     // The dynamic model: one filter pass over the window's readings.
     let mut filtered: Vec<(f64, f64)> = Vec::new();
     if let (Estimator::Dynamic, Some(model)) = (estimator, dynamic) {
@@ -610,6 +658,7 @@ pub fn estimate_with<S: Store>(
         latest,
         needed,
         series,
+        multiplier: memo(q),
     });
     Ok(estimates)
 }

@@ -600,7 +600,8 @@ impl ConditionModel {
     }
 
     /// Logits (the first `k` of `out`) to probabilities: shifted by their maximum,
-    /// exponentiated, divided by their sum.
+    /// exponentiated, divided by their sum. A shifted logit of zero (the maximum's) is
+    /// e⁰ = 1 exactly, without calling `exp`.
     fn normalise(k: usize, out: &mut [f64]) {
         let mut max = f64::NEG_INFINITY;
         for &s in out.iter().take(k) {
@@ -608,7 +609,8 @@ impl ConditionModel {
         }
         let mut total = 0.0;
         for o in out.iter_mut().take(k) {
-            *o = (*o - max).exp();
+            let d = *o - max;
+            *o = if d == 0.0 { 1.0 } else { d.exp() };
             total += *o;
         }
         for o in out.iter_mut().take(k) {
@@ -1454,6 +1456,34 @@ mod tests {
 
     proptest::proptest! {
         #![proptest_config(proptest::test_runner::Config::with_cases(256))]
+        /// `normalise` skips `exp` for the maximum's shifted logit (zero): the same bits as
+        /// exponentiating every shifted logit, ties, signed zeros and infinities included.
+        #[test]
+        fn normalise_is_the_plain_softmax_to_the_bit(
+            logits in proptest::collection::vec(
+                proptest::prop_oneof![
+                    proptest::strategy::Just(0.0),
+                    proptest::strategy::Just(-0.0),
+                    proptest::strategy::Just(f64::INFINITY),
+                    proptest::strategy::Just(f64::NEG_INFINITY),
+                    proptest::strategy::Just(1.5),
+                    -800.0f64..800.0,
+                ],
+                1..6,
+            ),
+        ) {
+            let k = logits.len();
+            let mut got = logits.clone();
+            ConditionModel::normalise(k, &mut got);
+            let max = logits.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+            let mut want: Vec<f64> = logits.iter().map(|&o| (o - max).exp()).collect();
+            let total: f64 = want.iter().fold(0.0, |a, &b| a + b);
+            want.iter_mut().for_each(|w| *w /= total);
+            for (g, w) in got.iter().zip(&want) {
+                proptest::prop_assert_eq!(g.to_bits(), w.to_bits(), "{:?}: {:?} vs {:?}", logits, got, want);
+            }
+        }
+
         #[test]
         fn arbitrary_model_bytes_never_panic(
             body in proptest::collection::vec(proptest::num::u8::ANY, 0..400),
