@@ -166,7 +166,7 @@ pub fn explore_with<S: Store>(
         None => (None, Vec::new()),
         Some((_, all, unreachable)) => (Some(all), unreachable.clone()),
     };
-    let mut plan_with = |options: &ExplorationOptions| match &routed {
+    let plan_with = |options: &ExplorationOptions| match &routed {
         None => memo.plan(&model, base, centres, &service_j, options),
         Some((_, all, _)) => {
             // The reachable cells only, with their legs; cell indices mapped back after.
@@ -197,28 +197,7 @@ pub fn explore_with<S: Store>(
             Ok(plan)
         }
     };
-    // In wind the planner's length-based split may leave a sortie over the budget in the
-    // wind: a larger margin then, up to one that always suffices.
-    let margins = exploration_margins(&model);
-    let mut found = None;
-    for (k, &budget_margin) in margins.iter().enumerate() {
-        let options = ExplorationOptions {
-            budget_margin,
-            ..ExplorationOptions::default()
-        };
-        match plan_with(&options) {
-            Ok(plan) => {
-                found = Some(plan);
-                break;
-            }
-            Err(ExplorationError::Infeasible { .. }) if k + 1 < margins.len() => continue,
-            Err(e) => return Err(AppError::core("exploration", e)),
-        }
-    }
-    let plan = found.ok_or_else(|| AppError::Core {
-        context: "exploration",
-        message: "no budget margin gave sorties within the battery".into(),
-    })?;
+    let plan = within_budget(&model, plan_with)?;
     let zeros = vec![0.0; centres.len()];
     let mut sorties = Vec::with_capacity(plan.sorties.len());
     let mut vias = Vec::with_capacity(plan.sorties.len());
@@ -269,16 +248,7 @@ pub fn explore_with<S: Store>(
     }
     if !request.dry_run {
         project.check_stored_grid(&k.field)?;
-        let ids = project.store_mut().write(|tx| {
-            sorties
-                .iter()
-                .map(|(_, m)| tx.create_mission(m))
-                .collect::<std::result::Result<Vec<_>, _>>()
-                .map_err(AppError::from)
-        })?;
-        for ((id, _), new) in sorties.iter_mut().zip(ids) {
-            *id = Some(new);
-        }
+        store_sorties(project, &mut sorties)?;
     }
     Ok(Exploration {
         planned_at: t,
@@ -291,6 +261,51 @@ pub fn explore_with<S: Store>(
         unreachable,
         wind: plan_wind,
     })
+}
+
+/// The first exploration plan within the battery: in wind the planner's length-based split
+/// may leave a sortie over the budget in the wind, so a larger margin then, up to one that
+/// always suffices.
+fn within_budget(
+    model: &MissionEnergyModel,
+    mut plan_with: impl FnMut(
+        &ExplorationOptions,
+    ) -> std::result::Result<ExplorationPlan, ExplorationError>,
+) -> Result<ExplorationPlan> {
+    let margins = exploration_margins(model);
+    for (k, &budget_margin) in margins.iter().enumerate() {
+        let options = ExplorationOptions {
+            budget_margin,
+            ..ExplorationOptions::default()
+        };
+        match plan_with(&options) {
+            Ok(plan) => return Ok(plan),
+            Err(ExplorationError::Infeasible { .. }) if k + 1 < margins.len() => continue,
+            Err(e) => return Err(AppError::core("exploration", e)),
+        }
+    }
+    Err(AppError::Core {
+        context: "exploration",
+        message: "no budget margin gave sorties within the battery".into(),
+    })
+}
+
+/// Stores the sorties as missions in one transaction; sets their ids.
+fn store_sorties<S: Store>(
+    project: &mut Project<S>,
+    sorties: &mut [(Option<MissionId>, NewMission)],
+) -> Result<()> {
+    let ids = project.store_mut().write(|tx| {
+        sorties
+            .iter()
+            .map(|(_, m)| tx.create_mission(m))
+            .collect::<std::result::Result<Vec<_>, _>>()
+            .map_err(AppError::from)
+    })?;
+    for ((id, _), new) in sorties.iter_mut().zip(ids) {
+        *id = Some(new);
+    }
+    Ok(())
 }
 
 #[cfg(test)]

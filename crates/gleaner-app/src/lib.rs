@@ -43,6 +43,7 @@
 
 pub mod airspace;
 mod cell_detail;
+pub mod crash_test;
 mod explore;
 mod ingest;
 mod init;

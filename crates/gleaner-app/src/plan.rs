@@ -20,7 +20,7 @@ use gleaner_scoring::Project;
 use gleaner_scoring::cell_csv;
 use gleaner_scoring::{self as score, Objective, ScoreRequest, Scoring, parse_planner};
 use gleaner_scoring::{AppError, Result};
-use gleaner_scoring::{History, Knowledge};
+use gleaner_scoring::{History, Knowledge, Settings};
 
 /// What to plan.
 #[derive(Debug, Clone, Default)]
@@ -415,163 +415,42 @@ pub fn plan_scored<S: Store>(
         )));
     }
     let settings = project.settings().clone();
-    let planner = match request.planner {
-        Some(p) => p,
-        None => parse_planner(&settings.planner.solver)?,
-    };
-    let time_limit_s = request
-        .time_limit_s
-        .unwrap_or(settings.planner.time_limit_s);
-    if !(time_limit_s.is_finite() && (0.0..=86_400.0).contains(&time_limit_s)) {
-        return Err(AppError::Invalid(format!(
-            "time limit {} s: expected a number of seconds in [0, 86400]",
-            gleaner_ingest::number(time_limit_s)
-        )));
-    }
-    let seed = request.seed.unwrap_or(settings.planner.seed);
-    let given = match (&request.cell_scores, &request.scores) {
-        (Some(v), _) => Some(Given::Values(v)),
-        (None, Some(p)) => Some(Given::File(p)),
-        (None, None) => None,
-    };
-    let (file_knowledge, scoring, scores, t, anomaly_form, weights) = match given {
-        Some(given) => {
-            let k =
-                gleaner_scoring::state::collection_knowledge(project, request.at, request.history)?;
-            let t = gleaner_scoring::when::mission_time(request.at, k.latest)?;
-            let (s, form) = match given {
-                Given::File(path) => (read_scores(path, &k)?, "n/a (scores from file)"),
-                Given::Values(v) => {
-                    if v.len() != k.field.cells().len() {
-                        return Err(AppError::Invalid(format!(
-                            "{} cell scores given for {} cells",
-                            v.len(),
-                            k.field.cells().len()
-                        )));
-                    }
-                    (v.clone(), "n/a (scores given)")
-                }
-            };
-            (Some(k), None, s, t, form.to_string(), [0.0; 4])
-        }
-        None => {
-            let mut scoring = match scored {
-                Some(scoring) => scoring,
-                None => score::compute(
-                    project,
-                    &ScoreRequest {
-                        at: request.at,
-                        history: request.history,
-                        probabilities: None,
-                        dry_run: true,
-                    },
-                )?,
-            };
-            let mut scores: Vec<f64> = scoring.terms.iter().map(|c| c.s).collect();
-            let mut form = scoring.anomaly_form.clone();
-            let eta = settings.utility.variance_weight;
-            if eta > 0.0 {
-                // gleaner's variance-reduction term: the planner routes by S + η·V.
-                match gleaner_scoring::variance_gains(project, &scoring.knowledge, scoring.t)? {
-                    Ok(v) => {
-                        for (s, v) in scores.iter_mut().zip(&v) {
-                            *s += eta * v;
-                        }
-                        form = format!("{form}; S + {eta}·V (variance reduction)");
-                    }
-                    Err(why) => scoring.warnings.push(why),
-                }
-            }
-            let (t, w) = (scoring.t, scoring.weights);
-            (None, Some(scoring), scores, t, form, w)
-        }
-    };
-    let k = scoring
-        .as_ref()
-        .map(|s| &s.knowledge)
-        .or(file_knowledge.as_ref())
-        .ok_or_else(|| AppError::Invalid("nothing known at the mission time".into()))?;
-    let model = match energy_preset {
-        None => energy_model(project)?,
-        Some(preset) => {
-            let mut energy = settings.energy.clone();
-            energy.preset = preset.to_string();
-            flight_model(&energy, "energy preset")?
-        }
-    };
-    // Legs and hovers priced in the forecast wind plus the margin (still air: the model as
-    // it was, to the bit).
-    let plan_wind = crate::wind::PlanWind::of(&settings.flight, request.wind)?;
-    let model = model.with_wind_up_to(plan_wind.planned);
+    let (planner, time_limit_s, seed) = planner_choice(&settings, request)?;
+    let prizes = cell_prizes(project, request, scored, &settings)?;
+    let (t, scores) = (prizes.t, &prizes.scores);
+    let k = prizes.knowledge()?;
+    let (model, plan_wind) = planning_model(project, energy_preset, request.wind)?;
     let profile = flight_profile(project, &model)?;
     let services = services(&model, k, t)?;
     let points = FlightPoints::of(&k.field);
     let routed = routing(project, k, &points)?;
     let detours = routed.as_ref().map(|(_, d, _)| d);
     let unreachable = routed.as_ref().map(|r| r.2.clone()).unwrap_or_default();
-    // The information objective: the filter at t over what is known, the model fitted on it
-    // unless the caller (a campaign) hands its own.
-    let fitted;
+    let mut fitted = None;
     let objective = request.objective.unwrap_or(settings.planner.objective);
-    let information = match objective {
-        Objective::Score => None,
-        Objective::Information | Objective::Hybrid => {
-            let name = score::condition_modality(&settings, &k.modalities).ok_or_else(|| {
-                AppError::Invalid(
-                    "the information objective needs a soil-moisture modality; plan by score"
-                        .into(),
-                )
-            })?;
-            let modality = gleaner_field::Modality::new(&name)
-                .map_err(|e| AppError::Invalid(format!("modality {name:?}: {e}")))?;
-            let model = match dynamic {
-                Some(m) => m,
-                None => {
-                    let known = t.min(request.history.until);
-                    fitted = gleaner_scoring::fit_dynamic_model(project, &modality, known, None)?
-                        .ok_or_else(|| {
-                        gleaner_scoring::unfit_dynamic(&modality, "plan by score")
-                    })?;
-                    &fitted
-                }
-            };
-            let info = gleaner_scoring::CellInformation::at(
-                project,
-                k,
-                request.history,
-                &modality,
-                model,
-                t,
-            )?;
-            Some(match objective {
-                Objective::Hybrid => info.blended(&scores, settings.planner.information_weight),
-                _ => info,
-            })
-        }
-    };
+    let information = information_objective(
+        project,
+        request,
+        (k, t, scores),
+        objective,
+        (dynamic, &mut fitted),
+    )?;
     let anomaly_form = match (&information, objective) {
         (Some(_), Objective::Hybrid) => format!(
-            "{anomaly_form}; routed by score and information (dynamic field model, weight {})",
-            settings.planner.information_weight
+            "{}; routed by score and information (dynamic field model, weight {})",
+            prizes.anomaly_form, settings.planner.information_weight
         ),
-        (Some(_), _) => format!("{anomaly_form}; routed by information (dynamic field model)"),
-        (None, _) => anomaly_form,
+        (Some(_), _) => format!(
+            "{}; routed by information (dynamic field model)",
+            prizes.anomaly_form
+        ),
+        (None, _) => prizes.anomaly_form.clone(),
     };
-    let prizes: Vec<f64> = match &information {
+    let singletons: Vec<f64> = match &information {
         Some(info) => info.singletons(),
         None => scores.clone(),
     };
-    let candidates: Vec<Candidate> = points
-        .centres
-        .iter()
-        .zip(&prizes)
-        .zip(&services)
-        .map(|((&centre, &score), svc)| Candidate {
-            centre,
-            score,
-            hover_s: svc.hover_s,
-        })
-        .collect();
+    let candidates = candidates(&points, &singletons, &services);
     let options = PlanOptions {
         planner,
         seed,
@@ -587,118 +466,35 @@ pub fn plan_scored<S: Store>(
             "sorties = {sorties}: allowed 1..={MAX_SORTIES}"
         )));
     }
-    let planned = match &information {
-        None => plan_sorties_routed(&model, base, &candidates, &options, sorties, detours),
-        Some(info) => plan_sorties_valued_routed(
-            &model,
-            base,
-            &candidates,
-            |cells| info.value(cells),
-            &options,
-            sorties,
-            detours,
-        )
-        .map(|mut plans| {
-            // Each sortie's worth is what it adds to the ones before it.
-            let mut before: Vec<usize> = Vec::new();
-            for p in &mut plans {
-                let v0 = info.value(&before);
-                before.extend(&p.order);
-                p.total_score = info.value(&before) - v0;
-            }
-            plans
-        }),
-    };
-    let (mut plans, empty): (Vec<MissionPlan>, Vec<MissionPlan>) = planned
-        .map_err(|e| AppError::core("planner", e))?
-        .into_iter()
-        .partition(|p| !p.order.is_empty());
-    let plan = if plans.is_empty() {
-        if refuse_empty && !request.dry_run {
-            return Err(AppError::Invalid(format!(
-                "no cell to visit: of {} cells none scores S > 0 within the battery's reach; \
-                 nothing was stored (a dry run shows the empty plan)",
-                k.field.cells().len()
-            )));
-        }
-        empty
-            .into_iter()
-            .next()
-            .ok_or_else(|| AppError::Invalid("the planner returned no sortie".into()))?
-    } else {
-        plans.remove(0)
-    };
-    let greedy = plan_sorties_routed(
-        &model,
+    let routes = Routes {
+        model: &model,
         base,
-        &candidates,
-        &PlanOptions {
-            planner: Planner::Greedy,
-            ..options
-        },
-        1,
+        candidates: &candidates,
         detours,
-    )
-    .map_err(|e| AppError::core("planner", e))?
-    .remove(0);
+    };
+    let (mut plans, empty) = routes.sorties(&options, sorties, information.as_ref())?;
+    let refuse = refuse_empty && !request.dry_run;
+    let plan = first_sortie(&mut plans, empty, refuse, k.field.cells().len())?;
+    let greedy = routes.greedy(&options)?;
     check_feasible(&plan)?;
     for p in &plans {
         check_feasible(p)?;
     }
-    let terms = scoring.as_ref().map(|s| s.terms.as_slice());
-    let route_wind = |plan: &MissionPlan| -> Result<crate::wind::RouteWind> {
-        let visits: Vec<gleaner_energy::CellVisit> = plan
-            .order
-            .iter()
-            .map(|&k| gleaner_energy::CellVisit {
-                centre: candidates[k].centre,
-                hover_s: candidates[k].hover_s,
-            })
-            .collect();
-        let strongest = if visits.is_empty() {
-            None
-        } else {
-            crate::wind::strongest(
-                &model,
-                base,
-                &visits,
-                &plan.via,
-                (plan_wind.forecast.from_deg, plan_wind.planned.speed_mps),
-            )?
-        };
-        Ok(crate::wind::RouteWind {
-            wind: plan_wind,
-            legs: crate::wind::legs(&plan.energy),
-            strongest,
-        })
-    };
-    let new_mission = |plan: &MissionPlan| NewMission {
+    let parts = MissionParts {
         created_at: clock_now,
-        kind: MissionKind::Adaptive,
         planned_at: t,
-        solver: planner.name().to_string(),
+        solver: planner.name(),
         seed,
-        weights,
-        anomaly_form: anomaly_form.clone(),
-        total_score: plan.total_score,
+        weights: prizes.weights,
+        anomaly_form,
         profile,
-        energy: breakdown(&plan.energy),
-        return_distance_m: if plan.order.is_empty() {
-            0.0
-        } else {
-            plan.energy.legs.last().map_or(0.0, |l| l.distance_m)
-        },
-        stops: stops(
-            k,
-            &points,
-            &plan.order,
-            &plan.energy,
-            &services,
-            &scores,
-            terms,
-        ),
+        knowledge: k,
+        points: &points,
+        services: &services,
+        scores,
+        terms: prizes.scoring.as_ref().map(|s| s.terms.as_slice()),
     };
-    let mission = new_mission(&plan);
+    let mission = parts.mission(&plan);
     let frame = &k.field.frame().clone();
     let first_via = via_positions(frame, &plan.via);
     let extra_sorties: Vec<ExtraSortie> = plans
@@ -706,12 +502,18 @@ pub fn plan_scored<S: Store>(
         .map(|p| {
             Ok(ExtraSortie {
                 id: None,
-                mission: new_mission(p),
+                mission: parts.mission(p),
                 via: via_positions(frame, &p.via),
-                wind: route_wind(p)?,
+                wind: routes.wind(&plan_wind, p)?,
             })
         })
         .collect::<Result<_>>()?;
+    let wind = routes.wind(&plan_wind, &plan)?;
+    let Prizes {
+        file_knowledge,
+        scoring,
+        ..
+    } = prizes;
     let mut planned = PlannedMission {
         id: None,
         mission,
@@ -728,47 +530,428 @@ pub fn plan_scored<S: Store>(
         extra_sorties,
         via: first_via,
         unreachable,
-        wind: route_wind(&plan)?,
+        wind,
     };
     if !request.dry_run {
-        let known = planned
-            .scoring
-            .as_ref()
-            .map(|s| &s.knowledge)
-            .or(file_knowledge.as_ref())
-            .ok_or_else(|| AppError::Invalid("nothing known at the mission time".into()))?;
-        project.check_stored_grid(&known.field)?;
-        let rows = match &planned.scoring {
-            Some(s) => {
-                let energy: Vec<f64> = services.iter().map(|svc| svc.energy_j).collect();
-                score::metadata_rows(project, s, Some(&energy))
-            }
-            None => Vec::new(),
-        };
-        let mission = &planned.mission;
-        let extra = &planned.extra_sorties;
-        // Every sortie in one transaction: all stored or none.
-        let (id, extra_ids) = project.store_mut().write(|tx| {
-            if !rows.is_empty() {
-                score::write_scoring(tx, rows)?;
-            }
-            let id = if mission.stops.is_empty() {
-                None
-            } else {
-                Some(tx.create_mission(mission)?)
-            };
-            let mut extra_ids = Vec::with_capacity(extra.len());
-            for e in extra {
-                extra_ids.push(tx.create_mission(&e.mission)?);
-            }
-            Ok::<_, AppError>((id, extra_ids))
-        })?;
-        planned.id = id;
-        for (e, id) in planned.extra_sorties.iter_mut().zip(extra_ids) {
-            e.id = Some(id);
-        }
+        store_planned(project, &mut planned, &services, file_knowledge.as_ref())?;
     }
     Ok(planned)
+}
+
+/// The plan's first sortie, taken out of `plans` (the sorties that visit a cell); without
+/// one, the first of `empty` unless `refuse` (a stored plan), which then refuses the plan.
+fn first_sortie(
+    plans: &mut Vec<MissionPlan>,
+    empty: Vec<MissionPlan>,
+    refuse: bool,
+    cells: usize,
+) -> Result<MissionPlan> {
+    if !plans.is_empty() {
+        return Ok(plans.remove(0));
+    }
+    if refuse {
+        return Err(AppError::Invalid(format!(
+            "no cell to visit: of {cells} cells none scores S > 0 within the battery's reach; \
+             nothing was stored (a dry run shows the empty plan)"
+        )));
+    }
+    empty
+        .into_iter()
+        .next()
+        .ok_or_else(|| AppError::Invalid("the planner returned no sortie".into()))
+}
+
+/// The energy model a plan prices its routes with (the project's, or `energy_preset`'s with
+/// the project's `[energy]` fields over it), legs and hovers in the forecast wind plus the
+/// margin (still air: the model as it was, to the bit); and that wind.
+fn planning_model<S: Store>(
+    project: &Project<S>,
+    energy_preset: Option<&str>,
+    wind: Option<gleaner_energy::Wind>,
+) -> Result<(MissionEnergyModel, crate::wind::PlanWind)> {
+    let settings = project.settings();
+    let model = match energy_preset {
+        None => energy_model(project)?,
+        Some(preset) => {
+            let mut energy = settings.energy.clone();
+            energy.preset = preset.to_string();
+            flight_model(&energy, "energy preset")?
+        }
+    };
+    let plan_wind = crate::wind::PlanWind::of(&settings.flight, wind)?;
+    Ok((model.with_wind_up_to(plan_wind.planned), plan_wind))
+}
+
+/// The cells as the planner's candidates: each rounded centre (m) with its prize and hover
+/// time (s).
+fn candidates(points: &FlightPoints, prizes: &[f64], services: &[CellService]) -> Vec<Candidate> {
+    points
+        .centres
+        .iter()
+        .zip(prizes)
+        .zip(services)
+        .map(|((&centre, &score), svc)| Candidate {
+            centre,
+            score,
+            hover_s: svc.hover_s,
+        })
+        .collect()
+}
+
+/// The planner, its time limit (s, in [0, 86400]) and its seed: the request's, else the
+/// project's `[planner]`.
+fn planner_choice(settings: &Settings, request: &PlanRequest) -> Result<(Planner, f64, u64)> {
+    let planner = match request.planner {
+        Some(p) => p,
+        None => parse_planner(&settings.planner.solver)?,
+    };
+    let time_limit_s = request
+        .time_limit_s
+        .unwrap_or(settings.planner.time_limit_s);
+    if !(time_limit_s.is_finite() && (0.0..=86_400.0).contains(&time_limit_s)) {
+        return Err(AppError::Invalid(format!(
+            "time limit {} s: expected a number of seconds in [0, 86400]",
+            gleaner_ingest::number(time_limit_s)
+        )));
+    }
+    let seed = request.seed.unwrap_or(settings.planner.seed);
+    Ok((planner, time_limit_s, seed))
+}
+
+/// Each cell's worth to the planner at the mission time: given scores (a file, or values)
+/// or the utility engine's S (+ η·V).
+struct Prizes {
+    /// What is known at t, when the scores were given (else it is the scoring's).
+    file_knowledge: Option<Knowledge>,
+    /// The utility engine's scoring, when it scored.
+    scoring: Option<Scoring>,
+    /// Per cell, in field order.
+    scores: Vec<f64>,
+    /// The mission time t.
+    t: UnixSeconds,
+    /// The anomaly term's form (or where the scores came from), as stored with the mission.
+    anomaly_form: String,
+    /// The weights of S (zeros for given scores).
+    weights: [f64; 4],
+}
+
+impl Prizes {
+    /// What is known at the mission time.
+    fn knowledge(&self) -> Result<&Knowledge> {
+        self.scoring
+            .as_ref()
+            .map(|s| &s.knowledge)
+            .or(self.file_knowledge.as_ref())
+            .ok_or_else(|| AppError::Invalid("nothing known at the mission time".into()))
+    }
+}
+
+/// The request's scores, or the utility engine's (`scored` when the caller computed them).
+fn cell_prizes<S: Store>(
+    project: &Project<S>,
+    request: &PlanRequest,
+    scored: Option<Scoring>,
+    settings: &Settings,
+) -> Result<Prizes> {
+    let given = match (&request.cell_scores, &request.scores) {
+        (Some(v), _) => Some(Given::Values(v)),
+        (None, Some(p)) => Some(Given::File(p)),
+        (None, None) => None,
+    };
+    if let Some(given) = given {
+        let k = gleaner_scoring::state::collection_knowledge(project, request.at, request.history)?;
+        let t = gleaner_scoring::when::mission_time(request.at, k.latest)?;
+        let (scores, form) = match given {
+            Given::File(path) => (read_scores(path, &k)?, "n/a (scores from file)"),
+            Given::Values(v) => {
+                if v.len() != k.field.cells().len() {
+                    return Err(AppError::Invalid(format!(
+                        "{} cell scores given for {} cells",
+                        v.len(),
+                        k.field.cells().len()
+                    )));
+                }
+                (v.clone(), "n/a (scores given)")
+            }
+        };
+        return Ok(Prizes {
+            file_knowledge: Some(k),
+            scoring: None,
+            scores,
+            t,
+            anomaly_form: form.to_string(),
+            weights: [0.0; 4],
+        });
+    }
+    let mut scoring = match scored {
+        Some(scoring) => scoring,
+        None => score::compute(
+            project,
+            &ScoreRequest {
+                at: request.at,
+                history: request.history,
+                probabilities: None,
+                dry_run: true,
+            },
+        )?,
+    };
+    let mut scores: Vec<f64> = scoring.terms.iter().map(|c| c.s).collect();
+    let mut form = scoring.anomaly_form.clone();
+    let eta = settings.utility.variance_weight;
+    if eta > 0.0 {
+        // gleaner's variance-reduction term: the planner routes by S + η·V.
+        match gleaner_scoring::variance_gains(project, &scoring.knowledge, scoring.t)? {
+            Ok(v) => {
+                for (s, v) in scores.iter_mut().zip(&v) {
+                    *s += eta * v;
+                }
+                form = format!("{form}; S + {eta}·V (variance reduction)");
+            }
+            Err(why) => scoring.warnings.push(why),
+        }
+    }
+    Ok(Prizes {
+        file_knowledge: None,
+        t: scoring.t,
+        weights: scoring.weights,
+        scoring: Some(scoring),
+        scores,
+        anomaly_form: form,
+    })
+}
+
+/// The information objective (`information`, `hybrid`): the dynamic field model's filter at
+/// t over what is known, the model fitted on it (into `fitted`) unless the caller (a
+/// campaign) hands its own; `None` when the route maximises the score.
+fn information_objective<'m, S: Store>(
+    project: &Project<S>,
+    request: &PlanRequest,
+    (k, t, scores): (&Knowledge, UnixSeconds, &[f64]),
+    objective: Objective,
+    (dynamic, fitted): (
+        Option<&'m gleaner_kriging::DynamicModel>,
+        &'m mut Option<gleaner_kriging::DynamicModel>,
+    ),
+) -> Result<Option<gleaner_scoring::CellInformation<'m>>> {
+    if matches!(objective, Objective::Score) {
+        return Ok(None);
+    }
+    let settings = project.settings();
+    let name = score::condition_modality(settings, &k.modalities).ok_or_else(|| {
+        AppError::Invalid(
+            "the information objective needs a soil-moisture modality; plan by score".into(),
+        )
+    })?;
+    let modality = gleaner_field::Modality::new(&name)
+        .map_err(|e| AppError::Invalid(format!("modality {name:?}: {e}")))?;
+    let model: &'m gleaner_kriging::DynamicModel = match dynamic {
+        Some(m) => m,
+        None => {
+            let known = t.min(request.history.until);
+            let model = gleaner_scoring::fit_dynamic_model(project, &modality, known, None)?
+                .ok_or_else(|| gleaner_scoring::unfit_dynamic(&modality, "plan by score"))?;
+            fitted.insert(model)
+        }
+    };
+    let info =
+        gleaner_scoring::CellInformation::at(project, k, request.history, &modality, model, t)?;
+    Ok(Some(match objective {
+        Objective::Hybrid => info.blended(scores, settings.planner.information_weight),
+        _ => info,
+    }))
+}
+
+/// The routes of one plan: the energy model, the base, the candidate cells and the detours
+/// around no-fly zones.
+struct Routes<'a> {
+    model: &'a MissionEnergyModel,
+    base: LocalPoint,
+    candidates: &'a [Candidate],
+    detours: Option<&'a Detours>,
+}
+
+impl Routes<'_> {
+    /// The day's sorties by the score or by `information`, split into those that visit a
+    /// cell and those that do not.
+    fn sorties(
+        &self,
+        options: &PlanOptions,
+        sorties: usize,
+        information: Option<&gleaner_scoring::CellInformation>,
+    ) -> Result<(Vec<MissionPlan>, Vec<MissionPlan>)> {
+        let (model, base, candidates, detours) =
+            (self.model, self.base, self.candidates, self.detours);
+        let planned = match information {
+            None => plan_sorties_routed(model, base, candidates, options, sorties, detours),
+            Some(info) => plan_sorties_valued_routed(
+                model,
+                base,
+                candidates,
+                |cells| info.value(cells),
+                options,
+                sorties,
+                detours,
+            )
+            .map(|mut plans| {
+                // Each sortie's worth is what it adds to the ones before it.
+                let mut before: Vec<usize> = Vec::new();
+                for p in &mut plans {
+                    let v0 = info.value(&before);
+                    before.extend(&p.order);
+                    p.total_score = info.value(&before) - v0;
+                }
+                plans
+            }),
+        };
+        Ok(planned
+            .map_err(|e| AppError::core("planner", e))?
+            .into_iter()
+            .partition(|p| !p.order.is_empty()))
+    }
+
+    /// The paper's greedy route over the same candidates (the baseline a plan is shown
+    /// against).
+    fn greedy(&self, options: &PlanOptions) -> Result<MissionPlan> {
+        Ok(plan_sorties_routed(
+            self.model,
+            self.base,
+            self.candidates,
+            &PlanOptions {
+                planner: Planner::Greedy,
+                ..*options
+            },
+            1,
+            self.detours,
+        )
+        .map_err(|e| AppError::core("planner", e))?
+        .remove(0))
+    }
+
+    /// A route's wind: the plan's, each leg's, and the strongest it stands.
+    fn wind(
+        &self,
+        plan_wind: &crate::wind::PlanWind,
+        plan: &MissionPlan,
+    ) -> Result<crate::wind::RouteWind> {
+        let visits: Vec<gleaner_energy::CellVisit> = plan
+            .order
+            .iter()
+            .map(|&k| gleaner_energy::CellVisit {
+                centre: self.candidates[k].centre,
+                hover_s: self.candidates[k].hover_s,
+            })
+            .collect();
+        let strongest = if visits.is_empty() {
+            None
+        } else {
+            crate::wind::strongest(
+                self.model,
+                self.base,
+                &visits,
+                &plan.via,
+                (plan_wind.forecast.from_deg, plan_wind.planned.speed_mps),
+            )?
+        };
+        Ok(crate::wind::RouteWind {
+            wind: *plan_wind,
+            legs: crate::wind::legs(&plan.energy),
+            strongest,
+        })
+    }
+}
+
+/// What every sortie of one plan shares, to make each its mission.
+struct MissionParts<'a> {
+    created_at: UnixSeconds,
+    planned_at: UnixSeconds,
+    solver: &'static str,
+    seed: u64,
+    weights: [f64; 4],
+    anomaly_form: String,
+    profile: FlightProfile,
+    knowledge: &'a Knowledge,
+    points: &'a FlightPoints,
+    services: &'a [CellService],
+    scores: &'a [f64],
+    terms: Option<&'a [gleaner_utility::CellTerms]>,
+}
+
+impl MissionParts<'_> {
+    /// The mission of one sortie's route.
+    fn mission(&self, plan: &MissionPlan) -> NewMission {
+        NewMission {
+            created_at: self.created_at,
+            kind: MissionKind::Adaptive,
+            planned_at: self.planned_at,
+            solver: self.solver.to_string(),
+            seed: self.seed,
+            weights: self.weights,
+            anomaly_form: self.anomaly_form.clone(),
+            total_score: plan.total_score,
+            profile: self.profile,
+            energy: breakdown(&plan.energy),
+            return_distance_m: if plan.order.is_empty() {
+                0.0
+            } else {
+                plan.energy.legs.last().map_or(0.0, |l| l.distance_m)
+            },
+            stops: stops(
+                self.knowledge,
+                self.points,
+                &plan.order,
+                &plan.energy,
+                self.services,
+                self.scores,
+                self.terms,
+            ),
+        }
+    }
+}
+
+/// Stores the plan's scoring and every sortie with stops in one transaction: all stored or
+/// none; sets their ids.
+fn store_planned<S: Store>(
+    project: &mut Project<S>,
+    planned: &mut PlannedMission,
+    services: &[CellService],
+    file_knowledge: Option<&Knowledge>,
+) -> Result<()> {
+    let known = planned
+        .scoring
+        .as_ref()
+        .map(|s| &s.knowledge)
+        .or(file_knowledge)
+        .ok_or_else(|| AppError::Invalid("nothing known at the mission time".into()))?;
+    project.check_stored_grid(&known.field)?;
+    let rows = match &planned.scoring {
+        Some(s) => {
+            let energy: Vec<f64> = services.iter().map(|svc| svc.energy_j).collect();
+            score::metadata_rows(project, s, Some(&energy))
+        }
+        None => Vec::new(),
+    };
+    let mission = &planned.mission;
+    let extra = &planned.extra_sorties;
+    let (id, extra_ids) = project.store_mut().write(|tx| {
+        if !rows.is_empty() {
+            score::write_scoring(tx, rows)?;
+        }
+        let id = if mission.stops.is_empty() {
+            None
+        } else {
+            Some(tx.create_mission(mission)?)
+        };
+        let mut extra_ids = Vec::with_capacity(extra.len());
+        for e in extra {
+            extra_ids.push(tx.create_mission(&e.mission)?);
+        }
+        Ok::<_, AppError>((id, extra_ids))
+    })?;
+    planned.id = id;
+    for (e, id) in planned.extra_sorties.iter_mut().zip(extra_ids) {
+        e.id = Some(id);
+    }
+    Ok(())
 }
 
 /// Refuses a route the energy model says the budget cannot carry.

@@ -5,7 +5,9 @@ use std::collections::{HashMap, HashSet};
 
 use gleaner_field::{CellIndex, SensorId, UnixSeconds};
 use gleaner_ingest::time::format_rfc3339;
-use gleaner_store::{ConflictPolicy, MissionId, MissionStatus, Store, StoreWrite, VisitRecord};
+use gleaner_store::{
+    ConflictPolicy, MissionId, MissionRecord, MissionStatus, Store, StoreWrite, VisitRecord,
+};
 
 use crate::ingest::{IngestRequest, Parsed, StatePolicy, known_sensors, parse_files, store_parsed};
 use crate::progress::Progress;
@@ -81,141 +83,21 @@ pub fn record_parsed<S: Store>(
     parsed: Option<Parsed>,
     clock_now: UnixSeconds,
 ) -> Result<RecordOutcome> {
-    let mission = project
-        .store()
-        .mission(request.mission)?
-        .ok_or_else(|| AppError::NotFound {
-            what: "mission",
-            id: format!("#{}", request.mission),
-        })?;
-    crate::missions::refuse_cancelled(&mission, "recorded")?;
-    if mission.status == MissionStatus::Flown && !request.amend {
-        return Err(AppError::Conflict(format!(
-            "mission #{} was already recorded as flown{}; pass --amend to replace that record",
-            request.mission,
-            mission
-                .flown_at
-                .map_or(String::new(), |t| format!(" at {}", format_rfc3339(t)))
-        )));
-    }
-    gleaner_scoring::when::check("collection time", request.at)?;
-    let planned_at = mission.mission.planned_at;
-    // Without a collection time, the flight was no earlier than the newest reading it
-    // brought back (a same-day reading is not "after the flight"), nor than its planned time.
-    let newest_brought = parsed.as_ref().and_then(|p| {
-        p.files
-            .iter()
-            .flat_map(|(_, _, readings, _)| readings.rows.iter().map(|r| r.t))
-            .max()
-    });
-    let at = request
-        .at
-        .unwrap_or_else(|| newest_brought.map_or(planned_at, |t| t.max(planned_at)));
-    if at < planned_at {
-        return Err(AppError::Invalid(format!(
-            "collection time {} is before mission #{}'s planned time {}: a mission is flown at \
-             or after the time it was planned for; nothing was recorded",
-            format_rfc3339(at),
-            request.mission,
-            format_rfc3339(planned_at)
-        )));
-    }
+    let mission = recordable_mission(project, request)?;
+    let at = collection_time(request, &mission, parsed.as_ref())?;
     if mission.mission.stops.is_empty() {
         return Err(AppError::Invalid(format!(
             "mission #{} has no stops: there is no flight to record",
             request.mission
         )));
     }
-    let labels: Vec<String> = match &request.cells {
-        Some(c) => c.clone(),
-        None => mission
-            .mission
-            .stops
-            .iter()
-            .map(|s| s.cell.to_string())
-            .collect(),
-    };
-    let cells = project.store().cells()?;
-    let mut visits = Vec::new();
-    let mut collected: Vec<(SensorId, UnixSeconds)> = Vec::new();
-    let mut cell_of: HashMap<SensorId, CellIndex> = HashMap::new();
-    for cell in &cells {
-        for s in &cell.sensors {
-            cell_of.insert(s.clone(), cell.index);
-        }
-    }
-    let planned: HashSet<CellIndex> = mission.mission.stops.iter().map(|s| s.cell).collect();
-    let planned_labels: Vec<String> = mission
-        .mission
-        .stops
-        .iter()
-        .map(|s| s.cell.to_string())
-        .collect();
-    if labels.is_empty() {
-        return Err(AppError::Invalid(
-            "no cell visited: list the cells the flight visited".into(),
-        ));
-    }
-    let mut seen = HashSet::new();
-    for (order, label) in labels.iter().enumerate() {
-        let index = CellIndex::parse(label.trim()).ok_or_else(|| {
-            AppError::Invalid(format!(
-                "cell {label:?}: expected a cell id like x3y-1 (see `gleaner cells`)"
-            ))
-        })?;
-        let cell = cells
-            .iter()
-            .find(|c| c.index == index)
-            .ok_or_else(|| AppError::NotFound {
-                what: "cell",
-                id: format!("{label} in the project's grid"),
-            })?;
-        if !seen.insert(index) {
-            return Err(AppError::Invalid(format!("cell {label} is listed twice")));
-        }
-        if !planned.contains(&index) {
-            return Err(AppError::Invalid(format!(
-                "cell {label} is not a stop of mission #{} (its stops: {}); nothing was recorded",
-                request.mission,
-                planned_labels.join(",")
-            )));
-        }
-        collected.extend(cell.sensors.iter().map(|s| (s.clone(), at)));
-        visits.push(VisitRecord {
-            order: order as u32,
-            cell: index,
-            arrived_at: Some(at),
-            energy_j: None,
-        });
-    }
-    let visited: HashSet<&SensorId> = collected.iter().map(|(s, _)| s).collect();
+    let flown = Flown::of(project, request, &mission, at)?;
     if let Some(parsed) = &parsed {
-        for (path, _, readings, _) in &parsed.files {
-            for row in &readings.rows {
-                let Some(sensor) = readings.sensors.get(row.sensor as usize) else {
-                    continue;
-                };
-                if !visited.contains(sensor) {
-                    return Err(AppError::Invalid(format!(
-                        "{}: sensor {sensor} is in cell {}, which this flight did not visit \
-                             (visited: {}); nothing was recorded",
-                        path.display(),
-                        cell_of.get(sensor).map_or("?".into(), ToString::to_string),
-                        labels.join(",")
-                    )));
-                }
-                if row.t > at {
-                    return Err(AppError::Invalid(format!(
-                        "{}: reading of {sensor} at {} is after the collection time {}; \
-                             nothing was recorded",
-                        path.display(),
-                        format_rfc3339(row.t),
-                        format_rfc3339(at)
-                    )));
-                }
-            }
-        }
+        flown.check_brought_back(parsed)?;
     }
+    let Flown {
+        visits, collected, ..
+    } = flown;
     let settings = project.settings().clone();
     let id = request.mission;
     let amend = request.amend;
@@ -250,6 +132,185 @@ pub fn record_parsed<S: Store>(
         readings_unchanged: unchanged,
         amended: mission.status == MissionStatus::Flown,
     })
+}
+
+/// The mission to record: it exists, is not cancelled and, unless `amend`, not yet flown.
+fn recordable_mission<S: Store>(
+    project: &Project<S>,
+    request: &RecordRequest,
+) -> Result<MissionRecord> {
+    let mission = project
+        .store()
+        .mission(request.mission)?
+        .ok_or_else(|| AppError::NotFound {
+            what: "mission",
+            id: format!("#{}", request.mission),
+        })?;
+    crate::missions::refuse_cancelled(&mission, "recorded")?;
+    if mission.status == MissionStatus::Flown && !request.amend {
+        return Err(AppError::Conflict(format!(
+            "mission #{} was already recorded as flown{}; pass --amend to replace that record",
+            request.mission,
+            mission
+                .flown_at
+                .map_or(String::new(), |t| format!(" at {}", format_rfc3339(t)))
+        )));
+    }
+    Ok(mission)
+}
+
+/// The collection time: the request's, else the planned time or the newest reading brought
+/// back when that is later; never before the planned time.
+fn collection_time(
+    request: &RecordRequest,
+    mission: &MissionRecord,
+    parsed: Option<&Parsed>,
+) -> Result<UnixSeconds> {
+    gleaner_scoring::when::check("collection time", request.at)?;
+    let planned_at = mission.mission.planned_at;
+    // Without a collection time, the flight was no earlier than the newest reading it
+    // brought back (a same-day reading is not "after the flight"), nor than its planned time.
+    let newest_brought = parsed.and_then(|p| {
+        p.files
+            .iter()
+            .flat_map(|(_, _, readings, _)| readings.rows.iter().map(|r| r.t))
+            .max()
+    });
+    let at = request
+        .at
+        .unwrap_or_else(|| newest_brought.map_or(planned_at, |t| t.max(planned_at)));
+    if at < planned_at {
+        return Err(AppError::Invalid(format!(
+            "collection time {} is before mission #{}'s planned time {}: a mission is flown at \
+             or after the time it was planned for; nothing was recorded",
+            format_rfc3339(at),
+            request.mission,
+            format_rfc3339(planned_at)
+        )));
+    }
+    Ok(at)
+}
+
+/// The flight as recorded: the cells visited (each a stop of the mission, once) and their
+/// sensors, collected at `at`.
+struct Flown {
+    /// The visits, in order.
+    visits: Vec<VisitRecord>,
+    /// Every visited cell's sensors, collected at `at`.
+    collected: Vec<(SensorId, UnixSeconds)>,
+    /// Each sensor's cell, over the grid.
+    cell_of: HashMap<SensorId, CellIndex>,
+    /// The visited cells' ids as given.
+    labels: Vec<String>,
+    /// The collection time.
+    at: UnixSeconds,
+}
+
+impl Flown {
+    /// The request's visited cells (else the planned stops), checked against the grid and
+    /// the mission's stops.
+    fn of<S: Store>(
+        project: &Project<S>,
+        request: &RecordRequest,
+        mission: &MissionRecord,
+        at: UnixSeconds,
+    ) -> Result<Self> {
+        let stops = &mission.mission.stops;
+        let planned_labels: Vec<String> = stops.iter().map(|s| s.cell.to_string()).collect();
+        let labels: Vec<String> = match &request.cells {
+            Some(c) => c.clone(),
+            None => planned_labels.clone(),
+        };
+        let cells = project.store().cells()?;
+        let mut visits = Vec::new();
+        let mut collected: Vec<(SensorId, UnixSeconds)> = Vec::new();
+        let mut cell_of: HashMap<SensorId, CellIndex> = HashMap::new();
+        for cell in &cells {
+            for s in &cell.sensors {
+                cell_of.insert(s.clone(), cell.index);
+            }
+        }
+        let planned: HashSet<CellIndex> = stops.iter().map(|s| s.cell).collect();
+        if labels.is_empty() {
+            return Err(AppError::Invalid(
+                "no cell visited: list the cells the flight visited".into(),
+            ));
+        }
+        let mut seen = HashSet::new();
+        for (order, label) in labels.iter().enumerate() {
+            let index = CellIndex::parse(label.trim()).ok_or_else(|| {
+                AppError::Invalid(format!(
+                    "cell {label:?}: expected a cell id like x3y-1 (see `gleaner cells`)"
+                ))
+            })?;
+            let cell =
+                cells
+                    .iter()
+                    .find(|c| c.index == index)
+                    .ok_or_else(|| AppError::NotFound {
+                        what: "cell",
+                        id: format!("{label} in the project's grid"),
+                    })?;
+            if !seen.insert(index) {
+                return Err(AppError::Invalid(format!("cell {label} is listed twice")));
+            }
+            if !planned.contains(&index) {
+                return Err(AppError::Invalid(format!(
+                    "cell {label} is not a stop of mission #{} (its stops: {}); nothing was recorded",
+                    request.mission,
+                    planned_labels.join(",")
+                )));
+            }
+            collected.extend(cell.sensors.iter().map(|s| (s.clone(), at)));
+            visits.push(VisitRecord {
+                order: order as u32,
+                cell: index,
+                arrived_at: Some(at),
+                energy_j: None,
+            });
+        }
+        Ok(Self {
+            visits,
+            collected,
+            cell_of,
+            labels,
+            at,
+        })
+    }
+
+    /// Refuses a reading brought back from a sensor outside the visited cells, or dated
+    /// after the collection.
+    fn check_brought_back(&self, parsed: &Parsed) -> Result<()> {
+        let visited: HashSet<&SensorId> = self.collected.iter().map(|(s, _)| s).collect();
+        for (path, _, readings, _) in &parsed.files {
+            for row in &readings.rows {
+                let Some(sensor) = readings.sensors.get(row.sensor as usize) else {
+                    continue;
+                };
+                if !visited.contains(sensor) {
+                    return Err(AppError::Invalid(format!(
+                        "{}: sensor {sensor} is in cell {}, which this flight did not visit \
+                             (visited: {}); nothing was recorded",
+                        path.display(),
+                        self.cell_of
+                            .get(sensor)
+                            .map_or("?".into(), ToString::to_string),
+                        self.labels.join(",")
+                    )));
+                }
+                if row.t > self.at {
+                    return Err(AppError::Invalid(format!(
+                        "{}: reading of {sensor} at {} is after the collection time {}; \
+                             nothing was recorded",
+                        path.display(),
+                        format_rfc3339(row.t),
+                        format_rfc3339(self.at)
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -75,61 +75,13 @@ pub use gleaner_mission::{REPLAN_ITERATIONS, REPLAN_TIME_LIMIT_S};
 /// an energy left that is not a finite positive number or exceeds the battery, not enough
 /// energy for the leg home with the reserve (land now), invalid `[energy]` settings.
 pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result<Replan> {
-    let parent: MissionRecord = crate::view::mission(project, request.mission)?;
-    crate::missions::refuse_cancelled(&parent, "re-planned")?;
-    if parent.status == MissionStatus::Flown {
-        return Err(AppError::Invalid(format!(
-            "mission #{} was already recorded as flown: nothing to re-plan",
-            parent.id
-        )));
-    }
-    let field_settings = &project.settings().field;
-    if field_settings.geofence.is_some() || field_settings.no_fly.is_some() {
-        // The continuation's legs are straight: never hand over one that may cross a zone.
-        return Err(AppError::Invalid(
-            "re-planning in the air does not route around no-fly zones yet, and this project \
-             sets [field] geofence or no_fly: fly the planned mission or return to launch"
-                .into(),
-        ));
-    }
+    let parent = replannable(project, request)?;
     let stops = &parent.mission.stops;
-    if request.after_stop > stops.len() {
-        return Err(AppError::Invalid(format!(
-            "mission #{} has {} stops: --after-stop {} is beyond them (0 = over the base)",
-            parent.id,
-            stops.len(),
-            request.after_stop
-        )));
-    }
-    let config = project.settings().energy.to_core()?;
-    let (capacity_j, reserve_fraction) =
-        (config.battery.capacity_j, config.battery.reserve_fraction);
-    let left = request.energy_left_j;
-    if !(left.is_finite() && left > 0.0 && left <= capacity_j) {
-        return Err(AppError::Invalid(format!(
-            "energy left {left} J: must be a positive number of joules, at most the battery's \
-             {capacity_j:.1} J"
-        )));
-    }
-    let reserve_j = capacity_j * reserve_fraction;
+    let (left, reserve_j) = energy_left(project, request)?;
     // Priced by the very model the files' writers recompute with, at the mission's speed and
     // altitude (what its files command).
     let stored = crate::view::export_energy_model(project, &parent)?;
-    // The wind now, if given (plus the margin), else the one the mission was planned in.
-    let plan_wind = match request.wind {
-        Some(w) => {
-            let mut flight = project.settings().flight;
-            if let Some(m) = request.wind_margin_mps {
-                flight.wind_margin_mps = m;
-            }
-            crate::wind::PlanWind::of(&flight, Some(w))?
-        }
-        None => crate::wind::PlanWind {
-            forecast: stored.wind,
-            margin_mps: 0.0,
-            planned: stored.wind,
-        },
-    };
+    let plan_wind = replan_wind(project, request, &stored)?;
     let export = gleaner_energy::FlightEnergyModel {
         wind: plan_wind.planned,
         ..stored
@@ -177,27 +129,7 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
             )),
             other => AppError::core("re-planning", other),
         })?;
-    let kept: Vec<StopRecord> = plan
-        .order
-        .iter()
-        .enumerate()
-        .map(|(n, &k)| {
-            let (leg, cell) = (&plan.energy.legs[n + 1], &plan.energy.cells[n + 1]);
-            StopRecord {
-                order: n as u32,
-                leg_distance_m: leg.distance_m,
-                leg_energy_j: leg.energy_j,
-                hover_s: cell.hover_s,
-                hover_j: cell.hover_j,
-                comm_j: cell.comm_j,
-                ..remaining[k].clone()
-            }
-        })
-        .collect();
-    let dropped: Vec<CellIndex> = (0..remaining.len())
-        .filter(|k| !plan.order.contains(k))
-        .map(|k| remaining[k].cell)
-        .collect();
+    let (kept, dropped) = kept_and_dropped(&plan, remaining);
     let visits: Vec<gleaner_energy::CellVisit> = std::iter::once(gleaner_energy::CellVisit {
         centre: start_local,
         hover_s: 0.0,
@@ -240,4 +172,103 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
         solve_seconds: plan.solve_seconds,
         wind,
     })
+}
+
+/// The mission to re-plan: planned (neither cancelled nor flown), in a project without
+/// geofence or no-fly zones, with `after_stop` within its stops.
+fn replannable<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result<MissionRecord> {
+    let parent: MissionRecord = crate::view::mission(project, request.mission)?;
+    crate::missions::refuse_cancelled(&parent, "re-planned")?;
+    if parent.status == MissionStatus::Flown {
+        return Err(AppError::Invalid(format!(
+            "mission #{} was already recorded as flown: nothing to re-plan",
+            parent.id
+        )));
+    }
+    let field_settings = &project.settings().field;
+    if field_settings.geofence.is_some() || field_settings.no_fly.is_some() {
+        // The continuation's legs are straight: never hand over one that may cross a zone.
+        return Err(AppError::Invalid(
+            "re-planning in the air does not route around no-fly zones yet, and this project \
+             sets [field] geofence or no_fly: fly the planned mission or return to launch"
+                .into(),
+        ));
+    }
+    let stops = &parent.mission.stops;
+    if request.after_stop > stops.len() {
+        return Err(AppError::Invalid(format!(
+            "mission #{} has {} stops: --after-stop {} is beyond them (0 = over the base)",
+            parent.id,
+            stops.len(),
+            request.after_stop
+        )));
+    }
+    Ok(parent)
+}
+
+/// The energy left (J, checked: positive, at most the battery's capacity) and the battery's
+/// reserve, J.
+fn energy_left<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result<(f64, f64)> {
+    let config = project.settings().energy.to_core()?;
+    let (capacity_j, reserve_fraction) =
+        (config.battery.capacity_j, config.battery.reserve_fraction);
+    let left = request.energy_left_j;
+    if !(left.is_finite() && left > 0.0 && left <= capacity_j) {
+        return Err(AppError::Invalid(format!(
+            "energy left {left} J: must be a positive number of joules, at most the battery's \
+             {capacity_j:.1} J"
+        )));
+    }
+    Ok((left, capacity_j * reserve_fraction))
+}
+
+/// The wind now, if given (plus the margin), else the one the mission was planned in.
+fn replan_wind<S: Store>(
+    project: &Project<S>,
+    request: &ReplanRequest,
+    stored: &FlightEnergyModel,
+) -> Result<crate::wind::PlanWind> {
+    Ok(match request.wind {
+        Some(w) => {
+            let mut flight = project.settings().flight;
+            if let Some(m) = request.wind_margin_mps {
+                flight.wind_margin_mps = m;
+            }
+            crate::wind::PlanWind::of(&flight, Some(w))?
+        }
+        None => crate::wind::PlanWind {
+            forecast: stored.wind,
+            margin_mps: 0.0,
+            planned: stored.wind,
+        },
+    })
+}
+
+/// The continuation's stops, re-priced leg by leg, and the remaining cells it drops.
+fn kept_and_dropped(
+    plan: &gleaner_mission::MissionPlan,
+    remaining: &[StopRecord],
+) -> (Vec<StopRecord>, Vec<CellIndex>) {
+    let kept: Vec<StopRecord> = plan
+        .order
+        .iter()
+        .enumerate()
+        .map(|(n, &k)| {
+            let (leg, cell) = (&plan.energy.legs[n + 1], &plan.energy.cells[n + 1]);
+            StopRecord {
+                order: n as u32,
+                leg_distance_m: leg.distance_m,
+                leg_energy_j: leg.energy_j,
+                hover_s: cell.hover_s,
+                hover_j: cell.hover_j,
+                comm_j: cell.comm_j,
+                ..remaining[k].clone()
+            }
+        })
+        .collect();
+    let dropped: Vec<CellIndex> = (0..remaining.len())
+        .filter(|k| !plan.order.contains(k))
+        .map(|k| remaining[k].cell)
+        .collect();
+    (kept, dropped)
 }

@@ -37,239 +37,18 @@ use gleaner_app::{ScoreRequest, compute, score};
 use crate::campaign_flight::{FlightConditions, FlightDay, fly_in_wind};
 use crate::simulate::{Truth, fly_buffered, fly_cells};
 
-/// A utility term, for ablations.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Term {
-    /// Freshness F (alpha).
-    Freshness,
-    /// Anomaly A (beta).
-    Anomaly,
-    /// Model uncertainty U (gamma).
-    Uncertainty,
-    /// Redundancy R (delta).
-    Redundancy,
-}
+mod run;
+mod strategy;
+mod summary;
 
-/// How a run chooses the cells of each mission.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Strategy {
-    /// Every cell, in as many sorties as it takes (the exploration plan at each mission).
-    Exhaustive,
-    /// Longest-unvisited first: score = days since the cell's last collection.
-    RoundRobin,
-    /// S with freshness only (alpha = 1, the other weights 0), default planner.
-    Freshness,
-    /// Uniform random scores in (0, 1], seeded, default planner.
-    Random,
-    /// Every cell worth the same, the paper's greedy insertion: the nearest cells first.
-    Nearest,
-    /// The paper's method: its S (docs/method.md §2 at the paper's values,
-    /// [`gleaner_app::settings::UtilitySection::paper`], whatever the project's), its greedy planner.
-    Paper,
-    /// gleaner's method: the project's utility settings made gleaner's
-    /// ([`gleaner_app::settings::UtilitySection::gleaner`]: gated S with the drift freshness, the
-    /// bounded anomaly, γ = δ = 0; plus η·V when `[utility] variance_weight` is set), the
-    /// default planner.
-    Gleaner,
-    /// gleaner's method with one utility term switched off (with α = 0 the gated S is 0
-    /// everywhere: nothing is worth a flight).
-    Without(Term),
-    /// Expected reduction of the field's posterior variance (greedy marginal gains of the
-    /// kriging model fitted on the history), default planner.
-    Variance,
-    /// The information objective (docs/method.md §7): the route whose readings remove the
-    /// most posterior variance of the dynamic field model (fitted on the history, run as a
-    /// filter over what is known at each mission), summed over every sensor; marginal-gain
-    /// orienteering ([`gleaner_app::Objective::Information`]).
-    Information,
-    /// The oracle's flyable twin: each cell worth its sensors' *predicted* squared error
-    /// before the flight — the campaign estimator's variance from what is known, nothing
-    /// clairvoyant — routed by the default planner.
-    Expected,
-    /// gleaner's earlier method ([`gleaner_app::settings::UtilitySection::gated`]: gated S with a
-    /// 14-day freshness half-life and the bounded anomaly, the project's γ and δ), the
-    /// default planner.
-    Gated,
-    /// gleaner's score and the information objective together
-    /// ([`gleaner_app::Objective::Hybrid`]): gleaner's utility settings, a route worth its
-    /// cells' share of the total S blended with the share of the dynamic field model's
-    /// posterior variance its readings remove (`[planner] information_weight`), marginal-gain
-    /// orienteering.
-    Hybrid,
-    /// A clairvoyant yardstick, not a strategy a UAV could fly: each cell is worth the squared
-    /// error its sensors' pre-flight model-based estimates have against the values the flight
-    /// will bring back (the truth stamped T − period, (m³/m³)² ×10⁶ for soil water), routed by
-    /// the default planner. What choosing cells could buy at the budget if one knew the
-    /// answer (up to the planner, and to the neighbours' estimates a visit also improves); never
-    /// among [`Strategy::ALL`] nor counted as a same-energy competitor.
-    Oracle,
-}
-
-impl Strategy {
-    /// Every strategy, ablations included, in report order.
-    pub const ALL: [Strategy; 16] = [
-        Strategy::Gleaner,
-        Strategy::Paper,
-        Strategy::Variance,
-        Strategy::Information,
-        Strategy::Freshness,
-        Strategy::RoundRobin,
-        Strategy::Random,
-        Strategy::Nearest,
-        Strategy::Exhaustive,
-        Strategy::Without(Term::Freshness),
-        Strategy::Without(Term::Anomaly),
-        Strategy::Without(Term::Uncertainty),
-        Strategy::Without(Term::Redundancy),
-        Strategy::Gated,
-        Strategy::Expected,
-        Strategy::Hybrid,
-    ];
-
-    /// The main strategies (`main`): gleaner, paper, variance, information, freshness,
-    /// round-robin, random, nearest, exhaustive — the first nine of [`Strategy::ALL`], no
-    /// ablations.
-    pub const MAIN: &'static [Strategy] = Self::ALL.as_slice().split_at(9).0;
-
-    /// Yardsticks run only when named: they see the truth (see [`Strategy::Oracle`]).
-    pub const YARDSTICKS: [Strategy; 1] = [Strategy::Oracle];
-
-    /// Whether the strategy sees the truth (a yardstick, not a competitor).
-    pub fn is_yardstick(self) -> bool {
-        Self::YARDSTICKS.contains(&self)
-    }
-
-    /// The strategy's name in outputs and on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Strategy::Exhaustive => "exhaustive",
-            Strategy::RoundRobin => "round-robin",
-            Strategy::Freshness => "freshness",
-            Strategy::Random => "random",
-            Strategy::Nearest => "nearest",
-            Strategy::Paper => "paper",
-            Strategy::Gleaner => "gleaner",
-            Strategy::Without(Term::Freshness) => "no-freshness",
-            Strategy::Without(Term::Anomaly) => "no-anomaly",
-            Strategy::Without(Term::Uncertainty) => "no-uncertainty",
-            Strategy::Without(Term::Redundancy) => "no-redundancy",
-            Strategy::Variance => "variance",
-            Strategy::Information => "information",
-            Strategy::Hybrid => "hybrid",
-            Strategy::Expected => "expected-error",
-            Strategy::Gated => "gated",
-            Strategy::Oracle => "oracle",
-        }
-    }
-
-    /// Parses a name of [`Strategy::name`].
-    pub fn parse(name: &str) -> Result<Self> {
-        Self::ALL
-            .iter()
-            .chain(&Self::YARDSTICKS)
-            .copied()
-            .find(|s| s.name() == name)
-            .ok_or_else(|| {
-                AppError::Invalid(format!(
-                    "unknown strategy {name:?}: expected one of {}, or the yardstick {}",
-                    Self::ALL.map(Strategy::name).join(", "),
-                    Self::YARDSTICKS.map(Strategy::name).join(", ")
-                ))
-            })
-    }
-
-    /// Strategies by name, in order, duplicates next to each other dropped: `all` is
-    /// [`Strategy::ALL`], `main` [`Strategy::MAIN`].
-    pub fn parse_list<S: AsRef<str>>(names: &[S]) -> Result<Vec<Self>> {
-        let mut out = Vec::new();
-        for n in names {
-            match n.as_ref() {
-                "all" => out.extend(Self::ALL),
-                "main" => out.extend_from_slice(Self::MAIN),
-                other => out.push(Self::parse(other)?),
-            }
-        }
-        out.dedup();
-        if out.is_empty() {
-            return Err(AppError::Invalid("no strategy named".into()));
-        }
-        Ok(out)
-    }
-
-    /// The run's settings: the campaign's with this strategy's weights and planner.
-    fn settings(self, base: &Settings) -> Settings {
-        let mut s = base.clone();
-        match self {
-            Strategy::Paper => s.utility = s.utility.paper(),
-            Strategy::Gleaner | Strategy::Without(_) | Strategy::Hybrid => {
-                s.utility = s.utility.gleaner()
-            }
-            Strategy::Gated => s.utility = s.utility.gated(),
-            _ => {}
-        }
-        let u = &mut s.utility;
-        match self {
-            Strategy::Freshness => {
-                (u.alpha, u.beta, u.gamma, u.delta) = (1.0, 0.0, 0.0, 0.0);
-                u.variance_weight = 0.0;
-            }
-            Strategy::Without(Term::Freshness) => u.alpha = 0.0,
-            Strategy::Without(Term::Anomaly) => u.beta = 0.0,
-            Strategy::Without(Term::Uncertainty) => u.gamma = 0.0,
-            Strategy::Without(Term::Redundancy) => u.delta = 0.0,
-            _ => {}
-        }
-        s
-    }
-
-    /// A rough rank of a run's cost (higher: longer), for scheduling the longest runs first:
-    /// exhaustive flies several sorties per mission and records each; the drift freshness
-    /// reads and scores its window at every scoring; given scores skip the utility engine's
-    /// second scoring. Only the order of the runs depends on it, never a result.
-    fn expected_cost(self) -> u8 {
-        match self {
-            Strategy::Exhaustive => 4,
-            Strategy::Gleaner | Strategy::Without(_) | Strategy::Hybrid => 3,
-            Strategy::Freshness | Strategy::Gated | Strategy::Paper | Strategy::Information => 2,
-            Strategy::Variance
-            | Strategy::RoundRobin
-            | Strategy::Random
-            | Strategy::Oracle
-            | Strategy::Expected => 1,
-            Strategy::Nearest => 0,
-        }
-    }
-
-    fn planner(self) -> Planner {
-        match self {
-            Strategy::Paper | Strategy::Nearest => Planner::Greedy,
-            _ => Planner::Default,
-        }
-    }
-
-    /// How a run of this strategy chooses its cells besides its settings: the strategy itself
-    /// when [`run_one`] gives the planner its own per-cell scores or explores (exhaustive);
-    /// `None` when the utility engine scores by the run's settings alone. Two runs with the
-    /// same selection and the same settings ([`run_settings`]) compute the same results.
-    fn selection(self) -> Option<Strategy> {
-        match self {
-            Strategy::Exhaustive
-            | Strategy::RoundRobin
-            | Strategy::Random
-            | Strategy::Nearest
-            | Strategy::Variance
-            | Strategy::Information
-            | Strategy::Hybrid
-            | Strategy::Expected
-            | Strategy::Oracle => Some(self),
-            Strategy::Freshness
-            | Strategy::Paper
-            | Strategy::Gleaner
-            | Strategy::Without(_)
-            | Strategy::Gated => None,
-        }
-    }
-}
+#[cfg(test)]
+use run::oracle_scores;
+use run::run_one;
+pub use strategy::{Strategy, Term};
+pub use summary::{
+    BLOCK_DAYS, CampaignSummary, Interval, METRICS, MIN_BLOCKS, Summary, block_interval,
+    block_means, campaign_summary, every, interval, metric, summarise,
+};
 
 /// A run's settings: the strategy's ([`Strategy::settings`]) with the run's budget, planner
 /// and seed.
@@ -857,6 +636,70 @@ pub fn run_campaign(
     truth: &Truth,
     progress: &(dyn Progress + Sync),
 ) -> Result<CampaignResult> {
+    check_request(request)?;
+    let mut history = truth.available_by(request.history_until);
+    if let Some(from) = request.history_from {
+        history.rows.retain(|r| r.t >= from);
+    }
+    // The field model, fitted once on the history (the exploration history every run shares).
+    let probe = probe_project(request, truth, &history)?;
+    let modality = target_modality(&probe, request.modality.as_deref())?;
+    let gleaner_app::shortcuts::Models {
+        levels: model,
+        changes,
+        dynamic,
+        step_s,
+    } = fit_models(&probe, &modality, request.history_until)?;
+    let names: Vec<String> = probe
+        .store()
+        .modalities()?
+        .into_iter()
+        .map(|m| m.modality.to_string())
+        .collect();
+    let class_name = gleaner_app::shortcuts::condition_modality(probe.settings(), &names);
+    let (dir, probe_settings, template) = probe.into_parts();
+    let mut template = check_exhaustive(request, &dir, &probe_settings, template)?;
+    // Every run's first recorded flight would otherwise rebuild the cell-summary cache from
+    // the whole history; built once here, every copy starts with it.
+    template.write(|tx| gleaner_app::shortcuts::prepare_cache(tx))?;
+    let series = truth_series(truth, &modality.to_string());
+    let class_series = match &class_name {
+        Some(c) if *c != modality.to_string() => truth_series(truth, c),
+        _ => series.clone(),
+    };
+    let events = campaign_events(request, truth, &modality);
+    let shared = Shared {
+        request,
+        truth,
+        history,
+        modality,
+        series,
+        class_series,
+        events,
+        model,
+        changes,
+        estimator: request.estimator.resolve(dynamic.as_ref()),
+        dynamic,
+        step_s,
+        template: Some(std::sync::Mutex::new(template)),
+    };
+    let runs = run_all(&shared, progress)?;
+    Ok(CampaignResult {
+        label: request.label.clone(),
+        modality: shared.modality.to_string(),
+        period_s: truth.period_s,
+        covariance: shared.model.covariance,
+        changes: Some(shared.changes),
+        estimator: Some(shared.estimator),
+        events: shared.events,
+        runs,
+    })
+}
+
+/// Refuses a campaign that cannot run: no or unordered mission times, a first mission before
+/// the history's end, a budget that is not a positive fraction, sorties outside
+/// 1..=MAX_SORTIES, bad flight conditions, or wind with no-fly zones.
+fn check_request(request: &CampaignRequest) -> Result<()> {
     if request.schedule.is_empty() {
         return Err(AppError::Invalid(
             "the campaign has no mission times".into(),
@@ -893,118 +736,109 @@ pub fn run_campaign(
                 .into(),
         ));
     }
-    let mut history = truth.available_by(request.history_until);
-    if let Some(from) = request.history_from {
-        history.rows.retain(|r| r.t >= from);
-    }
-    // The field model, fitted once on the history (the exploration history every run shares).
-    let probe = {
-        let shared0 = Shared {
-            request,
-            truth,
-            history: history.clone(),
-            modality: Modality::new("vw@30cm").map_err(|e| AppError::Invalid(e.to_string()))?,
-            series: BTreeMap::new(),
-            class_series: BTreeMap::new(),
-            events: Vec::new(),
-            model: FieldModel {
-                covariance: Covariance::new(1.0, 0.0, 1.0, 1.0)
-                    .map_err(|e| AppError::core("field model", e))?,
-                means: Vec::new(),
-            },
-            changes: {
-                let none = gleaner_kriging::Variogram {
-                    nugget: 0.0,
-                    partial: 0.0,
-                    scale_s: 1.0,
-                };
-                IncrementModel::new(none, 1.0, none)
-                    .map_err(|e| AppError::core("model of changes", e))?
-            },
-            dynamic: None,
-            estimator: request.estimator,
-            step_s: 1,
-            template: None,
-        };
-        new_run_project(&shared0, request.settings.clone())?
+    Ok(())
+}
+
+/// The project every run's is a copy of: the history ingested with the request's settings
+/// (placeholder models: nothing is estimated in it).
+fn probe_project(
+    request: &CampaignRequest,
+    truth: &Truth,
+    history: &Readings,
+) -> Result<Project<SqliteStore>> {
+    let shared0 = Shared {
+        request,
+        truth,
+        history: history.clone(),
+        modality: Modality::new("vw@30cm").map_err(|e| AppError::Invalid(e.to_string()))?,
+        series: BTreeMap::new(),
+        class_series: BTreeMap::new(),
+        events: Vec::new(),
+        model: FieldModel {
+            covariance: Covariance::new(1.0, 0.0, 1.0, 1.0)
+                .map_err(|e| AppError::core("field model", e))?,
+            means: Vec::new(),
+        },
+        changes: {
+            let none = gleaner_kriging::Variogram {
+                nugget: 0.0,
+                partial: 0.0,
+                scale_s: 1.0,
+            };
+            IncrementModel::new(none, 1.0, none)
+                .map_err(|e| AppError::core("model of changes", e))?
+        },
+        dynamic: None,
+        estimator: request.estimator,
+        step_s: 1,
+        template: None,
     };
-    let modality = target_modality(&probe, request.modality.as_deref())?;
-    let gleaner_app::shortcuts::Models {
-        levels: model,
-        changes,
-        dynamic,
-        step_s,
-    } = fit_models(&probe, &modality, request.history_until)?;
-    let names: Vec<String> = probe
-        .store()
-        .modalities()?
-        .into_iter()
-        .map(|m| m.modality.to_string())
-        .collect();
-    let class_name = gleaner_app::shortcuts::condition_modality(probe.settings(), &names);
-    let (dir, probe_settings, mut template) = probe.into_parts();
-    // Exhaustive collection must reach every cell within one battery: refuse a budget that
-    // cannot, now rather than when its run fails after the others have run for minutes.
-    if request.strategies.contains(&Strategy::Exhaustive) {
-        for &budget in &request.budgets {
-            let mut settings = probe_settings.clone();
-            let battery = settings.energy.to_core()?.battery.capacity_j;
-            settings.energy.battery_j = Some(battery * budget);
-            let mut check = Project::new(&dir, settings, template);
-            let explored = explore(
-                &mut check,
-                &ExploreRequest {
-                    at: Some(request.history_until),
-                    dry_run: true,
-                    wind: None,
-                },
-                request.clock_now,
-            );
-            (_, _, template) = check.into_parts();
-            if let Err(e) = explored {
-                return Err(AppError::Invalid(format!(
-                    "budget {budget} ({:.1} kJ battery): exhaustive collection cannot be flown \
-                     ({e}); raise the budget or leave exhaustive out of the strategies",
-                    battery * budget / 1_000.0
-                )));
-            }
+    new_run_project(&shared0, request.settings.clone())
+}
+
+/// Exhaustive collection must reach every cell within one battery: refuses a budget that
+/// cannot, now rather than when its run fails after the others have run for minutes.
+/// Returns the template store (each check borrows it).
+fn check_exhaustive(
+    request: &CampaignRequest,
+    dir: &std::path::Path,
+    probe_settings: &Settings,
+    mut template: SqliteStore,
+) -> Result<SqliteStore> {
+    if !request.strategies.contains(&Strategy::Exhaustive) {
+        return Ok(template);
+    }
+    for &budget in &request.budgets {
+        let mut settings = probe_settings.clone();
+        let battery = settings.energy.to_core()?.battery.capacity_j;
+        settings.energy.battery_j = Some(battery * budget);
+        let mut check = Project::new(dir, settings, template);
+        let explored = explore(
+            &mut check,
+            &ExploreRequest {
+                at: Some(request.history_until),
+                dry_run: true,
+                wind: None,
+            },
+            request.clock_now,
+        );
+        (_, _, template) = check.into_parts();
+        if let Err(e) = explored {
+            return Err(AppError::Invalid(format!(
+                "budget {budget} ({:.1} kJ battery): exhaustive collection cannot be flown \
+                 ({e}); raise the budget or leave exhaustive out of the strategies",
+                battery * budget / 1_000.0
+            )));
         }
     }
-    // Every run's first recorded flight would otherwise rebuild the cell-summary cache from
-    // the whole history; built once here, every copy starts with it.
-    template.write(|tx| gleaner_app::shortcuts::prepare_cache(tx))?;
-    let series = truth_series(truth, &modality.to_string());
-    let class_series = match &class_name {
-        Some(c) if *c != modality.to_string() => truth_series(truth, c),
-        _ => series.clone(),
-    };
+    Ok(template)
+}
+
+/// The events the campaign can catch: the request's (else the rule's on the truth) that
+/// become available after the history and by the last mission.
+fn campaign_events(
+    request: &CampaignRequest,
+    truth: &Truth,
+    modality: &Modality,
+) -> Vec<TruthEvent> {
     let last = *request.schedule.last().unwrap_or(&request.history_until);
     let all_events = match &request.events {
         Some(e) => e.clone(),
         None => rule_events(truth, &modality.to_string(), request.event_z),
     };
-    let events: Vec<TruthEvent> = all_events
+    all_events
         .into_iter()
         .filter(|e| {
             let available = e.start.saturating_add(truth.period_s);
             available > request.history_until && available <= last
         })
-        .collect();
-    let shared = Shared {
-        request,
-        truth,
-        history,
-        modality,
-        series,
-        class_series,
-        events,
-        model,
-        changes,
-        estimator: request.estimator.resolve(dynamic.as_ref()),
-        dynamic,
-        step_s,
-        template: Some(std::sync::Mutex::new(template)),
-    };
+        .collect()
+}
+
+/// Every run of the request on `jobs` threads, longest first, the same computation once;
+/// the results in the keys' order.
+fn run_all(shared: &Shared<'_>, progress: &(dyn Progress + Sync)) -> Result<Vec<RunResult>> {
+    let request = shared.request;
     let keys = run_keys(request);
     progress.start(
         &format!("{}: missions", request.label),
@@ -1036,7 +870,7 @@ pub fn run_campaign(
                         }
                         continue;
                     }
-                    let result = run_one(&shared, keys[k].clone(), progress);
+                    let result = run_one(shared, keys[k].clone(), progress);
                     let copies = same.iter().enumerate().filter(|&(j, &r)| r == k && j != k);
                     progress.advance((copies.count() * request.schedule.len()) as u64);
                     if let Ok(mut slot) = slots[k].lock() {
@@ -1047,10 +881,20 @@ pub fn run_campaign(
         }
     });
     progress.finish();
-    let mut done: Vec<Option<Result<RunResult>>> = slots
+    let done: Vec<Option<Result<RunResult>>> = slots
         .into_iter()
         .map(|slot| slot.into_inner().ok().flatten())
         .collect();
+    copy_same_runs(&keys, &same, done)
+}
+
+/// The runs in the keys' order, each copy ([`same_runs`]) taking the results of the run it
+/// copies.
+fn copy_same_runs(
+    keys: &[RunKey],
+    same: &[usize],
+    mut done: Vec<Option<Result<RunResult>>>,
+) -> Result<Vec<RunResult>> {
     // Last key first: a copy comes after the run it copies, which is taken after it.
     let mut runs = Vec::with_capacity(keys.len());
     for (k, key) in keys.iter().enumerate().rev() {
@@ -1075,17 +919,7 @@ pub fn run_campaign(
             result.unwrap_or_else(|| Err(AppError::Invalid("a campaign run panicked".into()))),
         );
     }
-    let runs = runs.into_iter().rev().collect::<Result<Vec<_>>>()?;
-    Ok(CampaignResult {
-        label: request.label.clone(),
-        modality: shared.modality.to_string(),
-        period_s: truth.period_s,
-        covariance: shared.model.covariance,
-        changes: Some(shared.changes),
-        estimator: Some(shared.estimator),
-        events: shared.events,
-        runs,
-    })
+    runs.into_iter().rev().collect::<Result<Vec<_>>>()
 }
 
 /// For every key, the first key with the same [`run_signature`] (itself when none before).
@@ -1095,44 +929,6 @@ fn same_runs(request: &CampaignRequest, keys: &[RunKey]) -> Result<Vec<usize>> {
         .enumerate()
         .map(|(k, key)| Ok(*first.entry(run_signature(request, key)?).or_insert(k)))
         .collect()
-}
-
-/// The predicted (argmax) and true class of every cell, as a share right.
-fn classifier_accuracy(
-    scoring: &gleaner_app::Scoring,
-    cells: &[(CellIndex, Vec<SensorId>)],
-    class_series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
-    at: UnixSeconds,
-) -> Option<f64> {
-    let cond = scoring.condition.as_ref()?;
-    if cond.thresholds.is_empty() {
-        return None;
-    }
-    let k = &scoring.knowledge;
-    let mut right = 0usize;
-    let mut total = 0usize;
-    for (c, cell) in k.field.cells().iter().enumerate() {
-        let Some((_, sensors)) = cells.iter().find(|(i, _)| *i == cell.index) else {
-            continue;
-        };
-        let values: Vec<f64> = sensors
-            .iter()
-            .filter_map(|s| value_at(class_series, s, at))
-            .collect();
-        if values.is_empty() {
-            continue;
-        }
-        let truth = values.iter().sum::<f64>() / values.len() as f64;
-        let true_class = gleaner_utility::class_of(truth, &cond.thresholds);
-        let predicted = cond.probabilities[c]
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1))
-            .map(|p| p.0)?;
-        total += 1;
-        right += usize::from(predicted == true_class);
-    }
-    (total > 0).then(|| right as f64 / total as f64)
 }
 
 /// Every run of `request`: strategies, then seeds, then budgets, in the request's order.
@@ -1150,775 +946,6 @@ fn run_keys(request: &CampaignRequest) -> Vec<RunKey> {
         }
     }
     keys
-}
-
-fn run_one(
-    shared: &Shared<'_>,
-    key: RunKey,
-    progress: &(dyn Progress + Sync),
-) -> Result<RunResult> {
-    let request = shared.request;
-    let truth = shared.truth;
-    let period = truth.period_s;
-    let settings = run_settings(request, &key)?;
-    let mut project = new_run_project(shared, settings)?;
-    let cells: Vec<(CellIndex, Vec<SensorId>)> = project
-        .store()
-        .cells()?
-        .into_iter()
-        .map(|c| (c.index, c.sensors))
-        .collect();
-    let (sensors, field) = project.field()?;
-    let sensor_of_cell: HashMap<CellIndex, &Vec<SensorId>> =
-        cells.iter().map(|(i, s)| (*i, s)).collect();
-    let centres: Vec<[f64; 2]> = field
-        .cells()
-        .iter()
-        .map(|c| [c.centre.e, c.centre.n])
-        .collect();
-    let cell_sensor_ids: Vec<Vec<SensorId>> = field
-        .cells()
-        .iter()
-        .map(|c| c.sensors.iter().map(|&s| sensors[s].id.clone()).collect())
-        .collect();
-    let lookback = (5.0 * shared.model.covariance.time_scale_s).clamp(
-        7.0 * 86_400.0_f64.max(shared.step_s as f64),
-        730.0 * 86_400.0,
-    ) as i64;
-    // When each sensor's data was last brought home: its latest history reading's
-    // availability, then its collections.
-    let mut last: HashMap<SensorId, UnixSeconds> = HashMap::new();
-    for r in &shared.history.rows {
-        if let Some(s) = shared.history.sensors.get(r.sensor as usize) {
-            let t = r.t.saturating_add(period);
-            let e = last.entry(s.clone()).or_insert(t);
-            *e = (*e).max(t);
-        }
-    }
-    let mut caught: Vec<Option<UnixSeconds>> = vec![None; shared.events.len()];
-    let mut exploration_memo = ExplorationMemo::default();
-    let mut estimate_reads = EstimateReads::default();
-    let mut missions = Vec::with_capacity(request.schedule.len());
-    let mut visits = Vec::new();
-    for (index, &t) in request.schedule.iter().enumerate() {
-        if progress.cancelled() {
-            return Err(AppError::Cancelled);
-        }
-        let cell_age = |c: usize| -> Option<f64> {
-            cell_sensor_ids[c]
-                .iter()
-                .filter_map(|s| last.get(s))
-                .min()
-                .map(|&l| (t - l).max(0) as f64)
-        };
-        // What the planner believed before the flight (for the classifier's accuracy).
-        let scoring = compute(
-            &project,
-            &ScoreRequest {
-                at: Some(t),
-                dry_run: true,
-                ..ScoreRequest::default()
-            },
-        )?;
-        // Reconstruction of every sensor's value stamped T − period from what was known
-        // before the flights. `reuse`: nothing was written since the last estimate (the
-        // previous mission's, after its flights, which brought back only readings stamped at
-        // or before its target).
-        let target = t - period;
-        let errors_now = |project: &Project<SqliteStore>,
-                          reads: &mut EstimateReads,
-                          reuse: bool|
-         -> Result<(Errors, Vec<SensorEstimate>)> {
-            let estimates = estimate_with(
-                project,
-                &shared.modality,
-                (&shared.model, &shared.changes, shared.dynamic.as_ref()),
-                (target, lookback),
-                (request.neighbours, shared.estimator),
-                (reads, reuse),
-            )?;
-            Ok((
-                reconstruction_errors(&estimates, &shared.series, target),
-                estimates,
-            ))
-        };
-        let (before, before_estimates) = errors_now(&project, &mut estimate_reads, true)?;
-        let given: Option<Vec<f64>> = match key.strategy.selection() {
-            Some(Strategy::RoundRobin) => {
-                let ages: Vec<Option<f64>> = (0..centres.len()).map(cell_age).collect();
-                let oldest = ages.iter().flatten().fold(0.0f64, |a, b| a.max(*b));
-                Some(
-                    ages.iter()
-                        .map(|a| a.unwrap_or(oldest + 86_400.0) / 86_400.0 + 1e-3)
-                        .collect(),
-                )
-            }
-            Some(Strategy::Random) => Some(
-                (0..centres.len())
-                    .map(|c| {
-                        let x = splitmix(key.seed ^ splitmix(index as u64 ^ ((c as u64) << 32)));
-                        ((x >> 11) as f64 + 1.0) / (1u64 << 53) as f64
-                    })
-                    .collect(),
-            ),
-            Some(Strategy::Nearest) => Some(vec![1.0; centres.len()]),
-            Some(Strategy::Expected) => Some(expected_scores(&before_estimates, &cell_sensor_ids)),
-            Some(Strategy::Oracle) => Some(oracle_scores(
-                &before_estimates,
-                &cell_sensor_ids,
-                &shared.series,
-                target,
-            )),
-            Some(Strategy::Variance) => {
-                let ages: Vec<Option<f64>> = (0..centres.len()).map(cell_age).collect();
-                let weights: Vec<f64> = cell_sensor_ids.iter().map(|s| s.len() as f64).collect();
-                Some(
-                    variance_reduction(&shared.model.covariance, &centres, &ages, &weights)
-                        .map_err(|e| AppError::core("variance-reduction utility", e))?,
-                )
-            }
-            _ => None,
-        };
-        let accuracy = classifier_accuracy(&scoring, &cells, &shared.class_series, t - period);
-        // The day's forecast (planned for) and the wind the sorties meet.
-        let day = request.flight.day(t)?;
-        let mut flown = Vec::new();
-        let (mut energy_j, mut budget_j) = (0.0, 0.0);
-        // The pre-flight scoring, handed to the planner when it scores by the utility engine
-        // (the same store, the same time: what `plan` would compute again) and taken back.
-        let mut scoring = Some(scoring);
-        if key.strategy.selection() == Some(Strategy::Exhaustive) {
-            let plan = explore_with(
-                &mut project,
-                &ExploreRequest {
-                    at: Some(t),
-                    dry_run: false,
-                    wind: request.flight.plan_wind(&day),
-                },
-                request.clock_now,
-                &mut exploration_memo,
-            )?;
-            for (id, m) in &plan.sorties {
-                energy_j += m.energy.total_j;
-                budget_j = m.energy.budget_j;
-                flown.extend(*id);
-            }
-        } else {
-            let scored = if given.is_none() {
-                scoring.take()
-            } else {
-                None
-            };
-            let mut planned = plan_scored(
-                &mut project,
-                &PlanRequest {
-                    at: Some(t),
-                    cell_scores: given,
-                    max_iterations: Some(request.planner_iterations),
-                    time_limit_s: Some(3_600.0),
-                    sorties: Some(request.sorties),
-                    wind: match request.flight.wind {
-                        crate::campaign_flight::WindSource::Still => None,
-                        _ => Some(day.forecast),
-                    },
-                    objective: Some(match key.strategy.selection() {
-                        Some(Strategy::Information) => Objective::Information,
-                        Some(Strategy::Hybrid) => Objective::Hybrid,
-                        _ => Objective::Score,
-                    }),
-                    ..PlanRequest::default()
-                },
-                None,
-                (scored, shared.dynamic.as_ref()),
-                false,
-                request.clock_now,
-            )?;
-            if scoring.is_none() {
-                scoring = planned.scoring.take();
-            }
-            energy_j = planned.mission.energy.total_j;
-            budget_j = planned.mission.energy.budget_j;
-            if !planned.mission.stops.is_empty() {
-                flown.extend(planned.id);
-            }
-            for extra in &planned.extra_sorties {
-                if !extra.mission.stops.is_empty() {
-                    energy_j += extra.mission.energy.total_j;
-                    flown.extend(extra.id);
-                }
-            }
-        }
-        let scoring = scoring.ok_or_else(|| {
-            AppError::Invalid("the planner did not give back the mission's scoring".into())
-        })?;
-        let terms_of: HashMap<CellIndex, (usize, &gleaner_utility::CellTerms)> = scoring
-            .knowledge
-            .field
-            .cells()
-            .iter()
-            .zip(&scoring.terms)
-            .enumerate()
-            .map(|(k, (c, terms))| (c.index, (k, terms)))
-            .collect();
-        let mut visited: HashSet<SensorId> = HashSet::new();
-        let mut cells_visited = 0;
-        let mut lost_readings = 0;
-        let mut flight = FlightDay::new(day);
-        for (sortie, id) in flown.iter().enumerate() {
-            let (outcome, lost) = if request.flight.is_still() {
-                // Flown exactly as planned.
-                let e = gleaner_app::mission(&project, *id)?.mission.energy;
-                flight.add((e.total_j, e.budget_j), 1.0, false, 0);
-                fly_buffered(&mut project, truth, *id, t, request.clock_now)?
-            } else {
-                let factor = request.flight.battery_factor(t, sortie);
-                let f = fly_in_wind(
-                    &project,
-                    *id,
-                    request.flight.sortie(t, sortie, day.actual),
-                    factor,
-                    request.planner_iterations,
-                )?;
-                flight.add((f.energy_j, f.usable_j), factor, f.replanned, f.dropped);
-                fly_cells(
-                    &mut project,
-                    truth,
-                    *id,
-                    Some(&f.cells),
-                    t,
-                    request.clock_now,
-                )?
-            };
-            flight.readings += outcome.readings_inserted;
-            lost_readings += lost;
-            cells_visited += outcome.cells.len();
-            for c in &outcome.cells {
-                if let Some(&(k, terms)) = terms_of.get(c) {
-                    visits.push(Visit {
-                        index,
-                        cell: *c,
-                        age_days: cell_age(k).unwrap_or(f64::NAN) / 86_400.0,
-                        f: terms.f,
-                        a: terms.a,
-                        u: terms.u,
-                        r: terms.r,
-                        s: terms.s,
-                    });
-                }
-                if let Some(s) = sensor_of_cell.get(c) {
-                    visited.extend(s.iter().cloned());
-                }
-            }
-        }
-        drop(terms_of);
-        drop(scoring);
-        // Events first caught now: a visited sensor brought back one of the event's readings
-        // (still in its buffer).
-        let mut events_caught = 0;
-        let keep_from = truth
-            .buffer_readings
-            .map(|n| t - period - (n as i64 - 1) * shared.step_s);
-        for (e, event) in shared.events.iter().enumerate() {
-            if caught[e].is_some() || event.start.saturating_add(period) > t {
-                continue;
-            }
-            let in_buffer = keep_from.is_none_or(|from| event.end - shared.step_s >= from);
-            if in_buffer && event.sensors.iter().any(|s| visited.contains(s)) {
-                caught[e] = Some(t);
-                events_caught += 1;
-            }
-        }
-        // Reconstruction of every sensor's value stamped T − period, after the flights.
-        let (after, _) = errors_now(&project, &mut estimate_reads, false)?;
-        for s in &visited {
-            last.insert(s.clone(), t);
-        }
-        // Staleness over every sensor (one never brought home counts from the campaign start).
-        let ages: Vec<f64> = sensors
-            .iter()
-            .map(|s| (t - last.get(&s.id).copied().unwrap_or(request.history_until)).max(0) as f64)
-            .collect();
-        let staleness_mean_s = ages.iter().sum::<f64>() / (ages.len() as f64).max(1.0);
-        let staleness_max_s = ages.iter().fold(0.0f64, |a, b| a.max(*b));
-        missions.push(MissionMetrics {
-            index,
-            t,
-            sorties: flown.len(),
-            cells: cells_visited,
-            energy_j,
-            budget_j,
-            rmse_carried: after.rmse_carried,
-            mae_carried: after.mae_carried,
-            rmse_kriged: after.rmse_kriged,
-            mae_kriged: after.mae_kriged,
-            mean_variance: after.mean_variance,
-            coverage90: after.coverage90,
-            rmse_carried_before: before.rmse_carried,
-            rmse_kriged_before: before.rmse_kriged,
-            evaluated: after.evaluated,
-            staleness_mean_s,
-            staleness_max_s,
-            classifier_accuracy: accuracy,
-            lost_readings,
-            events_caught,
-            flight: Some(flight),
-        });
-        progress.advance(1);
-    }
-    Ok(RunResult {
-        key,
-        missions,
-        caught,
-        visits,
-    })
-}
-
-/// [`Strategy::Oracle`]'s scores in field order: per cell, the squared error of its sensors'
-/// model-based estimates against the true values stamped `target`, ×10⁶ (the unit squared:
-/// (m³/m³)² ×10⁶ for soil water), plus 10⁻⁹ so that a cell with nothing to correct still
-/// counts as a place (the planner's scores are positive).
-fn oracle_scores(
-    estimates: &[SensorEstimate],
-    cell_sensor_ids: &[Vec<SensorId>],
-    series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
-    target: UnixSeconds,
-) -> Vec<f64> {
-    let error: HashMap<&SensorId, f64> = estimates
-        .iter()
-        .filter_map(|e| {
-            value_at(series, &e.sensor, target).map(|v| (&e.sensor, (e.kriged - v).powi(2)))
-        })
-        .collect();
-    cell_sensor_ids
-        .iter()
-        .map(|ids| 1e-9 + 1e6 * ids.iter().filter_map(|s| error.get(s)).sum::<f64>())
-        .collect()
-}
-
-/// Each cell's predicted squared error before the flight: the sum of its sensors' estimator
-/// variances ((unit)² ×10⁶, + 1e-9 so every cell stays eligible).
-fn expected_scores(estimates: &[SensorEstimate], cell_sensor_ids: &[Vec<SensorId>]) -> Vec<f64> {
-    let variance: HashMap<&SensorId, f64> = estimates
-        .iter()
-        .filter(|e| e.variance.is_finite())
-        .map(|e| (&e.sensor, e.variance.max(0.0)))
-        .collect();
-    cell_sensor_ids
-        .iter()
-        .map(|ids| 1e-9 + 1e6 * ids.iter().filter_map(|s| variance.get(s)).sum::<f64>())
-        .collect()
-}
-
-/// The errors of one reconstruction against the truth (see [`MissionMetrics`]).
-struct Errors {
-    rmse_carried: f64,
-    mae_carried: f64,
-    rmse_kriged: f64,
-    mae_kriged: f64,
-    mean_variance: f64,
-    coverage90: Option<f64>,
-    evaluated: usize,
-}
-
-/// Errors of `estimates` against the true values stamped `target` (sensors without one are
-/// left out; 0 when none has one).
-fn reconstruction_errors(
-    estimates: &[SensorEstimate],
-    series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
-    target: UnixSeconds,
-) -> Errors {
-    let (mut se_c, mut ae_c, mut se_k, mut ae_k, mut var, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0);
-    let (mut covered, mut estimated) = (0usize, 0usize);
-    for e in estimates {
-        let Some(v) = value_at(series, &e.sensor, target) else {
-            continue;
-        };
-        if e.last_time != Some(target) {
-            estimated += 1;
-            covered += usize::from((e.kriged - v).abs() <= e.half90);
-        }
-        se_c += (e.carried - v).powi(2);
-        ae_c += (e.carried - v).abs();
-        se_k += (e.kriged - v).powi(2);
-        ae_k += (e.kriged - v).abs();
-        var += e.variance;
-        n += 1;
-    }
-    let nf = (n as f64).max(1.0);
-    Errors {
-        rmse_carried: (se_c / nf).sqrt(),
-        mae_carried: ae_c / nf,
-        rmse_kriged: (se_k / nf).sqrt(),
-        mae_kriged: ae_k / nf,
-        mean_variance: var / nf,
-        coverage90: (estimated > 0).then(|| covered as f64 / estimated as f64),
-        evaluated: n,
-    }
-}
-
-/// A schedule: every `step_s` seconds from `start` to `end` inclusive.
-pub fn every(start: UnixSeconds, end: UnixSeconds, step_s: i64) -> Result<Vec<UnixSeconds>> {
-    if step_s <= 0 {
-        return Err(AppError::Invalid(format!(
-            "mission interval {step_s} s must be positive"
-        )));
-    }
-    if end < start {
-        return Err(AppError::Invalid(
-            "the schedule ends before it starts".into(),
-        ));
-    }
-    let n = (end - start) / step_s + 1;
-    if n > 1_000_000 {
-        return Err(AppError::Invalid(format!(
-            "{n} missions: at most 1,000,000"
-        )));
-    }
-    Ok((0..n).map(|k| start + k * step_s).collect())
-}
-
-/// A mean with its 95% confidence interval.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Interval {
-    /// The mean.
-    pub mean: f64,
-    /// Lower end of the 95% interval.
-    pub low: f64,
-    /// Upper end of the 95% interval.
-    pub high: f64,
-    /// Number of independent values the interval rests on.
-    pub n: usize,
-}
-
-/// Two-sided 97.5% quantile of Student's t with `df` degrees of freedom.
-fn t975(df: usize) -> f64 {
-    const T: [f64; 30] = [
-        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
-        2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
-        2.052, 2.048, 2.045, 2.042,
-    ];
-    match df {
-        0 => f64::NAN,
-        1..=30 => T[df - 1],
-        31..=60 => 2.000 + (2.042 - 2.000) * (60 - df) as f64 / 30.0,
-        61..=120 => 1.980 + (2.000 - 1.980) * (120 - df) as f64 / 60.0,
-        _ => 1.960,
-    }
-}
-
-/// The mean of `values` (non-finite ones left out) with Student's t 95% interval (the
-/// interval is the mean itself for a single value).
-pub fn interval(values: &[f64]) -> Interval {
-    let v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-    let n = v.len();
-    if n == 0 {
-        return Interval {
-            mean: f64::NAN,
-            low: f64::NAN,
-            high: f64::NAN,
-            n,
-        };
-    }
-    let mean = v.iter().sum::<f64>() / n as f64;
-    if n == 1 {
-        return Interval {
-            mean,
-            low: mean,
-            high: mean,
-            n,
-        };
-    }
-    let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt();
-    let h = t975(n - 1) * sd / (n as f64).sqrt();
-    Interval {
-        mean,
-        low: mean - h,
-        high: mean + h,
-        n,
-    }
-}
-
-/// Days of mission time per block: consecutive missions are correlated (the same weather,
-/// the same stale sensors), so intervals rest on the means of blocks of this many days of
-/// missions, not on single missions.
-pub const BLOCK_DAYS: i64 = 7;
-
-/// Fewest blocks an interval rests on: with fewer, Student's t over so few block means is
-/// too wide to mean anything (or, worse, too narrow by chance), and no interval is given.
-pub const MIN_BLOCKS: usize = 10;
-
-/// The values an interval rests on: per block of [`BLOCK_DAYS`] days of mission time (from the
-/// first mission of any run), the mean over runs of each run's mean over its missions in
-/// that block. Runs are averaged within a block rather than counted as separate values, so
-/// replicates of the same dataset (which share its weather) do not pass for independent
-/// evidence; blocks are the units, taken as approximately independent at a week apart.
-pub fn block_means(per_run: &[Vec<(UnixSeconds, f64)>]) -> Vec<f64> {
-    let Some(t0) = per_run.iter().flatten().map(|p| p.0).min() else {
-        return Vec::new();
-    };
-    let block_s = BLOCK_DAYS * 86_400;
-    let mut blocks: BTreeMap<i64, (f64, usize)> = BTreeMap::new();
-    for run in per_run {
-        let mut own: BTreeMap<i64, (f64, usize)> = BTreeMap::new();
-        for &(t, v) in run.iter().filter(|p| p.1.is_finite()) {
-            let e = own.entry((t - t0).div_euclid(block_s)).or_insert((0.0, 0));
-            e.0 += v;
-            e.1 += 1;
-        }
-        for (b, (sum, n)) in own {
-            let e = blocks.entry(b).or_insert((0.0, 0));
-            e.0 += sum / n as f64;
-            e.1 += 1;
-        }
-    }
-    blocks.values().map(|(sum, n)| sum / *n as f64).collect()
-}
-
-/// The mean over blocks with Student's t 95% interval over the [`block_means`], given only
-/// when there are at least [`MIN_BLOCKS`] blocks (else `low` and `high` are NaN).
-pub fn block_interval(per_run: &[Vec<(UnixSeconds, f64)>]) -> Interval {
-    let mut i = interval(&block_means(per_run));
-    if i.n < MIN_BLOCKS {
-        i.low = f64::NAN;
-        i.high = f64::NAN;
-    }
-    i
-}
-
-/// A per-mission metric, by name: `rmse_kriged`, `rmse_carried`, `rmse_kriged_before`,
-/// `rmse_carried_before`, `mae_kriged`,
-/// `mae_carried`, `staleness_mean_days`, `staleness_max_days`, `energy_kj`, `utilisation`,
-/// `cells`, `classifier_accuracy`, `lost_readings`, `mean_sd` (square root of the mean
-/// kriging variance), `coverage90` (share of estimated sensors inside their 90% interval).
-pub fn metric(m: &MissionMetrics, name: &str) -> f64 {
-    match name {
-        "rmse_kriged" => m.rmse_kriged,
-        "rmse_carried" => m.rmse_carried,
-        "rmse_kriged_before" => m.rmse_kriged_before,
-        "rmse_carried_before" => m.rmse_carried_before,
-        "mae_kriged" => m.mae_kriged,
-        "mae_carried" => m.mae_carried,
-        "staleness_mean_days" => m.staleness_mean_s / 86_400.0,
-        "staleness_max_days" => m.staleness_max_s / 86_400.0,
-        "energy_kj" => m.energy_j / 1_000.0,
-        "utilisation" => {
-            if m.budget_j > 0.0 && m.sorties > 0 {
-                m.energy_j / (m.budget_j * m.sorties as f64)
-            } else {
-                0.0
-            }
-        }
-        "cells" => m.cells as f64,
-        "classifier_accuracy" => m.classifier_accuracy.unwrap_or(f64::NAN),
-        "lost_readings" => m.lost_readings as f64,
-        "mean_sd" => m.mean_variance.sqrt(),
-        "coverage90" => m.coverage90.unwrap_or(f64::NAN),
-        _ => f64::NAN,
-    }
-}
-
-/// The per-mission metrics [`metric`] knows, in report order.
-pub const METRICS: [&str; 15] = [
-    "rmse_kriged",
-    "rmse_carried",
-    "rmse_kriged_before",
-    "rmse_carried_before",
-    "mae_kriged",
-    "mae_carried",
-    "mean_sd",
-    "coverage90",
-    "staleness_mean_days",
-    "staleness_max_days",
-    "energy_kj",
-    "utilisation",
-    "cells",
-    "classifier_accuracy",
-    "lost_readings",
-];
-
-/// One strategy at one budget, over every run (and dataset) given.
-#[derive(Debug, Clone)]
-pub struct Summary {
-    /// Strategy.
-    pub strategy: Strategy,
-    /// Budget fraction.
-    pub budget: f64,
-    /// Runs pooled.
-    pub runs: usize,
-    /// Per [`METRICS`] name: the mean over blocks of missions with its 95% interval
-    /// ([`block_interval`]).
-    pub metrics: Vec<(&'static str, Interval)>,
-    /// Events caught / events, pooled.
-    pub events_caught: (usize, usize),
-    /// Delay from an event's first available reading to its catch, days (caught events).
-    pub delay_days: Interval,
-    /// Kriging RMSE minus the reference strategy's, paired by mission (same dataset, seed,
-    /// budget), with its 95% interval over blocks ([`block_interval`]); `None` for the
-    /// reference itself or without a pair.
-    pub rmse_vs_reference: Option<Interval>,
-    /// Catch delay minus the reference strategy's, days, over the events both caught (same
-    /// dataset, seed, budget), with Student's t 95% interval over those events; `None` for
-    /// the reference itself or without a pair.
-    pub delay_vs_reference: Option<Interval>,
-}
-
-/// What one campaign found, per strategy and budget: what `POST /api/v1/simulate` answers.
-#[derive(Debug, Clone)]
-pub struct CampaignSummary {
-    /// The dataset's name.
-    pub label: String,
-    /// The evaluated modality.
-    pub modality: String,
-    /// The logging period, s.
-    pub period_s: i64,
-    /// End of the history, s.
-    pub history_until: UnixSeconds,
-    /// Mission times, s.
-    pub schedule: Vec<UnixSeconds>,
-    /// Events that became available during the campaign.
-    pub events: usize,
-    /// The strategy the differences are taken against (gleaner when it ran, else the
-    /// first).
-    pub reference: Strategy,
-    /// Per (strategy, budget), in the request's order.
-    pub summaries: Vec<Summary>,
-}
-
-impl CampaignRequest {
-    /// Missions the campaign flies in all: missions × strategies × seeds × budgets.
-    pub fn mission_runs(&self) -> usize {
-        self.schedule
-            .len()
-            .saturating_mul(self.strategies.len())
-            .saturating_mul(self.seeds.len())
-            .saturating_mul(self.budgets.len())
-    }
-}
-
-/// [`summarise`] of one campaign, against gleaner when it ran.
-pub fn campaign_summary(request: &CampaignRequest, result: &CampaignResult) -> CampaignSummary {
-    let reference = if request.strategies.contains(&Strategy::Gleaner) {
-        Strategy::Gleaner
-    } else {
-        request
-            .strategies
-            .first()
-            .copied()
-            .unwrap_or(Strategy::Gleaner)
-    };
-    CampaignSummary {
-        label: result.label.clone(),
-        modality: result.modality.clone(),
-        period_s: result.period_s,
-        history_until: request.history_until,
-        schedule: request.schedule.clone(),
-        events: result.events.len(),
-        reference,
-        summaries: summarise(std::slice::from_ref(result), reference),
-    }
-}
-
-/// Summaries of every (strategy, budget) over the given campaigns (e.g. one per synthetic
-/// seed), with paired RMSE differences against `reference`.
-pub fn summarise(results: &[CampaignResult], reference: Strategy) -> Vec<Summary> {
-    let mut keys: Vec<(Strategy, u64)> = Vec::new();
-    for r in results {
-        for run in &r.runs {
-            let k = (run.key.strategy, run.key.budget.to_bits());
-            if !keys.contains(&k) {
-                keys.push(k);
-            }
-        }
-    }
-    let mut out = Vec::new();
-    for (strategy, budget_bits) in keys {
-        let budget = f64::from_bits(budget_bits);
-        let runs: Vec<(&CampaignResult, &RunResult)> = results
-            .iter()
-            .flat_map(|r| r.runs.iter().map(move |run| (r, run)))
-            .filter(|(_, run)| run.key.strategy == strategy && run.key.budget == budget)
-            .collect();
-        let metrics = METRICS
-            .iter()
-            .map(|&name| {
-                let per_run: Vec<Vec<(UnixSeconds, f64)>> = runs
-                    .iter()
-                    .map(|(_, run)| {
-                        run.missions
-                            .iter()
-                            .map(|m| (m.t, metric(m, name)))
-                            .collect()
-                    })
-                    .collect();
-                (name, block_interval(&per_run))
-            })
-            .collect();
-        let mut caught = 0;
-        let mut total = 0;
-        let mut delays = Vec::new();
-        for (r, run) in &runs {
-            for (e, c) in r.events.iter().zip(&run.caught) {
-                total += 1;
-                if let Some(at) = c {
-                    caught += 1;
-                    delays.push((at - e.start - r.period_s) as f64 / 86_400.0);
-                }
-            }
-        }
-        let rmse_vs_reference = (strategy != reference)
-            .then(|| {
-                let per_run: Vec<Vec<(UnixSeconds, f64)>> = runs
-                    .iter()
-                    .filter_map(|(r, run)| {
-                        let other = r.runs.iter().find(|o| {
-                            o.key.strategy == reference
-                                && o.key.seed == run.key.seed
-                                && o.key.budget == run.key.budget
-                        })?;
-                        Some(
-                            run.missions
-                                .iter()
-                                .zip(&other.missions)
-                                .map(|(a, b)| (a.t, a.rmse_kriged - b.rmse_kriged))
-                                .collect(),
-                        )
-                    })
-                    .collect();
-                (!per_run.is_empty()).then(|| block_interval(&per_run))
-            })
-            .flatten();
-        let delay_vs_reference = (strategy != reference)
-            .then(|| {
-                let mut diffs = Vec::new();
-                for (r, run) in &runs {
-                    let Some(other) = r.runs.iter().find(|o| {
-                        o.key.strategy == reference
-                            && o.key.seed == run.key.seed
-                            && o.key.budget == run.key.budget
-                    }) else {
-                        continue;
-                    };
-                    for (a, b) in run.caught.iter().zip(&other.caught) {
-                        if let (Some(a), Some(b)) = (a, b) {
-                            diffs.push((a - b) as f64 / 86_400.0);
-                        }
-                    }
-                }
-                (!diffs.is_empty()).then(|| interval(&diffs))
-            })
-            .flatten();
-        out.push(Summary {
-            strategy,
-            budget,
-            runs: runs.len(),
-            metrics,
-            events_caught: (caught, total),
-            delay_days: interval(&delays),
-            rmse_vs_reference,
-            delay_vs_reference,
-        });
-    }
-    out
 }
 
 #[cfg(test)]

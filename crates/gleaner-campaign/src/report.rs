@@ -409,7 +409,6 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
     let mut charts: Vec<(String, String)> = Vec::new();
     let summaries = summarise(results, Strategy::Gleaner);
     let unit = "m³/m³";
-    let modality = &results[0].modality;
     let mut budgets: Vec<f64> = summaries.iter().map(|s| s.budget).collect();
     budgets.sort_by(f64::total_cmp);
     budgets.dedup();
@@ -418,6 +417,51 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
         .copied()
         .min_by(|a, b| (a - 1.0).abs().total_cmp(&(b - 1.0).abs()))
         .unwrap_or(1.0);
+    let mut md = String::new();
+    overview_section(&mut md, results, command, &budgets, unit)?;
+    let at_main: Vec<&Summary> = summaries
+        .iter()
+        .filter(|s| s.budget == main_budget)
+        .collect();
+    strategies_section(&mut md, results, &summaries, (&at_main, main_budget), unit)?;
+    charts.push((
+        "rmse_intervals.svg".into(),
+        rmse_chart(&at_main, main_budget, unit)?,
+    ));
+    writeln!(
+        md,
+        "![RMSE with 95% intervals](figures/rmse_intervals.svg)\n"
+    )?;
+    exhaustive_section(&mut md, &summaries, main_budget)?;
+    let strategies: Vec<Strategy> = at_main.iter().map(|s| s.strategy).collect();
+    over_campaign_section(
+        &mut md,
+        &mut charts,
+        results,
+        (&strategies, main_budget),
+        unit,
+    )?;
+    if budgets.len() > 1 {
+        against_budget_section(&mut md, &mut charts, &summaries, &strategies, unit)?;
+    }
+    flights_section(&mut md, results)?;
+    definitions_section(&mut md, results, command)?;
+    Ok(RenderedReport {
+        markdown: md,
+        figures: charts,
+    })
+}
+
+/// The report's title, the command that reproduces it, and what the campaigns were: missions,
+/// the fitted models, events, budgets.
+fn overview_section(
+    md: &mut String,
+    results: &[CampaignResult],
+    command: &str,
+    budgets: &[f64],
+    unit: &str,
+) -> Result<()> {
+    let modality = &results[0].modality;
     let labels: Vec<&str> = results.iter().map(|r| r.label.as_str()).collect();
     let first = &results[0];
     let missions = first.runs.first().map_or(0, |r| r.missions.len());
@@ -426,7 +470,6 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
         .first()
         .and_then(|r| Some((r.missions.first()?.t, r.missions.last()?.t)))
         .unwrap_or((0, 0));
-    let mut md = String::new();
     writeln!(md, "# Campaign report: {}\n", labels.join(", "))?;
     writeln!(md, "Reproduce with:\n\n```\n{}\n```\n", command.trim())?;
     writeln!(
@@ -493,6 +536,17 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
             .collect::<Vec<_>>()
             .join(", ")
     )?;
+    Ok(())
+}
+
+/// The strategies' table at the main budget, and which strategies' runs were identical.
+fn strategies_section(
+    md: &mut String,
+    results: &[CampaignResult],
+    summaries: &[Summary],
+    (at_main, main_budget): (&[&Summary], f64),
+    unit: &str,
+) -> Result<()> {
     writeln!(md, "## Strategies at budget {main_budget}\n")?;
     writeln!(
         md,
@@ -514,11 +568,7 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
         md,
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     )?;
-    let at_main: Vec<&Summary> = summaries
-        .iter()
-        .filter(|s| s.budget == main_budget)
-        .collect();
-    for s in &at_main {
+    for s in at_main {
         let (caught, total) = s.events_caught;
         writeln!(
             md,
@@ -546,7 +596,7 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
         )?;
     }
     writeln!(md)?;
-    let shared = same_runs(results, &summaries);
+    let shared = same_runs(results, summaries);
     if !shared.is_empty() {
         let text: Vec<String> = shared
             .iter()
@@ -561,6 +611,11 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
             text.join(", ")
         )?;
     }
+    Ok(())
+}
+
+/// The chart of the kriging RMSE with its 95% intervals at the main budget (SVG).
+fn rmse_chart(at_main: &[&Summary], main_budget: f64, unit: &str) -> Result<String> {
     let rows: Vec<IntervalRow> = at_main
         .iter()
         .map(|s| {
@@ -579,22 +634,25 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
         })
         .filter(|r| r.mean.is_finite())
         .collect();
-    let svg = interval_chart_svg(&IntervalChart {
+    Ok(interval_chart_svg(&IntervalChart {
         title: format!("Kriging RMSE at budget {main_budget} (95% intervals)"),
         x_label: format!("RMSE, {unit} ×1000"),
         rows,
-    })?;
-    charts.push(("rmse_intervals.svg".into(), svg));
-    writeln!(
-        md,
-        "![RMSE with 95% intervals](figures/rmse_intervals.svg)\n"
-    )?;
-    exhaustive_section(&mut md, &summaries, main_budget)?;
+    })?)
+}
+
+/// Each metric over the campaign at the main budget: a line per strategy (charts).
+fn over_campaign_section(
+    md: &mut String,
+    charts: &mut Vec<(String, String)>,
+    results: &[CampaignResult],
+    (strategies, main_budget): (&[Strategy], f64),
+    unit: &str,
+) -> Result<()> {
     writeln!(
         md,
         "## Each metric over the campaign (budget {main_budget})\n"
     )?;
-    let strategies: Vec<Strategy> = at_main.iter().map(|s| s.strategy).collect();
     for name in METRICS {
         let (title, ylabel, scale, _) = describe(name, unit);
         let lines: Vec<Line> = strategies
@@ -645,77 +703,91 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
         writeln!(md, "![{title}](figures/{file})\n")?;
         charts.push((file, svg));
     }
-    if budgets.len() > 1 {
-        writeln!(md, "## Each metric against the budget\n")?;
+    Ok(())
+}
+
+/// Each metric against the budget: a table and a chart per metric.
+fn against_budget_section(
+    md: &mut String,
+    charts: &mut Vec<(String, String)>,
+    summaries: &[Summary],
+    strategies: &[Strategy],
+    unit: &str,
+) -> Result<()> {
+    writeln!(md, "## Each metric against the budget\n")?;
+    writeln!(
+        md,
+        "| strategy | budget | RMSE kriging | energy kJ/mission | events caught | delay d |\n|---|---|---|---|---|---|"
+    )?;
+    for s in summaries {
         writeln!(
             md,
-            "| strategy | budget | RMSE kriging | energy kJ/mission | events caught | delay d |\n|---|---|---|---|---|---|"
+            "| {} | {} | {} | {} | {}/{} | {} |",
+            s.strategy.name(),
+            s.budget,
+            fmt_iv(get(s, "rmse_kriged"), 1000.0, 2),
+            fmt_iv(get(s, "energy_kj"), 1.0, 1),
+            s.events_caught.0,
+            s.events_caught.1,
+            fmt_iv(&s.delay_days, 1.0, 2)
         )?;
-        for s in &summaries {
-            writeln!(
-                md,
-                "| {} | {} | {} | {} | {}/{} | {} |",
-                s.strategy.name(),
-                s.budget,
-                fmt_iv(get(s, "rmse_kriged"), 1000.0, 2),
-                fmt_iv(get(s, "energy_kj"), 1.0, 1),
-                s.events_caught.0,
-                s.events_caught.1,
-                fmt_iv(&s.delay_days, 1.0, 2)
-            )?;
-        }
-        writeln!(md)?;
-        let mut metrics: Vec<&str> = METRICS.to_vec();
-        metrics.push("events_caught_share");
-        metrics.push("delay_days");
-        for name in metrics {
-            let (title, ylabel, scale) = match name {
-                "events_caught_share" => ("events caught", "%".to_string(), 100.0),
-                "delay_days" => ("delay to catch an event", "days".to_string(), 1.0),
-                other => {
-                    let (t, y, s, _) = describe(other, unit);
-                    (t, y, s)
-                }
-            };
-            let lines: Vec<Line> = strategies
-                .iter()
-                .map(|&st| Line {
-                    name: st.name().into(),
-                    points: summaries
-                        .iter()
-                        .filter(|s| s.strategy == st)
-                        .map(|s| {
-                            let y = match name {
-                                "events_caught_share" => {
-                                    s.events_caught.0 as f64 / s.events_caught.1.max(1) as f64
-                                }
-                                "delay_days" => s.delay_days.mean,
-                                other => get(s, other).mean,
-                            };
-                            (s.budget * 100.0, y * scale)
-                        })
-                        .collect(),
-                })
-                .collect();
-            if lines
-                .iter()
-                .all(|l| l.points.iter().all(|p| !p.1.is_finite()))
-            {
-                continue;
-            }
-            let svg = line_chart_svg(&LineChart {
-                title: format!("{title} against the budget"),
-                x_label: "budget, % of the preset battery".into(),
-                y_label: ylabel,
-                x_axis: XAxis::Number,
-                lines,
-            })?;
-            let file = format!("{name}_vs_budget.svg");
-            writeln!(md, "![{title} against the budget](figures/{file})\n")?;
-            charts.push((file, svg));
-        }
     }
-    flights_section(&mut md, results)?;
+    writeln!(md)?;
+    let mut metrics: Vec<&str> = METRICS.to_vec();
+    metrics.push("events_caught_share");
+    metrics.push("delay_days");
+    for name in metrics {
+        let (title, ylabel, scale) = match name {
+            "events_caught_share" => ("events caught", "%".to_string(), 100.0),
+            "delay_days" => ("delay to catch an event", "days".to_string(), 1.0),
+            other => {
+                let (t, y, s, _) = describe(other, unit);
+                (t, y, s)
+            }
+        };
+        let lines: Vec<Line> = strategies
+            .iter()
+            .map(|&st| Line {
+                name: st.name().into(),
+                points: summaries
+                    .iter()
+                    .filter(|s| s.strategy == st)
+                    .map(|s| {
+                        let y = match name {
+                            "events_caught_share" => {
+                                s.events_caught.0 as f64 / s.events_caught.1.max(1) as f64
+                            }
+                            "delay_days" => s.delay_days.mean,
+                            other => get(s, other).mean,
+                        };
+                        (s.budget * 100.0, y * scale)
+                    })
+                    .collect(),
+            })
+            .collect();
+        if lines
+            .iter()
+            .all(|l| l.points.iter().all(|p| !p.1.is_finite()))
+        {
+            continue;
+        }
+        let svg = line_chart_svg(&LineChart {
+            title: format!("{title} against the budget"),
+            x_label: "budget, % of the preset battery".into(),
+            y_label: ylabel,
+            x_axis: XAxis::Number,
+            lines,
+        })?;
+        let file = format!("{name}_vs_budget.svg");
+        writeln!(md, "![{title} against the budget](figures/{file})\n")?;
+        charts.push((file, svg));
+    }
+    Ok(())
+}
+
+/// How the simulation worked and what each metric means; the model-based estimate named as
+/// recorded with the results (older results: as named on the command line).
+fn definitions_section(md: &mut String, results: &[CampaignResult], command: &str) -> Result<()> {
     writeln!(md, "## Definitions\n")?;
     // The model-based estimate ("kriging" columns) the simulation used.
     // Recorded with the results; older results: named on the command line.
@@ -785,10 +857,7 @@ pub fn render_report(results: &[CampaignResult], command: &str) -> Result<Render
          flight against the class of the cell's true value (the model's own thresholds).\n\
          - Staleness: mission time minus each sensor's last collection."
     )?;
-    Ok(RenderedReport {
-        markdown: md,
-        figures: charts,
-    })
+    Ok(())
 }
 
 #[cfg(test)]

@@ -215,6 +215,24 @@ fn num<T: std::str::FromStr>(path: &Path, line: usize, column: &str, v: &str) ->
 
 /// Reads the results `write_results` wrote.
 pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
+    let mut results = read_campaigns(dir)?;
+    read_events(dir, &mut results)?;
+    read_missions(dir, &mut results)?;
+    read_flights(dir, &mut results)?;
+    read_catches(dir, &mut results)?;
+    Ok(results)
+}
+
+/// The campaign named `label` among `results`, for line `line` of `p`.
+fn find(results: &[CampaignResult], label: &str, p: &Path, line: usize) -> Result<usize> {
+    results
+        .iter()
+        .position(|r| r.label == label)
+        .ok_or_else(|| Error::malformed(p, line, format!("unknown campaign {label:?}")))
+}
+
+/// The campaigns of `campaign.csv`, without their events and runs.
+fn read_campaigns(dir: &Path) -> Result<Vec<CampaignResult>> {
     let mut results: Vec<CampaignResult> = Vec::new();
     let p = dir.join(CAMPAIGN);
     // Files written before the temporal nugget have 7 columns (temporal share 1), before the
@@ -266,15 +284,14 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
             runs: Vec::new(),
         });
     }
-    let find = |results: &mut Vec<CampaignResult>, label: &str, p: &Path, line: usize| {
-        results
-            .iter()
-            .position(|r| r.label == label)
-            .ok_or_else(|| Error::malformed(p, line, format!("unknown campaign {label:?}")))
-    };
+    Ok(results)
+}
+
+/// The events of `events.csv`, into their campaigns.
+fn read_events(dir: &Path, results: &mut [CampaignResult]) -> Result<()> {
     let p = dir.join(EVENTS);
     for (line, c) in rows(&p, 5)? {
-        let r = find(&mut results, &c[0], &p, line)?;
+        let r = find(results, &c[0], &p, line)?;
         let sensors = c[2]
             .split(';')
             .filter(|s| !s.is_empty())
@@ -287,6 +304,11 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
             end: num(&p, line, "end", &c[4])?,
         });
     }
+    Ok(())
+}
+
+/// The missions of `missions.csv`, into their campaigns' runs.
+fn read_missions(dir: &Path, results: &mut [CampaignResult]) -> Result<()> {
     let p = dir.join(MISSIONS);
     for (line, c) in rows_of(
         &p,
@@ -296,7 +318,7 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
             MISSIONS_COLUMNS_V1,
         ],
     )? {
-        let r = find(&mut results, &c[0], &p, line)?;
+        let r = find(results, &c[0], &p, line)?;
         let key = RunKey {
             strategy: Strategy::parse(&c[1]).map_err(|e| Error::malformed(&p, line, e))?,
             seed: num(&p, line, "seed", &c[2])?,
@@ -353,11 +375,16 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
             }),
         }
     }
+    Ok(())
+}
+
+/// The flights of `flights.csv`, into their missions.
+fn read_flights(dir: &Path, results: &mut [CampaignResult]) -> Result<()> {
     // Flights (files written before flights were simulated have none).
     let p = dir.join(FLIGHTS);
     if p.exists() {
         for (line, c) in rows(&p, FLIGHTS_HEADER.split(',').count())? {
-            let r = find(&mut results, &c[0], &p, line)?;
+            let r = find(results, &c[0], &p, line)?;
             let strategy = Strategy::parse(&c[1]).map_err(|e| Error::malformed(&p, line, e))?;
             let seed: u64 = num(&p, line, "seed", &c[2])?;
             let budget: f64 = num(&p, line, "budget", &c[3])?;
@@ -399,9 +426,14 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
             }
         }
     }
+    Ok(())
+}
+
+/// The catches of `catches.csv`, into their runs.
+fn read_catches(dir: &Path, results: &mut [CampaignResult]) -> Result<()> {
     let p = dir.join(CATCHES);
     for (line, c) in rows(&p, 6)? {
-        let r = find(&mut results, &c[0], &p, line)?;
+        let r = find(results, &c[0], &p, line)?;
         if c[5].is_empty() {
             continue;
         }
@@ -424,5 +456,5 @@ pub fn read_results(dir: &Path) -> Result<Vec<CampaignResult>> {
             run.caught[e] = Some(at);
         }
     }
-    Ok(results)
+    Ok(())
 }

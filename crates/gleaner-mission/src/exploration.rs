@@ -234,56 +234,13 @@ pub fn plan_exploration_routed(
     options: &ExplorationOptions,
     detours: Option<&Detours>,
 ) -> Result<ExplorationPlan, ExplorationError> {
+    check_inputs(base, centres, service_j, options, detours)?;
     let cells = centres;
-    if let Some(d) = detours
-        && d.len() != cells.len() + 1
-    {
-        return Err(EnergyError::LengthMismatch {
-            what: "detour nodes vs base + cells",
-            left: d.len(),
-            right: cells.len() + 1,
-        }
-        .into());
-    }
     let legs = Legs {
         base,
         cells,
         detours,
     };
-    if cells.len() != service_j.len() {
-        return Err(EnergyError::LengthMismatch {
-            what: "cell centres vs service energies",
-            left: cells.len(),
-            right: service_j.len(),
-        }
-        .into());
-    }
-    for p in cells.iter().chain(std::iter::once(&base)) {
-        if !(p.e.is_finite() && p.n.is_finite()) {
-            let bad = if p.e.is_finite() { p.n } else { p.e };
-            return Err(invalid(
-                "cell or base coordinate (m)",
-                bad,
-                "a finite number",
-            ));
-        }
-    }
-    for &s in service_j {
-        if !(s.is_finite() && s >= 0.0) {
-            return Err(invalid(
-                "cell service energy (J)",
-                s,
-                "a finite number >= 0",
-            ));
-        }
-    }
-    if !(options.budget_margin >= 0.0 && options.budget_margin < 1.0) {
-        return Err(invalid(
-            "budget margin",
-            options.budget_margin,
-            "a number in [0, 1)",
-        ));
-    }
     let n = cells.len();
     let fixed_j = model.sortie_fixed_j();
     let epm = model.energy_per_metre_j();
@@ -316,60 +273,9 @@ pub fn plan_exploration_routed(
         fixed_j,
         budget,
     };
-    let mut best: Option<(usize, f64, Vec<Vec<usize>>)> = None;
-    let mut sequence = Vec::with_capacity(n);
-    for candidate in [&tour, &sweep] {
-        for reversed in [false, true] {
-            for start in 0..n.max(1) {
-                sequence.clear();
-                for k in 0..n {
-                    let at = if reversed {
-                        (start + n - k) % n
-                    } else {
-                        (start + k) % n
-                    };
-                    sequence.push(candidate[at]);
-                }
-                let (count, energy, groups) = cost.split(&sequence);
-                let better = match &best {
-                    None => true,
-                    Some((c, e, _)) => count < *c || (count == *c && energy < *e),
-                };
-                if better {
-                    best = Some((count, energy, groups));
-                }
-            }
-        }
-    }
-    let mut groups = best.map(|b| b.2).unwrap_or_default();
+    let mut groups = best_split(&cost, [&tour, &sweep], n);
     // The sorties as a team orienteering instance in J: node 0 = base, node c + 1 = cell c.
-    let sorties_problem = if n > 0 {
-        let mut service = Vec::with_capacity(n + 1);
-        service.push(0.0);
-        service.extend_from_slice(service_j);
-        let problem = match detours {
-            None => {
-                let points: Vec<[f64; 2]> = std::iter::once(base)
-                    .chain(cells.iter().copied())
-                    .map(|p| [epm * p.e, epm * p.n])
-                    .collect();
-                Problem::from_points(&points, Metric::Euclidean, vec![0.0; n + 1], route_budget)?
-            }
-            Some(d) => {
-                let cost: Vec<f64> = (0..=n)
-                    .flat_map(|a| (0..=n).map(move |b| epm * d.length_m(a, b)))
-                    .collect();
-                Problem::new(cost, vec![0.0; n + 1], route_budget)?
-            }
-        };
-        Some(
-            problem
-                .with_service_costs(service)?
-                .with_vehicles(groups.len().max(1))?,
-        )
-    } else {
-        None
-    };
+    let sorties_problem = sorties_problem(&legs, service_j, epm, route_budget, groups.len())?;
     let improve = ImproveOptions {
         neighbours: options.neighbours,
         between_routes: options.max_improvement_rounds > 0,
@@ -413,6 +319,152 @@ pub fn plan_exploration_routed(
             groups = improve_sorties(groups)?;
         }
     }
+    let sorties = priced_sorties(model, &legs, service_j, groups)?;
+    let total_energy_j = sorties.iter().map(|s| s.energy_j).sum();
+    Ok(ExplorationPlan {
+        sorties,
+        lower_bound_sorties,
+        total_energy_j,
+        giant_tour_m,
+    })
+}
+
+/// Refuses detours over another number of nodes than base + cells, a service energy per
+/// cell missing, a coordinate or service energy that is not finite (or negative), a budget
+/// margin outside [0, 1).
+fn check_inputs(
+    base: LocalPoint,
+    cells: &[LocalPoint],
+    service_j: &[f64],
+    options: &ExplorationOptions,
+    detours: Option<&Detours>,
+) -> Result<(), ExplorationError> {
+    if let Some(d) = detours
+        && d.len() != cells.len() + 1
+    {
+        return Err(EnergyError::LengthMismatch {
+            what: "detour nodes vs base + cells",
+            left: d.len(),
+            right: cells.len() + 1,
+        }
+        .into());
+    }
+    if cells.len() != service_j.len() {
+        return Err(EnergyError::LengthMismatch {
+            what: "cell centres vs service energies",
+            left: cells.len(),
+            right: service_j.len(),
+        }
+        .into());
+    }
+    for p in cells.iter().chain(std::iter::once(&base)) {
+        if !(p.e.is_finite() && p.n.is_finite()) {
+            let bad = if p.e.is_finite() { p.n } else { p.e };
+            return Err(invalid(
+                "cell or base coordinate (m)",
+                bad,
+                "a finite number",
+            ));
+        }
+    }
+    for &s in service_j {
+        if !(s.is_finite() && s >= 0.0) {
+            return Err(invalid(
+                "cell service energy (J)",
+                s,
+                "a finite number >= 0",
+            ));
+        }
+    }
+    if !(options.budget_margin >= 0.0 && options.budget_margin < 1.0) {
+        return Err(invalid(
+            "budget margin",
+            options.budget_margin,
+            "a number in [0, 1)",
+        ));
+    }
+    Ok(())
+}
+
+/// The fewest sorties (then the least energy) over every rotation of each candidate order,
+/// forwards and backwards, split by [`SplitCost::split`].
+fn best_split(cost: &SplitCost<'_>, candidates: [&Vec<usize>; 2], n: usize) -> Vec<Vec<usize>> {
+    let mut best: Option<(usize, f64, Vec<Vec<usize>>)> = None;
+    let mut sequence = Vec::with_capacity(n);
+    for candidate in candidates {
+        for reversed in [false, true] {
+            for start in 0..n.max(1) {
+                sequence.clear();
+                for k in 0..n {
+                    let at = if reversed {
+                        (start + n - k) % n
+                    } else {
+                        (start + k) % n
+                    };
+                    sequence.push(candidate[at]);
+                }
+                let (count, energy, groups) = cost.split(&sequence);
+                let better = match &best {
+                    None => true,
+                    Some((c, e, _)) => count < *c || (count == *c && energy < *e),
+                };
+                if better {
+                    best = Some((count, energy, groups));
+                }
+            }
+        }
+    }
+    best.map(|b| b.2).unwrap_or_default()
+}
+
+/// The sorties as a team orienteering instance in J for `vehicles` sorties (node 0 = base,
+/// node c + 1 = cell c; legs along the detours when given); `None` without cells.
+fn sorties_problem(
+    legs: &Legs<'_>,
+    service_j: &[f64],
+    epm: f64,
+    route_budget: f64,
+    vehicles: usize,
+) -> Result<Option<Problem>, ExplorationError> {
+    let (base, cells, detours, n) = (legs.base, legs.cells, legs.detours, legs.cells.len());
+    if n > 0 {
+        let mut service = Vec::with_capacity(n + 1);
+        service.push(0.0);
+        service.extend_from_slice(service_j);
+        let problem = match detours {
+            None => {
+                let points: Vec<[f64; 2]> = std::iter::once(base)
+                    .chain(cells.iter().copied())
+                    .map(|p| [epm * p.e, epm * p.n])
+                    .collect();
+                Problem::from_points(&points, Metric::Euclidean, vec![0.0; n + 1], route_budget)?
+            }
+            Some(d) => {
+                let cost: Vec<f64> = (0..=n)
+                    .flat_map(|a| (0..=n).map(move |b| epm * d.length_m(a, b)))
+                    .collect();
+                Problem::new(cost, vec![0.0; n + 1], route_budget)?
+            }
+        };
+        Ok(Some(
+            problem
+                .with_service_costs(service)?
+                .with_vehicles(vehicles.max(1))?,
+        ))
+    } else {
+        Ok(None)
+    }
+}
+
+/// Each group of cells as a sortie, re-checked by the energy model with the hover times
+/// behind the service energies (and along the detours); refuses one over the budget.
+fn priced_sorties(
+    model: &MissionEnergyModel,
+    legs: &Legs<'_>,
+    service_j: &[f64],
+    groups: Vec<Vec<usize>>,
+) -> Result<Vec<Sortie>, ExplorationError> {
+    let (base, cells, detours) = (legs.base, legs.cells, legs.detours);
     let per_joule_of_service = model.hover_power_w() + model.rx_power_w();
     let mut sorties = Vec::with_capacity(groups.len());
     for (k, g) in groups.into_iter().filter(|g| !g.is_empty()).enumerate() {
@@ -442,13 +494,7 @@ pub fn plan_exploration_routed(
             energy_j: e.total_j,
         });
     }
-    let total_energy_j = sorties.iter().map(|s| s.energy_j).sum();
-    Ok(ExplorationPlan {
-        sorties,
-        lower_bound_sorties,
-        total_energy_j,
-        giant_tour_m,
-    })
+    Ok(sorties)
 }
 
 /// A closed tour through all cells: nearest neighbour from cell 0, then the generic tour

@@ -218,117 +218,13 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
             "EDGE_WEIGHT_FORMAT" => wformat = value.to_string(),
             "NODE_COORD_SECTION" | "DISPLAY_DATA_SECTION" | "NODE_SCORE_SECTION" => {
                 let d = need_dim(dim, ln, key)?;
-                for _ in 0..d {
-                    let Some(raw) = lines.get(i) else {
-                        return Err(parse_err(name, i + 1, key, "unexpected end of file"));
-                    };
-                    let row = i + 1;
-                    i += 1;
-                    let t: Vec<&str> = raw.split_whitespace().collect();
-                    let width = if key == "NODE_SCORE_SECTION" { 2 } else { 3 };
-                    if t.len() < width {
-                        fail!(
-                            name,
-                            row,
-                            key,
-                            "expected {width} fields, got `{}`",
-                            raw.trim()
-                        );
-                    }
-                    let id = number(name, row, "node id", t[0])?;
-                    if id < 1.0 || id > d as f64 || id.fract() != 0.0 {
-                        fail!(name, row, "node id", "`{}` not in 1..={d}", t[0]);
-                    }
-                    let k = id as usize - 1;
-                    match key {
-                        "NODE_COORD_SECTION" => {
-                            coords[k] = Some([
-                                number(name, row, "x", t[1])?,
-                                number(name, row, "y", t[2])?,
-                            ]);
-                        }
-                        "NODE_SCORE_SECTION" => scores[k] = Some(number(name, row, "score", t[1])?),
-                        _ => {}
-                    }
-                }
+                node_section(name, (&lines, &mut i), key, d, (&mut coords, &mut scores))?;
             }
             "EDGE_WEIGHT_SECTION" => {
                 let d = need_dim(dim, ln, key)?;
-                let count = match wformat.as_str() {
-                    "FULL_MATRIX" => d * d,
-                    "UPPER_ROW" | "LOWER_ROW" => d * (d - 1) / 2,
-                    "UPPER_DIAG_ROW" | "LOWER_DIAG_ROW" => d * (d + 1) / 2,
-                    other => {
-                        fail!(name, ln, "EDGE_WEIGHT_FORMAT", "unsupported `{other}`");
-                    }
-                };
-                let mut vals = Vec::with_capacity(count);
-                while vals.len() < count {
-                    let Some(raw) = lines.get(i) else {
-                        fail!(name, i + 1, key, "only {} of {count} weights", vals.len());
-                    };
-                    let row = i + 1;
-                    i += 1;
-                    for tok in raw.split_whitespace() {
-                        vals.push(number(name, row, "edge weight", tok)?);
-                    }
-                }
-                if vals.len() != count {
-                    fail!(name, i, key, "{} weights, expected {count}", vals.len());
-                }
-                let mut m = vec![0.0; d * d];
-                let mut it = vals.into_iter();
-                let mut set = |a: usize, b: usize, v: f64| {
-                    m[a * d + b] = v;
-                    m[b * d + a] = v;
-                };
-                match wformat.as_str() {
-                    "FULL_MATRIX" => {
-                        for a in 0..d {
-                            for b in 0..d {
-                                let v = it.next().unwrap_or(0.0);
-                                if a <= b {
-                                    set(a, b, v);
-                                }
-                            }
-                        }
-                    }
-                    "UPPER_ROW" => (0..d).for_each(|a| {
-                        ((a + 1)..d).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))
-                    }),
-                    "UPPER_DIAG_ROW" => (0..d)
-                        .for_each(|a| (a..d).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))),
-                    "LOWER_ROW" => (0..d)
-                        .for_each(|a| (0..a).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))),
-                    _ => (0..d)
-                        .for_each(|a| (0..=a).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))),
-                }
-                for a in 0..d {
-                    m[a * d + a] = 0.0;
-                }
-                explicit = Some(m);
+                explicit = Some(edge_weights(name, (&lines, &mut i), ln, &wformat, d)?);
             }
-            "DEPOT_SECTION" => {
-                while let Some(raw) = lines.get(i) {
-                    let row = i + 1;
-                    i += 1;
-                    let t = raw.trim();
-                    if t.is_empty() {
-                        continue;
-                    }
-                    let v = number(name, row, "depot", t)?;
-                    if v < 0.0 {
-                        break;
-                    }
-                    if depot.is_none() {
-                        let d = need_dim(dim, row, key)?;
-                        if v < 1.0 || v > d as f64 || v.fract() != 0.0 {
-                            fail!(name, row, "depot", "`{t}` not in 1..={d}");
-                        }
-                        depot = Some(v as usize - 1);
-                    }
-                }
-            }
+            "DEPOT_SECTION" => depot = depot_section(name, (&lines, &mut i), dim, depot)?,
             "EOF" => break,
             _ if line.contains(':') => {}
             other => fail!(name, ln, "keyword", "unknown `{other}`"),
@@ -404,6 +300,145 @@ pub fn parse_oplib(name: &str, set: &str, text: &str) -> Result<OpInstance, Form
         problem,
         target: None,
     })
+}
+
+/// A node section (`NODE_COORD_SECTION`, `DISPLAY_DATA_SECTION`, `NODE_SCORE_SECTION`): `d`
+/// lines from line `*i` (0-based) on, into `coords` or `scores` by node id.
+fn node_section(
+    name: &str,
+    (lines, i): (&[&str], &mut usize),
+    key: &str,
+    d: usize,
+    (coords, scores): (&mut [Option<[f64; 2]>], &mut [Option<f64>]),
+) -> Result<(), FormatError> {
+    for _ in 0..d {
+        let Some(raw) = lines.get(*i) else {
+            return Err(parse_err(name, *i + 1, key, "unexpected end of file"));
+        };
+        let row = *i + 1;
+        *i += 1;
+        let t: Vec<&str> = raw.split_whitespace().collect();
+        let width = if key == "NODE_SCORE_SECTION" { 2 } else { 3 };
+        if t.len() < width {
+            fail!(
+                name,
+                row,
+                key,
+                "expected {width} fields, got `{}`",
+                raw.trim()
+            );
+        }
+        let id = number(name, row, "node id", t[0])?;
+        if id < 1.0 || id > d as f64 || id.fract() != 0.0 {
+            fail!(name, row, "node id", "`{}` not in 1..={d}", t[0]);
+        }
+        let k = id as usize - 1;
+        match key {
+            "NODE_COORD_SECTION" => {
+                coords[k] = Some([number(name, row, "x", t[1])?, number(name, row, "y", t[2])?]);
+            }
+            "NODE_SCORE_SECTION" => scores[k] = Some(number(name, row, "score", t[1])?),
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// `EDGE_WEIGHT_SECTION` (opened at line `ln`) in `wformat`, from line `*i` (0-based) on: the
+/// symmetric `d` × `d` matrix, row-major, with a zero diagonal.
+fn edge_weights(
+    name: &str,
+    (lines, i): (&[&str], &mut usize),
+    ln: usize,
+    wformat: &str,
+    d: usize,
+) -> Result<Vec<f64>, FormatError> {
+    let key = "EDGE_WEIGHT_SECTION";
+    let count = match wformat {
+        "FULL_MATRIX" => d * d,
+        "UPPER_ROW" | "LOWER_ROW" => d * (d - 1) / 2,
+        "UPPER_DIAG_ROW" | "LOWER_DIAG_ROW" => d * (d + 1) / 2,
+        other => {
+            fail!(name, ln, "EDGE_WEIGHT_FORMAT", "unsupported `{other}`");
+        }
+    };
+    let mut vals = Vec::with_capacity(count);
+    while vals.len() < count {
+        let Some(raw) = lines.get(*i) else {
+            fail!(name, *i + 1, key, "only {} of {count} weights", vals.len());
+        };
+        let row = *i + 1;
+        *i += 1;
+        for tok in raw.split_whitespace() {
+            vals.push(number(name, row, "edge weight", tok)?);
+        }
+    }
+    if vals.len() != count {
+        fail!(name, *i, key, "{} weights, expected {count}", vals.len());
+    }
+    let mut m = vec![0.0; d * d];
+    let mut it = vals.into_iter();
+    let mut set = |a: usize, b: usize, v: f64| {
+        m[a * d + b] = v;
+        m[b * d + a] = v;
+    };
+    match wformat {
+        "FULL_MATRIX" => {
+            for a in 0..d {
+                for b in 0..d {
+                    let v = it.next().unwrap_or(0.0);
+                    if a <= b {
+                        set(a, b, v);
+                    }
+                }
+            }
+        }
+        "UPPER_ROW" => {
+            (0..d).for_each(|a| ((a + 1)..d).for_each(|b| set(a, b, it.next().unwrap_or(0.0))))
+        }
+        "UPPER_DIAG_ROW" => {
+            (0..d).for_each(|a| (a..d).for_each(|b| set(a, b, it.next().unwrap_or(0.0))))
+        }
+        "LOWER_ROW" => {
+            (0..d).for_each(|a| (0..a).for_each(|b| set(a, b, it.next().unwrap_or(0.0))))
+        }
+        _ => (0..d).for_each(|a| (0..=a).for_each(|b| set(a, b, it.next().unwrap_or(0.0)))),
+    }
+    for a in 0..d {
+        m[a * d + a] = 0.0;
+    }
+    Ok(m)
+}
+
+/// `DEPOT_SECTION` from line `*i` (0-based) on, to its `-1`: the first depot (0-based), or
+/// `depot` as found before.
+fn depot_section(
+    name: &str,
+    (lines, i): (&[&str], &mut usize),
+    dim: Option<usize>,
+    mut depot: Option<usize>,
+) -> Result<Option<usize>, FormatError> {
+    let key = "DEPOT_SECTION";
+    while let Some(raw) = lines.get(*i) {
+        let row = *i + 1;
+        *i += 1;
+        let t = raw.trim();
+        if t.is_empty() {
+            continue;
+        }
+        let v = number(name, row, "depot", t)?;
+        if v < 0.0 {
+            break;
+        }
+        if depot.is_none() {
+            let d = dim.ok_or_else(|| parse_err(name, row, key, "section before DIMENSION"))?;
+            if v < 1.0 || v > d as f64 || v.fract() != 0.0 {
+                fail!(name, row, "depot", "`{t}` not in 1..={d}");
+            }
+            depot = Some(v as usize - 1);
+        }
+    }
+    Ok(depot)
 }
 
 #[cfg(test)]

@@ -70,31 +70,7 @@ pub fn exploration_map_svg(
         })
         .collect();
 
-    let total_cells: usize = sorties.iter().map(|m| m.stops.len()).sum();
-    let total_kj: f64 = sorties.iter().map(|m| m.energy.total_j).sum::<f64>() / 1000.0;
-    let title = match &opts.title {
-        Some(t) => t.clone(),
-        None => format!(
-            "Exploration of {} \u{b7} {} sorties",
-            if field.project.is_empty() {
-                "the field"
-            } else {
-                &field.project
-            },
-            sorties.len()
-        ),
-    };
-    let first_time = sorties
-        .iter()
-        .min_by_key(|m| m.planned_at_s)
-        .map(|m| display_time(&m.planned_at));
-    let subtitle = format!(
-        "{} of {} cells visited \u{b7} {:.1} kJ in all{}",
-        total_cells,
-        field.cells.len(),
-        total_kj,
-        first_time.map_or(String::new(), |t| format!(" \u{b7} from {t}"))
-    );
+    let (title, subtitle) = titles_text(field, sorties, opts);
 
     // Right column: north arrow and scale bar.
     let rc_w = (text_width("500 m", font, false) + 2.0).max(2.0 * font);
@@ -110,48 +86,8 @@ pub fn exploration_map_svg(
     let below_map = (x_title_baseline + 0.45 * font).max(map_top + row_h);
 
     // Legend: one entry per sortie, then the shared symbols.
-    let entries: Vec<Entry> = sorties
-        .iter()
-        .enumerate()
-        .map(|(k, m)| {
-            let (c, dash) = colour::qualitative(k);
-            let id = m.mission_id.map_or(String::new(), |id| format!(" (#{id})"));
-            let pct = if m.energy.budget_j > 0.0 {
-                format!(", {:.0} %", 100.0 * m.energy.total_j / m.energy.budget_j)
-            } else {
-                String::new()
-            };
-            Entry {
-                symbol: Symbol::Sortie(c.tint(CELL_TINT), c, dash),
-                text: format!(
-                    "sortie {}{id}: {} cells, {:.1} kJ{pct}",
-                    k + 1,
-                    m.stops.len(),
-                    m.energy.total_j / 1000.0
-                ),
-            }
-        })
-        .collect();
-    let mut shared = vec![
-        Entry {
-            symbol: Symbol::Sensor,
-            text: "sensor".into(),
-        },
-        Entry {
-            symbol: Symbol::Return(Rgb(0x55, 0x55, 0x55)),
-            text: "return leg".into(),
-        },
-        Entry {
-            symbol: Symbol::Base(base_r(font)),
-            text: "base station".into(),
-        },
-    ];
-    if fills.contains(&NOT_VISITED) {
-        shared.push(Entry {
-            symbol: Symbol::Swatch(NOT_VISITED),
-            text: "cell not visited".into(),
-        });
-    }
+    let entries = sortie_entries(sorties);
+    let shared = shared_entries(&fills, font);
     let legend_top = below_map + 0.5 * font;
     let sorties_h = frame::legend_height(&entries, inner, font);
     let shared_top = legend_top + sorties_h + if entries.is_empty() { 0.0 } else { 0.3 * font };
@@ -223,4 +159,87 @@ pub fn exploration_map_svg(
     );
     frame::draw_legend(&mut svg, "legend", &shared, margin, shared_top, inner, font);
     Ok(svg.finish())
+}
+
+/// The symbols every sortie shares: sensor, return leg, base, and unvisited cells when the
+/// map has them.
+fn shared_entries(fills: &[Rgb], font: f64) -> Vec<Entry> {
+    let mut shared = vec![
+        Entry {
+            symbol: Symbol::Sensor,
+            text: "sensor".into(),
+        },
+        Entry {
+            symbol: Symbol::Return(Rgb(0x55, 0x55, 0x55)),
+            text: "return leg".into(),
+        },
+        Entry {
+            symbol: Symbol::Base(base_r(font)),
+            text: "base station".into(),
+        },
+    ];
+    if fills.contains(&NOT_VISITED) {
+        shared.push(Entry {
+            symbol: Symbol::Swatch(NOT_VISITED),
+            text: "cell not visited".into(),
+        });
+    }
+    shared
+}
+
+/// The map's title (the options', else the project and the sortie count) and subtitle.
+fn titles_text(field: &FieldDoc, sorties: &[MissionDoc], opts: &FigureOptions) -> (String, String) {
+    let total_cells: usize = sorties.iter().map(|m| m.stops.len()).sum();
+    let total_kj: f64 = sorties.iter().map(|m| m.energy.total_j).sum::<f64>() / 1000.0;
+    let title = match &opts.title {
+        Some(t) => t.clone(),
+        None => format!(
+            "Exploration of {} \u{b7} {} sorties",
+            if field.project.is_empty() {
+                "the field"
+            } else {
+                &field.project
+            },
+            sorties.len()
+        ),
+    };
+    let first_time = sorties
+        .iter()
+        .min_by_key(|m| m.planned_at_s)
+        .map(|m| display_time(&m.planned_at));
+    let subtitle = format!(
+        "{} of {} cells visited \u{b7} {:.1} kJ in all{}",
+        total_cells,
+        field.cells.len(),
+        total_kj,
+        first_time.map_or(String::new(), |t| format!(" \u{b7} from {t}"))
+    );
+
+    (title, subtitle)
+}
+
+/// One legend entry per sortie: its colours, id, cells, energy and share of the budget.
+fn sortie_entries(sorties: &[MissionDoc]) -> Vec<Entry> {
+    sorties
+        .iter()
+        .enumerate()
+        .map(|(k, m)| {
+            let (c, dash) = colour::qualitative(k);
+            let id = m.mission_id.map_or(String::new(), |id| format!(" (#{id})"));
+            let pct = if m.energy.budget_j > 0.0 {
+                format!(", {:.0} %", 100.0 * m.energy.total_j / m.energy.budget_j)
+            } else {
+                String::new()
+            };
+            Entry {
+                symbol: Symbol::Sortie(c.tint(CELL_TINT), c, dash),
+                text: format!(
+                    "sortie {}{id}: {} cells, {:.1} kJ{pct}",
+                    k + 1,
+                    m.stops.len(),
+                    m.energy.total_j / 1000.0
+                ),
+            }
+        })
+        .collect()
 }

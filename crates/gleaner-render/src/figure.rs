@@ -271,26 +271,7 @@ pub fn mission_figure_svg(
     let inner = width - 2.0 * margin;
 
     // Title and subtitle.
-    let title = match &opts.title {
-        Some(t) => t.clone(),
-        None => {
-            let who = match mission.mission_id {
-                Some(id) => format!("Mission {id}"),
-                None => "Mission (dry run)".to_string(),
-            };
-            format!(
-                "{who} \u{b7} {} \u{b7} {}",
-                mission.kind,
-                display_time(&mission.planned_at)
-            )
-        }
-    };
-    let subtitle = format!(
-        "{} cells visited \u{b7} total S = {:.2} \u{b7} planner: {}",
-        mission.stops.len(),
-        mission.total_score,
-        mission.planner
-    );
+    let (title, subtitle) = titles_text(mission, opts);
 
     // Colour scale.
     let scored: Vec<f64> = scene.cells.iter().filter_map(|c| c.s).collect();
@@ -337,6 +318,107 @@ pub fn mission_figure_svg(
     let formula_text = formula(mission.weights);
     let formula_baseline = below_map + 0.5 * font + cap;
     let legend_top = formula_baseline + 0.9 * font;
+    let entries = legend_entries(&scene, &zones, font);
+    let legend_h = frame::legend_height(&entries, inner, font);
+    let table_top = legend_top + legend_h + 0.5 * font;
+    let height = table_top + EnergyTable::height(font) + margin;
+
+    // Draw.
+    let mut svg = Svg::new(width, height, font, &title);
+    titles.draw(&mut svg, margin);
+    frame::draw_cells(&mut svg, &view, &scene.cells, &fills);
+    frame::draw_zones(&mut svg, &view, &zones);
+    frame::draw_sensors(&mut svg, &view, &scene.sensors);
+
+    // Route.
+    let br = base_r(font);
+    let (pts, radii) = frame::route_points_via(&view, base, &stops, &via, br, stop_r);
+    let base_pt = pts[0];
+    svg.line(format_args!(r#"<g id="route">"#));
+    if !stops.is_empty() {
+        frame::draw_route(&mut svg, &pts, &radii, &ROUTE.hex(), "", 0.85 * font, 0.0);
+    }
+    svg.line(format_args!("</g>"));
+    draw_stops(&mut svg, &view, mission, &stops, (stop_r, font));
+    svg.line(format_args!(r#"<g id="base">"#));
+    frame::base_marker(&mut svg, base_pt.0, base_pt.1, br);
+    svg.line(format_args!("</g>"));
+    frame::draw_axes(&mut svg, &view, &axes, font, margin, x_title_baseline);
+
+    // Right column.
+    let rc_bottom = map_top + row_h;
+    let sb_top = rc_bottom - sb_h;
+    let na_top = sb_top - 0.8 * font - na_h;
+    let cx = rc_x + 0.5 * rc_w;
+    if let Some(sc) = scale.as_mut() {
+        s_colour_bar(&mut svg, sc, (rc_x, map_top, na_top), bar_w, font);
+    }
+    frame::north_arrow(&mut svg, cx, na_top, na_h, font);
+    let len_m = frame::scale_length_m(view.k, rc_w - 1.0);
+    frame::scale_bar(&mut svg, cx, sb_top, len_m, view.k, font);
+
+    // Formula, legend, table.
+    svg.text_attrs(
+        margin,
+        formula_baseline,
+        font,
+        Anchor::Start,
+        false,
+        &format!(r#"id="formula" fill="{INK}""#),
+        &fit(&format!("Utility {formula_text}"), font, false, inner),
+    );
+    frame::draw_legend(
+        &mut svg, "legend", &entries, margin, legend_top, inner, font,
+    );
+    EnergyTable::new(mission).draw(&mut svg, margin, table_top, inner, font);
+    Ok(svg.finish())
+}
+
+/// The stops' numbered markers, in visiting order.
+fn draw_stops(
+    svg: &mut Svg,
+    view: &frame::MapView,
+    mission: &MissionDoc,
+    stops: &[(f64, f64)],
+    (stop_r, font): (f64, f64),
+) {
+    svg.line(format_args!(r#"<g id="stops">"#));
+    for (s, &p) in mission.stops.iter().zip(stops) {
+        let (x, y) = view.pt(p);
+        frame::stop_marker(svg, x, y, stop_r, &s.order.to_string(), font, &ROUTE.hex());
+    }
+    svg.line(format_args!("</g>"));
+}
+
+/// The figure's title (the options', else the mission, its kind and time) and subtitle.
+fn titles_text(mission: &MissionDoc, opts: &FigureOptions) -> (String, String) {
+    let title = match &opts.title {
+        Some(t) => t.clone(),
+        None => {
+            let who = match mission.mission_id {
+                Some(id) => format!("Mission {id}"),
+                None => "Mission (dry run)".to_string(),
+            };
+            format!(
+                "{who} \u{b7} {} \u{b7} {}",
+                mission.kind,
+                display_time(&mission.planned_at)
+            )
+        }
+    };
+    let subtitle = format!(
+        "{} cells visited \u{b7} total S = {:.2} \u{b7} planner: {}",
+        mission.stops.len(),
+        mission.total_score,
+        mission.planner
+    );
+
+    (title, subtitle)
+}
+
+/// The legend's symbols: sensor, stop, legs, base, and unscored cells, no-fly zones and the
+/// geofence when the map has them.
+fn legend_entries(scene: &Scene, zones: &[frame::ZoneShape], font: f64) -> Vec<Entry> {
     let mut entries = vec![
         Entry {
             symbol: Symbol::Sensor,
@@ -377,125 +459,74 @@ pub fn mission_figure_svg(
             text: "geofence".into(),
         });
     }
-    let legend_h = frame::legend_height(&entries, inner, font);
-    let table_top = legend_top + legend_h + 0.5 * font;
-    let height = table_top + EnergyTable::height(font) + margin;
+    entries
+}
 
-    // Draw.
-    let mut svg = Svg::new(width, height, font, &title);
-    titles.draw(&mut svg, margin);
-    frame::draw_cells(&mut svg, &view, &scene.cells, &fills);
-    frame::draw_zones(&mut svg, &view, &zones);
-    frame::draw_sensors(&mut svg, &view, &scene.sensors);
-
-    // Route.
-    let br = base_r(font);
-    let (pts, radii) = frame::route_points_via(&view, base, &stops, &via, br, stop_r);
-    let base_pt = pts[0];
-    svg.line(format_args!(r#"<g id="route">"#));
-    if !stops.is_empty() {
-        frame::draw_route(&mut svg, &pts, &radii, &ROUTE.hex(), "", 0.85 * font, 0.0);
-    }
-    svg.line(format_args!("</g>"));
-    svg.line(format_args!(r#"<g id="stops">"#));
-    for (s, &p) in mission.stops.iter().zip(&stops) {
-        let (x, y) = view.pt(p);
-        frame::stop_marker(
-            &mut svg,
-            x,
-            y,
-            stop_r,
-            &s.order.to_string(),
-            font,
-            &ROUTE.hex(),
-        );
-    }
-    svg.line(format_args!("</g>"));
-    svg.line(format_args!(r#"<g id="base">"#));
-    frame::base_marker(&mut svg, base_pt.0, base_pt.1, br);
-    svg.line(format_args!("</g>"));
-    frame::draw_axes(&mut svg, &view, &axes, font, margin, x_title_baseline);
-
-    // Right column.
-    let rc_bottom = map_top + row_h;
-    let sb_top = rc_bottom - sb_h;
-    let na_top = sb_top - 0.8 * font - na_h;
-    let cx = rc_x + 0.5 * rc_w;
-    if let Some(sc) = scale.as_mut() {
-        let bar_top = map_top + s_label_h;
-        let bar_bottom = na_top - 0.8 * font;
-        let len = (bar_bottom - bar_top).max(1.0);
-        sc.set_ticks(len, 1.5 * font);
-        let bx = rc_x;
-        svg.line(format_args!(r#"<g id="colour-bar">"#));
-        svg.text_attrs(
-            bx + 0.5 * bar_w,
-            map_top + cap,
-            font,
-            Anchor::Middle,
-            true,
-            &format!(r#"fill="{INK}""#),
-            "S",
-        );
-        // The bar: a vertical gradient through the colour map's anchors, top = high S.
-        svg.line(format_args!(
-            r#"<defs><linearGradient id="s-ramp" x1="0" y1="1" x2="0" y2="0">{}</linearGradient></defs>"#,
-            colour::ramp_stops()
-        ));
-        svg.line(format_args!(
-            r#"<rect x="{}" y="{}" width="{}" height="{}" fill="url(#s-ramp)"/>"#,
-            N(bx),
-            N(bar_top),
-            N(bar_w),
-            N(len)
-        ));
-        svg.line(format_args!(
-            r#"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="{INK}" stroke-width="0.4"/>"#,
-            N(bx),
-            N(bar_top),
-            N(bar_w),
-            N(len)
-        ));
-        for (v, label) in &sc.ticks {
-            let ty = bar_bottom - sc.t(*v) * len;
-            svg.line(format_args!(
-                r#"<line class="colour-tick" x1="{}" y1="{}" x2="{}" y2="{}" stroke="{INK}" stroke-width="0.4"/>"#,
-                N(bx + bar_w),
-                N(ty),
-                N(bx + bar_w + TICK),
-                N(ty)
-            ));
-            svg.text_attrs(
-                bx + bar_w + TICK + 1.2,
-                ty + 0.5 * cap,
-                font,
-                Anchor::Start,
-                false,
-                &format!(r#"fill="{INK}""#),
-                label,
-            );
-        }
-        svg.line(format_args!("</g>"));
-    }
-    frame::north_arrow(&mut svg, cx, na_top, na_h, font);
-    let len_m = frame::scale_length_m(view.k, rc_w - 1.0);
-    frame::scale_bar(&mut svg, cx, sb_top, len_m, view.k, font);
-
-    // Formula, legend, table.
+/// The colour bar of S at the right column's `x`, from below its label at `map_top` down to
+/// above the north arrow at `na_top` (pt): gradient, frame, ticks, labels.
+fn s_colour_bar(
+    svg: &mut Svg,
+    sc: &mut ColourScale,
+    (rc_x, map_top, na_top): (f64, f64, f64),
+    bar_w: f64,
+    font: f64,
+) {
+    let cap = CAP_HEIGHT_EM * font;
+    let s_label_h = 1.4 * font;
+    let bar_top = map_top + s_label_h;
+    let bar_bottom = na_top - 0.8 * font;
+    let len = (bar_bottom - bar_top).max(1.0);
+    sc.set_ticks(len, 1.5 * font);
+    let bx = rc_x;
+    svg.line(format_args!(r#"<g id="colour-bar">"#));
     svg.text_attrs(
-        margin,
-        formula_baseline,
+        bx + 0.5 * bar_w,
+        map_top + cap,
         font,
-        Anchor::Start,
-        false,
-        &format!(r#"id="formula" fill="{INK}""#),
-        &fit(&format!("Utility {formula_text}"), font, false, inner),
+        Anchor::Middle,
+        true,
+        &format!(r#"fill="{INK}""#),
+        "S",
     );
-    frame::draw_legend(
-        &mut svg, "legend", &entries, margin, legend_top, inner, font,
-    );
-    EnergyTable::new(mission).draw(&mut svg, margin, table_top, inner, font);
-    Ok(svg.finish())
+    // The bar: a vertical gradient through the colour map's anchors, top = high S.
+    svg.line(format_args!(
+        r#"<defs><linearGradient id="s-ramp" x1="0" y1="1" x2="0" y2="0">{}</linearGradient></defs>"#,
+        colour::ramp_stops()
+    ));
+    svg.line(format_args!(
+        r#"<rect x="{}" y="{}" width="{}" height="{}" fill="url(#s-ramp)"/>"#,
+        N(bx),
+        N(bar_top),
+        N(bar_w),
+        N(len)
+    ));
+    svg.line(format_args!(
+        r#"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="{INK}" stroke-width="0.4"/>"#,
+        N(bx),
+        N(bar_top),
+        N(bar_w),
+        N(len)
+    ));
+    for (v, label) in &sc.ticks {
+        let ty = bar_bottom - sc.t(*v) * len;
+        svg.line(format_args!(
+            r#"<line class="colour-tick" x1="{}" y1="{}" x2="{}" y2="{}" stroke="{INK}" stroke-width="0.4"/>"#,
+            N(bx + bar_w),
+            N(ty),
+            N(bx + bar_w + TICK),
+            N(ty)
+        ));
+        svg.text_attrs(
+            bx + bar_w + TICK + 1.2,
+            ty + 0.5 * cap,
+            font,
+            Anchor::Start,
+            false,
+            &format!(r#"fill="{INK}""#),
+            label,
+        );
+    }
+    svg.line(format_args!("</g>"));
 }
 
 #[cfg(test)]

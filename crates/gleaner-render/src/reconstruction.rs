@@ -162,6 +162,227 @@ pub fn reconstruction_map_svg(
     frame::check_options(opts)?;
     let projection = Projection::new(doc.base_lon_lat)?;
     let cell_size_m = finite(|| "cell_size_m".into(), doc.cell_size_m)?;
+    let (cells, sensors, outline) = projected(doc, &projection, cell_size_m)?;
+
+    let extent = extent_of(&cells, &sensors, &outline, cell_size_m);
+
+    let font = opts.font_pt;
+    let cap = CAP_HEIGHT_EM * font;
+    let width = opts.width_mm * PT_PER_MM;
+    let margin = 0.6 * font;
+    let inner = width - 2.0 * margin;
+
+    // Text.
+    let short = doc
+        .modality
+        .split('@')
+        .next()
+        .unwrap_or_default()
+        .to_uppercase();
+    let unit = doc.unit.as_deref().map(pretty_unit).unwrap_or_default();
+    let with_unit = |label: &str| {
+        if unit.is_empty() {
+            label.to_string()
+        } else {
+            format!("{label} ({unit})")
+        }
+    };
+    let (title, subtitle) = titles_text(doc, opts, (&sensors, cells.len(), cell_size_m));
+
+    // Colour scales: the estimate over its range, the sd from 0.
+    let means: Vec<f64> = cells.iter().map(|c| c.mean).collect();
+    let value_scale = ColourScale::new(&means);
+    let max_sd = cells.iter().map(|c| c.sd).fold(0.0, f64::max);
+    let sd_scale = (!cells.is_empty()).then(|| ColourScale {
+        lo: 0.0,
+        hi: if max_sd > 0.0 { max_sd } else { 1e-3 },
+        ticks: Vec::new(),
+    });
+    let value_of = |c: &Shape| c.mean;
+    let sd_of = |c: &Shape| c.sd;
+    let mut panels = [
+        Panel {
+            key: "value",
+            header: format!("(a) Estimate: {}", with_unit(&short)),
+            bar_title: with_unit(&short),
+            map: VALUE_MAP,
+            scale: value_scale,
+            value: &value_of,
+            unit: &unit,
+        },
+        Panel {
+            key: "sd",
+            header: format!("(b) Uncertainty: {}", with_unit("posterior sd")),
+            bar_title: with_unit("sd"),
+            map: UNCERTAINTY_MAP,
+            scale: sd_scale,
+            value: &sd_of,
+            unit: &unit,
+        },
+    ];
+
+    // Horizontal layout: two slots, each [y title | y labels | map | gap | colour bar].
+    let gap_between = 1.6 * font;
+    let slot_w = (inner - gap_between) / 2.0;
+    let bar_w = 0.9 * font;
+    let bar_gap = 0.9 * font;
+    let column_w = |p: &Panel| {
+        let labels = p.scale.as_ref().map_or(0.0, |s| s.label_width(font));
+        bar_w + TICK + 1.2 + labels + 0.5 * font + 1.25 * font
+    };
+    let columns = [column_w(&panels[0]), column_w(&panels[1])];
+    let widest_column = columns[0].max(columns[1]);
+    let titles = frame::Titles::new(&title, &subtitle, font, inner, margin);
+    let header_baseline = titles.map_top + cap;
+    let map_top = header_baseline + 0.9 * font;
+    let pad = marker_r(font) + 1.5;
+    let y_area = |ylab_w: f64| 1.25 * font + ylab_w + 1.2 + TICK;
+    let avail_w = |ylab_w: f64| (slot_w - y_area(ylab_w) - bar_gap - widest_column).max(4.0 * font);
+    let (view, ylab_w) = fit_view((extent, &projection), opts, (map_top, pad), avail_w);
+    let used_w = y_area(ylab_w) + view.w + bar_gap + widest_column;
+    let offset = 0.5 * (slot_w - used_w).max(0.0);
+    let slot_x = |k: usize| margin + k as f64 * (slot_w + gap_between);
+    let x_title_baseline = view.y + view.h + TICK + 1.0 + cap + 1.2 * font + 0.1 * font;
+
+    // The legend row: symbols left, scale bar and north arrow right.
+    let entries = legend_entries(doc, font);
+    let na_h = frame::north_arrow_height(font);
+    let na_w = 2.0 * font;
+    let scale_max = (0.22 * inner).max(text_width("500 m", font, false) + 2.0);
+    let len_m = frame::scale_length_m(view.k, scale_max);
+    let scale_w = (len_m * view.k).max(text_width(&frame::distance_label(len_m), font, false));
+    let right_w = scale_w + 1.5 * font + na_w;
+    let legend_w = (inner - right_w - 2.0 * font).max(10.0 * font);
+    let row_top = x_title_baseline + 0.9 * font;
+    let legend_h = frame::legend_height(&entries, legend_w, font);
+    let row_h = legend_h.max(na_h);
+    let height = row_top + row_h + margin;
+
+    // Draw.
+    let mut svg = Svg::new(width, height, font, &title);
+    titles.draw(&mut svg, margin);
+    let layout = PanelLayout {
+        header_baseline,
+        slot_w,
+        offset,
+        bar_w,
+        bar_gap,
+        x_title_baseline,
+        y_area: y_area(ylab_w),
+        font,
+    };
+    let content = Content {
+        cells: &cells,
+        sensors: &sensors,
+        outline: &outline,
+        projection: &projection,
+        opts,
+    };
+    for (k, panel) in panels.iter_mut().enumerate() {
+        draw_panel(
+            &mut svg,
+            panel,
+            &content,
+            &layout,
+            (slot_x(k) + offset, view),
+        );
+    }
+    frame::draw_legend(
+        &mut svg, "legend", &entries, margin, row_top, legend_w, font,
+    );
+    let na_cx = width - margin - 0.5 * na_w;
+    frame::north_arrow(&mut svg, na_cx, row_top, na_h, font);
+    let sb_cx = width - margin - na_w - 1.5 * font - 0.5 * scale_w;
+    frame::scale_bar(
+        &mut svg,
+        sb_cx,
+        row_top + 0.5 * (na_h - frame::scale_bar_height(font)),
+        len_m,
+        view.k,
+        font,
+    );
+    Ok(svg.finish())
+}
+
+/// The map's placement in its slot at `map_top` (pt), `avail_w(y labels' width)` wide:
+/// fitted, then refitted with the measured y labels (at most three passes). Returns it and
+/// the y labels' width, pt.
+fn fit_view(
+    (extent, projection): ((f64, f64, f64, f64), &Projection),
+    opts: &FigureOptions,
+    (map_top, pad): (f64, f64),
+    avail_w: impl Fn(f64) -> f64,
+) -> (MapView, f64) {
+    let font = opts.font_pt;
+    let mut ylab_w = text_width("\u{2212}000", font, false);
+    let mut view;
+    let mut passes = 0;
+    loop {
+        let avail_w = avail_w(ylab_w);
+        view = MapView::fit(
+            extent,
+            0.0,
+            map_top,
+            avail_w,
+            opts.max_map_aspect * avail_w,
+            pad,
+        );
+        let axes = Axes::new(&view, projection, opts.coordinates, font);
+        let measured = axes.y_label_width(font);
+        passes += 1;
+        if measured <= ylab_w + 0.01 || passes >= 3 {
+            break;
+        }
+        ylab_w = measured;
+    }
+    (view, ylab_w)
+}
+
+/// The map's title (the options', else the modality, time and estimator) and subtitle (the
+/// project, the sensors read and estimated, the cells).
+fn titles_text(
+    doc: &ReconstructionMapDoc,
+    opts: &FigureOptions,
+    (sensors, cells, cell_size_m): (&[Point], usize, f64),
+) -> (String, String) {
+    let quantity = pretty_modality(&doc.modality);
+    let title = match &opts.title {
+        Some(t) => t.clone(),
+        None => format!(
+            "Estimated {quantity} \u{b7} {} \u{b7} {}",
+            display_time(&doc.at),
+            estimator_text(&doc.estimator)
+        ),
+    };
+    let read = sensors.iter().filter(|s| s.read).count();
+    let subtitle = format!(
+        "{}{} sensors: {} read within {} before the time, {} estimated only \u{b7} {} cells of {} m, each the mean of its sensors",
+        if doc.project.is_empty() {
+            String::new()
+        } else {
+            format!("{} \u{b7} ", doc.project)
+        },
+        sensors.len(),
+        read,
+        duration_text(doc.read_within_s),
+        sensors.len() - read,
+        cells,
+        ticks_label(cell_size_m)
+    );
+
+    (title, subtitle)
+}
+
+/// The cells, sensors and outline rings in the local frame, m.
+type Projected = (Vec<Shape>, Vec<Point>, Vec<Vec<(f64, f64)>>);
+
+/// The document's cells, sensors and outline in the local frame (m), checked: finite, sds
+/// and the cell size positive, positions possible.
+fn projected(
+    doc: &ReconstructionMapDoc,
+    projection: &Projection,
+    cell_size_m: f64,
+) -> Result<Projected, RenderError> {
     if cell_size_m <= 0.0 {
         return Err(RenderError::OutOfRange {
             what: "cell_size_m".into(),
@@ -218,8 +439,17 @@ pub fn reconstruction_map_svg(
         }
         outline.push(pts);
     }
+    Ok((cells, sensors, outline))
+}
 
-    // Extent: cells, sensors, outline; a point still gets an area.
+/// The map's extent (e0, e1, n0, n1, m) over the cells, sensors and outline; a span under a
+/// cell side (or 20 m) widened to it about its middle, so a point still gets an area.
+fn extent_of(
+    cells: &[Shape],
+    sensors: &[Point],
+    outline: &[Vec<(f64, f64)>],
+    cell_size_m: f64,
+) -> (f64, f64, f64, f64) {
     let mut ext: Option<(f64, f64, f64, f64)> = None;
     let mut grow = |(e, n): (f64, f64)| {
         ext = Some(match ext {
@@ -245,130 +475,12 @@ pub fn reconstruction_map_svg(
     };
     let (e0, e1) = widen(e0, e1);
     let (n0, n1) = widen(n0, n1);
-    let extent = (e0, e1, n0, n1);
+    (e0, e1, n0, n1)
+}
 
-    let font = opts.font_pt;
-    let cap = CAP_HEIGHT_EM * font;
-    let width = opts.width_mm * PT_PER_MM;
-    let margin = 0.6 * font;
-    let inner = width - 2.0 * margin;
-
-    // Text.
-    let quantity = pretty_modality(&doc.modality);
-    let short = doc
-        .modality
-        .split('@')
-        .next()
-        .unwrap_or_default()
-        .to_uppercase();
-    let unit = doc.unit.as_deref().map(pretty_unit).unwrap_or_default();
-    let with_unit = |label: &str| {
-        if unit.is_empty() {
-            label.to_string()
-        } else {
-            format!("{label} ({unit})")
-        }
-    };
-    let title = match &opts.title {
-        Some(t) => t.clone(),
-        None => format!(
-            "Estimated {quantity} \u{b7} {} \u{b7} {}",
-            display_time(&doc.at),
-            estimator_text(&doc.estimator)
-        ),
-    };
-    let read = sensors.iter().filter(|s| s.read).count();
-    let subtitle = format!(
-        "{}{} sensors: {} read within {} before the time, {} estimated only \u{b7} {} cells of {} m, each the mean of its sensors",
-        if doc.project.is_empty() {
-            String::new()
-        } else {
-            format!("{} \u{b7} ", doc.project)
-        },
-        sensors.len(),
-        read,
-        duration_text(doc.read_within_s),
-        sensors.len() - read,
-        cells.len(),
-        ticks_label(cell_size_m)
-    );
-
-    // Colour scales: the estimate over its range, the sd from 0.
-    let means: Vec<f64> = cells.iter().map(|c| c.mean).collect();
-    let value_scale = ColourScale::new(&means);
-    let max_sd = cells.iter().map(|c| c.sd).fold(0.0, f64::max);
-    let sd_scale = (!cells.is_empty()).then(|| ColourScale {
-        lo: 0.0,
-        hi: if max_sd > 0.0 { max_sd } else { 1e-3 },
-        ticks: Vec::new(),
-    });
-    let value_of = |c: &Shape| c.mean;
-    let sd_of = |c: &Shape| c.sd;
-    let mut panels = [
-        Panel {
-            key: "value",
-            header: format!("(a) Estimate: {}", with_unit(&short)),
-            bar_title: with_unit(&short),
-            map: VALUE_MAP,
-            scale: value_scale,
-            value: &value_of,
-            unit: &unit,
-        },
-        Panel {
-            key: "sd",
-            header: format!("(b) Uncertainty: {}", with_unit("posterior sd")),
-            bar_title: with_unit("sd"),
-            map: UNCERTAINTY_MAP,
-            scale: sd_scale,
-            value: &sd_of,
-            unit: &unit,
-        },
-    ];
-
-    // Horizontal layout: two slots, each [y title | y labels | map | gap | colour bar].
-    let gap_between = 1.6 * font;
-    let slot_w = (inner - gap_between) / 2.0;
-    let bar_w = 0.9 * font;
-    let bar_gap = 0.9 * font;
-    let column_w = |p: &Panel| {
-        let labels = p.scale.as_ref().map_or(0.0, |s| s.label_width(font));
-        bar_w + TICK + 1.2 + labels + 0.5 * font + 1.25 * font
-    };
-    let columns = [column_w(&panels[0]), column_w(&panels[1])];
-    let widest_column = columns[0].max(columns[1]);
-    let titles = frame::Titles::new(&title, &subtitle, font, inner, margin);
-    let header_baseline = titles.map_top + cap;
-    let map_top = header_baseline + 0.9 * font;
-    let pad = marker_r(font) + 1.5;
-    let mut ylab_w = text_width("\u{2212}000", font, false);
-    let y_area = |ylab_w: f64| 1.25 * font + ylab_w + 1.2 + TICK;
-    let (mut view, mut axes);
-    let mut passes = 0;
-    loop {
-        let avail_w = (slot_w - y_area(ylab_w) - bar_gap - widest_column).max(4.0 * font);
-        view = MapView::fit(
-            extent,
-            0.0,
-            map_top,
-            avail_w,
-            opts.max_map_aspect * avail_w,
-            pad,
-        );
-        axes = Axes::new(&view, &projection, opts.coordinates, font);
-        let measured = axes.y_label_width(font);
-        passes += 1;
-        if measured <= ylab_w + 0.01 || passes >= 3 {
-            break;
-        }
-        ylab_w = measured;
-    }
-    let used_w = y_area(ylab_w) + view.w + bar_gap + widest_column;
-    let offset = 0.5 * (slot_w - used_w).max(0.0);
-    let slot_x = |k: usize| margin + k as f64 * (slot_w + gap_between);
-    let x_title_baseline = view.y + view.h + TICK + 1.0 + cap + 1.2 * font + 0.1 * font;
-
-    // The legend row: symbols left, scale bar and north arrow right.
-    let entries = vec![
+/// The legend's symbols: sensors read, sensors estimated, the field's outline.
+fn legend_entries(doc: &ReconstructionMapDoc, font: f64) -> Vec<Entry> {
+    vec![
         Entry {
             symbol: Symbol::SensorRead(marker_r(font)),
             text: format!(
@@ -384,53 +496,93 @@ pub fn reconstruction_map_svg(
             symbol: Symbol::Outline,
             text: "field outline".into(),
         },
-    ];
-    let na_h = frame::north_arrow_height(font);
-    let na_w = 2.0 * font;
-    let scale_max = (0.22 * inner).max(text_width("500 m", font, false) + 2.0);
-    let len_m = frame::scale_length_m(view.k, scale_max);
-    let scale_w = (len_m * view.k).max(text_width(&frame::distance_label(len_m), font, false));
-    let right_w = scale_w + 1.5 * font + na_w;
-    let legend_w = (inner - right_w - 2.0 * font).max(10.0 * font);
-    let row_top = x_title_baseline + 0.9 * font;
-    let legend_h = frame::legend_height(&entries, legend_w, font);
-    let row_h = legend_h.max(na_h);
-    let height = row_top + row_h + margin;
+    ]
+}
 
-    // Draw.
-    let mut svg = Svg::new(width, height, font, &title);
-    titles.draw(&mut svg, margin);
+/// Where the panels go: their slot, header, colour bar and axis titles, pt.
+struct PanelLayout {
+    header_baseline: f64,
+    slot_w: f64,
+    offset: f64,
+    bar_w: f64,
+    bar_gap: f64,
+    x_title_baseline: f64,
+    /// Width of the y title and labels left of the map.
+    y_area: f64,
+    font: f64,
+}
+
+/// What every panel draws.
+struct Content<'a> {
+    cells: &'a [Shape],
+    sensors: &'a [Point],
+    outline: &'a [Vec<(f64, f64)>],
+    projection: &'a Projection,
+    opts: &'a FigureOptions,
+}
+
+/// One panel at `x0` (pt): its header, cells, outline, sensors, axes and colour bar; `view`
+/// the map's placement (moved to the panel).
+fn draw_panel(
+    svg: &mut Svg,
+    panel: &mut Panel<'_>,
+    content: &Content<'_>,
+    layout: &PanelLayout,
+    (x0, view): (f64, MapView),
+) {
+    let font = layout.font;
     let r = marker_r(font);
-    for (k, panel) in panels.iter_mut().enumerate() {
-        let x0 = slot_x(k) + offset;
-        let mut v = view;
-        v.x = x0 + y_area(ylab_w);
-        svg.line(format_args!(r#"<g id="panel-{}">"#, panel.key));
-        svg.text_attrs(
-            x0,
-            header_baseline,
-            font,
-            Anchor::Start,
-            true,
-            &format!(r#"fill="{INK}""#),
-            &fit(&panel.header, font, true, slot_w - offset),
-        );
-        // Cells.
+    let mut v = view;
+    v.x = x0 + layout.y_area;
+    svg.line(format_args!(r#"<g id="panel-{}">"#, panel.key));
+    svg.text_attrs(
+        x0,
+        layout.header_baseline,
+        font,
+        Anchor::Start,
+        true,
+        &format!(r#"fill="{INK}""#),
+        &fit(&panel.header, font, true, layout.slot_w - layout.offset),
+    );
+    // Cells.
+    svg.line(format_args!(
+        r##"<g id="{}-cells" stroke="#ffffff" stroke-width="0.35" stroke-linejoin="round">"##,
+        panel.key
+    ));
+    for (j, c) in content.cells.iter().enumerate() {
+        if c.ring.len() < 3 {
+            continue;
+        }
+        let value = (panel.value)(c);
+        let fill: Rgb = match &panel.scale {
+            Some(s) => panel.map.at(s.t(value)),
+            None => crate::colour::NO_SCORE,
+        };
+        let mut d = String::new();
+        for (i, &p) in c.ring.iter().enumerate() {
+            let (x, y) = v.pt(p);
+            d.push_str(&format!(
+                "{}{} {}",
+                if i == 0 { "M" } else { "L" },
+                N(x),
+                N(y)
+            ));
+        }
+        d.push('Z');
         svg.line(format_args!(
-            r##"<g id="{}-cells" stroke="#ffffff" stroke-width="0.35" stroke-linejoin="round">"##,
-            panel.key
+            r#"<path id="{}-cell-{j}" class="cell" d="{d}" fill="{}"><title>{} {}</title></path>"#,
+            panel.key,
+            fill.hex(),
+            esc(&c.id),
+            esc(format!("{} {}", value_text(value), panel.unit).trim_end())
         ));
-        for (j, c) in cells.iter().enumerate() {
-            if c.ring.len() < 3 {
-                continue;
-            }
-            let value = (panel.value)(c);
-            let fill: Rgb = match &panel.scale {
-                Some(s) => panel.map.at(s.t(value)),
-                None => crate::colour::NO_SCORE,
-            };
-            let mut d = String::new();
-            for (i, &p) in c.ring.iter().enumerate() {
+    }
+    svg.line(format_args!("</g>"));
+    // Outline.
+    if !content.outline.is_empty() {
+        let mut d = String::new();
+        for ring in content.outline {
+            for (i, &p) in ring.iter().enumerate() {
                 let (x, y) = v.pt(p);
                 d.push_str(&format!(
                     "{}{} {}",
@@ -439,123 +591,104 @@ pub fn reconstruction_map_svg(
                     N(y)
                 ));
             }
-            d.push('Z');
-            svg.line(format_args!(
-                r#"<path id="{}-cell-{j}" class="cell" d="{d}" fill="{}"><title>{} {}</title></path>"#,
-                panel.key,
-                fill.hex(),
-                esc(&c.id),
-                esc(format!("{} {}", value_text(value), panel.unit).trim_end())
-            ));
         }
-        svg.line(format_args!("</g>"));
-        // Outline.
-        if !outline.is_empty() {
-            let mut d = String::new();
-            for ring in &outline {
-                for (i, &p) in ring.iter().enumerate() {
-                    let (x, y) = v.pt(p);
-                    d.push_str(&format!(
-                        "{}{} {}",
-                        if i == 0 { "M" } else { "L" },
-                        N(x),
-                        N(y)
-                    ));
-                }
-            }
-            svg.line(format_args!(
-                r#"<path id="{}-outline" d="{d}" fill="none" stroke="{INK}" stroke-width="0.9" stroke-linejoin="round"/>"#,
-                panel.key
-            ));
-        }
-        // Sensors: the estimated ones first, the read ones over them.
-        svg.line(format_args!(r#"<g id="{}-sensors">"#, panel.key));
-        for read in [false, true] {
-            for s in sensors.iter().filter(|s| s.read == read) {
-                let (x, y) = v.pt(s.at);
-                let value = if panel.key == "sd" { s.sd } else { s.estimate };
-                let title = format!("{} {} {}", s.id, value_text(value), panel.unit);
-                sensor_marker(&mut svg, x, y, r, s.read, title.trim_end());
-            }
-        }
-        svg.line(format_args!("</g>"));
-        let axes_k = Axes::new(&v, &projection, opts.coordinates, font);
-        frame::draw_axes(&mut svg, &v, &axes_k, font, x0, x_title_baseline);
-        // Colour bar: gradient, frame, ticks, labels, the rotated title.
-        if let Some(scale) = panel.scale.as_mut() {
-            let bx = v.x + v.w + bar_gap;
-            let (top, len) = (v.y, v.h);
-            scale.set_ticks(len, 1.5 * font);
-            svg.line(format_args!(r#"<g id="{}-colour-bar">"#, panel.key));
-            svg.line(format_args!(
-                r#"<defs><linearGradient id="{}-ramp" x1="0" y1="1" x2="0" y2="0">{}</linearGradient></defs>"#,
-                panel.key,
-                panel.map.stops()
-            ));
-            svg.line(format_args!(
-                r#"<rect x="{}" y="{}" width="{}" height="{}" fill="url(#{}-ramp)" stroke="{INK}" stroke-width="0.4"/>"#,
-                N(bx),
-                N(top),
-                N(bar_w),
-                N(len),
-                panel.key
-            ));
-            let mut label_w: f64 = 0.0;
-            for (value, label) in &scale.ticks {
-                let ty = top + len - scale.t(*value) * len;
-                svg.line(format_args!(
-                    r#"<line class="colour-tick" x1="{}" y1="{}" x2="{}" y2="{}" stroke="{INK}" stroke-width="0.4"/>"#,
-                    N(bx + bar_w),
-                    N(ty),
-                    N(bx + bar_w + TICK),
-                    N(ty)
-                ));
-                svg.text_attrs(
-                    bx + bar_w + TICK + 1.2,
-                    ty + 0.5 * cap,
-                    font,
-                    Anchor::Start,
-                    false,
-                    &format!(r#"fill="{INK}""#),
-                    label,
-                );
-                label_w = label_w.max(text_width(label, font, false));
-            }
-            // Rotated a quarter turn: its glyphs lie left of its baseline at `cx`.
-            let cx = bx + bar_w + TICK + 1.2 + label_w + 0.5 * font + 0.93 * font;
-            let cy = top + 0.5 * len;
-            svg.text_attrs(
-                cx,
-                cy,
-                font,
-                Anchor::Middle,
-                false,
-                &format!(
-                    r#"fill="{INK}" transform="rotate(-90 {} {})""#,
-                    N(cx),
-                    N(cy)
-                ),
-                &fit(&panel.bar_title, font, false, len),
-            );
-            svg.line(format_args!("</g>"));
-        }
-        svg.line(format_args!("</g>"));
+        svg.line(format_args!(
+            r#"<path id="{}-outline" d="{d}" fill="none" stroke="{INK}" stroke-width="0.9" stroke-linejoin="round"/>"#,
+            panel.key
+        ));
     }
-    frame::draw_legend(
-        &mut svg, "legend", &entries, margin, row_top, legend_w, font,
-    );
-    let na_cx = width - margin - 0.5 * na_w;
-    frame::north_arrow(&mut svg, na_cx, row_top, na_h, font);
-    let sb_cx = width - margin - na_w - 1.5 * font - 0.5 * scale_w;
-    frame::scale_bar(
-        &mut svg,
-        sb_cx,
-        row_top + 0.5 * (na_h - frame::scale_bar_height(font)),
-        len_m,
-        view.k,
+    // Sensors: the estimated ones first, the read ones over them.
+    svg.line(format_args!(r#"<g id="{}-sensors">"#, panel.key));
+    for read in [false, true] {
+        for s in content.sensors.iter().filter(|s| s.read == read) {
+            let (x, y) = v.pt(s.at);
+            let value = if panel.key == "sd" { s.sd } else { s.estimate };
+            let title = format!("{} {} {}", s.id, value_text(value), panel.unit);
+            sensor_marker(svg, x, y, r, s.read, title.trim_end());
+        }
+    }
+    svg.line(format_args!("</g>"));
+    let axes_k = Axes::new(&v, content.projection, content.opts.coordinates, font);
+    frame::draw_axes(svg, &v, &axes_k, font, x0, layout.x_title_baseline);
+    // Colour bar: gradient, frame, ticks, labels, the rotated title.
+    if let Some(scale) = panel.scale.as_mut() {
+        colour_bar(
+            svg,
+            (panel.key, &panel.map, &panel.bar_title),
+            scale,
+            &v,
+            layout,
+        );
+    }
+    svg.line(format_args!("</g>"));
+}
+
+/// A panel's colour bar right of its map `v`: gradient, frame, ticks, labels, the rotated
+/// title.
+fn colour_bar(
+    svg: &mut Svg,
+    (key, map, bar_title): (&str, &ColourMap, &str),
+    scale: &mut ColourScale,
+    v: &MapView,
+    layout: &PanelLayout,
+) {
+    let (font, bar_w, bar_gap) = (layout.font, layout.bar_w, layout.bar_gap);
+    let cap = CAP_HEIGHT_EM * font;
+    let bx = v.x + v.w + bar_gap;
+    let (top, len) = (v.y, v.h);
+    scale.set_ticks(len, 1.5 * font);
+    svg.line(format_args!(r#"<g id="{}-colour-bar">"#, key));
+    svg.line(format_args!(
+        r#"<defs><linearGradient id="{}-ramp" x1="0" y1="1" x2="0" y2="0">{}</linearGradient></defs>"#,
+        key,
+        map.stops()
+    ));
+    svg.line(format_args!(
+        r#"<rect x="{}" y="{}" width="{}" height="{}" fill="url(#{}-ramp)" stroke="{INK}" stroke-width="0.4"/>"#,
+        N(bx),
+        N(top),
+        N(bar_w),
+        N(len),
+        key
+    ));
+    let mut label_w: f64 = 0.0;
+    for (value, label) in &scale.ticks {
+        let ty = top + len - scale.t(*value) * len;
+        svg.line(format_args!(
+            r#"<line class="colour-tick" x1="{}" y1="{}" x2="{}" y2="{}" stroke="{INK}" stroke-width="0.4"/>"#,
+            N(bx + bar_w),
+            N(ty),
+            N(bx + bar_w + TICK),
+            N(ty)
+        ));
+        svg.text_attrs(
+            bx + bar_w + TICK + 1.2,
+            ty + 0.5 * cap,
+            font,
+            Anchor::Start,
+            false,
+            &format!(r#"fill="{INK}""#),
+            label,
+        );
+        label_w = label_w.max(text_width(label, font, false));
+    }
+    // Rotated a quarter turn: its glyphs lie left of its baseline at `cx`.
+    let cx = bx + bar_w + TICK + 1.2 + label_w + 0.5 * font + 0.93 * font;
+    let cy = top + 0.5 * len;
+    svg.text_attrs(
+        cx,
+        cy,
         font,
+        Anchor::Middle,
+        false,
+        &format!(
+            r#"fill="{INK}" transform="rotate(-90 {} {})""#,
+            N(cx),
+            N(cy)
+        ),
+        &fit(bar_title, font, false, len),
     );
-    Ok(svg.finish())
+    svg.line(format_args!("</g>"));
 }
 
 /// A value in a tooltip: four significant decimals.

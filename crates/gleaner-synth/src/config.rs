@@ -284,27 +284,7 @@ fn check_depths(name: &'static str, depths: &[u32]) -> Result<(), SynthError> {
 impl SynthConfig {
     /// Checks every setting; [`crate::generate`] calls this first.
     pub fn validate(&self) -> Result<(), SynthError> {
-        if let Some(layout) = &self.layout {
-            if layout.is_empty() {
-                return Err(invalid("layout", 0, "must hold at least one station"));
-            }
-            if layout.len() != self.sensor_count {
-                return Err(invalid(
-                    "sensor_count",
-                    self.sensor_count,
-                    "must equal the layout's station count (see SynthConfig::on_layout)",
-                ));
-            }
-            let mut ids: Vec<&SensorId> = layout.iter().map(|(id, _)| id).collect();
-            ids.sort();
-            if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
-                return Err(invalid(
-                    "layout",
-                    w[0].as_str(),
-                    "station ids must be distinct",
-                ));
-            }
-        }
+        self.check_layout()?;
         if self.sensor_count == 0 || self.sensor_count > 10_000_000 {
             return Err(invalid(
                 "sensor_count",
@@ -365,6 +345,39 @@ impl SynthConfig {
                 "at most 2e9 values (8 GB in memory)",
             ));
         }
+        self.check_faults()?;
+        self.check_events()?;
+        self.check_climate()
+    }
+
+    /// A layout: at least one station, as many as `sensor_count`, distinct ids.
+    fn check_layout(&self) -> Result<(), SynthError> {
+        if let Some(layout) = &self.layout {
+            if layout.is_empty() {
+                return Err(invalid("layout", 0, "must hold at least one station"));
+            }
+            if layout.len() != self.sensor_count {
+                return Err(invalid(
+                    "sensor_count",
+                    self.sensor_count,
+                    "must equal the layout's station count (see SynthConfig::on_layout)",
+                ));
+            }
+            let mut ids: Vec<&SensorId> = layout.iter().map(|(id, _)| id).collect();
+            ids.sort();
+            if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+                return Err(invalid(
+                    "layout",
+                    w[0].as_str(),
+                    "station ids must be distinct",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The fault rates: probabilities in [0, 1], mean lengths at least 1.
+    fn check_faults(&self) -> Result<(), SynthError> {
         let f = &self.faults;
         check_probability("faults.dropout_per_step", f.dropout_per_step)?;
         check_probability("faults.spike_per_reading", f.spike_per_reading)?;
@@ -386,6 +399,11 @@ impl SynthConfig {
                 "must be a probability in [0, 1]",
             ));
         }
+        Ok(())
+    }
+
+    /// The ground-truth events: at most 10000, durations ascending from 1 day, a positive radius.
+    fn check_events(&self) -> Result<(), SynthError> {
         if self.event_count > 10_000 {
             return Err(invalid("event_count", self.event_count, "at most 10000"));
         }
@@ -400,6 +418,11 @@ impl SynthConfig {
         if let Some(r) = self.event_radius_m.filter(|r| !(r.is_finite() && *r > 0.0)) {
             return Err(invalid("event_radius_m", r, "must be positive and finite"));
         }
+        Ok(())
+    }
+
+    /// The climate: storms, seasons and temperatures finite and in range.
+    fn check_climate(&self) -> Result<(), SynthError> {
         let c = &self.climate;
         check_at_least("climate.storms_per_year", c.storms_per_year, 0.0)?;
         if c.storms_per_year > 365.0 * 24.0 {

@@ -260,22 +260,7 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
     let dt_days = config.interval_s as f64 / 86_400.0;
     let n = config.sensor_count;
 
-    let mut modalities = Vec::new();
-    // Soil moisture (water) first, then soil temperature.
-    for (depths, quantity, unit, is_water, decimals) in [
-        (&config.vw_depths_cm, "vw", "m3/m3", true, 3),
-        (&config.t_depths_cm, "t", "degC", false, 2),
-    ] {
-        for &d in depths {
-            modalities.push(ModalitySpec {
-                modality: Modality::at_depth(quantity, Some(d))?,
-                unit,
-                decimals,
-                depth_cm: d,
-                is_water,
-            });
-        }
-    }
+    let modalities = modality_specs(config)?;
     let times: Vec<i64> = (0..steps as i64)
         .map(|i| config.start + i * config.interval_s)
         .collect();
@@ -291,28 +276,6 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
         Some(layout) => layout.iter().map(|(_, p)| frame.forward(*p)).collect(),
         None => grid_layout(config, n, [w, h], [nx, ny], [dx, dy]),
     };
-    // The closure below keeps the grid's layout stream.
-    fn grid_layout(
-        config: &SynthConfig,
-        n: usize,
-        [w, h]: [f64; 2],
-        [nx, _ny]: [usize; 2],
-        [dx, dy]: [f64; 2],
-    ) -> Vec<LocalPoint> {
-        (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let mut rng = stream(config.seed, Domain::Layout, i as u64);
-                let (col, row) = ((i % nx) as f64, (i / nx) as f64);
-                let je = 0.8 * (uniform(&mut rng) - 0.5);
-                let jn = 0.8 * (uniform(&mut rng) - 0.5);
-                LocalPoint::new(
-                    -w / 2.0 + (col + 0.5 + je) * dx,
-                    -h / 2.0 + (row + 0.5 + jn) * dy,
-                )
-            })
-            .collect()
-    }
 
     // Static spatial fields, drawn in a fixed order.
     let mut frng = stream(config.seed, Domain::Fields, 0);
@@ -331,21 +294,7 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
     let front_field =
         SpatialField::exponential(&mut frng, FRONT_CORRELATION_M).standardized_over(&local);
 
-    let width = n.to_string().len().max(5);
-    let sensors: Vec<Sensor> = local
-        .par_iter()
-        .enumerate()
-        .map(|(i, p)| -> Result<Sensor, crate::SynthError> {
-            let id = match &config.layout {
-                Some(layout) => layout[i].0.clone(),
-                None => SensorId::new(format!("SYN{:0width$}", i + 1))?,
-            };
-            let ll = frame.inverse(*p);
-            let mut s = Sensor::new(id, LatLon::new(ll.lat(), ll.lon())?);
-            s.elevation_m = Some(round_to(785.0 + 12.0 * elevation_field.at(*p), 2));
-            Ok(s)
-        })
-        .collect::<Result<_, _>>()?;
+    let sensors = sensors_at(config, &local, &frame, &elevation_field)?;
 
     // Shared weather.
     let mut wrng = stream(config.seed, Domain::Weather, 0);
@@ -370,17 +319,7 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
         .collect();
     let et_surface = et_at(&doys, 0.0);
     let spin_up_et_surface = et_at(&spin_doys, 0.0);
-    let mut anomaly = vec![0.0; ANOMALY_FIELDS * steps];
-    for k in 0..ANOMALY_FIELDS {
-        let mut z = SmoothProcess::new(dt_days, ANOMALY_TAU_DAYS, normal(&mut wrng));
-        for t in 0..steps {
-            anomaly[k * steps + t] = if t == 0 {
-                z.value()
-            } else {
-                z.step(normal(&mut wrng))
-            };
-        }
-    }
+    let anomaly = anomaly_series(&mut wrng, dt_days, steps);
     let (t_annual, t_rest) = temperature_drivers(config, &mut wrng, &times, &doys, dt_days);
     let common: Vec<f64> = (0..steps).map(|_| normal(&mut wrng)).collect();
 
@@ -439,6 +378,93 @@ pub fn generate(config: &SynthConfig) -> Result<SynthFarm, crate::SynthError> {
         events,
         faults,
     })
+}
+
+/// The farm's modalities: soil moisture (water) at each depth first, then soil temperature.
+fn modality_specs(config: &SynthConfig) -> Result<Vec<ModalitySpec>, crate::SynthError> {
+    let mut modalities = Vec::new();
+    // Soil moisture (water) first, then soil temperature.
+    for (depths, quantity, unit, is_water, decimals) in [
+        (&config.vw_depths_cm, "vw", "m3/m3", true, 3),
+        (&config.t_depths_cm, "t", "degC", false, 2),
+    ] {
+        for &d in depths {
+            modalities.push(ModalitySpec {
+                modality: Modality::at_depth(quantity, Some(d))?,
+                unit,
+                decimals,
+                depth_cm: d,
+                is_water,
+            });
+        }
+    }
+    Ok(modalities)
+}
+
+/// A jittered grid of `n` stations over the extent `[w, h]` (m, centred on the field
+/// centre): `nx` columns of `dx` by `dy` cells, each station's jitter from its own stream.
+fn grid_layout(
+    config: &SynthConfig,
+    n: usize,
+    [w, h]: [f64; 2],
+    [nx, _ny]: [usize; 2],
+    [dx, dy]: [f64; 2],
+) -> Vec<LocalPoint> {
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut rng = stream(config.seed, Domain::Layout, i as u64);
+            let (col, row) = ((i % nx) as f64, (i / nx) as f64);
+            let je = 0.8 * (uniform(&mut rng) - 0.5);
+            let jn = 0.8 * (uniform(&mut rng) - 0.5);
+            LocalPoint::new(
+                -w / 2.0 + (col + 0.5 + je) * dx,
+                -h / 2.0 + (row + 0.5 + jn) * dy,
+            )
+        })
+        .collect()
+}
+
+/// The stations at `local` (m): the layout's ids or `SYN00001`.., WGS84 positions, elevations
+/// from `elevation_field` (m).
+fn sensors_at(
+    config: &SynthConfig,
+    local: &[LocalPoint],
+    frame: &TransverseMercator,
+    elevation_field: &SpatialField,
+) -> Result<Vec<Sensor>, crate::SynthError> {
+    let n = config.sensor_count;
+    let width = n.to_string().len().max(5);
+    local
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| -> Result<Sensor, crate::SynthError> {
+            let id = match &config.layout {
+                Some(layout) => layout[i].0.clone(),
+                None => SensorId::new(format!("SYN{:0width$}", i + 1))?,
+            };
+            let ll = frame.inverse(*p);
+            let mut s = Sensor::new(id, LatLon::new(ll.lat(), ll.lon())?);
+            s.elevation_m = Some(round_to(785.0 + 12.0 * elevation_field.at(*p), 2));
+            Ok(s)
+        })
+        .collect::<Result<_, _>>()
+}
+
+/// The shared anomaly processes, `steps` values each, field by field, drawn from `wrng`.
+fn anomaly_series(wrng: &mut ChaCha8Rng, dt_days: f64, steps: usize) -> Vec<f64> {
+    let mut anomaly = vec![0.0; ANOMALY_FIELDS * steps];
+    for k in 0..ANOMALY_FIELDS {
+        let mut z = SmoothProcess::new(dt_days, ANOMALY_TAU_DAYS, normal(wrng));
+        for t in 0..steps {
+            anomaly[k * steps + t] = if t == 0 {
+                z.value()
+            } else {
+                z.step(normal(wrng))
+            };
+        }
+    }
+    anomaly
 }
 
 /// Shared soil-temperature drivers per temperature depth: the annual wave (to be scaled by
@@ -741,78 +767,17 @@ fn simulate_sensor(
         .iter()
         .map(|f| f.at(p) / (ANOMALY_FIELDS as f64).sqrt())
         .collect();
-    let mut layers: Vec<WaterLayer> = config
-        .vw_depths_cm
-        .iter()
-        .map(|&d| {
-            let d = f64::from(d);
-            let tau = interp(&INFILTRATION_TAU_DAYS, d);
-            let front_delay_days = interp(&FRONT_DELAY_DAYS, d) * (FRONT_DELAY_SD * f_front).exp();
-            let pulse_in = interp(&PULSE_IN_TAU_DAYS, d);
-            let pulse_tau = interp(&PULSE_TAU_DAYS, d);
-            let gain = (0.3 * mix(f_gain, &mut rng)).exp();
-            WaterLayer {
-                wilt: interp(&WILT_MEAN, d) + interp(&WILT_SD, d) * mix(f_wilt, &mut rng),
-                range: interp(&RANGE_MEAN, d)
-                    * (interp(&RANGE_CV, d) * mix(f_range, &mut rng)).exp(),
-                drying: interp(&DRYING_RATE, d) * (0.5 * mix(f_dry, &mut rng)).exp(),
-                gain: interp(&RAIN_GAIN, d) * gain,
-                alpha: 1.0 - (-dt / tau).exp(),
-                spin_alpha: 1.0 - (-1.0 / tau).exp(),
-                pulse_alpha: 1.0 - (-dt / pulse_in).exp(),
-                spin_pulse_alpha: 1.0 - (-1.0 / pulse_in).exp(),
-                pulse_gain: interp(&PULSE_GAIN, d) * gain,
-                pulse_decay: (-dt / pulse_tau).exp(),
-                spin_pulse_decay: (-1.0 / pulse_tau).exp(),
-                event_alpha: 1.0 - (-dt / interp(&EVENT_TAU_DAYS, d)).exp(),
-                noise: interp(&VW_NOISE, d),
-                common_noise: interp(&VW_COMMON_NOISE, d),
-                anomaly_sd: interp(&ANOMALY_SD, d),
-                anomaly_alpha: match interp(&ANOMALY_FILTER_DAYS, d) {
-                    tau if tau > 0.0 => 1.0 - (-dt / tau).exp(),
-                    _ => 1.0,
-                },
-                anomaly_state: f64::NAN,
-                local_sd: interp(&LOCAL_SD, d),
-                store: 0.5,
-                inflow: 0.0,
-                pulse: 0.0,
-                pulse_inflow: 0.0,
-                local: SmoothProcess::new(dt, interp(&LOCAL_TAU_DAYS, d), normal(&mut rng)),
-                percolates: d > TABLE_DEPTHS_CM[0],
-                front: DelayLine::new(front_delay_days.round() as usize),
-                front_delay_days,
-                leak: 0.0,
-                dry: 0.0,
-            }
-        })
-        .collect();
+    let mut layers = water_layers(
+        config,
+        dt,
+        [f_wilt, f_range, f_dry, f_gain, f_front],
+        &mut rng,
+    );
     let t_offset = T_OFFSET_SD * mix(f_t, &mut rng);
     let t_amp = 1.0 + T_AMPLITUDE_CV * normal(&mut rng);
 
     // Spin-up, daily steps, no events, the field's mean storm response.
-    let mut topsoil = Topsoil {
-        store: 0.5,
-        inflow: 0.0,
-    };
-    let top_tau = INFILTRATION_TAU_DAYS[0];
-    let (spin_top_alpha, top_alpha) = (1.0 - (-1.0 / top_tau).exp(), 1.0 - (-dt / top_tau).exp());
-    for k in 0..ctx.spin_up_rain_mm.len() {
-        let rain = ctx.spin_up_rain_mm[k] * (1.0 - RAIN_INTERCEPTION * ctx.spin_up_et_surface[k]);
-        let percolation = topsoil.percolation(rain);
-        topsoil.step(rain, ctx.spin_up_et_surface[k], 1.0, spin_top_alpha);
-        for (j, layer) in layers.iter_mut().enumerate() {
-            let alphas = (layer.spin_alpha, layer.spin_pulse_alpha);
-            let decay = layer.spin_pulse_decay;
-            layer.water_step(rain, percolation, ctx.spin_up_et[j][k], 1.0, alphas, decay);
-        }
-    }
-    // The fronts still on their way, moved onto the sampling grid.
-    let per_day = (1.0 / dt).round().max(1.0) as usize;
-    for layer in &mut layers {
-        let steps = (layer.front_delay_days / dt).round() as usize;
-        layer.front = layer.front.resampled(steps, per_day);
-    }
+    let (mut topsoil, top_alpha) = spin_up(ctx, &mut layers);
 
     let effects = &ctx.effects[index];
     let n_vw = layers.len();
@@ -886,7 +851,113 @@ fn simulate_sensor(
         }
     }
 
-    // Failing-sensor events.
+    failing_sensor_events(ctx, effects, out);
+
+    let faults = apply_faults(
+        config,
+        index,
+        ctx.modalities,
+        &ctx.outages,
+        out,
+        steps,
+        &mut rng,
+    );
+
+    quantise(ctx, out);
+    faults
+}
+
+/// A sensor's soil-water layers, one per `vw_depths_cm`, from the spatial fields at its
+/// position (`[wilt, range, drying, gain, front]`) plus nugget drawn from `rng`; `dt` the
+/// sampling step, days.
+fn water_layers(
+    config: &SynthConfig,
+    dt: f64,
+    [f_wilt, f_range, f_dry, f_gain, f_front]: [f64; 5],
+    rng: &mut ChaCha8Rng,
+) -> Vec<WaterLayer> {
+    config
+        .vw_depths_cm
+        .iter()
+        .map(|&d| {
+            let d = f64::from(d);
+            let tau = interp(&INFILTRATION_TAU_DAYS, d);
+            let front_delay_days = interp(&FRONT_DELAY_DAYS, d) * (FRONT_DELAY_SD * f_front).exp();
+            let pulse_in = interp(&PULSE_IN_TAU_DAYS, d);
+            let pulse_tau = interp(&PULSE_TAU_DAYS, d);
+            let gain = (0.3 * mix(f_gain, rng)).exp();
+            WaterLayer {
+                wilt: interp(&WILT_MEAN, d) + interp(&WILT_SD, d) * mix(f_wilt, rng),
+                range: interp(&RANGE_MEAN, d) * (interp(&RANGE_CV, d) * mix(f_range, rng)).exp(),
+                drying: interp(&DRYING_RATE, d) * (0.5 * mix(f_dry, rng)).exp(),
+                gain: interp(&RAIN_GAIN, d) * gain,
+                alpha: 1.0 - (-dt / tau).exp(),
+                spin_alpha: 1.0 - (-1.0 / tau).exp(),
+                pulse_alpha: 1.0 - (-dt / pulse_in).exp(),
+                spin_pulse_alpha: 1.0 - (-1.0 / pulse_in).exp(),
+                pulse_gain: interp(&PULSE_GAIN, d) * gain,
+                pulse_decay: (-dt / pulse_tau).exp(),
+                spin_pulse_decay: (-1.0 / pulse_tau).exp(),
+                event_alpha: 1.0 - (-dt / interp(&EVENT_TAU_DAYS, d)).exp(),
+                noise: interp(&VW_NOISE, d),
+                common_noise: interp(&VW_COMMON_NOISE, d),
+                anomaly_sd: interp(&ANOMALY_SD, d),
+                anomaly_alpha: match interp(&ANOMALY_FILTER_DAYS, d) {
+                    tau if tau > 0.0 => 1.0 - (-dt / tau).exp(),
+                    _ => 1.0,
+                },
+                anomaly_state: f64::NAN,
+                local_sd: interp(&LOCAL_SD, d),
+                store: 0.5,
+                inflow: 0.0,
+                pulse: 0.0,
+                pulse_inflow: 0.0,
+                local: SmoothProcess::new(dt, interp(&LOCAL_TAU_DAYS, d), normal(rng)),
+                percolates: d > TABLE_DEPTHS_CM[0],
+                front: DelayLine::new(front_delay_days.round() as usize),
+                front_delay_days,
+                leak: 0.0,
+                dry: 0.0,
+            }
+        })
+        .collect()
+}
+
+/// The spin-up: daily steps before the record, no events, the field's mean storm response;
+/// the fronts still on their way moved onto the sampling grid. Returns the topsoil and its
+/// infiltration rate per sampling step.
+fn spin_up(ctx: &Context<'_>, layers: &mut [WaterLayer]) -> (Topsoil, f64) {
+    let dt = ctx.dt_days;
+    let mut topsoil = Topsoil {
+        store: 0.5,
+        inflow: 0.0,
+    };
+    let top_tau = INFILTRATION_TAU_DAYS[0];
+    let (spin_top_alpha, top_alpha) = (1.0 - (-1.0 / top_tau).exp(), 1.0 - (-dt / top_tau).exp());
+    for k in 0..ctx.spin_up_rain_mm.len() {
+        let rain = ctx.spin_up_rain_mm[k] * (1.0 - RAIN_INTERCEPTION * ctx.spin_up_et_surface[k]);
+        let percolation = topsoil.percolation(rain);
+        topsoil.step(rain, ctx.spin_up_et_surface[k], 1.0, spin_top_alpha);
+        for (j, layer) in layers.iter_mut().enumerate() {
+            let alphas = (layer.spin_alpha, layer.spin_pulse_alpha);
+            let decay = layer.spin_pulse_decay;
+            layer.water_step(rain, percolation, ctx.spin_up_et[j][k], 1.0, alphas, decay);
+        }
+    }
+    // The fronts still on their way, moved onto the sampling grid.
+    let per_day = (1.0 / dt).round().max(1.0) as usize;
+    for layer in layers.iter_mut() {
+        let steps = (layer.front_delay_days / dt).round() as usize;
+        layer.front = layer.front.resampled(steps, per_day);
+    }
+
+    (topsoil, top_alpha)
+}
+
+/// Failing-sensor events: a drifting sensor's values drift, a stuck one's freeze; both are
+/// missing from the event's end until the sensor is replaced.
+fn failing_sensor_events(ctx: &Context<'_>, effects: &[EventEffect], out: &mut [f32]) {
+    let (steps, dt) = (ctx.steps, ctx.dt_days);
     for e in effects {
         if !matches!(e.kind, EventKind::SensorDrift | EventKind::SensorStuck) {
             continue;
@@ -914,18 +985,11 @@ fn simulate_sensor(
             }
         }
     }
+}
 
-    let faults = apply_faults(
-        config,
-        index,
-        ctx.modalities,
-        &ctx.outages,
-        out,
-        steps,
-        &mut rng,
-    );
-
-    // The sensor's resolution step: values are multiples of it (CAF: 0.001 m³/m³, 0.01 °C).
+/// The sensor's resolution step: values are multiples of it (CAF: 0.001 m³/m³, 0.01 °C).
+fn quantise(ctx: &Context<'_>, out: &mut [f32]) {
+    let steps = ctx.steps;
     for (m, spec) in ctx.modalities.iter().enumerate() {
         let step = if spec.is_water {
             VW_RESOLUTION
@@ -939,7 +1003,6 @@ fn simulate_sensor(
             }
         }
     }
-    faults
 }
 
 /// The network-wide outages, `[start, end)` sampling steps: drawn day by day (a new one can

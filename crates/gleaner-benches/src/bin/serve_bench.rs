@@ -224,51 +224,11 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let mut config = ServerConfig::new(args.project.clone());
     config.addr = "127.0.0.1:0".parse()?;
     config.token = Some(token.clone());
-    let (addr_tx, addr_rx) = std::sync::mpsc::channel();
-    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-    let workers = args.workers;
-    let server = std::thread::spawn(move || -> Result<(), String> {
-        let rt = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(workers)
-            .enable_all()
-            .build()
-            .map_err(|e| e.to_string())?;
-        rt.block_on(async move {
-            let listener = tokio::net::TcpListener::bind(config.addr)
-                .await
-                .map_err(|e| e.to_string())?;
-            addr_tx
-                .send(listener.local_addr().map_err(|e| e.to_string())?)
-                .ok();
-            gleaner_server::serve(listener, &config, async {
-                stopped.await.ok();
-            })
-            .await
-            .map_err(|e| e.to_string())
-        })
-    });
-    let addr = addr_rx
-        .recv()
-        .map_err(|_| "the server did not start (is --project a gleaner project?)")?;
+    let (addr, stop, server) = start_server(config, args.workers)?;
     let mut c = Client::new(addr);
 
     // A mission to read.
-    let missions = c.get("/api/v1/missions")?.json()?;
-    let id = match missions.as_array().and_then(|m| m.last()) {
-        Some(m) => m["mission_id"].as_i64().ok_or("bad mission list")?,
-        None => {
-            eprintln!("planning a mission to read (greedy, stored)…");
-            let r = c.post_json(
-                "/api/v1/plan",
-                &serde_json::json!({"solver": "greedy"}),
-                Some(token.reveal()),
-            )?;
-            if r.status != 200 {
-                return Err(format!("planning failed: {}", r.text()).into());
-            }
-            r.json()?["mission_id"].as_i64().ok_or("no mission id")?
-        }
-    };
+    let id = mission_to_read(&mut c, &token)?;
     let cells = c
         .get("/api/v1/cells")?
         .json()?
@@ -302,34 +262,7 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     // The same reads while missions are planned and saved back to back (greedy: each save
     // is a write that invalidates the cached answers, which are then computed again once).
     for (what, path) in reads {
-        eprintln!("{what} while plans are saved…");
-        let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
-        let saver = {
-            let stop = Arc::clone(&stop);
-            let token = token.clone();
-            std::thread::spawn(move || {
-                let mut c = Client::new(addr);
-                let mut saved = 0usize;
-                while !stop.load(std::sync::atomic::Ordering::Relaxed) {
-                    match c.post_json(
-                        "/api/v1/plan",
-                        &serde_json::json!({"solver": "greedy"}),
-                        Some(token.reveal()),
-                    ) {
-                        Ok(r) if r.status == 200 => saved += 1,
-                        _ => break,
-                    }
-                }
-                saved
-            })
-        };
-        let during = load(addr, path, args.requests, args.clients);
-        stop.store(true, std::sync::atomic::Ordering::Relaxed);
-        let saved = saver.join().map_err(|_| "saver thread")?;
-        println!(
-            "{} {saved} plans saved meanwhile",
-            during.line(&format!("{what} while plans are saved"))
-        );
+        reads_while_saving(addr, &token, (what, path), args)?;
     }
 
     // Reads while a mission is planned (default solver, dry run so nothing is stored).
@@ -360,6 +293,121 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
 
     // Page weight: everything the dashboard loads to show the field and the latest mission.
     println!();
+    page_weight(&mut c)?;
+    if args.browser {
+        let (fcp, ready) = first_paint(addr)?;
+        println!(
+            "headless Chromium, median of 5 loads: first contentful paint {fcp:.0} ms, map drawn (cells interactive) {ready:.0} ms after navigation start"
+        );
+    }
+    stop.send(()).ok();
+    server.join().map_err(|_| "server thread")??;
+    Ok(())
+}
+
+/// A running server: its address, the sender that stops it, its thread.
+type Server = (
+    std::net::SocketAddr,
+    tokio::sync::oneshot::Sender<()>,
+    std::thread::JoinHandle<Result<(), String>>,
+);
+
+/// The server on its own thread and runtime (`workers` threads) at a free loopback port:
+/// its address, the sender that stops it, its thread.
+fn start_server(
+    config: ServerConfig,
+    workers: usize,
+) -> Result<Server, Box<dyn std::error::Error>> {
+    let (addr_tx, addr_rx) = std::sync::mpsc::channel();
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    let server = std::thread::spawn(move || -> Result<(), String> {
+        let rt = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(workers)
+            .enable_all()
+            .build()
+            .map_err(|e| e.to_string())?;
+        rt.block_on(async move {
+            let listener = tokio::net::TcpListener::bind(config.addr)
+                .await
+                .map_err(|e| e.to_string())?;
+            addr_tx
+                .send(listener.local_addr().map_err(|e| e.to_string())?)
+                .ok();
+            gleaner_server::serve(listener, &config, async {
+                stopped.await.ok();
+            })
+            .await
+            .map_err(|e| e.to_string())
+        })
+    });
+    let addr = addr_rx
+        .recv()
+        .map_err(|_| "the server did not start (is --project a gleaner project?)")?;
+    Ok((addr, stop, server))
+}
+
+/// The project's newest mission, or one planned now (greedy, stored) when it has none.
+fn mission_to_read(c: &mut Client, token: &Token) -> Result<i64, Box<dyn std::error::Error>> {
+    let missions = c.get("/api/v1/missions")?.json()?;
+    Ok(match missions.as_array().and_then(|m| m.last()) {
+        Some(m) => m["mission_id"].as_i64().ok_or("bad mission list")?,
+        None => {
+            eprintln!("planning a mission to read (greedy, stored)…");
+            let r = c.post_json(
+                "/api/v1/plan",
+                &serde_json::json!({"solver": "greedy"}),
+                Some(token.reveal()),
+            )?;
+            if r.status != 200 {
+                return Err(format!("planning failed: {}", r.text()).into());
+            }
+            r.json()?["mission_id"].as_i64().ok_or("no mission id")?
+        }
+    })
+}
+
+/// `path` read by `args.clients` clients while missions are planned and saved back to back;
+/// prints the line.
+fn reads_while_saving(
+    addr: std::net::SocketAddr,
+    token: &Token,
+    (what, path): (&str, &str),
+    args: &Args,
+) -> Result<(), Box<dyn std::error::Error>> {
+    eprintln!("{what} while plans are saved…");
+    let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let saver = {
+        let stop = Arc::clone(&stop);
+        let token = token.clone();
+        std::thread::spawn(move || {
+            let mut c = Client::new(addr);
+            let mut saved = 0usize;
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                match c.post_json(
+                    "/api/v1/plan",
+                    &serde_json::json!({"solver": "greedy"}),
+                    Some(token.reveal()),
+                ) {
+                    Ok(r) if r.status == 200 => saved += 1,
+                    _ => break,
+                }
+            }
+            saved
+        })
+    };
+    let during = load(addr, path, args.requests, args.clients);
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let saved = saver.join().map_err(|_| "saver thread")?;
+    println!(
+        "{} {saved} plans saved meanwhile",
+        during.line(&format!("{what} while plans are saved"))
+    );
+    Ok(())
+}
+
+/// Prints the dashboard's page weight: everything it loads to show the field and the latest
+/// mission.
+fn page_weight(c: &mut Client) -> Result<(), Box<dyn std::error::Error>> {
     let mut total = 0;
     let mut parts = Vec::new();
     for path in [
@@ -380,14 +428,6 @@ fn run(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         total as f64 / 1000.0,
         parts.join(", ")
     );
-    if args.browser {
-        let (fcp, ready) = first_paint(addr)?;
-        println!(
-            "headless Chromium, median of 5 loads: first contentful paint {fcp:.0} ms, map drawn (cells interactive) {ready:.0} ms after navigation start"
-        );
-    }
-    stop.send(()).ok();
-    server.join().map_err(|_| "server thread")??;
     Ok(())
 }
 

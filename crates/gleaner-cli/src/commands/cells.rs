@@ -1,5 +1,9 @@
 //! `gleaner cells`: the cell table with its metadata, as text or JSON.
 
+use anyhow::Result;
+
+use crate::{JsonArg, ProjectArg};
+
 use std::collections::HashMap;
 
 use gleaner_field::CellIndex;
@@ -89,4 +93,34 @@ pub fn table(rows: &[CellRowDoc], readings: &HashMap<CellIndex, u64>) -> String 
         ));
     }
     out
+}
+
+// The arguments of `gleaner cells` (no doc comment: the variant's is the help).
+#[derive(clap::Args)]
+pub struct CellsArgs {
+    #[command(flatten)]
+    pub project: ProjectArg,
+    #[command(flatten)]
+    pub json: JsonArg,
+    /// Order of the rows.
+    #[arg(long, value_enum, default_value_t = SortKey::Label)]
+    pub sort: SortKey,
+}
+
+/// Prints the cell table (or JSON).
+pub fn run(args: CellsArgs) -> Result<()> {
+    let p = args.project.open()?;
+    let view = gleaner_app::field_view(&p)?;
+    let mut rows: Vec<_> = view
+        .cells
+        .iter()
+        .map(|c| gleaner_wire::convert::cell_row(c, view.cell_size_m))
+        .collect();
+    sort(&mut rows, args.sort);
+    if args.json.json {
+        return args.json.emit(&rows, "serialising cells", String::new);
+    }
+    let counts = gleaner_app::cell_reading_counts(&p)?;
+    args.json
+        .emit(&rows, "serialising cells", || table(&rows, &counts))
 }

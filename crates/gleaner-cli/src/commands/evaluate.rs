@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use gleaner_eval::peer::{self, Dataset, FROZEN_ESTIMATOR, FROZEN_PLANNER, Planner};
+use gleaner_eval::peer::{self, FROZEN_ESTIMATOR, FROZEN_PLANNER};
 
 /// Which protocol data to run on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -33,30 +33,17 @@ pub enum PeerData {
 }
 
 impl PeerData {
-    /// The year of a rolling-window data set.
-    fn windows_year(self) -> Option<i32> {
-        match self {
-            PeerData::TuningWindows => Some(2013),
-            PeerData::Windows2014 => Some(2014),
-            PeerData::Windows2015 => Some(2015),
-            PeerData::Windows2016 => Some(2016),
-            PeerData::Holdout | PeerData::Tuning | PeerData::HubbardBrook => None,
-        }
-    }
-
-    fn title(self) -> String {
-        match self {
-            PeerData::Holdout => "hold-out: hourly VW 30 cm, Jan-Apr 2015".into(),
-            PeerData::Tuning => "tuning: CAF daily VW 30 cm, train 2012, test 2013".into(),
-            PeerData::TuningWindows => {
-                "tuning: CAF daily VW 30 cm, 21-day windows through 2013".into()
-            }
-            PeerData::HubbardBrook => "hold-out: Hubbard Brook hourly water content".into(),
-            d => format!(
-                "hold-out: CAF daily VW 30 cm, 21-day windows through {}",
-                d.windows_year().unwrap_or_default()
-            ),
-        }
+    /// The CAF data of the protocol; `None` for Hubbard Brook (its own pipeline).
+    fn data(self) -> Option<peer::PeerData> {
+        Some(match self {
+            PeerData::Holdout => peer::PeerData::Holdout,
+            PeerData::Tuning => peer::PeerData::Tuning,
+            PeerData::TuningWindows => peer::PeerData::Windows(2013),
+            PeerData::Windows2014 => peer::PeerData::Windows(2014),
+            PeerData::Windows2015 => peer::PeerData::Windows(2015),
+            PeerData::Windows2016 => peer::PeerData::Windows(2016),
+            PeerData::HubbardBrook => return None,
+        })
     }
 }
 
@@ -79,86 +66,39 @@ pub struct PeerArgs {
     pub unshared_weight: f64,
 }
 
-/// Runs the protocol; returns the summary text.
+/// Runs the protocol (`gleaner_eval::peer::evaluate`), writes its files; returns the summary.
 pub fn run_peer(args: &PeerArgs) -> Result<String> {
     let context = || format!("{} (set GLEANER_DATA_DIR)", args.data.display());
-    if args.on == PeerData::HubbardBrook {
+    let Some(on) = args.on.data() else {
         return run_hubbard_brook(args);
-    }
-    let (matrix, layouts, results, mut protocols) = match args.on.windows_year() {
-        Some(year) => peer::load_windows(&args.data, year).with_context(context)?,
-        None => {
-            let dataset = match args.on {
-                PeerData::Holdout => Dataset::Hourly2015,
-                _ => Dataset::TuningDaily,
-            };
-            let (m, l, r, p) = peer::load(&args.data, dataset).with_context(context)?;
-            (m, l, r, vec![p])
-        }
     };
+    let loaded = peer::load_data(&args.data, on).with_context(context)?;
     if !(args.unshared_weight.is_finite() && args.unshared_weight >= 0.0) {
         anyhow::bail!(
             "--unshared-weight {}: expected a number >= 0",
             args.unshared_weight
         );
     }
-    for p in &mut protocols {
-        p.unshared_weight = args.unshared_weight;
-    }
-    let planners = [Planner::Count, Planner::Information];
-    let total = (layouts.len() * protocols.len()) as u64;
-    let bar = crate::progress::bar(total, "layouts");
-    let (report, each) = peer::run_windows(
-        &matrix,
-        &layouts,
-        &results,
-        &protocols,
-        &peer::PEER_CAPACITIES_J,
-        &planners,
-        |done, _| bar.set_position(done as u64),
-    )?;
+    let bar = crate::progress::bar((loaded.1.len() * loaded.3.len()) as u64, "layouts");
+    let e = peer::evaluate(loaded, on, args.unshared_weight, |done, _| {
+        bar.set_position(done as u64)
+    })?;
     bar.finish_and_clear();
-    let mut summary = start_output(args)?;
-    for p in planners {
-        summary.push_str(&report.summary(p, FROZEN_ESTIMATOR));
-        summary.push('\n');
-    }
-    if each.len() > 1 {
-        let windows = peer::window_means(
-            &matrix,
-            &protocols,
-            &each,
-            &planners,
-            FROZEN_ESTIMATOR,
-            (8e3, 32e3),
-        );
-        let mut table = String::from("window_start,planner,mean_error_8_32kJ\n");
-        for w in &windows {
-            for (p, m) in &w.means {
-                let m = m.map_or("inf".to_string(), |x| x.to_string());
-                let day = gleaner_field::time::format_rfc3339(w.start);
-                table.push_str(&format!("{},{},{m}\n", &day[..10], p.name()));
-            }
-        }
-        let path = args.out.join("windows.csv");
-        std::fs::write(&path, table).with_context(|| format!("cannot write {}", path.display()))?;
-        if let Some((d, lo, hi, n)) =
-            peer::paired_difference(&windows, Planner::Count, Planner::Information)
-        {
-            summary.push_str(&format!(
-                "Paired over {n} windows, `count` − `information` (mean 8–32 kJ, ×10⁻³): {:.3} [{:.3}, {:.3}] (95%, Student's t).\n",
-                d * 1e3,
-                lo * 1e3,
-                hi * 1e3
-            ));
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let files = [
+        ("windows.csv", e.windows_csv.as_deref()),
+        ("outcomes.csv", Some(e.outcomes_csv.as_str())),
+        ("summary.md", Some(e.summary.as_str())),
+    ];
+    for (name, text) in files {
+        if let Some(text) = text {
+            let path = args.out.join(name);
+            std::fs::write(&path, text)
+                .with_context(|| format!("cannot write {}", path.display()))?;
         }
     }
-    let csv = args.out.join("outcomes.csv");
-    std::fs::write(&csv, report.outcomes_csv())
-        .with_context(|| format!("cannot write {}", csv.display()))?;
-    let md = args.out.join("summary.md");
-    std::fs::write(&md, &summary).with_context(|| format!("cannot write {}", md.display()))?;
-    Ok(summary)
+    Ok(e.summary)
 }
 
 /// `--on hubbard-brook`: both depths, one summary.
@@ -168,7 +108,14 @@ fn run_hubbard_brook(args: &PeerArgs) -> Result<String> {
         anyhow::bail!("--unshared-weight is not used with --on hubbard-brook");
     }
     let dir = args.data.join("hubbard_brook");
-    let mut summary = start_output(args)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let mut summary = format!(
+        "# gleaner on the peer protocol ({})\n\nFrozen pipeline: planner `{}`, estimator `{}`.\n\n",
+        "hold-out: Hubbard Brook hourly water content",
+        FROZEN_PLANNER.name(),
+        FROZEN_ESTIMATOR.name()
+    );
     for depth in Depth::ALL {
         let data = hubbard::load(&dir, depth)
             .with_context(|| format!("{} (set GLEANER_DATA_DIR)", dir.display()))?;
@@ -188,16 +135,4 @@ fn run_hubbard_brook(args: &PeerArgs) -> Result<String> {
     let md = args.out.join("summary.md");
     std::fs::write(&md, &summary).with_context(|| format!("cannot write {}", md.display()))?;
     Ok(summary)
-}
-
-/// Creates the output directory; returns the summary's heading.
-fn start_output(args: &PeerArgs) -> Result<String> {
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    Ok(format!(
-        "# gleaner on the peer protocol ({})\n\nFrozen pipeline: planner `{}`, estimator `{}`.\n\n",
-        args.on.title(),
-        FROZEN_PLANNER.name(),
-        FROZEN_ESTIMATOR.name()
-    ))
 }

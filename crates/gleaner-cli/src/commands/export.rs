@@ -5,8 +5,10 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use gleaner_app::MissionExport;
+use gleaner_app::{MissionExport, MissionId};
 use gleaner_wire::WpmlOptions;
+
+use crate::{ProjectArg, out, outln};
 
 /// The files written.
 pub struct Exported {
@@ -14,6 +16,19 @@ pub struct Exported {
     pub files: Vec<PathBuf>,
     /// Files not written, each with the reason (a format that cannot carry this mission).
     pub skipped: Vec<String>,
+}
+
+impl Exported {
+    /// `wrote FILES` and a `not written: REASON` line per file skipped, each line ending in
+    /// a newline.
+    pub fn lines(&self) -> String {
+        let names: Vec<String> = self.files.iter().map(|f| f.display().to_string()).collect();
+        let mut t = format!("wrote {}\n", names.join(", "));
+        for note in &self.skipped {
+            t.push_str(&format!("not written: {note}\n"));
+        }
+        t
+    }
 }
 
 fn write(dir: &Path, name: &str, bytes: &[u8], files: &mut Vec<PathBuf>) -> Result<()> {
@@ -165,4 +180,66 @@ pub fn write_exploration_map<S: gleaner_app::Store>(
         &mut files,
     )?;
     Ok(files.iter().map(|f| f.display().to_string()).collect())
+}
+
+// The arguments of `gleaner export` (no doc comment: the variant's is the help).
+#[derive(clap::Args)]
+pub struct ExportArgs {
+    #[command(flatten)]
+    pub project: ProjectArg,
+    /// The mission's id (printed by `gleaner plan`).
+    #[arg(long)]
+    pub mission: i64,
+    /// Output directory [default: <project>/missions/<id>].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// mission.kmz: DJI's aircraft enumeration value (wpml:droneEnumValue; 77 = Mavic 3
+    /// Enterprise series).
+    #[arg(long, default_value_t = 77)]
+    pub dji_drone: u32,
+    /// mission.kmz: DJI's aircraft sub-type (wpml:droneSubEnumValue; for 77: 0 = M3E,
+    /// 1 = M3T, 2 = M3M).
+    #[arg(long, default_value_t = 0)]
+    pub dji_drone_sub: u32,
+    /// mission.kmz: DJI's payload enumeration value (wpml:payloadEnumValue; 66 = M3E camera).
+    #[arg(long, default_value_t = 66)]
+    pub dji_payload: u32,
+}
+
+// The arguments of `gleaner map-exploration` (no doc comment: the variant's is the help).
+#[derive(clap::Args)]
+pub struct MapExplorationArgs {
+    #[command(flatten)]
+    pub project: ProjectArg,
+    /// Output directory [default: <project>/missions].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// Writes the mission's files; prints their names.
+pub fn run(args: ExportArgs) -> Result<()> {
+    let p = args.project.open()?;
+    let export = gleaner_app::export(&p, MissionId(args.mission))?;
+    let dir = args.out.unwrap_or_else(|| {
+        args.project
+            .dir
+            .join("missions")
+            .join(args.mission.to_string())
+    });
+    let wpml = WpmlOptions {
+        drone_enum: args.dji_drone,
+        drone_sub_enum: args.dji_drone_sub,
+        payload_enum: args.dji_payload,
+    };
+    out(&write_files_with(&export, &dir, wpml)?.lines())
+}
+
+/// Draws the exploration overview; prints the files' names.
+pub fn map_exploration(args: MapExplorationArgs) -> Result<()> {
+    let p = args.project.open()?;
+    let dir = args
+        .out
+        .unwrap_or_else(|| args.project.dir.join("missions"));
+    let files = write_exploration_map(&p, &dir)?;
+    outln(&format!("wrote {}", files.join(", ")))
 }

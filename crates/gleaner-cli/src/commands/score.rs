@@ -1,5 +1,12 @@
 //! `gleaner score`: the scoring as a table (or JSON).
 
+use std::path::PathBuf;
+
+use anyhow::Result;
+use gleaner_app as app;
+
+use crate::{JsonArg, ProjectArg, WhenArgs, warn};
+
 use gleaner_wire::docs::{ScoreRowDoc, ScoringDoc};
 
 /// How to order scored cells.
@@ -69,4 +76,43 @@ pub fn table(doc: &ScoringDoc, limit: usize) -> String {
         ));
     }
     out
+}
+
+// The arguments of `gleaner score` (no doc comment: the variant's is the help).
+#[derive(clap::Args)]
+pub struct ScoreArgs {
+    #[command(flatten)]
+    pub project: ProjectArg,
+    #[command(flatten)]
+    pub when: WhenArgs,
+    /// Per-cell class probabilities from your own model, instead of the built-in one.
+    #[arg(long)]
+    pub probabilities: Option<PathBuf>,
+    #[command(flatten)]
+    pub json: JsonArg,
+    /// Rows of the table.
+    #[arg(long, default_value_t = 20)]
+    pub limit: usize,
+    /// Order of the rows (largest first; `cell` by id).
+    #[arg(long, value_enum, default_value_t = ScoreSort::Score)]
+    pub sort: ScoreSort,
+}
+
+/// Scores the cells; prints the table (or JSON).
+pub fn run(args: ScoreArgs) -> Result<()> {
+    let mut p = args.project.open()?;
+    let scoring = app::score(
+        &mut p,
+        &app::ScoreRequest {
+            at: args.when.at,
+            history: args.when.history(),
+            probabilities: args.probabilities,
+            dry_run: false,
+        },
+    )?;
+    warn(&scoring);
+    let mut doc = gleaner_wire::convert::scoring(&scoring);
+    sort(&mut doc, args.sort);
+    args.json
+        .emit(&doc, "serialising scores", || table(&doc, args.limit))
 }

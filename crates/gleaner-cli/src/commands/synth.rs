@@ -134,8 +134,23 @@ fn write_file(
         .with_context(|| format!("{}: cannot write", path.display()))
 }
 
+/// Generates the farm and writes its four files; returns the summary line.
+pub fn run(args: &SynthArgs) -> Result<String> {
+    let (farm, files) = write_farm(args)?;
+    Ok(format!(
+        "wrote {} sensors, {} readings, {} events to {}",
+        farm.sensors().len(),
+        farm.reading_count(),
+        farm.events().len(),
+        files
+            .sensors
+            .parent()
+            .map_or(String::new(), |p| p.display().to_string())
+    ))
+}
+
 /// Generates the farm and writes its four files; returns the farm and the file names.
-pub fn run(args: &SynthArgs) -> Result<(SynthFarm, SynthFiles)> {
+fn write_farm(args: &SynthArgs) -> Result<(SynthFarm, SynthFiles)> {
     let mut config = config(args);
     if let Some(path) = &args.layout {
         let sensors = gleaner_app::read_sensors_file(path, args.utm_zone.as_deref())?;

@@ -468,6 +468,67 @@ pub(super) fn upsert_cell_metadata(c: &Connection, metadata: &[CellMetadata]) ->
 /// A stored summary row's values: count, mean, std, min, max, latest t, latest value.
 type SummaryRow = (i64, f64, Option<f64>, f64, f64, i64, f64);
 
+/// Stored summaries by (cell, modality) key and correlations (value, overlap) by (cell,
+/// neighbour, modality) key.
+type StoredChildRows = (
+    HashMap<(i64, i64), SummaryRow>,
+    HashMap<(i64, i64, i64), (f64, i64)>,
+);
+
+/// The stored child rows (summaries, correlations) of the cells `metadata` gives summaries or
+/// correlations for, by (cell, modality) and (cell, neighbour, modality) keys.
+fn stored_child_rows(
+    c: &Connection,
+    metadata: &[CellMetadata],
+    cell_key: &dyn Fn(&CellIndex) -> Result<i64>,
+) -> Result<StoredChildRows> {
+    let mut stored_summaries: HashMap<(i64, i64), SummaryRow> = HashMap::new();
+    let mut stored_correlations: HashMap<(i64, i64, i64), (f64, i64)> = HashMap::new();
+    let mut summaries = c
+        .prepare_cached(
+            "SELECT modality, count, mean, std, min, max, latest_t, latest_value
+             FROM cell_summaries WHERE cell = ?1",
+        )
+        .db()?;
+    let mut correlations = c
+        .prepare_cached(
+            "SELECT neighbour, modality, correlation, overlap FROM cell_correlations
+             WHERE cell = ?1",
+        )
+        .db()?;
+    for md in metadata {
+        if !md.summaries.is_empty() {
+            let ck = cell_key(&md.cell)?;
+            let mut rows = summaries.query([ck]).db()?;
+            while let Some(r) = rows.next().db()? {
+                stored_summaries.insert(
+                    (ck, r.get(0).db()?),
+                    (
+                        r.get(1).db()?,
+                        r.get(2).db()?,
+                        r.get(3).db()?,
+                        r.get(4).db()?,
+                        r.get(5).db()?,
+                        r.get(6).db()?,
+                        r.get(7).db()?,
+                    ),
+                );
+            }
+        }
+        if !md.correlations.is_empty() {
+            let ck = cell_key(&md.cell)?;
+            let mut rows = correlations.query([ck]).db()?;
+            while let Some(r) = rows.next().db()? {
+                stored_correlations.insert(
+                    (ck, r.get(0).db()?, r.get(1).db()?),
+                    (r.get(2).db()?, r.get(3).db()?),
+                );
+            }
+        }
+    }
+    Ok((stored_summaries, stored_correlations))
+}
+
 /// Writes validated metadata. The child rows (summaries, correlations, anomalies) are
 /// upserts that leave a row untouched when its values are already stored, instead of
 /// `INSERT OR REPLACE`, which deletes and reinserts each row with its index entries and
@@ -492,53 +553,8 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
             .copied()
             .ok_or_else(|| StoreError::UnknownModality(m.clone()))
     };
-    // The stored child rows of the cells this write gives summaries or correlations for.
-    let mut stored_summaries: HashMap<(i64, i64), SummaryRow> = HashMap::new();
-    let mut stored_correlations: HashMap<(i64, i64, i64), (f64, i64)> = HashMap::new();
-    {
-        let mut summaries = c
-            .prepare_cached(
-                "SELECT modality, count, mean, std, min, max, latest_t, latest_value
-                 FROM cell_summaries WHERE cell = ?1",
-            )
-            .db()?;
-        let mut correlations = c
-            .prepare_cached(
-                "SELECT neighbour, modality, correlation, overlap FROM cell_correlations
-                 WHERE cell = ?1",
-            )
-            .db()?;
-        for md in metadata {
-            if !md.summaries.is_empty() {
-                let ck = cell_key(&md.cell)?;
-                let mut rows = summaries.query([ck]).db()?;
-                while let Some(r) = rows.next().db()? {
-                    stored_summaries.insert(
-                        (ck, r.get(0).db()?),
-                        (
-                            r.get(1).db()?,
-                            r.get(2).db()?,
-                            r.get(3).db()?,
-                            r.get(4).db()?,
-                            r.get(5).db()?,
-                            r.get(6).db()?,
-                            r.get(7).db()?,
-                        ),
-                    );
-                }
-            }
-            if !md.correlations.is_empty() {
-                let ck = cell_key(&md.cell)?;
-                let mut rows = correlations.query([ck]).db()?;
-                while let Some(r) = rows.next().db()? {
-                    stored_correlations.insert(
-                        (ck, r.get(0).db()?, r.get(1).db()?),
-                        (r.get(2).db()?, r.get(3).db()?),
-                    );
-                }
-            }
-        }
-    }
+    let (mut stored_summaries, mut stored_correlations) =
+        stored_child_rows(c, metadata, &cell_key)?;
     let mut row = c
         .prepare_cached(
             "INSERT OR REPLACE INTO cell_metadata (cell, last_collected, pending_bytes,

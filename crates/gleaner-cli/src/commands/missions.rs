@@ -1,0 +1,133 @@
+//! `gleaner missions`, `cancel`, `delete`: the mission history (a table or the
+//! `gleaner.mission` documents) and its two changes.
+
+use anyhow::Result;
+use gleaner_app::{self as app, MissionId};
+
+use crate::commands::plan;
+use crate::{ProjectArg, emit, out, outln};
+
+// The arguments of `gleaner missions` (no doc comment: the variant's is the help).
+#[derive(clap::Args)]
+pub struct MissionsArgs {
+    #[command(flatten)]
+    pub project: ProjectArg,
+    /// Show this mission with its stops and energy breakdown.
+    #[arg(long, conflicts_with_all = ["limit", "before"])]
+    pub mission: Option<i64>,
+    /// List one page of at most this many missions (1 to 500), newest first [default with
+    /// --before: 20].
+    #[arg(long)]
+    pub limit: Option<usize>,
+    /// List only missions with an id below this one (the next page's cursor).
+    #[arg(long)]
+    pub before: Option<i64>,
+    /// Print JSON (the `gleaner.mission` document) instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+// The arguments of `gleaner cancel` (no doc comment: the variant's is the help).
+#[derive(clap::Args)]
+pub struct CancelArgs {
+    #[command(flatten)]
+    pub project: ProjectArg,
+    /// The mission to cancel.
+    #[arg(long)]
+    pub mission: i64,
+}
+
+// The arguments of `gleaner delete` (no doc comment: the variant's is the help).
+#[derive(clap::Args)]
+pub struct DeleteArgs {
+    #[command(flatten)]
+    pub project: ProjectArg,
+    /// The mission to delete.
+    #[arg(long)]
+    pub mission: i64,
+}
+
+/// Lists the missions (all, or one page), or shows one.
+pub fn run(args: MissionsArgs) -> Result<()> {
+    let p = args.project.open()?;
+    if args.limit.is_some() || args.before.is_some() {
+        let page = app::missions_page(&p, args.before.map(MissionId), args.limit.unwrap_or(20))?;
+        if args.json {
+            let docs: Vec<_> = page
+                .missions
+                .iter()
+                .map(gleaner_wire::convert::stored_mission)
+                .collect();
+            let doc = serde_json::json!({"missions": docs, "next": page.next.map(|m| m.0)});
+            return emit(true, &doc, "serialising missions", String::new);
+        }
+        out(&missions_table(&page.missions))?;
+        return match page.next {
+            Some(n) => outln(&format!("next page: --before {n}")),
+            None => outln("no older missions"),
+        };
+    }
+    match args.mission {
+        Some(id) => {
+            let m = app::mission(&p, MissionId(id))?;
+            let doc = gleaner_wire::convert::stored_mission(&m);
+            emit(args.json, &doc, "serialising the mission", || {
+                plan::table(&doc)
+            })
+        }
+        None => {
+            let all = app::missions(&p)?;
+            let docs: Vec<_> = all
+                .iter()
+                .map(gleaner_wire::convert::stored_mission)
+                .collect();
+            emit(args.json, &docs, "serialising missions", || {
+                missions_table(&all)
+            })
+        }
+    }
+}
+
+/// Cancels a planned mission.
+pub fn cancel(args: CancelArgs) -> Result<()> {
+    let mut p = args.project.open()?;
+    let m = app::cancel_mission(&mut p, MissionId(args.mission))?;
+    outln(&format!(
+        "cancelled mission #{}: it stays in the history and can no longer be recorded or exported",
+        m.id
+    ))
+}
+
+/// Deletes a mission never flown.
+pub fn delete(args: DeleteArgs) -> Result<()> {
+    let mut p = args.project.open()?;
+    app::delete_mission(&mut p, MissionId(args.mission))?;
+    outln(&format!("deleted mission #{}", args.mission))
+}
+
+fn missions_table(missions: &[app::MissionRecord]) -> String {
+    let mut out = format!(
+        "{:>4} {:<11} {:<8} {:<20} {:<11} {:>5} {:>9} {:>11} {:>6}\n",
+        "id", "kind", "status", "planned_at", "planner", "cells", "total_S", "energy_J", "use"
+    );
+    for m in missions {
+        let e = &m.mission.energy;
+        out.push_str(&format!(
+            "{:>4} {:<11} {:<8} {:<20} {:<11} {:>5} {:>9.3} {:>11.1} {:>5.1}%\n",
+            m.id,
+            m.mission.kind.as_str(),
+            m.status.as_str(),
+            app::format_rfc3339(m.mission.planned_at),
+            m.mission.solver,
+            m.mission.stops.len(),
+            m.mission.total_score,
+            e.total_j,
+            if e.budget_j > 0.0 {
+                100.0 * e.total_j / e.budget_j
+            } else {
+                0.0
+            }
+        ));
+    }
+    out
+}
