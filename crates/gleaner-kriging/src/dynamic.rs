@@ -696,37 +696,11 @@ pub fn fit_dynamic(
         .collect();
     // The common level: at each time read by at least two sensors, the mean deviation; the
     // sensors' deviations from it are what the covariance and φ describe.
-    let mut common = (0.0, 0.0);
-    if options.common_mode && n >= 2 {
-        let mut level: std::collections::BTreeMap<i64, (f64, usize)> = Default::default();
-        for ((t, _), d) in clean.iter().zip(&dev) {
-            for (&ti, &di) in t.iter().zip(d) {
-                let e = level.entry(ti).or_insert((0.0, 0));
-                e.0 += di;
-                e.1 += 1;
-            }
-        }
-        level.retain(|_, (_, c)| *c >= 2);
-        let (ct, cv): (Vec<i64>, Vec<f64>) =
-            level.iter().map(|(&t, &(s, c))| (t, s / c as f64)).unzip();
-        for ((t, _), d) in clean.iter_mut().zip(dev.iter_mut()) {
-            let mut keep_t = Vec::with_capacity(t.len());
-            let mut keep_d = Vec::with_capacity(t.len());
-            for (&ti, &di) in t.iter().zip(d.iter()) {
-                if let Ok(k) = ct.binary_search(&ti) {
-                    keep_t.push(ti);
-                    keep_d.push(di - cv[k]);
-                }
-            }
-            *t = keep_t;
-            *d = keep_d;
-        }
-        if cv.len() >= 2 {
-            let var_c = cv.iter().map(|x| x * x).sum::<f64>() / cv.len() as f64;
-            let phi_c = persistence_fit(&[(ct.as_slice(), cv.as_slice())], options);
-            common = (var_c, phi_c);
-        }
-    }
+    let common = if options.common_mode && n >= 2 {
+        remove_common_level(&mut clean, &mut dev, options)
+    } else {
+        (0.0, 0.0)
+    };
     let vars: Vec<Option<f64>> = dev
         .iter()
         .map(|d| (d.len() >= 2).then(|| d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64))
@@ -761,6 +735,66 @@ pub fn fit_dynamic(
     let step = options.step_s;
 
     // Pairwise-complete correlations.
+    let (corr, count) = pairwise_correlations(&clean, &dev, &var, options.min_overlap);
+    let lambda = shrinkage_intensity(options.shrinkage, phi, &corr, &count, n)?;
+    let (cov, lambda) = positive_definite_shrunk(&corr, &var, lambda);
+    let noise = options.noise_share.max(0.0) * mean_var;
+    let mut model =
+        DynamicModel::new(means, cov, phi, step as f64, noise)?.with_common(common.0, common.1)?;
+    model.shrinkage = lambda;
+    Ok(model)
+}
+
+/// Removes the common level from the deviations: at each time read by at least two sensors,
+/// the mean deviation, subtracted from each sensor's deviation there (times read by one
+/// sensor are dropped). Returns the common level's variance (unit²) and persistence per step
+/// (0, 0 with fewer than two such times).
+fn remove_common_level(
+    clean: &mut [(Vec<i64>, Vec<f64>)],
+    dev: &mut [Vec<f64>],
+    options: &DynamicFitOptions,
+) -> (f64, f64) {
+    let mut level: std::collections::BTreeMap<i64, (f64, usize)> = Default::default();
+    for ((t, _), d) in clean.iter().zip(dev.iter()) {
+        for (&ti, &di) in t.iter().zip(d) {
+            let e = level.entry(ti).or_insert((0.0, 0));
+            e.0 += di;
+            e.1 += 1;
+        }
+    }
+    level.retain(|_, (_, c)| *c >= 2);
+    let (ct, cv): (Vec<i64>, Vec<f64>) =
+        level.iter().map(|(&t, &(s, c))| (t, s / c as f64)).unzip();
+    for ((t, _), d) in clean.iter_mut().zip(dev.iter_mut()) {
+        let mut keep_t = Vec::with_capacity(t.len());
+        let mut keep_d = Vec::with_capacity(t.len());
+        for (&ti, &di) in t.iter().zip(d.iter()) {
+            if let Ok(k) = ct.binary_search(&ti) {
+                keep_t.push(ti);
+                keep_d.push(di - cv[k]);
+            }
+        }
+        *t = keep_t;
+        *d = keep_d;
+    }
+    if cv.len() >= 2 {
+        let var_c = cv.iter().map(|x| x * x).sum::<f64>() / cv.len() as f64;
+        let phi_c = persistence_fit(&[(ct.as_slice(), cv.as_slice())], options);
+        return (var_c, phi_c);
+    }
+    (0.0, 0.0)
+}
+
+/// Pairwise-complete correlations of the deviations (row-major n × n, 1 on the diagonal, 0
+/// for pairs with fewer than `min_overlap` (at least 2) common times) and each upper pair's
+/// count of common times.
+fn pairwise_correlations(
+    clean: &[(Vec<i64>, Vec<f64>)],
+    dev: &[Vec<f64>],
+    var: &[f64],
+    min_overlap: usize,
+) -> (Vec<f64>, Vec<usize>) {
+    let n = clean.len();
     let mut corr = vec![0.0; n * n];
     let mut count = vec![0usize; n * n];
     for i in 0..n {
@@ -768,7 +802,7 @@ pub fn fit_dynamic(
         for j in i + 1..n {
             let (ti, tj) = (&clean[i].0, &clean[j].0);
             let (sab, _, _, cnt) = paired(ti, &dev[i], tj, &dev[j], 0);
-            if cnt >= options.min_overlap.max(2) {
+            if cnt >= min_overlap.max(2) {
                 let r = (sab / cnt as f64 / (var[i] * var[j]).sqrt()).clamp(-1.0, 1.0);
                 corr[i * n + j] = r;
                 corr[j * n + i] = r;
@@ -776,7 +810,20 @@ pub fn fit_dynamic(
             }
         }
     }
-    let mut lambda = match options.shrinkage {
+    (corr, count)
+}
+
+/// The shrinkage intensity towards zero correlation: a fixed one (checked in [0, 1]), or the
+/// automatic one from the correlations' sampling noise with each pair's count of common
+/// times reduced by the persistence `phi` (per step).
+fn shrinkage_intensity(
+    shrinkage: Shrinkage,
+    phi: f64,
+    corr: &[f64],
+    count: &[usize],
+    n: usize,
+) -> Result<f64, KrigingError> {
+    Ok(match shrinkage {
         Shrinkage::Fixed(l) => {
             if !(0.0..=1.0).contains(&l) {
                 return Err(KrigingError::Parameter {
@@ -812,7 +859,14 @@ pub fn fit_dynamic(
                 1.0
             }
         }
-    };
+    })
+}
+
+/// The covariance from correlations shrunk by `lambda` and the variances, with the intensity
+/// raised until it is positive definite (pairwise-complete correlations need not be);
+/// returns it and the intensity used.
+fn positive_definite_shrunk(corr: &[f64], var: &[f64], mut lambda: f64) -> (Vec<f64>, f64) {
+    let n = var.len();
     let build = |lambda: f64| -> Vec<f64> {
         let mut c = vec![0.0; n * n];
         for i in 0..n {
@@ -838,11 +892,7 @@ pub fn fit_dynamic(
         lambda = (lambda + (1.0 - lambda) * 0.25 + 1e-3).min(1.0);
         cov = build(lambda);
     }
-    let noise = options.noise_share.max(0.0) * mean_var;
-    let mut model =
-        DynamicModel::new(means, cov, phi, step as f64, noise)?.with_common(common.0, common.1)?;
-    model.shrinkage = lambda;
-    Ok(model)
+    (cov, lambda)
 }
 
 /// `exp(Σ k ln ρ_k / Σ k²)` over the pooled lag-k autocorrelations `ρ_k > 0.05` of the series

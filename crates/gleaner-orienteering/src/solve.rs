@@ -258,50 +258,7 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
     let mut cur = State::from_routes(problem, &greedy_solution.routes);
     cur.local_search(&ctx, &mut rng, scan_all);
     let mut best = cur.clone();
-    // Anchored constructions: route 0 first goes to anchor v, then ratio insertion. Scored
-    // for (a sample of) all candidates; the best few get a local search and seed the pool.
-    let mut anchors: Vec<(f64, usize)> = Vec::new();
-    {
-        let sample: Vec<usize> = if ctx.cands.len() <= 400 {
-            ctx.cands.clone()
-        } else {
-            (0..64)
-                .map(|_| ctx.cands[rng.random_range(0..ctx.cands.len())])
-                .collect()
-        };
-        let search = options.max_iterations.is_none_or(|m| m > 0);
-        for &v in sample.iter().filter(|_| search) {
-            if started.elapsed() >= options.time_limit / 4 {
-                break;
-            }
-            if let Some(mut st) = anchored(&ctx, &[v], 0.0, &mut rng) {
-                st.local_search(&ctx, &mut rng, scan_all);
-                anchors.push((st.reward, v));
-                if better(&st, &best, ctx.eps) {
-                    best = st;
-                }
-            }
-        }
-        anchors.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-    }
-    let mut elite: Vec<State> = Vec::new();
-    let mut last_reward = f64::NAN;
-    for &(rw, v) in anchors.iter() {
-        if elite.len() >= 4 || started.elapsed() >= options.time_limit / 3 {
-            break;
-        }
-        if rw == last_reward {
-            continue;
-        }
-        last_reward = rw;
-        if let Some(mut st) = anchored(&ctx, &[v], 0.0, &mut rng) {
-            st.local_search(&ctx, &mut rng, scan_all);
-            if better(&st, &best, ctx.eps) {
-                best = st.clone();
-            }
-            elite.push(st);
-        }
-    }
+    let (anchors, mut elite) = anchor_pool(&ctx, options, started, &mut rng, scan_all, &mut best);
     cur = best.clone();
     elite.push(best.clone());
     let top_anchors: Vec<usize> = anchors.iter().take(20).map(|a| a.1).collect();
@@ -414,6 +371,65 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
     } else {
         result
     }
+}
+
+/// The anchored constructions of [`solve_default`]: route 0 first goes to an anchor, then
+/// ratio insertion, each followed by a local search; scored for (a sample of) all candidates,
+/// improving `best`. Returns the anchors by reward (best first) and up to four distinct
+/// elite solutions from the best of them, in the order the search draws them.
+fn anchor_pool(
+    ctx: &Ctx<'_>,
+    options: &SolveOptions,
+    started: Instant,
+    rng: &mut ChaCha8Rng,
+    scan_all: bool,
+    best: &mut State,
+) -> (Vec<(f64, usize)>, Vec<State>) {
+    // Anchored constructions: route 0 first goes to anchor v, then ratio insertion. Scored
+    // for (a sample of) all candidates; the best few get a local search and seed the pool.
+    let mut anchors: Vec<(f64, usize)> = Vec::new();
+    {
+        let sample: Vec<usize> = if ctx.cands.len() <= 400 {
+            ctx.cands.clone()
+        } else {
+            (0..64)
+                .map(|_| ctx.cands[rng.random_range(0..ctx.cands.len())])
+                .collect()
+        };
+        let search = options.max_iterations.is_none_or(|m| m > 0);
+        for &v in sample.iter().filter(|_| search) {
+            if started.elapsed() >= options.time_limit / 4 {
+                break;
+            }
+            if let Some(mut st) = anchored(ctx, &[v], 0.0, rng) {
+                st.local_search(ctx, rng, scan_all);
+                anchors.push((st.reward, v));
+                if better(&st, best, ctx.eps) {
+                    *best = st;
+                }
+            }
+        }
+        anchors.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    }
+    let mut elite: Vec<State> = Vec::new();
+    let mut last_reward = f64::NAN;
+    for &(rw, v) in anchors.iter() {
+        if elite.len() >= 4 || started.elapsed() >= options.time_limit / 3 {
+            break;
+        }
+        if rw == last_reward {
+            continue;
+        }
+        last_reward = rw;
+        if let Some(mut st) = anchored(ctx, &[v], 0.0, rng) {
+            st.local_search(ctx, rng, scan_all);
+            if better(&st, best, ctx.eps) {
+                *best = st.clone();
+            }
+            elite.push(st);
+        }
+    }
+    (anchors, elite)
 }
 
 #[cfg(test)]
