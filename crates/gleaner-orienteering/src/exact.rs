@@ -93,84 +93,16 @@ pub fn exact(problem: &Problem) -> Result<Solution, SolveError> {
         }
         chosen.push(best);
     } else {
-        // g[k][U]: best reward of k disjoint feasible subsets within U.
-        let mut layers: Vec<Vec<f64>> = vec![value.clone()];
-        // Make layer 1 monotone over supersets (best feasible subset within U).
-        let mut arg1: Vec<usize> = (0..full).collect();
-        for bit in 0..c {
-            for set in 0..full {
-                if set & (1 << bit) != 0 {
-                    let sub = set ^ (1 << bit);
-                    if layers[0][sub] > layers[0][set] {
-                        layers[0][set] = layers[0][sub];
-                        arg1[set] = arg1[sub];
-                    }
-                }
-            }
-        }
-        let mut args: Vec<Vec<usize>> = vec![arg1];
-        for _ in 1..p.vehicles().min(c.max(1)) {
-            let prev = layers.last().cloned().unwrap_or_default();
-            let mut cur = prev.clone();
-            let mut arg = vec![0usize; full];
-            for u in 0..full {
-                let mut sub = u;
-                loop {
-                    if value[sub] > f64::NEG_INFINITY {
-                        let v = value[sub] + prev[u ^ sub];
-                        if v > cur[u] {
-                            cur[u] = v;
-                            arg[u] = sub;
-                        }
-                    }
-                    if sub == 0 {
-                        break;
-                    }
-                    sub = (sub - 1) & u;
-                }
-            }
-            layers.push(cur);
-            args.push(arg);
-        }
-        let mut u = full - 1;
-        for layer in (1..layers.len()).rev() {
-            let sub = args[layer][u];
-            if layers[layer][u] > layers[layer - 1][u] && sub != 0 {
-                chosen.push(sub);
-                u ^= sub;
-            }
-        }
-        chosen.push(args[0][u]);
+        chosen = choose_disjoint(&value, c, p.vehicles());
     }
     // Rebuild each route backwards through dp.
     let mut routes = Vec::new();
     for set in chosen {
-        let mut seq = Vec::new();
-        if set != 0 {
-            let mut cur_set = set;
-            let mut j = last[set];
-            seq.push(cands[j]);
-            while cur_set.count_ones() > 1 {
-                let prev_set = cur_set ^ (1 << j);
-                let target = dp[cur_set * c + j] - p.service(cands[j]);
-                let mut pick = usize::MAX;
-                let mut err = f64::INFINITY;
-                for i in 0..c {
-                    if prev_set & (1 << i) == 0 {
-                        continue;
-                    }
-                    let d = (dp[prev_set * c + i] + p.cost(cands[i], cands[j]) - target).abs();
-                    if d < err {
-                        err = d;
-                        pick = i;
-                    }
-                }
-                j = pick;
-                cur_set = prev_set;
-                seq.push(cands[j]);
-            }
-            seq.reverse();
-        }
+        let seq = if set == 0 {
+            Vec::new()
+        } else {
+            rebuild(p, &cands, &dp, last[set], set)
+        };
         let mut route = vec![s];
         route.extend(seq);
         route.push(e);
@@ -178,4 +110,92 @@ pub fn exact(problem: &Problem) -> Result<Solution, SolveError> {
     }
     // Reconstruction is exact by construction; evaluation guards against rounding.
     Ok(evaluate(p, &routes).unwrap_or_else(|_| Solution::empty(p)))
+}
+
+/// The best `vehicles` disjoint feasible subsets by a subset convolution over `value` (each
+/// subset's reward, −∞ when infeasible; 2^c entries): the chosen subsets (empty ones left out
+/// but the last).
+fn choose_disjoint(value: &[f64], c: usize, vehicles: usize) -> Vec<usize> {
+    let full = value.len();
+    let mut chosen = Vec::new();
+    // g[k][U]: best reward of k disjoint feasible subsets within U.
+    let mut layers: Vec<Vec<f64>> = vec![value.to_vec()];
+    // Make layer 1 monotone over supersets (best feasible subset within U).
+    let mut arg1: Vec<usize> = (0..full).collect();
+    for bit in 0..c {
+        for set in 0..full {
+            if set & (1 << bit) != 0 {
+                let sub = set ^ (1 << bit);
+                if layers[0][sub] > layers[0][set] {
+                    layers[0][set] = layers[0][sub];
+                    arg1[set] = arg1[sub];
+                }
+            }
+        }
+    }
+    let mut args: Vec<Vec<usize>> = vec![arg1];
+    for _ in 1..vehicles.min(c.max(1)) {
+        let prev = layers.last().cloned().unwrap_or_default();
+        let mut cur = prev.clone();
+        let mut arg = vec![0usize; full];
+        for u in 0..full {
+            let mut sub = u;
+            loop {
+                if value[sub] > f64::NEG_INFINITY {
+                    let v = value[sub] + prev[u ^ sub];
+                    if v > cur[u] {
+                        cur[u] = v;
+                        arg[u] = sub;
+                    }
+                }
+                if sub == 0 {
+                    break;
+                }
+                sub = (sub - 1) & u;
+            }
+        }
+        layers.push(cur);
+        args.push(arg);
+    }
+    let mut u = full - 1;
+    for layer in (1..layers.len()).rev() {
+        let sub = args[layer][u];
+        if layers[layer][u] > layers[layer - 1][u] && sub != 0 {
+            chosen.push(sub);
+            u ^= sub;
+        }
+    }
+    chosen.push(args[0][u]);
+    chosen
+}
+
+/// The candidates of the cheapest path over `set` ending at candidate index `last`, in visit
+/// order, traced backwards through `dp` (path costs by subset and last node).
+fn rebuild(p: &Problem, cands: &[usize], dp: &[f64], last: usize, set: usize) -> Vec<usize> {
+    let c = cands.len();
+    let mut seq = Vec::new();
+    let mut cur_set = set;
+    let mut j = last;
+    seq.push(cands[j]);
+    while cur_set.count_ones() > 1 {
+        let prev_set = cur_set ^ (1 << j);
+        let target = dp[cur_set * c + j] - p.service(cands[j]);
+        let mut pick = usize::MAX;
+        let mut err = f64::INFINITY;
+        for i in 0..c {
+            if prev_set & (1 << i) == 0 {
+                continue;
+            }
+            let d = (dp[prev_set * c + i] + p.cost(cands[i], cands[j]) - target).abs();
+            if d < err {
+                err = d;
+                pick = i;
+            }
+        }
+        j = pick;
+        cur_set = prev_set;
+        seq.push(cands[j]);
+    }
+    seq.reverse();
+    seq
 }
