@@ -491,6 +491,25 @@ struct MultiplierMemo {
     q: f64,
 }
 
+impl MultiplierMemo {
+    /// Whether both were computed from the same inputs (their `q` aside).
+    fn same_inputs(&self, other: &MultiplierMemo) -> bool {
+        self.estimator == other.estimator
+            && self.neighbours == other.neighbours
+            && self.cells == other.cells
+            && self.positions == other.positions
+            && self.changes == other.changes
+    }
+}
+
+/// Whether two lists of latest readings (time s, value) are equal to the last bit.
+fn same_bits(a: &[Option<(UnixSeconds, f64)>], b: &[Option<(UnixSeconds, f64)>]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(a, b)| a.map(|(t, v)| (t, v.to_bits())) == b.map(|(t, v)| (t, v.to_bits())))
+}
+
 /// [`estimate`] at `at` with look-back `lookback_s` (seconds), keeping its reads in `reads`.
 /// With `reuse`, the caller vouches that the store holds no reading stamped after the kept
 /// estimate's time and that no stored reading was replaced since (a campaign between one
@@ -592,35 +611,20 @@ pub fn estimate_with<S: Store>(
         at,
         (neighbours, estimator),
     );
-    let memo = |q: f64| MultiplierMemo {
+    // The interval multiplier's inputs; the kept multiplier serves when this estimate reads
+    // exactly what the kept one read (the same latest readings bit for bit and the same change
+    // window: the kept series unrestricted).
+    let memo = MultiplierMemo {
         estimator,
         neighbours,
         changes: format!("{changes:?}"),
         positions: positions.iter().map(|p| p.map(f64::to_bits)).collect(),
         cells: cells.clone(),
-        q,
+        q: f64::NAN,
     };
-    // The kept multiplier when this estimate reads exactly what the kept one read (the same
-    // latest readings bit for bit and the same change window: the kept series unrestricted).
     let kept_q = kept.as_ref().and_then(|k| {
-        let m = &k.multiplier;
-        let same_latest = k.latest.len() == latest.len()
-            && k.latest
-                .iter()
-                .zip(&latest)
-                .all(|(a, b)| a.map(|(t, v)| (t, v.to_bits())) == b.map(|(t, v)| (t, v.to_bits())));
-        let same = same_latest
-            && k.needed == needed
-            && m.estimator == estimator
-            && m.neighbours == neighbours
-            && m.cells == cells
-            && m.positions.len() == positions.len()
-            && m.positions
-                .iter()
-                .zip(&positions)
-                .all(|(a, b)| *a == b.map(f64::to_bits))
-            && m.changes == format!("{changes:?}");
-        same.then_some(m.q)
+        (same_bits(&k.latest, &latest) && k.needed == needed && k.multiplier.same_inputs(&memo))
+            .then_some(k.multiplier.q)
     });
     let q = kept_q.unwrap_or_else(|| kriging.multiplier());
     // The dynamic model: one filter pass over the window's readings.
@@ -658,7 +662,7 @@ pub fn estimate_with<S: Store>(
         latest,
         needed,
         series,
-        multiplier: memo(q),
+        multiplier: MultiplierMemo { q, ..memo },
     });
     Ok(estimates)
 }
