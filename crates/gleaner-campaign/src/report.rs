@@ -641,6 +641,28 @@ fn rmse_chart(at_main: &[&Summary], main_budget: f64, unit: &str) -> Result<Stri
     })?)
 }
 
+/// Draws `chart` as `figures/<file>` and links it in `md` with `alt`, unless no line has a
+/// finite point (then nothing).
+fn push_chart(
+    md: &mut String,
+    charts: &mut Vec<(String, String)>,
+    chart: LineChart,
+    file: String,
+    alt: &str,
+) -> Result<()> {
+    if chart
+        .lines
+        .iter()
+        .all(|l| l.points.iter().all(|p| !p.1.is_finite()))
+    {
+        return Ok(());
+    }
+    let svg = line_chart_svg(&chart)?;
+    writeln!(md, "![{alt}](figures/{file})\n")?;
+    charts.push((file, svg));
+    Ok(())
+}
+
 /// Each metric over the campaign at the main budget: a line per strategy (charts).
 fn over_campaign_section(
     md: &mut String,
@@ -686,22 +708,20 @@ fn over_campaign_section(
                 }
             })
             .collect();
-        if lines
-            .iter()
-            .all(|l| l.points.iter().all(|p| !p.1.is_finite()))
-        {
-            continue;
-        }
-        let svg = line_chart_svg(&LineChart {
+        let chart = LineChart {
             title: format!("{title} per mission"),
             x_label: "mission time (UTC)".into(),
             y_label: ylabel,
             x_axis: XAxis::Date,
             lines,
-        })?;
-        let file = format!("{name}_over_campaign.svg");
-        writeln!(md, "![{title}](figures/{file})\n")?;
-        charts.push((file, svg));
+        };
+        push_chart(
+            md,
+            charts,
+            chart,
+            format!("{name}_over_campaign.svg"),
+            title,
+        )?;
     }
     Ok(())
 }
@@ -765,22 +785,15 @@ fn against_budget_section(
                     .collect(),
             })
             .collect();
-        if lines
-            .iter()
-            .all(|l| l.points.iter().all(|p| !p.1.is_finite()))
-        {
-            continue;
-        }
-        let svg = line_chart_svg(&LineChart {
+        let chart = LineChart {
             title: format!("{title} against the budget"),
             x_label: "budget, % of the preset battery".into(),
             y_label: ylabel,
             x_axis: XAxis::Number,
             lines,
-        })?;
-        let file = format!("{name}_vs_budget.svg");
-        writeln!(md, "![{title} against the budget](figures/{file})\n")?;
-        charts.push((file, svg));
+        };
+        let alt = format!("{title} against the budget");
+        push_chart(md, charts, chart, format!("{name}_vs_budget.svg"), &alt)?;
     }
     Ok(())
 }
