@@ -464,6 +464,28 @@ fn legend_entries(scene: &Scene, zones: &[frame::ZoneShape], font: f64) -> Vec<E
 
 /// The colour bar of S at the right column's `x`, from below its label at `map_top` down to
 /// above the north arrow at `na_top` (pt): gradient, frame, ticks, labels.
+/// One tick of a vertical colour bar whose right edge is at `x` (mm): a tick mark at height
+/// `ty` (mm) and its label right of it; `font` is the label's size and `cap` its cap height
+/// (mm).
+pub(crate) fn colour_tick(svg: &mut Svg, x: f64, ty: f64, (font, cap): (f64, f64), label: &str) {
+    svg.line(format_args!(
+        r#"<line class="colour-tick" x1="{}" y1="{}" x2="{}" y2="{}" stroke="{INK}" stroke-width="0.4"/>"#,
+        N(x),
+        N(ty),
+        N(x + TICK),
+        N(ty)
+    ));
+    svg.text_attrs(
+        x + TICK + 1.2,
+        ty + 0.5 * cap,
+        font,
+        Anchor::Start,
+        false,
+        &format!(r#"fill="{INK}""#),
+        label,
+    );
+}
+
 fn s_colour_bar(
     svg: &mut Svg,
     sc: &mut ColourScale,
@@ -509,22 +531,7 @@ fn s_colour_bar(
     ));
     for (v, label) in &sc.ticks {
         let ty = bar_bottom - sc.t(*v) * len;
-        svg.line(format_args!(
-            r#"<line class="colour-tick" x1="{}" y1="{}" x2="{}" y2="{}" stroke="{INK}" stroke-width="0.4"/>"#,
-            N(bx + bar_w),
-            N(ty),
-            N(bx + bar_w + TICK),
-            N(ty)
-        ));
-        svg.text_attrs(
-            bx + bar_w + TICK + 1.2,
-            ty + 0.5 * cap,
-            font,
-            Anchor::Start,
-            false,
-            &format!(r#"fill="{INK}""#),
-            label,
-        );
+        colour_tick(svg, bx + bar_w, ty, (font, cap), label);
     }
     svg.line(format_args!("</g>"));
 }

@@ -4,7 +4,7 @@
 use gleaner_wire::docs::ReconstructionMapDoc;
 
 use crate::colour::{ColourMap, Rgb, UNCERTAINTY_MAP, VALUE_MAP};
-use crate::figure::{ColourScale, display_time};
+use crate::figure::{ColourScale, colour_tick, display_time};
 use crate::font::{CAP_HEIGHT_EM, text_width};
 use crate::frame::{
     self, Axes, Entry, INK, MapView, PT_PER_MM, Projection, Symbol, TICK, finite, lon_lat,
@@ -654,22 +654,7 @@ fn colour_bar(
     let mut label_w: f64 = 0.0;
     for (value, label) in &scale.ticks {
         let ty = top + len - scale.t(*value) * len;
-        svg.line(format_args!(
-            r#"<line class="colour-tick" x1="{}" y1="{}" x2="{}" y2="{}" stroke="{INK}" stroke-width="0.4"/>"#,
-            N(bx + bar_w),
-            N(ty),
-            N(bx + bar_w + TICK),
-            N(ty)
-        ));
-        svg.text_attrs(
-            bx + bar_w + TICK + 1.2,
-            ty + 0.5 * cap,
-            font,
-            Anchor::Start,
-            false,
-            &format!(r#"fill="{INK}""#),
-            label,
-        );
+        colour_tick(svg, bx + bar_w, ty, (font, cap), label);
         label_w = label_w.max(text_width(label, font, false));
     }
     // Rotated a quarter turn: its glyphs lie left of its baseline at `cx`.
