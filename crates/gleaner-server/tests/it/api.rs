@@ -499,14 +499,7 @@ fn simulates_with_the_campaign_report() {
     let server = Server::caf();
     let mut c = server.client();
     let post = |c: &mut gleaner_server::client::Client, body: &Value| {
-        let r = c
-            .request(
-                "POST",
-                "/api/v1/simulate",
-                &[("content-type", "application/json")],
-                Some(body.to_string().as_bytes()),
-            )
-            .unwrap();
+        let r = c.post_json("/api/v1/simulate", body, None).unwrap();
         assert_eq!(r.status, 200, "{body}: {}", r.text());
         let v: Value = r.json().unwrap();
         v

@@ -372,12 +372,7 @@ async fn drive(c: &fantoccini::Client, server: &Server, downloads: &Path) -> Res
         "wind": "weibull:6", "gust": 1.5});
     let r = server
         .client()
-        .request(
-            "POST",
-            "/api/v1/simulate",
-            &[("content-type", "application/json")],
-            Some(body.to_string().as_bytes()),
-        )
+        .post_json("/api/v1/simulate", &body, None)
         .unwrap();
     assert_eq!(r.status, 200, "{}", r.text());
     let doc: Value = r.json().unwrap();
@@ -419,12 +414,7 @@ async fn drive(c: &fantoccini::Client, server: &Server, downloads: &Path) -> Res
         "report": true});
     let r = server
         .client()
-        .request(
-            "POST",
-            "/api/v1/simulate",
-            &[("content-type", "application/json")],
-            Some(body.to_string().as_bytes()),
-        )
+        .post_json("/api/v1/simulate", &body, None)
         .unwrap();
     assert_eq!(r.status, 200, "{}", r.text());
     let doc: Value = r.json().unwrap();
