@@ -186,6 +186,7 @@ pub fn load(dir: &Path, depth: Depth) -> Result<HubbardBrook, EvalError> {
     loggers.sort();
     // (time, site) -> (sum, count) of the site's probes with a value.
     let mut cells: BTreeMap<(i64, usize), (f64, u32)> = BTreeMap::new();
+    let mut seen = vec![false; labels.len()];
     let mut missing_loggers = Vec::new();
     for logger in &loggers {
         let path = dir.join(format!("{logger}.csv"));
@@ -208,11 +209,12 @@ pub fn load(dir: &Path, depth: Depth) -> Result<HubbardBrook, EvalError> {
                 let c = cells.entry((r.t, k)).or_insert((0.0, 0));
                 c.0 += r.value;
                 c.1 += 1;
+                seen[k] = true;
             }
         }
     }
     let n = labels.len();
-    if let Some(k) = (0..n).find(|&k| !cells.keys().any(|&(_, c)| c == k)) {
+    if let Some(k) = seen.iter().position(|s| !s) {
         return Err(EvalError::Data(format!(
             "{}: site {} has no water content at {}",
             dir.display(),
@@ -339,6 +341,37 @@ pub fn run(data: HubbardBrook, progress: impl FnMut(usize, usize)) -> Result<Out
         progress,
     )?;
     Ok(Outcome { data, mean, each })
+}
+
+/// What `gleaner evaluate peer --on hubbard-brook` writes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HubbardEvaluation {
+    /// `summary.md`: both depths' summaries under the protocol's heading.
+    pub summary: String,
+    /// Each depth's outcomes CSV with its file name (`outcomes-shallow.csv`,
+    /// `outcomes-50cm.csv`).
+    pub outcomes: Vec<(&'static str, String)>,
+}
+
+/// Loads and runs both depths from the Hubbard Brook directory `dir`; `progress(done, total)`
+/// after each window of a depth.
+pub fn evaluate(
+    dir: &Path,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<HubbardEvaluation, EvalError> {
+    let mut summary = crate::peer::summary_heading("hold-out: Hubbard Brook hourly water content");
+    let mut outcomes = Vec::new();
+    for depth in Depth::ALL {
+        let out = run(load(dir, depth)?, &mut progress)?;
+        summary.push_str(&out.summary());
+        summary.push('\n');
+        let name = match depth {
+            Depth::Shallow => "outcomes-shallow.csv",
+            Depth::Cm50 => "outcomes-50cm.csv",
+        };
+        outcomes.push((name, out.mean.outcomes_csv()));
+    }
+    Ok(HubbardEvaluation { summary, outcomes })
 }
 
 /// The mean error of (`planner`, `estimator`) over a report's capacities, unit²; `None` when

@@ -25,7 +25,7 @@ use crate::EvalError;
 mod evaluation;
 mod files;
 
-pub use evaluation::{PeerData, PeerEvaluation, evaluate, load_data};
+pub use evaluation::{PeerData, PeerEvaluation, evaluate, load_data, summary_heading};
 pub use files::{Layout, PeerResult, read_layouts, read_results};
 pub(crate) use files::{bad, column, number, read_csv};
 

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use gleaner_eval::peer::{self, FROZEN_ESTIMATOR, FROZEN_PLANNER};
+use gleaner_eval::peer;
 
 /// Which protocol data to run on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -103,36 +103,23 @@ pub fn run_peer(args: &PeerArgs) -> Result<String> {
 
 /// `--on hubbard-brook`: both depths, one summary.
 fn run_hubbard_brook(args: &PeerArgs) -> Result<String> {
-    use gleaner_eval::hubbard::{self, Depth};
     if args.unshared_weight != 0.0 {
         anyhow::bail!("--unshared-weight is not used with --on hubbard-brook");
     }
     let dir = args.data.join("hubbard_brook");
+    let bar = crate::progress::bar(0, "windows");
+    let e = gleaner_eval::hubbard::evaluate(&dir, |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64)
+    })
+    .with_context(|| format!("{} (set GLEANER_DATA_DIR)", dir.display()))?;
+    bar.finish_and_clear();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let mut summary = format!(
-        "# gleaner on the peer protocol ({})\n\nFrozen pipeline: planner `{}`, estimator `{}`.\n\n",
-        "hold-out: Hubbard Brook hourly water content",
-        FROZEN_PLANNER.name(),
-        FROZEN_ESTIMATOR.name()
-    );
-    for depth in Depth::ALL {
-        let data = hubbard::load(&dir, depth)
-            .with_context(|| format!("{} (set GLEANER_DATA_DIR)", dir.display()))?;
-        let bar = crate::progress::bar(data.protocols.len() as u64, "windows");
-        let out = hubbard::run(data, |done, _| bar.set_position(done as u64))?;
-        bar.finish_and_clear();
-        summary.push_str(&out.summary());
-        summary.push('\n');
-        let name = match depth {
-            Depth::Shallow => "outcomes-shallow.csv",
-            Depth::Cm50 => "outcomes-50cm.csv",
-        };
-        let csv = args.out.join(name);
-        std::fs::write(&csv, out.mean.outcomes_csv())
-            .with_context(|| format!("cannot write {}", csv.display()))?;
+    let files = e.outcomes.iter().map(|(name, csv)| (*name, csv.as_str()));
+    for (name, text) in files.chain([("summary.md", e.summary.as_str())]) {
+        let path = args.out.join(name);
+        std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
     }
-    let md = args.out.join("summary.md");
-    std::fs::write(&md, &summary).with_context(|| format!("cannot write {}", md.display()))?;
-    Ok(summary)
+    Ok(e.summary)
 }

@@ -65,6 +65,15 @@ pub struct PeerEvaluation {
     pub windows_csv: Option<String>,
 }
 
+/// The summary's heading: the data's title and the frozen pipeline.
+pub fn summary_heading(title: &str) -> String {
+    format!(
+        "# gleaner on the peer protocol ({title})\n\nFrozen pipeline: planner `{}`, estimator `{}`.\n\n",
+        FROZEN_PLANNER.name(),
+        FROZEN_ESTIMATOR.name()
+    )
+}
+
 /// Runs `count` and `information` over the loaded data with the unshared drift weight
 /// `unshared_weight` (≥ 0); `progress(done, total)` after each layout and protocol.
 pub fn evaluate(
@@ -87,12 +96,7 @@ pub fn evaluate(
         &planners,
         progress,
     )?;
-    let mut summary = format!(
-        "# gleaner on the peer protocol ({})\n\nFrozen pipeline: planner `{}`, estimator `{}`.\n\n",
-        on.title(),
-        FROZEN_PLANNER.name(),
-        FROZEN_ESTIMATOR.name()
-    );
+    let mut summary = summary_heading(&on.title());
     for p in planners {
         summary.push_str(&report.summary(p, FROZEN_ESTIMATOR));
         summary.push('\n');
