@@ -40,6 +40,11 @@ pub(crate) struct Ctx<'a> {
     /// (a directed instance) every reversing move adds the change of the reversed inner
     /// arcs to its gain.
     symmetric: bool,
+    /// Every pair's travel cost, row-major (`n` × `n`), when the problem keeps them in a
+    /// table: [`Ctx::c`] reads it directly (the same values as [`Problem::cost`]).
+    table: Option<&'a [f64]>,
+    /// Node count (the table's row length).
+    n: usize,
 }
 
 /// Prefix sums of a route's arc costs both ways: `fwd[k]` is the cost of the route's first
@@ -102,6 +107,8 @@ impl<'a> Ctx<'a> {
             by_reward,
             metric: p.is_metric(),
             symmetric: p.is_symmetric(),
+            table: p.cost_table(),
+            n,
         }
     }
 
@@ -112,7 +119,10 @@ impl<'a> Ctx<'a> {
 
     #[inline]
     pub fn c(&self, i: usize, j: usize) -> f64 {
-        self.p.cost(i, j)
+        match self.table {
+            Some(t) => t[i * self.n + j],
+            None => self.p.cost(i, j),
+        }
     }
 
     /// False when `v` provably fits in no route of `state` (metric costs: an insertion costs

@@ -443,6 +443,16 @@ impl Problem {
         }
     }
 
+    /// Every pair's travel cost (budget unit), row-major (`len()` × `len()`), when the
+    /// problem keeps them in a table (a cost matrix, or points with at most
+    /// [`TABULATED_NODES`] nodes): entry `i·n + j` is [`Problem::cost`]`(i, j)`.
+    pub fn cost_table(&self) -> Option<&[f64]> {
+        match &self.cost {
+            Costs::Dense(m) => Some(m),
+            Costs::Points(_, _, _, table) | Costs::Displacement(_, _, table) => table.as_deref(),
+        }
+    }
+
     /// The planar points and metric when the problem was built by [`Problem::from_points`]
     /// or [`Problem::from_scaled_points`].
     pub fn points(&self) -> Option<(&[[f64; 2]], Metric)> {
