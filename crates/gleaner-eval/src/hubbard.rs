@@ -125,12 +125,139 @@ fn chosen(probes: &[Probe], depth: Depth) -> BTreeMap<String, Vec<Probe>> {
         .collect()
 }
 
+/// What a site's series measures: the probes' water content or their soil temperature.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Quantity {
+    /// Volumetric water content, m³/m³ (values outside 0–1 are missing).
+    WaterContent,
+    /// Soil temperature of the same probes, °C (values outside −50…60 °C are missing).
+    Temperature,
+}
+
+impl Quantity {
+    /// Its name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Quantity::WaterContent => "water content",
+            Quantity::Temperature => "soil temperature",
+        }
+    }
+
+    /// The modality's quantity code (`vw@15cm`, `t@15cm`).
+    fn code(self) -> &'static str {
+        match self {
+            Quantity::WaterContent => "vw",
+            Quantity::Temperature => "t",
+        }
+    }
+
+    /// Whether `x` (the quantity's unit) is physically possible.
+    fn valid(self, x: f64) -> bool {
+        match self {
+            Quantity::WaterContent => (0.0..=1.0).contains(&x),
+            Quantity::Temperature => (-50.0..=60.0).contains(&x),
+        }
+    }
+
+    /// The factor errors are reported with, the unit they are then in, and its short form
+    /// for differences.
+    fn error_unit(self) -> (f64, &'static str, &'static str) {
+        match self {
+            Quantity::WaterContent => (1e3, "×10⁻³ (m³/m³)²", "×10⁻³"),
+            Quantity::Temperature => (1.0, "°C²", "°C²"),
+        }
+    }
+}
+
+/// One data set of the protocol: a quantity at a depth, over every complete hour of the
+/// sites that have the depth, or (`late`) only over the hours after the last of those, with
+/// the sites that have a value in at least half of the later hours.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Series {
+    /// What is measured.
+    pub quantity: Quantity,
+    /// At which depth.
+    pub depth: Depth,
+    /// Only the hours after every site's last complete hour.
+    pub late: bool,
+}
+
+impl Series {
+    /// Water content at `depth` over every complete hour (the first registration).
+    pub fn water(depth: Depth) -> Series {
+        Series {
+            quantity: Quantity::WaterContent,
+            depth,
+            late: false,
+        }
+    }
+
+    /// A file-name stem: `water-shallow`, `temperature-50cm`, `water-late-shallow`, …
+    pub fn stem(self) -> String {
+        let q = match self.quantity {
+            Quantity::WaterContent => "water",
+            Quantity::Temperature => "temperature",
+        };
+        let d = match self.depth {
+            Depth::Shallow => "shallow",
+            Depth::Cm50 => "50cm",
+        };
+        if self.late {
+            format!("{q}-late-{d}")
+        } else {
+            format!("{q}-{d}")
+        }
+    }
+}
+
+/// Which registration's data sets to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Registration {
+    /// Water content, shallow and 50 cm, every complete hour
+    /// (`peer-hubbard-brook-preregistration.md`).
+    First,
+    /// Water content in the hours after the first's data ended, shallow and 50 cm, and soil
+    /// temperature over every complete hour, shallow and 50 cm
+    /// (`peer-hubbard-brook-2-preregistration.md`).
+    Second,
+}
+
+impl Registration {
+    /// Its data sets, in report order.
+    pub fn series(self) -> Vec<Series> {
+        match self {
+            Registration::First => Depth::ALL.map(Series::water).to_vec(),
+            Registration::Second => {
+                let late = Depth::ALL.map(|depth| Series {
+                    late: true,
+                    ..Series::water(depth)
+                });
+                let temperature = Depth::ALL.map(|depth| Series {
+                    quantity: Quantity::Temperature,
+                    ..Series::water(depth)
+                });
+                late.into_iter().chain(temperature).collect()
+            }
+        }
+    }
+
+    /// The summary's heading.
+    fn title(self) -> &'static str {
+        match self {
+            Registration::First => "hold-out: Hubbard Brook hourly water content",
+            Registration::Second => {
+                "hold-out: Hubbard Brook, later hours' water content and soil temperature"
+            }
+        }
+    }
+}
+
 /// A loaded Hubbard Brook protocol: the complete-case matrix (columns = sites), the layout,
 /// one protocol per window, the capacities (J) and the every-site tour's energy (J).
 #[derive(Debug, Clone)]
 pub struct HubbardBrook {
-    /// Which water content.
-    pub depth: Depth,
+    /// The data set.
+    pub series: Series,
     /// Complete-case rows, one column per site (site names).
     pub matrix: Matrix,
     /// The sites about their centroid, depot at the centroid.
@@ -143,14 +270,23 @@ pub struct HubbardBrook {
     pub capacities: Vec<f64>,
     /// Loggers of chosen probes listed in the metadata whose file is not in the directory.
     pub missing_loggers: Vec<String>,
+    /// For a late series: the last complete hour of every site (s), after which its rows lie.
+    pub after: Option<i64>,
 }
 
-/// Loads the protocol of `depth` from the Hubbard Brook directory `dir` (its
-/// `sensor_metadata.csv` and one `<logger>.csv` per logger).
-///
-/// Errors: unreadable files, a logger file of a chosen probe missing, fewer than one window
-/// of complete rows.
+/// Loads the water content at `depth` over every complete hour ([`load_series`]).
 pub fn load(dir: &Path, depth: Depth) -> Result<HubbardBrook, EvalError> {
+    load_series(dir, Series::water(depth))
+}
+
+/// The sites' probes, their series (one column per site) and the loggers without a file.
+type SiteSeries = (BTreeMap<String, Vec<Probe>>, Matrix, Vec<String>);
+
+/// Every site's hourly series of `series` (replicate probes averaged over those with a value
+/// at the hour), one column per site, NaN where a site has none; the sites' probes and the
+/// listed loggers without a file.
+fn read_sites(dir: &Path, series: Series) -> Result<SiteSeries, EvalError> {
+    let (quantity, depth) = (series.quantity, series.depth);
     let meta_path = dir.join("sensor_metadata.csv");
     let sites = chosen(&probes(&meta_path)?, depth);
     if sites.is_empty() {
@@ -174,7 +310,7 @@ pub fn load(dir: &Path, depth: Depth) -> Result<HubbardBrook, EvalError> {
             want.insert(
                 (
                     format!("{}:p{}", p.logger, p.port),
-                    format!("vw@{}cm", p.depth_cm),
+                    format!("{}@{}cm", quantity.code(), p.depth_cm),
                 ),
                 k,
             );
@@ -204,7 +340,7 @@ pub fn load(dir: &Path, depth: Depth) -> Result<HubbardBrook, EvalError> {
                 .as_str()
                 .to_string();
             if let Some(&k) = want.get(&(sensor, modality))
-                && (0.0..=1.0).contains(&r.value)
+                && quantity.valid(r.value)
             {
                 let c = cells.entry((r.t, k)).or_insert((0.0, 0));
                 c.0 += r.value;
@@ -216,9 +352,10 @@ pub fn load(dir: &Path, depth: Depth) -> Result<HubbardBrook, EvalError> {
     let n = labels.len();
     if let Some(k) = seen.iter().position(|s| !s) {
         return Err(EvalError::Data(format!(
-            "{}: site {} has no water content at {}",
+            "{}: site {} has no {} at {}",
             dir.display(),
             labels[k],
+            quantity.name(),
             depth.name()
         )));
     }
@@ -231,11 +368,70 @@ pub fn load(dir: &Path, depth: Depth) -> Result<HubbardBrook, EvalError> {
         }
     }
     let matrix = Matrix {
-        labels: labels.clone(),
+        labels,
         times,
+        values,
+    };
+    Ok((sites, matrix, missing_loggers))
+}
+
+/// The rows of `raw` after its last complete row, with the sites that have a value in at
+/// least half of those rows: the kept sites' columns and their complete rows; `None` when
+/// no row follows. Also returns the last complete row's time (s).
+fn late_rows(raw: &Matrix) -> Option<(Vec<usize>, Matrix, i64)> {
+    let cut = *raw.complete_rows().times.last()?;
+    let n = raw.labels.len();
+    let first = raw.times.partition_point(|&t| t <= cut);
+    let rows = raw.times.len() - first;
+    if rows == 0 {
+        return None;
+    }
+    let kept: Vec<usize> = (0..n)
+        .filter(|&k| {
+            let have = (first..raw.times.len())
+                .filter(|&r| raw.values[r * n + k].is_finite())
+                .count();
+            2 * have >= rows
+        })
+        .collect();
+    let mut values = Vec::with_capacity(rows * kept.len());
+    for r in first..raw.times.len() {
+        values.extend(kept.iter().map(|&k| raw.values[r * n + k]));
+    }
+    let matrix = Matrix {
+        labels: kept.iter().map(|&k| raw.labels[k].clone()).collect(),
+        times: raw.times[first..].to_vec(),
         values,
     }
     .complete_rows();
+    Some((kept, matrix, cut))
+}
+
+/// Loads the protocol of `series` from the Hubbard Brook directory `dir` (its
+/// `sensor_metadata.csv` and one `<logger>.csv` per logger).
+///
+/// Errors: unreadable files, a site without any value, fewer than one window of complete
+/// rows.
+pub fn load_series(dir: &Path, series: Series) -> Result<HubbardBrook, EvalError> {
+    let depth = series.depth;
+    let (mut sites, raw, missing_loggers) = read_sites(dir, series)?;
+    let (matrix, after) = if series.late {
+        let Some((kept, matrix, cut)) = late_rows(&raw) else {
+            return Err(EvalError::Data(format!(
+                "{}: no hours of {} at {} after the last complete one",
+                dir.display(),
+                series.quantity.name(),
+                depth.name()
+            )));
+        };
+        let names: Vec<String> = sites.keys().cloned().collect();
+        let keep: Vec<&String> = kept.iter().map(|&k| &names[k]).collect();
+        sites.retain(|name, _| keep.contains(&name));
+        (matrix, Some(cut))
+    } else {
+        (raw.complete_rows(), None)
+    };
+    let n = matrix.labels.len();
     let layout = site_layout(&sites)?;
     let base = Protocol::peer_hourly(frozen_fit(3_600));
     let protocols = tiled_windows(matrix.times.len(), &base);
@@ -260,13 +456,14 @@ pub fn load(dir: &Path, depth: Depth) -> Result<HubbardBrook, EvalError> {
     }
     let capacities = CAPACITY_SHARES.iter().map(|s| s * all.energy_j).collect();
     Ok(HubbardBrook {
-        depth,
+        series,
         matrix,
         layout,
         protocols,
         all_sites_j: all.energy_j,
         capacities,
         missing_loggers,
+        after,
     })
 }
 
@@ -343,31 +540,33 @@ pub fn run(data: HubbardBrook, progress: impl FnMut(usize, usize)) -> Result<Out
     Ok(Outcome { data, mean, each })
 }
 
-/// What `gleaner evaluate peer --on hubbard-brook` writes.
+/// What `gleaner evaluate peer --on hubbard-brook` (or `hubbard-brook-2`) writes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HubbardEvaluation {
-    /// `summary.md`: both depths' summaries under the protocol's heading.
+    /// `summary.md`: every data set's summary under the registration's heading.
     pub summary: String,
-    /// Each depth's outcomes CSV with its file name (`outcomes-shallow.csv`,
-    /// `outcomes-50cm.csv`).
-    pub outcomes: Vec<(&'static str, String)>,
+    /// Each data set's outcomes CSV with its file name (the first registration's
+    /// `outcomes-shallow.csv`, `outcomes-50cm.csv`; the second's `outcomes-<stem>.csv`).
+    pub outcomes: Vec<(String, String)>,
 }
 
-/// Loads and runs both depths from the Hubbard Brook directory `dir`; `progress(done, total)`
-/// after each window of a depth.
+/// Loads and runs every data set of `registration` from the Hubbard Brook directory `dir`;
+/// `progress(done, total)` after each window of a data set.
 pub fn evaluate(
     dir: &Path,
+    registration: Registration,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<HubbardEvaluation, EvalError> {
-    let mut summary = crate::peer::summary_heading("hold-out: Hubbard Brook hourly water content");
+    let mut summary = crate::peer::summary_heading(registration.title());
     let mut outcomes = Vec::new();
-    for depth in Depth::ALL {
-        let out = run(load(dir, depth)?, &mut progress)?;
+    for series in registration.series() {
+        let out = run(load_series(dir, series)?, &mut progress)?;
         summary.push_str(&out.summary());
         summary.push('\n');
-        let name = match depth {
-            Depth::Shallow => "outcomes-shallow.csv",
-            Depth::Cm50 => "outcomes-50cm.csv",
+        let name = match (registration, series.depth) {
+            (Registration::First, Depth::Shallow) => "outcomes-shallow.csv".to_string(),
+            (Registration::First, Depth::Cm50) => "outcomes-50cm.csv".to_string(),
+            (Registration::Second, _) => format!("outcomes-{}.csv", series.stem()),
         };
         outcomes.push((name, out.mean.outcomes_csv()));
     }
@@ -431,10 +630,15 @@ impl Outcome {
         let mut s = String::new();
         let first = d.matrix.times.first().copied().unwrap_or_default();
         let last = d.matrix.times.last().copied().unwrap_or_default();
+        let (scale, unit, short) = d.series.quantity.error_unit();
+        let after = d.after.map_or(String::new(), |t| {
+            format!(", hours after {}", gleaner_field::time::format_rfc3339(t))
+        });
         let _ = writeln!(
             s,
-            "### Hubbard Brook, water content {}\n\n{} sites, {} complete hours ({} .. {}), {} windows; every-site tour {:.0} J; capacities {}.{}\n",
-            d.depth.name(),
+            "### Hubbard Brook, {} {}{after}\n\n{} sites, {} complete hours ({} .. {}), {} windows; every-site tour {:.0} J; capacities {}.{}\n",
+            d.series.quantity.name(),
+            d.series.depth.name(),
             d.layout.labels.len(),
             d.matrix.times.len(),
             gleaner_field::time::format_rfc3339(first),
@@ -477,7 +681,7 @@ impl Outcome {
                         o.mse
                             .iter()
                             .find(|x| x.0 == e)
-                            .map_or("–".into(), |x| format!("{:.3}", x.1 * 1e3))
+                            .map_or("–".into(), |x| format!("{:.3}", x.1 * scale))
                     })
                     .collect::<Vec<_>>()
                     .join(" | ")
@@ -495,7 +699,7 @@ impl Outcome {
         }
         let _ = writeln!(
             s,
-            "\n(mean over the windows of the summed squared error over unvisited sites, ×10⁻³ (m³/m³)²; visited: first window's tours)\n"
+            "\n(mean over the windows of the summed squared error over unvisited sites, {unit}; visited: first window's tours)\n"
         );
         for e in Estimator::ALL.iter().rev() {
             let w = self.window_means(*e);
@@ -503,11 +707,12 @@ impl Outcome {
                 Some((m, lo, hi, n)) => {
                     let _ = writeln!(
                         s,
-                        "- {}: count − information {:+.3} [{:+.3}, {:+.3}] ×10⁻³ over {n} windows",
+                        "- {}: count − information {:+.3} [{:+.3}, {:+.3}] {} over {n} windows",
                         e.name(),
-                        m * 1e3,
-                        lo * 1e3,
-                        hi * 1e3
+                        m * scale,
+                        lo * scale,
+                        hi * scale,
+                        short
                     );
                 }
                 None => {
@@ -541,11 +746,12 @@ impl Outcome {
             if let Some((m, lo, hi, n)) = mean_interval(&d) {
                 let _ = writeln!(
                     s,
-                    "- information's tours: {} − dynamic {:+.3} [{:+.3}, {:+.3}] ×10⁻³ over {n} windows",
+                    "- information's tours: {} − dynamic {:+.3} [{:+.3}, {:+.3}] {} over {n} windows",
                     other.name(),
-                    m * 1e3,
-                    lo * 1e3,
-                    hi * 1e3
+                    m * scale,
+                    lo * scale,
+                    hi * scale,
+                    short
                 );
             }
         }
@@ -625,8 +831,10 @@ mod tests {
     /// A directory like the network's: site A (logger z1) with a 15 cm probe and two 50 cm
     /// replicates, site B (logger z2, 10 cm, and z3 listed without a file), `hours` hourly
     /// rows; returns the directory.
-    fn fixture(hours: usize) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("gleaner-hb-{}-{hours}", std::process::id()));
+    /// `tag` keeps the directories of tests running at once apart.
+    fn fixture(tag: &str, hours: usize) -> std::path::PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("gleaner-hb-{}-{tag}-{hours}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(
             dir.join("sensor_metadata.csv"),
@@ -636,9 +844,11 @@ mod tests {
         )
         .unwrap();
         let mut z1 = String::from(
-            "timestamp,p2:TEROS_12:Water_Content:m3_per_m3,p4:TEROS_12:Water_Content:m3_per_m3,p5:TEROS_12:Water_Content:m3_per_m3\n",
+            "timestamp,p2:TEROS_12:Water_Content:m3_per_m3,p4:TEROS_12:Water_Content:m3_per_m3,p5:TEROS_12:Water_Content:m3_per_m3,p2:TEROS_12:Soil_Temperature:degC\n",
         );
-        let mut z2 = String::from("timestamp,p1:TEROS_12:Water_Content:m3_per_m3\n");
+        let mut z2 = String::from(
+            "timestamp,p1:TEROS_12:Water_Content:m3_per_m3,p1:TEROS_12:Soil_Temperature:degC\n",
+        );
         for h in 0..hours {
             let (day, hour) = (1 + h / 24, h % 24);
             let stamp = format!(
@@ -649,8 +859,15 @@ mod tests {
             let x = (h as f64 / 50.0).sin() * 0.02;
             // Hour 7 of B is out of range (missing), so that row is not complete.
             let b = if h == 7 { 1.5 } else { 0.25 + x };
-            let _ = writeln!(z1, "{stamp},{},{},{}", 0.30 + x, 0.20 + x, 0.40 + x);
-            let _ = writeln!(z2, "{stamp},{b}");
+            let _ = writeln!(
+                z1,
+                "{stamp},{},{},{},{}",
+                0.30 + x,
+                0.20 + x,
+                0.40 + x,
+                12.0 + 100.0 * x
+            );
+            let _ = writeln!(z2, "{stamp},{b},{}", 11.0 + 100.0 * x);
         }
         std::fs::write(dir.join("z1.csv"), z1).unwrap();
         std::fs::write(dir.join("z2.csv"), z2).unwrap();
@@ -659,7 +876,7 @@ mod tests {
 
     #[test]
     fn load_averages_replicates_keeps_complete_hours_and_names_missing_loggers() {
-        let dir = fixture(1_600);
+        let dir = fixture("water", 1_600);
         let shallow = load(&dir, Depth::Shallow).unwrap();
         assert_eq!(shallow.layout.labels, ["A", "B"]);
         assert_eq!(shallow.missing_loggers, ["z3"]);
@@ -689,11 +906,104 @@ mod tests {
             "{summary}"
         );
         // Too few hours for a window: a clear error.
-        let short = fixture(1_000);
+        let short = fixture("water", 1_000);
         let e = load(&short, Depth::Shallow).unwrap_err().to_string();
         assert!(e.contains("fewer than one window"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
         std::fs::remove_dir_all(&short).unwrap();
+    }
+
+    /// Soil temperature comes from the same probes, with its own validity range (B's
+    /// out-of-range water content at hour 7 does not remove its temperature).
+    #[test]
+    fn temperature_is_read_from_the_same_probes() {
+        let dir = fixture("temperature", 1_600);
+        let t = load_series(
+            &dir,
+            Series {
+                quantity: Quantity::Temperature,
+                ..Series::water(Depth::Shallow)
+            },
+        )
+        .unwrap();
+        assert_eq!(t.layout.labels, ["A", "B"]);
+        assert_eq!(t.matrix.times.len(), 1_600);
+        assert!(
+            (t.matrix.values[0] - 12.0).abs() < 1e-9,
+            "{:?}",
+            &t.matrix.values[..2]
+        );
+        assert!(
+            (t.matrix.values[1] - 11.0).abs() < 1e-9,
+            "{:?}",
+            &t.matrix.values[..2]
+        );
+        let out = run(t, |_, _| {}).unwrap();
+        let summary = out.summary();
+        assert!(
+            summary.contains("### Hubbard Brook, soil temperature shallow"),
+            "{summary}"
+        );
+        assert!(summary.contains(", °C²;"), "{summary}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The late rows: after the last complete row, the sites with a value in at least half
+    /// of them, their complete rows.
+    #[test]
+    fn late_rows_follow_the_last_complete_row_with_the_sites_still_reporting() {
+        let nan = f64::NAN;
+        // Sites A, B, C, D over times 0..10: C stops after 4, D reports at 5 and 6 only
+        // (2 of the 5 later rows), B misses time 8.
+        let mut values = Vec::new();
+        for t in 0..10 {
+            let c = if t <= 4 { 3.0 } else { nan };
+            let d = if t <= 6 { 4.0 } else { nan };
+            let b = if t == 8 { nan } else { 2.0 };
+            values.extend_from_slice(&[1.0 + t as f64, b, c, d]);
+        }
+        let raw = Matrix {
+            labels: ["A", "B", "C", "D"].map(String::from).to_vec(),
+            times: (0..10).collect(),
+            values,
+        };
+        let (kept, m, cut) = late_rows(&raw).unwrap();
+        assert_eq!(cut, 4);
+        assert_eq!(kept, [0, 1]);
+        assert_eq!(m.labels, ["A", "B"]);
+        assert_eq!(m.times, [5, 6, 7, 9]);
+        assert_eq!(m.values[..2], [6.0, 2.0]);
+        // Nothing after the last complete row: none.
+        let complete = Matrix {
+            labels: vec!["A".into()],
+            times: vec![0, 1],
+            values: vec![1.0, 2.0],
+        };
+        assert!(late_rows(&complete).is_none());
+    }
+
+    #[test]
+    fn registrations_name_their_data_sets() {
+        let first: Vec<String> = Registration::First
+            .series()
+            .iter()
+            .map(|s| s.stem())
+            .collect();
+        assert_eq!(first, ["water-shallow", "water-50cm"]);
+        let second: Vec<String> = Registration::Second
+            .series()
+            .iter()
+            .map(|s| s.stem())
+            .collect();
+        assert_eq!(
+            second,
+            [
+                "water-late-shallow",
+                "water-late-50cm",
+                "temperature-shallow",
+                "temperature-50cm"
+            ]
+        );
     }
 
     #[test]

@@ -30,6 +30,11 @@ pub enum PeerData {
     /// windows of 1,001 training and 500 test hours, capacities 0.2-0.8 of the every-site
     /// tour's energy (outcomes-shallow.csv, outcomes-50cm.csv, summary.md).
     HubbardBrook,
+    /// The second Hubbard Brook hold-out: water content in the hours after the first one's
+    /// data end (the sites with a value in at least half of them) and soil temperature over
+    /// every complete hour, shallow and 50 cm each (outcomes-<data set>.csv, summary.md).
+    #[value(name = "hubbard-brook-2")]
+    HubbardBrook2,
 }
 
 impl PeerData {
@@ -42,7 +47,7 @@ impl PeerData {
             PeerData::Windows2014 => peer::PeerData::Windows(2014),
             PeerData::Windows2015 => peer::PeerData::Windows(2015),
             PeerData::Windows2016 => peer::PeerData::Windows(2016),
-            PeerData::HubbardBrook => return None,
+            PeerData::HubbardBrook | PeerData::HubbardBrook2 => return None,
         })
     }
 }
@@ -101,14 +106,19 @@ pub fn run_peer(args: &PeerArgs) -> Result<String> {
     Ok(e.summary)
 }
 
-/// `--on hubbard-brook`: both depths, one summary.
+/// `--on hubbard-brook` / `hubbard-brook-2`: every data set of the registration, one summary.
 fn run_hubbard_brook(args: &PeerArgs) -> Result<String> {
+    use gleaner_eval::hubbard::Registration;
     if args.unshared_weight != 0.0 {
         anyhow::bail!("--unshared-weight is not used with --on hubbard-brook");
     }
+    let registration = match args.on {
+        PeerData::HubbardBrook2 => Registration::Second,
+        _ => Registration::First,
+    };
     let dir = args.data.join("hubbard_brook");
     let bar = crate::progress::bar(0, "windows");
-    let e = gleaner_eval::hubbard::evaluate(&dir, |done, total| {
+    let e = gleaner_eval::hubbard::evaluate(&dir, registration, |done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64)
     })
@@ -116,7 +126,10 @@ fn run_hubbard_brook(args: &PeerArgs) -> Result<String> {
     bar.finish_and_clear();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let files = e.outcomes.iter().map(|(name, csv)| (*name, csv.as_str()));
+    let files = e
+        .outcomes
+        .iter()
+        .map(|(name, csv)| (name.as_str(), csv.as_str()));
     for (name, text) in files.chain([("summary.md", e.summary.as_str())]) {
         let path = args.out.join(name);
         std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
