@@ -2308,3 +2308,47 @@ fn evaluate_peer_on_hubbard_brook() {
         summary
     );
 }
+
+/// The second Hubbard Brook hold-out: the later hours' water content (the sites still
+/// reporting) and soil temperature, four data sets from the real files, each with its
+/// outcomes file and verdict.
+#[test]
+fn evaluate_peer_on_hubbard_brook_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("hb2");
+    let data = shared_data();
+    let summary = ok(&[
+        "evaluate",
+        "peer",
+        "--on",
+        "hubbard-brook-2",
+        "--data",
+        s(&data),
+        "--out",
+        s(&out),
+    ]);
+    assert!(
+        summary.contains("water content shallow (10-20 cm), hours after 2024-05-27T04:00:00Z"),
+        "{summary}"
+    );
+    assert!(
+        summary.contains("8 sites, 8203 complete hours"),
+        "{summary}"
+    );
+    assert!(
+        summary.contains("6 sites, 8203 complete hours"),
+        "{summary}"
+    );
+    assert!(summary.contains("soil temperature 50 cm"), "{summary}");
+    assert_eq!(summary.matches("- registration: ").count(), 4, "{summary}");
+    assert_eq!(summary.matches("°C²;").count(), 2, "{summary}");
+    for stem in [
+        "water-late-shallow",
+        "water-late-50cm",
+        "temperature-shallow",
+        "temperature-50cm",
+    ] {
+        let csv = std::fs::read_to_string(out.join(format!("outcomes-{stem}.csv"))).unwrap();
+        assert_eq!(csv.lines().count(), 1 + 7 * 2 * 3, "{stem}");
+    }
+}
