@@ -609,17 +609,23 @@ impl Outcome {
             .collect()
     }
 
-    /// The mean over the windows and capacities of the dynamic model's 90% coverage of the
-    /// unvisited sites' test values under `planner`'s tours.
+    /// The mean over the windows and capacities of the dynamic model's calibrated 90%
+    /// coverage of the unvisited sites' test values under `planner`'s tours.
     pub fn coverage(&self, planner: Planner) -> f64 {
-        let c: Vec<f64> = self
-            .each
-            .iter()
-            .flat_map(|r| r.outcomes.iter())
-            .filter(|o| o.planner == planner && o.coverage90.is_finite())
-            .map(|o| o.coverage90)
-            .collect();
-        c.iter().sum::<f64>() / c.len().max(1) as f64
+        crate::peer::mean_coverage(
+            self.each.iter().flat_map(|r| r.outcomes.iter()),
+            planner,
+            |o| o.coverage90,
+        )
+    }
+
+    /// The same for the Gaussian interval (`mean ± 1.645·sd`).
+    pub fn coverage_gaussian(&self, planner: Planner) -> f64 {
+        crate::peer::mean_coverage(
+            self.each.iter().flat_map(|r| r.outcomes.iter()),
+            planner,
+            |o| o.coverage90_gaussian,
+        )
     }
 
     /// A Markdown summary: the data, per capacity the mean over the windows of each
@@ -767,9 +773,11 @@ impl Outcome {
         };
         let _ = writeln!(
             s,
-            "- 90% intervals (dynamic model) cover {:.1}% of the unvisited sites' test values under information's tours, {:.1}% under count's\n- registration: {verdict}",
+            "- calibrated 90% intervals (dynamic model, back-test multiplier) cover {:.1}% of the unvisited sites' test values under information's tours, {:.1}% under count's (Gaussian intervals: {:.1}%, {:.1}%)\n- registration: {verdict}",
             100.0 * self.coverage(Planner::Information),
-            100.0 * self.coverage(Planner::Count)
+            100.0 * self.coverage(Planner::Count),
+            100.0 * self.coverage_gaussian(Planner::Information),
+            100.0 * self.coverage_gaussian(Planner::Count)
         );
         s
     }

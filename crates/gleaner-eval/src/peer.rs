@@ -264,8 +264,35 @@ pub struct Outcome {
     /// Per estimator: the error (sum over unvisited sensors of squared error, averaged over
     /// the test rows; unit²), or infinite when nothing was visited (the peer's convention).
     pub mse: Vec<(Estimator, f64)>,
-    /// Share of the unvisited sensors' test values inside the dynamic model's 90% interval.
+    /// Share of the unvisited sensors' test values inside the dynamic model's calibrated 90%
+    /// interval (`mean ± q·sd`, `q` from the back-test: [`Fitted::interval_multiplier`]).
     pub coverage90: f64,
+    /// The same for the Gaussian 90% interval (`mean ± 1.645·sd`).
+    pub coverage90_gaussian: f64,
+    /// The calibrated interval's multiplier `q` (1.645: the Gaussian one).
+    pub multiplier90: f64,
+}
+
+/// The 90% intervals' coverage of the unvisited sensors' test values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coverage {
+    /// Share inside the calibrated interval `mean ± q·sd` (NaN: nothing judged).
+    pub calibrated: f64,
+    /// Share inside the Gaussian interval `mean ± 1.645·sd`.
+    pub gaussian: f64,
+    /// The calibrated multiplier `q`.
+    pub multiplier: f64,
+}
+
+impl Default for Coverage {
+    /// Nothing judged: NaN shares, the Gaussian multiplier.
+    fn default() -> Self {
+        Self {
+            calibrated: f64::NAN,
+            gaussian: f64::NAN,
+            multiplier: gleaner_kriging::Z90,
+        }
+    }
 }
 
 /// A fitted protocol over one readings matrix (columns in a layout's label order).
@@ -276,6 +303,12 @@ pub struct Fitted {
     peer: DynamicModel,
     /// Each sensor's unshared drift variance over the test, unit² (rate × mean horizon).
     own_drift: Vec<f64>,
+    /// The dynamic model fitted on the training rows before [`Self::split`] only, for the
+    /// intervals' back-test (None when the back-test stretch or its fit is empty).
+    backtest: Option<DynamicModel>,
+    /// First row of the back-test stretch: the last `min(test rows, training rows / 2)`
+    /// training rows.
+    split: usize,
 }
 
 fn series(matrix: &Matrix, rows: Range<usize>) -> (Vec<Vec<i64>>, Vec<Vec<f64>>) {
@@ -293,6 +326,19 @@ fn series(matrix: &Matrix, rows: Range<usize>) -> (Vec<Vec<i64>>, Vec<Vec<f64>>)
     (times, values)
 }
 
+/// The fitting input over per-sensor times (s) and values.
+fn sensor_series<'a>(times: &'a [Vec<i64>], values: &'a [Vec<f64>]) -> Vec<SensorSeries<'a>> {
+    times
+        .iter()
+        .zip(values)
+        .map(|(t, v)| SensorSeries {
+            position: [0.0, 0.0],
+            times: t,
+            values: v,
+        })
+        .collect()
+}
+
 impl Fitted {
     /// Fits the dynamic model and the peer's Gaussian model on the training rows.
     ///
@@ -306,15 +352,7 @@ impl Fitted {
             )));
         }
         let (times, values) = series(&matrix, protocol.train.clone());
-        let input: Vec<SensorSeries<'_>> = times
-            .iter()
-            .zip(&values)
-            .map(|(t, v)| SensorSeries {
-                position: [0.0, 0.0],
-                times: t,
-                values: v,
-            })
-            .collect();
+        let input = sensor_series(&times, &values);
         let fit = |o: &DynamicFitOptions| {
             gleaner_kriging::fit_dynamic(&input, o).map_err(|e| EvalError::Data(e.to_string()))
         };
@@ -339,13 +377,55 @@ impl Fitted {
                 / protocol.test.len() as f64
         };
         let own_drift = rates.iter().map(|r| r * horizon.max(0.0)).collect();
+        let train = protocol.train.clone();
+        let split = train.end - protocol.test.len().min(train.len() / 2);
+        let backtest = if split > train.start && split < train.end {
+            let (times, values) = series(&matrix, train.start..split);
+            let input = sensor_series(&times, &values);
+            gleaner_kriging::fit_dynamic(&input, &protocol.fit).ok()
+        } else {
+            None
+        };
         Ok(Fitted {
             matrix,
             protocol,
             dynamic,
             peer,
             own_drift,
+            backtest,
+            split,
         })
+    }
+
+    /// The calibrated 90% interval's multiplier for `visited` (a split-conformal back-test,
+    /// [`gleaner_kriging::interval_multiplier`]): the dynamic model fitted on the training rows
+    /// before the split is run over the rest of the training rows reading only the visited
+    /// sensors, as the test will; the others' standardised errors there give `q`.
+    /// [`gleaner_kriging::Z90`] without a back-test.
+    pub fn interval_multiplier(&self, visited: &[usize]) -> f64 {
+        let Some(model) = &self.backtest else {
+            return gleaner_kriging::Z90;
+        };
+        let n = self.matrix.labels.len();
+        let mut read = vec![false; n];
+        for &v in visited {
+            if v < n {
+                read[v] = true;
+            }
+        }
+        let train = self.protocol.train.clone();
+        let (times, values) = series(&self.matrix, train.clone());
+        let input = sensor_series(&times, &values);
+        let t = &self.matrix.times;
+        let errors = gleaner_kriging::backtest_errors(
+            model,
+            &input,
+            t[train.start],
+            t[self.split],
+            t[train.end - 1],
+            &read,
+        );
+        gleaner_kriging::interval_multiplier(&errors)
     }
 
     /// The dynamic model fitted on the training rows.
@@ -425,7 +505,7 @@ impl Fitted {
     }
 
     /// Scores a choice of visited sensors with every estimator.
-    pub fn score(&self, visited: &[usize]) -> (Vec<(Estimator, f64)>, f64) {
+    pub fn score(&self, visited: &[usize]) -> (Vec<(Estimator, f64)>, Coverage) {
         let n = self.matrix.labels.len();
         let mut is_visited = vec![false; n];
         for &v in visited {
@@ -438,8 +518,9 @@ impl Fitted {
         let rows = test.len().max(1) as f64;
         if visited.is_empty() {
             let inf = Estimator::ALL.map(|e| (e, f64::INFINITY)).to_vec();
-            return (inf, f64::NAN);
+            return (inf, Coverage::default());
         }
+        let q = self.interval_multiplier(visited);
         // Last training value of each sensor.
         let mut last = vec![f64::NAN; n];
         for t in self.protocol.train.clone() {
@@ -450,9 +531,8 @@ impl Fitted {
             }
         }
         let mut sums = [0.0f64; 3];
-        let (mut inside, mut judged) = (0usize, 0usize);
+        let (mut inside, mut inside_gaussian, mut judged) = (0usize, 0usize, 0usize);
         let mut filter = self.trained_filter();
-        let z90 = 1.644_853_626_951_472_2;
         for t in test {
             let row = self.matrix.row(t);
             let readings: Vec<(usize, f64)> = visited
@@ -480,10 +560,10 @@ impl Fitted {
                 sums[1] += (levels[u].0 - truth).powi(2);
                 sums[2] += (mean - truth).powi(2);
                 judged += 1;
-                let half = z90 * (var + self.dynamic.noise()).sqrt();
-                if (truth - mean).abs() <= half {
-                    inside += 1;
-                }
+                let sd = (var + self.dynamic.noise()).sqrt();
+                let miss = (truth - mean).abs();
+                inside += usize::from(miss <= q * sd);
+                inside_gaussian += usize::from(miss <= gleaner_kriging::Z90 * sd);
             }
         }
         let mse = Estimator::ALL
@@ -491,10 +571,17 @@ impl Fitted {
             .zip(sums)
             .map(|(&e, s)| (e, s / rows))
             .collect();
-        let coverage = if judged > 0 {
-            inside as f64 / judged as f64
-        } else {
-            f64::NAN
+        let share = |k: usize| {
+            if judged > 0 {
+                k as f64 / judged as f64
+            } else {
+                f64::NAN
+            }
+        };
+        let coverage = Coverage {
+            calibrated: share(inside),
+            gaussian: share(inside_gaussian),
+            multiplier: q,
         };
         (mse, coverage)
     }
@@ -510,7 +597,7 @@ impl Fitted {
         let p = &self.protocol;
         let charged = tour.len().saturating_sub(p.free_visits) as f64;
         let energy_j = p.per_metre_j * tour_m + p.per_visit_j * charged;
-        let (mse, coverage90) = self.score(&tour);
+        let (mse, coverage) = self.score(&tour);
         Ok(Outcome {
             layout: layout.name.clone(),
             capacity_j,
@@ -519,7 +606,9 @@ impl Fitted {
             tour_m,
             energy_j,
             mse,
-            coverage90,
+            coverage90: coverage.calibrated,
+            coverage90_gaussian: coverage.gaussian,
+            multiplier90: coverage.multiplier,
         })
     }
 }
@@ -588,14 +677,14 @@ impl Report {
     /// The outcomes as CSV: one row per (layout, capacity, planner, estimator).
     pub fn outcomes_csv(&self) -> String {
         let mut s = String::from(
-            "layout,capacity_J,planner,estimator,n_selected,tour_len_m,energy_J,mse_sum_over_unvisited,coverage90,tour\n",
+            "layout,capacity_J,planner,estimator,n_selected,tour_len_m,energy_J,mse_sum_over_unvisited,coverage90,coverage90_gaussian,q90,tour\n",
         );
         for o in &self.outcomes {
             let tour: Vec<String> = o.tour.iter().map(|v| v.to_string()).collect();
             for (e, mse) in &o.mse {
                 let _ = writeln!(
                     s,
-                    "{},{},{},{},{},{:.3},{:.3},{},{:.4},{}",
+                    "{},{},{},{},{},{:.3},{:.3},{},{:.4},{:.4},{:.4},{}",
                     o.layout,
                     o.capacity_j,
                     o.planner.name(),
@@ -605,6 +694,8 @@ impl Report {
                     o.energy_j,
                     mse,
                     o.coverage90,
+                    o.coverage90_gaussian,
+                    o.multiplier90,
                     tour.join(" ")
                 );
             }
@@ -754,18 +845,28 @@ impl Report {
                 m * 1e3
             );
         }
-        let cov: Vec<f64> = self
-            .outcomes
-            .iter()
-            .filter(|o| o.planner == planner && o.coverage90.is_finite())
-            .map(|o| o.coverage90)
-            .collect();
-        if !cov.is_empty() {
-            let mut c = cov.clone();
+        for (name, pick) in [
+            (
+                "calibrated",
+                (|o: &Outcome| o.coverage90) as fn(&Outcome) -> f64,
+            ),
+            ("Gaussian", |o: &Outcome| o.coverage90_gaussian),
+        ] {
+            let mut c: Vec<f64> = self
+                .outcomes
+                .iter()
+                .filter(|o| o.planner == planner)
+                .map(pick)
+                .filter(|c| c.is_finite())
+                .collect();
+            if c.is_empty() {
+                continue;
+            }
             c.sort_by(f64::total_cmp);
             let _ = writeln!(
                 s,
-                "Coverage of the dynamic model's 90% intervals over unvisited test values: median {:.1}% (min {:.1}%, max {:.1}%) over {} runs.",
+                "Coverage of the dynamic model's {name} 90% intervals over unvisited test values: mean {:.1}%, median {:.1}% (min {:.1}%, max {:.1}%) over {} runs.",
+                100.0 * mean_coverage(&self.outcomes, planner, pick),
                 100.0 * c[c.len() / 2],
                 100.0 * c[0],
                 100.0 * c[c.len() - 1],
@@ -776,6 +877,26 @@ impl Report {
             let _ = writeln!(s, "- {n}");
         }
         s
+    }
+}
+
+/// The mean over `outcomes` of `planner` of a coverage `pick`s (finite ones only; NaN when
+/// there is none).
+pub fn mean_coverage<'a>(
+    outcomes: impl IntoIterator<Item = &'a Outcome>,
+    planner: Planner,
+    pick: fn(&Outcome) -> f64,
+) -> f64 {
+    let c: Vec<f64> = outcomes
+        .into_iter()
+        .filter(|o| o.planner == planner)
+        .map(pick)
+        .filter(|c| c.is_finite())
+        .collect();
+    if c.is_empty() {
+        f64::NAN
+    } else {
+        c.iter().sum::<f64>() / c.len() as f64
     }
 }
 
@@ -905,17 +1026,22 @@ pub fn run_windows(
                 xs.iter().sum::<f64>() / xs.len() as f64
             };
         }
-        let cs: Vec<f64> = each
-            .iter()
-            .filter_map(|r| r.outcomes.get(k))
-            .map(|x| x.coverage90)
-            .filter(|c| c.is_finite())
-            .collect();
-        o.coverage90 = if cs.is_empty() {
-            f64::NAN
-        } else {
-            cs.iter().sum::<f64>() / cs.len() as f64
+        let mean_of = |pick: fn(&Outcome) -> f64| {
+            let cs: Vec<f64> = each
+                .iter()
+                .filter_map(|r| r.outcomes.get(k))
+                .map(pick)
+                .filter(|c| c.is_finite())
+                .collect();
+            if cs.is_empty() {
+                f64::NAN
+            } else {
+                cs.iter().sum::<f64>() / cs.len() as f64
+            }
         };
+        o.coverage90 = mean_of(|x| x.coverage90);
+        o.coverage90_gaussian = mean_of(|x| x.coverage90_gaussian);
+        o.multiplier90 = mean_of(|x| x.multiplier90);
     }
     mean.notes = vec![format!(
         "{} windows of {WINDOW_TEST_DAYS} test days, each trained on the {WINDOW_TRAIN_DAYS} days before it",
@@ -1121,6 +1247,29 @@ mod tests {
             },
             ..Protocol::peer_hourly(DynamicFitOptions::default())
         }
+    }
+
+    /// The calibrated interval's multiplier comes from the back-test on the last half of the
+    /// training rows (100 rows, 2 unvisited sensors: 200 errors), scoring reports it, and the
+    /// calibrated coverage is the share of test values within `q·sd`.
+    #[test]
+    fn calibrated_intervals_take_the_backtests_multiplier() {
+        let fitted = Fitted::new(toy_matrix(), protocol()).unwrap();
+        assert_eq!(fitted.split, 100);
+        assert!(fitted.backtest.is_some());
+        let q = fitted.interval_multiplier(&[0]);
+        assert!(q.is_finite() && q > 0.0);
+        assert_ne!(q, gleaner_kriging::Z90);
+        let (_, c) = fitted.score(&[0]);
+        assert_eq!(c.multiplier, q);
+        assert!((0.0..=1.0).contains(&c.calibrated) && (0.0..=1.0).contains(&c.gaussian));
+        if q > gleaner_kriging::Z90 {
+            assert!(c.calibrated >= c.gaussian);
+        } else {
+            assert!(c.calibrated <= c.gaussian);
+        }
+        // Everything visited: no error to back-test, the Gaussian multiplier.
+        assert_eq!(fitted.interval_multiplier(&[0, 1, 2]), gleaner_kriging::Z90);
     }
 
     /// The unshared drift over the test: each sensor's fitted rate times the mean time from

@@ -27,7 +27,9 @@
 //!   dynamics of the deviations, as a Kalman filter — the Gaussian conditional of levels for
 //!   sensors not read for long, the last value and its inferred change for those read lately;
 //! - [`variance_reduction`] is the expected reduction of the field's posterior variance from
-//!   visiting cells, picked greedily on the (submodular) marginal gain.
+//!   visiting cells, picked greedily on the (submodular) marginal gain;
+//! - [`interval_multiplier`] calibrates a 90% interval from out-of-sample errors (split
+//!   conformal), [`backtest_errors`] gives the dynamic model's on a stretch of history.
 //!
 //! Units: positions are east/north metres in one local frame; times and ages seconds; values
 //! and residuals in the modality's unit (variances in its square).
@@ -48,8 +50,10 @@
 
 use thiserror::Error;
 
+mod calibration;
 mod dynamic;
 mod increments;
+pub use calibration::{BACKTEST_MIN, Z90, backtest_errors, interval_multiplier};
 pub use dynamic::{
     DynamicFitOptions, DynamicModel, FieldFilter, MAX_DYNAMIC_SENSORS, Shrinkage, fit_dynamic,
     fit_own_rates,

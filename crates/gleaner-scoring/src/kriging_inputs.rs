@@ -22,31 +22,14 @@ pub const BACKTEST_SAMPLES: usize = 160;
 /// (readings of one visit are stamped within minutes of each other).
 pub const BACKTEST_FRESH_S: i64 = 3_600;
 
-/// Fewest back-tested errors for a calibrated interval; with fewer, `Z90`·sd.
-pub const BACKTEST_MIN: usize = 20;
-
-/// The multiplier `q` of a 90% prediction interval `estimate ± q·sd` from standardised
-/// out-of-sample errors `|z|`: their split-conformal quantile, the ⌈0.9 (n + 1)⌉-th smallest
-/// (so a new error as exchangeable with them falls inside with probability ≥ 90%); [`Z90`]
-/// (the Gaussian interval) with fewer than [`BACKTEST_MIN`] errors. Non-finite errors are
-/// left out.
-pub fn interval_multiplier(errors: &[f64]) -> f64 {
-    let mut z: Vec<f64> = errors.iter().copied().filter(|z| z.is_finite()).collect();
-    if z.len() < BACKTEST_MIN {
-        return Z90;
-    }
-    z.sort_by(f64::total_cmp);
-    let rank = (0.9 * (z.len() + 1) as f64).ceil() as usize;
-    z[rank.clamp(1, z.len()) - 1]
-}
+pub use gleaner_kriging::interval_multiplier;
 
 /// Fewest candidate neighbours (the nearest read after the target) the kriging of changes
 /// weighs for each estimate, before choosing the most informative of them; at least 4 times
 /// the neighbours asked for. Bounds the cost on large networks.
 pub const CHANGE_CANDIDATES: usize = 64;
 
-/// The standard normal's 95% quantile: a 90% interval is `mean ± Z90·sd`.
-pub const Z90: f64 = 1.644_853_626_951_472_2;
+pub use gleaner_kriging::Z90;
 
 /// A sensor's latest known reading: time (s) and value, if any.
 pub(crate) type Latest = Option<(UnixSeconds, f64)>;
@@ -291,22 +274,6 @@ mod tests {
     use super::*;
 
     const DAY: i64 = 86_400;
-
-    /// The split-conformal multiplier: the ⌈0.9 (n + 1)⌉-th smallest error; the Gaussian
-    /// multiplier below [`BACKTEST_MIN`] errors; non-finite errors left out.
-    #[test]
-    fn interval_multiplier_is_the_conformal_quantile() {
-        let errors: Vec<f64> = (1..=99).rev().map(|i| f64::from(i) / 100.0).collect();
-        assert_eq!(interval_multiplier(&errors), 0.90);
-        let mut with_nan = errors.clone();
-        with_nan.push(f64::NAN);
-        assert_eq!(interval_multiplier(&with_nan), 0.90);
-        // n = 19: ⌈0.9·20⌉ = 18 → the 18th smallest; fewer than 20 → Z90.
-        assert_eq!(interval_multiplier(&errors[..19]), Z90);
-        let twenty: Vec<f64> = (1..=20).map(f64::from).collect();
-        assert_eq!(interval_multiplier(&twenty), 19.0);
-        assert_eq!(interval_multiplier(&[]), Z90);
-    }
 
     #[test]
     fn neighbour_changes_cover_the_targets_unseen_interval() {

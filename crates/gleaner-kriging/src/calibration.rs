@@ -1,0 +1,151 @@
+//! Calibrated prediction intervals: a split-conformal multiplier from out-of-sample errors.
+//!
+//! A Gaussian model's 90% interval is `mean ± 1.645·sd`; when the model is wrong about its
+//! own uncertainty (heavy-tailed changes, a drift the covariance does not carry) the interval
+//! covers more or less than 90%. The interval becomes `mean ± q·sd`, `q` the split-conformal
+//! quantile of the model's standardised errors `|z| = |v − v̂| / sd` on readings it did not
+//! see ([`interval_multiplier`]). [`backtest_errors`] produces those errors for the dynamic
+//! field model in the one-shot regime: a stretch of history in which only the sensors that
+//! will be read are read, the others estimated as they will be.
+//!
+//! Units: times seconds; values in the modality's unit; `z` dimensionless.
+
+use crate::SensorSeries;
+use crate::dynamic::DynamicModel;
+
+/// The standard normal's 95% quantile: a Gaussian 90% interval is `mean ± Z90·sd`.
+pub const Z90: f64 = 1.644_853_626_951_472_2;
+
+/// Fewest back-tested errors for a calibrated interval; with fewer, [`Z90`]·sd.
+pub const BACKTEST_MIN: usize = 20;
+
+/// The multiplier `q` of a 90% prediction interval `estimate ± q·sd` from standardised
+/// out-of-sample errors `|z|`: their split-conformal quantile, the ⌈0.9 (n + 1)⌉-th smallest
+/// (so a new error as exchangeable with them falls inside with probability ≥ 90%); [`Z90`]
+/// (the Gaussian interval) with fewer than [`BACKTEST_MIN`] errors. Non-finite errors are
+/// left out.
+pub fn interval_multiplier(errors: &[f64]) -> f64 {
+    let mut z: Vec<f64> = errors.iter().copied().filter(|z| z.is_finite()).collect();
+    if z.len() < BACKTEST_MIN {
+        return Z90;
+    }
+    z.sort_by(f64::total_cmp);
+    let rank = (0.9 * (z.len() + 1) as f64).ceil() as usize;
+    z[rank.clamp(1, z.len()) - 1]
+}
+
+/// The dynamic model's standardised errors on a back-test stretch `[split_s, end_s]`
+/// (seconds) in which only the sensors with `read[i]` are read.
+///
+/// `model` should be fitted on readings before `split_s` only (the errors are then out of
+/// sample). Its Kalman filter takes every reading of `series` in `[start_s, split_s)`, then in
+/// `[split_s, end_s]` only the readings of the sensors read; each reading of a sensor not
+/// read in that stretch is estimated at its time (after the readings stamped at the same
+/// time) and gives `|z| = |v − mean| / √(variance + reading noise)`. Sensors beyond the
+/// model's and non-finite values are skipped; a zero standard deviation gives no error.
+pub fn backtest_errors(
+    model: &DynamicModel,
+    series: &[SensorSeries<'_>],
+    start_s: i64,
+    split_s: i64,
+    end_s: i64,
+    read: &[bool],
+) -> Vec<f64> {
+    let n = model.len().min(series.len());
+    // (time, 0 = a reading the filter takes / 1 = a reading to estimate, sensor, value)
+    let mut events: Vec<(i64, u8, usize, f64)> = Vec::new();
+    for (i, s) in series.iter().enumerate().take(n) {
+        let is_read = read.get(i).copied().unwrap_or(false);
+        for (&t, &v) in s.times.iter().zip(s.values) {
+            if t < start_s || t > end_s || !v.is_finite() {
+                continue;
+            }
+            match (t < split_s, is_read) {
+                (true, _) | (false, true) => events.push((t, 0, i, v)),
+                (false, false) => events.push((t, 1, i, v)),
+            }
+        }
+    }
+    events.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let mut filter = model.filter(start_s as f64);
+    let mut errors = Vec::new();
+    for (t, kind, i, v) in events {
+        filter.advance(t as f64);
+        if kind == 0 {
+            filter.observe(i, v);
+        } else {
+            let (mean, var) = filter.estimate(i);
+            let sd = (var + model.noise()).sqrt();
+            if sd > 0.0 && mean.is_finite() {
+                errors.push((v - mean).abs() / sd);
+            }
+        }
+    }
+    errors
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interval_multiplier_is_the_conformal_quantile() {
+        let errors: Vec<f64> = (1..=99).rev().map(|i| f64::from(i) / 100.0).collect();
+        assert_eq!(interval_multiplier(&errors), 0.90);
+        let mut with_nan = errors.clone();
+        with_nan.push(f64::NAN);
+        assert_eq!(interval_multiplier(&with_nan), 0.90);
+        // n = 19: ⌈0.9·20⌉ = 18 → the 18th smallest; fewer than 20 → Z90.
+        assert_eq!(interval_multiplier(&errors[..19]), Z90);
+        let twenty: Vec<f64> = (1..=20).map(f64::from).collect();
+        assert_eq!(interval_multiplier(&twenty), 19.0);
+        assert_eq!(interval_multiplier(&[]), Z90);
+    }
+
+    /// Two sensors, perfectly known model: sensor 0 read through the back-test, sensor 1
+    /// estimated. The errors are the standardised distances of sensor 1's values from the
+    /// filter's estimate, and only back-test readings of the unread sensor give one.
+    #[test]
+    fn backtest_estimates_the_unread_sensors_after_the_split() {
+        let model =
+            DynamicModel::new(vec![0.0, 0.0], vec![1.0, 0.9, 0.9, 1.0], 0.5, 1.0, 0.01).unwrap();
+        let times: Vec<i64> = (0..10).collect();
+        let a: Vec<f64> = times.iter().map(|&t| (t as f64 * 0.7).sin()).collect();
+        let b: Vec<f64> = times
+            .iter()
+            .map(|&t| (t as f64 * 0.7).sin() + 0.3)
+            .collect();
+        let series = [
+            SensorSeries {
+                position: [0.0, 0.0],
+                times: &times,
+                values: &a,
+            },
+            SensorSeries {
+                position: [1.0, 0.0],
+                times: &times,
+                values: &b,
+            },
+        ];
+        let z = backtest_errors(&model, &series, 0, 6, 9, &[true, false]);
+        assert_eq!(z.len(), 4, "sensor 1 at t = 6, 7, 8, 9");
+        // The same by hand for the first of them.
+        let mut f = model.filter(0.0);
+        for t in 0..6usize {
+            f.advance(t as f64);
+            f.observe(0, a[t]);
+            f.observe(1, b[t]);
+        }
+        f.advance(6.0);
+        f.observe(0, a[6]);
+        let (m, v) = f.estimate(1);
+        assert!((z[0] - (b[6] - m).abs() / (v + 0.01).sqrt()).abs() < 1e-12);
+        // Everything read: nothing to back-test.
+        assert!(backtest_errors(&model, &series, 0, 6, 9, &[true, true]).is_empty());
+        // Sensors beyond the model's are ignored.
+        assert_eq!(
+            backtest_errors(&model, &series[..1], 0, 6, 9, &[false]).len(),
+            4
+        );
+    }
+}
