@@ -303,12 +303,11 @@ pub struct Fitted {
     peer: DynamicModel,
     /// Each sensor's unshared drift variance over the test, unit² (rate × mean horizon).
     own_drift: Vec<f64>,
-    /// The dynamic model fitted on the training rows before [`Self::split`] only, for the
-    /// intervals' back-test (None when the back-test stretch or its fit is empty).
-    backtest: Option<DynamicModel>,
-    /// First row of the back-test stretch: the last `min(test rows, training rows / 2)`
-    /// training rows.
-    split: usize,
+    /// The intervals' back-tests: each origin (a training row) with the dynamic model fitted
+    /// on the training rows before it only ([`backtest_origins`]).
+    backtests: Vec<(usize, DynamicModel)>,
+    /// Rows of each back-test stretch: `min(test rows, training rows / 2)`.
+    backtest_rows: usize,
 }
 
 fn series(matrix: &Matrix, rows: Range<usize>) -> (Vec<Vec<i64>>, Vec<Vec<f64>>) {
@@ -324,6 +323,24 @@ fn series(matrix: &Matrix, rows: Range<usize>) -> (Vec<Vec<i64>>, Vec<Vec<f64>>)
         }
     }
     (times, values)
+}
+
+/// Most back-test origins per fit ([`backtest_origins`]).
+pub const BACKTEST_ORIGINS: usize = 4;
+
+/// The interval back-tests' origins in `train` for stretches of `rows` rows: the last
+/// stretch of the training rows first, then each `rows` earlier, at most
+/// [`BACKTEST_ORIGINS`], every origin leaving at least half the training rows before it to
+/// fit on. Empty when `rows` is 0.
+pub fn backtest_origins(train: &Range<usize>, rows: usize) -> Vec<usize> {
+    if rows == 0 || train.len() < 2 {
+        return Vec::new();
+    }
+    let earliest = train.start + train.len() / 2;
+    (0..BACKTEST_ORIGINS)
+        .map_while(|j| train.end.checked_sub(rows * (j + 1)))
+        .take_while(|&o| o >= earliest)
+        .collect()
 }
 
 /// The fitting input over per-sensor times (s) and values.
@@ -377,35 +394,34 @@ impl Fitted {
                 / protocol.test.len() as f64
         };
         let own_drift = rates.iter().map(|r| r * horizon.max(0.0)).collect();
-        let train = protocol.train.clone();
-        let split = train.end - protocol.test.len().min(train.len() / 2);
-        let backtest = if split > train.start && split < train.end {
-            let (times, values) = series(&matrix, train.start..split);
-            let input = sensor_series(&times, &values);
-            gleaner_kriging::fit_dynamic(&input, &protocol.fit).ok()
-        } else {
-            None
-        };
+        let backtest_rows = protocol.test.len().min(protocol.train.len() / 2);
+        let backtests = backtest_origins(&protocol.train, backtest_rows)
+            .into_iter()
+            .filter_map(|origin| {
+                let (times, values) = series(&matrix, protocol.train.start..origin);
+                let input = sensor_series(&times, &values);
+                let model = gleaner_kriging::fit_dynamic(&input, &protocol.fit).ok()?;
+                Some((origin, model))
+            })
+            .collect();
         Ok(Fitted {
             matrix,
             protocol,
             dynamic,
             peer,
             own_drift,
-            backtest,
-            split,
+            backtests,
+            backtest_rows,
         })
     }
 
-    /// The calibrated 90% interval's multiplier for `visited` (a split-conformal back-test,
-    /// [`gleaner_kriging::interval_multiplier`]): the dynamic model fitted on the training rows
-    /// before the split is run over the rest of the training rows reading only the visited
-    /// sensors, as the test will; the others' standardised errors there give `q`.
-    /// [`gleaner_kriging::Z90`] without a back-test.
+    /// The calibrated 90% interval's multiplier for `visited`: the split-conformal quantile
+    /// ([`gleaner_kriging::interval_multiplier`]) of the standardised errors of back-tests on
+    /// the training rows — at each origin the dynamic model fitted on the rows before it is
+    /// run over the next rows reading only the visited sensors, as the test will
+    /// ([`gleaner_kriging::backtest_errors`]) — and never below the Gaussian
+    /// [`gleaner_kriging::Z90`] (a back-test can only widen the model's own interval).
     pub fn interval_multiplier(&self, visited: &[usize]) -> f64 {
-        let Some(model) = &self.backtest else {
-            return gleaner_kriging::Z90;
-        };
         let n = self.matrix.labels.len();
         let mut read = vec![false; n];
         for &v in visited {
@@ -417,15 +433,19 @@ impl Fitted {
         let (times, values) = series(&self.matrix, train.clone());
         let input = sensor_series(&times, &values);
         let t = &self.matrix.times;
-        let errors = gleaner_kriging::backtest_errors(
-            model,
-            &input,
-            t[train.start],
-            t[self.split],
-            t[train.end - 1],
-            &read,
-        );
-        gleaner_kriging::interval_multiplier(&errors)
+        let mut errors = Vec::new();
+        for (origin, model) in &self.backtests {
+            let last = (origin + self.backtest_rows).min(train.end) - 1;
+            errors.extend(gleaner_kriging::backtest_errors(
+                model,
+                &input,
+                t[train.start],
+                t[*origin],
+                t[last],
+                &read,
+            ));
+        }
+        gleaner_kriging::interval_multiplier(&errors).max(gleaner_kriging::Z90)
     }
 
     /// The dynamic model fitted on the training rows.
@@ -1255,21 +1275,28 @@ mod tests {
     #[test]
     fn calibrated_intervals_take_the_backtests_multiplier() {
         let fitted = Fitted::new(toy_matrix(), protocol()).unwrap();
-        assert_eq!(fitted.split, 100);
-        assert!(fitted.backtest.is_some());
+        assert_eq!(fitted.backtest_rows, 100);
+        let origins: Vec<usize> = fitted.backtests.iter().map(|b| b.0).collect();
+        assert_eq!(origins, vec![100]);
         let q = fitted.interval_multiplier(&[0]);
-        assert!(q.is_finite() && q > 0.0);
-        assert_ne!(q, gleaner_kriging::Z90);
+        assert!(q.is_finite() && q >= gleaner_kriging::Z90);
         let (_, c) = fitted.score(&[0]);
         assert_eq!(c.multiplier, q);
         assert!((0.0..=1.0).contains(&c.calibrated) && (0.0..=1.0).contains(&c.gaussian));
-        if q > gleaner_kriging::Z90 {
-            assert!(c.calibrated >= c.gaussian);
-        } else {
-            assert!(c.calibrated <= c.gaussian);
-        }
+        assert!(c.calibrated >= c.gaussian);
         // Everything visited: no error to back-test, the Gaussian multiplier.
         assert_eq!(fitted.interval_multiplier(&[0, 1, 2]), gleaner_kriging::Z90);
+    }
+
+    /// Origins: the last stretch first, each a stretch earlier, at most four, none with less
+    /// than half the training rows before it.
+    #[test]
+    fn backtest_origins_step_back_by_a_stretch() {
+        assert_eq!(backtest_origins(&(0..365), 21), vec![344, 323, 302, 281]);
+        assert_eq!(backtest_origins(&(0..1001), 500), vec![501]);
+        assert_eq!(backtest_origins(&(10..110), 30), vec![80]);
+        assert_eq!(backtest_origins(&(0..10), 0), Vec::<usize>::new());
+        assert_eq!(backtest_origins(&(0..1), 1), Vec::<usize>::new());
     }
 
     /// The unshared drift over the test: each sensor's fitted rate times the mean time from
