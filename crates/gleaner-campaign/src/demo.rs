@@ -2,7 +2,7 @@
 //! exploration sorties, each flown in simulation and recorded → adaptive missions, one a day,
 //! each planned, exported (its files under `missions/<id>`), flown and recorded → a
 //! rescoring. It returns what happened as typed data, the missions' exports at the moment
-//! they were planned or flown, and [`story`] tells it as text.
+//! they were planned or flown, and [`story::story`] tells it as text.
 
 use std::path::{Path, PathBuf};
 
@@ -13,10 +13,9 @@ use gleaner_app::{
 use gleaner_field::UnixSeconds;
 
 use crate::datasets::{farm_config, write_farm};
-
-mod story;
 use crate::{Error, Result, Truth, fly};
-pub use story::story;
+
+pub mod story;
 
 /// Adaptive missions flown after the exploration.
 pub const MISSIONS: i64 = 5;
@@ -206,10 +205,7 @@ fn write_mission_files(export: &MissionExport, dir: &Path) -> Result<Vec<PathBuf
 
 /// Writes the exploration overview of `project`'s sorties into `dir`; returns its paths.
 fn write_overview(project: &Project<AnyStore>, dir: &Path) -> Result<Vec<PathBuf>> {
-    let sorties: Vec<_> = app::exploration_sorties(project)?
-        .iter()
-        .map(|(m, via)| gleaner_wire::convert::routed_mission(m, via))
-        .collect();
+    let sorties = gleaner_wire::convert::routed_missions(&app::exploration_sorties(project)?);
     let field = gleaner_wire::convert::field(&app::field_view(project)?);
     let set = gleaner_render::files::exploration_files(&field, &sorties)?;
     Ok(app::write_files(dir, &set.files)?)

@@ -47,5 +47,5 @@ pub fn run(args: &DemoArgs) -> Result<String> {
         data: args.data.clone(),
     };
     let d = demo::demo(&request, clock_now(), &Terminal::default())?;
-    Ok(demo::story(&d, &request))
+    Ok(demo::story::story(&d, &request))
 }

@@ -75,10 +75,7 @@ pub fn map_exploration(args: MapExplorationArgs) -> Result<()> {
     let dir = args
         .out
         .unwrap_or_else(|| args.project.dir.join("missions"));
-    let sorties: Vec<_> = gleaner_app::exploration_sorties(&p)?
-        .iter()
-        .map(|(m, via)| convert::routed_mission(m, via))
-        .collect();
+    let sorties = convert::routed_missions(&gleaner_app::exploration_sorties(&p)?);
     anyhow::ensure!(
         !sorties.is_empty(),
         "no exploration sorties in this project (run `gleaner explore`)"
