@@ -20,6 +20,7 @@
 //! | [`export()`] | a mission | nothing (checks it is safe to fly) |
 //! | [`record_flight`] | a mission, visited cells, readings files | readings, collections, visits, summaries, the persisted utility state |
 //! | [`migrate()`] | every table of one store | every table of another, empty one (SQLite <-> PostgreSQL) |
+//! | [`migrate_project`] | a project's database | [`migrate()`] into another; with `switch` the `database` setting |
 //!
 //! The persisted utility state (the statistics behind A and R and the condition model behind
 //! U, one store blob kept up to date inside the ingest and record transactions) lets
@@ -32,7 +33,8 @@
 //! simulator (`gleaner-campaign`) replays a dataset as a campaign of missions per strategy
 //! through these same use cases and the few [`shortcuts`] a long replay needs.
 //!
-//! Read models: [`field_view`] (the cell table), [`missions`], [`mission`], [`cell_detail`]
+//! Read models: [`field_view`] (the cell table), [`missions`], [`mission`],
+//! [`exploration_sorties`] (with their routes around no-fly zones), [`cell_detail`]
 //! (one cell's weighted terms, rank and recent series).
 //!
 //! Units: times are seconds since 1970-01-01T00:00:00Z (UTC); positions WGS84 ([`LatLon`],
@@ -68,7 +70,9 @@ pub use init::{
     DEFAULT_CELL_SIZE_M, InitOutcome, InitRequest, init, init_store, init_store_with,
     read_sensors_file, relative_to,
 };
-pub use migrate::{MigrateOutcome, migrate};
+pub use migrate::{
+    MigrateOutcome, MigrateProjectRequest, ProjectMigration, migrate, migrate_project,
+};
 pub use missions::{MissionPage, cancel_mission, delete_mission, missions_page};
 pub use plan::{
     Baseline, ExtraSortie, MAX_SORTIES, PlanRequest, PlannedMission, energy_model, flight_profile,
@@ -78,8 +82,9 @@ pub use progress::{Progress, Silent};
 pub use record::{RecordOutcome, RecordRequest, record_flight};
 pub use replan::{REPLAN_ITERATIONS, REPLAN_TIME_LIMIT_S, Replan, ReplanRequest, replan};
 pub use view::{
-    CellView, FieldView, MissionExport, cell_reading_counts, check_flyable, export,
-    export_energy_model, field_view, mission, missions, newest_reading,
+    CellView, FieldView, MissionExport, RoutedMission, cell_reading_counts, check_flyable,
+    exploration_sorties, export, export_energy_model, field_view, mission, missions,
+    newest_reading, write_files,
 };
 
 // The scoring machinery (`gleaner-scoring`): the project, its settings and errors, what is

@@ -1,11 +1,13 @@
 //! Copying a project's data between stores (SQLite file <-> PostgreSQL project), losslessly:
 //! every row the [`StoreRead`] interface can see arrives unchanged, mission ids included.
 
+use std::path::PathBuf;
+
 use gleaner_store::{ConflictPolicy, StoreError};
 
 use crate::progress::Progress;
 use crate::{Store, StoreRead, StoreWrite};
-use gleaner_scoring::{AppError, Result};
+use gleaner_scoring::{AppError, Project, Result, database};
 
 /// What a copy moved.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -24,6 +26,65 @@ pub struct MigrateOutcome {
     pub missions: usize,
     /// Settings and opaque values (e.g. the persisted utility state) copied.
     pub config_and_blobs: usize,
+}
+
+/// What [`migrate_project`] copies from where to where.
+#[derive(Debug, Clone, Default)]
+pub struct MigrateProjectRequest {
+    /// The project directory.
+    pub dir: PathBuf,
+    /// The source database instead of the project's `database` setting (an SQLite file
+    /// relative to `dir`, or a `postgres://` URL).
+    pub database: Option<String>,
+    /// The target database, as `database`; it must be empty (it is created when missing).
+    pub to: String,
+    /// Afterwards, point the project's `database` setting at the target.
+    pub switch: bool,
+}
+
+/// A project's data copied into another database.
+#[derive(Debug, Clone)]
+pub struct ProjectMigration {
+    /// What was copied.
+    pub outcome: MigrateOutcome,
+    /// The source database, as text (no password).
+    pub from: String,
+    /// The target database, as text (no password).
+    pub to: String,
+    /// Whether the project's `database` setting now names the target.
+    pub switched: bool,
+}
+
+/// Copies the project in `r.dir` from its database (or `r.database`) into `r.to` with
+/// [`migrate`]; with `r.switch` the project's settings then name the target. A target that is
+/// the source itself is refused.
+pub fn migrate_project(
+    r: &MigrateProjectRequest,
+    progress: &dyn Progress,
+) -> Result<ProjectMigration> {
+    let source = Project::open_with(&r.dir, r.database.as_deref())?;
+    let mut settings = source.settings().clone();
+    let target = database(&r.dir, &settings, Some(&r.to))?;
+    let from = database(&r.dir, &settings, r.database.as_deref())?;
+    if target == from {
+        return Err(AppError::Invalid(format!(
+            "the target {target} is the project's own database"
+        )));
+    }
+    let mut store = target
+        .open()
+        .map_err(|e| AppError::Invalid(format!("opening the target {target}: {e}")))?;
+    let outcome = migrate(source.store(), &mut store, progress)?;
+    if r.switch {
+        settings.project.database = PathBuf::from(&r.to);
+        settings.save(&r.dir)?;
+    }
+    Ok(ProjectMigration {
+        outcome,
+        from: from.to_string(),
+        to: target.to_string(),
+        switched: r.switch,
+    })
 }
 
 /// Copies everything in `from` into `to`, which must be empty (no sensors, readings or

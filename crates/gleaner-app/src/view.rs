@@ -127,6 +127,40 @@ pub fn mission<S: Store>(project: &Project<S>, id: MissionId) -> Result<MissionR
         })
 }
 
+/// A stored mission and the turn points of its legs around the no-fly zones (WGS84; one list
+/// per stop's leg, then the return leg's; empty without zones), for its map.
+pub type RoutedMission = (MissionRecord, Vec<Vec<LatLon>>);
+
+/// Every exploration sortie of the project, oldest first, with its turn points: the
+/// exploration map's routes.
+pub fn exploration_sorties<S: Store>(project: &Project<S>) -> Result<Vec<RoutedMission>> {
+    Ok(missions(project)?
+        .into_iter()
+        .filter(|m| m.mission.kind == gleaner_store::MissionKind::Exploration)
+        .map(|m| {
+            let via = crate::airspace::stored_via(project, &m);
+            (m, via)
+        })
+        .collect())
+}
+
+/// Writes `files` (name, bytes) into `dir`, created if missing: an adapter's file set of an
+/// export (flight files, document, maps). Returns the paths written, in order.
+pub fn write_files(
+    dir: &std::path::Path,
+    files: &[(&str, Vec<u8>)],
+) -> Result<Vec<std::path::PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| AppError::io(dir, format!("cannot create: {e}")))?;
+    let mut written = Vec::with_capacity(files.len());
+    for (name, bytes) in files {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes)
+            .map_err(|e| AppError::io(&path, format!("cannot write: {e}")))?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
 /// A mission with everything its files and maps need.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MissionExport {

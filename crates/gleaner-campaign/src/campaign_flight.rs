@@ -282,6 +282,34 @@ impl WindSource {
     }
 }
 
+impl WindSource {
+    /// The source `simulate` names: the observed days of `csv` ([`read_wind_csv`]), else
+    /// `text` ([`WindSource::parse`]), else still air.
+    ///
+    /// # Errors
+    /// Those of [`read_wind_csv`] and [`WindSource::parse`].
+    pub fn choose(text: Option<&str>, csv: Option<&Path>) -> Result<Self> {
+        Ok(match (text, csv) {
+            (_, Some(path)) => Self::Observed {
+                path: path.to_path_buf(),
+                days: read_wind_csv(path)?,
+            },
+            (Some(text), None) => Self::parse(text)?,
+            (None, None) => Self::Still,
+        })
+    }
+
+    /// The forecast error's standard deviation when none is given, m/s: 0 in still air, else
+    /// [`DEFAULT_GUST_SD_MPS`].
+    pub fn default_gust_sd_mps(&self) -> f64 {
+        if *self == Self::Still {
+            0.0
+        } else {
+            DEFAULT_GUST_SD_MPS
+        }
+    }
+}
+
 /// Parses a planning-margin quantile as `simulate --margin-quantile` takes it: a number in
 /// [0.5, 0.999], or `settings` (`None`: the project's `[flight] wind_margin_mps`).
 ///

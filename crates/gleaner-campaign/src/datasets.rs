@@ -3,16 +3,11 @@
 //! generated from its seed and written as small files; a project's own record is read as is.
 //! The adapters choose a dataset and the replay options; everything else happens here.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use gleaner_app::{self as app, Format, IngestRequest, InitRequest, Project};
 use gleaner_field::UnixSeconds;
-use gleaner_synth::{
-    FaultRates, SynthConfig, SynthFarm, generate, write_faults_csv, write_ground_truth_csv,
-    write_readings_csv, write_sensors_csv,
-};
+use gleaner_synth::{FaultRates, SynthConfig, SynthFarm, generate};
 
 use crate::campaign::{DatasetParts, Replay, ReplayOptions, TruthEvent, replay};
 use crate::{Error, ProjectRecord, Result, Truth};
@@ -196,18 +191,6 @@ pub fn preset_replay(preset: Preset, data: &Path, setup: &Setup<'_>) -> Result<R
     }
 }
 
-/// Writes one file of a synthetic farm.
-fn write_file(
-    path: &Path,
-    f: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
-) -> Result<()> {
-    let file = File::create(path).map_err(|e| Error::file(path, format!("cannot create: {e}")))?;
-    let mut w = BufWriter::with_capacity(1 << 20, file);
-    f(&mut w)
-        .and_then(|()| w.flush())
-        .map_err(|e| Error::file(path, format!("cannot write: {e}")))
-}
-
 /// A CAF-like farm's settings: daily readings, VW at 30/60/90 cm and T at 30 cm, the default
 /// faults, a 500 m correlation length.
 pub(crate) fn farm_config(
@@ -240,15 +223,9 @@ pub(crate) fn write_farm(
 ) -> Result<(SynthFarm, PathBuf, PathBuf)> {
     let synth = generate(config)
         .map_err(|e| app::AppError::Invalid(format!("invalid synthetic farm settings: {e}")))?;
-    std::fs::create_dir_all(dir).map_err(|e| Error::file(dir, format!("cannot create: {e}")))?;
-    let sensors = dir.join("sensors.csv");
-    let readings = dir.join("readings.csv");
-    write_file(&sensors, |w| write_sensors_csv(&synth, w))?;
-    write_file(&readings, |w| write_readings_csv(&synth, w))?;
-    write_file(&dir.join("ground_truth.csv"), |w| {
-        write_ground_truth_csv(&synth, w)
-    })?;
-    write_file(&dir.join("faults.csv"), |w| write_faults_csv(&synth, w))?;
+    let files = gleaner_synth::write_farm_files(&synth, dir)
+        .map_err(|e| Error::file(&e.path, format!("cannot {}: {}", e.what, e.source)))?;
+    let (sensors, readings) = (files.sensors, files.readings);
     Ok((synth, sensors, readings))
 }
 

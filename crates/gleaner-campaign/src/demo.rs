@@ -1,8 +1,8 @@
 //! The demo's lifecycle (`gleaner demo`): a synthetic farm or the CAF network → `init` →
 //! exploration sorties, each flown in simulation and recorded → adaptive missions, one a day,
-//! each planned, flown and recorded → a rescoring. It returns what happened as typed data,
-//! the missions' exports at the moment they were planned or flown; the adapter writes their
-//! files and prints.
+//! each planned, exported (its files under `missions/<id>`), flown and recorded → a
+//! rescoring. It returns what happened as typed data, the missions' exports at the moment
+//! they were planned or flown, and [`story::story`] tells it as text.
 
 use std::path::{Path, PathBuf};
 
@@ -14,6 +14,8 @@ use gleaner_field::UnixSeconds;
 
 use crate::datasets::{farm_config, write_farm};
 use crate::{Error, Result, Truth, fly};
+
+pub mod story;
 
 /// Adaptive missions flown after the exploration.
 pub const MISSIONS: i64 = 5;
@@ -56,12 +58,15 @@ pub enum DemoFarm {
 }
 
 /// One flown mission: its id, its export (before the flight for an adaptive mission, after
-/// it for an exploration sortie) and what the flight brought back.
+/// it for an exploration sortie), its files and what the flight brought back.
 pub struct DemoFlight {
     /// The mission.
     pub id: MissionId,
     /// The mission as exported.
     pub export: MissionExport,
+    /// Its files as written (`gleaner_render::files::mission_files`), under
+    /// `missions/<id>` of the demo's directory.
+    pub files: Vec<PathBuf>,
     /// The recorded flight.
     pub record: RecordOutcome,
 }
@@ -86,6 +91,8 @@ pub struct Demo {
     /// scoring is the one before it), the scoring after the campaign and that mission as
     /// stored.
     pub rescored: Option<(usize, Scoring, MissionRecord)>,
+    /// The exploration overview's files (`missions/exploration.svg`, `.png`).
+    pub overview: Vec<PathBuf>,
 }
 
 /// Removes what an earlier demo run wrote in `dir` (and nothing else).
@@ -187,6 +194,23 @@ fn farm(
     }
 }
 
+/// Writes the files of `export` into `dir/<id>`; returns their paths.
+fn write_mission_files(export: &MissionExport, dir: &Path) -> Result<Vec<PathBuf>> {
+    let doc = gleaner_wire::convert::export_mission(export);
+    let field = gleaner_wire::convert::field(&export.field);
+    let set = gleaner_render::files::mission_files(&field, &doc, Default::default())?;
+    let dir = dir.join(export.mission.id.to_string());
+    Ok(app::write_files(&dir, &set.files)?)
+}
+
+/// Writes the exploration overview of `project`'s sorties into `dir`; returns its paths.
+fn write_overview(project: &Project<AnyStore>, dir: &Path) -> Result<Vec<PathBuf>> {
+    let sorties = gleaner_wire::convert::routed_missions(&app::exploration_sorties(project)?);
+    let field = gleaner_wire::convert::field(&app::field_view(project)?);
+    let set = gleaner_render::files::exploration_files(&field, &sorties)?;
+    Ok(app::write_files(dir, &set.files)?)
+}
+
 /// A stored mission's id, or the error that it was not stored.
 fn stored(id: Option<MissionId>) -> Result<MissionId> {
     id.ok_or_else(|| app::AppError::Invalid("the demo's mission was not stored".into()).into())
@@ -212,12 +236,19 @@ pub fn demo(
         },
         clock_now,
     )?;
+    let missions_dir = request.dir.join("missions");
     let mut sorties = Vec::new();
     for (id, _) in &exploration.sorties {
         let id = stored(*id)?;
         let record = fly(&mut project, &truth, id, t0, clock_now)?;
         let export = app::export(&project, id)?;
-        sorties.push(DemoFlight { id, export, record });
+        let files = write_mission_files(&export, &missions_dir)?;
+        sorties.push(DemoFlight {
+            id,
+            export,
+            files,
+            record,
+        });
     }
     // Adaptive missions, one a day.
     let mut missions = Vec::new();
@@ -240,8 +271,15 @@ pub fn demo(
             first = Some((missions.len(), id));
         }
         let export = app::export(&project, id)?;
+        let files = write_mission_files(&export, &missions_dir)?;
         let record = fly(&mut project, &truth, id, t, clock_now)?;
-        missions.push((planned, DemoFlight { id, export, record }));
+        let flight = DemoFlight {
+            id,
+            export,
+            files,
+            record,
+        };
+        missions.push((planned, flight));
     }
     // The first mission's cells after their collection: fresh again.
     let rescored = match first {
@@ -257,7 +295,9 @@ pub fn demo(
         }
         None => None,
     };
+    let overview = write_overview(&project, &missions_dir)?;
     Ok(Demo {
+        overview,
         project,
         farm,
         init,

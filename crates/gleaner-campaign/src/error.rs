@@ -33,6 +33,9 @@ pub enum Error {
     /// A chart of the report could not be drawn.
     #[error(transparent)]
     Render(#[from] gleaner_render::RenderError),
+    /// A mission's files could not be made (the demo's exports).
+    #[error(transparent)]
+    Files(#[from] gleaner_render::FileError),
     /// Formatting the report failed (writing into memory: never in practice).
     #[error("formatting the report failed")]
     Format(#[from] std::fmt::Error),

@@ -10,6 +10,8 @@
 //! - [`simulate`]: [`Truth`] (what is available when), [`fly`] (a mission flown in
 //!   simulation, recorded like a real flight).
 //! - [`replay`]: [`ProjectRecord`], a project's own record as a dataset.
+//! - [`simulation`]: `gleaner simulate`'s run: a dataset's campaigns, their results and
+//!   report written into one directory.
 //! - [`results`]: the results format (CSV files a simulation writes and the report reads).
 //! - [`report`]: the campaign report, Markdown with SVG charts.
 //! - [`doc`]: a campaign's summary as the `gleaner.campaign` document.
@@ -30,6 +32,7 @@ pub mod replay;
 pub mod report;
 pub mod results;
 pub mod simulate;
+pub mod simulation;
 
 pub use error::{Error, Result};
 

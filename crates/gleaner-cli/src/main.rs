@@ -368,16 +368,8 @@ fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
     Ok((lat, lon))
 }
 
-fn parse_energy_preset(s: &str) -> Result<app::EnergyPreset, String> {
-    s.parse().map_err(|e: app::AppError| e.to_string())
-}
-
 fn parse_wind(s: &str) -> Result<app::Wind, String> {
     app::wind::parse(s).map_err(|e| e.to_string())
-}
-
-fn parse_objective(s: &str) -> Result<app::Objective, String> {
-    s.parse().map_err(|e: app::AppError| e.to_string())
 }
 
 pub(crate) fn parse_time(s: &str) -> Result<i64, String> {
@@ -412,7 +404,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench(BenchCommand::Op(args)) => out(&bench::run(&args)?.1),
         Command::Synth(args) => outln(&synth::run(&args)?),
         Command::Demo(args) => out(&demo::run(&args)?),
-        Command::Migrate(args) => outln(&migrate::run(&args, &progress)?),
+        Command::Migrate(args) => outln(&migrate::run(args, &progress)?),
         Command::Serve(args) => serve::run(args),
         Command::FarmToken(args) => serve::farm_token(args),
         Command::Simulate(args) => {

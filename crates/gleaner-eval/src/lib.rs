@@ -14,12 +14,17 @@
 //! hold-out no setting was chosen on: windows at the peer's horizon, capacities scaled to
 //! the layout.
 //!
+//! [`run_peer`] runs either from the shared data directory and writes its files.
+//!
 //! Units: positions metres, energies J, times seconds, values in the modality's unit
 //! (errors in its square).
 #![deny(missing_docs)]
 
 pub mod hubbard;
 pub mod peer;
+mod run;
+
+pub use run::{PeerRun, run_peer};
 
 use std::path::PathBuf;
 
@@ -51,6 +56,14 @@ pub enum EvalError {
     /// The readings could not be read.
     #[error(transparent)]
     Ingest(#[from] gleaner_ingest::IngestError),
+    /// A protocol's data could not be loaded from the shared data directory `dir`.
+    #[error("{} (set GLEANER_DATA_DIR): {source}", dir.display())]
+    Load {
+        /// The directory.
+        dir: PathBuf,
+        /// Why.
+        source: Box<EvalError>,
+    },
     /// The data are not enough for the protocol.
     #[error("{0}")]
     Data(String),

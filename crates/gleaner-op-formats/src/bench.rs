@@ -126,6 +126,28 @@ pub fn load_instance(path: &Path) -> Result<OpInstance, FormatError> {
     Ok(inst)
 }
 
+/// The benchmark files `path` names: the file itself, or every instance under a directory
+/// ([`find_instances`]); with `max_n`, only instances of at most that many nodes.
+pub fn benchmark_files(path: &Path, max_n: Option<usize>) -> Result<Vec<PathBuf>, FormatError> {
+    let files = if path.is_dir() {
+        find_instances(path)?
+    } else if path.exists() {
+        vec![path.to_path_buf()]
+    } else {
+        return Err(FormatError::NotFound {
+            file: path.to_path_buf(),
+        });
+    };
+    let Some(max) = max_n else { return Ok(files) };
+    let mut kept = Vec::new();
+    for f in files {
+        if load_instance(&f)?.n <= max {
+            kept.push(f);
+        }
+    }
+    Ok(kept)
+}
+
 /// All benchmark instance files under `dir` (recursively, sorted): `*.oplib` files and the
 /// classic `*.txt` files (except `OP_format.txt`).
 pub fn find_instances(dir: &Path) -> Result<Vec<PathBuf>, FormatError> {

@@ -16,6 +16,12 @@ pub enum FormatError {
         #[source]
         source: std::io::Error,
     },
+    /// A benchmark path that does not exist.
+    #[error("{}: no such file or directory", file.display())]
+    NotFound {
+        /// The path.
+        file: PathBuf,
+    },
     /// A field has a bad value.
     #[error("{file}:{line}: bad {field}: {message}")]
     Parse {

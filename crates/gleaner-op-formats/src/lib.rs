@@ -48,9 +48,9 @@ mod instance;
 mod parse;
 
 pub use bench::{
-    BenchRow, BenchSummary, RouteRecord, find_instances, format_csv, format_table, load_instance,
-    parse_classic_targets, parse_oplib_best, parse_routes, run_benchmark, run_instance, summarize,
-    write_routes,
+    BenchRow, BenchSummary, RouteRecord, benchmark_files, find_instances, format_csv, format_table,
+    load_instance, parse_classic_targets, parse_oplib_best, parse_routes, run_benchmark,
+    run_instance, summarize, write_routes,
 };
 pub use error::FormatError;
 pub use instance::{DistanceRule, OpFormat, OpInstance, RouteCheck};

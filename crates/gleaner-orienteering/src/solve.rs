@@ -126,6 +126,24 @@ pub enum SolverKind {
     Exact,
 }
 
+impl std::str::FromStr for SolverKind {
+    type Err = String;
+
+    /// `default`, `greedy` or `exact`; anything else is refused, quoting it.
+    fn from_str(name: &str) -> Result<Self, String> {
+        Ok(match name {
+            "default" => Self::Default,
+            "greedy" => Self::Greedy,
+            "exact" => Self::Exact,
+            other => {
+                return Err(format!(
+                    "unknown solver {other:?}: expected default, greedy or exact"
+                ));
+            }
+        })
+    }
+}
+
 impl SolverKind {
     /// The solver's name as written in outputs: `greedy`, `default`, `exact`.
     pub fn name(self) -> &'static str {

@@ -12,6 +12,8 @@
 //!   estimated, the field's outline, scale bar and north arrow.
 //! - [`line_chart_svg`] and [`interval_chart_svg`]: campaign report charts (a metric per
 //!   strategy over time or budget; means with 95% intervals).
+//! - [`files`]: a mission's file set (flight files, document, map) and the maps as files'
+//!   bytes, for every adapter.
 //! - [`svg_to_png`]: rasterises either with resvg, loading only the bundled DejaVu Sans
 //!   ([`FONT_FAMILY`]), so output is the same on every machine; [`outline_text`] turns the
 //!   text of a figure into outlines of that font for a vector file that needs no fonts.
@@ -39,6 +41,7 @@ mod colour;
 pub mod example;
 mod exploration;
 mod figure;
+pub mod files;
 mod font;
 mod frame;
 mod png;
@@ -51,6 +54,7 @@ pub use chart::{
 };
 pub use exploration::exploration_map_svg;
 pub use figure::mission_figure_svg;
+pub use files::{FileError, FileSet, ImageFormat};
 pub use font::FONT_FAMILY;
 pub use png::{MAX_PNG_SIDE_PX, outline_text, parse_svg, svg_to_png};
 pub use reconstruction::reconstruction_map_svg;

@@ -6,7 +6,8 @@
 //!   `/api/v1/openapi.json`, and the dashboard ([`dashboard`]: HTML, CSS and JavaScript
 //!   embedded in the binary; no CDN, no third-party code, works offline).
 //! - [`serve`] runs it on a bound listener until a shutdown future completes (ctrl-c in the
-//!   CLI), finishing the requests in flight.
+//!   CLI), finishing the requests in flight; [`start`] is `gleaner serve`'s start-up (the
+//!   write token, malloc settings, log, runtime, until ctrl-c or SIGTERM) and `farm-token`.
 //! - Every use case runs on a blocking thread over a small pool of open projects
 //!   ([`AppState`]); planning and exploration searches queue one at a time, so reads keep
 //!   being answered while a mission is planned. Writes through the server run one at a time;
@@ -42,6 +43,7 @@ pub mod dashboard;
 mod error;
 pub mod farms;
 pub mod handlers;
+pub mod start;
 pub mod state;
 
 mod security;

@@ -185,6 +185,7 @@ pub use network::{
     network_stats, seasonal_rise_fractions, z_exceedance_fraction,
 };
 pub use write::{
-    FAULTS_HEADER, GROUND_TRUTH_HEADER, READINGS_HEADER, SENSORS_HEADER, push_fixed,
-    write_faults_csv, write_ground_truth_csv, write_readings_csv, write_sensors_csv,
+    FAULTS_HEADER, FarmFiles, GROUND_TRUTH_HEADER, READINGS_HEADER, SENSORS_HEADER, WriteError,
+    push_fixed, write_farm_files, write_faults_csv, write_ground_truth_csv, write_readings_csv,
+    write_sensors_csv,
 };

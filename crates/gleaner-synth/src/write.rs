@@ -222,6 +222,67 @@ pub fn write_faults_csv(farm: &SynthFarm, out: &mut impl Write) -> io::Result<()
     out.write_all(&buf)
 }
 
+/// The four files of a farm in its directory.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FarmFiles {
+    /// `sensors.csv`: `id,lat,lon,elevation_m`.
+    pub sensors: std::path::PathBuf,
+    /// `readings.csv`: the long readings format.
+    pub readings: std::path::PathBuf,
+    /// `ground_truth.csv`: the localised events.
+    pub ground_truth: std::path::PathBuf,
+    /// `faults.csv`: injected sensor faults.
+    pub faults: std::path::PathBuf,
+}
+
+impl FarmFiles {
+    /// The files' names inside `dir`.
+    pub fn in_dir(dir: &std::path::Path) -> Self {
+        Self {
+            sensors: dir.join("sensors.csv"),
+            readings: dir.join("readings.csv"),
+            ground_truth: dir.join("ground_truth.csv"),
+            faults: dir.join("faults.csv"),
+        }
+    }
+}
+
+/// A farm's file that could not be written: `{path}: cannot {create|write}: {OS message}`.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: cannot {what}: {source}", path.display())]
+pub struct WriteError {
+    /// The file or directory.
+    pub path: std::path::PathBuf,
+    /// `create` or `write`.
+    pub what: &'static str,
+    /// The OS error.
+    pub source: io::Error,
+}
+
+/// Creates `dir` (if missing) and writes the farm's four files into it ([`FarmFiles`]), each
+/// through a 1 MiB buffer.
+pub fn write_farm_files(farm: &SynthFarm, dir: &std::path::Path) -> Result<FarmFiles, WriteError> {
+    let fail = |path: &std::path::Path, what: &'static str| {
+        let path = path.to_path_buf();
+        move |source| WriteError { path, what, source }
+    };
+    std::fs::create_dir_all(dir).map_err(fail(dir, "create"))?;
+    let files = FarmFiles::in_dir(dir);
+    let write = |path: &std::path::Path,
+                 f: &dyn Fn(&mut io::BufWriter<std::fs::File>) -> io::Result<()>| {
+        let file = std::fs::File::create(path).map_err(fail(path, "create"))?;
+        let mut w = io::BufWriter::with_capacity(1 << 20, file);
+        f(&mut w)
+            .and_then(|()| w.flush())
+            .map_err(fail(path, "write"))
+    };
+    write(&files.sensors, &|w| write_sensors_csv(farm, w))?;
+    write(&files.readings, &|w| write_readings_csv(farm, w))?;
+    write(&files.ground_truth, &|w| write_ground_truth_csv(farm, w))?;
+    write(&files.faults, &|w| write_faults_csv(farm, w))?;
+    Ok(files)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

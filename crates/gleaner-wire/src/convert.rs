@@ -138,6 +138,25 @@ pub fn stored_mission(m: &MissionRecord) -> MissionDoc {
     mission_doc(Some(m.id), &m.mission, status, m.flown_at)
 }
 
+/// The documents of missions with their turn points ([`routed_mission`] each), e.g. the
+/// app's `exploration_sorties` for the exploration map.
+pub fn routed_missions(
+    missions: &[(MissionRecord, Vec<Vec<gleaner_field::LatLon>>)],
+) -> Vec<MissionDoc> {
+    missions
+        .iter()
+        .map(|(m, via)| routed_mission(m, via))
+        .collect()
+}
+
+/// A stored mission's document flying through `via`, the turn points of its legs around the
+/// no-fly zones (WGS84; see [`set_via`]): the route as flown, for maps.
+pub fn routed_mission(m: &MissionRecord, via: &[Vec<gleaner_field::LatLon>]) -> MissionDoc {
+    let mut doc = stored_mission(m);
+    set_via(&mut doc, via);
+    doc
+}
+
 /// A stored mission ready for the flight-file writers: [`stored_mission`] with the energy
 /// model the writers price what they write with.
 pub fn export_mission(e: &MissionExport) -> MissionDoc {

@@ -108,6 +108,7 @@ mod error;
 mod flight;
 mod geo;
 pub mod samples;
+pub mod text;
 pub mod wpml;
 
 pub use check::{MAX_ALTITUDE_M, MAX_HOVER_S, check_flyable};

@@ -1,12 +1,10 @@
 //! `gleaner bench op`: runs a route planner over standard orienteering benchmark files and
 //! tabulates the scores against the known targets.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use gleaner_op_formats::{
-    BenchRow, find_instances, format_csv, format_table, load_instance, run_benchmark,
-};
+use gleaner_op_formats::{BenchRow, benchmark_files, format_csv, format_table, run_benchmark};
 use gleaner_orienteering::{SolveOptions, SolverKind};
 
 use crate::progress;
@@ -45,41 +43,13 @@ pub struct BenchOpArgs {
     pub routes: Option<PathBuf>,
 }
 
-/// Parses a solver name.
-pub fn parse_solver(name: &str) -> Result<SolverKind> {
-    Ok(match name {
-        "default" => SolverKind::Default,
-        "greedy" => SolverKind::Greedy,
-        "exact" => SolverKind::Exact,
-        other => bail!("unknown solver {other:?}: expected default, greedy or exact"),
-    })
-}
-
-fn instances(path: &Path, max_n: Option<usize>) -> Result<Vec<PathBuf>> {
-    let files = if path.is_dir() {
-        find_instances(path)?
-    } else if path.exists() {
-        vec![path.to_path_buf()]
-    } else {
-        bail!("{}: no such file or directory", path.display());
-    };
-    let Some(max) = max_n else { return Ok(files) };
-    let mut kept = Vec::new();
-    for f in files {
-        if load_instance(&f)?.n <= max {
-            kept.push(f);
-        }
-    }
-    Ok(kept)
-}
-
 /// Runs the benchmark; returns the table with its summary line.
 pub fn run(args: &BenchOpArgs) -> Result<(Vec<BenchRow>, String)> {
-    let files = instances(&args.path, args.max_n)?;
+    let files = benchmark_files(&args.path, args.max_n)?;
     if files.is_empty() {
         bail!("{}: no benchmark instances found", args.path.display());
     }
-    let solver = parse_solver(&args.solver)?;
+    let solver: SolverKind = args.solver.parse().map_err(anyhow::Error::msg)?;
     let mut options = SolveOptions::default()
         .with_time_limit(
             gleaner_orienteering::time_limit_from_secs(args.time_limit).context("--time-limit")?,

@@ -4,9 +4,6 @@ use anyhow::Result;
 
 use crate::{JsonArg, ProjectArg};
 
-use std::collections::HashMap;
-
-use gleaner_field::CellIndex;
 use gleaner_wire::docs::CellRowDoc;
 
 /// How to order the table.
@@ -45,56 +42,6 @@ pub fn sort(rows: &mut [CellRowDoc], key: SortKey) {
     }
 }
 
-/// The table as aligned text, one line per cell; `readings` is each cell's stored readings
-/// (every sensor and modality; a cell missing from it has none).
-pub fn table(rows: &[CellRowDoc], readings: &HashMap<CellIndex, u64>) -> String {
-    let mut out = format!(
-        "{:<10} {:>10} {:>11} {:>7} {:>8} {:>20} {:>10} {:>6} {:>6} {:>6} {:>6} {:>7}\n",
-        "cell",
-        "lat",
-        "lon",
-        "sensors",
-        "readings",
-        "latest",
-        "pending_kB",
-        "F",
-        "R",
-        "A",
-        "U",
-        "S"
-    );
-    for r in rows {
-        let readings: u64 = CellIndex::parse(&r.cell)
-            .and_then(|c| readings.get(&c).copied())
-            .unwrap_or(0);
-        let latest = r
-            .summaries
-            .iter()
-            .map(|s| s.latest_t.as_str())
-            .max()
-            .unwrap_or("-");
-        let f = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.3}"));
-        let s = r.scores.as_ref();
-        out.push_str(&format!(
-            "{:<10} {:>10.6} {:>11.6} {:>7} {:>8} {:>20} {:>10} {:>6} {:>6} {:>6} {:>6} {:>7}\n",
-            r.cell,
-            r.centre_lon_lat[1],
-            r.centre_lon_lat[0],
-            r.sensors.len(),
-            readings,
-            latest,
-            r.pending_bytes
-                .map_or("-".to_string(), |b| format!("{:.1}", b / 1000.0)),
-            f(s.map(|s| s.freshness)),
-            f(s.map(|s| s.redundancy)),
-            f(s.map(|s| s.anomaly)),
-            f(s.map(|s| s.uncertainty)),
-            f(s.map(|s| s.score)),
-        ));
-    }
-    out
-}
-
 // The arguments of `gleaner cells` (no doc comment: the variant's is the help).
 #[derive(clap::Args)]
 pub struct CellsArgs {
@@ -121,6 +68,7 @@ pub fn run(args: CellsArgs) -> Result<()> {
         return args.json.emit(&rows, "serialising cells", String::new);
     }
     let counts = gleaner_app::cell_reading_counts(&p)?;
-    args.json
-        .emit(&rows, "serialising cells", || table(&rows, &counts))
+    args.json.emit(&rows, "serialising cells", || {
+        gleaner_wire::text::cells_table(&rows, &counts)
+    })
 }

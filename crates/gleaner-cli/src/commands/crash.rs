@@ -2,14 +2,13 @@
 //! translates the arguments, runs each child as this binary's own `ingest`, `plan` or
 //! `record` with `GLEANER_CRASH_AFTER` set, and tabulates the sweeps.
 
-use std::fmt::Write as _;
 use std::os::unix::process::ExitStatusExt as _;
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
 use anyhow::Result;
 use clap::{Args, ValueEnum};
-use gleaner_app::crash_test::{self as harness, Backend, ChildRun, CrashTestRequest, Tally};
+use gleaner_app::crash_test::{self as harness, Backend, ChildRun, CrashTestRequest};
 
 /// `gleaner crash-test` arguments.
 #[derive(Args)]
@@ -142,41 +141,5 @@ pub fn run(args: &CrashArgs) -> Result<(String, bool)> {
         kill_points: args.kill_points,
     };
     let sweeps = harness::crash_test(&request, &mut run_child)?;
-    let mut report = String::from(
-        "backend   use case  steps  trials  rolled back  committed  completed  failures\n",
-    );
-    let mut totals = Tally::default();
-    for s in sweeps {
-        let t = s.tally;
-        writeln!(
-            report,
-            "{:<9} {:<9} {:>5}  {:>6}  {:>11}  {:>9}  {:>9}  {:>8}",
-            s.backend.name(),
-            s.case.name(),
-            s.steps,
-            t.trials,
-            t.rolled_back,
-            t.committed,
-            t.completed,
-            t.failures.len()
-        )?;
-        for f in &t.failures {
-            writeln!(report, "  FAIL {f}")?;
-        }
-        totals.trials += t.trials;
-        totals.rolled_back += t.rolled_back;
-        totals.committed += t.committed;
-        totals.completed += t.completed;
-        totals.failures.extend(t.failures);
-    }
-    writeln!(
-        report,
-        "total: {} kill points, {} rolled back, {} committed, {} completed, {} failures (integrity, partial state, lost readings, rerun)",
-        totals.trials,
-        totals.rolled_back,
-        totals.committed,
-        totals.completed,
-        totals.failures.len()
-    )?;
-    Ok((report, totals.failures.is_empty()))
+    Ok(gleaner_wire::text::crash_report(sweeps))
 }

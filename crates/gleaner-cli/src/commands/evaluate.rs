@@ -1,11 +1,11 @@
 //! `gleaner evaluate peer`: the peer study's one-shot selection protocol on CAF, run by
-//! gleaner-eval; this module only translates arguments and writes the files.
+//! gleaner-eval; this module only translates arguments.
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::{Args, ValueEnum};
-use gleaner_eval::peer;
+use gleaner_eval::{PeerRun, peer};
 
 /// Which protocol data to run on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -38,16 +38,18 @@ pub enum PeerData {
 }
 
 impl PeerData {
-    /// The CAF data of the protocol; `None` for Hubbard Brook (its own pipeline).
-    fn data(self) -> Option<peer::PeerData> {
-        Some(match self {
+    /// The evaluation to run.
+    fn run(self) -> PeerRun {
+        use gleaner_eval::hubbard::Registration;
+        PeerRun::Caf(match self {
             PeerData::Holdout => peer::PeerData::Holdout,
             PeerData::Tuning => peer::PeerData::Tuning,
             PeerData::TuningWindows => peer::PeerData::Windows(2013),
             PeerData::Windows2014 => peer::PeerData::Windows(2014),
             PeerData::Windows2015 => peer::PeerData::Windows(2015),
             PeerData::Windows2016 => peer::PeerData::Windows(2016),
-            PeerData::HubbardBrook | PeerData::HubbardBrook2 => return None,
+            PeerData::HubbardBrook => return PeerRun::Hubbard(Registration::First),
+            PeerData::HubbardBrook2 => return PeerRun::Hubbard(Registration::Second),
         })
     }
 }
@@ -71,68 +73,25 @@ pub struct PeerArgs {
     pub unshared_weight: f64,
 }
 
-/// Runs the protocol (`gleaner_eval::peer::evaluate`), writes its files; returns the summary.
+/// Runs the protocol (`gleaner_eval::run_peer`, which writes its files); returns the summary.
 pub fn run_peer(args: &PeerArgs) -> Result<String> {
-    let context = || format!("{} (set GLEANER_DATA_DIR)", args.data.display());
-    let Some(on) = args.on.data() else {
-        return run_hubbard_brook(args);
+    let run = args.on.run();
+    let what = if matches!(run, PeerRun::Caf(_)) {
+        "layouts"
+    } else {
+        "windows"
     };
-    let loaded = peer::load_data(&args.data, on).with_context(context)?;
-    if !(args.unshared_weight.is_finite() && args.unshared_weight >= 0.0) {
-        anyhow::bail!(
-            "--unshared-weight {}: expected a number >= 0",
-            args.unshared_weight
-        );
-    }
-    let bar = crate::progress::bar((loaded.1.len() * loaded.3.len()) as u64, "layouts");
-    let e = peer::evaluate(loaded, on, args.unshared_weight, |done, _| {
-        bar.set_position(done as u64)
-    })?;
+    let bar = crate::progress::bar(0, what);
+    let summary = gleaner_eval::run_peer(
+        &args.data,
+        &args.out,
+        run,
+        args.unshared_weight,
+        |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64)
+        },
+    )?;
     bar.finish_and_clear();
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let files = [
-        ("windows.csv", e.windows_csv.as_deref()),
-        ("outcomes.csv", Some(e.outcomes_csv.as_str())),
-        ("summary.md", Some(e.summary.as_str())),
-    ];
-    for (name, text) in files {
-        if let Some(text) = text {
-            let path = args.out.join(name);
-            std::fs::write(&path, text)
-                .with_context(|| format!("cannot write {}", path.display()))?;
-        }
-    }
-    Ok(e.summary)
-}
-
-/// `--on hubbard-brook` / `hubbard-brook-2`: every data set of the registration, one summary.
-fn run_hubbard_brook(args: &PeerArgs) -> Result<String> {
-    use gleaner_eval::hubbard::Registration;
-    if args.unshared_weight != 0.0 {
-        anyhow::bail!("--unshared-weight is not used with --on hubbard-brook");
-    }
-    let registration = match args.on {
-        PeerData::HubbardBrook2 => Registration::Second,
-        _ => Registration::First,
-    };
-    let dir = args.data.join("hubbard_brook");
-    let bar = crate::progress::bar(0, "windows");
-    let e = gleaner_eval::hubbard::evaluate(&dir, registration, |done, total| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64)
-    })
-    .with_context(|| format!("{} (set GLEANER_DATA_DIR)", dir.display()))?;
-    bar.finish_and_clear();
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let files = e
-        .outcomes
-        .iter()
-        .map(|(name, csv)| (name.as_str(), csv.as_str()));
-    for (name, text) in files.chain([("summary.md", e.summary.as_str())]) {
-        let path = args.out.join(name);
-        std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
-    }
-    Ok(e.summary)
+    Ok(summary)
 }

@@ -4,7 +4,6 @@
 use anyhow::Result;
 use gleaner_app as app;
 
-use crate::commands::plan;
 use crate::{JsonArg, ProjectArg, clock_now, parse_time, parse_wind};
 
 // The arguments of `gleaner explore` (no doc comment: the variant's is the help).
@@ -42,6 +41,6 @@ pub fn run(args: ExploreArgs) -> Result<()> {
     )?;
     let doc = gleaner_wire::convert::exploration(&e);
     args.json.emit(&doc, "serialising the plan", || {
-        plan::exploration_table(&doc)
+        gleaner_wire::text::exploration_table(&doc)
     })
 }

@@ -82,26 +82,5 @@ pub fn run(args: IngestArgs, progress: &Terminal) -> Result<()> {
         clock_now(),
         progress,
     )?;
-    outln(&ingest_line(&outcome))
-}
-
-/// The one-line summary of an ingest.
-fn ingest_line(o: &app::IngestOutcome) -> String {
-    let r = &o.report;
-    let mut out = format!(
-        "ingested {} file(s): {} rows read, {} readings ({} new, {} already stored), {} missing values, {} duplicate rows, {} rows skipped, {} conflicts kept as stored",
-        o.files,
-        r.rows_read,
-        r.readings,
-        o.inserted,
-        o.unchanged,
-        r.missing,
-        r.duplicates,
-        r.skipped,
-        o.conflicts
-    );
-    for s in &r.skipped_rows {
-        out.push_str(&format!("\n  skipped: {}", s.reason));
-    }
-    out
+    outln(&gleaner_wire::text::ingest_line(&outcome))
 }

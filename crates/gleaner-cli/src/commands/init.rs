@@ -1,7 +1,7 @@
 //! `gleaner init`: creates a project from a sensors file with the application layer's
 //! [`gleaner_app::init`].
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::ValueEnum;
@@ -114,23 +114,5 @@ pub fn run(args: InitArgs) -> Result<()> {
         no_fly: args.no_fly,
         no_fly_buffer_m: args.no_fly_buffer,
     })?;
-    outln(&init_line(&outcome, &args.dir))
-}
-
-fn init_line(o: &app::InitOutcome, dir: &Path) -> String {
-    format!(
-        "project {} in {}\n  sensors: {} ({} new, {} updated)\n  base station: {:.6}, {:.6}\n  cells: {} non-empty cells of {} m ({} kept, {} added, {} removed)",
-        o.settings.project.name,
-        dir.display(),
-        o.sensors,
-        o.upsert.added.len(),
-        o.upsert.updated.len(),
-        o.settings.field.base_lat,
-        o.settings.field.base_lon,
-        o.n_cells,
-        o.settings.field.cell_size_m,
-        o.cells.kept,
-        o.cells.added,
-        o.cells.removed,
-    )
+    outln(&gleaner_wire::text::init_lines(&outcome, &args.dir))
 }

@@ -3,9 +3,9 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use clap::Args;
-use gleaner_app::{self as app, Progress, Project, Settings};
+use gleaner_app::{self as app, Progress};
 
 /// `gleaner migrate` arguments.
 #[derive(Args)]
@@ -27,33 +27,15 @@ pub struct MigrateArgs {
 }
 
 /// Runs the copy; returns the report line.
-pub fn run(args: &MigrateArgs, progress: &dyn Progress) -> Result<String> {
-    let source = Project::open_with(&args.dir, args.database.as_deref())?;
-    let settings = source.settings().clone();
-    let target = app::database(&args.dir, &settings, Some(&args.to))?;
-    let from = app::database(&args.dir, &settings, args.database.as_deref())?;
-    if target == from {
-        bail!("the target {target} is the project's own database");
-    }
-    let mut store = target
-        .open()
-        .with_context(|| format!("opening the target {target}"))?;
-    let outcome = app::migrate(source.store(), &mut store, progress)?;
-    let mut line = format!(
-        "copied {} sensors, {} modalities, {} readings, {} ingests, {} cells, {} missions, {} settings and blobs from {from} to {target}",
-        outcome.sensors,
-        outcome.modalities,
-        outcome.readings,
-        outcome.ingests,
-        outcome.cells,
-        outcome.missions,
-        outcome.config_and_blobs,
-    );
-    if args.switch {
-        let mut settings: Settings = settings;
-        settings.project.database = PathBuf::from(&args.to);
-        settings.save(&args.dir)?;
-        line.push_str(&format!("\nthe project now uses {target}"));
-    }
-    Ok(line)
+pub fn run(args: MigrateArgs, progress: &dyn Progress) -> Result<String> {
+    let m = app::migrate_project(
+        &app::MigrateProjectRequest {
+            dir: args.dir,
+            database: args.database,
+            to: args.to,
+            switch: args.switch,
+        },
+        progress,
+    )?;
+    Ok(gleaner_wire::text::migration_lines(&m))
 }

@@ -3,8 +3,8 @@
 
 use anyhow::Result;
 use gleaner_app::{self as app, MissionId};
+use gleaner_wire::text;
 
-use crate::commands::plan;
 use crate::{ProjectArg, emit, out, outln};
 
 // The arguments of `gleaner missions` (no doc comment: the variant's is the help).
@@ -61,7 +61,7 @@ pub fn run(args: MissionsArgs) -> Result<()> {
             let doc = serde_json::json!({"missions": docs, "next": page.next.map(|m| m.0)});
             return emit(true, &doc, "serialising missions", String::new);
         }
-        out(&missions_table(&page.missions))?;
+        out(&text::missions_table(&page.missions))?;
         return match page.next {
             Some(n) => outln(&format!("next page: --before {n}")),
             None => outln("no older missions"),
@@ -72,7 +72,7 @@ pub fn run(args: MissionsArgs) -> Result<()> {
             let m = app::mission(&p, MissionId(id))?;
             let doc = gleaner_wire::convert::stored_mission(&m);
             emit(args.json, &doc, "serialising the mission", || {
-                plan::table(&doc)
+                text::mission_table(&doc)
             })
         }
         None => {
@@ -82,7 +82,7 @@ pub fn run(args: MissionsArgs) -> Result<()> {
                 .map(gleaner_wire::convert::stored_mission)
                 .collect();
             emit(args.json, &docs, "serialising missions", || {
-                missions_table(&all)
+                text::missions_table(&all)
             })
         }
     }
@@ -103,31 +103,4 @@ pub fn delete(args: DeleteArgs) -> Result<()> {
     let mut p = args.project.open()?;
     app::delete_mission(&mut p, MissionId(args.mission))?;
     outln(&format!("deleted mission #{}", args.mission))
-}
-
-fn missions_table(missions: &[app::MissionRecord]) -> String {
-    let mut out = format!(
-        "{:>4} {:<11} {:<8} {:<20} {:<11} {:>5} {:>9} {:>11} {:>6}\n",
-        "id", "kind", "status", "planned_at", "planner", "cells", "total_S", "energy_J", "use"
-    );
-    for m in missions {
-        let e = &m.mission.energy;
-        out.push_str(&format!(
-            "{:>4} {:<11} {:<8} {:<20} {:<11} {:>5} {:>9.3} {:>11.1} {:>5.1}%\n",
-            m.id,
-            m.mission.kind.as_str(),
-            m.status.as_str(),
-            app::format_rfc3339(m.mission.planned_at),
-            m.mission.solver,
-            m.mission.stops.len(),
-            m.mission.total_score,
-            e.total_j,
-            if e.budget_j > 0.0 {
-                100.0 * e.total_j / e.budget_j
-            } else {
-                0.0
-            }
-        ));
-    }
-    out
 }

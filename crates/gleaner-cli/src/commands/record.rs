@@ -51,18 +51,5 @@ pub fn run(args: RecordArgs, progress: &Terminal) -> Result<()> {
         clock_now(),
         progress,
     )?;
-    outln(&record_line(&outcome))
-}
-
-fn record_line(o: &app::RecordOutcome) -> String {
-    format!(
-        "mission #{} recorded as flown at {}{}: {} cells, {} sensors collected, {} readings brought back ({} new)",
-        o.mission,
-        app::format_rfc3339(o.at),
-        if o.amended { " (amended)" } else { "" },
-        o.cells.len(),
-        o.sensors_collected,
-        o.readings_inserted + o.readings_unchanged,
-        o.readings_inserted
-    )
+    outln(&gleaner_wire::text::record_line(&outcome))
 }

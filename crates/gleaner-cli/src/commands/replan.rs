@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use gleaner_app::{self as app, MissionId};
+use gleaner_wire::{convert, text};
 
-use crate::commands::{export, plan};
 use crate::{JsonArg, ProjectArg, parse_wind};
 
 // The arguments of `gleaner replan` (no doc comment: the variant's is the help).
@@ -68,11 +68,13 @@ pub fn run(args: ReplanArgs) -> Result<()> {
             .join(args.mission.to_string())
             .join(format!("replan-after-{}", args.after_stop))
     });
-    let written = export::write_replan_files(&p, &r, &dir)?;
-    let doc = gleaner_wire::convert::replanned_mission(&r);
+    let doc = convert::replanned_mission(&r);
+    let field = convert::field(&app::field_view(&p)?);
+    let set = gleaner_render::files::continuation_files(&field, &doc)?;
+    let written = app::write_files(&dir, &set.files)?;
     args.json.emit(&doc, "serialising the continuation", || {
-        let mut t = plan::replan_table(&doc, &r.dropped);
-        t.push_str(&written.lines());
+        let mut t = text::replan_table(&doc, &r.dropped);
+        t.push_str(&text::written_lines(&written, &set.skipped));
         t
     })
 }

@@ -49,35 +49,6 @@ pub fn sort(doc: &mut ScoringDoc, key: ScoreSort) {
     }
 }
 
-/// The table: header lines with the weights, then one line per cell.
-pub fn table(doc: &ScoringDoc, limit: usize) -> String {
-    let mut out =
-        format!(
-            "scored at {}  S = {}·F + {}·A + {}·U − {}·R  (anomaly: {}{})\n",
-            doc.t,
-            doc.weights[0],
-            doc.weights[1],
-            doc.weights[2],
-            doc.weights[3],
-            doc.anomaly_form,
-            doc.condition.as_ref().map_or(
-                String::from(", no condition model: U = 0"),
-                |c| format!(", U from {}: {}", c.modality, c.classes.join("/"))
-            )
-        );
-    out.push_str(&format!(
-        "{:<10} {:>7} {:>6} {:>6} {:>8} {:>6} {:>8}  {}\n",
-        "cell", "sensors", "F", "R", "A", "U", "S", "driver"
-    ));
-    for c in doc.cells.iter().take(limit) {
-        out.push_str(&format!(
-            "{:<10} {:>7} {:>6.3} {:>6.3} {:>8.3} {:>6.3} {:>8.3}  {}\n",
-            c.cell, c.sensors, c.f, c.r, c.a, c.u, c.s, c.driver
-        ));
-    }
-    out
-}
-
 // The arguments of `gleaner score` (no doc comment: the variant's is the help).
 #[derive(clap::Args)]
 pub struct ScoreArgs {
@@ -113,6 +84,7 @@ pub fn run(args: ScoreArgs) -> Result<()> {
     warn(&scoring);
     let mut doc = gleaner_wire::convert::scoring(&scoring);
     sort(&mut doc, args.sort);
-    args.json
-        .emit(&doc, "serialising scores", || table(&doc, args.limit))
+    args.json.emit(&doc, "serialising scores", || {
+        gleaner_wire::text::scoring_table(&doc, args.limit)
+    })
 }

@@ -1,14 +1,15 @@
 //! `gleaner simulate`: translates the arguments into replay options and a dataset
-//! (`gleaner_campaign::datasets`: the presets, synthetic farms, a project's record), runs the
-//! campaigns and writes the results as CSV files plus the report.
+//! (`gleaner_campaign::datasets`: the presets, synthetic farms, a project's record) for
+//! `gleaner_campaign::simulation`, which runs the campaigns and writes the results as CSV
+//! files plus the report.
 
-use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use gleaner_app as app;
-use gleaner_campaign::campaign::{CampaignResult, Replay, ReplayOptions, Strategy, run_campaign};
-use gleaner_campaign::datasets::{self, Preset};
+use gleaner_campaign::campaign::{ReplayOptions, Strategy};
+use gleaner_campaign::datasets::{Preset, SyntheticFarm};
+use gleaner_campaign::simulation::{self, SimulationRequest, Source};
 
 /// Which data a campaign replays.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -201,29 +202,15 @@ pub struct SimulateArgs {
 fn flight_conditions(
     args: &SimulateArgs,
 ) -> Result<gleaner_campaign::campaign_flight::FlightConditions> {
-    use gleaner_campaign::campaign_flight::{DEFAULT_GUST_SD_MPS, FlightConditions, WindSource};
-    let wind = match (&args.wind, &args.wind_csv) {
-        (_, Some(path)) => WindSource::Observed {
-            path: path.clone(),
-            days: gleaner_campaign::campaign_flight::read_wind_csv(path)?,
-        },
-        (Some(text), None) => WindSource::parse(text)?,
-        (None, None) => WindSource::Still,
-    };
-    let gust_sd_mps = args.gust.unwrap_or(if wind == WindSource::Still {
-        0.0
-    } else {
-        DEFAULT_GUST_SD_MPS
-    });
+    use gleaner_campaign::campaign_flight::{FlightConditions, WindSource, parse_margin_quantile};
+    let wind = WindSource::choose(args.wind.as_deref(), args.wind_csv.as_deref())?;
     Ok(FlightConditions {
+        gust_sd_mps: args.gust.unwrap_or(wind.default_gust_sd_mps()),
         wind,
-        gust_sd_mps,
         battery_weakening: args.weak_battery,
         seed: args.weather_seed,
         leg_gust_sd_mps: args.leg_gust,
-        margin_quantile: gleaner_campaign::campaign_flight::parse_margin_quantile(
-            &args.margin_quantile,
-        )?,
+        margin_quantile: parse_margin_quantile(&args.margin_quantile)?,
     })
 }
 
@@ -260,58 +247,45 @@ fn options(args: &SimulateArgs) -> Result<ReplayOptions> {
     })
 }
 
-/// Runs the campaigns the arguments describe and writes the results into `args.out`.
-pub fn run(
-    args: &SimulateArgs,
-    command_line: &str,
-    progress: &crate::progress::Terminal,
-) -> Result<String> {
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("{}: cannot create", args.out.display()))?;
-    let mut results: Vec<CampaignResult> = Vec::new();
-    let mut run_one = |p: Replay| -> Result<()> {
-        results.push(run_campaign(&p.request, &p.truth, progress)?);
-        Ok(())
-    };
-    let options = options(args)?;
-    let project_dir = args.out.join("project");
-    let setup = datasets::Setup {
-        project_dir: &project_dir,
-        cell_size_m: args.cell_size,
-        options: &options,
-        clock_now: crate::clock_now(),
-    };
-    let preset = |p| datasets::preset_replay(p, &args.data_dir, &setup);
-    match (&args.project, args.dataset) {
-        (Some(dir), _) => run_one(datasets::project_replay(dir, &options, setup.clock_now)?)?,
-        (None, None) => {}
-        (None, Some(Dataset::CafDaily)) => run_one(preset(Preset::CafDaily)?)?,
-        (None, Some(Dataset::CafHourly)) => run_one(preset(Preset::CafHourly)?)?,
-        (None, Some(Dataset::HubbardBrook)) => run_one(preset(Preset::HubbardBrook)?)?,
-        (None, Some(Dataset::Synthetic)) => {
-            for &seed in &args.farm_seeds {
-                let farm = datasets::SyntheticFarm {
+/// What the arguments replay.
+fn source(args: &SimulateArgs) -> Result<Source> {
+    Ok(match (&args.project, args.dataset) {
+        (Some(dir), _) => Source::Project(dir.clone()),
+        (None, Some(Dataset::CafDaily)) => Source::Preset(Preset::CafDaily),
+        (None, Some(Dataset::CafHourly)) => Source::Preset(Preset::CafHourly),
+        (None, Some(Dataset::HubbardBrook)) => Source::Preset(Preset::HubbardBrook),
+        (None, Some(Dataset::Synthetic)) => Source::Synthetic(
+            args.farm_seeds
+                .iter()
+                .map(|&seed| SyntheticFarm {
                     seed,
                     sensors: args.farm_sensors,
                     days: args.farm_days,
                     events: args.farm_events,
                     scale_extent: args.farm_scale_extent,
                     history_days: args.farm_history_days,
-                };
-                run_one(datasets::synthetic_replay(&farm, &args.out, &setup)?)?;
-            }
-        }
-    }
-    gleaner_campaign::results::write_results(&args.out, &results, command_line)?;
-    let report = gleaner_campaign::report::write_report(&args.out)?;
-    let mut out = String::new();
-    writeln!(
-        out,
-        "{} campaign(s), {} runs; results in {}; report {}",
-        results.len(),
-        results.iter().map(|r| r.runs.len()).sum::<usize>(),
-        args.out.display(),
-        report.display()
-    )?;
-    Ok(out)
+                })
+                .collect(),
+        ),
+        (None, None) => anyhow::bail!("give --dataset or --project"),
+    })
+}
+
+/// Runs the campaigns the arguments describe (`gleaner_campaign::simulation`), which write
+/// the results into `args.out`; returns the summary line.
+pub fn run(
+    args: &SimulateArgs,
+    command_line: &str,
+    progress: &crate::progress::Terminal,
+) -> Result<String> {
+    let request = SimulationRequest {
+        source: source(args)?,
+        options: options(args)?,
+        out: args.out.clone(),
+        data_dir: args.data_dir.clone(),
+        cell_size_m: args.cell_size,
+        command_line: command_line.to_string(),
+    };
+    let s = simulation::simulate(&request, crate::clock_now(), progress)?;
+    Ok(format!("{}\n", simulation::summary_line(&s, &args.out)))
 }

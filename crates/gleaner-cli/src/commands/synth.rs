@@ -1,38 +1,9 @@
 //! `gleaner synth`: writes a seeded synthetic farm in the generic format.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use gleaner_synth::{
-    FaultRates, SynthConfig, SynthFarm, generate, write_faults_csv, write_ground_truth_csv,
-    write_readings_csv, write_sensors_csv,
-};
-
-/// The files `synth` writes, inside the output directory.
-pub struct SynthFiles {
-    /// `sensors.csv`: `id,lat,lon,elevation_m`.
-    pub sensors: PathBuf,
-    /// `readings.csv`: the long readings format.
-    pub readings: PathBuf,
-    /// `ground_truth.csv`: the localised events.
-    pub ground_truth: PathBuf,
-    /// `faults.csv`: injected sensor faults.
-    pub faults: PathBuf,
-}
-
-impl SynthFiles {
-    /// The file names inside `dir`.
-    pub fn in_dir(dir: &Path) -> Self {
-        Self {
-            sensors: dir.join("sensors.csv"),
-            readings: dir.join("readings.csv"),
-            ground_truth: dir.join("ground_truth.csv"),
-            faults: dir.join("faults.csv"),
-        }
-    }
-}
+use gleaner_synth::{FaultRates, SynthConfig, generate, write_farm_files};
 
 // The arguments of `gleaner synth` (no doc comment: the variant's is the help). Everything
 // else takes `SynthConfig`'s defaults, which are calibrated to the CAF network.
@@ -123,34 +94,9 @@ pub fn config(args: &SynthArgs) -> SynthConfig {
     }
 }
 
-fn write_file(
-    path: &Path,
-    f: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
-) -> Result<()> {
-    let file = File::create(path).with_context(|| format!("{}: cannot create", path.display()))?;
-    let mut w = BufWriter::with_capacity(1 << 20, file);
-    f(&mut w)
-        .and_then(|()| w.flush())
-        .with_context(|| format!("{}: cannot write", path.display()))
-}
-
-/// Generates the farm and writes its four files; returns the summary line.
+/// Generates the farm and writes its four files (`gleaner_synth::write_farm_files`); returns
+/// the summary line.
 pub fn run(args: &SynthArgs) -> Result<String> {
-    let (farm, files) = write_farm(args)?;
-    Ok(format!(
-        "wrote {} sensors, {} readings, {} events to {}",
-        farm.sensors().len(),
-        farm.reading_count(),
-        farm.events().len(),
-        files
-            .sensors
-            .parent()
-            .map_or(String::new(), |p| p.display().to_string())
-    ))
-}
-
-/// Generates the farm and writes its four files; returns the farm and the file names.
-fn write_farm(args: &SynthArgs) -> Result<(SynthFarm, SynthFiles)> {
     let mut config = config(args);
     if let Some(path) = &args.layout {
         let sensors = gleaner_app::read_sensors_file(path, args.utm_zone.as_deref())?;
@@ -159,12 +105,12 @@ fn write_farm(args: &SynthArgs) -> Result<(SynthFarm, SynthFiles)> {
             .with_context(|| format!("{}: cannot lay a farm on it", path.display()))?;
     }
     let farm = generate(&config).context("invalid synthetic farm settings")?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("{}: cannot create", args.out.display()))?;
-    let files = SynthFiles::in_dir(&args.out);
-    write_file(&files.sensors, |w| write_sensors_csv(&farm, w))?;
-    write_file(&files.readings, |w| write_readings_csv(&farm, w))?;
-    write_file(&files.ground_truth, |w| write_ground_truth_csv(&farm, w))?;
-    write_file(&files.faults, |w| write_faults_csv(&farm, w))?;
-    Ok((farm, files))
+    write_farm_files(&farm, &args.out)?;
+    Ok(format!(
+        "wrote {} sensors, {} readings, {} events to {}",
+        farm.sensors().len(),
+        farm.reading_count(),
+        farm.events().len(),
+        args.out.display()
+    ))
 }

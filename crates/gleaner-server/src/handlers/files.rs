@@ -77,33 +77,15 @@ pub async fn mission_file(
             let export = app::export(p, id)?;
             let doc = gleaner_wire::convert::export_mission(&export);
             let field = gleaner_wire::convert::field(&export.field);
-            let export_err =
-                |e: gleaner_wire::ExportError| ApiError::bad_request(None, e.to_string());
-            let render_err = |e: gleaner_render::RenderError| ApiError::internal(e.to_string());
-            Ok(match name {
-                "mission.plan" => gleaner_wire::qgc_plan(&doc)
-                    .map_err(export_err)?
-                    .into_bytes(),
-                "mission.waypoints" => gleaner_wire::wpl(&doc).map_err(export_err)?.into_bytes(),
-                "mission.kmz" => {
-                    gleaner_wire::wpml_kmz(&doc, Default::default()).map_err(export_err)?
+            let file = gleaner_render::files::mission_file(name, &field, &doc, Default::default());
+            match file {
+                Some(Ok(bytes)) => Ok(bytes),
+                Some(Err(gleaner_render::FileError::Export(e))) => {
+                    Err(ApiError::bad_request(None, e.to_string()))
                 }
-                "mission.geojson" => gleaner_wire::geojson(&field, &doc)
-                    .map_err(export_err)?
-                    .into_bytes(),
-                "mission.json" => serde_json::to_vec_pretty(&doc)
-                    .map_err(|e| ApiError::internal(e.to_string()))?,
-                "mission.svg" => {
-                    gleaner_render::mission_figure_svg(&field, &doc, &Default::default())
-                        .map_err(render_err)?
-                        .into_bytes()
-                }
-                _ => {
-                    let svg = gleaner_render::mission_figure_svg(&field, &doc, &Default::default())
-                        .map_err(render_err)?;
-                    gleaner_render::svg_to_png(&svg, 1600).map_err(render_err)?
-                }
-            })
+                Some(Err(e)) => Err(ApiError::internal(e.to_string())),
+                None => Err(ApiError::internal(format!("no mission file {name:?}"))),
+            }
         })
         .await?;
     let disposition = format!(
@@ -155,8 +137,8 @@ pub async fn map(State(s): State<AppState>, RawQuery(q): RawQuery) -> ApiResult<
             let svg = match mission {
                 Some(m) => {
                     // The route as flown: through the turn points around the no-fly zones.
-                    let mut doc = gleaner_wire::convert::stored_mission(&m);
-                    gleaner_wire::convert::set_via(&mut doc, &app::airspace::stored_via(p, &m));
+                    let via = app::airspace::stored_via(p, &m);
+                    let doc = gleaner_wire::convert::routed_mission(&m, &via);
                     gleaner_render::mission_figure_svg(&field, &doc, &map_options())
                 }
                 None => gleaner_render::exploration_map_svg(&field, &[], &map_options()),

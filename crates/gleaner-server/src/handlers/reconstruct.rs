@@ -232,17 +232,13 @@ async fn reconstruction_map(s: &AppState, q: Option<String>, png: bool) -> ApiRe
     let has_modality = request.reconstruct.modality.is_some();
     s.run_job(Job::read("reconstruct"), move |p, _| {
         let m = app::reconstruct_map(p, &request)?;
-        let svg = gleaner_render::reconstruction_map_svg(
+        let format = match png {
+            true => gleaner_render::ImageFormat::Png,
+            false => gleaner_render::ImageFormat::Svg,
+        };
+        gleaner_render::files::reconstruction_map_file(
             &gleaner_wire::convert::reconstruction_map(&m),
-            &reconstruction_map_options(),
-        )
-        .map_err(|e| ApiError::internal(e.to_string()))?;
-        if !png {
-            return Ok(svg.into_bytes());
-        }
-        gleaner_render::svg_to_png(
-            &svg,
-            gleaner_render::png_width_px(gleaner_render::FULL_WIDTH_MM, 300.0),
+            format,
         )
         .map_err(|e| ApiError::internal(e.to_string()))
     })
@@ -251,14 +247,6 @@ async fn reconstruction_map(s: &AppState, q: Option<String>, png: bool) -> ApiRe
         true => e.in_field("modality"),
         false => e,
     })
-}
-
-/// The reconstruction map's size: the full page width of a paper (as the CLI's `--map`).
-fn reconstruction_map_options() -> gleaner_render::FigureOptions {
-    gleaner_render::FigureOptions {
-        width_mm: gleaner_render::FULL_WIDTH_MM,
-        ..Default::default()
-    }
 }
 
 /// The map of the estimated field and its uncertainty at one time (as `gleaner reconstruct

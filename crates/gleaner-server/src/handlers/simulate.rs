@@ -173,7 +173,7 @@ fn report_doc(r: gleaner_campaign::report::RenderedReport) -> ReportDoc {
 fn simulated_weather(
     b: &SimulateBody,
 ) -> ApiResult<gleaner_campaign::campaign_flight::FlightConditions> {
-    use gleaner_campaign::campaign_flight::{DEFAULT_GUST_SD_MPS, FlightConditions, WindSource};
+    use gleaner_campaign::campaign_flight::{FlightConditions, WindSource};
     let wind = match (&b.wind, &b.winds) {
         (Some(_), Some(_)) => {
             return Err(ApiError::bad_request(
@@ -191,11 +191,7 @@ fn simulated_weather(
         (None, None) => WindSource::Still,
     };
     let still = FlightConditions::default();
-    let gust_sd_mps = b.gust.unwrap_or(if wind == WindSource::Still {
-        0.0
-    } else {
-        DEFAULT_GUST_SD_MPS
-    });
+    let gust_sd_mps = b.gust.unwrap_or(wind.default_gust_sd_mps());
     let one = |field: &str, c: FlightConditions| {
         c.check(&[])
             .map_err(|e| ApiError::from(e).in_field(field))
