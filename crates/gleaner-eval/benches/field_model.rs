@@ -1,13 +1,14 @@
 //! The dynamic field model on the CAF hourly data (32 sensors, VW 30 cm, Jan-Apr 2015):
 //! fitting on the 1,001 training hours, reconstructing 500 hourly steps of every sensor (one
 //! filter pass), and a flight's update (ten sensors' last day of hourly readings brought back,
-//! then every sensor's estimate). Needs the shared data directory (GLEANER_DATA_DIR, default
+//! then every sensor's estimate), and the calibrated interval's back-test (the last 500
+//! training hours with 10 sensors read, the other 22 estimated at every hour). Needs the shared data directory (GLEANER_DATA_DIR, default
 //! ../shared/data from the repository root).
 use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use gleaner_eval::peer::{self, Dataset};
-use gleaner_kriging::{SensorSeries, fit_dynamic};
+use gleaner_kriging::{SensorSeries, backtest_errors, fit_dynamic, interval_multiplier};
 
 fn data_dir() -> PathBuf {
     std::env::var_os("GLEANER_DATA_DIR")
@@ -71,6 +72,34 @@ fn bench(c: &mut Criterion) {
                     }
                 }
                 (0..n).map(|i| f.estimate(i).1).sum::<f64>()
+            })
+        },
+    );
+    let half: Vec<SensorSeries<'_>> = series
+        .iter()
+        .map(|s| SensorSeries {
+            times: &s.times[..train.len() / 2],
+            values: &s.values[..train.len() / 2],
+            ..*s
+        })
+        .collect();
+    let early = fit_dynamic(&half, &protocol.fit).expect("fit on the first half");
+    let read: Vec<bool> = (0..n).map(|i| i < 10).collect();
+    let t = &matrix.times;
+    let split = train.start + train.len() / 2;
+    c.bench_function(
+        "interval back-test: 500 hours, 10 of 32 sensors read, q from 11,000 errors",
+        |b| {
+            b.iter(|| {
+                let z = backtest_errors(
+                    &early,
+                    &series,
+                    t[train.start],
+                    t[split],
+                    t[train.end - 1],
+                    &read,
+                );
+                interval_multiplier(&z)
             })
         },
     );
