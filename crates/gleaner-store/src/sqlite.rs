@@ -274,7 +274,10 @@ impl SqliteTx<'_> {
 
 /// `PRAGMA data_version`: changes when another connection commits to the database.
 fn data_version(c: &Connection) -> Result<i64> {
-    c.query_row("PRAGMA data_version", [], |r| r.get(0)).db()
+    c.prepare_cached("PRAGMA data_version")
+        .db()?
+        .query_row([], |r| r.get(0))
+        .db()
 }
 
 impl StoreRead for SqliteStore {

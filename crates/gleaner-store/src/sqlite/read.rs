@@ -632,19 +632,19 @@ pub(super) fn missions(c: &Connection, id: Option<MissionId>) -> Result<Vec<Miss
 }
 
 pub(super) fn config_get(c: &Connection, key: &str) -> Result<Option<String>> {
-    c.query_row("SELECT value FROM config WHERE key = ?1", [key], |r| {
-        r.get(0)
-    })
-    .optional()
-    .db()
+    c.prepare_cached("SELECT value FROM config WHERE key = ?1")
+        .db()?
+        .query_row([key], |r| r.get(0))
+        .optional()
+        .db()
 }
 
 pub(super) fn blob_get(c: &Connection, key: &str) -> Result<Option<Vec<u8>>> {
-    c.query_row("SELECT value FROM blobs WHERE key = ?1", [key], |r| {
-        r.get(0)
-    })
-    .optional()
-    .db()
+    c.prepare_cached("SELECT value FROM blobs WHERE key = ?1")
+        .db()?
+        .query_row([key], |r| r.get(0))
+        .optional()
+        .db()
 }
 
 pub(super) fn config_entries(c: &Connection) -> Result<Vec<(String, String)>> {

@@ -19,6 +19,16 @@ use crate::{
     SensorRecord, StoreError, UpsertStats, VisitRecord,
 };
 
+/// [`Connection::execute`] through the connection's statement cache: the statement is parsed
+/// once per connection instead of at every call (the same SQL, so the same effect).
+fn execute_cached<P: rusqlite::Params>(
+    c: &Connection,
+    sql: &str,
+    params: P,
+) -> rusqlite::Result<usize> {
+    c.prepare_cached(sql)?.execute(params)
+}
+
 /// Rows per multi-row `INSERT` statement in [`insert_readings`] (4 parameters each).
 const CHUNK: usize = 128;
 
@@ -196,7 +206,8 @@ pub(super) fn insert_readings(
 }
 
 pub(super) fn record_ingest(c: &Connection, ingest: &IngestRecord) -> Result<i64> {
-    c.execute(
+    execute_cached(
+        c,
         "INSERT INTO ingests (file_name, format, rows_read, rows_inserted, rows_unchanged,
                               rows_skipped, at)
          VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)",
@@ -309,7 +320,8 @@ fn insert_mission(c: &Connection, m: &NewMission, id: Option<i64>) -> Result<Mis
     validate_mission(m)?;
     let e = &m.energy;
     let p = &m.profile;
-    c.execute(
+    execute_cached(
+        c,
         "INSERT INTO missions (created_at, kind, planned_at, solver, seed,
              weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form, total_score,
              base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
@@ -414,13 +426,13 @@ pub(super) fn record_visits(
             flown_at: stored_flown_at.unwrap_or(flown_at),
         });
     }
-    c.execute(
+    execute_cached(
+        c,
         "UPDATE missions SET status = ?2, flown_at = ?3 WHERE id = ?1",
         params![mission.0, MissionStatus::Flown.as_str(), flown_at],
     )
     .db()?;
-    c.execute("DELETE FROM visits WHERE mission = ?1", [mission.0])
-        .db()?;
+    execute_cached(c, "DELETE FROM visits WHERE mission = ?1", [mission.0]).db()?;
     let mut stmt = c
         .prepare_cached(
             "INSERT INTO visits (mission, position, cell, arrived_at, energy_j)
@@ -441,7 +453,8 @@ pub(super) fn record_visits(
 }
 
 pub(super) fn config_set(c: &Connection, key: &str, value: &str) -> Result<()> {
-    c.execute(
+    execute_cached(
+        c,
         "INSERT INTO config (key, value) VALUES (?1, ?2)
          ON CONFLICT (key) DO UPDATE SET value = excluded.value",
         [key, value],
@@ -451,7 +464,8 @@ pub(super) fn config_set(c: &Connection, key: &str, value: &str) -> Result<()> {
 }
 
 pub(super) fn blob_put(c: &Connection, key: &str, value: &[u8]) -> Result<()> {
-    c.execute(
+    execute_cached(
+        c,
         "INSERT INTO blobs (key, value) VALUES (?1, ?2)
          ON CONFLICT (key) DO UPDATE SET value = excluded.value",
         params![key, value],
