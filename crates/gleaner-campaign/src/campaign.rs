@@ -11,58 +11,39 @@
 //! which anomaly events the flights have caught, how stale the sensors are, and how well the
 //! condition model predicted the cells' classes before the flight.
 
-use std::collections::{BTreeMap, HashMap, HashSet};
-use std::path::PathBuf;
+use std::collections::{BTreeMap, HashMap};
 
-use gleaner_field::{CellIndex, Modality, Sensor, SensorId, UnixSeconds};
-use gleaner_ingest::{IngestReport, Readings};
-use gleaner_kriging::{Covariance, FieldModel, IncrementModel, variance_reduction};
-use gleaner_mission::Planner;
+use gleaner_field::{Modality, Sensor, SensorId, UnixSeconds};
+use gleaner_ingest::Readings;
+use gleaner_kriging::{Covariance, FieldModel, IncrementModel};
 use gleaner_store::{SqliteStore, Store, StoreRead};
 
 use gleaner_app::settings::Settings;
-use gleaner_app::shortcuts::{
-    EstimateReads, ExplorationMemo, Parsed, estimate_with, explore_with, fit_models, ingest_parsed,
-    plan_scored, target_modality,
-};
+use gleaner_app::shortcuts::{fit_models, target_modality};
 use gleaner_app::{AppError, Result};
 use gleaner_app::{ExploreRequest, explore};
-use gleaner_app::{Format, IngestRequest};
-use gleaner_app::{InitRequest, init_store, init_store_with};
-use gleaner_app::{Objective, PlanRequest};
-use gleaner_app::{Progress, Silent};
-use gleaner_app::{Project, SensorEstimate};
-use gleaner_app::{ScoreRequest, compute, score};
+use gleaner_app::{InitRequest, Progress, Project};
 
-use crate::campaign_flight::{FlightConditions, FlightDay, fly_in_wind};
-use crate::simulate::{Truth, fly_buffered, fly_cells};
+use crate::campaign_flight::FlightConditions;
+use crate::simulate::Truth;
 
 mod run;
 mod strategy;
 mod summary;
+mod types;
 
 #[cfg(test)]
 use run::oracle_scores;
-use run::run_one;
+use run::{Shared, new_run_project, run_one, run_settings};
 pub use strategy::{Strategy, Term};
 pub use summary::{
-    BLOCK_DAYS, CampaignSummary, Interval, METRICS, MIN_BLOCKS, Summary, block_interval,
-    block_means, campaign_summary, every, interval, metric, summarise,
+    BLOCK_DAYS, CALM_DAY_MPS, CampaignSummary, FlightSummary, Interval, METRICS, MIN_BLOCKS,
+    Summary, block_interval, block_means, campaign_summary, every, flight_summaries, interval,
+    metric, summarise,
 };
-
-/// A run's settings: the strategy's ([`Strategy::settings`]) with the run's budget, planner
-/// and seed.
-fn run_settings(request: &CampaignRequest, key: &RunKey) -> Result<Settings> {
-    let mut settings = key.strategy.settings(&request.settings);
-    let battery = settings.energy.to_core()?.battery.capacity_j;
-    settings.energy.battery_j = Some(battery * key.budget);
-    settings.planner.solver = key.strategy.planner().name().to_string();
-    settings.planner.seed = key.seed;
-    settings.flight.wind_margin_mps = request
-        .flight
-        .planning_margin_mps(settings.flight.wind_margin_mps);
-    Ok(settings)
-}
+pub use types::{
+    CampaignRequest, CampaignResult, MissionMetrics, RunKey, RunResult, TruthEvent, Visit,
+};
 
 /// Everything a run's results depend on besides what every run shares: the strategy's
 /// selection ([`Strategy::selection`]), the seed, the budget (bits) and the run's settings
@@ -78,19 +59,6 @@ fn run_signature(request: &CampaignRequest, key: &RunKey) -> Result<String> {
         key.seed,
         key.budget.to_bits()
     ))
-}
-
-/// An anomaly event to catch: sensors, and the readings' times it covers.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TruthEvent {
-    /// Identifier.
-    pub id: String,
-    /// The affected sensors (caught when any of them is collected with an event reading).
-    pub sensors: Vec<SensorId>,
-    /// First affected reading's time, seconds.
-    pub start: UnixSeconds,
-    /// End (exclusive), seconds: the first reading time no longer in the event.
-    pub end: UnixSeconds,
 }
 
 /// Events of the real-data rule: for each sensor, z = (Δ − mean Δ) / sd Δ of its consecutive
@@ -177,57 +145,6 @@ fn truth_series(truth: &Truth, modality: &str) -> BTreeMap<SensorId, (Vec<UnixSe
             )
         })
         .collect()
-}
-
-/// A campaign to run.
-#[derive(Debug, Clone)]
-pub struct CampaignRequest {
-    /// The dataset's name in outputs.
-    pub label: String,
-    /// The sensors (as for `init`; its directory is not used).
-    pub init: InitRequest,
-    /// The sensors themselves (e.g. a project's own, `simulate --project`), used instead of
-    /// reading `init.sensors` when given.
-    pub sensors: Option<Vec<Sensor>>,
-    /// The settings every run starts from (grid, utility, energy at 100% budget, planner).
-    pub settings: Settings,
-    /// Readings available by this time (t + period <= it) are the history every run starts
-    /// with, seconds.
-    pub history_until: UnixSeconds,
-    /// Readings before this time are left out of the history, seconds [default: none].
-    pub history_from: Option<UnixSeconds>,
-    /// Mission times, seconds, ascending, after `history_until`.
-    pub schedule: Vec<UnixSeconds>,
-    /// Strategies.
-    pub strategies: Vec<Strategy>,
-    /// Replicate seeds (planner and random choices).
-    pub seeds: Vec<u64>,
-    /// Battery capacities as fractions of the settings' (1 = the paper's budget).
-    pub budgets: Vec<f64>,
-    /// The evaluated modality [default: the condition modality].
-    pub modality: Option<String>,
-    /// Ground-truth events (synthetic farms) [default: [`rule_events`] with `event_z`].
-    pub events: Option<Vec<TruthEvent>>,
-    /// |z| threshold of the real-data event rule.
-    pub event_z: f64,
-    /// Planner iteration cap (results independent of the machine's speed).
-    pub planner_iterations: u64,
-    /// Sorties per mission of the planned strategies (battery swaps, each within the budget,
-    /// planned together by `plan`'s team solver), in 1..=[`gleaner_app::MAX_SORTIES`];
-    /// exhaustive collection flies as many as it takes whatever this says.
-    pub sorties: usize,
-    /// Observations per kriging estimate.
-    pub neighbours: usize,
-    /// The reconstruction's model-based estimator (the `kriged` metrics): kriging of changes
-    /// (the default), the dynamic field model or kriging of levels.
-    pub estimator: gleaner_app::Estimator,
-    /// Runs in parallel (threads; 0 = rayon's default).
-    pub jobs: usize,
-    /// Provenance time stamped on missions, seconds.
-    pub clock_now: UnixSeconds,
-    /// The wind and batteries the flights meet [default: still air, full batteries: flown
-    /// as planned]; every run meets the same.
-    pub flight: FlightConditions,
 }
 
 /// A dataset as a campaign takes it: the truth, the sensors, the settings, and the dataset's
@@ -397,236 +314,6 @@ pub fn replay(
         },
         truth,
     })
-}
-
-/// One mission's metrics (after its flights were recorded).
-#[derive(Debug, Clone, PartialEq)]
-pub struct MissionMetrics {
-    /// Mission number, from 0.
-    pub index: usize,
-    /// Mission time T, seconds.
-    pub t: UnixSeconds,
-    /// Sorties flown.
-    pub sorties: usize,
-    /// Cells visited.
-    pub cells: usize,
-    /// Energy of all sorties, J.
-    pub energy_j: f64,
-    /// Usable budget per sortie, J.
-    pub budget_j: f64,
-    /// Root-mean-square error of last value carried forward, the modality's unit.
-    pub rmse_carried: f64,
-    /// Mean absolute error of last value carried forward.
-    pub mae_carried: f64,
-    /// Root-mean-square error of the kriging estimate.
-    pub rmse_kriged: f64,
-    /// Mean absolute error of the kriging estimate.
-    pub mae_kriged: f64,
-    /// Mean kriging variance, the unit squared.
-    pub mean_variance: f64,
-    /// Share of the sensors *estimated* (not read at T − period: their estimate is not their
-    /// own reading) whose true value lies in the estimator's 90% interval, estimate ±
-    /// 1.645·sd; None when none was estimated (or results of an older version). A calibrated
-    /// model covers 90%.
-    pub coverage90: Option<f64>,
-    /// Root-mean-square error of last value carried forward from what was known before this
-    /// mission's flights (after the previous mission's), against the same truth: the error the
-    /// operator lived with between the two missions, at its largest. NaN when not measured
-    /// (results files of an older version).
-    pub rmse_carried_before: f64,
-    /// The same for the kriging estimate.
-    pub rmse_kriged_before: f64,
-    /// Sensors with a true value at T − period (those evaluated).
-    pub evaluated: usize,
-    /// Mean time since each sensor's last collection, seconds.
-    pub staleness_mean_s: f64,
-    /// Largest time since a sensor's last collection, seconds.
-    pub staleness_max_s: f64,
-    /// Share of cells whose class the condition model predicted right before the flight.
-    pub classifier_accuracy: Option<f64>,
-    /// Readings dropped by full buffers, brought to light by this mission's collections.
-    pub lost_readings: u64,
-    /// Events first caught at this mission.
-    pub events_caught: usize,
-    /// How its sorties flew: wind, batteries, re-plans, energy against the battery (`None`
-    /// in results files written before flights were simulated).
-    pub flight: Option<FlightDay>,
-}
-
-/// A run's identity.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RunKey {
-    /// Strategy.
-    pub strategy: Strategy,
-    /// Replicate seed.
-    pub seed: u64,
-    /// Budget as a fraction of the settings' battery.
-    pub budget: f64,
-}
-
-/// One run's results.
-#[derive(Debug, Clone)]
-pub struct RunResult {
-    /// Which run.
-    pub key: RunKey,
-    /// One per scheduled mission.
-    pub missions: Vec<MissionMetrics>,
-    /// Per campaign event (same order as [`CampaignResult::events`]): when it was caught
-    /// (the mission time), seconds.
-    pub caught: Vec<Option<UnixSeconds>>,
-    /// Every cell visited, with the utility terms the planner's scoring gave it before the
-    /// flight (diagnostics: which terms drove the choice, revisit counts). Empty when the
-    /// results were read back from files that do not hold it.
-    pub visits: Vec<Visit>,
-}
-
-/// One visited cell of one mission, with its pre-flight utility terms (the project's weights
-/// and forms, whatever the strategy chose by).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Visit {
-    /// Mission number, from 0.
-    pub index: usize,
-    /// The cell.
-    pub cell: CellIndex,
-    /// Days since the cell was last collected (its stalest sensor), at the mission time.
-    pub age_days: f64,
-    /// Freshness F, in [0, 1].
-    pub f: f64,
-    /// Anomaly as scored (raw or bounded).
-    pub a: f64,
-    /// Uncertainty U, in [0, 1].
-    pub u: f64,
-    /// Redundancy R, in [0, 1].
-    pub r: f64,
-    /// Score S with the project's weights.
-    pub s: f64,
-}
-
-/// A campaign's results.
-#[derive(Debug, Clone)]
-pub struct CampaignResult {
-    /// The dataset's name.
-    pub label: String,
-    /// The evaluated modality.
-    pub modality: String,
-    /// The logging period, seconds.
-    pub period_s: i64,
-    /// The field model fitted on the history.
-    pub covariance: Covariance,
-    /// The model of changes fitted on the history (`None` in results written before it).
-    pub changes: Option<IncrementModel>,
-    /// The estimator every run was judged by, resolved against the fitted models (`None` in
-    /// results written before it was recorded).
-    pub estimator: Option<gleaner_app::Estimator>,
-    /// Events that became available during the campaign.
-    pub events: Vec<TruthEvent>,
-    /// One per (strategy, seed, budget), in that order.
-    pub runs: Vec<RunResult>,
-}
-
-/// A small deterministic generator (SplitMix64): the random strategy's and the campaign
-/// weather's draws.
-pub(crate) fn splitmix(mut x: u64) -> u64 {
-    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    x ^ (x >> 31)
-}
-
-/// What every run shares: the history, the truth's evaluation series, the cells' sensors.
-struct Shared<'a> {
-    request: &'a CampaignRequest,
-    truth: &'a Truth,
-    history: Readings,
-    modality: Modality,
-    /// Truth series of the evaluated modality, per sensor id.
-    series: BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
-    /// Truth series of the condition modality (may equal `series`).
-    class_series: BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
-    events: Vec<TruthEvent>,
-    model: FieldModel,
-    /// The model of changes fitted on the history.
-    changes: IncrementModel,
-    /// The dynamic field model fitted on the history (None when it cannot be fitted).
-    dynamic: Option<gleaner_kriging::DynamicModel>,
-    /// The request's estimator, resolved against the models ([`gleaner_app::Estimator::resolve`]).
-    estimator: gleaner_app::Estimator,
-    step_s: i64,
-    /// The store every run starts from (the history ingested, the utility state built),
-    /// copied for each run.
-    template: Option<std::sync::Mutex<SqliteStore>>,
-}
-
-fn value_at(
-    series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
-    s: &SensorId,
-    t: UnixSeconds,
-) -> Option<f64> {
-    let (times, values) = series.get(s)?;
-    times.binary_search(&t).ok().map(|k| values[k])
-}
-
-/// A new in-memory project for one run, with the history ingested: a copy of the campaign's
-/// template store when there is one (what the steps below would write again), scored once
-/// with the run's settings.
-fn new_run_project(shared: &Shared<'_>, settings: Settings) -> Result<Project<SqliteStore>> {
-    let request = shared.request;
-    if let Some(template) = &shared.template {
-        let store = template
-            .lock()
-            .map_err(|_| AppError::Invalid("a campaign run panicked".into()))?
-            .copy_in_memory()?;
-        let mut project = Project::new(&request.init.dir, settings, store);
-        score(
-            &mut project,
-            &ScoreRequest {
-                at: Some(request.history_until),
-                ..ScoreRequest::default()
-            },
-        )?;
-        return Ok(project);
-    }
-    let store = SqliteStore::open_in_memory()?;
-    let dir = request.init.dir.clone();
-    let mut project = Project::new(&dir, settings, store);
-    match &request.sensors {
-        Some(sensors) => init_store_with(&mut project, sensors, &request.label)?,
-        None => init_store(&mut project, &request.init)?,
-    };
-    let report = IngestReport {
-        rows_read: shared.history.rows.len() as u64,
-        readings: shared.history.rows.len() as u64,
-        ..IngestReport::default()
-    };
-    let parsed = Parsed {
-        files: vec![(
-            PathBuf::from(format!("{} history", request.label)),
-            Format::Long,
-            shared.history.clone(),
-            report.clone(),
-        )],
-        report,
-    };
-    ingest_parsed(
-        &mut project,
-        parsed,
-        &IngestRequest {
-            now: Some(request.history_until),
-            ..IngestRequest::default()
-        },
-        request.clock_now,
-        &Silent,
-    )?;
-    // As after any bulk ingest: the first scoring rebuilds the persisted utility state, so
-    // every mission's scoring takes the fast path.
-    score(
-        &mut project,
-        &ScoreRequest {
-            at: Some(request.history_until),
-            ..ScoreRequest::default()
-        },
-    )?;
-    Ok(project)
 }
 
 /// Runs the campaign: every (strategy, seed, budget) in parallel over `jobs` threads, each
@@ -951,6 +638,8 @@ fn run_keys(request: &CampaignRequest) -> Vec<RunKey> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use gleaner_app::SensorEstimate;
+    use gleaner_mission::Planner;
 
     const DAY: i64 = 86_400;
 

@@ -24,7 +24,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal, Weibull};
 use statrs::distribution::{ContinuousCDF, Normal};
 
-use crate::campaign::splitmix;
+use crate::seed::splitmix;
 use gleaner_app::Project;
 use gleaner_app::wind::MAX_WIND_MPS;
 use gleaner_app::{AppError, Result};
@@ -784,85 +784,6 @@ pub fn fly_in_wind<S: Store>(
         energy_j: flown.total_j,
         usable_j,
     })
-}
-
-/// One strategy's flights over every run and dataset given (missions with a flight record).
-#[derive(Debug, Clone, PartialEq)]
-pub struct FlightSummary {
-    /// Strategy.
-    pub strategy: crate::campaign::Strategy,
-    /// Missions with a flight record.
-    pub missions: usize,
-    /// Mean forecast wind, m/s.
-    pub mean_forecast_mps: f64,
-    /// Missions of which a sortie re-planned in the air.
-    pub replanned: usize,
-    /// Planned stops the re-plans dropped.
-    pub cells_dropped: usize,
-    /// Readings brought back.
-    pub readings: u64,
-    /// Readings brought back on missions whose forecast was below [`CALM_DAY_MPS`].
-    pub readings_calm_days: u64,
-    /// Missions whose forecast was below [`CALM_DAY_MPS`].
-    pub calm_days: usize,
-    /// Missions of which a sortie flew more energy than its battery could give above the
-    /// reserve (must be 0).
-    pub over_budget: usize,
-    /// The largest flown energy less the usable energy over every sortie, J (< 0: every
-    /// sortie landed with at least that much to spare above the reserve).
-    pub max_excess_j: f64,
-}
-
-/// Forecast speed below which a mission day counts as moderate, m/s (the flight-day target:
-/// data within 10% of still air's on such days).
-pub const CALM_DAY_MPS: f64 = 6.0;
-
-/// [`FlightSummary`] per strategy, in order of first appearance.
-pub fn flight_summaries(results: &[crate::campaign::CampaignResult]) -> Vec<FlightSummary> {
-    let mut out: Vec<FlightSummary> = Vec::new();
-    let mut wind_sum: Vec<f64> = Vec::new();
-    for run in results.iter().flat_map(|r| &r.runs) {
-        let k = match out.iter().position(|f| f.strategy == run.key.strategy) {
-            Some(k) => k,
-            None => {
-                out.push(FlightSummary {
-                    strategy: run.key.strategy,
-                    missions: 0,
-                    mean_forecast_mps: f64::NAN,
-                    replanned: 0,
-                    cells_dropped: 0,
-                    readings: 0,
-                    readings_calm_days: 0,
-                    calm_days: 0,
-                    over_budget: 0,
-                    max_excess_j: f64::NEG_INFINITY,
-                });
-                wind_sum.push(0.0);
-                out.len() - 1
-            }
-        };
-        let f = &mut out[k];
-        for d in run.missions.iter().filter_map(|m| m.flight.as_ref()) {
-            f.missions += 1;
-            wind_sum[k] += d.wind.forecast.speed_mps;
-            f.replanned += usize::from(d.replanned > 0);
-            f.cells_dropped += d.cells_dropped;
-            f.readings += d.readings;
-            if d.wind.forecast.speed_mps < CALM_DAY_MPS {
-                f.calm_days += 1;
-                f.readings_calm_days += d.readings;
-            }
-            f.over_budget += usize::from(d.over_budget > 0);
-            f.max_excess_j = f.max_excess_j.max(d.max_excess_j);
-        }
-    }
-    for (f, w) in out.iter_mut().zip(wind_sum) {
-        if f.missions > 0 {
-            f.mean_forecast_mps = w / f.missions as f64;
-        }
-    }
-    out.retain(|f| f.missions > 0);
-    out
 }
 
 #[cfg(test)]

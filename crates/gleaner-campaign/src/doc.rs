@@ -19,7 +19,7 @@ fn interval(i: &Interval) -> IntervalDoc {
 }
 
 /// Per strategy, how a campaign's sorties flew in its weather (`CampaignDoc::flights`).
-pub fn flights(f: &[crate::campaign_flight::FlightSummary]) -> Vec<FlightSummaryDoc> {
+pub fn flights(f: &[crate::campaign::FlightSummary]) -> Vec<FlightSummaryDoc> {
     f.iter()
         .map(|f| FlightSummaryDoc {
             strategy: f.strategy.name().into(),

@@ -31,6 +31,7 @@ mod error;
 pub mod replay;
 pub mod report;
 pub mod results;
+mod seed;
 pub mod simulate;
 pub mod simulation;
 

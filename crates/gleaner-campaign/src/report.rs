@@ -22,7 +22,7 @@ use crate::results::{CAMPAIGN, COMMAND, read_results, write};
 /// they dropped, the data brought back and the energy flown against each battery. Nothing
 /// when the files hold no flights.
 fn flights_section(md: &mut String, results: &[CampaignResult]) -> Result<()> {
-    use crate::campaign_flight::{CALM_DAY_MPS, flight_summaries};
+    use crate::campaign::{CALM_DAY_MPS, flight_summaries};
     let rows = flight_summaries(results);
     if rows.is_empty() {
         return Ok(());

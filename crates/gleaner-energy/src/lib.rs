@@ -34,6 +34,7 @@
 //! ```
 #![deny(missing_docs)]
 
+mod air;
 mod config;
 mod error;
 pub mod flight;

@@ -3,11 +3,11 @@
 
 use gleaner_field::{CellId, Field, LocalPoint};
 
+use crate::air::{Wind, WindLeg};
 use crate::config::{CruiseSpeed, EnergyConfig, LinearEnergy, VerticalConfig};
 use crate::error::{EnergyError, finite, non_negative};
 use crate::link::{DataLogging, HoverConfig, LinkConfig, SensorBacklog};
 use crate::propulsion::PowerModel;
-use crate::wind::Wind;
 
 /// Euclidean distance between two local points, metres: sqrt(Δe² + Δn²). Used for every
 /// distance in this crate so that the planner costs and the breakdown agree to the last bit.
@@ -463,7 +463,7 @@ impl MissionEnergyModel {
 
     /// One straight segment in the model's wind at the cruise ground speed (finite points:
     /// the callers check them; a non-finite one gives NaN energies, refused downstream).
-    fn segment_in_wind(&self, from: LocalPoint, to: LocalPoint) -> crate::wind::WindLeg {
+    fn segment_in_wind(&self, from: LocalPoint, to: LocalPoint) -> WindLeg {
         let planned = self.segment_at(from, to, self.wind);
         if !self.up_to {
             return planned;
@@ -473,7 +473,7 @@ impl MissionEnergyModel {
         for k in 0..UP_TO_SAMPLES {
             let leg = self.segment_at(from, to, self.sample(k));
             if leg.energy_j > worst.energy_j || leg.energy_j.is_nan() {
-                worst = crate::wind::WindLeg {
+                worst = WindLeg {
                     headwind_mps: planned.headwind_mps,
                     crosswind_mps: planned.crosswind_mps,
                     ..leg
@@ -483,10 +483,10 @@ impl MissionEnergyModel {
         worst
     }
 
-    fn segment_at(&self, from: LocalPoint, to: LocalPoint, wind: Wind) -> crate::wind::WindLeg {
+    fn segment_at(&self, from: LocalPoint, to: LocalPoint, wind: Wind) -> WindLeg {
         self.power
             .leg_in_wind(from, to, self.cruise_speed_mps, wind)
-            .unwrap_or(crate::wind::WindLeg {
+            .unwrap_or(WindLeg {
                 distance_m: f64::NAN,
                 ground_speed_mps: self.cruise_speed_mps,
                 airspeed_mps: f64::NAN,

@@ -34,9 +34,9 @@ use sha2::{Digest, Sha256};
 use subtle::ConstantTimeEq;
 use tower::ServiceExt as _;
 
-use crate::auth::Token;
 use crate::error::ApiError;
 use crate::state::AppState;
+use crate::token::Token;
 use crate::{ServerConfig, ServerError};
 
 /// What a farm token may do.

@@ -45,6 +45,7 @@ pub mod farms;
 pub mod handlers;
 pub mod start;
 pub mod state;
+mod token;
 
 mod security;
 
@@ -62,10 +63,10 @@ use utoipa::OpenApi as _;
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
-pub use auth::{Token, TokenError};
 pub use error::{ApiError, ErrorBody};
 pub use farms::{FarmTokens, Farms, Scope};
 pub use state::{AppState, Event, Hook};
+pub use token::{Token, TokenError};
 
 /// Default address: loopback only.
 pub const DEFAULT_ADDR: &str = "127.0.0.1:8080";

@@ -21,8 +21,8 @@ use tokio::sync::{OwnedSemaphorePermit, Semaphore, watch};
 use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 
-use crate::auth::Token;
 use crate::error::{ApiError, ApiResult};
+use crate::token::Token;
 
 /// A project as [`Project::open`] opens it (the one place naming the backend it returns).
 pub type Opened = Project<gleaner_app::AnyStore>;
@@ -179,7 +179,7 @@ pub(crate) struct Inner {
     slots: Arc<Semaphore>,
     pub(crate) token: Option<Token>,
     /// One farm of a `--farms` server: the dispatcher checked the request's farm token and
-    /// put its scope in the request ([`crate::farms::FarmAccess`]); `token` is unused.
+    /// put its scope in the request (`farms.rs`'s `FarmAccess`); `token` is unused.
     pub(crate) farm: bool,
     /// Whether computations that write nothing (previews, dry runs, simulations,
     /// reconstructions) may run without the token: on loopback only.

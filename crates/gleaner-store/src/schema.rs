@@ -1,13 +1,9 @@
 //! The SQLite schema as an ordered list of migrations.
 //!
 //! Migration `k` (1-based) brings the schema from version `k - 1` to `k`. Each runs in its own
-//! transaction together with its row in `schema_migrations` and `PRAGMA user_version`, so a
-//! crash leaves the database at a whole version. Never edit a released migration: append one.
-
-use rusqlite::{Connection, OptionalExtension, TransactionBehavior};
-
-use crate::sqlite::Db;
-use crate::{Result, StoreError};
+//! transaction together with its row in `schema_migrations` and `PRAGMA user_version` (the
+//! SQLite store's `migrate`; PostgreSQL's its own), so a crash leaves the database at a whole
+//! version. Never edit a released migration: append one.
 
 /// One schema step.
 pub(crate) struct Migration {
@@ -334,85 +330,4 @@ CREATE TABLE blobs (
 /// The schema version this build writes.
 pub(crate) fn latest_version() -> i64 {
     MIGRATIONS.len() as i64
-}
-
-/// Brings `conn` to the latest schema, or fails with [`StoreError::SchemaTooNew`] if the
-/// database is newer than this build. Returns the version found before migrating.
-pub(crate) fn migrate(conn: &mut Connection) -> Result<i64> {
-    migrate_with(conn, MIGRATIONS)
-}
-
-/// [`migrate`] with an explicit list (tests use longer lists).
-///
-/// Each step runs in an IMMEDIATE transaction that re-reads the version first, so two
-/// processes opening the same new database at once apply every step exactly once.
-pub(crate) fn migrate_with(conn: &mut Connection, migrations: &[Migration]) -> Result<i64> {
-    conn.execute_batch(
-        "CREATE TABLE IF NOT EXISTS schema_migrations (
-             version     INTEGER PRIMARY KEY,
-             applied_at  INTEGER NOT NULL,
-             description TEXT    NOT NULL
-         );",
-    )
-    .db()?;
-    let supported = migrations.len() as i64;
-    let found = current_version(conn)?;
-    if found == supported {
-        // Up to date: no write transaction, so opening a project never waits for (or fails
-        // on) another process's write.
-        return Ok(found);
-    }
-    let path = conn.path().unwrap_or(":memory:").to_string();
-    loop {
-        let tx = conn
-            .transaction_with_behavior(TransactionBehavior::Immediate)
-            .map_err(|e| {
-                if e.sqlite_error_code() == Some(rusqlite::ErrorCode::DatabaseBusy) {
-                    crate::sqlite::busy_error(&path, crate::sqlite::BUSY_TIMEOUT)
-                } else {
-                    StoreError::Backend(e.to_string())
-                }
-            })?;
-        let version = current_version(&tx)?;
-        if version > supported {
-            return Err(StoreError::SchemaTooNew {
-                found: version,
-                supported,
-            });
-        }
-        let Some(m) = usize::try_from(version)
-            .ok()
-            .and_then(|k| migrations.get(k))
-        else {
-            break;
-        };
-        let next = version + 1;
-        tx.execute_batch(m.sql).db()?;
-        tx.execute(
-            "INSERT INTO schema_migrations (version, applied_at, description)
-             VALUES (?1, CAST(strftime('%s', 'now') AS INTEGER), ?2)",
-            rusqlite::params![next, m.description],
-        )
-        .db()?;
-        tx.pragma_update(None, "user_version", next).db()?;
-        tx.commit().db()?;
-    }
-    Ok(found)
-}
-
-/// The schema version recorded in `conn`: the later of `schema_migrations` and
-/// `PRAGMA user_version`.
-fn current_version(conn: &Connection) -> Result<i64> {
-    let recorded: i64 = conn
-        .query_row("SELECT MAX(version) FROM schema_migrations", [], |r| {
-            r.get::<_, Option<i64>>(0)
-        })
-        .optional()
-        .db()?
-        .flatten()
-        .unwrap_or(0);
-    let user_version: i64 = conn
-        .query_row("PRAGMA user_version", [], |r| r.get(0))
-        .db()?;
-    Ok(recorded.max(user_version))
 }

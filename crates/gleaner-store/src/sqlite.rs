@@ -19,9 +19,9 @@ use std::path::Path;
 use std::time::Duration;
 
 use gleaner_field::{Modality, SensorId, UnixSeconds};
-use rusqlite::{Connection, Transaction, TransactionBehavior};
+use rusqlite::{Connection, OptionalExtension, Transaction, TransactionBehavior};
 
-use crate::schema;
+use crate::schema::{self, Migration};
 use crate::{
     CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionRecord,
     ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result, SensorRecord, Store,
@@ -93,6 +93,87 @@ pub(crate) fn busy_error(path: &str, timeout: Duration) -> StoreError {
          it has finished",
         timeout.as_secs_f64()
     ))
+}
+
+/// Brings `conn` to the latest schema, or fails with [`StoreError::SchemaTooNew`] if the
+/// database is newer than this build ([`schema::MIGRATIONS`]). Returns the version found before migrating.
+fn migrate(conn: &mut Connection) -> Result<i64> {
+    migrate_with(conn, schema::MIGRATIONS)
+}
+
+/// [`migrate`] with an explicit list (tests use longer lists).
+///
+/// Each step runs in an IMMEDIATE transaction that re-reads the version first, so two
+/// processes opening the same new database at once apply every step exactly once.
+pub(crate) fn migrate_with(conn: &mut Connection, migrations: &[Migration]) -> Result<i64> {
+    conn.execute_batch(
+        "CREATE TABLE IF NOT EXISTS schema_migrations (
+             version     INTEGER PRIMARY KEY,
+             applied_at  INTEGER NOT NULL,
+             description TEXT    NOT NULL
+         );",
+    )
+    .db()?;
+    let supported = migrations.len() as i64;
+    let found = current_version(conn)?;
+    if found == supported {
+        // Up to date: no write transaction, so opening a project never waits for (or fails
+        // on) another process's write.
+        return Ok(found);
+    }
+    let path = conn.path().unwrap_or(":memory:").to_string();
+    loop {
+        let tx = conn
+            .transaction_with_behavior(TransactionBehavior::Immediate)
+            .map_err(|e| {
+                if e.sqlite_error_code() == Some(rusqlite::ErrorCode::DatabaseBusy) {
+                    busy_error(&path, BUSY_TIMEOUT)
+                } else {
+                    StoreError::Backend(e.to_string())
+                }
+            })?;
+        let version = current_version(&tx)?;
+        if version > supported {
+            return Err(StoreError::SchemaTooNew {
+                found: version,
+                supported,
+            });
+        }
+        let Some(m) = usize::try_from(version)
+            .ok()
+            .and_then(|k| migrations.get(k))
+        else {
+            break;
+        };
+        let next = version + 1;
+        tx.execute_batch(m.sql).db()?;
+        tx.execute(
+            "INSERT INTO schema_migrations (version, applied_at, description)
+             VALUES (?1, CAST(strftime('%s', 'now') AS INTEGER), ?2)",
+            rusqlite::params![next, m.description],
+        )
+        .db()?;
+        tx.pragma_update(None, "user_version", next).db()?;
+        tx.commit().db()?;
+    }
+    Ok(found)
+}
+
+/// The schema version recorded in `conn`: the later of `schema_migrations` and
+/// `PRAGMA user_version`.
+fn current_version(conn: &Connection) -> Result<i64> {
+    let recorded: i64 = conn
+        .query_row("SELECT MAX(version) FROM schema_migrations", [], |r| {
+            r.get::<_, Option<i64>>(0)
+        })
+        .optional()
+        .db()?
+        .flatten()
+        .unwrap_or(0);
+    let user_version: i64 = conn
+        .query_row("PRAGMA user_version", [], |r| r.get(0))
+        .db()?;
+    Ok(recorded.max(user_version))
 }
 
 /// An open write transaction of a [`SqliteStore`] (see [`Store::write`]).
@@ -174,7 +255,7 @@ impl SqliteStore {
              PRAGMA cache_size = -{CACHE_KIB};"
         ))
         .db()?;
-        schema::migrate(&mut conn)?;
+        migrate(&mut conn)?;
         Ok(Self {
             conn,
             count: Cell::new(None),

@@ -7,6 +7,7 @@ use gleaner_field::{CellIndex, LatLon, UnixSeconds};
 
 use crate::conformance::{batch, md, sensor, sid};
 use crate::schema::{self, Migration};
+use crate::sqlite::migrate_with;
 use crate::*;
 
 const T0: UnixSeconds = 1_262_304_000; // 2010-01-01T00:00:00Z
@@ -286,7 +287,7 @@ fn later_migrations_apply_in_order_and_failed_ones_roll_back() {
         sql: "CREATE TABLE extra (x INTEGER); SELECT * FROM no_such_table;",
     });
     // The broken third step fails; the second stays applied, the third leaves nothing.
-    assert!(schema::migrate_with(&mut conn, &list).is_err());
+    assert!(migrate_with(&mut conn, &list).is_err());
     let version: i64 = conn
         .query_row("SELECT MAX(version) FROM schema_migrations", [], |r| {
             r.get(0)
@@ -302,7 +303,7 @@ fn later_migrations_apply_in_order_and_failed_ones_roll_back() {
         .unwrap();
     assert_eq!(extra, 0);
     list.pop();
-    assert_eq!(schema::migrate_with(&mut conn, &list).unwrap(), v1 + 1);
+    assert_eq!(migrate_with(&mut conn, &list).unwrap(), v1 + 1);
 }
 
 /// A version-1 database as the previous gleaner wrote it: an adaptive mission with the old
@@ -310,7 +311,7 @@ fn later_migrations_apply_in_order_and_failed_ones_roll_back() {
 fn legacy_v1_database(path: &Path) {
     let mut conn = rusqlite::Connection::open(path).unwrap();
     conn.pragma_update(None, "foreign_keys", true).unwrap();
-    schema::migrate_with(&mut conn, &schema::MIGRATIONS[..1]).unwrap();
+    migrate_with(&mut conn, &schema::MIGRATIONS[..1]).unwrap();
     let adaptive = r#"{"mission_id":null,"planned_at":"2010-01-01T00:01:00Z","planner":"default",
         "seed":42,"time_limit_s":2.0,"weights":[1.0,0.5,2.0,0.25],"anomaly_form":"raw",
         "base_lon_lat":[-117.0867,46.7788],"cruise_speed_mps":10.2,

@@ -1,7 +1,145 @@
 //! One run of a campaign: its missions, each scored, planned, flown, recorded and judged
 //! against the truth.
 
-use super::*;
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::path::PathBuf;
+
+use gleaner_field::{CellIndex, Modality, Sensor, SensorId, UnixSeconds};
+use gleaner_ingest::{IngestReport, Readings};
+use gleaner_kriging::{FieldModel, IncrementModel, variance_reduction};
+use gleaner_store::{SqliteStore, StoreRead};
+
+use gleaner_app::ExploreRequest;
+use gleaner_app::settings::Settings;
+use gleaner_app::shortcuts::{
+    EstimateReads, ExplorationMemo, Parsed, estimate_with, explore_with, ingest_parsed, plan_scored,
+};
+use gleaner_app::{AppError, Result};
+use gleaner_app::{Format, IngestRequest};
+use gleaner_app::{Objective, PlanRequest};
+use gleaner_app::{Progress, Silent};
+use gleaner_app::{Project, SensorEstimate};
+use gleaner_app::{ScoreRequest, compute, score};
+use gleaner_app::{init_store, init_store_with};
+
+use super::strategy::Strategy;
+use super::types::{CampaignRequest, MissionMetrics, RunKey, RunResult, TruthEvent, Visit};
+use crate::campaign_flight::{DayWind, FlightDay, WindSource, fly_in_wind};
+use crate::seed::splitmix;
+use crate::simulate::{Truth, fly_buffered, fly_cells};
+
+/// A run's settings: the strategy's ([`Strategy::settings`]) with the run's budget, planner
+/// and seed.
+pub(super) fn run_settings(request: &CampaignRequest, key: &RunKey) -> Result<Settings> {
+    let mut settings = key.strategy.settings(&request.settings);
+    let battery = settings.energy.to_core()?.battery.capacity_j;
+    settings.energy.battery_j = Some(battery * key.budget);
+    settings.planner.solver = key.strategy.planner().name().to_string();
+    settings.planner.seed = key.seed;
+    settings.flight.wind_margin_mps = request
+        .flight
+        .planning_margin_mps(settings.flight.wind_margin_mps);
+    Ok(settings)
+}
+
+/// What every run shares: the history, the truth's evaluation series, the cells' sensors.
+pub(super) struct Shared<'a> {
+    pub(super) request: &'a CampaignRequest,
+    pub(super) truth: &'a Truth,
+    pub(super) history: Readings,
+    pub(super) modality: Modality,
+    /// Truth series of the evaluated modality, per sensor id.
+    pub(super) series: BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
+    /// Truth series of the condition modality (may equal `series`).
+    pub(super) class_series: BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
+    pub(super) events: Vec<TruthEvent>,
+    pub(super) model: FieldModel,
+    /// The model of changes fitted on the history.
+    pub(super) changes: IncrementModel,
+    /// The dynamic field model fitted on the history (None when it cannot be fitted).
+    pub(super) dynamic: Option<gleaner_kriging::DynamicModel>,
+    /// The request's estimator, resolved against the models ([`gleaner_app::Estimator::resolve`]).
+    pub(super) estimator: gleaner_app::Estimator,
+    pub(super) step_s: i64,
+    /// The store every run starts from (the history ingested, the utility state built),
+    /// copied for each run.
+    pub(super) template: Option<std::sync::Mutex<SqliteStore>>,
+}
+
+fn value_at(
+    series: &BTreeMap<SensorId, (Vec<UnixSeconds>, Vec<f64>)>,
+    s: &SensorId,
+    t: UnixSeconds,
+) -> Option<f64> {
+    let (times, values) = series.get(s)?;
+    times.binary_search(&t).ok().map(|k| values[k])
+}
+
+/// A new in-memory project for one run, with the history ingested: a copy of the campaign's
+/// template store when there is one (what the steps below would write again), scored once
+/// with the run's settings.
+pub(super) fn new_run_project(
+    shared: &Shared<'_>,
+    settings: Settings,
+) -> Result<Project<SqliteStore>> {
+    let request = shared.request;
+    if let Some(template) = &shared.template {
+        let store = template
+            .lock()
+            .map_err(|_| AppError::Invalid("a campaign run panicked".into()))?
+            .copy_in_memory()?;
+        let mut project = Project::new(&request.init.dir, settings, store);
+        score(
+            &mut project,
+            &ScoreRequest {
+                at: Some(request.history_until),
+                ..ScoreRequest::default()
+            },
+        )?;
+        return Ok(project);
+    }
+    let store = SqliteStore::open_in_memory()?;
+    let dir = request.init.dir.clone();
+    let mut project = Project::new(&dir, settings, store);
+    match &request.sensors {
+        Some(sensors) => init_store_with(&mut project, sensors, &request.label)?,
+        None => init_store(&mut project, &request.init)?,
+    };
+    let report = IngestReport {
+        rows_read: shared.history.rows.len() as u64,
+        readings: shared.history.rows.len() as u64,
+        ..IngestReport::default()
+    };
+    let parsed = Parsed {
+        files: vec![(
+            PathBuf::from(format!("{} history", request.label)),
+            Format::Long,
+            shared.history.clone(),
+            report.clone(),
+        )],
+        report,
+    };
+    ingest_parsed(
+        &mut project,
+        parsed,
+        &IngestRequest {
+            now: Some(request.history_until),
+            ..IngestRequest::default()
+        },
+        request.clock_now,
+        &Silent,
+    )?;
+    // As after any bulk ingest: the first scoring rebuilds the persisted utility state, so
+    // every mission's scoring takes the fast path.
+    score(
+        &mut project,
+        &ScoreRequest {
+            at: Some(request.history_until),
+            ..ScoreRequest::default()
+        },
+    )?;
+    Ok(project)
+}
 
 pub(super) fn run_one(
     shared: &Shared<'_>,
@@ -270,7 +408,7 @@ fn plan_day(
     project: &mut Project<SqliteStore>,
     shared: &Shared<'_>,
     key: &RunKey,
-    (t, day): (UnixSeconds, &crate::campaign_flight::DayWind),
+    (t, day): (UnixSeconds, &DayWind),
     (given, scoring): (Option<Vec<f64>>, gleaner_app::Scoring),
     exploration_memo: &mut ExplorationMemo,
 ) -> Result<DayPlan> {
@@ -311,7 +449,7 @@ fn plan_day(
                 time_limit_s: Some(3_600.0),
                 sorties: Some(request.sorties),
                 wind: match request.flight.wind {
-                    crate::campaign_flight::WindSource::Still => None,
+                    WindSource::Still => None,
                     _ => Some(day.forecast),
                 },
                 objective: Some(match key.strategy.selection() {
@@ -370,7 +508,7 @@ fn fly_day(
     project: &mut Project<SqliteStore>,
     shared: &Shared<'_>,
     grid: &RunGrid,
-    (index, t, day): (usize, UnixSeconds, crate::campaign_flight::DayWind),
+    (index, t, day): (usize, UnixSeconds, DayWind),
     planned: &DayPlan,
     (ages, visits): (&[Option<f64>], &mut Vec<Visit>),
 ) -> Result<DayFlown> {

@@ -1,6 +1,8 @@
 //! The strategies a campaign compares and the utility terms their ablations drop.
 
-use super::*;
+use gleaner_app::settings::Settings;
+use gleaner_app::{AppError, Result};
+use gleaner_mission::Planner;
 
 /// A utility term, for ablations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]

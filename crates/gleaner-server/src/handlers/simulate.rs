@@ -128,9 +128,7 @@ pub async fn simulate(
             );
             if !replay.request.flight.is_still() {
                 doc.flights = gleaner_campaign::doc::flights(
-                    &gleaner_campaign::campaign_flight::flight_summaries(std::slice::from_ref(
-                        &result,
-                    )),
+                    &gleaner_campaign::campaign::flight_summaries(std::slice::from_ref(&result)),
                 );
             }
             let report = match with_report {
