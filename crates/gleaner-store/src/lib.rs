@@ -105,7 +105,7 @@
 #![deny(missing_docs)]
 
 /// The [`StoreRead`] methods, each a call of the backend's shared query in its own `read`
-/// module through the type's own `read` wrapper (the paths resolve where the macro is used:
+/// module (with the backend-neutral steps of `decode`) through the type's own `read` wrapper (the paths resolve where the macro is used:
 /// `sqlite.rs` and `postgres.rs`). Defined before those modules so both can use it.
 macro_rules! store_read_methods {
     () => {
@@ -123,14 +123,25 @@ macro_rules! store_read_methods {
             modality: Option<&Modality>,
             range: RangeInclusive<UnixSeconds>,
         ) -> Result<ReadingBatch> {
-            self.read(|c| read::readings_for(c, modality, range))
+            self.read(|c| {
+                let (sensors, modalities) = $crate::decode::all_sensors_of(
+                    read::sensor_ids(c)?,
+                    read::modality_ids(c)?,
+                    modality,
+                );
+                read::collect_readings(c, &sensors, &modalities, range)
+            })
         }
         fn readings_of_sensors(
             &self,
             sensors: &[SensorId],
             range: RangeInclusive<UnixSeconds>,
         ) -> Result<ReadingBatch> {
-            self.read(|c| read::readings_of_sensors(c, sensors, range))
+            self.read(|c| {
+                let wanted = $crate::decode::wanted_sensors(&read::sensor_ids(c)?, sensors)?;
+                let modalities = $crate::decode::sorted(read::modality_ids(c)?);
+                read::collect_readings(c, &wanted, &modalities, range)
+            })
         }
         fn latest_readings(
             &self,
@@ -182,6 +193,7 @@ mod any;
 mod checks;
 #[cfg(any(test, feature = "conformance"))]
 pub mod conformance;
+mod decode;
 mod error;
 pub mod failpoint;
 mod postgres;
