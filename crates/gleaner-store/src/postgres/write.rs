@@ -11,8 +11,9 @@ use postgres::Transaction;
 use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
 use crate::checks::{
-    ImportFlight, as_i64, check_cells, check_modality_list, check_sensor_list, check_visits,
-    import_flight, keys, mission_deleted, not_cancellable, plan_insert, validate_metadata,
+    ImportFlight, MetadataKeys, UnitChange, as_i64, check_cells, check_modality_list,
+    check_recordable, check_sensor_list, check_visits, import_flight, keys, mission_deleted,
+    not_cancellable, plan_cells, plan_insert, sensor_unchanged, unit_change, validate_metadata,
     validate_mission,
 };
 use crate::{
@@ -64,10 +65,7 @@ pub(super) fn upsert_sensors(
                 stats.added.push(s.id.to_string());
             }
             Some((slat, slon, elev, source))
-                if *slat == lat
-                    && *slon == lon
-                    && *elev == s.elevation_m
-                    && *source == s.source =>
+                if sensor_unchanged((*slat, *slon, *elev, source), s) =>
             {
                 stats.unchanged += 1;
             }
@@ -98,8 +96,8 @@ pub(super) fn upsert_modalities(
         if !done.insert(name) {
             continue;
         }
-        match (stored.get(name), &m.unit) {
-            (None, _) => {
+        match unit_change(m, stored.get(name).map(Option::as_deref))? {
+            UnitChange::Add => {
                 c.execute(
                     "INSERT INTO modalities (name, unit) VALUES ($1, $2)",
                     &[&name, &m.unit],
@@ -107,24 +105,15 @@ pub(super) fn upsert_modalities(
                 .db()?;
                 stats.added.push(name.to_string());
             }
-            // A unit for a modality stored without one is recorded.
-            (Some(None), Some(unit)) => {
+            UnitChange::SetUnit(unit) => {
                 c.execute(
                     "UPDATE modalities SET unit = $2 WHERE name = $1",
-                    &[&name, unit],
+                    &[&name, &unit],
                 )
                 .db()?;
                 stats.updated.push(name.to_string());
             }
-            (Some(Some(stored)), Some(incoming)) if stored != incoming => {
-                return Err(StoreError::UnitMismatch {
-                    modality: m.modality.clone(),
-                    stored: stored.clone(),
-                    incoming: incoming.clone(),
-                });
-            }
-            // Same unit, or no unit offered: the stored one stays.
-            (Some(_), _) => stats.unchanged += 1,
+            UnitChange::Unchanged => stats.unchanged += 1,
         }
     }
     Ok(stats)
@@ -305,28 +294,11 @@ pub(super) fn replace_cells(
     check_cells(cells)?;
     let stored = super::read::cells(c)?;
     let sensor_keys = sensor_ids(c)?;
-    let mut stats = ReplaceCellsStats::default();
-    let normalised = |cell: &CellRecord| {
-        let mut cell = cell.clone();
-        cell.sensors.sort();
-        cell.sensors.dedup();
-        cell
-    };
-    let new_by_label: HashMap<CellIndex, CellRecord> =
-        cells.iter().map(|x| (x.index, normalised(x))).collect();
-    let mut kept = HashSet::new();
-    let mut gone: Vec<String> = Vec::new();
-    for old in &stored {
-        if new_by_label.get(&old.index) == Some(old) {
-            kept.insert(old.index);
-        } else {
-            gone.push(old.index.to_string());
-        }
-    }
-    if !gone.is_empty() {
+    let plan = plan_cells(&stored, cells, &sensor_keys)?;
+    if !plan.gone.is_empty() {
+        let gone: Vec<String> = plan.gone.iter().map(|x| x.to_string()).collect();
         c.execute("DELETE FROM cells WHERE label = ANY($1)", &[&gone])
             .db()?;
-        stats.removed = gone.len();
     }
     let insert_cell = c
         .prepare(
@@ -337,12 +309,7 @@ pub(super) fn replace_cells(
     let insert_member = c
         .prepare("INSERT INTO cell_sensors (cell, sensor) VALUES ($1, $2)")
         .db()?;
-    let mut order: Vec<&CellRecord> = new_by_label.values().collect();
-    order.sort_by_key(|x| x.index);
-    for cell in order {
-        if kept.contains(&cell.index) {
-            continue;
-        }
+    for (cell, members) in &plan.added {
         let cell_key: i64 = c
             .query_one(
                 &insert_cell,
@@ -357,19 +324,15 @@ pub(super) fn replace_cells(
             )
             .db()?
             .get(0);
-        for s in &cell.sensors {
-            let sensor_key = sensor_keys
-                .get(s.as_str())
-                .ok_or_else(|| StoreError::Unknown {
-                    what: "sensor",
-                    name: s.to_string(),
-                })?;
+        for sensor_key in members {
             c.execute(&insert_member, &[&cell_key, sensor_key]).db()?;
         }
-        stats.added += 1;
     }
-    stats.kept = kept.len();
-    Ok(stats)
+    Ok(ReplaceCellsStats {
+        added: plan.added.len(),
+        removed: plan.gone.len(),
+        kept: plan.kept,
+    })
 }
 
 pub(super) fn set_sensors_collected(
@@ -506,20 +469,12 @@ pub(super) fn record_visits(
             &[&mission.0],
         )
         .db()?;
-    let Some(row) = stored else {
-        return Err(StoreError::Unknown {
-            what: "mission",
-            name: mission.to_string(),
-        });
-    };
-    let status: &str = row.get(0);
-    let stored_flown_at: Option<i64> = row.get(1);
-    if status == MissionStatus::Flown.as_str() && !amend {
-        return Err(StoreError::AlreadyFlown {
-            mission: mission.0,
-            flown_at: stored_flown_at.unwrap_or(flown_at),
-        });
-    }
+    check_recordable(
+        mission,
+        stored.as_ref().map(|row| (row.get(0), row.get(1))),
+        flown_at,
+        amend,
+    )?;
     c.execute(
         "UPDATE missions SET status = $2, flown_at = $3 WHERE id = $1",
         &[&mission.0, &MissionStatus::Flown.as_str(), &flown_at],
@@ -575,23 +530,12 @@ pub(super) fn upsert_cell_metadata(
     metadata: &[CellMetadata],
 ) -> Result<()> {
     validate_metadata(metadata)?;
-    let cell_keys = cell_ids(c)?;
-    let modality_keys = modality_ids(c)?;
-    let cell_key = |c: &CellIndex| {
-        cell_keys
-            .get(&c.to_string())
-            .copied()
-            .ok_or_else(|| StoreError::Unknown {
-                what: "cell",
-                name: c.to_string(),
-            })
+    let keys = MetadataKeys {
+        cells: cell_ids(c)?,
+        modalities: modality_ids(c)?,
     };
-    let modality_key = |m: &Modality| {
-        modality_keys
-            .get(m.as_str())
-            .copied()
-            .ok_or_else(|| StoreError::UnknownModality(m.clone()))
-    };
+    let cell_key = |c: &CellIndex| keys.cell(c);
+    let modality_key = |m: &Modality| keys.modality(m);
     let row = c
         .prepare(
             "INSERT INTO cell_metadata (cell, last_collected, pending_bytes, expected_energy_j,
