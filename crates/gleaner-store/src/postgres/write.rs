@@ -10,12 +10,7 @@ use postgres::Transaction;
 
 use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
-use crate::checks::{
-    ImportFlight, MetadataKeys, UnitChange, as_i64, check_cells, check_modality_list,
-    check_recordable, check_sensor_list, check_visits, import_flight, keys, mission_deleted,
-    not_cancellable, plan_cells, plan_insert, sensor_unchanged, unit_change, validate_metadata,
-    validate_mission,
-};
+use crate::checks::{self, ImportFlight, MetadataKeys, UnitChange};
 use crate::{
     CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionRecord,
     MissionStatus, ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result,
@@ -30,7 +25,7 @@ pub(super) fn upsert_sensors(
     c: &mut Transaction<'_>,
     sensors: &[SensorRecord],
 ) -> Result<UpsertStats> {
-    check_sensor_list(sensors)?;
+    checks::check_sensor_list(sensors)?;
     let mut stats = UpsertStats::default();
     let stored: HashMap<String, (f64, f64, Option<f64>, String)> = c
         .query(
@@ -65,7 +60,7 @@ pub(super) fn upsert_sensors(
                 stats.added.push(s.id.to_string());
             }
             Some((slat, slon, elev, source))
-                if sensor_unchanged((*slat, *slon, *elev, source), s) =>
+                if checks::sensor_unchanged((*slat, *slon, *elev, source), s) =>
             {
                 stats.unchanged += 1;
             }
@@ -82,7 +77,7 @@ pub(super) fn upsert_modalities(
     c: &mut Transaction<'_>,
     modalities: &[ModalityRecord],
 ) -> Result<UpsertStats> {
-    check_modality_list(modalities)?;
+    checks::check_modality_list(modalities)?;
     let mut stats = UpsertStats::default();
     let stored: HashMap<String, Option<String>> = c
         .query("SELECT name, unit FROM modalities", &[])
@@ -96,7 +91,7 @@ pub(super) fn upsert_modalities(
         if !done.insert(name) {
             continue;
         }
-        match unit_change(m, stored.get(name).map(Option::as_deref))? {
+        match checks::unit_change(m, stored.get(name).map(Option::as_deref))? {
             UnitChange::Add => {
                 c.execute(
                     "INSERT INTO modalities (name, unit) VALUES ($1, $2)",
@@ -172,10 +167,10 @@ pub(super) fn insert_readings(
 ) -> Result<InsertStats> {
     let known_sensors = sensor_ids(c)?;
     let known_modalities = modality_ids(c)?;
-    let sensor_keys = keys(&batch.sensors, &known_sensors, SensorId::as_str, |s| {
+    let sensor_keys = checks::keys(&batch.sensors, &known_sensors, SensorId::as_str, |s| {
         StoreError::UnknownSensor(s.clone())
     })?;
-    let modality_keys = keys(
+    let modality_keys = checks::keys(
         &batch.modalities,
         &known_modalities,
         Modality::as_str,
@@ -188,7 +183,7 @@ pub(super) fn insert_readings(
     // (new data usually meets none). During a bulk load the table holds only the load's
     // rows: a run outside their spans meets nothing, one inside needs the key back first.
     let mut stored_range = None;
-    let (order, fresh, stats) = plan_insert(
+    let (order, fresh, stats) = checks::plan_insert(
         batch,
         &sensor_keys,
         &modality_keys,
@@ -276,10 +271,10 @@ pub(super) fn record_ingest(c: &mut Transaction<'_>, ingest: &IngestRecord) -> R
         &[
             &ingest.file_name,
             &ingest.format,
-            &as_i64(ingest.rows_read),
-            &as_i64(ingest.rows_inserted),
-            &as_i64(ingest.rows_unchanged),
-            &as_i64(ingest.rows_skipped),
+            &checks::as_i64(ingest.rows_read),
+            &checks::as_i64(ingest.rows_inserted),
+            &checks::as_i64(ingest.rows_unchanged),
+            &checks::as_i64(ingest.rows_skipped),
             &ingest.at,
         ],
     )
@@ -291,10 +286,10 @@ pub(super) fn replace_cells(
     c: &mut Transaction<'_>,
     cells: &[CellRecord],
 ) -> Result<ReplaceCellsStats> {
-    check_cells(cells)?;
+    checks::check_cells(cells)?;
     let stored = super::read::cells(c)?;
     let sensor_keys = sensor_ids(c)?;
-    let plan = plan_cells(&stored, cells, &sensor_keys)?;
+    let plan = checks::plan_cells(&stored, cells, &sensor_keys)?;
     if !plan.gone.is_empty() {
         let gone: Vec<String> = plan.gone.iter().map(|x| x.to_string()).collect();
         c.execute("DELETE FROM cells WHERE label = ANY($1)", &[&gone])
@@ -363,7 +358,7 @@ pub(super) fn create_mission(c: &mut Transaction<'_>, m: &NewMission) -> Result<
 
 /// Inserts a mission and its stops, with the id `id` or (`None`) the next one.
 fn insert_mission(c: &mut Transaction<'_>, m: &NewMission, id: Option<i64>) -> Result<MissionId> {
-    validate_mission(m)?;
+    checks::validate_mission(m)?;
     let e = &m.energy;
     let p = &m.profile;
     // The same 64 bits as a signed integer (BIGINT is signed).
@@ -461,7 +456,7 @@ pub(super) fn record_visits(
     flown_at: UnixSeconds,
     amend: bool,
 ) -> Result<()> {
-    check_visits(mission, visits)?;
+    checks::check_visits(mission, visits)?;
     // FOR UPDATE: the row stays locked to the end of the transaction.
     let stored = c
         .query_opt(
@@ -469,7 +464,7 @@ pub(super) fn record_visits(
             &[&mission.0],
         )
         .db()?;
-    check_recordable(
+    checks::check_recordable(
         mission,
         stored.as_ref().map(|row| (row.get(0), row.get(1))),
         flown_at,
@@ -529,7 +524,7 @@ pub(super) fn upsert_cell_metadata(
     c: &mut Transaction<'_>,
     metadata: &[CellMetadata],
 ) -> Result<()> {
-    validate_metadata(metadata)?;
+    checks::validate_metadata(metadata)?;
     let keys = MetadataKeys {
         cells: cell_ids(c)?,
         modalities: modality_ids(c)?,
@@ -618,7 +613,7 @@ pub(super) fn upsert_cell_metadata(
                 &[
                     &ck,
                     &modality_key(&su.modality)?,
-                    &as_i64(st.count),
+                    &checks::as_i64(st.count),
                     &st.mean,
                     &st.std,
                     &st.min,
@@ -637,7 +632,7 @@ pub(super) fn upsert_cell_metadata(
                     &cell_key(&co.neighbour)?,
                     &modality_key(&co.modality)?,
                     &co.correlation,
-                    &as_i64(co.overlap),
+                    &checks::as_i64(co.overlap),
                 ],
             )
             .db()?;
@@ -669,7 +664,7 @@ pub(super) fn import_mission(c: &mut Transaction<'_>, record: &MissionRecord) ->
         &[],
     )
     .db()?;
-    match import_flight(record)? {
+    match checks::import_flight(record)? {
         ImportFlight::Nothing => Ok(()),
         ImportFlight::Record(flown_at) => {
             record_visits(c, record.id, &record.visits, flown_at, false)
@@ -688,7 +683,7 @@ pub(super) fn cancel_mission(c: &mut Transaction<'_>, mission: MissionId) -> Res
         )
         .db()?;
     if n == 0 {
-        return Err(not_cancellable(mission));
+        return Err(checks::not_cancellable(mission));
     }
     Ok(())
 }
@@ -698,5 +693,5 @@ pub(super) fn delete_mission(c: &mut Transaction<'_>, mission: MissionId) -> Res
     let n = c
         .execute("DELETE FROM missions WHERE id = $1", &[&mission.0])
         .db()?;
-    mission_deleted(mission, n)
+    checks::mission_deleted(mission, n)
 }
