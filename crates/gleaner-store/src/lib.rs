@@ -189,6 +189,60 @@ macro_rules! store_read_methods {
     };
 }
 
+/// The [`StoreWrite`] methods but `insert_readings` (which each backend runs its own way), each
+/// a call of the backend's write in its own `write` module inside a savepoint, through the
+/// transaction type's own `atomically` (the paths resolve where the macro is used: `sqlite.rs`
+/// and `postgres.rs`).
+macro_rules! store_write_methods {
+    () => {
+        fn upsert_sensors(&mut self, sensors: &[SensorRecord]) -> Result<UpsertStats> {
+            self.atomically(|c| write::upsert_sensors(c, sensors))
+        }
+        fn upsert_modalities(&mut self, modalities: &[ModalityRecord]) -> Result<UpsertStats> {
+            self.atomically(|c| write::upsert_modalities(c, modalities))
+        }
+        fn record_ingest(&mut self, ingest: &IngestRecord) -> Result<i64> {
+            self.atomically(|c| write::record_ingest(c, ingest))
+        }
+        fn replace_cells(&mut self, cells: &[CellRecord]) -> Result<ReplaceCellsStats> {
+            self.atomically(|c| write::replace_cells(c, cells))
+        }
+        fn upsert_cell_metadata(&mut self, metadata: &[CellMetadata]) -> Result<()> {
+            self.atomically(|c| write::upsert_cell_metadata(c, metadata))
+        }
+        fn set_sensors_collected(&mut self, collected: &[(SensorId, UnixSeconds)]) -> Result<()> {
+            self.atomically(|c| write::set_sensors_collected(c, collected))
+        }
+        fn create_mission(&mut self, mission: &NewMission) -> Result<MissionId> {
+            self.atomically(|c| write::create_mission(c, mission))
+        }
+        fn record_visits(
+            &mut self,
+            mission: MissionId,
+            visits: &[VisitRecord],
+            flown_at: UnixSeconds,
+            amend: bool,
+        ) -> Result<()> {
+            self.atomically(|c| write::record_visits(c, mission, visits, flown_at, amend))
+        }
+        fn cancel_mission(&mut self, mission: MissionId) -> Result<()> {
+            self.atomically(|c| write::cancel_mission(c, mission))
+        }
+        fn delete_mission(&mut self, mission: MissionId) -> Result<()> {
+            self.atomically(|c| write::delete_mission(c, mission))
+        }
+        fn import_mission(&mut self, record: &MissionRecord) -> Result<()> {
+            self.atomically(|c| write::import_mission(c, record))
+        }
+        fn config_set(&mut self, key: &str, value: &str) -> Result<()> {
+            self.atomically(|c| write::config_set(c, key, value))
+        }
+        fn blob_put(&mut self, key: &str, value: &[u8]) -> Result<()> {
+            self.atomically(|c| write::blob_put(c, key, value))
+        }
+    };
+}
+
 mod any;
 mod checks;
 #[cfg(any(test, feature = "conformance"))]
