@@ -200,25 +200,33 @@ impl Scene {
             .for_each(|&p| grow(p));
         sensors.iter().for_each(|&p| grow(p));
         extra.iter().for_each(|&p| grow(p));
-        // A point or a line still gets an area: at least one cell side, at least 20 m.
-        let min_span = cell_size_m.max(20.0);
-        let widen = |lo: f64, hi: f64| {
-            if hi - lo < min_span {
-                let mid = 0.5 * (lo + hi);
-                (mid - 0.5 * min_span, mid + 0.5 * min_span)
-            } else {
-                (lo, hi)
-            }
-        };
-        let (e0, e1) = widen(ext.0, ext.1);
-        let (n0, n1) = widen(ext.2, ext.3);
         Ok(Self {
             projection,
             cells,
             sensors,
-            extent: (e0, e1, n0, n1),
+            extent: widened(ext, cell_size_m),
         })
     }
+}
+
+/// The extent `(e0, e1, n0, n1)` (m) with a span under a cell side `cell_size_m` (m), or under
+/// 20 m, widened to it about its middle: a point or a line still gets an area.
+pub(crate) fn widened(
+    (e0, e1, n0, n1): (f64, f64, f64, f64),
+    cell_size_m: f64,
+) -> (f64, f64, f64, f64) {
+    let min_span = cell_size_m.max(20.0);
+    let widen = |lo: f64, hi: f64| {
+        if hi - lo < min_span {
+            let mid = 0.5 * (lo + hi);
+            (mid - 0.5 * min_span, mid + 0.5 * min_span)
+        } else {
+            (lo, hi)
+        }
+    };
+    let (e0, e1) = widen(e0, e1);
+    let (n0, n1) = widen(n0, n1);
+    (e0, e1, n0, n1)
 }
 
 /// A mission's base and stops in the local frame, m.
@@ -301,6 +309,20 @@ impl MapView {
             self.x + (e - self.e0) * self.k,
             self.y + (self.n1 - n) * self.k,
         )
+    }
+
+    /// Appends to the SVG path data `d` the polyline through `points` ((east, north) m), in
+    /// page pt: a move to the first point, a line to each next one (no closing `Z`).
+    pub(crate) fn push_path(&self, d: &mut String, points: &[(f64, f64)]) {
+        for (j, &p) in points.iter().enumerate() {
+            let (x, y) = self.pt(p);
+            d.push_str(&format!(
+                "{}{} {}",
+                if j == 0 { "M" } else { "L" },
+                N(x),
+                N(y)
+            ));
+        }
     }
 
     fn e1(&self) -> f64 {
@@ -539,15 +561,7 @@ pub(crate) fn draw_zones(svg: &mut Svg, view: &MapView, zones: &[ZoneShape]) {
     for (k, z) in zones.iter().enumerate() {
         let mut d = String::new();
         for ring in z.polygons.iter().flatten() {
-            for (j, &p) in ring.iter().enumerate() {
-                let (x, y) = view.pt(p);
-                d.push_str(&format!(
-                    "{}{} {}",
-                    if j == 0 { "M" } else { "L" },
-                    N(x),
-                    N(y)
-                ));
-            }
+            view.push_path(&mut d, ring);
             d.push('Z');
         }
         let (fill, stroke) = if z.no_fly {
@@ -583,15 +597,7 @@ pub(crate) fn draw_zones(svg: &mut Svg, view: &MapView, zones: &[ZoneShape]) {
                 continue;
             }
             let mut d = String::new();
-            for (j, &p) in line.iter().enumerate() {
-                let (x, y) = view.pt(p);
-                d.push_str(&format!(
-                    "{}{} {}",
-                    if j == 0 { "M" } else { "L" },
-                    N(x),
-                    N(y)
-                ));
-            }
+            view.push_path(&mut d, line);
             svg.line(format_args!(
                 r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1.4"><title>{}</title></path>"#,
                 NO_FLY.hex(),
@@ -613,15 +619,7 @@ pub(crate) fn draw_cells(svg: &mut Svg, view: &MapView, cells: &[CellShape], fil
             continue;
         }
         let mut d = String::new();
-        for (j, &p) in c.ring.iter().enumerate() {
-            let (x, y) = view.pt(p);
-            d.push_str(&format!(
-                "{}{} {}",
-                if j == 0 { "M" } else { "L" },
-                N(x),
-                N(y)
-            ));
-        }
+        view.push_path(&mut d, &c.ring);
         d.push('Z');
         let s =
             c.s.map_or_else(|| "not scored".to_string(), |s| format!("S = {s:.3}"));

@@ -463,19 +463,7 @@ fn extent_of(
         .for_each(|&p| grow(p));
     sensors.iter().for_each(|s| grow(s.at));
     outline.iter().flatten().for_each(|&p| grow(p));
-    let (e0, e1, n0, n1) = ext.unwrap_or((0.0, 0.0, 0.0, 0.0));
-    let min_span = cell_size_m.max(20.0);
-    let widen = |lo: f64, hi: f64| {
-        if hi - lo < min_span {
-            let mid = 0.5 * (lo + hi);
-            (mid - 0.5 * min_span, mid + 0.5 * min_span)
-        } else {
-            (lo, hi)
-        }
-    };
-    let (e0, e1) = widen(e0, e1);
-    let (n0, n1) = widen(n0, n1);
-    (e0, e1, n0, n1)
+    frame::widened(ext.unwrap_or((0.0, 0.0, 0.0, 0.0)), cell_size_m)
 }
 
 /// The legend's symbols: sensors read, sensors estimated, the field's outline.
@@ -559,15 +547,7 @@ fn draw_panel(
             None => crate::colour::NO_SCORE,
         };
         let mut d = String::new();
-        for (i, &p) in c.ring.iter().enumerate() {
-            let (x, y) = v.pt(p);
-            d.push_str(&format!(
-                "{}{} {}",
-                if i == 0 { "M" } else { "L" },
-                N(x),
-                N(y)
-            ));
-        }
+        v.push_path(&mut d, &c.ring);
         d.push('Z');
         svg.line(format_args!(
             r#"<path id="{}-cell-{j}" class="cell" d="{d}" fill="{}"><title>{} {}</title></path>"#,
@@ -582,15 +562,7 @@ fn draw_panel(
     if !content.outline.is_empty() {
         let mut d = String::new();
         for ring in content.outline {
-            for (i, &p) in ring.iter().enumerate() {
-                let (x, y) = v.pt(p);
-                d.push_str(&format!(
-                    "{}{} {}",
-                    if i == 0 { "M" } else { "L" },
-                    N(x),
-                    N(y)
-                ));
-            }
+            v.push_path(&mut d, ring);
         }
         svg.line(format_args!(
             r#"<path id="{}-outline" d="{d}" fill="none" stroke="{INK}" stroke-width="0.9" stroke-linejoin="round"/>"#,
@@ -660,17 +632,10 @@ fn colour_bar(
     // Rotated a quarter turn: its glyphs lie left of its baseline at `cx`.
     let cx = bx + bar_w + TICK + 1.2 + label_w + 0.5 * font + 0.93 * font;
     let cy = top + 0.5 * len;
-    svg.text_attrs(
-        cx,
-        cy,
+    svg.vertical_title(
+        (cx, cy),
         font,
-        Anchor::Middle,
-        false,
-        &format!(
-            r#"fill="{INK}" transform="rotate(-90 {} {})""#,
-            N(cx),
-            N(cy)
-        ),
+        &format!(r#"fill="{INK}" "#),
         &fit(bar_title, font, false, len),
     );
     svg.line(format_args!("</g>"));

@@ -101,6 +101,21 @@ impl Svg {
         self.text_attrs(x, y, size, anchor, bold, "", t);
     }
 
+    /// A title centred on (`x`, `y`) (pt) and turned a quarter turn anticlockwise (it reads
+    /// bottom to top), of `size` (pt), with the extra attributes `extra` before its transform
+    /// (e.g. `fill="#fff" `, or empty).
+    pub(crate) fn vertical_title(&mut self, (x, y): (f64, f64), size: f64, extra: &str, t: &str) {
+        self.text_attrs(
+            x,
+            y,
+            size,
+            Anchor::Middle,
+            false,
+            &format!(r#"{extra}transform="rotate(-90 {} {})""#, N(x), N(y)),
+            t,
+        );
+    }
+
     /// A text with extra attributes (`extra` is inserted as is, e.g. `fill="#fff"`).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn text_attrs(

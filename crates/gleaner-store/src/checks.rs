@@ -1,9 +1,11 @@
 //! Checks shared by the backends: every argument of a write is validated here, before the
-//! backend's first statement, so the backends refuse the same inputs with the same errors.
+//! backend's first statement, so the backends refuse the same inputs with the same errors;
+//! and what a write does with what is stored (new, changed or unchanged rows, the keys it
+//! names), decided here so the backends differ only in their SQL.
 
 use std::collections::{HashMap, HashSet};
 
-use gleaner_field::CellIndex;
+use gleaner_field::{CellIndex, Modality};
 
 use crate::{
     CellMetadata, CellRecord, Conflict, ConflictPolicy, InsertStats, MissionId, ModalityRecord,
@@ -450,6 +452,155 @@ pub(crate) fn mission_deleted(mission: MissionId, rows: u64) -> Result<()> {
         return Err(StoreError::Unknown {
             what: "mission",
             name: mission.to_string(),
+        });
+    }
+    Ok(())
+}
+
+/// The stored keys of the cells and modalities a metadata write names.
+pub(crate) struct MetadataKeys {
+    /// `label -> key` of every stored cell.
+    pub(crate) cells: HashMap<String, i64>,
+    /// `name -> key` of every stored modality.
+    pub(crate) modalities: HashMap<String, i64>,
+}
+
+impl MetadataKeys {
+    /// The key of `cell`, or [`StoreError::Unknown`] when it is not stored.
+    pub(crate) fn cell(&self, cell: &CellIndex) -> Result<i64> {
+        self.cells
+            .get(&cell.to_string())
+            .copied()
+            .ok_or_else(|| StoreError::Unknown {
+                what: "cell",
+                name: cell.to_string(),
+            })
+    }
+
+    /// The key of `modality`, or [`StoreError::UnknownModality`] when it is not stored.
+    pub(crate) fn modality(&self, modality: &Modality) -> Result<i64> {
+        self.modalities
+            .get(modality.as_str())
+            .copied()
+            .ok_or_else(|| StoreError::UnknownModality(modality.clone()))
+    }
+}
+
+/// What an upsert does with one modality.
+pub(crate) enum UnitChange<'a> {
+    /// Inserts it (not stored yet).
+    Add,
+    /// Records this unit for a modality stored without one.
+    SetUnit(&'a str),
+    /// Nothing: the same unit, or no unit offered (the stored one stays).
+    Unchanged,
+}
+
+/// What upserting `m` does given its stored unit (`None`: not stored; `Some(None)`: stored
+/// without a unit); [`StoreError::UnitMismatch`] when it names another unit than the stored one.
+pub(crate) fn unit_change<'a>(
+    m: &'a ModalityRecord,
+    stored: Option<Option<&str>>,
+) -> Result<UnitChange<'a>> {
+    match (stored, m.unit.as_deref()) {
+        (None, _) => Ok(UnitChange::Add),
+        (Some(None), Some(unit)) => Ok(UnitChange::SetUnit(unit)),
+        (Some(Some(stored)), Some(incoming)) if stored != incoming => {
+            Err(StoreError::UnitMismatch {
+                modality: m.modality.clone(),
+                stored: stored.to_string(),
+                incoming: incoming.to_string(),
+            })
+        }
+        (Some(_), _) => Ok(UnitChange::Unchanged),
+    }
+}
+
+/// Whether the stored sensor row `(lat, lon, elevation_m, source)` (deg, deg, m) already is `s`.
+pub(crate) fn sensor_unchanged(stored: (f64, f64, Option<f64>, &str), s: &SensorRecord) -> bool {
+    let (lat, lon, elevation_m, source) = stored;
+    lat == s.position.lat()
+        && lon == s.position.lon()
+        && elevation_m == s.elevation_m
+        && source == s.source
+}
+
+/// How [`crate::StoreWrite::replace_cells`] turns the stored grid into the new one.
+pub(crate) struct CellPlan {
+    /// How many stored cells stay as they are.
+    pub(crate) kept: usize,
+    /// The stored cells to delete (absent from the new grid, or changed).
+    pub(crate) gone: Vec<CellIndex>,
+    /// The cells to insert, in index order, sensors sorted and without repeats, each with its
+    /// sensors' stored keys.
+    pub(crate) added: Vec<(CellRecord, Vec<i64>)>,
+}
+
+/// The plan replacing the `stored` grid by `cells` (checked by [`check_cells`]), with
+/// `sensor_keys` (`name -> key`); [`StoreError::Unknown`] for the first sensor not stored.
+pub(crate) fn plan_cells(
+    stored: &[CellRecord],
+    cells: &[CellRecord],
+    sensor_keys: &HashMap<String, i64>,
+) -> Result<CellPlan> {
+    let normalised = |cell: &CellRecord| {
+        let mut cell = cell.clone();
+        cell.sensors.sort();
+        cell.sensors.dedup();
+        cell
+    };
+    let mut new_by_label: HashMap<CellIndex, CellRecord> =
+        cells.iter().map(|x| (x.index, normalised(x))).collect();
+    let mut kept = 0;
+    let mut gone = Vec::new();
+    for old in stored {
+        if new_by_label.get(&old.index) == Some(old) {
+            new_by_label.remove(&old.index);
+            kept += 1;
+        } else {
+            gone.push(old.index);
+        }
+    }
+    let mut order: Vec<CellRecord> = new_by_label.into_values().collect();
+    order.sort_by_key(|x| x.index);
+    let added = order
+        .into_iter()
+        .map(|cell| {
+            let members = keys(
+                &cell.sensors,
+                sensor_keys,
+                |s| s.as_str(),
+                |s| StoreError::Unknown {
+                    what: "sensor",
+                    name: s.to_string(),
+                },
+            )?;
+            Ok((cell, members))
+        })
+        .collect::<Result<_>>()?;
+    Ok(CellPlan { kept, gone, added })
+}
+
+/// Checks that visits may be recorded for `mission`, whose stored `(status, flown_at)` is
+/// `stored` (`None`: no such mission): a flown one only when `amend`. `flown_at` (s) stands in
+/// the error for a flown mission stored without a time.
+pub(crate) fn check_recordable(
+    mission: MissionId,
+    stored: Option<(&str, Option<i64>)>,
+    flown_at: i64,
+    amend: bool,
+) -> Result<()> {
+    let Some((status, stored_flown_at)) = stored else {
+        return Err(StoreError::Unknown {
+            what: "mission",
+            name: mission.to_string(),
+        });
+    };
+    if status == crate::MissionStatus::Flown.as_str() && !amend {
+        return Err(StoreError::AlreadyFlown {
+            mission: mission.0,
+            // Migration 2 gives every flown mission a time; the fallback is for hand edits.
+            flown_at: stored_flown_at.unwrap_or(flown_at),
         });
     }
     Ok(())

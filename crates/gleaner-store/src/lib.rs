@@ -105,7 +105,7 @@
 #![deny(missing_docs)]
 
 /// The [`StoreRead`] methods, each a call of the backend's shared query in its own `read`
-/// module through the type's own `read` wrapper (the paths resolve where the macro is used:
+/// module (with the backend-neutral steps of `decode`) through the type's own `read` wrapper (the paths resolve where the macro is used:
 /// `sqlite.rs` and `postgres.rs`). Defined before those modules so both can use it.
 macro_rules! store_read_methods {
     () => {
@@ -123,14 +123,25 @@ macro_rules! store_read_methods {
             modality: Option<&Modality>,
             range: RangeInclusive<UnixSeconds>,
         ) -> Result<ReadingBatch> {
-            self.read(|c| read::readings_for(c, modality, range))
+            self.read(|c| {
+                let (sensors, modalities) = $crate::decode::all_sensors_of(
+                    read::sensor_ids(c)?,
+                    read::modality_ids(c)?,
+                    modality,
+                );
+                read::collect_readings(c, &sensors, &modalities, range)
+            })
         }
         fn readings_of_sensors(
             &self,
             sensors: &[SensorId],
             range: RangeInclusive<UnixSeconds>,
         ) -> Result<ReadingBatch> {
-            self.read(|c| read::readings_of_sensors(c, sensors, range))
+            self.read(|c| {
+                let wanted = $crate::decode::wanted_sensors(&read::sensor_ids(c)?, sensors)?;
+                let modalities = $crate::decode::sorted(read::modality_ids(c)?);
+                read::collect_readings(c, &wanted, &modalities, range)
+            })
         }
         fn latest_readings(
             &self,
@@ -178,10 +189,65 @@ macro_rules! store_read_methods {
     };
 }
 
+/// The [`StoreWrite`] methods but `insert_readings` (which each backend runs its own way), each
+/// a call of the backend's write in its own `write` module inside a savepoint, through the
+/// transaction type's own `atomically` (the paths resolve where the macro is used: `sqlite.rs`
+/// and `postgres.rs`).
+macro_rules! store_write_methods {
+    () => {
+        fn upsert_sensors(&mut self, sensors: &[SensorRecord]) -> Result<UpsertStats> {
+            self.atomically(|c| write::upsert_sensors(c, sensors))
+        }
+        fn upsert_modalities(&mut self, modalities: &[ModalityRecord]) -> Result<UpsertStats> {
+            self.atomically(|c| write::upsert_modalities(c, modalities))
+        }
+        fn record_ingest(&mut self, ingest: &IngestRecord) -> Result<i64> {
+            self.atomically(|c| write::record_ingest(c, ingest))
+        }
+        fn replace_cells(&mut self, cells: &[CellRecord]) -> Result<ReplaceCellsStats> {
+            self.atomically(|c| write::replace_cells(c, cells))
+        }
+        fn upsert_cell_metadata(&mut self, metadata: &[CellMetadata]) -> Result<()> {
+            self.atomically(|c| write::upsert_cell_metadata(c, metadata))
+        }
+        fn set_sensors_collected(&mut self, collected: &[(SensorId, UnixSeconds)]) -> Result<()> {
+            self.atomically(|c| write::set_sensors_collected(c, collected))
+        }
+        fn create_mission(&mut self, mission: &NewMission) -> Result<MissionId> {
+            self.atomically(|c| write::create_mission(c, mission))
+        }
+        fn record_visits(
+            &mut self,
+            mission: MissionId,
+            visits: &[VisitRecord],
+            flown_at: UnixSeconds,
+            amend: bool,
+        ) -> Result<()> {
+            self.atomically(|c| write::record_visits(c, mission, visits, flown_at, amend))
+        }
+        fn cancel_mission(&mut self, mission: MissionId) -> Result<()> {
+            self.atomically(|c| write::cancel_mission(c, mission))
+        }
+        fn delete_mission(&mut self, mission: MissionId) -> Result<()> {
+            self.atomically(|c| write::delete_mission(c, mission))
+        }
+        fn import_mission(&mut self, record: &MissionRecord) -> Result<()> {
+            self.atomically(|c| write::import_mission(c, record))
+        }
+        fn config_set(&mut self, key: &str, value: &str) -> Result<()> {
+            self.atomically(|c| write::config_set(c, key, value))
+        }
+        fn blob_put(&mut self, key: &str, value: &[u8]) -> Result<()> {
+            self.atomically(|c| write::blob_put(c, key, value))
+        }
+    };
+}
+
 mod any;
 mod checks;
 #[cfg(any(test, feature = "conformance"))]
 pub mod conformance;
+mod decode;
 mod error;
 pub mod failpoint;
 mod postgres;

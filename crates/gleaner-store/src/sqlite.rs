@@ -391,13 +391,7 @@ impl StoreRead for SqliteTx<'_> {
 }
 
 impl StoreWrite for SqliteTx<'_> {
-    fn upsert_sensors(&mut self, sensors: &[SensorRecord]) -> Result<UpsertStats> {
-        self.atomically(|c| write::upsert_sensors(c, sensors))
-    }
-
-    fn upsert_modalities(&mut self, modalities: &[ModalityRecord]) -> Result<UpsertStats> {
-        self.atomically(|c| write::upsert_modalities(c, modalities))
-    }
+    store_write_methods!();
 
     fn insert_readings(
         &mut self,
@@ -409,54 +403,6 @@ impl StoreWrite for SqliteTx<'_> {
         let stats = write::insert_readings(&self.tx, batch, policy)?;
         self.count.set(before.map(|n| n + stats.inserted));
         Ok(stats)
-    }
-
-    fn record_ingest(&mut self, ingest: &IngestRecord) -> Result<i64> {
-        self.atomically(|c| write::record_ingest(c, ingest))
-    }
-
-    fn replace_cells(&mut self, cells: &[CellRecord]) -> Result<ReplaceCellsStats> {
-        self.atomically(|c| write::replace_cells(c, cells))
-    }
-
-    fn upsert_cell_metadata(&mut self, metadata: &[CellMetadata]) -> Result<()> {
-        self.atomically(|c| write::upsert_cell_metadata(c, metadata))
-    }
-
-    fn set_sensors_collected(&mut self, collected: &[(SensorId, UnixSeconds)]) -> Result<()> {
-        self.atomically(|c| write::set_sensors_collected(c, collected))
-    }
-
-    fn create_mission(&mut self, mission: &NewMission) -> Result<MissionId> {
-        self.atomically(|c| write::create_mission(c, mission))
-    }
-
-    fn record_visits(
-        &mut self,
-        mission: MissionId,
-        visits: &[VisitRecord],
-        flown_at: UnixSeconds,
-        amend: bool,
-    ) -> Result<()> {
-        self.atomically(|c| write::record_visits(c, mission, visits, flown_at, amend))
-    }
-
-    fn cancel_mission(&mut self, mission: MissionId) -> Result<()> {
-        self.atomically(|c| write::cancel_mission(c, mission))
-    }
-    fn delete_mission(&mut self, mission: MissionId) -> Result<()> {
-        self.atomically(|c| write::delete_mission(c, mission))
-    }
-    fn import_mission(&mut self, record: &MissionRecord) -> Result<()> {
-        self.atomically(|c| write::import_mission(c, record))
-    }
-
-    fn config_set(&mut self, key: &str, value: &str) -> Result<()> {
-        self.atomically(|c| write::config_set(c, key, value))
-    }
-
-    fn blob_put(&mut self, key: &str, value: &[u8]) -> Result<()> {
-        self.atomically(|c| write::blob_put(c, key, value))
     }
 }
 

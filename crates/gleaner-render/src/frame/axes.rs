@@ -201,14 +201,6 @@ pub(crate) fn draw_axes(
         &axes.x_title,
     );
     let (cx, cy) = (y_title_x + 0.93 * font, view.y + 0.5 * view.h);
-    svg.text_attrs(
-        cx,
-        cy,
-        font,
-        Anchor::Middle,
-        false,
-        &format!(r#"transform="rotate(-90 {} {})""#, N(cx), N(cy)),
-        &axes.y_title,
-    );
+    svg.vertical_title((cx, cy), font, "", &axes.y_title);
     svg.line(format_args!("</g>"));
 }

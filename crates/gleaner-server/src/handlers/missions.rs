@@ -18,8 +18,8 @@ use crate::error::{ApiError, ApiResult, ErrorBody};
 use crate::state::{AppState, Changes, Job};
 
 use super::{
-    JsonType, body_bytes, clock_now, energy_preset, json_body_for, json_response, mission_id,
-    parse_json, query, to_json,
+    DryRunErrors, DryRunJson, JsonType, body_bytes, clock_now, energy_preset, json_response,
+    mission_id, parse_json, query, to_json,
 };
 
 /// All missions (planned and flown), oldest first (`gleaner.mission` documents).
@@ -169,16 +169,11 @@ pub async fn mission(State(s): State<AppState>, Path(id): Path<String>) -> ApiRe
 /// (unless `dry_run`) stores it. One planning search runs at a time; reads are never held up.
 #[utoipa::path(post, path = "/api/v1/plan", tag = "missions", request_body = PlanBody,
     security((), ("bearer" = [])),
-    responses((status = 200, body = MissionDoc), (status = 400, body = ErrorBody),
-        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
-        (status = 413, body = ErrorBody)))]
+    responses((status = 200, body = MissionDoc), DryRunErrors))]
 pub async fn plan(
     State(s): State<AppState>,
-    Computing(caller): Computing,
-    _: JsonType,
-    body: Result<Bytes, BytesRejection>,
+    DryRunJson(caller, b): DryRunJson<PlanBody>,
 ) -> ApiResult<Json<MissionDoc>> {
-    let b: PlanBody = json_body_for(&s, caller, body)?;
     if b.sorties.is_some_and(|k| k != 1) {
         return Err(ApiError::bad_request(
             Some("sorties"),
@@ -246,16 +241,11 @@ pub async fn replan(
 /// answer lists them in flying order, as `gleaner plan --sorties K --json` does.
 #[utoipa::path(post, path = "/api/v1/plan/sorties", tag = "missions", request_body = PlanBody,
     security((), ("bearer" = [])),
-    responses((status = 200, body = Vec<MissionDoc>), (status = 400, body = ErrorBody),
-        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
-        (status = 413, body = ErrorBody)))]
+    responses((status = 200, body = Vec<MissionDoc>), DryRunErrors))]
 pub async fn plan_sorties(
     State(s): State<AppState>,
-    Computing(caller): Computing,
-    _: JsonType,
-    body: Result<Bytes, BytesRejection>,
+    DryRunJson(caller, b): DryRunJson<PlanBody>,
 ) -> ApiResult<Json<Vec<MissionDoc>>> {
-    let b: PlanBody = json_body_for(&s, caller, body)?;
     Ok(Json(plan_request(&s, caller, b).await?))
 }
 
@@ -367,11 +357,8 @@ async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Ve
         (status = 401, body = ErrorBody), (status = 403, body = ErrorBody)))]
 pub async fn explore(
     State(s): State<AppState>,
-    Computing(caller): Computing,
-    _: JsonType,
-    body: Result<Bytes, BytesRejection>,
+    DryRunJson(caller, b): DryRunJson<ExploreBody>,
 ) -> ApiResult<Json<ExplorationDoc>> {
-    let b: ExploreBody = json_body_for(&s, caller, body)?;
     if !b.dry_run {
         caller.require_write(&s)?;
     }

@@ -22,8 +22,8 @@ pub use reconstruct::*;
 pub use simulate::*;
 
 use axum::body::Bytes;
-use axum::extract::FromRequestParts;
 use axum::extract::rejection::BytesRejection;
+use axum::extract::{FromRequest, FromRequestParts, Request};
 use axum::http::request::Parts;
 use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
@@ -31,7 +31,7 @@ use gleaner_app::MissionId;
 use serde::de::DeserializeOwned;
 use utoipa::OpenApi;
 
-use crate::auth::Caller;
+use crate::auth::{Caller, Computing};
 use crate::error::{ApiError, ApiResult, ErrorBody};
 use crate::state::AppState;
 
@@ -170,6 +170,44 @@ fn json_body_for<T: DeserializeOwned>(
         }
     }
     parse_json(&bytes)
+}
+
+/// The caller and JSON body of a computation that writes unless it says `"dry_run": true`:
+/// the caller is checked ([`Computing`]) and the `Content-Type` ([`JsonType`]) before the body
+/// is read, then the body is parsed as by [`json_body_for`].
+pub struct DryRunJson<T>(pub Caller, pub T);
+
+impl<T: DeserializeOwned> FromRequest<AppState> for DryRunJson<T> {
+    type Rejection = ApiError;
+
+    async fn from_request(req: Request, state: &AppState) -> Result<Self, ApiError> {
+        let (mut parts, body) = req.into_parts();
+        let Computing(caller) = Computing::from_request_parts(&mut parts, state).await?;
+        JsonType::from_request_parts(&mut parts, state).await?;
+        let bytes = Bytes::from_request(Request::from_parts(parts, body), state).await;
+        Ok(Self(caller, json_body_for(state, caller, bytes)?))
+    }
+}
+
+/// The error answers of a [`DryRunJson`] endpoint, for its OpenAPI `responses`: 400 (a bad
+/// body), 401 (no token for a write or a computation), 403 (computations disabled), 413 (the
+/// body over the upload limit). The variants carry no doc comment: it would become their
+/// description, which the OpenAPI document leaves empty.
+#[derive(utoipa::IntoResponses)]
+#[allow(missing_docs)]
+pub enum DryRunErrors {
+    // A bad body.
+    #[response(status = 400, description = "")]
+    BadRequest(ErrorBody),
+    // No token.
+    #[response(status = 401, description = "")]
+    Unauthorized(ErrorBody),
+    // Computations disabled.
+    #[response(status = 403, description = "")]
+    Forbidden(ErrorBody),
+    // The body over the upload limit.
+    #[response(status = 413, description = "")]
+    TooLarge(ErrorBody),
 }
 
 /// A query string, refusing unknown parameters; errors name the parameter at fault.

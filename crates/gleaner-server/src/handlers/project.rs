@@ -1,8 +1,6 @@
 //! Reads of the project, its field and cells, and scoring.
 
 use axum::Json;
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
 use axum::extract::{Path, RawQuery, State};
 use axum::response::Response;
 use gleaner_app::{self as app, StoreRead};
@@ -12,11 +10,10 @@ use serde::Deserialize;
 use utoipa::IntoParams;
 
 use crate::api::{CellDetailDoc, ProjectDoc, ScoreBody, checked_history, parse_time};
-use crate::auth::Computing;
 use crate::error::{ApiError, ApiResult, ErrorBody};
 use crate::state::{AppState, Changes};
 
-use super::{JsonType, cell_index, json_body_for, json_response, query, to_json};
+use super::{DryRunErrors, DryRunJson, cell_index, json_response, query, to_json};
 
 /// The project and its settings.
 #[utoipa::path(get, path = "/api/v1/project", tag = "project",
@@ -136,16 +133,11 @@ pub async fn cell(
 /// metadata table.
 #[utoipa::path(post, path = "/api/v1/score", tag = "data", request_body = ScoreBody,
     security((), ("bearer" = [])),
-    responses((status = 200, body = ScoringDoc), (status = 400, body = ErrorBody),
-        (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
-        (status = 413, body = ErrorBody)))]
+    responses((status = 200, body = ScoringDoc), DryRunErrors))]
 pub async fn score(
     State(s): State<AppState>,
-    Computing(caller): Computing,
-    _: JsonType,
-    body: Result<Bytes, BytesRejection>,
+    DryRunJson(caller, b): DryRunJson<ScoreBody>,
 ) -> ApiResult<Json<ScoringDoc>> {
-    let b: ScoreBody = json_body_for(&s, caller, body)?;
     if !b.dry_run {
         caller.require_write(&s)?;
     }

@@ -6,59 +6,35 @@
 use std::collections::HashMap;
 use std::ops::RangeInclusive;
 
-use gleaner_field::{CellIndex, LatLon, Modality, SensorId, UnixSeconds};
-use postgres::Transaction;
+use gleaner_field::{Modality, SensorId, UnixSeconds};
+use postgres::types::{FromSql, ToSql};
+use postgres::{Row, Transaction};
 
 use super::Db;
+use crate::decode::{self, Column, Columns};
 use crate::{
-    AnomalyRecord, CellMetadata, CellRecord, CellScores, ClassProbability, Correlation,
-    EnergyBreakdown, FlightProfile, IngestRecord, MissionId, MissionKind, MissionRecord,
-    MissionStatus, ModalityRecord, ModalitySummary, NewMission, Reading, ReadingBatch, Result,
-    SensorRecord, SeriesStats, StopRecord, StoreError, VisitRecord,
+    CellMetadata, CellRecord, IngestRecord, MissionId, MissionRecord, ModalityRecord, ReadingBatch,
+    Result, SensorRecord,
 };
 
-pub(super) fn parse_sensor(table: &'static str, name: String) -> Result<SensorId> {
-    SensorId::new(name).map_err(|e| StoreError::Corrupt {
-        table,
-        detail: e.to_string(),
-    })
+impl<T: for<'a> FromSql<'a>> Column<T> for Row {
+    /// Column `i` as a `T`; a type that does not match the column is a programming error and
+    /// panics, as [`Row::get`] does.
+    fn column(&self, i: usize) -> Result<T> {
+        Ok(self.get(i))
+    }
 }
 
-fn parse_modality(table: &'static str, name: &str) -> Result<Modality> {
-    Modality::new(name).map_err(|e| StoreError::Corrupt {
-        table,
-        detail: e.to_string(),
-    })
-}
+impl Columns for Row {}
 
-fn parse_latlon(table: &'static str, lat: f64, lon: f64) -> Result<LatLon> {
-    LatLon::new(lat, lon).map_err(|e| StoreError::Corrupt {
-        table,
-        detail: e.to_string(),
-    })
-}
-
-fn parse_cell(table: &'static str, label: &str) -> Result<CellIndex> {
-    CellIndex::parse(label).ok_or_else(|| StoreError::Corrupt {
-        table,
-        detail: format!("cell label {label:?} is not of the form x<i>y<j>"),
-    })
-}
-
-/// A count read back as `u64` (stored as a signed `BIGINT`).
-fn count(table: &'static str, n: i64) -> Result<u64> {
-    u64::try_from(n).map_err(|_| StoreError::Corrupt {
-        table,
-        detail: format!("negative count {n}"),
-    })
-}
-
-/// A position (stop or visit order) read back as `u32`.
-fn position(table: &'static str, n: i64) -> Result<u32> {
-    u32::try_from(n).map_err(|_| StoreError::Corrupt {
-        table,
-        detail: format!("position {n} out of range"),
-    })
+/// Every row `sql` returns for `params`, decoded by `decode`.
+fn rows<T>(
+    c: &mut Transaction<'_>,
+    sql: &str,
+    params: &[&(dyn ToSql + Sync)],
+    mut decode: impl FnMut(&Row) -> Result<T>,
+) -> Result<Vec<T>> {
+    c.query(sql, params).db()?.iter().map(&mut decode).collect()
 }
 
 /// `key -> id` for every row of a `SELECT key, id` statement.
@@ -95,75 +71,21 @@ pub(super) fn schema_version(c: &mut Transaction<'_>) -> Result<i64> {
 }
 
 pub(super) fn sensors(c: &mut Transaction<'_>) -> Result<Vec<SensorRecord>> {
-    c.query(
+    rows(
+        c,
         "SELECT name, lat, lon, elevation_m, source FROM sensors ORDER BY name COLLATE \"C\"",
         &[],
+        decode::sensor,
     )
-    .db()?
-    .iter()
-    .map(|r| {
-        Ok(SensorRecord {
-            id: parse_sensor("sensors", r.get(0))?,
-            position: parse_latlon("sensors", r.get(1), r.get(2))?,
-            elevation_m: r.get(3),
-            source: r.get(4),
-        })
-    })
-    .collect()
 }
 
 pub(super) fn modalities(c: &mut Transaction<'_>) -> Result<Vec<ModalityRecord>> {
-    c.query(
+    rows(
+        c,
         "SELECT name, unit FROM modalities ORDER BY name COLLATE \"C\"",
         &[],
+        decode::modality,
     )
-    .db()?
-    .iter()
-    .map(|r| {
-        Ok(ModalityRecord {
-            modality: parse_modality("modalities", r.get(0))?,
-            unit: r.get(1),
-        })
-    })
-    .collect()
-}
-
-/// `(name, key)` pairs sorted by name (byte-wise).
-fn sorted(map: HashMap<String, i64>) -> Vec<(String, i64)> {
-    let mut v: Vec<(String, i64)> = map.into_iter().collect();
-    v.sort();
-    v
-}
-
-pub(super) fn readings_for(
-    c: &mut Transaction<'_>,
-    modality: Option<&Modality>,
-    range: RangeInclusive<UnixSeconds>,
-) -> Result<ReadingBatch> {
-    let sensors = sorted(sensor_ids(c)?);
-    let mut modalities = sorted(modality_ids(c)?);
-    modalities.retain(|(name, _)| modality.is_none_or(|m| m.as_str() == name));
-    collect_readings(c, &sensors, &modalities, range)
-}
-
-pub(super) fn readings_of_sensors(
-    c: &mut Transaction<'_>,
-    sensors: &[SensorId],
-    range: RangeInclusive<UnixSeconds>,
-) -> Result<ReadingBatch> {
-    let ids = sensor_ids(c)?;
-    let mut wanted = sensors
-        .iter()
-        .map(|s| {
-            ids.get(s.as_str())
-                .map(|&k| (s.to_string(), k))
-                .ok_or_else(|| StoreError::UnknownSensor(s.clone()))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    wanted.sort();
-    wanted.dedup();
-    let modalities = sorted(modality_ids(c)?);
-    collect_readings(c, &wanted, &modalities, range)
 }
 
 /// Each sensor's latest `modality` reading in `range`, sorted by sensor name: one query, the
@@ -195,7 +117,7 @@ pub(super) fn latest_readings(
     }
     out.sort_by(|a, b| a.0.cmp(&b.0));
     out.into_iter()
-        .map(|(n, t, v)| Ok((parse_sensor("sensors", n)?, t, v)))
+        .map(|(n, t, v)| Ok((decode::parse_sensor("sensors", n)?, t, v)))
         .collect()
 }
 
@@ -203,15 +125,14 @@ pub(super) fn latest_readings(
 /// and by time. One query, ordered by the primary key (sensor key, modality key, t) so the
 /// server streams an index range; the rows are then regrouped by name order in Rust (keys
 /// and names need not sort alike).
-fn collect_readings(
+pub(super) fn collect_readings(
     c: &mut Transaction<'_>,
     sensors: &[(String, i64)],
     modalities: &[(String, i64)],
     range: RangeInclusive<UnixSeconds>,
 ) -> Result<ReadingBatch> {
-    let mut batch = ReadingBatch::new();
     if sensors.is_empty() || modalities.is_empty() {
-        return Ok(batch);
+        return Ok(ReadingBatch::new());
     }
     let sensor_keys: Vec<i64> = sensors.iter().map(|s| s.1).collect();
     let modality_keys: Vec<i64> = modalities.iter().map(|m| m.1).collect();
@@ -229,43 +150,12 @@ fn collect_readings(
         let key = (r.get::<_, i64>(0), r.get::<_, i64>(1));
         runs.entry(key).or_insert((k, 0)).1 += 1;
     }
-    batch.rows.reserve(rows.len());
-    let mut modality_index: HashMap<i64, u32> = HashMap::new();
-    for (sname, skey) in sensors {
-        let mut sensor_index = None;
-        for (mname, mkey) in modalities {
-            let Some(&(first, n)) = runs.get(&(*skey, *mkey)) else {
-                continue;
-            };
-            let s = match sensor_index {
-                Some(s) => s,
-                None => {
-                    batch.sensors.push(parse_sensor("sensors", sname.clone())?);
-                    let s = batch.sensors.len() as u32 - 1;
-                    sensor_index = Some(s);
-                    s
-                }
-            };
-            let m = match modality_index.get(mkey) {
-                Some(&m) => m,
-                None => {
-                    batch.modalities.push(parse_modality("modalities", mname)?);
-                    let m = batch.modalities.len() as u32 - 1;
-                    modality_index.insert(*mkey, m);
-                    m
-                }
-            };
-            for r in &rows[first..first + n] {
-                batch.rows.push(Reading {
-                    sensor: s,
-                    modality: m,
-                    t: r.get(2),
-                    value: r.get(3),
-                });
-            }
+    decode::assemble_readings(sensors, modalities, |skey, mkey, out| {
+        if let Some(&(first, n)) = runs.get(&(skey, mkey)) {
+            out.extend(rows[first..first + n].iter().map(|r| (r.get(2), r.get(3))));
         }
-    }
-    Ok(batch)
+        Ok(())
+    })
 }
 
 pub(super) fn reading_count(c: &mut Transaction<'_>) -> Result<u64> {
@@ -273,73 +163,51 @@ pub(super) fn reading_count(c: &mut Transaction<'_>) -> Result<u64> {
         .query_one("SELECT COUNT(*) FROM readings", &[])
         .db()?
         .get(0);
-    count("readings", n)
+    decode::count("readings", n)
 }
 
 pub(super) fn ingests(c: &mut Transaction<'_>) -> Result<Vec<IngestRecord>> {
-    c.query(
+    rows(
+        c,
         "SELECT file_name, format, rows_read, rows_inserted, rows_unchanged, rows_skipped, at
          FROM ingests ORDER BY id",
         &[],
+        decode::ingest,
     )
-    .db()?
-    .iter()
-    .map(|r| {
-        Ok(IngestRecord {
-            file_name: r.get(0),
-            format: r.get(1),
-            rows_read: count("ingests", r.get(2))?,
-            rows_inserted: count("ingests", r.get(3))?,
-            rows_unchanged: count("ingests", r.get(4))?,
-            rows_skipped: count("ingests", r.get(5))?,
-            at: r.get(6),
-        })
-    })
-    .collect()
 }
 
-/// Rows of a child query grouped by their first column (the parent's key), in query order.
-fn grouped(rows: Vec<postgres::Row>) -> HashMap<i64, Vec<postgres::Row>> {
-    let mut out: HashMap<i64, Vec<postgres::Row>> = HashMap::new();
-    for r in rows {
-        out.entry(r.get(0)).or_default().push(r);
+/// Rows of a child query grouped by their first column (the parent's key), in query order,
+/// each decoded by `decode`.
+fn grouped<T>(
+    c: &mut Transaction<'_>,
+    sql: &str,
+    params: &[&(dyn ToSql + Sync)],
+    mut decode: impl FnMut(&Row) -> Result<T>,
+) -> Result<HashMap<i64, Vec<T>>> {
+    let mut out: HashMap<i64, Vec<T>> = HashMap::new();
+    for r in c.query(sql, params).db()? {
+        out.entry(r.get(0)).or_default().push(decode(&r)?);
     }
-    out
+    Ok(out)
 }
 
 pub(super) fn cells(c: &mut Transaction<'_>) -> Result<Vec<CellRecord>> {
-    let rows = c
-        .query(
-            "SELECT id, label, lat, lon, cell_size_m FROM cells ORDER BY i, j",
-            &[],
-        )
-        .db()?;
     let mut members = grouped(
-        c.query(
-            "SELECT cs.cell, s.name FROM cell_sensors cs JOIN sensors s ON s.id = cs.sensor
-             ORDER BY cs.cell, s.name COLLATE \"C\"",
-            &[],
-        )
-        .db()?,
-    );
-    rows.iter()
-        .map(|r| {
+        c,
+        "SELECT cs.cell, s.name FROM cell_sensors cs JOIN sensors s ON s.id = cs.sensor
+         ORDER BY cs.cell, s.name COLLATE \"C\"",
+        &[],
+        decode::cell_member,
+    )?;
+    rows(
+        c,
+        "SELECT id, label, lat, lon, cell_size_m FROM cells ORDER BY i, j",
+        &[],
+        |r| {
             let id: i64 = r.get(0);
-            let label: &str = r.get(1);
-            let sensors = members
-                .remove(&id)
-                .unwrap_or_default()
-                .iter()
-                .map(|m| parse_sensor("cell_sensors", m.get(1)))
-                .collect::<Result<_>>()?;
-            Ok(CellRecord {
-                index: parse_cell("cells", label)?,
-                centre: parse_latlon("cells", r.get(2), r.get(3))?,
-                cell_size_m: r.get(4),
-                sensors,
-            })
-        })
-        .collect()
+            decode::cell(r, members.remove(&id).unwrap_or_default())
+        },
+    )
 }
 
 pub(super) fn cell_metadata(c: &mut Transaction<'_>) -> Result<Vec<CellMetadata>> {
@@ -363,98 +231,52 @@ fn cell_metadata_with(c: &mut Transaction<'_>, children: bool) -> Result<Vec<Cel
         )
         .db()?;
     let mut probs = grouped(
-        c.query(
-            "SELECT cell, class, probability FROM cell_class_probabilities ORDER BY cell, k",
-            &[],
-        )
-        .db()?,
-    );
-    // A child table's rows grouped by cell, or none when the children are not wanted.
-    let mut child = |sql: &str| -> Result<HashMap<i64, Vec<postgres::Row>>> {
-        Ok(if children {
-            grouped(c.query(sql, &[]).db()?)
-        } else {
-            HashMap::new()
-        })
-    };
-    let mut summaries = child(
-        "SELECT cs.cell, m.name, cs.count, cs.mean, cs.std, cs.min, cs.max, cs.latest_t,
-                        cs.latest_value
+        c,
+        "SELECT cell, class, probability FROM cell_class_probabilities ORDER BY cell, k",
+        &[],
+        decode::class_probability,
+    )?;
+    // The child tables' rows grouped by cell, or none when the children are not wanted.
+    let (mut summaries, mut correlations, mut anomalies) = if children {
+        (
+            grouped(
+                c,
+                "SELECT cs.cell, m.name, cs.count, cs.mean, cs.std, cs.min, cs.max,
+                        cs.latest_t, cs.latest_value
                  FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
                  ORDER BY cs.cell, m.name COLLATE \"C\"",
-    )?;
-    let mut correlations = child(
-        "SELECT cc.cell, n.label, m.name, cc.correlation, cc.overlap
+                &[],
+                decode::summary,
+            )?,
+            grouped(
+                c,
+                "SELECT cc.cell, n.label, m.name, cc.correlation, cc.overlap
                  FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
                       JOIN modalities m ON m.id = cc.modality
                  ORDER BY cc.cell, n.i, n.j, m.name COLLATE \"C\"",
-    )?;
-    let mut anomalies = child(
-        "SELECT ca.cell, m.name, ca.t, ca.anomaly, ca.flagged
+                &[],
+                decode::correlation,
+            )?,
+            grouped(
+                c,
+                "SELECT ca.cell, m.name, ca.t, ca.anomaly, ca.flagged
                  FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
                  ORDER BY ca.cell, m.name COLLATE \"C\", ca.t",
-    )?;
+                &[],
+                decode::anomaly,
+            )?,
+        )
+    } else {
+        Default::default()
+    };
     let mut out = Vec::with_capacity(rows.len());
     for r in &rows {
         let id: i64 = r.get(0);
-        let mut md = CellMetadata::new(parse_cell("cells", r.get(1))?);
-        md.last_collected = r.get(2);
-        md.pending_bytes = r.get(3);
-        md.expected_energy_j = r.get(4);
-        let term = |k: usize| r.get::<_, Option<f64>>(k);
-        if let (Some(f), Some(rr), Some(a), Some(u), Some(s), Some(at)) = (
-            term(5),
-            term(6),
-            term(7),
-            term(8),
-            term(9),
-            r.get::<_, Option<i64>>(10),
-        ) {
-            md.scores = Some(CellScores {
-                freshness: f,
-                redundancy: rr,
-                anomaly: a,
-                uncertainty: u,
-                score: s,
-                computed_at: at,
-            });
-        }
-        for p in probs.remove(&id).unwrap_or_default() {
-            md.class_probabilities.push(ClassProbability {
-                class: p.get(1),
-                probability: p.get(2),
-            });
-        }
-        for s in summaries.remove(&id).unwrap_or_default() {
-            md.summaries.push(ModalitySummary {
-                modality: parse_modality("cell_summaries", s.get(1))?,
-                stats: SeriesStats {
-                    count: count("cell_summaries", s.get(2))?,
-                    mean: s.get(3),
-                    std: s.get(4),
-                    min: s.get(5),
-                    max: s.get(6),
-                    latest_t: s.get(7),
-                    latest_value: s.get(8),
-                },
-            });
-        }
-        for co in correlations.remove(&id).unwrap_or_default() {
-            md.correlations.push(Correlation {
-                neighbour: parse_cell("cell_correlations", co.get(1))?,
-                modality: parse_modality("cell_correlations", co.get(2))?,
-                correlation: co.get(3),
-                overlap: count("cell_correlations", co.get(4))?,
-            });
-        }
-        for a in anomalies.remove(&id).unwrap_or_default() {
-            md.anomalies.push(AnomalyRecord {
-                modality: parse_modality("cell_anomalies", a.get(1))?,
-                t: a.get(2),
-                anomaly: a.get(3),
-                flagged: a.get(4),
-            });
-        }
+        let mut md = decode::cell_metadata(r)?;
+        md.class_probabilities = probs.remove(&id).unwrap_or_default();
+        md.summaries = summaries.remove(&id).unwrap_or_default();
+        md.correlations = correlations.remove(&id).unwrap_or_default();
+        md.anomalies = anomalies.remove(&id).unwrap_or_default();
         out.push(md);
     }
     Ok(out)
@@ -463,32 +285,23 @@ fn cell_metadata_with(c: &mut Transaction<'_>, children: bool) -> Result<Vec<Cel
 pub(super) fn sensor_last_collected(
     c: &mut Transaction<'_>,
 ) -> Result<Vec<(SensorId, UnixSeconds)>> {
-    c.query(
+    rows(
+        c,
         "SELECT s.name, sc.last_collected FROM sensor_collection sc
          JOIN sensors s ON s.id = sc.sensor ORDER BY s.name COLLATE \"C\"",
         &[],
+        decode::sensor_last_collected,
     )
-    .db()?
-    .iter()
-    .map(|r| Ok((parse_sensor("sensor_collection", r.get(0))?, r.get(1))))
-    .collect()
 }
 
 pub(super) fn sensor_reading_counts(c: &mut Transaction<'_>) -> Result<Vec<(SensorId, u64)>> {
-    c.query(
+    rows(
+        c,
         "SELECT s.name, n.count FROM (SELECT sensor, COUNT(*) AS count FROM readings
              GROUP BY sensor) n JOIN sensors s ON s.id = n.sensor ORDER BY s.name COLLATE \"C\"",
         &[],
+        decode::sensor_reading_count,
     )
-    .db()?
-    .iter()
-    .map(|r| {
-        Ok((
-            parse_sensor("readings", r.get(0))?,
-            count("readings", r.get(1))?,
-        ))
-    })
-    .collect()
 }
 
 /// All missions (`id` = `None`) or one, oldest first, with their stops and visits.
@@ -498,131 +311,36 @@ pub(super) fn missions(
 ) -> Result<Vec<MissionRecord>> {
     // -1 never names a mission (ids start at 1): "all" without a second query text.
     let only = id.map_or(-1, |m| m.0);
-    let rows = c
-        .query(
-            "SELECT id, created_at, kind, planned_at, solver, seed,
-                    weight_alpha, weight_beta, weight_gamma, weight_delta, anomaly_form,
-                    total_score, base_lat, base_lon, base_alt_m, altitude_m, cruise_speed_mps,
-                    travel_j, hover_j, comm_j, return_j, total_j, budget_j, distance_m,
-                    flight_time_s, return_distance_m, status, flown_at, wind_mps, wind_from_deg,
-                    cancelled
-             FROM missions WHERE $1::BIGINT = -1 OR id = $1::BIGINT ORDER BY id",
-            &[&only],
-        )
-        .db()?;
     let mut stops = grouped(
-        c.query(
-            "SELECT mission, position, cell, lat, lon, score, freshness, redundancy, anomaly,
-                    uncertainty, leg_distance_m, leg_energy_j, collection_s, hover_s, hover_j,
-                    comm_j
-             FROM mission_stops WHERE $1::BIGINT = -1 OR mission = $1::BIGINT ORDER BY mission, position",
-            &[&only],
-        )
-        .db()?,
-    );
+        c,
+        "SELECT mission, position, cell, lat, lon, score, freshness, redundancy, anomaly,
+                uncertainty, leg_distance_m, leg_energy_j, collection_s, hover_s, hover_j,
+                comm_j
+         FROM mission_stops WHERE $1::BIGINT = -1 OR mission = $1::BIGINT ORDER BY mission, position",
+        &[&only],
+        decode::stop,
+    )?;
     let mut visits = grouped(
-        c.query(
-            "SELECT mission, position, cell, arrived_at, energy_j FROM visits
-             WHERE $1::BIGINT = -1 OR mission = $1::BIGINT ORDER BY mission, position",
-            &[&only],
-        )
-        .db()?,
-    );
-    let mut out = Vec::with_capacity(rows.len());
-    for r in &rows {
-        let id: i64 = r.get(0);
-        let corrupt = |detail: String| StoreError::Corrupt {
-            table: "missions",
-            detail,
-        };
-        let kind_s: &str = r.get(2);
-        let kind = MissionKind::parse(kind_s)
-            .ok_or_else(|| corrupt(format!("mission {id}: unknown kind {kind_s:?}")))?;
-        let status_s: &str = r.get(26);
-        let cancelled: bool = r.get(30);
-        let status = match MissionStatus::parse(status_s) {
-            Some(MissionStatus::Planned) if cancelled => MissionStatus::Cancelled,
-            Some(s @ (MissionStatus::Planned | MissionStatus::Flown)) => s,
-            _ => {
-                return Err(corrupt(format!(
-                    "mission {id}: unknown status {status_s:?}"
-                )));
-            }
-        };
-        let mut stop_list = Vec::new();
-        for s in stops.remove(&id).unwrap_or_default() {
-            let terms = match (
-                s.get::<_, Option<f64>>(6),
-                s.get::<_, Option<f64>>(7),
-                s.get::<_, Option<f64>>(8),
-                s.get::<_, Option<f64>>(9),
-            ) {
-                (Some(f), Some(r), Some(a), Some(u)) => Some([f, r, a, u]),
-                _ => None,
-            };
-            stop_list.push(StopRecord {
-                order: position("mission_stops", s.get(1))?,
-                cell: parse_cell("mission_stops", s.get(2))?,
-                centre: parse_latlon("mission_stops", s.get(3), s.get(4))?,
-                score: s.get(5),
-                terms,
-                leg_distance_m: s.get(10),
-                leg_energy_j: s.get(11),
-                collection_s: s.get(12),
-                hover_s: s.get(13),
-                hover_j: s.get(14),
-                comm_j: s.get(15),
-            });
-        }
-        let mut visit_list = Vec::new();
-        for v in visits.remove(&id).unwrap_or_default() {
-            visit_list.push(VisitRecord {
-                order: position("visits", v.get(1))?,
-                cell: parse_cell("visits", v.get(2))?,
-                arrived_at: v.get(3),
-                energy_j: v.get(4),
-            });
-        }
-        let seed: i64 = r.get(5);
-        out.push(MissionRecord {
-            id: MissionId(id),
-            mission: NewMission {
-                created_at: r.get(1),
-                kind,
-                planned_at: r.get(3),
-                solver: r.get(4),
-                // Stored as the two's-complement i64 of the same 64 bits.
-                seed: seed as u64,
-                weights: [r.get(6), r.get(7), r.get(8), r.get(9)],
-                anomaly_form: r.get(10),
-                total_score: r.get(11),
-                profile: FlightProfile {
-                    base: parse_latlon("missions", r.get(12), r.get(13))?,
-                    base_alt_m: r.get(14),
-                    altitude_m: r.get(15),
-                    cruise_speed_mps: r.get(16),
-                    wind_mps: r.get(28),
-                    wind_from_deg: r.get(29),
-                },
-                energy: EnergyBreakdown {
-                    travel_j: r.get(17),
-                    hover_j: r.get(18),
-                    comm_j: r.get(19),
-                    return_j: r.get(20),
-                    total_j: r.get(21),
-                    budget_j: r.get(22),
-                    distance_m: r.get(23),
-                    flight_time_s: r.get(24),
-                },
-                return_distance_m: r.get(25),
-                stops: stop_list,
-            },
-            status,
-            flown_at: r.get(27),
-            visits: visit_list,
-        });
-    }
-    Ok(out)
+        c,
+        "SELECT mission, position, cell, arrived_at, energy_j FROM visits
+         WHERE $1::BIGINT = -1 OR mission = $1::BIGINT ORDER BY mission, position",
+        &[&only],
+        decode::visit,
+    )?;
+    rows(
+        c,
+        concat!(
+            "SELECT ",
+            decode::mission_columns!(),
+            " FROM missions WHERE $1::BIGINT = -1 OR id = $1::BIGINT ORDER BY id"
+        ),
+        &[&only],
+        |r| {
+            let id: i64 = r.get(0);
+            let stops = stops.remove(&id).unwrap_or_default();
+            decode::mission(r, stops, visits.remove(&id).unwrap_or_default())
+        },
+    )
 }
 
 pub(super) fn config_get(c: &mut Transaction<'_>, key: &str) -> Result<Option<String>> {

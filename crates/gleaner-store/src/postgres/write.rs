@@ -10,11 +10,7 @@ use postgres::Transaction;
 
 use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
-use crate::checks::{
-    ImportFlight, as_i64, check_cells, check_modality_list, check_sensor_list, check_visits,
-    import_flight, keys, mission_deleted, not_cancellable, plan_insert, validate_metadata,
-    validate_mission,
-};
+use crate::checks::{self, ImportFlight, MetadataKeys, UnitChange};
 use crate::{
     CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionRecord,
     MissionStatus, ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result,
@@ -29,7 +25,7 @@ pub(super) fn upsert_sensors(
     c: &mut Transaction<'_>,
     sensors: &[SensorRecord],
 ) -> Result<UpsertStats> {
-    check_sensor_list(sensors)?;
+    checks::check_sensor_list(sensors)?;
     let mut stats = UpsertStats::default();
     let stored: HashMap<String, (f64, f64, Option<f64>, String)> = c
         .query(
@@ -64,10 +60,7 @@ pub(super) fn upsert_sensors(
                 stats.added.push(s.id.to_string());
             }
             Some((slat, slon, elev, source))
-                if *slat == lat
-                    && *slon == lon
-                    && *elev == s.elevation_m
-                    && *source == s.source =>
+                if checks::sensor_unchanged((*slat, *slon, *elev, source), s) =>
             {
                 stats.unchanged += 1;
             }
@@ -84,7 +77,7 @@ pub(super) fn upsert_modalities(
     c: &mut Transaction<'_>,
     modalities: &[ModalityRecord],
 ) -> Result<UpsertStats> {
-    check_modality_list(modalities)?;
+    checks::check_modality_list(modalities)?;
     let mut stats = UpsertStats::default();
     let stored: HashMap<String, Option<String>> = c
         .query("SELECT name, unit FROM modalities", &[])
@@ -98,8 +91,8 @@ pub(super) fn upsert_modalities(
         if !done.insert(name) {
             continue;
         }
-        match (stored.get(name), &m.unit) {
-            (None, _) => {
+        match checks::unit_change(m, stored.get(name).map(Option::as_deref))? {
+            UnitChange::Add => {
                 c.execute(
                     "INSERT INTO modalities (name, unit) VALUES ($1, $2)",
                     &[&name, &m.unit],
@@ -107,24 +100,15 @@ pub(super) fn upsert_modalities(
                 .db()?;
                 stats.added.push(name.to_string());
             }
-            // A unit for a modality stored without one is recorded.
-            (Some(None), Some(unit)) => {
+            UnitChange::SetUnit(unit) => {
                 c.execute(
                     "UPDATE modalities SET unit = $2 WHERE name = $1",
-                    &[&name, unit],
+                    &[&name, &unit],
                 )
                 .db()?;
                 stats.updated.push(name.to_string());
             }
-            (Some(Some(stored)), Some(incoming)) if stored != incoming => {
-                return Err(StoreError::UnitMismatch {
-                    modality: m.modality.clone(),
-                    stored: stored.clone(),
-                    incoming: incoming.clone(),
-                });
-            }
-            // Same unit, or no unit offered: the stored one stays.
-            (Some(_), _) => stats.unchanged += 1,
+            UnitChange::Unchanged => stats.unchanged += 1,
         }
     }
     Ok(stats)
@@ -183,10 +167,10 @@ pub(super) fn insert_readings(
 ) -> Result<InsertStats> {
     let known_sensors = sensor_ids(c)?;
     let known_modalities = modality_ids(c)?;
-    let sensor_keys = keys(&batch.sensors, &known_sensors, SensorId::as_str, |s| {
+    let sensor_keys = checks::keys(&batch.sensors, &known_sensors, SensorId::as_str, |s| {
         StoreError::UnknownSensor(s.clone())
     })?;
-    let modality_keys = keys(
+    let modality_keys = checks::keys(
         &batch.modalities,
         &known_modalities,
         Modality::as_str,
@@ -199,7 +183,7 @@ pub(super) fn insert_readings(
     // (new data usually meets none). During a bulk load the table holds only the load's
     // rows: a run outside their spans meets nothing, one inside needs the key back first.
     let mut stored_range = None;
-    let (order, fresh, stats) = plan_insert(
+    let (order, fresh, stats) = checks::plan_insert(
         batch,
         &sensor_keys,
         &modality_keys,
@@ -287,10 +271,10 @@ pub(super) fn record_ingest(c: &mut Transaction<'_>, ingest: &IngestRecord) -> R
         &[
             &ingest.file_name,
             &ingest.format,
-            &as_i64(ingest.rows_read),
-            &as_i64(ingest.rows_inserted),
-            &as_i64(ingest.rows_unchanged),
-            &as_i64(ingest.rows_skipped),
+            &checks::as_i64(ingest.rows_read),
+            &checks::as_i64(ingest.rows_inserted),
+            &checks::as_i64(ingest.rows_unchanged),
+            &checks::as_i64(ingest.rows_skipped),
             &ingest.at,
         ],
     )
@@ -302,31 +286,14 @@ pub(super) fn replace_cells(
     c: &mut Transaction<'_>,
     cells: &[CellRecord],
 ) -> Result<ReplaceCellsStats> {
-    check_cells(cells)?;
+    checks::check_cells(cells)?;
     let stored = super::read::cells(c)?;
     let sensor_keys = sensor_ids(c)?;
-    let mut stats = ReplaceCellsStats::default();
-    let normalised = |cell: &CellRecord| {
-        let mut cell = cell.clone();
-        cell.sensors.sort();
-        cell.sensors.dedup();
-        cell
-    };
-    let new_by_label: HashMap<CellIndex, CellRecord> =
-        cells.iter().map(|x| (x.index, normalised(x))).collect();
-    let mut kept = HashSet::new();
-    let mut gone: Vec<String> = Vec::new();
-    for old in &stored {
-        if new_by_label.get(&old.index) == Some(old) {
-            kept.insert(old.index);
-        } else {
-            gone.push(old.index.to_string());
-        }
-    }
-    if !gone.is_empty() {
+    let plan = checks::plan_cells(&stored, cells, &sensor_keys)?;
+    if !plan.gone.is_empty() {
+        let gone: Vec<String> = plan.gone.iter().map(|x| x.to_string()).collect();
         c.execute("DELETE FROM cells WHERE label = ANY($1)", &[&gone])
             .db()?;
-        stats.removed = gone.len();
     }
     let insert_cell = c
         .prepare(
@@ -337,12 +304,7 @@ pub(super) fn replace_cells(
     let insert_member = c
         .prepare("INSERT INTO cell_sensors (cell, sensor) VALUES ($1, $2)")
         .db()?;
-    let mut order: Vec<&CellRecord> = new_by_label.values().collect();
-    order.sort_by_key(|x| x.index);
-    for cell in order {
-        if kept.contains(&cell.index) {
-            continue;
-        }
+    for (cell, members) in &plan.added {
         let cell_key: i64 = c
             .query_one(
                 &insert_cell,
@@ -357,19 +319,15 @@ pub(super) fn replace_cells(
             )
             .db()?
             .get(0);
-        for s in &cell.sensors {
-            let sensor_key = sensor_keys
-                .get(s.as_str())
-                .ok_or_else(|| StoreError::Unknown {
-                    what: "sensor",
-                    name: s.to_string(),
-                })?;
+        for sensor_key in members {
             c.execute(&insert_member, &[&cell_key, sensor_key]).db()?;
         }
-        stats.added += 1;
     }
-    stats.kept = kept.len();
-    Ok(stats)
+    Ok(ReplaceCellsStats {
+        added: plan.added.len(),
+        removed: plan.gone.len(),
+        kept: plan.kept,
+    })
 }
 
 pub(super) fn set_sensors_collected(
@@ -400,7 +358,7 @@ pub(super) fn create_mission(c: &mut Transaction<'_>, m: &NewMission) -> Result<
 
 /// Inserts a mission and its stops, with the id `id` or (`None`) the next one.
 fn insert_mission(c: &mut Transaction<'_>, m: &NewMission, id: Option<i64>) -> Result<MissionId> {
-    validate_mission(m)?;
+    checks::validate_mission(m)?;
     let e = &m.energy;
     let p = &m.profile;
     // The same 64 bits as a signed integer (BIGINT is signed).
@@ -498,7 +456,7 @@ pub(super) fn record_visits(
     flown_at: UnixSeconds,
     amend: bool,
 ) -> Result<()> {
-    check_visits(mission, visits)?;
+    checks::check_visits(mission, visits)?;
     // FOR UPDATE: the row stays locked to the end of the transaction.
     let stored = c
         .query_opt(
@@ -506,20 +464,12 @@ pub(super) fn record_visits(
             &[&mission.0],
         )
         .db()?;
-    let Some(row) = stored else {
-        return Err(StoreError::Unknown {
-            what: "mission",
-            name: mission.to_string(),
-        });
-    };
-    let status: &str = row.get(0);
-    let stored_flown_at: Option<i64> = row.get(1);
-    if status == MissionStatus::Flown.as_str() && !amend {
-        return Err(StoreError::AlreadyFlown {
-            mission: mission.0,
-            flown_at: stored_flown_at.unwrap_or(flown_at),
-        });
-    }
+    checks::check_recordable(
+        mission,
+        stored.as_ref().map(|row| (row.get(0), row.get(1))),
+        flown_at,
+        amend,
+    )?;
     c.execute(
         "UPDATE missions SET status = $2, flown_at = $3 WHERE id = $1",
         &[&mission.0, &MissionStatus::Flown.as_str(), &flown_at],
@@ -574,24 +524,13 @@ pub(super) fn upsert_cell_metadata(
     c: &mut Transaction<'_>,
     metadata: &[CellMetadata],
 ) -> Result<()> {
-    validate_metadata(metadata)?;
-    let cell_keys = cell_ids(c)?;
-    let modality_keys = modality_ids(c)?;
-    let cell_key = |c: &CellIndex| {
-        cell_keys
-            .get(&c.to_string())
-            .copied()
-            .ok_or_else(|| StoreError::Unknown {
-                what: "cell",
-                name: c.to_string(),
-            })
+    checks::validate_metadata(metadata)?;
+    let keys = MetadataKeys {
+        cells: cell_ids(c)?,
+        modalities: modality_ids(c)?,
     };
-    let modality_key = |m: &Modality| {
-        modality_keys
-            .get(m.as_str())
-            .copied()
-            .ok_or_else(|| StoreError::UnknownModality(m.clone()))
-    };
+    let cell_key = |c: &CellIndex| keys.cell(c);
+    let modality_key = |m: &Modality| keys.modality(m);
     let row = c
         .prepare(
             "INSERT INTO cell_metadata (cell, last_collected, pending_bytes, expected_energy_j,
@@ -674,7 +613,7 @@ pub(super) fn upsert_cell_metadata(
                 &[
                     &ck,
                     &modality_key(&su.modality)?,
-                    &as_i64(st.count),
+                    &checks::as_i64(st.count),
                     &st.mean,
                     &st.std,
                     &st.min,
@@ -693,7 +632,7 @@ pub(super) fn upsert_cell_metadata(
                     &cell_key(&co.neighbour)?,
                     &modality_key(&co.modality)?,
                     &co.correlation,
-                    &as_i64(co.overlap),
+                    &checks::as_i64(co.overlap),
                 ],
             )
             .db()?;
@@ -725,7 +664,7 @@ pub(super) fn import_mission(c: &mut Transaction<'_>, record: &MissionRecord) ->
         &[],
     )
     .db()?;
-    match import_flight(record)? {
+    match checks::import_flight(record)? {
         ImportFlight::Nothing => Ok(()),
         ImportFlight::Record(flown_at) => {
             record_visits(c, record.id, &record.visits, flown_at, false)
@@ -744,7 +683,7 @@ pub(super) fn cancel_mission(c: &mut Transaction<'_>, mission: MissionId) -> Res
         )
         .db()?;
     if n == 0 {
-        return Err(not_cancellable(mission));
+        return Err(checks::not_cancellable(mission));
     }
     Ok(())
 }
@@ -754,5 +693,5 @@ pub(super) fn delete_mission(c: &mut Transaction<'_>, mission: MissionId) -> Res
     let n = c
         .execute("DELETE FROM missions WHERE id = $1", &[&mission.0])
         .db()?;
-    mission_deleted(mission, n)
+    checks::mission_deleted(mission, n)
 }

@@ -9,8 +9,9 @@ use rusqlite::{Connection, OptionalExtension, params};
 use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
 use crate::checks::{
-    ImportFlight, as_i64, check_cells, check_modality_list, check_sensor_list, check_visits,
-    import_flight, keys, mission_deleted, not_cancellable, plan_insert, validate_metadata,
+    ImportFlight, MetadataKeys, UnitChange, as_i64, check_cells, check_modality_list,
+    check_recordable, check_sensor_list, check_visits, import_flight, keys, mission_deleted,
+    not_cancellable, plan_cells, plan_insert, sensor_unchanged, unit_change, validate_metadata,
     validate_mission,
 };
 use crate::{
@@ -71,12 +72,7 @@ pub(super) fn upsert_sensors(c: &Connection, sensors: &[SensorRecord]) -> Result
                 insert.execute(p).db()?;
                 stats.added.push(s.id.to_string());
             }
-            Some((lat, lon, elev, source))
-                if lat == s.position.lat()
-                    && lon == s.position.lon()
-                    && elev == s.elevation_m
-                    && source == s.source =>
-            {
+            Some((lat, lon, elev, source)) if sensor_unchanged((lat, lon, elev, &source), s) => {
                 stats.unchanged += 1;
             }
             Some(_) => {
@@ -110,25 +106,16 @@ pub(super) fn upsert_modalities(
             continue;
         }
         let stored: Option<Option<String>> = get.query_row([name], |r| r.get(0)).optional().db()?;
-        match (stored, &m.unit) {
-            (None, _) => {
+        match unit_change(m, stored.as_ref().map(Option::as_deref))? {
+            UnitChange::Add => {
                 insert.execute(params![name, m.unit]).db()?;
                 stats.added.push(name.to_string());
             }
-            // A unit for a modality stored without one is recorded.
-            (Some(None), Some(unit)) => {
+            UnitChange::SetUnit(unit) => {
                 update.execute(params![name, unit]).db()?;
                 stats.updated.push(name.to_string());
             }
-            (Some(Some(stored)), Some(incoming)) if stored != *incoming => {
-                return Err(StoreError::UnitMismatch {
-                    modality: m.modality.clone(),
-                    stored,
-                    incoming: incoming.clone(),
-                });
-            }
-            // Same unit, or no unit offered: the stored one stays.
-            (Some(_), _) => stats.unchanged += 1,
+            UnitChange::Unchanged => stats.unchanged += 1,
         }
     }
     Ok(stats)
@@ -229,26 +216,12 @@ pub(super) fn replace_cells(c: &Connection, cells: &[CellRecord]) -> Result<Repl
     check_cells(cells)?;
     let stored = super::read::cells(c)?;
     let sensor_keys = sensor_ids(c)?;
-    let mut stats = ReplaceCellsStats::default();
-    let normalised = |cell: &CellRecord| {
-        let mut cell = cell.clone();
-        cell.sensors.sort();
-        cell.sensors.dedup();
-        cell
-    };
-    let new_by_label: HashMap<CellIndex, CellRecord> =
-        cells.iter().map(|x| (x.index, normalised(x))).collect();
+    let plan = plan_cells(&stored, cells, &sensor_keys)?;
     let mut delete = c
         .prepare_cached("DELETE FROM cells WHERE label = ?1")
         .db()?;
-    let mut kept = HashSet::new();
-    for old in &stored {
-        if new_by_label.get(&old.index) == Some(old) {
-            kept.insert(old.index);
-        } else {
-            delete.execute([old.index.to_string()]).db()?;
-            stats.removed += 1;
-        }
+    for label in &plan.gone {
+        delete.execute([label.to_string()]).db()?;
     }
     let mut insert_cell = c
         .prepare_cached(
@@ -258,12 +231,7 @@ pub(super) fn replace_cells(c: &Connection, cells: &[CellRecord]) -> Result<Repl
     let mut insert_member = c
         .prepare_cached("INSERT INTO cell_sensors (cell, sensor) VALUES (?1, ?2)")
         .db()?;
-    let mut order: Vec<&CellRecord> = new_by_label.values().collect();
-    order.sort_by_key(|x| x.index);
-    for cell in order {
-        if kept.contains(&cell.index) {
-            continue;
-        }
+    for (cell, members) in &plan.added {
         insert_cell
             .execute(params![
                 cell.index.to_string(),
@@ -275,19 +243,15 @@ pub(super) fn replace_cells(c: &Connection, cells: &[CellRecord]) -> Result<Repl
             ])
             .db()?;
         let cell_key = c.last_insert_rowid();
-        for s in &cell.sensors {
-            let sensor_key = sensor_keys
-                .get(s.as_str())
-                .ok_or_else(|| StoreError::Unknown {
-                    what: "sensor",
-                    name: s.to_string(),
-                })?;
+        for sensor_key in members {
             insert_member.execute(params![cell_key, sensor_key]).db()?;
         }
-        stats.added += 1;
     }
-    stats.kept = kept.len();
-    Ok(stats)
+    Ok(ReplaceCellsStats {
+        added: plan.added.len(),
+        removed: plan.gone.len(),
+        kept: plan.kept,
+    })
 }
 
 pub(super) fn set_sensors_collected(
@@ -413,19 +377,12 @@ pub(super) fn record_visits(
         )
         .optional()
         .db()?;
-    let Some((status, stored_flown_at)) = stored else {
-        return Err(StoreError::Unknown {
-            what: "mission",
-            name: mission.to_string(),
-        });
-    };
-    if status == MissionStatus::Flown.as_str() && !amend {
-        return Err(StoreError::AlreadyFlown {
-            mission: mission.0,
-            // Migration 2 gives every flown mission a time; the fallback is for hand edits.
-            flown_at: stored_flown_at.unwrap_or(flown_at),
-        });
-    }
+    check_recordable(
+        mission,
+        stored.as_ref().map(|(s, t)| (s.as_str(), *t)),
+        flown_at,
+        amend,
+    )?;
     execute_cached(
         c,
         "UPDATE missions SET status = ?2, flown_at = ?3 WHERE id = ?1",
@@ -550,23 +507,12 @@ fn stored_child_rows(
 /// common case: a rescoring rewrites every cell's rows, most unchanged) are found first (one
 /// primary-key range read per written cell and table) and not written at all. The table contents are the same either way.
 fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
-    let cell_keys = cell_ids(c)?;
-    let modality_keys = modality_ids(c)?;
-    let cell_key = |c: &CellIndex| {
-        cell_keys
-            .get(&c.to_string())
-            .copied()
-            .ok_or_else(|| StoreError::Unknown {
-                what: "cell",
-                name: c.to_string(),
-            })
+    let keys = MetadataKeys {
+        cells: cell_ids(c)?,
+        modalities: modality_ids(c)?,
     };
-    let modality_key = |m: &Modality| {
-        modality_keys
-            .get(m.as_str())
-            .copied()
-            .ok_or_else(|| StoreError::UnknownModality(m.clone()))
-    };
+    let cell_key = |c: &CellIndex| keys.cell(c);
+    let modality_key = |m: &Modality| keys.modality(m);
     let (mut stored_summaries, mut stored_correlations) =
         stored_child_rows(c, metadata, &cell_key)?;
     let mut row = c
