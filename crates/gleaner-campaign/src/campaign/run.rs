@@ -89,13 +89,7 @@ pub(super) fn new_run_project(
             .map_err(|_| AppError::Invalid("a campaign run panicked".into()))?
             .copy_in_memory()?;
         let mut project = Project::new(&request.init.dir, settings, store);
-        score(
-            &mut project,
-            &ScoreRequest {
-                at: Some(request.history_until),
-                ..ScoreRequest::default()
-            },
-        )?;
+        score_history(&mut project, request.history_until)?;
         return Ok(project);
     }
     let store = SqliteStore::open_in_memory()?;
@@ -131,14 +125,21 @@ pub(super) fn new_run_project(
     )?;
     // As after any bulk ingest: the first scoring rebuilds the persisted utility state, so
     // every mission's scoring takes the fast path.
+    score_history(&mut project, request.history_until)?;
+    Ok(project)
+}
+
+/// Scores the run's project at the end of its history, `until` (s): the scoring a run
+/// starts from, which also leaves the persisted utility state for the missions' fast path.
+fn score_history(project: &mut Project<SqliteStore>, until: UnixSeconds) -> Result<()> {
     score(
-        &mut project,
+        project,
         &ScoreRequest {
-            at: Some(request.history_until),
+            at: Some(until),
             ..ScoreRequest::default()
         },
     )?;
-    Ok(project)
+    Ok(())
 }
 
 pub(super) fn run_one(
