@@ -3,7 +3,7 @@
 
 use std::ops::Range;
 
-use super::{Fitted, Outcome, Planner, sensor_series, series};
+use super::{Fitted, Outcome, Planner, sensor_series};
 
 /// The 90% intervals' coverage of the unvisited sensors' test values.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,8 +81,8 @@ impl Fitted {
             }
         }
         let train = self.protocol.train.clone();
-        let (times, values) = series(&self.matrix, train.clone());
-        let input = sensor_series(&times, &values);
+        let (times, values) = &self.train_series;
+        let input = sensor_series(times, values);
         let t = &self.matrix.times;
         let mut errors = Vec::new();
         for (origin, model) in &self.backtests {
