@@ -199,9 +199,9 @@ long from the sensors read now; docs/method.md §7); --levels: ordinary kriging 
 separable exponential space-time covariance with a temporal nugget); --simple: simple kriging
 of levels.
 
---from/--to/--every-hours: every sensor's mean, sd and 90% interval (mean ± 1.645·sd) at each
-time of a range, by the same estimator (one fit on the readings up to --to; each time uses only
-readings stamped at or before it) as CSV (time,sensor,mean,sd,lo90,hi90), or with --json the
+--from/--to/--every-hours: every sensor's mean, sd and 90% interval at each time of a range, by
+the same estimator (one fit on the readings up to --to; each time uses only readings stamped at
+or before it; the interval mean ± q·sd, q calibrated on back-tests: docs/method.md §7) as CSV (time,sensor,mean,sd,lo90,hi90), or with --json the
 `gleaner.reconstruction-series` document (as GET /api/v1/reconstruct?from=..&to=..).
 
 --map FILE.svg|FILE.png: the map of the estimated field at --at, a two-panel figure for a paper

@@ -35,14 +35,11 @@ pub fn interval_multiplier(errors: &[f64]) -> f64 {
 }
 
 /// The dynamic model's standardised errors on a back-test stretch `[split_s, end_s]`
-/// (seconds) in which only the sensors with `read[i]` are read.
+/// (seconds) in which only the sensors with `read[i]` are read: [`backtest_errors_hidden`]
+/// with every unread sensor hidden from `split_s` on.
 ///
 /// `model` should be fitted on readings before `split_s` only (the errors are then out of
-/// sample). Its Kalman filter takes every reading of `series` in `[start_s, split_s)`, then in
-/// `[split_s, end_s]` only the readings of the sensors read; each reading of a sensor not
-/// read in that stretch is estimated at its time (after the readings stamped at the same
-/// time) and gives `|z| = |v − mean| / √(variance + reading noise)`. Sensors beyond the
-/// model's and non-finite values are skipped; a zero standard deviation gives no error.
+/// sample).
 pub fn backtest_errors(
     model: &DynamicModel,
     series: &[SensorSeries<'_>],
@@ -51,19 +48,39 @@ pub fn backtest_errors(
     end_s: i64,
     read: &[bool],
 ) -> Vec<f64> {
+    let hidden_from: Vec<Option<i64>> = (0..series.len())
+        .map(|i| (!read.get(i).copied().unwrap_or(false)).then_some(split_s))
+        .collect();
+    backtest_errors_hidden(model, series, start_s, &hidden_from, end_s)
+}
+
+/// The dynamic model's standardised errors when sensor `i`'s readings from `hidden_from[i]`
+/// (seconds; `None`: never hidden) to `end_s` are withheld and estimated instead.
+///
+/// The Kalman filter starts at `start_s` and takes every reading of `series` in
+/// `[start_s, end_s]` that is not hidden; each hidden reading is estimated at its time (after
+/// the readings the filter takes stamped at the same time) and gives
+/// `|z| = |v − mean| / √(variance + reading noise)`. `model` should be fitted on readings
+/// before the earliest `hidden_from` only (the errors are then out of sample). Sensors beyond
+/// the model's and non-finite values are skipped; a zero standard deviation gives no error.
+pub fn backtest_errors_hidden(
+    model: &DynamicModel,
+    series: &[SensorSeries<'_>],
+    start_s: i64,
+    hidden_from: &[Option<i64>],
+    end_s: i64,
+) -> Vec<f64> {
     let n = model.len().min(series.len());
     // (time, 0 = a reading the filter takes / 1 = a reading to estimate, sensor, value)
     let mut events: Vec<(i64, u8, usize, f64)> = Vec::new();
     for (i, s) in series.iter().enumerate().take(n) {
-        let is_read = read.get(i).copied().unwrap_or(false);
+        let hidden = hidden_from.get(i).copied().flatten();
         for (&t, &v) in s.times.iter().zip(s.values) {
             if t < start_s || t > end_s || !v.is_finite() {
                 continue;
             }
-            match (t < split_s, is_read) {
-                (true, _) | (false, true) => events.push((t, 0, i, v)),
-                (false, false) => events.push((t, 1, i, v)),
-            }
+            let kind = u8::from(hidden.is_some_and(|h| t >= h));
+            events.push((t, kind, i, v));
         }
     }
     events.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
@@ -147,5 +164,36 @@ mod tests {
             backtest_errors(&model, &series[..1], 0, 6, 9, &[false]).len(),
             4
         );
+    }
+
+    /// Hiding each sensor from its own time: a sensor hidden from the split is the unread
+    /// sensor of [`backtest_errors`]; one hidden later gives errors only from then on.
+    #[test]
+    fn hidden_from_generalises_the_unread_sensors() {
+        let model =
+            DynamicModel::new(vec![0.0, 0.0], vec![1.0, 0.8, 0.8, 1.0], 0.6, 1.0, 0.02).unwrap();
+        let times: Vec<i64> = (0..12).collect();
+        let a: Vec<f64> = times.iter().map(|&t| (t as f64 * 0.5).cos()).collect();
+        let b: Vec<f64> = times.iter().map(|&t| (t as f64 * 0.4).sin()).collect();
+        let series = [
+            SensorSeries {
+                position: [0.0, 0.0],
+                times: &times,
+                values: &a,
+            },
+            SensorSeries {
+                position: [1.0, 0.0],
+                times: &times,
+                values: &b,
+            },
+        ];
+        let unread = backtest_errors(&model, &series, 0, 5, 11, &[true, false]);
+        let hidden = backtest_errors_hidden(&model, &series, 0, &[None, Some(5)], 11);
+        assert_eq!(unread, hidden);
+        let later = backtest_errors_hidden(&model, &series, 0, &[None, Some(9)], 11);
+        assert_eq!(later.len(), 3, "sensor 1 at t = 9, 10, 11");
+        let both = backtest_errors_hidden(&model, &series, 0, &[Some(10), Some(9)], 11);
+        assert_eq!(both.len(), 5);
+        assert!(backtest_errors_hidden(&model, &series, 0, &[None, None], 11).is_empty());
     }
 }

@@ -53,7 +53,9 @@ use thiserror::Error;
 mod calibration;
 mod dynamic;
 mod increments;
-pub use calibration::{BACKTEST_MIN, Z90, backtest_errors, interval_multiplier};
+pub use calibration::{
+    BACKTEST_MIN, Z90, backtest_errors, backtest_errors_hidden, interval_multiplier,
+};
 pub use dynamic::{
     DynamicFitOptions, DynamicModel, FieldFilter, MAX_DYNAMIC_SENSORS, Shrinkage, fit_dynamic,
     fit_own_rates,

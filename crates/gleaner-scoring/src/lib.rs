@@ -23,6 +23,7 @@ mod choices;
 mod codec;
 mod condition;
 mod drift;
+mod dynamic_interval;
 mod error;
 mod information;
 mod knowledge;
@@ -39,6 +40,7 @@ pub mod when;
 
 pub use choices::{Estimator, Objective, parse_planner};
 pub use condition::{Condition, ScoreRequest, Scoring, condition_modality, driver};
+pub use dynamic_interval::DYNAMIC_BACKTESTS;
 pub use error::{AppError, Result};
 pub use information::CellInformation;
 pub use knowledge::{History, Knowledge, knowledge, sampling_step};

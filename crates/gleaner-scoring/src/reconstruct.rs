@@ -17,9 +17,10 @@ use gleaner_kriging::{
 use gleaner_store::{ReadingBatch, Store};
 
 use crate::choices::Estimator;
+use crate::dynamic_interval::dynamic_multiplier;
 use crate::error::{AppError, Result};
 use crate::knowledge::sampling_step;
-use crate::kriging_inputs::{Columns, KrigingInputs, Z90};
+use crate::kriging_inputs::{Columns, KrigingInputs};
 use crate::project::Project;
 
 /// Most observations one kriging estimate uses (the most correlated with the target).
@@ -66,8 +67,9 @@ pub struct SensorEstimate {
     pub variance: f64,
     /// Half-width of its 90% prediction interval `kriged ± half90`, the modality's unit: for
     /// the kriging of changes calibrated on the estimator's own out-of-sample errors at past
-    /// reads ([`interval_multiplier`](crate::kriging_inputs::interval_multiplier)), otherwise
-    /// [`Z90`]·√variance.
+    /// reads ([`interval_multiplier`](crate::kriging_inputs::interval_multiplier)); for the
+    /// dynamic model `q`·√(variance + reading noise), `q` from back-tests that hide in the past
+    /// what is stale now (docs/method.md §7); otherwise [`Z90`](crate::Z90)·√variance.
     pub half90: f64,
 }
 
@@ -250,7 +252,7 @@ pub const UNSHARED_PRIOR_CHANGES: f64 = 30.0;
 /// columns, times `unshared_weight`; `[planner] unshared_weight`) when the weight is above 0;
 /// None over [`gleaner_kriging::MAX_DYNAMIC_SENSORS`] sensors or without two distinct
 /// readings.
-fn dynamic_from_columns(
+pub(crate) fn dynamic_from_columns(
     columns: &Columns,
     step_s: i64,
     unshared_weight: f64,
@@ -627,13 +629,22 @@ pub fn estimate_with<S: Store>(
             .then_some(k.multiplier.q)
     });
     let q = kept_q.unwrap_or_else(|| kriging.multiplier());
-    // The dynamic model: one filter pass over the window's readings.
+    // The dynamic model: one filter pass over the window's readings, and its interval's
+    // multiplier from back-tests over everything known.
     let mut filtered: Vec<(f64, f64)> = Vec::new();
+    let mut dynamic_q = None;
     if let (Estimator::Dynamic, Some(model)) = (estimator, dynamic) {
         let start = at.saturating_sub(dynamic_window_s(model)).max(from);
         run_filter(model, &series, start, &[at], |_, f| {
             filtered = (0..ids.len()).map(|k| f.estimate(k)).collect();
         });
+        let known = per_sensor(
+            &ids,
+            &project.store().readings_for(Some(modality), from..=at)?,
+        );
+        let step = (model.step_s() as i64).max(1);
+        let weight = project.settings().planner.unshared_weight;
+        dynamic_q = Some((dynamic_multiplier(&known, at, step, weight)?, model.noise()));
     }
     let estimates = sensors
         .iter()
@@ -650,7 +661,12 @@ pub fn estimate_with<S: Store>(
                 carried: latest[k].map_or(model.means[k], |l| l.1),
                 kriged,
                 variance,
-                half90: kriging.half90(k, variance, q),
+                half90: match dynamic_q {
+                    Some((q, noise)) if k < filtered.len() => {
+                        q * (variance.max(0.0) + noise).sqrt()
+                    }
+                    _ => kriging.half90(k, variance, q),
+                },
             }
         })
         .collect();
@@ -758,7 +774,8 @@ pub struct ReconstructionSeries {
     /// Posterior variances, same layout, the unit squared (without the reading noise).
     pub variance: Vec<f64>,
     /// Half-widths of the 90% prediction intervals, same layout, the modality's unit: under
-    /// the dynamic model `Z90`·√(variance + reading noise); under the kriging of changes
+    /// the dynamic model `q`·√(variance + reading noise), `q` back-tested on the staleness at
+    /// `to` (`Z90` when every sensor is read at `to`; docs/method.md §7); under the kriging of changes
     /// calibrated at each time on the estimator's out-of-sample errors at past readings
     /// ([`interval_multiplier`](crate::kriging_inputs::interval_multiplier)); `Z90`·√variance
     /// otherwise.
@@ -865,13 +882,19 @@ pub fn reconstruct_series<S: Store>(
     let mut half90 = vec![0.0; times.len() * m];
     match (&dynamic, estimator) {
         (Some(model), Estimator::Dynamic) => {
+            let q = dynamic_multiplier(
+                &columns,
+                request.to,
+                step,
+                project.settings().planner.unshared_weight,
+            )?;
             let start = request.from.saturating_sub(dynamic_window_s(model));
             run_filter(model, &columns, start, &times, |i, f| {
                 for (j, &k) in wanted.iter().enumerate() {
                     let (mu, v) = f.estimate(k);
                     mean[i * m + j] = mu;
                     variance[i * m + j] = v;
-                    half90[i * m + j] = Z90 * (v.max(0.0) + model.noise()).sqrt();
+                    half90[i * m + j] = q * (v.max(0.0) + model.noise()).sqrt();
                 }
             });
         }
