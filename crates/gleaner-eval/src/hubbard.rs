@@ -609,22 +609,15 @@ impl Outcome {
             .collect()
     }
 
-    /// The mean over the windows and capacities of the dynamic model's calibrated 90%
-    /// coverage of the unvisited sites' test values under `planner`'s tours.
-    pub fn coverage(&self, planner: Planner) -> f64 {
+    /// The mean over the windows and capacities of a 90% coverage of the unvisited sites'
+    /// test values under `planner`'s tours: the calibrated interval's with
+    /// `|o| o.coverage90`, the Gaussian one's (`mean ± 1.645·sd`) with
+    /// `|o| o.coverage90_gaussian`.
+    pub fn coverage(&self, planner: Planner, pick: fn(&crate::peer::Outcome) -> f64) -> f64 {
         crate::peer::mean_coverage(
             self.each.iter().flat_map(|r| r.outcomes.iter()),
             planner,
-            |o| o.coverage90,
-        )
-    }
-
-    /// The same for the Gaussian interval (`mean ± 1.645·sd`).
-    pub fn coverage_gaussian(&self, planner: Planner) -> f64 {
-        crate::peer::mean_coverage(
-            self.each.iter().flat_map(|r| r.outcomes.iter()),
-            planner,
-            |o| o.coverage90_gaussian,
+            pick,
         )
     }
 
@@ -771,13 +764,15 @@ impl Outcome {
             Some(_) => "inconclusive (the interval contains 0)",
             None => "not decidable (fewer than two windows)",
         };
+        let calibrated: fn(&crate::peer::Outcome) -> f64 = |o| o.coverage90;
+        let gaussian: fn(&crate::peer::Outcome) -> f64 = |o| o.coverage90_gaussian;
         let _ = writeln!(
             s,
             "- calibrated 90% intervals (dynamic model, back-test multiplier) cover {:.1}% of the unvisited sites' test values under information's tours, {:.1}% under count's (Gaussian intervals: {:.1}%, {:.1}%)\n- registration: {verdict}",
-            100.0 * self.coverage(Planner::Information),
-            100.0 * self.coverage(Planner::Count),
-            100.0 * self.coverage_gaussian(Planner::Information),
-            100.0 * self.coverage_gaussian(Planner::Count)
+            100.0 * self.coverage(Planner::Information, calibrated),
+            100.0 * self.coverage(Planner::Count, calibrated),
+            100.0 * self.coverage(Planner::Information, gaussian),
+            100.0 * self.coverage(Planner::Count, gaussian)
         );
         s
     }
