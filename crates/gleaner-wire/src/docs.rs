@@ -278,8 +278,8 @@ pub struct ReconstructionSeriesDoc {
     pub mean: Vec<Vec<f64>>,
     /// Posterior standard deviations, same layout, the unit.
     pub sd: Vec<Vec<f64>>,
-    /// Lower ends of the 90% intervals (mean ± q·sd, q calibrated on back-tests, at least
-    /// 1.645; under the dynamic model the sd includes the reading noise), same layout.
+    /// Lower ends of the 90% intervals (mean ± q·sd, q calibrated on back-tests;
+    /// under the dynamic model the sd includes the reading noise), same layout.
     pub lo90: Vec<Vec<f64>>,
     /// Upper ends of the 90% intervals, same layout.
     pub hi90: Vec<Vec<f64>>,
