@@ -764,15 +764,13 @@ impl Outcome {
             Some(_) => "inconclusive (the interval contains 0)",
             None => "not decidable (fewer than two windows)",
         };
-        let calibrated: fn(&crate::peer::Outcome) -> f64 = |o| o.coverage90;
-        let gaussian: fn(&crate::peer::Outcome) -> f64 = |o| o.coverage90_gaussian;
         let _ = writeln!(
             s,
             "- calibrated 90% intervals (dynamic model, back-test multiplier) cover {:.1}% of the unvisited sites' test values under information's tours, {:.1}% under count's (Gaussian intervals: {:.1}%, {:.1}%)\n- registration: {verdict}",
-            100.0 * self.coverage(Planner::Information, calibrated),
-            100.0 * self.coverage(Planner::Count, calibrated),
-            100.0 * self.coverage(Planner::Information, gaussian),
-            100.0 * self.coverage(Planner::Count, gaussian)
+            100.0 * self.coverage(Planner::Information, |o| o.coverage90),
+            100.0 * self.coverage(Planner::Count, |o| o.coverage90),
+            100.0 * self.coverage(Planner::Information, |o| o.coverage90_gaussian),
+            100.0 * self.coverage(Planner::Count, |o| o.coverage90_gaussian)
         );
         s
     }

@@ -19,13 +19,11 @@
 //! Units: times seconds; values in the modality's unit; `q` dimensionless.
 
 use gleaner_field::UnixSeconds;
-use gleaner_kriging::{
-    DynamicModel, SensorSeries, Z90, backtest_errors_hidden, interval_multiplier,
-};
+use gleaner_kriging::{DynamicModel, Z90, backtest_errors_hidden, interval_multiplier};
 
 use crate::error::Result;
 use crate::kriging_inputs::Columns;
-use crate::reconstruct::{dynamic_from_columns, dynamic_window_s};
+use crate::reconstruct::{dynamic_from_columns, dynamic_window_s, unplaced_series};
 
 /// Most back-test stretches per calibration.
 pub const DYNAMIC_BACKTESTS: usize = 4;
@@ -107,14 +105,7 @@ fn stretch_errors(
     ages: &[Option<i64>],
     (start, end): (UnixSeconds, UnixSeconds),
 ) -> Vec<f64> {
-    let series: Vec<SensorSeries<'_>> = columns
-        .iter()
-        .map(|(t, v)| SensorSeries {
-            position: [0.0, 0.0],
-            times: t,
-            values: v,
-        })
-        .collect();
+    let series = unplaced_series(columns);
     // Hidden strictly after `end − age`: the reading that is `age` old now stays known.
     let hidden_from: Vec<Option<i64>> = ages
         .iter()

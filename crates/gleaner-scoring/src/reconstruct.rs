@@ -260,14 +260,7 @@ pub(crate) fn dynamic_from_columns(
     if columns.len() > gleaner_kriging::MAX_DYNAMIC_SENSORS {
         return Ok(None);
     }
-    let series: Vec<SensorSeries<'_>> = columns
-        .iter()
-        .map(|(t, v)| SensorSeries {
-            position: [0.0, 0.0],
-            times: t,
-            values: v,
-        })
-        .collect();
+    let series = unplaced_series(columns);
     let Ok(model) = fit_dynamic(&series, &dynamic_fit_options(step_s)) else {
         return Ok(None);
     };
@@ -280,6 +273,19 @@ pub(crate) fn dynamic_from_columns(
         .with_own_rates(rates.into_iter().map(|r| r * unshared_weight).collect())
         .map_err(|e| AppError::core("unshared drift rates", e))?;
     Ok(Some(model))
+}
+
+/// `columns` (per sensor, times in seconds ascending) as the dynamic model's input series,
+/// without positions (it does not use them).
+pub(crate) fn unplaced_series(columns: &Columns) -> Vec<SensorSeries<'_>> {
+    columns
+        .iter()
+        .map(|(t, v)| SensorSeries {
+            position: [0.0, 0.0],
+            times: t,
+            values: v,
+        })
+        .collect()
 }
 
 /// How far back the dynamic estimator reads, seconds: three persistence times
@@ -629,30 +635,22 @@ pub fn estimate_with<S: Store>(
             .then_some(k.multiplier.q)
     });
     let q = kept_q.unwrap_or_else(|| kriging.multiplier());
-    // The dynamic model: one filter pass over the window's readings, and its interval's
-    // multiplier from back-tests over everything known.
-    let mut filtered: Vec<(f64, f64)> = Vec::new();
-    let mut dynamic_q = None;
-    if let (Estimator::Dynamic, Some(model)) = (estimator, dynamic) {
-        let start = at.saturating_sub(dynamic_window_s(model)).max(from);
-        run_filter(model, &series, start, &[at], |_, f| {
-            filtered = (0..ids.len()).map(|k| f.estimate(k)).collect();
-        });
-        let known = per_sensor(
-            &ids,
-            &project.store().readings_for(Some(modality), from..=at)?,
-        );
-        let step = (model.step_s() as i64).max(1);
-        let weight = project.settings().planner.unshared_weight;
-        dynamic_q = Some((dynamic_multiplier(&known, at, step, weight)?, model.noise()));
-    }
+    let dynamic_estimates = match (estimator, dynamic) {
+        (Estimator::Dynamic, Some(model)) => {
+            dynamic_at(project, (&ids, modality), model, &series, (from, at))?
+        }
+        _ => Vec::new(),
+    };
     let estimates = sensors
         .iter()
         .enumerate()
         .map(|(k, s)| {
-            let (kriged, variance) = match estimator {
-                Estimator::Dynamic if k < filtered.len() => filtered[k],
-                _ => kriging.estimate(k),
+            let (kriged, variance, half90) = match dynamic_estimates.get(k) {
+                Some(&e) => e,
+                None => {
+                    let (mean, variance) = kriging.estimate(k);
+                    (mean, variance, kriging.half90(k, variance, q))
+                }
             };
             SensorEstimate {
                 sensor: s.id.clone(),
@@ -661,12 +659,7 @@ pub fn estimate_with<S: Store>(
                 carried: latest[k].map_or(model.means[k], |l| l.1),
                 kriged,
                 variance,
-                half90: match dynamic_q {
-                    Some((q, noise)) if k < filtered.len() => {
-                        q * (variance.max(0.0) + noise).sqrt()
-                    }
-                    _ => kriging.half90(k, variance, q),
-                },
+                half90,
             }
         })
         .collect();
@@ -681,6 +674,42 @@ pub fn estimate_with<S: Store>(
         multiplier: MultiplierMemo { q, ..memo },
     });
     Ok(estimates)
+}
+
+/// The dynamic model's estimate of every sensor at `at` (seconds): (posterior mean, variance,
+/// 90% half-width `q`·√(variance + reading noise)), the modality's unit. One filter pass over
+/// `series` (each sensor's readings in the model's window before `at`, no earlier than
+/// `from`); `q` from back-tests over every reading of `modality` stamped in `[from, at]`
+/// ([`dynamic_multiplier`]).
+fn dynamic_at<S: Store>(
+    project: &Project<S>,
+    (ids, modality): (&[SensorId], &Modality),
+    model: &DynamicModel,
+    series: &Columns,
+    (from, at): (UnixSeconds, UnixSeconds),
+) -> Result<Vec<(f64, f64, f64)>> {
+    let start = at.saturating_sub(dynamic_window_s(model)).max(from);
+    let mut filtered: Vec<(f64, f64)> = Vec::new();
+    run_filter(model, series, start, &[at], |_, f| {
+        filtered = (0..ids.len()).map(|k| f.estimate(k)).collect();
+    });
+    let known = per_sensor(
+        ids,
+        &project.store().readings_for(Some(modality), from..=at)?,
+    );
+    let step = (model.step_s() as i64).max(1);
+    let weight = project.settings().planner.unshared_weight;
+    let q = dynamic_multiplier(&known, at, step, weight)?;
+    Ok(filtered
+        .into_iter()
+        .map(|(mean, variance)| {
+            (
+                mean,
+                variance,
+                q * (variance.max(0.0) + model.noise()).sqrt(),
+            )
+        })
+        .collect())
 }
 
 /// The use case: fits the field model of the modality on everything known at `at` and
@@ -994,14 +1023,7 @@ mod tests {
             .collect();
         let off = dynamic_from_columns(&columns, DAY, 0.0).unwrap().unwrap();
         assert!(off.own_rates().is_empty());
-        let series: Vec<SensorSeries<'_>> = columns
-            .iter()
-            .map(|(t, v)| SensorSeries {
-                position: [0.0, 0.0],
-                times: t,
-                values: v,
-            })
-            .collect();
+        let series = unplaced_series(&columns);
         let fitted = fit_own_rates(&series, DAY, UNSHARED_PRIOR_CHANGES).unwrap();
         assert!(fitted.iter().all(|&r| r > 0.0));
         let on = dynamic_from_columns(&columns, DAY, 2.5).unwrap().unwrap();
