@@ -196,4 +196,60 @@ mod tests {
         assert_eq!(both.len(), 5);
         assert!(backtest_errors_hidden(&model, &series, 0, &[None, None], 11).is_empty());
     }
+
+    proptest::proptest! {
+        /// One error per hidden finite reading inside the stretch of a sensor the model
+        /// knows, every error finite and non-negative; hiding a sensor later never gives it
+        /// more errors.
+        #[test]
+        fn one_error_per_hidden_reading(
+            n in 1usize..5,
+            len in 1usize..30,
+            hide in proptest::collection::vec(proptest::option::of(0i64..35), 5),
+            start in 0i64..10,
+            end in 0i64..35,
+            gaps in proptest::collection::vec(proptest::bool::weighted(0.2), 150),
+        ) {
+            let mut cov = vec![0.0; n * n];
+            for i in 0..n {
+                for j in 0..n {
+                    cov[i * n + j] = if i == j { 1.0 } else { 0.5 };
+                }
+            }
+            let model = DynamicModel::new(vec![0.0; n], cov, 0.8, 1.0, 0.01).unwrap();
+            let times: Vec<i64> = (0..len as i64).collect();
+            let values: Vec<Vec<f64>> = (0..5)
+                .map(|i| {
+                    (0..len)
+                        .map(|t| if gaps[i * 30 + t] { f64::NAN } else { (t as f64 * 0.3 + i as f64).sin() })
+                        .collect()
+                })
+                .collect();
+            // One more series than the model knows, so the sensors beyond it are exercised.
+            let series: Vec<SensorSeries<'_>> = values
+                .iter()
+                .take(n + 1)
+                .map(|v| SensorSeries { position: [0.0, 0.0], times: &times, values: v })
+                .collect();
+            let z = backtest_errors_hidden(&model, &series, start, &hide, end);
+            let expected: usize = (0..n)
+                .map(|i| {
+                    (0..len)
+                        .filter(|&t| {
+                            let t64 = t as i64;
+                            t64 >= start
+                                && t64 <= end
+                                && values[i][t].is_finite()
+                                && hide[i].is_some_and(|h| t64 >= h)
+                        })
+                        .count()
+                })
+                .sum();
+            proptest::prop_assert_eq!(z.len(), expected);
+            proptest::prop_assert!(z.iter().all(|e| e.is_finite() && *e >= 0.0));
+            let later: Vec<Option<i64>> = hide.iter().map(|h| h.map(|h| h + 3)).collect();
+            let fewer = backtest_errors_hidden(&model, &series, start, &later, end);
+            proptest::prop_assert!(fewer.len() <= z.len());
+        }
+    }
 }
