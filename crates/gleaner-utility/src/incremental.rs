@@ -479,15 +479,8 @@ impl IncrementalState {
         cell: usize,
         last: &[Option<UnixSeconds>],
     ) -> Result<(), UtilityError> {
-        let n_cells = self.n_cells();
-        let sensors = self
-            .last_collected
-            .get_mut(cell)
-            .ok_or(UtilityError::ReadingIndex {
-                what: "cell",
-                index: cell,
-                count: n_cells,
-            })?;
+        let cell = in_range("cell", cell, self.n_cells())?;
+        let sensors = &mut self.last_collected[cell];
         if last.len() != sensors.len() {
             return Err(UtilityError::ReadingIndex {
                 what: "sensor",
@@ -529,49 +522,18 @@ impl IncrementalState {
         sensor: usize,
         t: UnixSeconds,
     ) -> Result<(), UtilityError> {
-        let n_cells = self.n_cells();
-        let sensors = self
-            .last_collected
-            .get_mut(cell)
-            .ok_or(UtilityError::ReadingIndex {
-                what: "cell",
-                index: cell,
-                count: n_cells,
-            })?;
-        let count = sensors.len();
-        let slot = sensors.get_mut(sensor).ok_or(UtilityError::ReadingIndex {
-            what: "sensor",
-            index: sensor,
-            count,
-        })?;
+        let cell = in_range("cell", cell, self.n_cells())?;
+        let sensors = &mut self.last_collected[cell];
+        let sensor = in_range("sensor", sensor, sensors.len())?;
+        let slot = &mut sensors[sensor];
         *slot = Some(slot.map_or(t, |old| old.max(t)));
         Ok(())
     }
 
     fn check_reading(&self, r: &Reading) -> Result<(), UtilityError> {
-        let n_cells = self.n_cells();
-        let sensors = self
-            .last_collected
-            .get(r.cell)
-            .ok_or(UtilityError::ReadingIndex {
-                what: "cell",
-                index: r.cell,
-                count: n_cells,
-            })?;
-        if r.sensor >= sensors.len() {
-            return Err(UtilityError::ReadingIndex {
-                what: "sensor",
-                index: r.sensor,
-                count: sensors.len(),
-            });
-        }
-        if r.modality >= self.n_modalities {
-            return Err(UtilityError::ReadingIndex {
-                what: "modality",
-                index: r.modality,
-                count: self.n_modalities,
-            });
-        }
+        let cell = in_range("cell", r.cell, self.n_cells())?;
+        in_range("sensor", r.sensor, self.last_collected[cell].len())?;
+        in_range("modality", r.modality, self.n_modalities)?;
         if !r.value.is_finite() {
             return Err(UtilityError::NonFinite {
                 cell: r.cell,
@@ -1042,6 +1004,16 @@ impl IncrementalState {
         }
         r.finish()?;
         Ok(state)
+    }
+}
+
+/// `index` when it is below `count`, else the [`UtilityError::ReadingIndex`] that names the
+/// `what` ("cell", "sensor" or "modality") out of range.
+fn in_range(what: &'static str, index: usize, count: usize) -> Result<usize, UtilityError> {
+    if index < count {
+        Ok(index)
+    } else {
+        Err(UtilityError::ReadingIndex { what, index, count })
     }
 }
 
