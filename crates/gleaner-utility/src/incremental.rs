@@ -127,9 +127,15 @@ pub struct PairStats {
 impl PairStats {
     /// Statistics from stored parts, as returned by [`parts`](Self::parts).
     pub fn from_parts(parts: [f64; 6]) -> Self {
-        let [n, mean_x, mean_y, m2x, m2y, cxy] = parts;
+        let [n, moments @ ..] = parts;
+        Self::from_moments(n.max(0.0) as u64, moments)
+    }
+
+    /// Statistics of `n` points from their moments `[mean_x, mean_y, M2x, M2y, Cxy]`, the
+    /// correlation computed.
+    fn from_moments(n: u64, [mean_x, mean_y, m2x, m2y, cxy]: [f64; 5]) -> Self {
         let mut s = Self {
-            n: n.max(0.0) as u64,
+            n,
             mean_x,
             mean_y,
             m2x,
@@ -171,15 +177,8 @@ impl PairStats {
         self.corr = if self.n < 2 {
             0.0
         } else {
-            finish_pearson(
-                self.n as f64,
-                self.mean_x,
-                self.mean_y,
-                self.m2x,
-                self.m2y,
-                self.cxy,
-            )
-            .unwrap_or(0.0)
+            let [n, mean_x, mean_y, m2x, m2y, cxy] = self.parts();
+            finish_pearson(n, mean_x, mean_y, m2x, m2y, cxy).unwrap_or(0.0)
         };
     }
 
@@ -990,17 +989,7 @@ impl IncrementalState {
             for x in &mut v {
                 *x = r.finite()?;
             }
-            let [mean_x, mean_y, m2x, m2y, cxy] = v;
-            *p = PairStats {
-                n,
-                mean_x,
-                mean_y,
-                m2x,
-                m2y,
-                cxy,
-                corr: 0.0,
-            };
-            p.refresh();
+            *p = PairStats::from_moments(n, v);
         }
         r.finish()?;
         Ok(state)
