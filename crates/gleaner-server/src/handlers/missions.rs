@@ -334,16 +334,12 @@ async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Ve
     s.run_job(job, move |p, _| {
         let planned = app::plan_with_preset(p, &request, preset.as_deref(), clock_now())?;
         let mut docs = vec![gleaner_wire::convert::planned_mission(&planned)];
-        docs.extend(planned.extra_sorties.iter().map(|e| {
-            let mut doc = gleaner_wire::convert::mission_doc(
-                e.id,
-                &e.mission,
-                if e.id.is_some() { "planned" } else { "dry-run" },
-                None,
-            );
-            doc.wind = Some(gleaner_wire::convert::wind(&e.wind));
-            doc
-        }));
+        docs.extend(
+            planned
+                .extra_sorties
+                .iter()
+                .map(gleaner_wire::convert::extra_sortie),
+        );
         Ok(docs)
     })
     .await
