@@ -138,16 +138,10 @@ impl Parsed {
 /// Decides a file's format from its first line.
 pub fn detect(path: &Path) -> Result<Format> {
     use std::io::Read;
-    if gleaner_ingest::is_stdin(path) {
-        return Err(AppError::io(path, gleaner_ingest::STDIN_NOT_READ));
-    }
-    let meta = std::fs::metadata(path).map_err(|e| AppError::io(path, e))?;
-    if !meta.is_file() {
-        return Err(AppError::io(
-            path,
-            "not a regular file: give the readings as a file (pipes and devices are not read)",
-        ));
-    }
+    crate::cell_csv::require_regular_file(
+        path,
+        "not a regular file: give the readings as a file (pipes and devices are not read)",
+    )?;
     let mut head = vec![0u8; 4096];
     let n = std::fs::File::open(path)
         .and_then(|mut f| f.read(&mut head))

@@ -641,6 +641,28 @@ fn rmse_chart(at_main: &[&Summary], main_budget: f64, unit: &str) -> Result<Stri
     })?)
 }
 
+/// The x axis of the charts over a campaign: the missions' times.
+const BY_MISSION_TIME: (&str, XAxis) = ("mission time (UTC)", XAxis::Date);
+
+/// The x axis of the charts against the budget, % of the preset battery.
+const BY_BUDGET: (&str, XAxis) = ("budget, % of the preset battery", XAxis::Number);
+
+/// A metric's chart: `title`, the x axis (label and kind), the y axis label, the lines.
+fn line_chart(
+    title: String,
+    (x_label, x_axis): (&str, XAxis),
+    y_label: String,
+    lines: Vec<Line>,
+) -> LineChart {
+    LineChart {
+        title,
+        x_label: x_label.into(),
+        y_label,
+        x_axis,
+        lines,
+    }
+}
+
 /// Draws `chart` as `figures/<file>` and links it in `md` with `alt`, unless no line has a
 /// finite point (then nothing).
 fn push_chart(
@@ -708,13 +730,12 @@ fn over_campaign_section(
                 }
             })
             .collect();
-        let chart = LineChart {
-            title: format!("{title} per mission"),
-            x_label: "mission time (UTC)".into(),
-            y_label: ylabel,
-            x_axis: XAxis::Date,
+        let chart = line_chart(
+            format!("{title} per mission"),
+            BY_MISSION_TIME,
+            ylabel,
             lines,
-        };
+        );
         push_chart(
             md,
             charts,
@@ -785,13 +806,12 @@ fn against_budget_section(
                     .collect(),
             })
             .collect();
-        let chart = LineChart {
-            title: format!("{title} against the budget"),
-            x_label: "budget, % of the preset battery".into(),
-            y_label: ylabel,
-            x_axis: XAxis::Number,
+        let chart = line_chart(
+            format!("{title} against the budget"),
+            BY_BUDGET,
+            ylabel,
             lines,
-        };
+        );
         let alt = format!("{title} against the budget");
         push_chart(md, charts, chart, format!("{name}_vs_budget.svg"), &alt)?;
     }

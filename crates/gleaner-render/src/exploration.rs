@@ -96,9 +96,7 @@ pub fn exploration_map_svg(
 
     let mut svg = Svg::new(width, height, font, &title);
     titles.draw(&mut svg, margin);
-    frame::draw_cells(&mut svg, &view, &scene.cells, &fills);
-    frame::draw_zones(&mut svg, &view, &zones);
-    frame::draw_sensors(&mut svg, &view, &scene.sensors);
+    scene.draw_ground(&mut svg, &view, &fills, &zones);
     let br = base_r(font);
     let dot_r = 0.28 * font;
     for (k, (base, stops, via)) in routes.iter().enumerate() {

@@ -326,9 +326,7 @@ pub fn mission_figure_svg(
     // Draw.
     let mut svg = Svg::new(width, height, font, &title);
     titles.draw(&mut svg, margin);
-    frame::draw_cells(&mut svg, &view, &scene.cells, &fills);
-    frame::draw_zones(&mut svg, &view, &zones);
-    frame::draw_sensors(&mut svg, &view, &scene.sensors);
+    scene.draw_ground(&mut svg, &view, &fills, &zones);
 
     // Route.
     let br = base_r(font);

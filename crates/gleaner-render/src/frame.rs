@@ -152,6 +152,20 @@ pub(crate) struct Scene {
 }
 
 impl Scene {
+    /// Draws the map's layers below the routes on `view`: the cells filled with `fills` (one
+    /// a cell), the zones over them, then the sensors.
+    pub(crate) fn draw_ground(
+        &self,
+        svg: &mut Svg,
+        view: &MapView,
+        fills: &[Rgb],
+        zones: &[ZoneShape],
+    ) {
+        draw_cells(svg, view, &self.cells, fills);
+        draw_zones(svg, view, zones);
+        draw_sensors(svg, view, &self.sensors);
+    }
+
     /// Checks and projects the field; `extra` are further points to keep on the map.
     pub(crate) fn new(field: &FieldDoc, extra: &[(f64, f64)]) -> Result<Self, RenderError> {
         let projection = Projection::new(field.base_lon_lat)?;

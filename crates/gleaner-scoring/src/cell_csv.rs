@@ -19,16 +19,10 @@ pub struct CellRow {
 /// The text of the regular file `path`: a pipe, FIFO, device or stdin (`-`) is refused, as
 /// are bytes that are not UTF-8 (the error names the file and line).
 pub fn read_text(path: &Path) -> Result<String> {
-    if gleaner_ingest::is_stdin(path) {
-        return Err(AppError::io(path, gleaner_ingest::STDIN_NOT_READ));
-    }
-    let meta = std::fs::metadata(path).map_err(|e| AppError::io(path, e))?;
-    if !meta.is_file() {
-        return Err(AppError::io(
-            path,
-            "not a regular file: give the data as a file (pipes, FIFOs and devices are not read)",
-        ));
-    }
+    require_regular_file(
+        path,
+        "not a regular file: give the data as a file (pipes, FIFOs and devices are not read)",
+    )?;
     let bytes = std::fs::read(path).map_err(|e| AppError::io(path, e))?;
     match String::from_utf8(bytes) {
         Ok(t) => Ok(t),
@@ -42,6 +36,20 @@ pub fn read_text(path: &Path) -> Result<String> {
             )))
         }
     }
+}
+
+/// Refuses `path` unless it is a regular file: stdin (`-`) with
+/// [`gleaner_ingest::STDIN_NOT_READ`], a pipe, FIFO or device with `refusal` (a file that is
+/// read twice, or whose opening would block, must be a regular one).
+pub fn require_regular_file(path: &Path, refusal: &str) -> Result<()> {
+    if gleaner_ingest::is_stdin(path) {
+        return Err(AppError::io(path, gleaner_ingest::STDIN_NOT_READ));
+    }
+    let meta = std::fs::metadata(path).map_err(|e| AppError::io(path, e))?;
+    if !meta.is_file() {
+        return Err(AppError::io(path, refusal));
+    }
+    Ok(())
 }
 
 /// A small CSV file with a header line: the header's column names and the data rows.

@@ -75,21 +75,26 @@ enum ConditionState {
     NoModality,
     /// The configured modality has no readings: scoring fails (full path).
     Unusable,
-    /// Trained on the class modality `modality` when the newest reading was `fitted_to` (s).
-    Fitted {
-        modality: String,
-        fitted_to: UnixSeconds,
-        /// Class-modality readings in the store at the fit.
-        trained: u64,
-        /// Class-modality readings added since (the refit cadence, see
-        /// [`Settings`]' `utility.condition_refit_growth`).
-        pending: u64,
-        /// Labels before `fitted_to`: what scoring at t = `fitted_to` trains.
-        at_latest: Fit,
-        /// Labels at or before `fitted_to`: what scoring at a later t trains; `None` when
-        /// no class-modality point lies at `fitted_to` (then it is `at_latest`).
-        after_latest: Option<Fit>,
-    },
+    /// Trained on the class modality.
+    Fitted(ConditionFit),
+}
+
+/// A condition model trained on the class modality `modality` when the newest reading was
+/// `fitted_to` (s).
+#[derive(Debug, Clone)]
+struct ConditionFit {
+    modality: String,
+    fitted_to: UnixSeconds,
+    /// Class-modality readings in the store at the fit.
+    trained: u64,
+    /// Class-modality readings added since (the refit cadence, see
+    /// [`Settings`]' `utility.condition_refit_growth`).
+    pending: u64,
+    /// Labels before `fitted_to`: what scoring at t = `fitted_to` trains.
+    at_latest: Fit,
+    /// Labels at or before `fitted_to`: what scoring at a later t trains; `None` when
+    /// no class-modality point lies at `fitted_to` (then it is `at_latest`).
+    after_latest: Option<Fit>,
 }
 
 fn put_fit(o: &mut Out, fit: &Fit) {
@@ -204,21 +209,14 @@ impl Persisted {
         match &self.condition {
             ConditionState::NoModality => o.u8(0),
             ConditionState::Unusable => o.u8(1),
-            ConditionState::Fitted {
-                modality,
-                fitted_to,
-                trained,
-                pending,
-                at_latest,
-                after_latest,
-            } => {
+            ConditionState::Fitted(f) => {
                 o.u8(2);
-                o.bytes(modality.as_bytes());
-                o.i64(*fitted_to);
-                o.u64(*trained);
-                o.u64(*pending);
-                put_fit(&mut o, at_latest);
-                match after_latest {
+                o.bytes(f.modality.as_bytes());
+                o.i64(f.fitted_to);
+                o.u64(f.trained);
+                o.u64(f.pending);
+                put_fit(&mut o, &f.at_latest);
+                match &f.after_latest {
                     None => o.u8(0),
                     Some(fit) => {
                         o.u8(1);
@@ -268,7 +266,7 @@ impl Persisted {
         let condition = match i.u8()? {
             0 => ConditionState::NoModality,
             1 => ConditionState::Unusable,
-            2 => ConditionState::Fitted {
+            2 => ConditionState::Fitted(ConditionFit {
                 modality: i.string()?,
                 fitted_to: i.i64()?,
                 trained: i.u64()?,
@@ -279,7 +277,7 @@ impl Persisted {
                     1 => Some(get_fit(&mut i)?),
                     _ => return None,
                 },
-            },
+            }),
             _ => return None,
         };
         let state = IncrementalState::from_bytes(i.bytes()?).ok()?;
@@ -371,20 +369,21 @@ fn condition_state(
     if settings.utility.condition_refit_growth > 0.0 {
         // With a refit cadence the model is kept for later times anyway: one fit on every
         // label up to and including the newest reading (known data), used for every t.
-        return ConditionState::Fitted {
+        let at_latest = fit_condition_from(
+            settings,
+            &cells,
+            &neighbours,
+            latest.saturating_add(1),
+            previous,
+        );
+        return ConditionState::Fitted(ConditionFit {
             modality: name,
             fitted_to: latest,
             trained: trained(m),
             pending: 0,
-            at_latest: fit_condition_from(
-                settings,
-                &cells,
-                &neighbours,
-                latest.saturating_add(1),
-                previous,
-            ),
+            at_latest,
             after_latest: None,
-        };
+        });
     }
     let at_latest = fit_condition_from(settings, &cells, &neighbours, latest, previous);
     let after_latest = point_at_latest.then(|| {
@@ -396,14 +395,14 @@ fn condition_state(
             at_latest.as_ref().ok().or(previous),
         )
     });
-    ConditionState::Fitted {
+    ConditionState::Fitted(ConditionFit {
         modality: name,
         fitted_to: latest,
         trained: trained(m),
         pending: 0,
         at_latest,
         after_latest,
-    }
+    })
 }
 
 fn new_state(field: &Field, nm: usize, grid: TimeGrid) -> Option<IncrementalState> {
@@ -501,31 +500,15 @@ fn rebuild_keeping<R: StoreRead>(
     let growth = settings.utility.condition_refit_growth;
     let mut previous = None;
     let mut kept = None;
-    if let Some((
-        ConditionState::Fitted {
-            modality,
-            fitted_to,
-            trained,
-            pending,
-            at_latest,
-            after_latest,
-        },
-        added,
-    )) = carry
-        && class_name.as_deref() == Some(modality.as_str())
+    if let Some((ConditionState::Fitted(f), added)) = carry
+        && class_name.as_deref() == Some(f.modality.as_str())
     {
-        let pending = pending + added;
-        if growth > 0.0 && (pending as f64) <= growth * (trained as f64) && fitted_to <= latest {
-            kept = Some(ConditionState::Fitted {
-                modality,
-                fitted_to,
-                trained,
-                pending,
-                at_latest,
-                after_latest,
-            });
+        let pending = f.pending + added;
+        if growth > 0.0 && (pending as f64) <= growth * (f.trained as f64) && f.fitted_to <= latest
+        {
+            kept = Some(ConditionState::Fitted(ConditionFit { pending, ..f }));
         } else {
-            previous = after_latest.and_then(Result::ok).or(at_latest.ok());
+            previous = f.after_latest.and_then(Result::ok).or(f.at_latest.ok());
         }
     }
     let condition = match kept {
@@ -667,8 +650,8 @@ pub fn after_insert<W: StoreWrite>(tx: &mut W, plan: Plan, settings: &Settings) 
             if rows.is_empty() && is_current(&*tx, &p, settings)? {
                 return Ok(());
             }
-            if let ConditionState::Fitted { modality, .. } = &p.condition {
-                let added = rows.iter().filter(|r| r.1 == *modality).count() as u64;
+            if let ConditionState::Fitted(f) = &p.condition {
+                let added = rows.iter().filter(|r| r.1 == f.modality).count() as u64;
                 carry = Some((p.condition.clone(), added));
             }
             update(tx, *p, &rows, settings)?
@@ -830,25 +813,19 @@ fn update<W: StoreWrite>(
     let growth = settings.utility.condition_refit_growth;
     let class_name = condition_modality(settings, &p.modalities);
     let mut previous = None;
-    if let ConditionState::Fitted {
-        modality,
-        trained,
-        pending,
-        at_latest,
-        after_latest,
-        ..
-    } = &mut p.condition
-        && class_name.as_deref() == Some(modality.as_str())
+    if let ConditionState::Fitted(f) = &mut p.condition
+        && class_name.as_deref() == Some(f.modality.as_str())
     {
-        let added = rows.iter().filter(|r| r.1 == *modality).count() as u64;
-        *pending += added;
-        if growth > 0.0 && (*pending as f64) <= growth * (*trained as f64) {
+        let added = rows.iter().filter(|r| r.1 == f.modality).count() as u64;
+        f.pending += added;
+        if growth > 0.0 && (f.pending as f64) <= growth * (f.trained as f64) {
             return Ok(Some(p));
         }
-        previous = after_latest
+        previous = f
+            .after_latest
             .as_ref()
             .and_then(|f| f.as_ref().ok())
-            .or(at_latest.as_ref().ok())
+            .or(f.at_latest.as_ref().ok())
             .cloned();
     }
     // Refit the condition model on the class modality's whole history.
@@ -958,24 +935,18 @@ pub(crate) fn fast_scoring_from<S: Store>(
             None
         }
         ConditionState::Unusable => return Ok(None),
-        ConditionState::Fitted {
-            modality,
-            fitted_to,
-            at_latest,
-            after_latest,
-            ..
-        } => {
-            let Ok(m) = p.modalities.binary_search(modality) else {
+        ConditionState::Fitted(f) => {
+            let Ok(m) = p.modalities.binary_search(&f.modality) else {
                 return Ok(None);
             };
             // An earlier fit is one the refit cadence kept (see `update`).
-            if *fitted_to > latest {
+            if f.fitted_to > latest {
                 return Ok(None);
             }
             // At a later t the full path also trains on the labels at the newest reading.
-            let fit = match after_latest {
-                Some(fit) if t > *fitted_to => fit,
-                _ => at_latest,
+            let fit = match &f.after_latest {
+                Some(fit) if t > f.fitted_to => fit,
+                _ => &f.at_latest,
             };
             match fit {
                 Ok(model) => {
@@ -983,7 +954,7 @@ pub(crate) fn fast_scoring_from<S: Store>(
                     let cells: Vec<Series<'_>> =
                         recent.iter().map(OwnedSeries::as_series).collect();
                     let probabilities = model.predict_proba(&cells, &neighbour_lists(&field), t);
-                    Some(condition_output(modality.clone(), model, probabilities))
+                    Some(condition_output(f.modality.clone(), model, probabilities))
                 }
                 Err(warning) => {
                     warnings.push(warning.clone());
@@ -1109,14 +1080,14 @@ mod tests {
             span: vec![Some((86_400, 39 * 86_400)); 6],
             gaps: BTreeMap::from([(86_400, 228)]),
             latest: Some(39 * 86_400),
-            condition: ConditionState::Fitted {
+            condition: ConditionState::Fitted(ConditionFit {
                 modality: "vw@30cm".into(),
                 fitted_to: 39 * 86_400,
                 trained: 78,
                 pending: 0,
                 at_latest: Err("no condition model (too little data); U = 0".into()),
                 after_latest: None,
-            },
+            }),
             state,
         }
     }

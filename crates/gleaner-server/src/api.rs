@@ -460,6 +460,20 @@ pub fn parse_time(field: &str, value: Option<&str>) -> Result<Option<i64>, ApiEr
         .transpose()
 }
 
+/// A request's mission time and history range from its `at`, `history_from` and
+/// `history_until` fields: each parsed in that order ([`parse_time`]), then the range checked
+/// ([`checked_history`]).
+pub fn time_and_history(
+    at: Option<&str>,
+    history_from: Option<&str>,
+    history_until: Option<&str>,
+) -> Result<(Option<i64>, app::History), ApiError> {
+    let at = parse_time("at", at)?;
+    let from = parse_time("history_from", history_from)?;
+    let until = parse_time("history_until", history_until)?;
+    Ok((at, checked_history(at, from, until)?))
+}
+
 /// The history range of a request (unbounded sides as the CLI's), refusing a start after
 /// its end or after the mission time `at`.
 pub fn checked_history(

@@ -148,53 +148,6 @@ impl Client {
         headers: &[(&str, &str)],
         body: Option<&[u8]>,
     ) -> std::io::Result<Response> {
-        let fresh = self.conn.is_none();
-        match self.try_request(method, path, headers, body) {
-            Ok(r) => Ok(r),
-            Err(_) if !fresh => {
-                self.conn = None;
-                self.try_request(method, path, headers, body)
-            }
-            Err(e) => Err(e),
-        }
-    }
-
-    /// Sends `raw` (a whole request: line, headers, blank line, body) as it is and reads one
-    /// response: for requests the other methods cannot make (another `Host`, no `Host`).
-    pub fn request_raw(&mut self, raw: &[u8]) -> std::io::Result<Response> {
-        if self.conn.is_none() {
-            let s = TcpStream::connect(self.addr)?;
-            s.set_nodelay(true)?;
-            s.set_read_timeout(Some(self.read_timeout))?;
-            self.conn = Some(BufReader::new(s));
-        }
-        let conn = self.conn.as_mut().expect("connected above");
-        conn.get_mut().write_all(raw)?;
-        conn.get_mut().flush()?;
-        let response = read_response(conn);
-        if response.as_ref().map_or(true, |r| {
-            r.header("connection")
-                .is_some_and(|c| c.eq_ignore_ascii_case("close"))
-        }) {
-            self.conn = None;
-        }
-        response
-    }
-
-    fn try_request(
-        &mut self,
-        method: &str,
-        path: &str,
-        headers: &[(&str, &str)],
-        body: Option<&[u8]>,
-    ) -> std::io::Result<Response> {
-        if self.conn.is_none() {
-            let s = TcpStream::connect(self.addr)?;
-            s.set_nodelay(true)?;
-            s.set_read_timeout(Some(self.read_timeout))?;
-            self.conn = Some(BufReader::new(s));
-        }
-        let conn = self.conn.as_mut().expect("connected above");
         let mut head = format!("{method} {path} HTTP/1.1\r\nHost: {}\r\n", self.addr);
         for (n, v) in headers {
             head.push_str(&format!("{n}: {v}\r\n"));
@@ -203,21 +156,64 @@ impl Client {
             head.push_str(&format!("Content-Length: {}\r\n", b.len()));
         }
         head.push_str("\r\n");
+        let fresh = self.conn.is_none();
+        match self.try_request(head.as_bytes(), body) {
+            Ok(r) => Ok(r),
+            Err(_) if !fresh => {
+                self.conn = None;
+                self.try_request(head.as_bytes(), body)
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Sends `raw` (a whole request: line, headers, blank line, body) as it is and reads one
+    /// response: for requests the other methods cannot make (another `Host`, no `Host`).
+    pub fn request_raw(&mut self, raw: &[u8]) -> std::io::Result<Response> {
+        let conn = self.connection()?;
+        conn.get_mut().write_all(raw)?;
+        conn.get_mut().flush()?;
+        let response = read_response(conn);
+        if response.as_ref().map_or(true, closes) {
+            self.conn = None;
+        }
+        response
+    }
+
+    /// The open connection, made first when there is none (no Nagle delay, reads time out
+    /// after the client's read timeout).
+    fn connection(&mut self) -> std::io::Result<&mut BufReader<TcpStream>> {
+        if self.conn.is_none() {
+            let s = TcpStream::connect(self.addr)?;
+            s.set_nodelay(true)?;
+            s.set_read_timeout(Some(self.read_timeout))?;
+            self.conn = Some(BufReader::new(s));
+        }
+        Ok(self.conn.as_mut().expect("connected above"))
+    }
+
+    /// Sends `head` (request line, headers, blank line) and `body` on the connection and
+    /// reads one response.
+    fn try_request(&mut self, head: &[u8], body: Option<&[u8]>) -> std::io::Result<Response> {
+        let conn = self.connection()?;
         let stream = conn.get_mut();
-        stream.write_all(head.as_bytes())?;
+        stream.write_all(head)?;
         if let Some(b) = body {
             stream.write_all(b)?;
         }
         stream.flush()?;
         let response = read_response(conn)?;
-        if response
-            .header("connection")
-            .is_some_and(|c| c.eq_ignore_ascii_case("close"))
-        {
+        if closes(&response) {
             self.conn = None;
         }
         Ok(response)
     }
+}
+
+/// Whether the server closes the connection after `r` (`Connection: close`).
+fn closes(r: &Response) -> bool {
+    r.header("connection")
+        .is_some_and(|c| c.eq_ignore_ascii_case("close"))
 }
 
 fn bad(what: &str) -> std::io::Error {

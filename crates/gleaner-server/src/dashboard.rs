@@ -14,9 +14,11 @@
 
 use axum::Router;
 use axum::body::Bytes;
-use axum::http::{HeaderName, HeaderValue, header};
+use axum::http::{HeaderValue, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::get;
+
+use crate::security;
 
 /// The page.
 pub const INDEX_HTML: &str = include_str!("../assets/index.html");
@@ -45,14 +47,8 @@ fn asset(body: Bytes, media: &'static str, csp: &HeaderValue) -> Response {
     let h = r.headers_mut();
     h.insert(header::CONTENT_TYPE, HeaderValue::from_static(media));
     h.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-cache"));
-    h.insert(
-        HeaderName::from_static("x-content-type-options"),
-        HeaderValue::from_static("nosniff"),
-    );
-    h.insert(
-        HeaderName::from_static("referrer-policy"),
-        HeaderValue::from_static("no-referrer"),
-    );
+    security::set_static(h, security::NOSNIFF);
+    security::set_static(h, security::NO_REFERRER);
     h.insert(header::CONTENT_SECURITY_POLICY, csp.clone());
     r
 }

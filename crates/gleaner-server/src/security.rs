@@ -6,7 +6,7 @@ use std::net::IpAddr;
 use std::sync::Arc;
 
 use axum::extract::Request;
-use axum::http::{HeaderName, HeaderValue, Method, header};
+use axum::http::{HeaderMap, HeaderName, HeaderValue, Method, header};
 use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 use tower_http::classify::{ServerErrorsAsFailures, SharedClassifier};
@@ -103,25 +103,30 @@ pub async fn refuse_wrong_tokens(
 pub async fn headers(req: Request, next: Next) -> Response {
     let mut r = next.run(req).await;
     let h = r.headers_mut();
-    h.insert(
-        HeaderName::from_static("x-content-type-options"),
-        HeaderValue::from_static("nosniff"),
-    );
+    set_static(h, NOSNIFF);
     if !h.contains_key(header::CONTENT_SECURITY_POLICY) {
         h.insert(
             header::CONTENT_SECURITY_POLICY,
             HeaderValue::from_static(API_CSP),
         );
     }
-    h.insert(
-        HeaderName::from_static("referrer-policy"),
-        HeaderValue::from_static("no-referrer"),
-    );
-    h.insert(
-        HeaderName::from_static("x-frame-options"),
-        HeaderValue::from_static("DENY"),
-    );
+    set_static(h, NO_REFERRER);
+    set_static(h, ("x-frame-options", "DENY"));
     r
+}
+
+/// `X-Content-Type-Options: nosniff`: a response is read as its declared type only.
+pub(crate) const NOSNIFF: (&str, &str) = ("x-content-type-options", "nosniff");
+
+/// `Referrer-Policy: no-referrer`: no page of this server is named to another.
+pub(crate) const NO_REFERRER: (&str, &str) = ("referrer-policy", "no-referrer");
+
+/// Sets the header `name: value` (lowercase name), replacing any value it had.
+pub(crate) fn set_static(h: &mut HeaderMap, (name, value): (&'static str, &'static str)) {
+    h.insert(
+        HeaderName::from_static(name),
+        HeaderValue::from_static(value),
+    );
 }
 
 /// 405 with the JSON error body (axum keeps its `Allow` header).

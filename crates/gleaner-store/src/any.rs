@@ -195,58 +195,25 @@ any_read! {
     blob_keys() -> Vec<String>;
 }
 
+/// Forwards the [`StoreWrite`] methods listed by `for_each_store_write` to the backend's
+/// transaction.
+macro_rules! any_write {
+    ($($name:ident($($arg:ident: $ty:ty),*) -> $out:ty;)*) => {
+        $(fn $name(&mut self, $($arg: $ty),*) -> Result<$out> {
+            self.inner.$name($($arg),*)
+        })*
+    };
+}
+
 impl StoreWrite for AnyTx<'_> {
-    fn upsert_sensors(&mut self, sensors: &[SensorRecord]) -> Result<UpsertStats> {
-        self.inner.upsert_sensors(sensors)
-    }
-    fn upsert_modalities(&mut self, modalities: &[ModalityRecord]) -> Result<UpsertStats> {
-        self.inner.upsert_modalities(modalities)
-    }
+    for_each_store_write!(any_write);
+
     fn insert_readings(
         &mut self,
         batch: &ReadingBatch,
         policy: ConflictPolicy,
     ) -> Result<InsertStats> {
         self.inner.insert_readings(batch, policy)
-    }
-    fn record_ingest(&mut self, ingest: &IngestRecord) -> Result<i64> {
-        self.inner.record_ingest(ingest)
-    }
-    fn replace_cells(&mut self, cells: &[CellRecord]) -> Result<ReplaceCellsStats> {
-        self.inner.replace_cells(cells)
-    }
-    fn upsert_cell_metadata(&mut self, metadata: &[CellMetadata]) -> Result<()> {
-        self.inner.upsert_cell_metadata(metadata)
-    }
-    fn set_sensors_collected(&mut self, collected: &[(SensorId, UnixSeconds)]) -> Result<()> {
-        self.inner.set_sensors_collected(collected)
-    }
-    fn create_mission(&mut self, mission: &NewMission) -> Result<MissionId> {
-        self.inner.create_mission(mission)
-    }
-    fn record_visits(
-        &mut self,
-        mission: MissionId,
-        visits: &[VisitRecord],
-        flown_at: UnixSeconds,
-        amend: bool,
-    ) -> Result<()> {
-        self.inner.record_visits(mission, visits, flown_at, amend)
-    }
-    fn cancel_mission(&mut self, mission: MissionId) -> Result<()> {
-        self.inner.cancel_mission(mission)
-    }
-    fn delete_mission(&mut self, mission: MissionId) -> Result<()> {
-        self.inner.delete_mission(mission)
-    }
-    fn import_mission(&mut self, record: &MissionRecord) -> Result<()> {
-        self.inner.import_mission(record)
-    }
-    fn config_set(&mut self, key: &str, value: &str) -> Result<()> {
-        self.inner.config_set(key, value)
-    }
-    fn blob_put(&mut self, key: &str, value: &[u8]) -> Result<()> {
-        self.inner.blob_put(key, value)
     }
 }
 

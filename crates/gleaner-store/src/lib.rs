@@ -189,57 +189,43 @@ macro_rules! store_read_methods {
     };
 }
 
-/// The [`StoreWrite`] methods but `insert_readings` (which each backend runs its own way), each
-/// a call of the backend's write in its own `write` module inside a savepoint, through the
-/// transaction type's own `atomically` (the paths resolve where the macro is used: `sqlite.rs`
-/// and `postgres.rs`).
+/// The [`StoreWrite`] methods but `insert_readings` (which each backend runs its own way),
+/// listed once: `$method` is given each one's name, arguments and result type, and writes the
+/// methods (a backend's, `store_write_methods`; [`AnyTx`]'s, which forward to its backend).
+macro_rules! for_each_store_write {
+    ($method:ident) => {
+        $method! {
+            upsert_sensors(sensors: &[SensorRecord]) -> UpsertStats;
+            upsert_modalities(modalities: &[ModalityRecord]) -> UpsertStats;
+            record_ingest(ingest: &IngestRecord) -> i64;
+            replace_cells(cells: &[CellRecord]) -> ReplaceCellsStats;
+            upsert_cell_metadata(metadata: &[CellMetadata]) -> ();
+            set_sensors_collected(collected: &[(SensorId, UnixSeconds)]) -> ();
+            create_mission(mission: &NewMission) -> MissionId;
+            record_visits(
+                mission: MissionId,
+                visits: &[VisitRecord],
+                flown_at: UnixSeconds,
+                amend: bool
+            ) -> ();
+            cancel_mission(mission: MissionId) -> ();
+            delete_mission(mission: MissionId) -> ();
+            import_mission(record: &MissionRecord) -> ();
+            config_set(key: &str, value: &str) -> ();
+            blob_put(key: &str, value: &[u8]) -> ();
+        }
+    };
+}
+
+/// A backend's [`StoreWrite`] methods from `for_each_store_write`: each a call of the
+/// backend's write in its own `write` module inside a savepoint, through the transaction
+/// type's own `atomically` (the paths resolve where the macro is used: `sqlite.rs` and
+/// `postgres.rs`).
 macro_rules! store_write_methods {
-    () => {
-        fn upsert_sensors(&mut self, sensors: &[SensorRecord]) -> Result<UpsertStats> {
-            self.atomically(|c| write::upsert_sensors(c, sensors))
-        }
-        fn upsert_modalities(&mut self, modalities: &[ModalityRecord]) -> Result<UpsertStats> {
-            self.atomically(|c| write::upsert_modalities(c, modalities))
-        }
-        fn record_ingest(&mut self, ingest: &IngestRecord) -> Result<i64> {
-            self.atomically(|c| write::record_ingest(c, ingest))
-        }
-        fn replace_cells(&mut self, cells: &[CellRecord]) -> Result<ReplaceCellsStats> {
-            self.atomically(|c| write::replace_cells(c, cells))
-        }
-        fn upsert_cell_metadata(&mut self, metadata: &[CellMetadata]) -> Result<()> {
-            self.atomically(|c| write::upsert_cell_metadata(c, metadata))
-        }
-        fn set_sensors_collected(&mut self, collected: &[(SensorId, UnixSeconds)]) -> Result<()> {
-            self.atomically(|c| write::set_sensors_collected(c, collected))
-        }
-        fn create_mission(&mut self, mission: &NewMission) -> Result<MissionId> {
-            self.atomically(|c| write::create_mission(c, mission))
-        }
-        fn record_visits(
-            &mut self,
-            mission: MissionId,
-            visits: &[VisitRecord],
-            flown_at: UnixSeconds,
-            amend: bool,
-        ) -> Result<()> {
-            self.atomically(|c| write::record_visits(c, mission, visits, flown_at, amend))
-        }
-        fn cancel_mission(&mut self, mission: MissionId) -> Result<()> {
-            self.atomically(|c| write::cancel_mission(c, mission))
-        }
-        fn delete_mission(&mut self, mission: MissionId) -> Result<()> {
-            self.atomically(|c| write::delete_mission(c, mission))
-        }
-        fn import_mission(&mut self, record: &MissionRecord) -> Result<()> {
-            self.atomically(|c| write::import_mission(c, record))
-        }
-        fn config_set(&mut self, key: &str, value: &str) -> Result<()> {
-            self.atomically(|c| write::config_set(c, key, value))
-        }
-        fn blob_put(&mut self, key: &str, value: &[u8]) -> Result<()> {
-            self.atomically(|c| write::blob_put(c, key, value))
-        }
+    ($($name:ident($($arg:ident: $ty:ty),*) -> $out:ty;)*) => {
+        $(fn $name(&mut self, $($arg: $ty),*) -> Result<$out> {
+            self.atomically(|c| write::$name(c, $($arg),*))
+        })*
     };
 }
 
@@ -255,6 +241,7 @@ mod schema;
 mod sqlite;
 mod store;
 mod types;
+mod upsert;
 
 #[cfg(test)]
 mod pg_tests;

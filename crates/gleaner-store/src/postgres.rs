@@ -398,7 +398,7 @@ impl StoreRead for PgTx<'_> {
 }
 
 impl StoreWrite for PgTx<'_> {
-    store_write_methods!();
+    for_each_store_write!(store_write_methods);
 
     fn insert_readings(
         &mut self,

@@ -391,7 +391,7 @@ impl StoreRead for SqliteTx<'_> {
 }
 
 impl StoreWrite for SqliteTx<'_> {
-    store_write_methods!();
+    for_each_store_write!(store_write_methods);
 
     fn insert_readings(
         &mut self,

@@ -54,7 +54,11 @@ pub fn nearest_neighbours(positions: &[LocalPoint], k: usize) -> Vec<Vec<usize>>
         .collect()
 }
 
-fn median(xs: &mut [f64]) -> f64 {
+/// The median of `xs` (sorted in place), in the unit of the values; NaN when `xs` is empty.
+pub(crate) fn median(xs: &mut [f64]) -> f64 {
+    if xs.is_empty() {
+        return f64::NAN;
+    }
     xs.sort_by(f64::total_cmp);
     let n = xs.len();
     if n % 2 == 1 {

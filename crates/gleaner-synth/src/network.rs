@@ -11,7 +11,7 @@ use gleaner_field::time::civil_from_days;
 
 use crate::SynthFarm;
 use crate::calibration::{DailyPanel, StatsOptions, panel_stats};
-use crate::detection::own_history_z;
+use crate::detection::{median, own_history_z};
 
 /// One modality of a [`NetworkPanel`].
 #[derive(Debug, Clone, PartialEq)]
@@ -213,19 +213,6 @@ pub fn drainage_retention(series: &[Vec<f64>], threshold: f64, after: usize) -> 
         }
     }
     (median(&mut shares), shares.len())
-}
-
-fn median(xs: &mut [f64]) -> f64 {
-    if xs.is_empty() {
-        return f64::NAN;
-    }
-    xs.sort_by(f64::total_cmp);
-    let n = xs.len();
-    if n % 2 == 1 {
-        xs[n / 2]
-    } else {
-        0.5 * (xs[n / 2 - 1] + xs[n / 2])
-    }
 }
 
 /// Lag (days, `0..=max_lag`) at which the deep series best follows the shallow one: the lag

@@ -127,9 +127,15 @@ pub struct PairStats {
 impl PairStats {
     /// Statistics from stored parts, as returned by [`parts`](Self::parts).
     pub fn from_parts(parts: [f64; 6]) -> Self {
-        let [n, mean_x, mean_y, m2x, m2y, cxy] = parts;
+        let [n, moments @ ..] = parts;
+        Self::from_moments(n.max(0.0) as u64, moments)
+    }
+
+    /// Statistics of `n` points from their moments `[mean_x, mean_y, M2x, M2y, Cxy]`, the
+    /// correlation computed.
+    fn from_moments(n: u64, [mean_x, mean_y, m2x, m2y, cxy]: [f64; 5]) -> Self {
         let mut s = Self {
-            n: n.max(0.0) as u64,
+            n,
             mean_x,
             mean_y,
             m2x,
@@ -171,15 +177,8 @@ impl PairStats {
         self.corr = if self.n < 2 {
             0.0
         } else {
-            finish_pearson(
-                self.n as f64,
-                self.mean_x,
-                self.mean_y,
-                self.m2x,
-                self.m2y,
-                self.cxy,
-            )
-            .unwrap_or(0.0)
+            let [n, mean_x, mean_y, m2x, m2y, cxy] = self.parts();
+            finish_pearson(n, mean_x, mean_y, m2x, m2y, cxy).unwrap_or(0.0)
         };
     }
 
@@ -479,15 +478,8 @@ impl IncrementalState {
         cell: usize,
         last: &[Option<UnixSeconds>],
     ) -> Result<(), UtilityError> {
-        let n_cells = self.n_cells();
-        let sensors = self
-            .last_collected
-            .get_mut(cell)
-            .ok_or(UtilityError::ReadingIndex {
-                what: "cell",
-                index: cell,
-                count: n_cells,
-            })?;
+        let cell = in_range("cell", cell, self.n_cells())?;
+        let sensors = &mut self.last_collected[cell];
         if last.len() != sensors.len() {
             return Err(UtilityError::ReadingIndex {
                 what: "sensor",
@@ -529,49 +521,18 @@ impl IncrementalState {
         sensor: usize,
         t: UnixSeconds,
     ) -> Result<(), UtilityError> {
-        let n_cells = self.n_cells();
-        let sensors = self
-            .last_collected
-            .get_mut(cell)
-            .ok_or(UtilityError::ReadingIndex {
-                what: "cell",
-                index: cell,
-                count: n_cells,
-            })?;
-        let count = sensors.len();
-        let slot = sensors.get_mut(sensor).ok_or(UtilityError::ReadingIndex {
-            what: "sensor",
-            index: sensor,
-            count,
-        })?;
+        let cell = in_range("cell", cell, self.n_cells())?;
+        let sensors = &mut self.last_collected[cell];
+        let sensor = in_range("sensor", sensor, sensors.len())?;
+        let slot = &mut sensors[sensor];
         *slot = Some(slot.map_or(t, |old| old.max(t)));
         Ok(())
     }
 
     fn check_reading(&self, r: &Reading) -> Result<(), UtilityError> {
-        let n_cells = self.n_cells();
-        let sensors = self
-            .last_collected
-            .get(r.cell)
-            .ok_or(UtilityError::ReadingIndex {
-                what: "cell",
-                index: r.cell,
-                count: n_cells,
-            })?;
-        if r.sensor >= sensors.len() {
-            return Err(UtilityError::ReadingIndex {
-                what: "sensor",
-                index: r.sensor,
-                count: sensors.len(),
-            });
-        }
-        if r.modality >= self.n_modalities {
-            return Err(UtilityError::ReadingIndex {
-                what: "modality",
-                index: r.modality,
-                count: self.n_modalities,
-            });
-        }
+        let cell = in_range("cell", r.cell, self.n_cells())?;
+        in_range("sensor", r.sensor, self.last_collected[cell].len())?;
+        in_range("modality", r.modality, self.n_modalities)?;
         if !r.value.is_finite() {
             return Err(UtilityError::NonFinite {
                 cell: r.cell,
@@ -1028,20 +989,20 @@ impl IncrementalState {
             for x in &mut v {
                 *x = r.finite()?;
             }
-            let [mean_x, mean_y, m2x, m2y, cxy] = v;
-            *p = PairStats {
-                n,
-                mean_x,
-                mean_y,
-                m2x,
-                m2y,
-                cxy,
-                corr: 0.0,
-            };
-            p.refresh();
+            *p = PairStats::from_moments(n, v);
         }
         r.finish()?;
         Ok(state)
+    }
+}
+
+/// `index` when it is below `count`, else the [`UtilityError::ReadingIndex`] that names the
+/// `what` ("cell", "sensor" or "modality") out of range.
+fn in_range(what: &'static str, index: usize, count: usize) -> Result<usize, UtilityError> {
+    if index < count {
+        Ok(index)
+    } else {
+        Err(UtilityError::ReadingIndex { what, index, count })
     }
 }
 

@@ -1,9 +1,9 @@
 //! Explicit conversions from the application layer's data to the documents.
 
 use gleaner_app::{
-    CellView, Exploration, FieldView, MissionExport, MissionId, MissionKind, MissionRecord,
-    NewMission, PlannedMission, Reconstruction, ReconstructionMap, ReconstructionSeries, Scoring,
-    driver,
+    CellView, Exploration, ExtraSortie, FieldView, MissionExport, MissionId, MissionKind,
+    MissionRecord, NewMission, PlannedMission, Reconstruction, ReconstructionMap,
+    ReconstructionSeries, Scoring, driver,
 };
 use gleaner_ingest::time::format_rfc3339;
 
@@ -208,14 +208,24 @@ pub fn wind(w: &gleaner_app::wind::RouteWind) -> crate::WindDoc {
     }
 }
 
+/// A mission just planned, not flown: `planned` when it was stored under `id`, `dry-run`
+/// when it was not.
+fn just_planned(id: Option<MissionId>, m: &NewMission) -> MissionDoc {
+    let status = if id.is_some() { "planned" } else { "dry-run" };
+    mission_doc(id, m, status, None)
+}
+
+/// A sortie after the first of a day's plan, with its wind (the candidates and the greedy
+/// baseline belong to the day's first sortie: see [`planned_mission`]).
+pub fn extra_sortie(e: &ExtraSortie) -> MissionDoc {
+    let mut doc = just_planned(e.id, &e.mission);
+    doc.wind = Some(wind(&e.wind));
+    doc
+}
+
 /// A mission just planned (with the candidates and the greedy baseline).
 pub fn planned_mission(p: &PlannedMission) -> MissionDoc {
-    let mut doc = mission_doc(
-        p.id,
-        &p.mission,
-        if p.id.is_some() { "planned" } else { "dry-run" },
-        None,
-    );
+    let mut doc = just_planned(p.id, &p.mission);
     doc.candidates = Some(p.candidates);
     set_via(&mut doc, &p.via);
     doc.unreachable = unreachable(&p.unreachable);
@@ -242,12 +252,7 @@ pub fn exploration(e: &Exploration) -> ExplorationDoc {
             .iter()
             .enumerate()
             .map(|(k, (id, m))| {
-                let mut doc = mission_doc(
-                    *id,
-                    m,
-                    if id.is_some() { "planned" } else { "dry-run" },
-                    None,
-                );
+                let mut doc = just_planned(*id, m);
                 if let Some(via) = e.via.get(k) {
                     set_via(&mut doc, via);
                 }

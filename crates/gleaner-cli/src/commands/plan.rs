@@ -97,15 +97,9 @@ pub fn run(args: PlanArgs) -> Result<()> {
     }
     let mut docs = vec![doc];
     docs.extend(planned.extra_sorties.iter().map(|e| {
-        let mut doc = gleaner_wire::convert::mission_doc(
-            e.id,
-            &e.mission,
-            if e.id.is_some() { "planned" } else { "dry-run" },
-            None,
-        );
+        let mut doc = gleaner_wire::convert::extra_sortie(e);
         // The sorties of one day are chosen together from the same cells.
         doc.candidates = Some(planned.candidates);
-        doc.wind = Some(gleaner_wire::convert::wind(&e.wind));
         doc
     }));
     args.json.emit(&docs, "serialising the sorties", || {

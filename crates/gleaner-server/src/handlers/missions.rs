@@ -12,7 +12,7 @@ use gleaner_wire::docs::ExplorationDoc;
 use serde::{Deserialize, Serialize};
 use utoipa::{IntoParams, ToSchema};
 
-use crate::api::{ExploreBody, PlanBody, ReplanBody, ReplanDoc, checked_history, parse_time};
+use crate::api::{ExploreBody, PlanBody, ReplanBody, ReplanDoc, parse_time, time_and_history};
 use crate::auth::{Caller, Computing, Writing};
 use crate::error::{ApiError, ApiResult, ErrorBody};
 use crate::state::{AppState, Changes, Job};
@@ -296,14 +296,14 @@ async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Ve
         .map(app::parse_planner)
         .transpose()
         .map_err(|e| ApiError::from(e).in_field("solver"))?;
-    let at = parse_time("at", b.at.as_deref())?;
+    let (at, history) = time_and_history(
+        b.at.as_deref(),
+        b.history_from.as_deref(),
+        b.history_until.as_deref(),
+    )?;
     let request = app::PlanRequest {
         at,
-        history: checked_history(
-            at,
-            parse_time("history_from", b.history_from.as_deref())?,
-            parse_time("history_until", b.history_until.as_deref())?,
-        )?,
+        history,
         scores: None,
         cell_scores: None,
         planner,
@@ -334,16 +334,12 @@ async fn plan_request(s: &AppState, caller: Caller, b: PlanBody) -> ApiResult<Ve
     s.run_job(job, move |p, _| {
         let planned = app::plan_with_preset(p, &request, preset.as_deref(), clock_now())?;
         let mut docs = vec![gleaner_wire::convert::planned_mission(&planned)];
-        docs.extend(planned.extra_sorties.iter().map(|e| {
-            let mut doc = gleaner_wire::convert::mission_doc(
-                e.id,
-                &e.mission,
-                if e.id.is_some() { "planned" } else { "dry-run" },
-                None,
-            );
-            doc.wind = Some(gleaner_wire::convert::wind(&e.wind));
-            doc
-        }));
+        docs.extend(
+            planned
+                .extra_sorties
+                .iter()
+                .map(gleaner_wire::convert::extra_sortie),
+        );
         Ok(docs)
     })
     .await

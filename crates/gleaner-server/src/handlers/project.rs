@@ -9,7 +9,7 @@ use gleaner_wire::docs::{CellRowDoc, ScoringDoc};
 use serde::Deserialize;
 use utoipa::IntoParams;
 
-use crate::api::{CellDetailDoc, ProjectDoc, ScoreBody, checked_history, parse_time};
+use crate::api::{CellDetailDoc, ProjectDoc, ScoreBody, time_and_history};
 use crate::error::{ApiError, ApiResult, ErrorBody};
 use crate::state::{AppState, Changes};
 
@@ -141,14 +141,14 @@ pub async fn score(
     if !b.dry_run {
         caller.require_write(&s)?;
     }
-    let at = parse_time("at", b.at.as_deref())?;
+    let (at, history) = time_and_history(
+        b.at.as_deref(),
+        b.history_from.as_deref(),
+        b.history_until.as_deref(),
+    )?;
     let request = app::ScoreRequest {
         at,
-        history: checked_history(
-            at,
-            parse_time("history_from", b.history_from.as_deref())?,
-            parse_time("history_until", b.history_until.as_deref())?,
-        )?,
+        history,
         probabilities: None,
         dry_run: b.dry_run,
     };

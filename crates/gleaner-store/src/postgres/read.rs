@@ -219,6 +219,24 @@ pub(super) fn cell_metadata_scalars(c: &mut Transaction<'_>) -> Result<Vec<CellM
     cell_metadata_with(c, false)
 }
 
+/// Every cell's summaries, by cell then modality, as [`decode::summary`] reads them.
+const SUMMARIES: &str = "SELECT cs.cell, m.name, cs.count, cs.mean, cs.std, cs.min, cs.max,
+        cs.latest_t, cs.latest_value
+    FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
+    ORDER BY cs.cell, m.name COLLATE \"C\"";
+
+/// Every cell's correlations, by cell, neighbour, then modality, as [`decode::correlation`]
+/// reads them.
+const CORRELATIONS: &str = "SELECT cc.cell, n.label, m.name, cc.correlation, cc.overlap
+    FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
+        JOIN modalities m ON m.id = cc.modality
+    ORDER BY cc.cell, n.i, n.j, m.name COLLATE \"C\"";
+
+/// Every cell's anomalies, by cell, modality, then time, as [`decode::anomaly`] reads them.
+const ANOMALIES: &str = "SELECT ca.cell, m.name, ca.t, ca.anomaly, ca.flagged
+    FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
+    ORDER BY ca.cell, m.name COLLATE \"C\", ca.t";
+
 /// The cell metadata rows, with the child lists when `children`.
 fn cell_metadata_with(c: &mut Transaction<'_>, children: bool) -> Result<Vec<CellMetadata>> {
     let rows = c
@@ -239,32 +257,9 @@ fn cell_metadata_with(c: &mut Transaction<'_>, children: bool) -> Result<Vec<Cel
     // The child tables' rows grouped by cell, or none when the children are not wanted.
     let (mut summaries, mut correlations, mut anomalies) = if children {
         (
-            grouped(
-                c,
-                "SELECT cs.cell, m.name, cs.count, cs.mean, cs.std, cs.min, cs.max,
-                        cs.latest_t, cs.latest_value
-                 FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
-                 ORDER BY cs.cell, m.name COLLATE \"C\"",
-                &[],
-                decode::summary,
-            )?,
-            grouped(
-                c,
-                "SELECT cc.cell, n.label, m.name, cc.correlation, cc.overlap
-                 FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
-                      JOIN modalities m ON m.id = cc.modality
-                 ORDER BY cc.cell, n.i, n.j, m.name COLLATE \"C\"",
-                &[],
-                decode::correlation,
-            )?,
-            grouped(
-                c,
-                "SELECT ca.cell, m.name, ca.t, ca.anomaly, ca.flagged
-                 FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
-                 ORDER BY ca.cell, m.name COLLATE \"C\", ca.t",
-                &[],
-                decode::anomaly,
-            )?,
+            grouped(c, SUMMARIES, &[], decode::summary)?,
+            grouped(c, CORRELATIONS, &[], decode::correlation)?,
+            grouped(c, ANOMALIES, &[], decode::anomaly)?,
         )
     } else {
         Default::default()

@@ -11,6 +11,7 @@ use postgres::Transaction;
 use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
 use crate::checks::{self, ImportFlight, MetadataKeys, UnitChange};
+use crate::upsert::{ANOMALIES, CORRELATIONS, SUMMARIES};
 use crate::{
     CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionRecord,
     MissionStatus, ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result,
@@ -553,33 +554,11 @@ pub(super) fn upsert_cell_metadata(
              VALUES ($1, $2, $3, $4)",
         )
         .db()?;
-    let summary = c
-        .prepare(
-            "INSERT INTO cell_summaries (cell, modality, count, mean, std, min, max, latest_t,
-                 latest_value)
-             VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9)
-             ON CONFLICT (cell, modality) DO UPDATE SET count = excluded.count,
-                 mean = excluded.mean, std = excluded.std, min = excluded.min,
-                 max = excluded.max, latest_t = excluded.latest_t,
-                 latest_value = excluded.latest_value",
-        )
-        .db()?;
-    let correlation = c
-        .prepare(
-            "INSERT INTO cell_correlations (cell, neighbour, modality, correlation, overlap)
-             VALUES ($1, $2, $3, $4, $5)
-             ON CONFLICT (cell, neighbour, modality) DO UPDATE
-             SET correlation = excluded.correlation, overlap = excluded.overlap",
-        )
-        .db()?;
-    let anomaly = c
-        .prepare(
-            "INSERT INTO cell_anomalies (cell, modality, t, anomaly, flagged)
-             VALUES ($1, $2, $3, $4, $5)
-             ON CONFLICT (cell, modality, t) DO UPDATE
-             SET anomaly = excluded.anomaly, flagged = excluded.flagged",
-        )
-        .db()?;
+    let [summary, correlation, anomaly] =
+        [SUMMARIES, CORRELATIONS, ANOMALIES].map(|t| t.upsert('$'));
+    let summary = c.prepare(&summary).db()?;
+    let correlation = c.prepare(&correlation).db()?;
+    let anomaly = c.prepare(&anomaly).db()?;
     for md in metadata {
         // One write step per cell's metadata rows (crash-safety harness).
         crate::failpoint::step();

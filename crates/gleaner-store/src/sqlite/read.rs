@@ -205,6 +205,24 @@ pub(super) fn cell_metadata_scalars(c: &Connection) -> Result<Vec<CellMetadata>>
     cell_metadata_with(c, false)
 }
 
+/// One cell's (`?1`) summaries, by modality, as [`decode::summary`] reads them.
+const CELL_SUMMARIES: &str = "SELECT cs.cell, m.name, cs.count, cs.mean, cs.std, cs.min, cs.max,
+        cs.latest_t, cs.latest_value
+    FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
+    WHERE cs.cell = ?1 ORDER BY m.name";
+
+/// One cell's (`?1`) correlations, by neighbour then modality, as [`decode::correlation`]
+/// reads them.
+const CELL_CORRELATIONS: &str = "SELECT cc.cell, n.label, m.name, cc.correlation, cc.overlap
+    FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
+        JOIN modalities m ON m.id = cc.modality
+    WHERE cc.cell = ?1 ORDER BY n.i, n.j, m.name";
+
+/// One cell's (`?1`) anomalies, by modality then time, as [`decode::anomaly`] reads them.
+const CELL_ANOMALIES: &str = "SELECT ca.cell, m.name, ca.t, ca.anomaly, ca.flagged
+    FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
+    WHERE ca.cell = ?1 ORDER BY m.name, ca.t";
+
 /// The cell metadata rows, with the child lists when `children`.
 fn cell_metadata_with(c: &Connection, children: bool) -> Result<Vec<CellMetadata>> {
     rows(
@@ -225,32 +243,9 @@ fn cell_metadata_with(c: &Connection, children: bool) -> Result<Vec<CellMetadata
                 |r| decode::class_probability(r),
             )?;
             if children {
-                md.summaries = rows(
-                    c,
-                    "SELECT cs.cell, m.name, cs.count, cs.mean, cs.std, cs.min, cs.max,
-                            cs.latest_t, cs.latest_value
-                     FROM cell_summaries cs JOIN modalities m ON m.id = cs.modality
-                     WHERE cs.cell = ?1 ORDER BY m.name",
-                    [id],
-                    |r| decode::summary(r),
-                )?;
-                md.correlations = rows(
-                    c,
-                    "SELECT cc.cell, n.label, m.name, cc.correlation, cc.overlap
-                     FROM cell_correlations cc JOIN cells n ON n.id = cc.neighbour
-                          JOIN modalities m ON m.id = cc.modality
-                     WHERE cc.cell = ?1 ORDER BY n.i, n.j, m.name",
-                    [id],
-                    |r| decode::correlation(r),
-                )?;
-                md.anomalies = rows(
-                    c,
-                    "SELECT ca.cell, m.name, ca.t, ca.anomaly, ca.flagged
-                     FROM cell_anomalies ca JOIN modalities m ON m.id = ca.modality
-                     WHERE ca.cell = ?1 ORDER BY m.name, ca.t",
-                    [id],
-                    |r| decode::anomaly(r),
-                )?;
+                md.summaries = rows(c, CELL_SUMMARIES, [id], |r| decode::summary(r))?;
+                md.correlations = rows(c, CELL_CORRELATIONS, [id], |r| decode::correlation(r))?;
+                md.anomalies = rows(c, CELL_ANOMALIES, [id], |r| decode::anomaly(r))?;
             }
             Ok(md)
         },

@@ -4,7 +4,7 @@
 use std::collections::{HashMap, HashSet};
 
 use gleaner_field::{CellIndex, Modality, SensorId, UnixSeconds};
-use rusqlite::{Connection, OptionalExtension, params};
+use rusqlite::{CachedStatement, Connection, OptionalExtension, params};
 
 use super::Db;
 use super::read::{cell_ids, modality_ids, sensor_ids};
@@ -14,6 +14,7 @@ use crate::checks::{
     not_cancellable, plan_cells, plan_insert, sensor_unchanged, unit_change, validate_metadata,
     validate_mission,
 };
+use crate::upsert::{ANOMALIES, CORRELATIONS, SUMMARIES};
 use crate::{
     CellMetadata, CellRecord, ConflictPolicy, IngestRecord, InsertStats, MissionId, MissionRecord,
     MissionStatus, ModalityRecord, NewMission, ReadingBatch, ReplaceCellsStats, Result,
@@ -30,25 +31,36 @@ fn execute_cached<P: rusqlite::Params>(
     c.prepare_cached(sql)?.execute(params)
 }
 
+/// The statements of `sql`, each through the connection's statement cache (parsed once per
+/// connection).
+fn prepared<'c, const N: usize>(
+    c: &'c Connection,
+    sql: [&str; N],
+) -> Result<[CachedStatement<'c>; N]> {
+    let mut statements = Vec::with_capacity(N);
+    for s in sql {
+        statements.push(c.prepare_cached(s).db()?);
+    }
+    Ok(statements
+        .try_into()
+        .ok()
+        .expect("one statement for each SQL text"))
+}
+
 /// Rows per multi-row `INSERT` statement in [`insert_readings`] (4 parameters each).
 const CHUNK: usize = 128;
 
 pub(super) fn upsert_sensors(c: &Connection, sensors: &[SensorRecord]) -> Result<UpsertStats> {
     check_sensor_list(sensors)?;
     let mut stats = UpsertStats::default();
-    let mut get = c
-        .prepare_cached("SELECT lat, lon, elevation_m, source FROM sensors WHERE name = ?1")
-        .db()?;
-    let mut insert = c
-        .prepare_cached(
+    let [mut get, mut insert, mut update] = prepared(
+        c,
+        [
+            "SELECT lat, lon, elevation_m, source FROM sensors WHERE name = ?1",
             "INSERT INTO sensors (name, lat, lon, elevation_m, source) VALUES (?1, ?2, ?3, ?4, ?5)",
-        )
-        .db()?;
-    let mut update = c
-        .prepare_cached(
             "UPDATE sensors SET lat = ?2, lon = ?3, elevation_m = ?4, source = ?5 WHERE name = ?1",
-        )
-        .db()?;
+        ],
+    )?;
     let mut done = HashSet::new();
     for s in sensors {
         if !done.insert(s.id.as_str()) {
@@ -90,15 +102,14 @@ pub(super) fn upsert_modalities(
 ) -> Result<UpsertStats> {
     check_modality_list(modalities)?;
     let mut stats = UpsertStats::default();
-    let mut get = c
-        .prepare_cached("SELECT unit FROM modalities WHERE name = ?1")
-        .db()?;
-    let mut insert = c
-        .prepare_cached("INSERT INTO modalities (name, unit) VALUES (?1, ?2)")
-        .db()?;
-    let mut update = c
-        .prepare_cached("UPDATE modalities SET unit = ?2 WHERE name = ?1")
-        .db()?;
+    let [mut get, mut insert, mut update] = prepared(
+        c,
+        [
+            "SELECT unit FROM modalities WHERE name = ?1",
+            "INSERT INTO modalities (name, unit) VALUES (?1, ?2)",
+            "UPDATE modalities SET unit = ?2 WHERE name = ?1",
+        ],
+    )?;
     let mut done = HashSet::new();
     for m in modalities {
         let name = m.modality.as_str();
@@ -528,37 +539,17 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
     let mut prob = c.prepare_cached(
         "INSERT INTO cell_class_probabilities (cell, k, class, probability) VALUES (?1, ?2, ?3, ?4)",
     ).db()?;
-    let mut summary = c
-        .prepare_cached(
-            "INSERT INTO cell_summaries (cell, modality, count, mean, std, min, max,
-             latest_t, latest_value)
-         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)
-         ON CONFLICT (cell, modality) DO UPDATE SET count = excluded.count,
-             mean = excluded.mean, std = excluded.std, min = excluded.min, max = excluded.max,
-             latest_t = excluded.latest_t, latest_value = excluded.latest_value
-         WHERE count IS NOT excluded.count OR mean IS NOT excluded.mean
-             OR std IS NOT excluded.std OR min IS NOT excluded.min OR max IS NOT excluded.max
-             OR latest_t IS NOT excluded.latest_t OR latest_value IS NOT excluded.latest_value",
+    // A child row stored with the same values is left untouched (`IS NOT`: SQLite's
+    // null-safe `<>`), so it costs no index or foreign-key work.
+    let [summary, correlation, anomaly] = [SUMMARIES, CORRELATIONS, ANOMALIES].map(|t| {
+        format!(
+            "{} WHERE {}",
+            t.upsert('?'),
+            t.each_value(" IS NOT ", " OR ")
         )
-        .db()?;
-    let mut correlation = c
-        .prepare_cached(
-            "INSERT INTO cell_correlations (cell, neighbour, modality, correlation, overlap)
-         VALUES (?1, ?2, ?3, ?4, ?5)
-         ON CONFLICT (cell, neighbour, modality) DO UPDATE SET
-             correlation = excluded.correlation, overlap = excluded.overlap
-         WHERE correlation IS NOT excluded.correlation OR overlap IS NOT excluded.overlap",
-        )
-        .db()?;
-    let mut anomaly = c
-        .prepare_cached(
-            "INSERT INTO cell_anomalies (cell, modality, t, anomaly, flagged)
-         VALUES (?1, ?2, ?3, ?4, ?5)
-         ON CONFLICT (cell, modality, t) DO UPDATE SET
-             anomaly = excluded.anomaly, flagged = excluded.flagged
-         WHERE anomaly IS NOT excluded.anomaly OR flagged IS NOT excluded.flagged",
-        )
-        .db()?;
+    });
+    let [mut summary, mut correlation, mut anomaly] =
+        prepared(c, [&summary, &correlation, &anomaly].map(String::as_str))?;
     for md in metadata {
         // One write step per cell's metadata rows (crash-safety harness).
         crate::failpoint::step();
@@ -597,17 +588,18 @@ fn write_metadata(c: &Connection, metadata: &[CellMetadata]) -> Result<()> {
             if stored_summaries.get(&(ck, mk)) == Some(&row) {
                 continue;
             }
+            let (count, mean, std, min, max, latest_t, latest_value) = row;
             summary
                 .execute(params![
                     ck,
                     mk,
-                    as_i64(st.count),
-                    st.mean,
-                    st.std,
-                    st.min,
-                    st.max,
-                    st.latest_t,
-                    st.latest_value
+                    count,
+                    mean,
+                    std,
+                    min,
+                    max,
+                    latest_t,
+                    latest_value
                 ])
                 .db()?;
             // What is stored now (a key listed twice in one call: the last values win).
