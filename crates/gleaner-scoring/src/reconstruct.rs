@@ -275,6 +275,19 @@ pub(crate) fn dynamic_from_columns(
     Ok(Some(model))
 }
 
+/// Where the kriging of changes' readings start for an estimate at `at` (seconds): a
+/// [`CHANGE_MARGIN_S`] before the stalest sensor's latest reading (time s, value), or before
+/// `at` when no sensor has one.
+fn change_window_start(latest: &[Option<(UnixSeconds, f64)>], at: UnixSeconds) -> UnixSeconds {
+    latest
+        .iter()
+        .flatten()
+        .map(|l| l.0)
+        .min()
+        .unwrap_or(at)
+        .saturating_sub(CHANGE_MARGIN_S)
+}
+
 /// `columns` (per sensor, times in seconds ascending) as the dynamic model's input series,
 /// without positions (it does not use them).
 pub(crate) fn unplaced_series(columns: &Columns) -> Vec<SensorSeries<'_>> {
@@ -582,14 +595,7 @@ pub fn estimate_with<S: Store>(
             (None, per_sensor(&ids, &batch))
         }
         Estimator::Changes => {
-            let needed = latest
-                .iter()
-                .flatten()
-                .map(|l| l.0)
-                .min()
-                .unwrap_or(at)
-                .saturating_sub(CHANGE_MARGIN_S)
-                .max(from);
+            let needed = change_window_start(&latest, at).max(from);
             let series = match &kept {
                 Some(KeptReads {
                     needed: Some(was),
@@ -946,13 +952,7 @@ pub fn reconstruct_series<S: Store>(
                     .collect();
                 let series: Columns = match estimator {
                     Estimator::Changes => {
-                        let needed = latest
-                            .iter()
-                            .flatten()
-                            .map(|l| l.0)
-                            .min()
-                            .unwrap_or(at)
-                            .saturating_sub(CHANGE_MARGIN_S);
+                        let needed = change_window_start(&latest, at);
                         columns
                             .iter()
                             .map(|(t, v)| {
