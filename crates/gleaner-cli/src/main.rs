@@ -213,7 +213,8 @@ metres, a north arrow, and the modality, time (UTC) and estimator in the title (
 /api/v1/reconstruct/map.svg, .png).
 
 --json: the `gleaner.reconstruction` document (as GET /api/v1/reconstruct): sd = the model's
-standard deviation, positions WGS84 [lon, lat].
+standard deviation, lo90/hi90 the calibrated 90% interval (as in the table), positions WGS84
+[lon, lat].
 
 Examples:
   gleaner reconstruct --project caf --at 2014-03-01 --modality vw@30cm

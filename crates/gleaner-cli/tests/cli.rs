@@ -1225,11 +1225,18 @@ fn simulate_report_and_reconstruct_on_a_small_synthetic_farm() {
     for (row, line) in sensors.iter().zip(out.lines().skip(4)) {
         let cols: Vec<&str> = line.split_whitespace().collect();
         assert_eq!(cols[0], row["sensor"].as_str().unwrap());
-        let table = |k: usize| cols[cols.len() - 3 + k].parse::<f64>().unwrap();
+        let table = |k: usize| cols[cols.len() - 5 + k].parse::<f64>().unwrap();
         let json = |k: &str| row[k].as_f64().unwrap();
         assert!((table(0) - json("carried")).abs() <= 5e-5, "{line}");
         assert!((table(1) - json("estimate")).abs() <= 5e-5, "{line}");
         assert!((table(2) - json("sd")).abs() <= 5e-5, "{line}");
+        assert!((table(3) - json("lo90")).abs() <= 5e-5, "{line}");
+        assert!((table(4) - json("hi90")).abs() <= 5e-5, "{line}");
+        // The 90% interval holds the estimate.
+        assert!(
+            json("lo90") <= json("estimate") && json("estimate") <= json("hi90"),
+            "{line}"
+        );
         let ll = row["lon_lat"].as_array().unwrap();
         assert!(ll[0].as_f64().unwrap().abs() <= 180.0 && ll[1].as_f64().unwrap().abs() <= 90.0);
     }

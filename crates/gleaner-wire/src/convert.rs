@@ -535,6 +535,8 @@ pub fn reconstruction(r: &Reconstruction) -> ReconstructionDoc {
                 carried: s.carried,
                 estimate: s.kriged,
                 sd: s.variance.max(0.0).sqrt(),
+                lo90: Some(s.kriged - s.half90),
+                hi90: Some(s.kriged + s.half90),
             })
             .collect(),
     }

@@ -222,6 +222,14 @@ pub struct SensorEstimateDoc {
     pub estimate: f64,
     /// Its standard deviation under the model, the modality's unit.
     pub sd: f64,
+    /// Lower end of its 90% prediction interval, the modality's unit: `estimate − q·sd`,
+    /// q calibrated on back-tests (under the dynamic model the sd in the interval includes
+    /// the reading noise); null in documents of earlier builds.
+    #[serde(default)]
+    pub lo90: Option<f64>,
+    /// Upper end of its 90% prediction interval, the modality's unit.
+    #[serde(default)]
+    pub hi90: Option<f64>,
 }
 
 /// Every sensor's estimated value of one modality at one time from what is known
@@ -238,7 +246,8 @@ pub struct ReconstructionDoc {
     /// The modality (e.g. `vw@30cm`).
     pub modality: String,
     /// `changes` (kriging of changes: last value plus the neighbours' known changes since),
-    /// `levels` (ordinary kriging of levels) or `simple` (simple kriging of levels).
+    /// `levels` (ordinary kriging of levels), `simple` (simple kriging of levels) or `dynamic`
+    /// (the dynamic field model).
     pub estimator: String,
     /// Sampling step of the modality's readings, s.
     pub step_s: i64,

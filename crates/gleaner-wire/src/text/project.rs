@@ -206,8 +206,8 @@ pub fn written_lines(files: &[std::path::PathBuf], skipped: &[String]) -> String
     t
 }
 
-/// The reconstruction as a text table (values in the modality's unit, sd its square root;
-/// ranges m, time scales d).
+/// The reconstruction as a text table (values in the modality's unit, sd its square root,
+/// lo90/hi90 the 90% prediction interval; ranges m, time scales d).
 pub fn reconstruction_table(r: &Reconstruction) -> String {
     let mut out = String::new();
     let c = r.model.covariance;
@@ -247,18 +247,20 @@ pub fn reconstruction_table(r: &Reconstruction) -> String {
     );
     let _ = writeln!(
         out,
-        "{:<16} {:<21} {:>10} {:>10} {:>10}",
-        "sensor", "last reading", "carried", "kriged", "sd"
+        "{:<16} {:<21} {:>10} {:>10} {:>10} {:>10} {:>10}",
+        "sensor", "last reading", "carried", "kriged", "sd", "lo90", "hi90"
     );
     for s in &r.sensors {
         let _ = writeln!(
             out,
-            "{:<16} {:<21} {:>10.4} {:>10.4} {:>10.4}",
+            "{:<16} {:<21} {:>10.4} {:>10.4} {:>10.4} {:>10.4} {:>10.4}",
             s.sensor.as_str(),
             s.last_time.map_or("never".into(), format_rfc3339),
             s.carried,
             s.kriged,
-            s.variance.sqrt()
+            s.variance.sqrt(),
+            s.kriged - s.half90,
+            s.kriged + s.half90
         );
     }
     out
