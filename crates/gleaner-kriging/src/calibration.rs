@@ -34,6 +34,23 @@ pub fn interval_multiplier(errors: &[f64]) -> f64 {
     z[rank.clamp(1, z.len()) - 1]
 }
 
+/// Most back-test stretches one calibration pools ([`backtest_stretches`]).
+pub const BACKTEST_STRETCHES: usize = 4;
+
+/// The back-test stretches `(start, end)`, each `span` long, ending at `end`, `end − span`,
+/// `end − 2·span`, … (the latest first): at most [`BACKTEST_STRETCHES`], none starting before
+/// `earliest`; empty when `span` is not positive. Units are the caller's (seconds, or row
+/// indices).
+pub fn backtest_stretches(end: i64, span: i64, earliest: i64) -> Vec<(i64, i64)> {
+    if span <= 0 {
+        return Vec::new();
+    }
+    (0..BACKTEST_STRETCHES as i64)
+        .map(|j| (end - (j + 1) * span, end - j * span))
+        .take_while(|&(start, _)| start >= earliest)
+        .collect()
+}
+
 /// The dynamic model's standardised errors on a back-test stretch `[split_s, end_s]`
 /// (seconds) in which only the sensors with `read[i]` are read: [`backtest_errors_hidden`]
 /// with every unread sensor hidden from `split_s` on.
@@ -122,6 +139,33 @@ mod tests {
     /// Two sensors, perfectly known model: sensor 0 read through the back-test, sensor 1
     /// estimated. The errors are the standardised distances of sensor 1's values from the
     /// filter's estimate, and only back-test readings of the unread sensor give one.
+    /// Two sensors 1 apart read at `times`, with values `a` and `b`.
+    fn two_sensors<'a>(times: &'a [i64], a: &'a [f64], b: &'a [f64]) -> [SensorSeries<'a>; 2] {
+        [
+            SensorSeries {
+                position: [0.0, 0.0],
+                times,
+                values: a,
+            },
+            SensorSeries {
+                position: [1.0, 0.0],
+                times,
+                values: b,
+            },
+        ]
+    }
+
+    #[test]
+    fn backtest_stretches_step_back_by_a_span() {
+        assert_eq!(
+            backtest_stretches(365, 21, 182),
+            vec![(344, 365), (323, 344), (302, 323), (281, 302)]
+        );
+        assert_eq!(backtest_stretches(1001, 500, 500), vec![(501, 1001)]);
+        assert_eq!(backtest_stretches(100, 30, 80), Vec::<(i64, i64)>::new());
+        assert!(backtest_stretches(100, 0, 0).is_empty());
+    }
+
     #[test]
     fn backtest_estimates_the_unread_sensors_after_the_split() {
         let model =
@@ -132,18 +176,7 @@ mod tests {
             .iter()
             .map(|&t| (t as f64 * 0.7).sin() + 0.3)
             .collect();
-        let series = [
-            SensorSeries {
-                position: [0.0, 0.0],
-                times: &times,
-                values: &a,
-            },
-            SensorSeries {
-                position: [1.0, 0.0],
-                times: &times,
-                values: &b,
-            },
-        ];
+        let series = two_sensors(&times, &a, &b);
         let z = backtest_errors(&model, &series, 0, 6, 9, &[true, false]);
         assert_eq!(z.len(), 4, "sensor 1 at t = 6, 7, 8, 9");
         // The same by hand for the first of them.
@@ -175,18 +208,7 @@ mod tests {
         let times: Vec<i64> = (0..12).collect();
         let a: Vec<f64> = times.iter().map(|&t| (t as f64 * 0.5).cos()).collect();
         let b: Vec<f64> = times.iter().map(|&t| (t as f64 * 0.4).sin()).collect();
-        let series = [
-            SensorSeries {
-                position: [0.0, 0.0],
-                times: &times,
-                values: &a,
-            },
-            SensorSeries {
-                position: [1.0, 0.0],
-                times: &times,
-                values: &b,
-            },
-        ];
+        let series = two_sensors(&times, &a, &b);
         let unread = backtest_errors(&model, &series, 0, 5, 11, &[true, false]);
         let hidden = backtest_errors_hidden(&model, &series, 0, &[None, Some(5)], 11);
         assert_eq!(unread, hidden);

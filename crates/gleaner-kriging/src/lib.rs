@@ -54,7 +54,8 @@ mod calibration;
 mod dynamic;
 mod increments;
 pub use calibration::{
-    BACKTEST_MIN, Z90, backtest_errors, backtest_errors_hidden, interval_multiplier,
+    BACKTEST_MIN, BACKTEST_STRETCHES, Z90, backtest_errors, backtest_errors_hidden,
+    backtest_stretches, interval_multiplier,
 };
 pub use dynamic::{
     DynamicFitOptions, DynamicModel, FieldFilter, MAX_DYNAMIC_SENSORS, Shrinkage, fit_dynamic,

@@ -19,21 +19,22 @@
 //! Units: times seconds; values in the modality's unit; `q` dimensionless.
 
 use gleaner_field::UnixSeconds;
-use gleaner_kriging::{DynamicModel, Z90, backtest_errors_hidden, interval_multiplier};
+use gleaner_kriging::{
+    DynamicModel, SensorSeries, Z90, backtest_errors_hidden, backtest_stretches,
+    interval_multiplier,
+};
 
 use crate::error::Result;
 use crate::kriging_inputs::Columns;
-use crate::reconstruct::{dynamic_from_columns, dynamic_window_s, unplaced_series};
-
-/// Most back-test stretches per calibration.
-pub const DYNAMIC_BACKTESTS: usize = 4;
+use crate::reconstruct::{dynamic_from_series, dynamic_window_s, unplaced_series};
 
 /// The back-test stretches for estimation time `at` (seconds) over readings from `first`
 /// (seconds): `(start, end)` of each, the latest first, each `span` long (the largest age of
-/// `ages`), ending at `at − span`, `at − 2·span`, … — at most [`DYNAMIC_BACKTESTS`], none
-/// starting before the middle of `[first, at]`. Empty when nothing is older than `step_s`.
-/// Ages over a quarter of `[first, at]` are cut to it (so one stretch always fits), in place.
-pub(crate) fn backtest_stretches(
+/// `ages`), ending at `at − span`, `at − 2·span`, … — at most
+/// [`gleaner_kriging::BACKTEST_STRETCHES`], none starting before the middle of `[first, at]`
+/// ([`backtest_stretches`]). Empty when nothing is older than `step_s`. Ages over a quarter of
+/// `[first, at]` are cut to it (so one stretch always fits), in place.
+fn stretches_for(
     ages: &mut [Option<i64>],
     first: UnixSeconds,
     at: UnixSeconds,
@@ -47,11 +48,7 @@ pub(crate) fn backtest_stretches(
     if span < step_s.max(1) {
         return Vec::new();
     }
-    let earliest = first + (at - first) / 2;
-    (1..=DYNAMIC_BACKTESTS as i64)
-        .map(|j| (at - (j + 1) * span, at - j * span))
-        .take_while(|&(start, _)| start >= earliest)
-        .collect()
+    backtest_stretches(at - span, span, first + (at - first) / 2)
 }
 
 /// The multiplier `q` of the dynamic model's 90% interval at `at` (seconds), from `columns`
@@ -78,53 +75,58 @@ pub(crate) fn dynamic_multiplier(
             (n > 0).then(|| Some(at - t[n - 1]).filter(|&a| a >= step_s).unwrap_or(0))
         })
         .collect();
-    let stretches = backtest_stretches(&mut ages, first, at, step_s);
+    let series = unplaced_series(columns);
     let mut errors = Vec::new();
-    for (start, end) in stretches {
-        let before: Columns = columns
+    for (start, end) in stretches_for(&mut ages, first, at, step_s) {
+        // Each sensor's readings before the stretch: a prefix of its series.
+        let before: Vec<SensorSeries<'_>> = series
             .iter()
-            .map(|(t, v)| {
-                let n = t.partition_point(|&x| x < start);
-                (t[..n].to_vec(), v[..n].to_vec())
+            .map(|s| {
+                let n = s.times.partition_point(|&x| x < start);
+                SensorSeries {
+                    times: &s.times[..n],
+                    values: &s.values[..n],
+                    ..*s
+                }
             })
             .collect();
-        let Some(model) = dynamic_from_columns(&before, step_s, unshared_weight)? else {
+        let Some(model) = dynamic_from_series(&before, step_s, unshared_weight)? else {
             continue;
         };
-        errors.extend(stretch_errors(&model, columns, &ages, (start, end)));
+        errors.extend(stretch_errors(&model, &series, &ages, (start, end)));
     }
     Ok(interval_multiplier(&errors))
 }
 
-/// `model`'s standardised errors on the stretch `(start, end]` (seconds) with sensor `i`
-/// hidden for the last `ages[i]` seconds of it (never, for `None`); the filter starts a
-/// dynamic window ([`dynamic_window_s`]) before the stretch.
+/// `model`'s standardised errors on the stretch `(start, end]` (seconds) of `series` with
+/// sensor `i` hidden for the last `ages[i]` seconds of it (never, for `None`); the filter
+/// starts a dynamic window ([`dynamic_window_s`]) before the stretch.
 fn stretch_errors(
     model: &DynamicModel,
-    columns: &Columns,
+    series: &[SensorSeries<'_>],
     ages: &[Option<i64>],
     (start, end): (UnixSeconds, UnixSeconds),
 ) -> Vec<f64> {
-    let series = unplaced_series(columns);
     // Hidden strictly after `end − age`: the reading that is `age` old now stays known.
     let hidden_from: Vec<Option<i64>> = ages
         .iter()
         .map(|a| a.filter(|&a| a > 0).map(|a| end - a + 1))
         .collect();
     let filter_start = start.saturating_sub(dynamic_window_s(model));
-    backtest_errors_hidden(model, &series, filter_start, &hidden_from, end)
+    backtest_errors_hidden(model, series, filter_start, &hidden_from, end)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::reconstruct::dynamic_from_columns;
 
     const DAY: i64 = 86_400;
 
     #[test]
     fn stretches_step_back_by_the_largest_age() {
         let mut ages = vec![Some(0), Some(10 * DAY), None];
-        let s = backtest_stretches(&mut ages, 0, 400 * DAY, DAY);
+        let s = stretches_for(&mut ages, 0, 400 * DAY, DAY);
         assert_eq!(
             s,
             vec![
@@ -136,12 +138,12 @@ mod tests {
         );
         // A sensor dead for years is cut to a quarter of the history: one stretch fits.
         let mut ages = vec![Some(0), Some(1_000 * DAY)];
-        let s = backtest_stretches(&mut ages, 0, 400 * DAY, DAY);
+        let s = stretches_for(&mut ages, 0, 400 * DAY, DAY);
         assert_eq!(ages[1], Some(100 * DAY));
         assert_eq!(s, vec![(200 * DAY, 300 * DAY)]);
         // Everything read at the last step: nothing to calibrate.
         let mut ages = vec![Some(0), Some(DAY / 2)];
-        assert!(backtest_stretches(&mut ages, 0, 400 * DAY, DAY).is_empty());
+        assert!(stretches_for(&mut ages, 0, 400 * DAY, DAY).is_empty());
     }
 
     /// Columns of `n` sensors over `days` daily readings: a shared seasonal level plus a
@@ -205,14 +207,15 @@ mod tests {
     fn a_sensor_is_hidden_for_its_age() {
         let cols = columns(2, 60, 0.0);
         let model = dynamic_from_columns(&cols, DAY, 0.0).unwrap().unwrap();
+        let series = unplaced_series(&cols);
         let z = stretch_errors(
             &model,
-            &cols,
+            &series,
             &[Some(0), Some(3 * DAY)],
             (40 * DAY, 50 * DAY),
         );
         assert_eq!(z.len(), 3);
-        let none = stretch_errors(&model, &cols, &[Some(0), None], (40 * DAY, 50 * DAY));
+        let none = stretch_errors(&model, &series, &[Some(0), None], (40 * DAY, 50 * DAY));
         assert!(none.is_empty());
     }
 }

@@ -40,7 +40,6 @@ pub mod when;
 
 pub use choices::{Estimator, Objective, parse_planner};
 pub use condition::{Condition, ScoreRequest, Scoring, condition_modality, driver};
-pub use dynamic_interval::DYNAMIC_BACKTESTS;
 pub use error::{AppError, Result};
 pub use information::CellInformation;
 pub use knowledge::{History, Knowledge, knowledge, sampling_step};

@@ -257,17 +257,26 @@ pub(crate) fn dynamic_from_columns(
     step_s: i64,
     unshared_weight: f64,
 ) -> Result<Option<DynamicModel>> {
-    if columns.len() > gleaner_kriging::MAX_DYNAMIC_SENSORS {
+    dynamic_from_series(&unplaced_series(columns), step_s, unshared_weight)
+}
+
+/// [`dynamic_from_columns`] on the model's input series (per sensor, times in seconds,
+/// ascending).
+pub(crate) fn dynamic_from_series(
+    series: &[SensorSeries<'_>],
+    step_s: i64,
+    unshared_weight: f64,
+) -> Result<Option<DynamicModel>> {
+    if series.len() > gleaner_kriging::MAX_DYNAMIC_SENSORS {
         return Ok(None);
     }
-    let series = unplaced_series(columns);
-    let Ok(model) = fit_dynamic(&series, &dynamic_fit_options(step_s)) else {
+    let Ok(model) = fit_dynamic(series, &dynamic_fit_options(step_s)) else {
         return Ok(None);
     };
     if unshared_weight <= 0.0 {
         return Ok(Some(model));
     }
-    let rates = fit_own_rates(&series, step_s.max(1), UNSHARED_PRIOR_CHANGES)
+    let rates = fit_own_rates(series, step_s.max(1), UNSHARED_PRIOR_CHANGES)
         .map_err(|e| AppError::core("unshared drift rates", e))?;
     let model = model
         .with_own_rates(rates.into_iter().map(|r| r * unshared_weight).collect())
@@ -589,9 +598,10 @@ pub fn estimate_with<S: Store>(
     let (needed, series) = match estimator {
         Estimator::Levels(_) => (None, Vec::new()),
         Estimator::Dynamic => {
-            let model = dynamic.ok_or_else(|| unfit_dynamic(modality, "use another estimator"))?;
-            let start = at.saturating_sub(dynamic_window_s(model)).max(from);
-            let batch = project.store().readings_for(Some(modality), start..=at)?;
+            // Every reading known (the filter takes its window's, the interval's back-tests
+            // all of them): one read.
+            dynamic.ok_or_else(|| unfit_dynamic(modality, "use another estimator"))?;
+            let batch = project.store().readings_for(Some(modality), from..=at)?;
             (None, per_sensor(&ids, &batch))
         }
         Estimator::Changes => {
@@ -642,9 +652,12 @@ pub fn estimate_with<S: Store>(
     });
     let q = kept_q.unwrap_or_else(|| kriging.multiplier());
     let dynamic_estimates = match (estimator, dynamic) {
-        (Estimator::Dynamic, Some(model)) => {
-            dynamic_at(project, (&ids, modality), model, &series, (from, at))?
-        }
+        (Estimator::Dynamic, Some(model)) => dynamic_at(
+            model,
+            &series,
+            (from, at),
+            project.settings().planner.unshared_weight,
+        )?,
         _ => Vec::new(),
     };
     let estimates = sensors
@@ -683,29 +696,23 @@ pub fn estimate_with<S: Store>(
 }
 
 /// The dynamic model's estimate of every sensor at `at` (seconds): (posterior mean, variance,
-/// 90% half-width `q`·√(variance + reading noise)), the modality's unit. One filter pass over
-/// `series` (each sensor's readings in the model's window before `at`, no earlier than
-/// `from`); `q` from back-tests over every reading of `modality` stamped in `[from, at]`
+/// 90% half-width `q`·√(variance + reading noise)), the modality's unit, from `known` (each
+/// sensor's readings stamped in `[from, at]`, times ascending): one filter pass over those in
+/// the model's window before `at`, `q` from back-tests over all of them
 /// ([`dynamic_multiplier`]).
-fn dynamic_at<S: Store>(
-    project: &Project<S>,
-    (ids, modality): (&[SensorId], &Modality),
+fn dynamic_at(
     model: &DynamicModel,
-    series: &Columns,
+    known: &Columns,
     (from, at): (UnixSeconds, UnixSeconds),
+    unshared_weight: f64,
 ) -> Result<Vec<(f64, f64, f64)>> {
     let start = at.saturating_sub(dynamic_window_s(model)).max(from);
     let mut filtered: Vec<(f64, f64)> = Vec::new();
-    run_filter(model, series, start, &[at], |_, f| {
-        filtered = (0..ids.len()).map(|k| f.estimate(k)).collect();
+    run_filter(model, known, start, &[at], |_, f| {
+        filtered = (0..known.len()).map(|k| f.estimate(k)).collect();
     });
-    let known = per_sensor(
-        ids,
-        &project.store().readings_for(Some(modality), from..=at)?,
-    );
     let step = (model.step_s() as i64).max(1);
-    let weight = project.settings().planner.unshared_weight;
-    let q = dynamic_multiplier(&known, at, step, weight)?;
+    let q = dynamic_multiplier(known, at, step, unshared_weight)?;
     Ok(filtered
         .into_iter()
         .map(|(mean, variance)| {

@@ -28,20 +28,20 @@ impl Default for Coverage {
 }
 
 /// Most back-test origins per fit ([`backtest_origins`]).
-pub const BACKTEST_ORIGINS: usize = 4;
+pub const BACKTEST_ORIGINS: usize = gleaner_kriging::BACKTEST_STRETCHES;
 
 /// The interval back-tests' origins in `train` for stretches of `rows` rows: the last
 /// stretch of the training rows first, then each `rows` earlier, at most
 /// [`BACKTEST_ORIGINS`], every origin leaving at least half the training rows before it to
-/// fit on. Empty when `rows` is 0.
+/// fit on ([`gleaner_kriging::backtest_stretches`] in rows). Empty when `rows` is 0.
 pub fn backtest_origins(train: &Range<usize>, rows: usize) -> Vec<usize> {
     if rows == 0 || train.len() < 2 {
         return Vec::new();
     }
     let earliest = train.start + train.len() / 2;
-    (0..BACKTEST_ORIGINS)
-        .map_while(|j| train.end.checked_sub(rows * (j + 1)))
-        .take_while(|&o| o >= earliest)
+    gleaner_kriging::backtest_stretches(train.end as i64, rows as i64, earliest as i64)
+        .into_iter()
+        .map(|(start, _)| start as usize)
         .collect()
 }
 
