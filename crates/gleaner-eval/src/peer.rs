@@ -368,17 +368,8 @@ impl Fitted {
             .filter_map(|origin| {
                 // The training readings before the origin: a prefix of each sensor's.
                 let before = matrix.times[origin];
-                let prefix: Vec<SensorSeries<'_>> = input
-                    .iter()
-                    .map(|s| {
-                        let k = s.times.partition_point(|&t| t < before);
-                        SensorSeries {
-                            times: &s.times[..k],
-                            values: &s.values[..k],
-                            ..*s
-                        }
-                    })
-                    .collect();
+                let prefix: Vec<SensorSeries<'_>> =
+                    input.iter().map(|s| s.before(before)).collect();
                 let model = gleaner_kriging::fit_dynamic(&prefix, &protocol.fit).ok()?;
                 Some((origin, model))
             })

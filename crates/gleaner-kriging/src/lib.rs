@@ -413,6 +413,18 @@ pub struct SensorSeries<'a> {
     pub values: &'a [f64],
 }
 
+impl<'a> SensorSeries<'a> {
+    /// The readings stamped before `t` (seconds): a prefix, same position.
+    pub fn before(&self, t: i64) -> SensorSeries<'a> {
+        let n = self.times.partition_point(|&x| x < t);
+        SensorSeries {
+            times: &self.times[..n],
+            values: &self.values[..n],
+            ..*self
+        }
+    }
+}
+
 /// Options of [`fit`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FitOptions {

@@ -78,18 +78,7 @@ pub(crate) fn dynamic_multiplier(
     let series = unplaced_series(columns);
     let mut errors = Vec::new();
     for (start, end) in stretches_for(&mut ages, first, at, step_s) {
-        // Each sensor's readings before the stretch: a prefix of its series.
-        let before: Vec<SensorSeries<'_>> = series
-            .iter()
-            .map(|s| {
-                let n = s.times.partition_point(|&x| x < start);
-                SensorSeries {
-                    times: &s.times[..n],
-                    values: &s.values[..n],
-                    ..*s
-                }
-            })
-            .collect();
+        let before: Vec<SensorSeries<'_>> = series.iter().map(|s| s.before(start)).collect();
         let Some(model) = dynamic_from_series(&before, step_s, unshared_weight)? else {
             continue;
         };
