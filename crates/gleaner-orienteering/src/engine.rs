@@ -1006,19 +1006,24 @@ impl State {
         self.resync(ctx.p);
     }
 
+    /// The iterated local search's kick: with probability 0.3 a `shift` toward a free region,
+    /// else a `remove` of a segment or of random nodes, both of about `strength` nodes. The
+    /// nodes dropped from the routes are returned in `out` (cleared first).
+    pub fn kick(&mut self, ctx: &Ctx, rng: &mut ChaCha8Rng, strength: usize, out: &mut Vec<usize>) {
+        out.clear();
+        if rng.random_bool(0.3) {
+            self.shift(ctx, rng, strength, out);
+        } else {
+            self.remove(ctx, rng, strength, out);
+        }
+    }
+
     /// Shift perturbation: forces a random free candidate and up to `strength - 1` of its
     /// free nearest neighbours into a random route (cheapest positions, budget ignored),
     /// shortens that route, then drops the visited nodes of largest saving per reward (the
     /// forced ones last) until the route fits again. Moves a tour toward unvisited regions.
-    /// The dropped nodes are returned in `out` (to be kept out of the next refill).
-    pub fn shift(
-        &mut self,
-        ctx: &Ctx,
-        rng: &mut ChaCha8Rng,
-        strength: usize,
-        out: &mut Vec<usize>,
-    ) {
-        out.clear();
+    /// The dropped nodes are pushed to `out` (to be kept out of the next refill).
+    fn shift(&mut self, ctx: &Ctx, rng: &mut ChaCha8Rng, strength: usize, out: &mut Vec<usize>) {
         let free: Vec<usize> = ctx
             .cands
             .iter()
@@ -1068,16 +1073,9 @@ impl State {
         }
     }
 
-    /// Perturbation: removes a random segment of up to `strength` nodes from a random
-    /// non-empty route, or `strength` random visited nodes. Returns the removed nodes.
-    pub fn perturb(
-        &mut self,
-        ctx: &Ctx,
-        rng: &mut ChaCha8Rng,
-        strength: usize,
-        out: &mut Vec<usize>,
-    ) {
-        out.clear();
+    /// Removal perturbation: removes a random segment of up to `strength` nodes from a random
+    /// non-empty route, or `strength` random visited nodes; pushes the removed nodes to `out`.
+    fn remove(&mut self, ctx: &Ctx, rng: &mut ChaCha8Rng, strength: usize, out: &mut Vec<usize>) {
         let nonempty: Vec<usize> = (0..self.routes.len())
             .filter(|&r| self.routes[r].len() > 2)
             .collect();

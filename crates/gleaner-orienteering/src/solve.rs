@@ -300,12 +300,7 @@ pub fn solve_default(problem: &Problem, options: &SolveOptions) -> Solution {
         iter += 1;
         cand.clone_from(&cur);
         let visited: usize = cand.routes.iter().map(|r| r.len() - 2).sum();
-        // Perturbation: 30% shift toward a free region, else segment or random removal.
-        if rng.random_bool(0.3) {
-            cand.shift(&ctx, &mut rng, strength, &mut removed);
-        } else {
-            cand.perturb(&ctx, &mut rng, strength, &mut removed);
-        }
+        cand.kick(&ctx, &mut rng, strength, &mut removed);
         let noise = if rng.random_bool(0.5) { 0.0 } else { 0.3 };
         cand.fill(&ctx, &removed, noise, &mut rng);
         cand.local_search(&ctx, &mut rng, scan_all);

@@ -990,7 +990,7 @@ pub(crate) fn fast_scoring_from<S: Store>(
         .as_ref()
         .map_or_else(Vec::new, |c| c.probabilities.clone());
     let terms = state
-        .score_parallel(t, &config, &probabilities)
+        .score(t, &config, &probabilities)
         .map_err(|e| AppError::core("scoring", e))?;
     let nm = p.modalities.len();
     let series = (0..field.cells().len())

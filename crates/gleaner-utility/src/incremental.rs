@@ -677,23 +677,12 @@ impl IncrementalState {
     }
 
     /// Scores every cell at mission time `t` (s) from the maintained statistics, in
-    /// O(cells × neighbours × modalities). `probabilities` is empty (no model, U = 0) or one
-    /// distribution per cell. Only [`HistoryWindow::All`] is supported; every reading added
-    /// counts, whatever `t`.
+    /// O(cells × neighbours × modalities), the cells spread over rayon's global pool (each
+    /// cell's terms depend only on the statistics, so the result is the same on any number of
+    /// threads, in cell order). `probabilities` is empty (no model, U = 0) or one distribution
+    /// per cell. Only [`HistoryWindow::All`] is supported; every reading added counts,
+    /// whatever `t`.
     pub fn score(
-        &self,
-        t: UnixSeconds,
-        config: &UtilityConfig,
-        probabilities: &[Vec<f64>],
-    ) -> Result<Vec<CellTerms>, UtilityError> {
-        self.check_scoring(config, probabilities)?;
-        Ok((0..self.n_cells())
-            .map(|i| self.cell_terms(i, t, config, probabilities))
-            .collect())
-    }
-
-    /// [`score`](Self::score) on all cores (rayon's global pool); same result.
-    pub fn score_parallel(
         &self,
         t: UnixSeconds,
         config: &UtilityConfig,
@@ -1241,8 +1230,13 @@ mod tests {
             ..UtilityConfig::default()
         };
         let a = state.score(41 * DAY, &config, &[]).unwrap();
-        let b = full.score_parallel(41 * DAY, &config, &[]).unwrap();
-        assert_eq!(b, full.score(41 * DAY, &config, &[]).unwrap());
+        let b = full.score(41 * DAY, &config, &[]).unwrap();
+        let one_thread = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| full.score(41 * DAY, &config, &[]).unwrap());
+        assert_eq!(b, one_thread, "the same terms on one thread as on the pool");
         for (x, y) in a.iter().zip(&b) {
             rel_close(x.s, y.s, "retention");
         }
