@@ -532,124 +532,130 @@ impl State {
         inserted
     }
 
-    /// 2-opt on route `r` with neighbour lists, first improvement until none. Returns true
-    /// when the route got cheaper.
+    /// 2-opt on route `r`, first improvement, in passes until one finds no improving move:
+    /// over all position pairs on routes of up to `FULL_TWO_OPT` positions (catches long-range
+    /// moves that candidate lists miss on clustered instances), along the neighbour lists on
+    /// longer ones. Returns true when the route got cheaper.
     pub fn two_opt(&mut self, ctx: &Ctx, r: usize) -> bool {
-        if self.routes[r].len() <= FULL_TWO_OPT {
-            return self.two_opt_full(ctx, r);
-        }
-        let mut any = false;
-        let ru = r as u32;
+        let full = self.routes[r].len() <= FULL_TWO_OPT;
         let mut arcs = Arcs::default();
+        let mut any = false;
         loop {
-            let mut improved = false;
-            let m = self.routes[r].len();
             if !ctx.symmetric {
                 arcs.build(ctx, &self.routes[r]);
             }
-            let mut i = 0;
-            while i < m {
-                let a = self.routes[r][i];
-                for &c in ctx.neighbours(a) {
-                    let c = c as usize;
-                    if self.route_of[c] != ru {
-                        continue;
-                    }
-                    let j = self.pos[c] as usize;
-                    let dac = ctx.c(a, c);
-                    let route = &self.routes[r];
-                    let mut moved = None;
-                    // Successor variant: new edges (a, c), (a+, c+).
-                    if i + 1 < m && j + 1 < m && j != i + 1 && j != i {
-                        let (lo, hi) = if i < j { (i + 1, j) } else { (j + 1, i) };
-                        let g = if ctx.symmetric {
-                            let (an, cn) = (route[i + 1], route[j + 1]);
-                            dac + ctx.c(an, cn) - ctx.c(a, an) - ctx.c(c, cn)
-                        } else {
-                            ctx.reversal_gain(route, &arcs, lo, hi)
-                        };
-                        if g < -ctx.eps {
-                            moved = Some((g, (lo, hi)));
-                        }
-                    }
-                    // Predecessor variant: new edges (a, c), (a-, c-).
-                    if moved.is_none() && i > 0 && j > 0 && j + 1 != i && j != i + 1 {
-                        let (lo, hi) = if i < j { (i, j - 1) } else { (j, i - 1) };
-                        let g = if ctx.symmetric {
-                            let (ap, cp) = (route[i - 1], route[j - 1]);
-                            dac + ctx.c(ap, cp) - ctx.c(ap, a) - ctx.c(cp, c)
-                        } else {
-                            ctx.reversal_gain(route, &arcs, lo, hi)
-                        };
-                        if g < -ctx.eps {
-                            moved = Some((g, (lo, hi)));
-                        }
-                    }
-                    if let Some((g, (lo, hi))) = moved {
-                        self.routes[r][lo..=hi].reverse();
-                        self.refresh_range(r, lo, hi);
-                        self.cost[r] += g;
-                        if !ctx.symmetric {
-                            arcs.build(ctx, &self.routes[r]);
-                        }
-                        improved = true;
-                        break;
-                    }
-                }
-                i += 1;
-            }
+            let improved = if full {
+                self.two_opt_full_pass(ctx, r, &mut arcs)
+            } else {
+                self.two_opt_pass(ctx, r, &mut arcs)
+            };
             if !improved {
-                break;
+                return any;
             }
             any = true;
         }
-        any
     }
 
-    /// 2-opt over all position pairs (short routes: catches long-range moves that candidate
-    /// lists miss on clustered instances).
-    fn two_opt_full(&mut self, ctx: &Ctx, r: usize) -> bool {
-        let mut any = false;
-        let mut arcs = Arcs::default();
-        loop {
-            let mut improved = false;
-            let m = self.routes[r].len();
-            if !ctx.symmetric {
-                arcs.build(ctx, &self.routes[r]);
-            }
-            for i in 0..m.saturating_sub(3) {
+    /// One pass of 2-opt along the neighbour lists; true when it moved.
+    fn two_opt_pass(&mut self, ctx: &Ctx, r: usize, arcs: &mut Arcs) -> bool {
+        let ru = r as u32;
+        let mut improved = false;
+        let m = self.routes[r].len();
+        let mut i = 0;
+        while i < m {
+            let a = self.routes[r][i];
+            for &c in ctx.neighbours(a) {
+                let c = c as usize;
+                if self.route_of[c] != ru {
+                    continue;
+                }
+                let j = self.pos[c] as usize;
+                let dac = ctx.c(a, c);
                 let route = &self.routes[r];
-                let (a, an) = (route[i], route[i + 1]);
-                let dan = ctx.c(a, an);
-                let mut found = None;
-                for j in (i + 2)..(m - 1) {
+                let mut moved = None;
+                // Successor variant: new edges (a, c), (a+, c+).
+                if i + 1 < m && j + 1 < m && j != i + 1 && j != i {
+                    let (lo, hi) = if i < j { (i + 1, j) } else { (j + 1, i) };
                     let g = if ctx.symmetric {
-                        let (c, cn) = (route[j], route[j + 1]);
-                        ctx.c(a, c) + ctx.c(an, cn) - dan - ctx.c(c, cn)
+                        let (an, cn) = (route[i + 1], route[j + 1]);
+                        dac + ctx.c(an, cn) - ctx.c(a, an) - ctx.c(c, cn)
                     } else {
-                        ctx.reversal_gain(route, &arcs, i + 1, j)
+                        ctx.reversal_gain(route, arcs, lo, hi)
                     };
                     if g < -ctx.eps {
-                        found = Some((g, j));
-                        break;
+                        moved = Some((g, (lo, hi)));
                     }
                 }
-                if let Some((g, j)) = found {
-                    self.routes[r][i + 1..=j].reverse();
-                    self.refresh_range(r, i + 1, j);
-                    self.cost[r] += g;
-                    if !ctx.symmetric {
-                        arcs.build(ctx, &self.routes[r]);
+                // Predecessor variant: new edges (a, c), (a-, c-).
+                if moved.is_none() && i > 0 && j > 0 && j + 1 != i && j != i + 1 {
+                    let (lo, hi) = if i < j { (i, j - 1) } else { (j, i - 1) };
+                    let g = if ctx.symmetric {
+                        let (ap, cp) = (route[i - 1], route[j - 1]);
+                        dac + ctx.c(ap, cp) - ctx.c(ap, a) - ctx.c(cp, c)
+                    } else {
+                        ctx.reversal_gain(route, arcs, lo, hi)
+                    };
+                    if g < -ctx.eps {
+                        moved = Some((g, (lo, hi)));
                     }
+                }
+                if let Some((g, (lo, hi))) = moved {
+                    self.reverse_segment(ctx, r, (lo, hi), g, arcs);
                     improved = true;
+                    break;
                 }
             }
-            if !improved {
-                break;
-            }
-            any = true;
+            i += 1;
         }
-        any
+        improved
+    }
+
+    /// The 2-opt move: reverses `routes[r][lo..=hi]`, whose cost changes by `gain` (m or the
+    /// instance's cost unit; < 0 is cheaper), and keeps positions, cost and (asymmetric
+    /// costs) the route's prefix sums `arcs` in step.
+    fn reverse_segment(
+        &mut self,
+        ctx: &Ctx,
+        r: usize,
+        (lo, hi): (usize, usize),
+        gain: f64,
+        arcs: &mut Arcs,
+    ) {
+        self.routes[r][lo..=hi].reverse();
+        self.refresh_range(r, lo, hi);
+        self.cost[r] += gain;
+        if !ctx.symmetric {
+            arcs.build(ctx, &self.routes[r]);
+        }
+    }
+
+    /// One pass of 2-opt over all position pairs; true when it moved.
+    fn two_opt_full_pass(&mut self, ctx: &Ctx, r: usize, arcs: &mut Arcs) -> bool {
+        let mut improved = false;
+        let m = self.routes[r].len();
+        for i in 0..m.saturating_sub(3) {
+            let route = &self.routes[r];
+            let (a, an) = (route[i], route[i + 1]);
+            let dan = ctx.c(a, an);
+            let mut found = None;
+            for j in (i + 2)..(m - 1) {
+                let g = if ctx.symmetric {
+                    let (c, cn) = (route[j], route[j + 1]);
+                    ctx.c(a, c) + ctx.c(an, cn) - dan - ctx.c(c, cn)
+                } else {
+                    ctx.reversal_gain(route, arcs, i + 1, j)
+                };
+                if g < -ctx.eps {
+                    found = Some((g, j));
+                    break;
+                }
+            }
+            if let Some((g, j)) = found {
+                self.reverse_segment(ctx, r, (i + 1, j), g, arcs);
+                improved = true;
+            }
+        }
+        improved
     }
 
     /// Or-opt on route `r`: moves segments of 1..=3 nodes (either orientation) next to a
