@@ -9,10 +9,11 @@ use gleaner_field::{Modality, SensorId, UnixSeconds};
 use gleaner_kriging::{DynamicModel, FieldFilter};
 use gleaner_store::Store;
 
+use crate::dynamic::dynamic_window_s;
 use crate::error::{AppError, Result};
 use crate::knowledge::{History, Knowledge, known_until};
 use crate::project::Project;
-use crate::reconstruct::{dynamic_window_s, per_sensor, run_filter};
+use crate::reconstruct::{per_sensor, run_filter};
 
 /// The information a set of cells brings at one time: the filter's posterior given every
 /// reading known then, and each cell's sensors as positions in the model.

@@ -23,7 +23,7 @@ mod choices;
 mod codec;
 mod condition;
 mod drift;
-mod dynamic_interval;
+mod dynamic;
 mod error;
 mod information;
 mod knowledge;
@@ -40,6 +40,7 @@ pub mod when;
 
 pub use choices::{Estimator, Objective, parse_planner};
 pub use condition::{Condition, ScoreRequest, Scoring, condition_modality, driver};
+pub use dynamic::{dynamic_fit_options, dynamic_window_s};
 pub use error::{AppError, Result};
 pub use information::CellInformation;
 pub use knowledge::{History, Knowledge, knowledge, sampling_step};
@@ -47,9 +48,8 @@ pub use kriging_inputs::Z90;
 pub use project::{Project, database};
 pub use reconstruct::{
     DEFAULT_NEIGHBOURS, EstimateReads, MAX_SERIES_TIMES, Models, ReconstructRequest,
-    ReconstructSeriesRequest, Reconstruction, ReconstructionSeries, SensorEstimate,
-    dynamic_fit_options, dynamic_window_s, estimate_with, fit_dynamic_model, fit_models,
-    reconstruct, reconstruct_series, target_modality, unfit_dynamic,
+    ReconstructSeriesRequest, Reconstruction, ReconstructionSeries, SensorEstimate, estimate_with,
+    fit_dynamic_model, fit_models, reconstruct, reconstruct_series, target_modality, unfit_dynamic,
 };
 pub use reconstruct_map::{MapCell, ReconstructMapRequest, ReconstructionMap, reconstruct_map};
 pub use score::{compute, compute_full, metadata_rows, score, write_scoring};

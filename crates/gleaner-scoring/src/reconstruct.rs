@@ -11,13 +11,13 @@ use std::collections::HashMap;
 
 use gleaner_field::{CellIndex, LatLon, Modality, SensorId, UnixSeconds};
 use gleaner_kriging::{
-    DynamicFitOptions, DynamicModel, FieldModel, FitOptions, IncrementFitOptions, IncrementModel,
-    SensorSeries, Shrinkage, fit, fit_dynamic, fit_increments, fit_own_rates,
+    DynamicModel, FieldModel, FitOptions, IncrementFitOptions, IncrementModel, SensorSeries, fit,
+    fit_increments,
 };
 use gleaner_store::{ReadingBatch, Store};
 
 use crate::choices::Estimator;
-use crate::dynamic_interval::dynamic_multiplier;
+use crate::dynamic::{dynamic_from_columns, dynamic_multiplier, dynamic_window_s};
 use crate::error::{AppError, Result};
 use crate::knowledge::sampling_step;
 use crate::kriging_inputs::{Columns, KrigingInputs};
@@ -189,27 +189,6 @@ pub struct Models {
     pub step_s: i64,
 }
 
-/// Largest lag of the dynamic model's persistence fit, days.
-pub const DYNAMIC_LAG_DAYS: i64 = 14;
-
-/// Whether the dynamic model carries a common level of its own
-/// ([`DynamicFitOptions::common_mode`]).
-pub const DYNAMIC_COMMON_MODE: bool = false;
-
-/// The dynamic model's fit options at sampling step `step_s` (seconds): automatic
-/// shrinkage, reading noise 0.1% of the variance, lags up to [`DYNAMIC_LAG_DAYS`], a common
-/// level as [`DYNAMIC_COMMON_MODE`] says.
-pub fn dynamic_fit_options(step_s: i64) -> DynamicFitOptions {
-    DynamicFitOptions {
-        step_s: step_s.max(1),
-        max_lag_s: DYNAMIC_LAG_DAYS * 86_400,
-        shrinkage: Shrinkage::Auto,
-        noise_share: 1e-3,
-        common_mode: DYNAMIC_COMMON_MODE,
-        ..DynamicFitOptions::default()
-    }
-}
-
 /// Why the dynamic model is missing for `modality`, and what to do instead (`advice`).
 pub fn unfit_dynamic(modality: &Modality, advice: &str) -> AppError {
     AppError::Invalid(format!(
@@ -243,47 +222,6 @@ pub fn fit_dynamic_model<S: Store>(
     dynamic_from_columns(&columns, step_s, project.settings().planner.unshared_weight)
 }
 
-/// Pseudo-changes of the pooled rate each sensor's unshared drift rate is shrunk towards
-/// ([`fit_own_rates`]'s prior weight): a month of daily readings.
-pub const UNSHARED_PRIOR_CHANGES: f64 = 30.0;
-
-/// The dynamic model fitted on per-sensor columns (times in seconds, ascending) at sampling
-/// step `step_s` (seconds), with the unshared per-sensor drift (rates fitted on the same
-/// columns, times `unshared_weight`; `[planner] unshared_weight`) when the weight is above 0;
-/// None over [`gleaner_kriging::MAX_DYNAMIC_SENSORS`] sensors or without two distinct
-/// readings.
-pub(crate) fn dynamic_from_columns(
-    columns: &Columns,
-    step_s: i64,
-    unshared_weight: f64,
-) -> Result<Option<DynamicModel>> {
-    dynamic_from_series(&unplaced_series(columns), step_s, unshared_weight)
-}
-
-/// [`dynamic_from_columns`] on the model's input series (per sensor, times in seconds,
-/// ascending).
-pub(crate) fn dynamic_from_series(
-    series: &[SensorSeries<'_>],
-    step_s: i64,
-    unshared_weight: f64,
-) -> Result<Option<DynamicModel>> {
-    if series.len() > gleaner_kriging::MAX_DYNAMIC_SENSORS {
-        return Ok(None);
-    }
-    let Ok(model) = fit_dynamic(series, &dynamic_fit_options(step_s)) else {
-        return Ok(None);
-    };
-    if unshared_weight <= 0.0 {
-        return Ok(Some(model));
-    }
-    let rates = fit_own_rates(series, step_s.max(1), UNSHARED_PRIOR_CHANGES)
-        .map_err(|e| AppError::core("unshared drift rates", e))?;
-    let model = model
-        .with_own_rates(rates.into_iter().map(|r| r * unshared_weight).collect())
-        .map_err(|e| AppError::core("unshared drift rates", e))?;
-    Ok(Some(model))
-}
-
 /// Where the kriging of changes' readings start for an estimate at `at` (seconds): a
 /// [`CHANGE_MARGIN_S`] before the stalest sensor's latest reading (time s, value), or before
 /// `at` when no sensor has one.
@@ -295,32 +233,6 @@ fn change_window_start(latest: &[Option<(UnixSeconds, f64)>], at: UnixSeconds) -
         .min()
         .unwrap_or(at)
         .saturating_sub(CHANGE_MARGIN_S)
-}
-
-/// `columns` (per sensor, times in seconds ascending) as the dynamic model's input series,
-/// without positions (it does not use them).
-pub(crate) fn unplaced_series(columns: &Columns) -> Vec<SensorSeries<'_>> {
-    columns
-        .iter()
-        .map(|(t, v)| SensorSeries {
-            position: [0.0, 0.0],
-            times: t,
-            values: v,
-        })
-        .collect()
-}
-
-/// How far back the dynamic estimator reads, seconds: three persistence times
-/// (`−3·step/ln φ`), between 14 and 180 days. Readings older than that have decayed to a
-/// few percent of their weight; the filter starts from the stationary prior there.
-pub fn dynamic_window_s(model: &DynamicModel) -> i64 {
-    let (lo, hi) = (14 * 86_400, 180 * 86_400);
-    let phi = model.phi();
-    if !(phi > 0.0 && phi < 1.0) {
-        return if phi >= 1.0 { hi } else { lo };
-    }
-    let tau = -model.step_s() / phi.ln();
-    ((3.0 * tau) as i64).clamp(lo, hi)
 }
 
 /// Runs `model`'s Kalman filter over `columns` (per sensor, times ascending, seconds) from
@@ -1002,42 +914,4 @@ pub fn reconstruct_series<S: Store>(
         half90,
         model: dynamic.filter(|_| estimator == Estimator::Dynamic),
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    const DAY: i64 = 86_400;
-
-    /// `[planner] unshared_weight` scales the fitted unshared drift rates; 0 leaves the model
-    /// without them (the model as before, to the bit).
-    #[test]
-    fn unshared_weight_scales_the_fitted_rates() {
-        let times: Vec<i64> = (0..60).map(|d| d * DAY).collect();
-        let columns: Columns = (0..4)
-            .map(|i| {
-                let values = times
-                    .iter()
-                    .enumerate()
-                    .map(|(d, _)| {
-                        0.25 + 0.01 * ((d as f64) * 0.3 + i as f64).sin()
-                            + 0.002 * (i * d % 7) as f64
-                    })
-                    .collect();
-                (times.clone(), values)
-            })
-            .collect();
-        let off = dynamic_from_columns(&columns, DAY, 0.0).unwrap().unwrap();
-        assert!(off.own_rates().is_empty());
-        let series = unplaced_series(&columns);
-        let fitted = fit_own_rates(&series, DAY, UNSHARED_PRIOR_CHANGES).unwrap();
-        assert!(fitted.iter().all(|&r| r > 0.0));
-        let on = dynamic_from_columns(&columns, DAY, 2.5).unwrap().unwrap();
-        for (got, want) in on.own_rates().iter().zip(&fitted) {
-            assert_eq!(*got, want * 2.5);
-        }
-        // The shared part is the same fit.
-        assert_eq!(on.phi(), off.phi());
-    }
 }
