@@ -10,9 +10,10 @@ Prints per crate and per file code lines, and every function whose body spans
 more than the limit (raw lines from `fn` to its closing brace).
 
 Usage (from the repository root):
-  python3 scripts/code-size.py [-v] [--fn-limit N] [--file-limit N] [CRATE...]
+  python3 scripts/code-size.py [-v] [--fn-limit N] [--file-limit N] [--max CRATE=N]... [CRATE...]
 -v lists every file; otherwise only files over the file limit (default 1000 code lines)
-and functions over the function limit (default 150 lines) are listed.
+and functions over the function limit (default 150 lines) are listed. `--max CRATE=N`
+caps a crate's code lines. Exits 1 when a limit is exceeded (CI runs it: .ci/run).
 """
 import os
 import re
@@ -185,15 +186,19 @@ def analyse(path, excluded_files):
 def main():
     args = sys.argv[1:]
     fn_limit, file_limit = 150, 1000
-    crates = []
+    crates, caps = [], {}
     while args:
         a = args.pop(0)
         if a == "--fn-limit":
             fn_limit = int(args.pop(0))
         elif a == "--file-limit":
             file_limit = int(args.pop(0))
+        elif a == "--max":
+            name, n = args.pop(0).split("=")
+            caps[name] = int(n)
         elif a != "-v":
             crates.append(a)
+    over = 0
     root = os.path.join(os.getcwd(), "crates")
     crates = crates or sorted(os.listdir(root))
     for crate in crates:
@@ -210,15 +215,21 @@ def main():
             results[p] = analyse(p, excluded)
         results = {p: r for p, r in results.items() if p not in excluded}
         total = sum(r[0] for r in results.values())
-        print(f"{crate}: {total} code lines")
+        cap = caps.get(crate)
+        flag = f"  OVER {cap}" if cap is not None and total > cap else ""
+        over += bool(flag)
+        print(f"{crate}: {total} code lines{flag}")
         for p, (lines, fns) in sorted(results.items()):
             rel = os.path.relpath(p, root)
             flag = "  OVER FILE LIMIT" if lines > file_limit else ""
+            over += bool(flag)
             if "-v" in sys.argv or flag:
                 print(f"  {lines:6} {rel}{flag}")
             for name, line, span, body in fns:
                 if span > fn_limit:
+                    over += 1
                     print(f"  fn {rel}:{line} {name}: {span} lines ({body} code)")
+    sys.exit(1 if over else 0)
 
 
 if __name__ == "__main__":

@@ -40,9 +40,10 @@ pub struct InitRequest {
     pub base_alt_m: Option<f64>,
     /// Cell side, metres [default 40].
     pub cell_size_m: Option<f64>,
-    /// Neighbour fallback radius, metres (`[field] neighbour_radius_m`: cells within it count
-    /// as neighbours of a cell with fewer than `neighbour_k` adjacent ones), at most 100 cell
-    /// sides [default: 200 m, or 100 cell sides when the cells are smaller than 2 m].
+    /// Neighbour fallback radius, metres (`[field] neighbour_radius_m`: a cell with no
+    /// non-empty adjacent cell takes its `neighbour_k` nearest non-empty cells within it as
+    /// neighbours), at most 100 cell sides [default: 200 m, or 100 cell sides when the cells
+    /// are smaller than 2 m].
     pub neighbour_radius_m: Option<f64>,
     /// UAV altitude (m) and antenna half-angle (degrees) to derive the cell side.
     pub coverage: Option<(f64, f64)>,

@@ -65,7 +65,7 @@ enum Command {
     /// Score every cell at a mission time: F, R, A, U and S, printed and kept in the cell
     /// metadata table.
     #[command(
-        after_help = "S = alpha·F + beta·A + gamma·U − delta·R with the weights of [utility] in gleaner.toml.\nU comes from the built-in condition model (dry/adequate/wet from soil moisture) or from\n--probabilities (CSV: cell_id,p_1,...,p_K with a header).\n\nExamples:\n  gleaner score --project caf --at 2014-03-01 --history-from 2011-01-01 --history-until 2013-12-31\n  gleaner score --project farm --json --limit 20"
+        after_help = "S is gated, alpha·F·max(0, 1 + beta·A + gamma·U − delta·R) (score_form = \"gated\", what `init`\nwrites by default), or additive, alpha·F + beta·A + gamma·U − delta·R (\"additive\", `init --method\npaper`), with the weights of [utility] in gleaner.toml.\nU comes from the built-in condition model (dry/adequate/wet from soil moisture) or from\n--probabilities (CSV: cell_id,p_1,...,p_K with a header).\n\nExamples:\n  gleaner score --project caf --at 2014-03-01 --history-from 2011-01-01 --history-until 2013-12-31\n  gleaner score --project farm --json --limit 20"
     )]
     Score(commands::score::ScoreArgs),
     /// Plan a mission: score the cells (or read --scores), then choose and order the cells that
@@ -93,7 +93,7 @@ enum Command {
     /// still reaches the base with the battery's reserve — written as a new file set
     /// (.plan, WPL, GeoJSON, JSON) that starts where the aircraft is.
     #[command(
-        after_help = "The continuation's files have no take-off: DO_CHANGE_SPEED to the mission's speed, a 0 s\nwaypoint where the aircraft is, the kept stops with their holds, return-to-launch. Their energy\nis recomputed from what they command (no climb; the descent at the base) and must fit the energy\nleft less the reserve ([energy] capacity_j x reserve_fraction). Nothing is stored: record the\nflight against the mission itself (its stops include the continuation's).\n\nExamples:\n  gleaner replan --project farm --mission 3 --after-stop 4 --energy-left 30000\n  gleaner replan --project farm --mission 3 --after-stop 0 --energy-left 52000 --json"
+        after_help = "The continuation's files have no take-off: DO_CHANGE_SPEED to the mission's speed, a 0 s\nwaypoint where the aircraft is, the kept stops with their holds, return-to-launch. Their energy\nis recomputed from what they command (no climb; the descent at the base) and must fit the energy\nleft less the reserve ([energy] battery_j x reserve_fraction). Nothing is stored: record the\nflight against the mission itself (its stops include the continuation's).\n\nExamples:\n  gleaner replan --project farm --mission 3 --after-stop 4 --energy-left 30000\n  gleaner replan --project farm --mission 3 --after-stop 0 --energy-left 52000 --json"
     )]
     Replan(commands::replan::ReplanArgs),
     /// Draw the exploration overview: every exploration sortie on one map, one colour each
@@ -133,12 +133,12 @@ enum Command {
         after_help = "Examples:\n  gleaner migrate --project farm --to postgres://gleaner@localhost/farms\n  gleaner migrate --project farm --to 'postgres://gleaner@localhost/farms#farm_a' --switch\n  gleaner migrate --project farm --database postgres://gleaner@localhost/farms --to farm-copy.db"
     )]
     Migrate(migrate::MigrateArgs),
-    /// Crash-safety harness: kill `ingest`, `plan` and `record` with SIGKILL at evenly spread
+    /// Crash-safety harness: kill `ingest` (into an empty and a filled project), `plan` and `record` with SIGKILL at evenly spread
     /// write steps on SQLite and PostgreSQL, then check integrity, all-or-nothing and that a
     /// rerun completes (real CAF data; a benchmark-style run, minutes).
     #[command(
         name = "crash-test",
-        after_help = "Examples:\n  gleaner crash-test --kill-points 34          # 204 kill points on both backends\n  gleaner crash-test --backend sqlite --kill-points 5"
+        after_help = "Examples:\n  gleaner crash-test --kill-points 34          # up to 272 kill points: 4 use cases x 2 backends\n  gleaner crash-test --backend sqlite --kill-points 5"
     )]
     CrashTest(crash::CrashArgs),
     /// The main job on built-in data: synthetic farm -> project -> exploration sorties -> five

@@ -193,7 +193,8 @@ impl Default for IngestSection {
     }
 }
 
-/// `[utility]`: the score S = alpha·F + beta·A + gamma·U − delta·R (docs/method.md §2).
+/// `[utility]`: the score S, additive (alpha·F + beta·A + gamma·U − delta·R) or gated
+/// (alpha·F·max(0, 1 + beta·A + gamma·U − delta·R)) by `score_form` (docs/method.md §2).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct UtilitySection {

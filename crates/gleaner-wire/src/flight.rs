@@ -139,7 +139,8 @@ pub struct FlightMeta {
     pub planner: String,
     /// Planner seed.
     pub seed: u64,
-    /// Weights alpha, beta, gamma, delta of S = alpha·F + beta·A + gamma·U − delta·R.
+    /// Weights alpha, beta, gamma, delta of S (additive alpha·F + beta·A + gamma·U − delta·R, or
+    /// gated alpha·F·max(0, 1 + beta·A + gamma·U − delta·R); docs/method.md §2).
     pub weights: [f64; 4],
     /// Anomaly form (`raw`, `bounded(kappa=3)`, `n/a`).
     pub anomaly_form: String,

@@ -37,9 +37,9 @@ pub struct InitArgs {
     /// Cell side in metres (the UAV's ground coverage), at least 0.5 [default: 40].
     #[arg(long)]
     pub cell_size: Option<f64>,
-    /// Neighbour fallback radius in metres: a cell with fewer than `neighbour_k` adjacent
-    /// cells takes the cells within it as neighbours; at most 100 cell sides [default:
-    /// 200, or 100 cell sides for cells under 2 m].
+    /// Neighbour fallback radius in metres: a cell with no non-empty adjacent cell takes its
+    /// `neighbour_k` nearest non-empty cells within it as neighbours; at most 100 cell sides
+    /// [default: 200, or 100 cell sides for cells under 2 m].
     #[arg(long)]
     pub neighbour_radius: Option<f64>,
     /// UAV altitude, metres; with --half-angle derives the cell side (r = h·tan θ, side = r·√2).

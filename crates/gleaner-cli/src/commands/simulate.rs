@@ -65,11 +65,12 @@ pub struct SimulateArgs {
     /// Mission times instead of a period (comma-separated RFC 3339 or dates).
     #[arg(long, value_delimiter = ',', value_parser = crate::parse_time)]
     pub times: Option<Vec<i64>>,
-    /// Strategies, comma-separated, or `all` / `main` (gleaner, paper, variance, freshness,
-    /// round-robin, random, nearest, exhaustive). Names: gleaner, paper, variance,
-    /// freshness, round-robin, random, nearest, exhaustive, no-freshness, no-anomaly,
-    /// no-uncertainty, no-redundancy, gated (gleaner's earlier method: the gated S with a
-    /// 14-day freshness half-life). The yardstick `oracle` runs only when named: it sees the
+    /// Strategies, comma-separated, or `all` / `main` (gleaner, paper, variance, information,
+    /// freshness, round-robin, random, nearest, exhaustive). Names: those, no-freshness,
+    /// no-anomaly, no-uncertainty, no-redundancy, gated (gleaner's earlier method: the gated S
+    /// with a 14-day freshness half-life), expected-error (each cell worth its sensors'
+    /// predicted squared error), hybrid (gleaner's score blended with the information
+    /// objective). The yardstick `oracle` runs only when named: it sees the
     /// values each flight will bring back (each cell worth its sensors' squared estimation
     /// error), so it bounds what any choice of cells could buy; it is not a flyable strategy.
     #[arg(long, value_delimiter = ',', default_value = "main")]
