@@ -854,7 +854,7 @@ impl Routes<'_> {
         };
         Ok(crate::wind::RouteWind {
             wind: *plan_wind,
-            legs: crate::wind::legs(&plan.energy),
+            legs: plan.energy.legs.clone(),
             strongest,
         })
     }

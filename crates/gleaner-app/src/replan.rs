@@ -141,7 +141,7 @@ pub fn replan<S: Store>(project: &Project<S>, request: &ReplanRequest) -> Result
     .collect();
     let wind = crate::wind::RouteWind {
         wind: plan_wind,
-        legs: crate::wind::legs(&plan.energy),
+        legs: plan.energy.legs.clone(),
         strongest: crate::wind::strongest_continuation(
             &model,
             (start_local, base),

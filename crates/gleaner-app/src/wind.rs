@@ -1,9 +1,9 @@
 //! The wind a mission is planned for: the forecast (`[flight]` settings, or a request's own),
-//! the margin added to it, the wind the legs are priced in, each leg's head-, tail- and
-//! cross-wind, and the strongest wind a planned route stands (docs/method.md §3, wind).
+//! the margin added to it, the wind the legs are priced in, each leg as priced in it, and the
+//! strongest wind a planned route stands (docs/method.md §3, wind).
 
 use gleaner_energy::{
-    CellVisit, MissionEnergy, MissionEnergyModel, Wind, WindTolerance, strongest_wind_from,
+    CellVisit, LegEnergy, MissionEnergyModel, Wind, WindTolerance, strongest_wind_from,
 };
 use gleaner_field::LocalPoint;
 
@@ -104,50 +104,18 @@ impl PlanWind {
     }
 }
 
-/// One leg's wind as the plan priced it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LegWind {
-    /// Leg length, m.
-    pub distance_m: f64,
-    /// Head-wind component (against the track), m/s (>= 0; 0 with a tail wind).
-    pub headwind_mps: f64,
-    /// Tail-wind component (along the track), m/s (>= 0; 0 with a head wind).
-    pub tailwind_mps: f64,
-    /// Cross-wind component, m/s: > 0 from the left of the track, < 0 from the right.
-    pub crosswind_mps: f64,
-    /// Airspeed that holds the track at the planned ground speed, m/s.
-    pub airspeed_mps: f64,
-    /// Propulsion energy of the leg, J.
-    pub energy_j: f64,
-}
-
 /// The wind of a planned route: the plan's wind, every leg's components (one per stop, the
 /// leg arriving there, then the return leg) and the strongest wind it stands.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RouteWind {
     /// The plan's wind.
     pub wind: PlanWind,
-    /// Each leg's wind at [`PlanWind::planned`].
-    pub legs: Vec<LegWind>,
+    /// Each leg as priced at [`PlanWind::planned`]: head- and cross-wind components, airspeed
+    /// and energy (the plan's `MissionEnergy::legs`).
+    pub legs: Vec<LegEnergy>,
     /// The strongest wind from the forecast's direction at which the route as its files
     /// command it stays within the budget (see [`strongest`]); `None` for an empty route.
     pub strongest: Option<WindTolerance>,
-}
-
-/// Each leg's wind components in `energy` (a breakdown priced in the plan's wind).
-pub fn legs(energy: &MissionEnergy) -> Vec<LegWind> {
-    energy
-        .legs
-        .iter()
-        .map(|l| LegWind {
-            distance_m: l.distance_m,
-            headwind_mps: l.headwind_mps.max(0.0),
-            tailwind_mps: (-l.headwind_mps).max(0.0),
-            crosswind_mps: l.crosswind_mps,
-            airspeed_mps: l.airspeed_mps,
-            energy_j: l.energy_j,
-        })
-        .collect()
 }
 
 /// The strongest wind from `from_deg` (degrees from north) at which the sortie `base` →

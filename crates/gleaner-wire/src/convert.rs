@@ -198,8 +198,8 @@ pub fn wind(w: &gleaner_app::wind::RouteWind) -> crate::WindDoc {
             .iter()
             .map(|l| crate::LegWindDoc {
                 distance_m: l.distance_m,
-                headwind_mps: l.headwind_mps,
-                tailwind_mps: l.tailwind_mps,
+                headwind_mps: l.headwind_mps.max(0.0),
+                tailwind_mps: (-l.headwind_mps).max(0.0),
                 crosswind_mps: l.crosswind_mps,
                 airspeed_mps: l.airspeed_mps,
                 energy_j: l.energy_j,
