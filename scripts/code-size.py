@@ -160,16 +160,21 @@ def functions(masked):
         yield m.group(5), masked.count("\n", 0, m.start()), masked.count("\n", 0, end)
 
 
-def analyse(path, excluded_files):
-    src = open(path, encoding="utf-8").read()
-    masked, code = mask(src)
-    spans, files = test_spans(masked)
+def exclude_test_files(path, files, excluded_files):
+    """Adds the paths of `path`'s `#[cfg(test)] mod f;` files (`files`) to `excluded_files`."""
     here = os.path.dirname(path)
     stem = os.path.splitext(os.path.basename(path))[0]
     mod_dir = here if stem in ("lib", "main", "mod") else os.path.join(here, stem)
     for f in files:
         excluded_files.add(os.path.join(mod_dir, f + ".rs"))
         excluded_files.add(os.path.join(mod_dir, f, "mod.rs"))
+
+
+def analyse(path, excluded_files):
+    src = open(path, encoding="utf-8").read()
+    masked, code = mask(src)
+    spans, files = test_spans(masked)
+    exclude_test_files(path, files, excluded_files)
     in_test = set()
     for a, b in spans:
         in_test.update(range(a, b + 1))

@@ -130,13 +130,7 @@ def crate_graph(src_dir):
         if p in excluded:
             continue
         masked, _ = code_size.mask(open(p, encoding="utf-8").read())
-        _, test_files = code_size.test_spans(masked)
-        here = os.path.dirname(p)
-        stem = os.path.splitext(os.path.basename(p))[0]
-        mod_dir = here if stem in ("lib", "main", "mod") else os.path.join(here, stem)
-        for f in test_files:
-            excluded.add(os.path.join(mod_dir, f + ".rs"))
-            excluded.add(os.path.join(mod_dir, f, "mod.rs"))
+        code_size.exclude_test_files(p, code_size.test_spans(masked)[1], excluded)
         m = module_path(src_dir, p)
         modules[m] = os.path.relpath(p)
         code[m] = strip_tests(masked)
