@@ -13,6 +13,7 @@ it, and exits 1 when there is one; `--quiet` prints only circles.
 
 Usage (from the repository root):
   python3 scripts/import-circles.py [--quiet] [CRATE...]
+  python3 scripts/import-circles.py --self-test   # the detector on small fixture crates
 """
 import importlib.util
 import os
@@ -189,7 +190,55 @@ def circles(nodes, edges):
     return out
 
 
+def self_test():
+    """Checks the detector on small crates written to a temporary directory."""
+    import tempfile
+
+    cases = {
+        # a <-> b through a re-export of the root, and b -> a directly: one circle
+        "circle": {
+            "lib.rs": "mod a;\nmod b;\npub use a::A;\npub use b::{B, helper};\n",
+            "a.rs": "use crate::helper;\npub struct A;\n",
+            "b.rs": "use crate::A;\npub struct B;\npub fn helper() {}\n",
+        },
+        # a parent re-exporting and declaring its children, children using the parent and
+        # each other one way, a test module reaching back: no circle
+        "clean": {
+            "lib.rs": "mod a;\nmod b;\npub use b::B;\npub struct Root;\n",
+            "a.rs": "use crate::{Root, b::B};\npub struct A(pub B, pub Root);\n",
+            "b/mod.rs": "mod c;\npub use c::C;\npub struct B;\n"
+            "#[cfg(test)]\nmod tests {\n    use crate::a::A;\n}\n",
+            "b/c.rs": "use super::super::Root;\npub struct C(pub Root);\n",
+        },
+        # a nested module reaching its sibling through `super::` and back: one circle
+        "nested": {
+            "lib.rs": "mod m;\n",
+            "m/mod.rs": "mod x;\nmod y;\n",
+            "m/x.rs": "use super::y::Y;\npub struct X;\n",
+            "m/y.rs": "pub struct Y;\nfn f() -> super::x::X { super::x::X }\n",
+        },
+    }
+    want = {"circle": 1, "clean": 0, "nested": 1}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, files in cases.items():
+            src = os.path.join(tmp, name, "src")
+            for rel, text in files.items():
+                path = os.path.join(src, rel)
+                os.makedirs(os.path.dirname(path), exist_ok=True)
+                with open(path, "w", encoding="utf-8") as f:
+                    f.write(text)
+            modules, edges = crate_graph(src)
+            got = len(circles(list(modules), edges))
+            if got != want[name]:
+                print(f"self-test {name}: {got} circles, expected {want[name]}", file=sys.stderr)
+                sys.exit(1)
+    print("self-test passed")
+
+
 def main():
+    if "--self-test" in sys.argv:
+        self_test()
+        return
     args = [a for a in sys.argv[1:] if a != "--quiet"]
     quiet = "--quiet" in sys.argv
     root = os.path.join(os.getcwd(), "crates")
