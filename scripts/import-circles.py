@@ -2,10 +2,14 @@
 """Import circles between the source files of each workspace crate.
 
 A file A imports a file B when A's non-test code names a path into B: `use crate::b::X`,
-`crate::b::f(...)`, `super::b`, `self::b` (groups `use crate::{a, b::{X}}` expanded), or
-a name that the crate root re-exports from B (`pub use b::X;` in lib.rs, then
-`use crate::X` elsewhere). A module's reach into its own submodules (`mod b;`,
-`pub use b::X;`, `use b::*`) declares or re-exports them and is not an import. Items under
+`crate::b::f(...)`, `super::b`, `self::b` (groups `use crate::{a, b::{X}}` expanded), or a
+name that another module re-exports from B (`pub use`, `pub(crate) use`, renamed with `as`,
+or by a glob `pub use b::*` when B defines the name). A module's reach into its own
+descendants is not counted: a parent declares its children (`mod b;`), re-exports them and
+dispatches to them, which is the module tree itself.
+
+Not seen: paths inside macro bodies and macros imported with `#[macro_use]`; `super::`
+inside a non-test inline `mod` is read as if written at the file's top level. Items under
 `#[cfg(test)]` are left out, as are the crates' `tests/`, `benches/` and `examples/`.
 
 Prints every circle (a strongly connected set of two or more files) with the names that tie
@@ -47,14 +51,24 @@ def strip_tests(masked):
     return "\n".join(lines)
 
 
-def use_trees(code):
-    """Every path of every `use` declaration, groups expanded, as lists of segments."""
+def squeeze(tree):
+    """A `use` tree without whitespace, `x as y` kept as `x@y`."""
+    return re.sub(r"\s+", "", re.sub(r"\s+as\s+", "@", tree))
+
+
+def use_trees(code, public_only=False):
+    """Every path of every `use` declaration (only `pub`/`pub(..)` ones with `public_only`),
+    groups expanded, as (segments, name) pairs: `name` is what the path is known as here
+    (its last segment or its alias; `*` for a glob)."""
     out = []
-    for m in re.finditer(r"\buse\s+", code):
+    pattern = r"\bpub(\([^)]*\))?\s+use\s+" if public_only else r"\buse\s+"
+    for m in re.finditer(pattern, code):
         end = code.find(";", m.end())
         if end < 0:
             continue
-        out += expand(re.sub(r"\s+", "", code[m.end():end]))
+        for segs in expand(squeeze(code[m.end():end])):
+            last, _, alias = segs[-1].partition("@")
+            out.append((segs[:-1] + [last], alias or last))
     return out
 
 
@@ -62,7 +76,7 @@ def expand(tree):
     """`a::{b,c::{d}}` -> [[a,b], [a,c,d]] (`self` in a group names the prefix itself)."""
     i = tree.find("{")
     if i < 0:
-        return [tree.split(" as ")[0].split("::")] if tree else []
+        return [tree.split("::")] if tree else []
     prefix = [p for p in tree[:i].split("::") if p]
     body = tree[i + 1 : tree.rfind("}")]
     parts, depth, cur = [], 0, ""
@@ -90,35 +104,61 @@ def inline_paths(code):
     ]
 
 
-def resolve(segments, here, modules, reexports):
-    """The module (tuple) that a path from module `here` lands in, or None."""
-    if not segments:
-        return None
-    head, rest = segments[0], segments[1:]
-    if head == "crate":
-        base = ()
-    elif head == "super":
-        base = here[:-1]
-        while rest and rest[0] == "super":
-            base, rest = base[:-1], rest[1:]
-    elif head == "self":
-        base = here
-    else:
-        base = here
-        rest = segments
-        if (here + (head,)) not in modules:
+DEFINES = r"\b(fn|struct|enum|union|trait|type|const|static|mod)\s+{}\b"
+
+
+class Crate:
+    """A crate's file modules, their non-test code and what each re-exports."""
+
+    def __init__(self, modules, code):
+        self.modules, self.code = modules, code
+        # (module, name) -> the path it re-exports under that name; module -> glob paths
+        self.reexports, self.globs = {}, {}
+        for m, c in code.items():
+            for segs, name in use_trees(c, public_only=True):
+                if name == "*":
+                    self.globs.setdefault(m, []).append(segs[:-1])
+                else:
+                    self.reexports[(m, name)] = segs
+
+    def defines(self, module, name):
+        return re.search(DEFINES.format(re.escape(name)), self.code[module]) is not None
+
+    def resolve(self, segments, here, depth=0):
+        """The file module (tuple) where a path written in module `here` lands, following
+        re-exports (any visibility, aliases, globs); None outside the crate."""
+        if not segments or depth > 16:
             return None
-    best = base if base in modules else None
-    cur = base
-    for s in rest:
-        cur = cur + (s,)
-        if cur in modules:
-            best = cur
+        head, rest = segments[0], segments[1:]
+        if head == "crate":
+            base = ()
+        elif head == "super":
+            base = here[:-1]
+            while rest and rest[0] == "super":
+                base, rest = base[:-1], rest[1:]
+        elif head == "self":
+            base = here
+        elif (here + (head,)) in self.modules:
+            base, rest = here, segments
         else:
-            break
-    if best == () and rest and rest[0] in reexports:
-        return reexports[rest[0]]
-    return best
+            return None
+        if base not in self.modules:
+            return None
+        best, k = base, 0
+        while k < len(rest) and best + (rest[k],) in self.modules:
+            best, k = best + (rest[k],), k + 1
+        if k < len(rest):
+            name = rest[k]
+            if (best, name) in self.reexports:
+                t = self.resolve(self.reexports[(best, name)], best, depth + 1)
+                if t is not None:
+                    return t
+            elif not self.defines(best, name):
+                for g in self.globs.get(best, []):
+                    t = self.resolve(g, best, depth + 1)
+                    if t is not None and self.defines(t, name):
+                        return t
+        return best
 
 
 def crate_graph(src_dir):
@@ -135,21 +175,15 @@ def crate_graph(src_dir):
         m = module_path(src_dir, p)
         modules[m] = os.path.relpath(p)
         code[m] = strip_tests(masked)
-    reexports = {}
-    root = code.get(())
-    if root is not None:
-        for m in re.finditer(r"\bpub\s+use\s+", root):
-            end = root.find(";", m.end())
-            for segs in expand(re.sub(r"\s+", "", root[m.end():end])):
-                target = resolve(segs, (), modules, {})
-                if target not in (None, ()) and segs:
-                    reexports[segs[-1]] = target
+    crate = Crate(modules, code)
     edges = {m: {} for m in modules}
     for m, c in code.items():
-        for segs in use_trees(c) + inline_paths(c):
-            t = resolve(segs, m, modules, reexports)
-            # A module's reach into its own submodules declares or re-exports them (`mod`,
-            # `pub use child::X`): structure, not an import. The other way is one.
+        for segs in [u[0] for u in use_trees(c)] + inline_paths(c):
+            t = crate.resolve(segs, m)
+            # A module's reach into its own descendants is not counted: a parent declares its
+            # children (`mod`), re-exports them (`pub use child::X`) and dispatches to them;
+            # Rust's module tree is that structure. A child's reach up, or any reach across
+            # (through re-exports too), is an import.
             if t is None or t[: len(m)] == m:
                 continue
             edges[m].setdefault(t, set()).add("::".join(segs))
@@ -217,8 +251,24 @@ def self_test():
             "m/x.rs": "use super::y::Y;\npub struct X;\n",
             "m/y.rs": "pub struct Y;\nfn f() -> super::x::X { super::x::X }\n",
         },
+        # through a `pub(crate) use` of an intermediate module, renamed: f -> m/leg (via m),
+        # leg -> g, g -> f; one circle
+        "reexported": {
+            "lib.rs": "mod f;\nmod g;\nmod m;\n",
+            "m/mod.rs": "mod leg;\npub(crate) use leg::{Mark as Symbol, draw};\n",
+            "m/leg.rs": "pub struct Mark;\npub fn draw() { crate::g::dot() }\n",
+            "g.rs": "use crate::f::Scale;\npub fn dot() {}\n",
+            "f.rs": "use crate::m::Symbol;\npub struct Scale;\n",
+        },
+        # a glob re-export: f -> leg through `pub use leg::*`, leg -> f; one circle
+        "glob": {
+            "lib.rs": "mod f;\nmod m;\n",
+            "m/mod.rs": "mod leg;\npub use leg::*;\n",
+            "m/leg.rs": "pub fn draw() { crate::f::g() }\n",
+            "f.rs": "pub fn g() { crate::m::draw() }\n",
+        },
     }
-    want = {"circle": 1, "clean": 0, "nested": 1}
+    want = {"circle": 1, "clean": 0, "nested": 1, "reexported": 1, "glob": 1}
     with tempfile.TemporaryDirectory() as tmp:
         for name, files in cases.items():
             src = os.path.join(tmp, name, "src")

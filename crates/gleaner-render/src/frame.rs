@@ -15,7 +15,7 @@ mod legend;
 pub(crate) use axes::{Axes, TICK, draw_axes};
 pub(crate) use legend::{
     Entry, RETURN_DASH, Symbol, arrowhead, dash_attr, draw_legend, legend_height, route_line,
-    stop_marker, stop_radius,
+    sensor_state_marker, stop_marker, stop_radius,
 };
 
 /// Mean Earth radius, m (IUGG).

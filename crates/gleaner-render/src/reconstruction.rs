@@ -87,47 +87,6 @@ fn marker_r(font: f64) -> f64 {
     0.25 * font
 }
 
-/// A sensor marker centred at (`x`, `y`), `r` pt: read = a dark disc with a thin white rim;
-/// estimated only = a white diamond with a dark edge (told apart by shape as well as by
-/// tone, so in grey too and on dark cells). A marker with a `title` (a sensor on the map,
-/// not a legend symbol) carries the class `sensor-read` or `sensor-estimated`.
-pub(crate) fn sensor_marker(svg: &mut Svg, x: f64, y: f64, r: f64, read: bool, title: &str) {
-    let (title, class) = if title.is_empty() {
-        (String::new(), "")
-    } else if read {
-        (
-            format!("<title>{}</title>", esc(title)),
-            r#" class="sensor-read""#,
-        )
-    } else {
-        (
-            format!("<title>{}</title>", esc(title)),
-            r#" class="sensor-estimated""#,
-        )
-    };
-    if read {
-        svg.line(format_args!(
-            r##"<circle{class} cx="{}" cy="{}" r="{}" fill="{INK}" stroke="#ffffff" stroke-width="0.35">{title}</circle>"##,
-            N(x),
-            N(y),
-            N(r)
-        ));
-    } else {
-        let d = 1.2 * r;
-        svg.line(format_args!(
-            r##"<path{class} d="M{} {}L{} {}L{} {}L{} {}Z" fill="#ffffff" stroke="{INK}" stroke-width="0.55" stroke-linejoin="round">{title}</path>"##,
-            N(x),
-            N(y - d),
-            N(x + d),
-            N(y),
-            N(x),
-            N(y + d),
-            N(x - d),
-            N(y)
-        ));
-    }
-}
-
 /// One panel's content: which values, which colours, the bar's title.
 struct Panel<'a> {
     /// `value` or `sd`: ids of its groups and cells.
@@ -576,7 +535,7 @@ fn draw_panel(
             let (x, y) = v.pt(s.at);
             let value = if panel.key == "sd" { s.sd } else { s.estimate };
             let title = format!("{} {} {}", s.id, value_text(value), panel.unit);
-            sensor_marker(svg, x, y, r, s.read, title.trim_end());
+            frame::sensor_state_marker(svg, x, y, r, s.read, title.trim_end());
         }
     }
     svg.line(format_args!("</g>"));

@@ -163,8 +163,14 @@ fn bench_farm(c: &mut Criterion, f: &Fixture) {
     g.bench_function("decode", |b| {
         b.iter(|| black_box(IncrementalState::from_bytes(black_box(&bytes)).expect("decodes")))
     });
+    // Scoring on a pool of one thread, as these figures were first taken (`score` spreads
+    // the cells over rayon's pool).
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a one-thread pool");
     g.bench_function("score", |b| {
-        b.iter(|| black_box(state.score(t, &config, &[]).expect("scores")))
+        b.iter(|| one_thread.install(|| black_box(state.score(t, &config, &[]).expect("scores"))))
     });
     let recent = state.recent_series(f.class_modality);
     g.bench_function("predict_from_recent", |b| {
@@ -179,7 +185,7 @@ fn bench_farm(c: &mut Criterion, f: &Fixture) {
             let m = ConditionModel::from_bytes(&model_bytes).expect("decodes");
             let recent = s.recent_series(f.class_modality);
             let p = m.predict_proba(&views(&recent), &f.neighbours, t);
-            black_box(s.score(t, &config, &p).expect("scores"))
+            black_box(one_thread.install(|| s.score(t, &config, &p).expect("scores")))
         })
     });
     g.bench_function("mission_update", |b| {

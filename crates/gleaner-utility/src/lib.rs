@@ -55,7 +55,8 @@
 //! # Speed
 //!
 //! Criterion benches in `benches/scoring.rs` (`cargo bench -p gleaner-utility`): 100,000 cells
-//! with 8 neighbours and 3 modalities scored from maintained statistics (one thread), from
+//! with 8 neighbours and 3 modalities scored from maintained statistics (on a one-thread pool;
+//! `IncrementalState::score` spreads the cells over rayon's pool), from
 //! scratch over 365 daily points (all cores; complete series and 10% missing days), and the
 //! incremental update after a 10-cell mission. From scratch, each neighbour pair is correlated
 //! once, over contiguous slices when the two series share their timestamps.

@@ -125,10 +125,8 @@ fn draw_symbol(svg: &mut Svg, s: &Symbol, x: f64, cy: f64, font: f64) {
             ));
             route_line(svg, &[(x, cy), (x + w, cy)], &line.hex(), dash_attr(*dash));
         }
-        Symbol::SensorRead(r) => crate::reconstruction::sensor_marker(svg, cx, cy, *r, true, ""),
-        Symbol::SensorEstimated(r) => {
-            crate::reconstruction::sensor_marker(svg, cx, cy, *r, false, "")
-        }
+        Symbol::SensorRead(r) => sensor_state_marker(svg, cx, cy, *r, true, ""),
+        Symbol::SensorEstimated(r) => sensor_state_marker(svg, cx, cy, *r, false, ""),
         Symbol::Outline => {
             svg.line(format_args!(
                 r#"<line x1="{}" y1="{}" x2="{}" y2="{}" stroke="{INK}" stroke-width="0.9"/>"#,
@@ -289,4 +287,45 @@ pub(crate) fn legend_height(entries: &[Entry], width: f64, font: f64) -> f64 {
         return 0.0;
     }
     legend_columns(entries, width, font).0 as f64 * legend_row_height(font)
+}
+
+/// A sensor marker centred at (`x`, `y`), `r` pt: read = a dark disc with a thin white rim;
+/// estimated only = a white diamond with a dark edge (told apart by shape as well as by
+/// tone, so in grey too and on dark cells). A marker with a `title` (a sensor on the map,
+/// not a legend symbol) carries the class `sensor-read` or `sensor-estimated`.
+pub(crate) fn sensor_state_marker(svg: &mut Svg, x: f64, y: f64, r: f64, read: bool, title: &str) {
+    let (title, class) = if title.is_empty() {
+        (String::new(), "")
+    } else if read {
+        (
+            format!("<title>{}</title>", esc(title)),
+            r#" class="sensor-read""#,
+        )
+    } else {
+        (
+            format!("<title>{}</title>", esc(title)),
+            r#" class="sensor-estimated""#,
+        )
+    };
+    if read {
+        svg.line(format_args!(
+            r##"<circle{class} cx="{}" cy="{}" r="{}" fill="{INK}" stroke="#ffffff" stroke-width="0.35">{title}</circle>"##,
+            N(x),
+            N(y),
+            N(r)
+        ));
+    } else {
+        let d = 1.2 * r;
+        svg.line(format_args!(
+            r##"<path{class} d="M{} {}L{} {}L{} {}L{} {}Z" fill="#ffffff" stroke="{INK}" stroke-width="0.55" stroke-linejoin="round">{title}</path>"##,
+            N(x),
+            N(y - d),
+            N(x + d),
+            N(y),
+            N(x),
+            N(y + d),
+            N(x - d),
+            N(y)
+        ));
+    }
 }
