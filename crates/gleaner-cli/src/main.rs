@@ -4,21 +4,22 @@
 //! This binary is the only place that knows clap: arguments are parsed here, turned into plain
 //! settings, and handed to the `commands` modules.
 
+mod args;
 mod commands;
+mod output;
 mod progress;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
-use clap::{Args, Parser, Subcommand, ValueEnum};
-use gleaner_app as app;
-use gleaner_app::Project;
+use anyhow::Result;
+use clap::{Parser, Subcommand};
 
 use commands::{
     bench, cells, crash, demo, evaluate, explore, export, ingest, init, migrate, missions, plan,
     reconstruct, record, replan, score, serve, simulate, synth,
 };
+use output::{out, outln};
 
 /// Evaluation protocols.
 #[derive(Debug, Subcommand)]
@@ -226,75 +227,6 @@ Examples:
     Reconstruct(commands::reconstruct::ReconstructArgs),
 }
 
-/// `--project`: the project directory.
-#[derive(Args)]
-struct ProjectArg {
-    /// Project directory.
-    #[arg(
-        long = "project",
-        id = "project",
-        value_name = "PROJECT",
-        default_value = "."
-    )]
-    dir: PathBuf,
-    /// The project's database instead of its `database` setting: an SQLite file (relative to
-    /// the project directory) or `postgres://user:password@host:port/db[#schema]`.
-    #[arg(long, value_name = "FILE_OR_URL", env = "GLEANER_DATABASE")]
-    database: Option<String>,
-}
-
-impl ProjectArg {
-    fn open(&self) -> Result<Project<app::AnyStore>> {
-        Ok(Project::open_with(&self.dir, self.database.as_deref())?)
-    }
-}
-
-/// `--json`: JSON on standard output instead of a table.
-#[derive(Args)]
-struct JsonArg {
-    /// Print JSON instead of a table.
-    #[arg(long)]
-    json: bool,
-}
-
-impl JsonArg {
-    /// Prints `value` as pretty JSON when `--json`, else the text `table` renders.
-    fn emit<T: serde::Serialize>(
-        &self,
-        value: &T,
-        what: &str,
-        table: impl FnOnce() -> String,
-    ) -> Result<()> {
-        emit(self.json, value, what, table)
-    }
-}
-
-/// The mission time and which stored readings count as collected by then.
-#[derive(Args)]
-struct WhenArgs {
-    /// Mission time (RFC 3339 or YYYY-MM-DD, UTC; years 1900..=2199) [default: the latest
-    /// reading]. Only data up to this time is used.
-    #[arg(long, value_parser = parse_time)]
-    at: Option<i64>,
-    /// Use only readings from this time on (RFC 3339 or date) as collected history.
-    #[arg(long, value_parser = parse_time)]
-    history_from: Option<i64>,
-    /// Use only readings up to this time as collected history (later ones are not yet
-    /// collected at the mission time, unless a recorded collection brought them back), e.g.
-    /// score 2014 from 2011-2013 data.
-    #[arg(long, value_parser = parse_time)]
-    history_until: Option<i64>,
-}
-
-impl WhenArgs {
-    fn history(&self) -> app::History {
-        app::History {
-            from: self.history_from.unwrap_or(i64::MIN),
-            until: self.history_until.unwrap_or(i64::MAX),
-        }
-    }
-}
-
 #[derive(Subcommand)]
 enum BenchCommand {
     /// Solve standard orienteering benchmarks (classic Tsiligirides/Chao sets and OPLib) and
@@ -304,86 +236,6 @@ enum BenchCommand {
         after_help = "Examples:\n  gleaner bench op ../shared/data/op/classic --time-limit 1\n  gleaner bench op ../shared/data/op/oplib --max-n 400 --time-limit 10 --csv oplib.csv\n  gleaner bench op ../shared/data/op/classic/Tsiligirides_1 --solver greedy"
     )]
     Op(bench::BenchOpArgs),
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum MethodArg {
-    Paper,
-    Gleaner,
-}
-
-/// Prints the scoring's warnings on standard error.
-fn warn(scoring: &app::Scoring) {
-    for w in &scoring.warnings {
-        eprintln!("warning: {w}");
-    }
-}
-
-/// Prints `value` as pretty JSON when `json`, else the text `table` renders.
-fn emit<T: serde::Serialize>(
-    json: bool,
-    value: &T,
-    what: &str,
-    table: impl FnOnce() -> String,
-) -> Result<()> {
-    if json {
-        let mut text = serde_json::to_string_pretty(value).with_context(|| what.to_string())?;
-        text.push('\n');
-        out(&text)
-    } else {
-        out(&table())
-    }
-}
-
-/// Writes `text` to standard output. A reader that closes the pipe early (`gleaner cells
-/// --json | head`) has what it wanted: the rest is dropped quietly, not a panic or an error.
-fn out(text: &str) -> Result<()> {
-    use std::io::Write;
-    let mut stdout = std::io::stdout().lock();
-    match stdout
-        .write_all(text.as_bytes())
-        .and_then(|()| stdout.flush())
-    {
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
-        r => r.context("writing to standard output"),
-    }
-}
-
-/// [`out`] with a newline.
-fn outln(text: &str) -> Result<()> {
-    out(&format!("{text}\n"))
-}
-
-fn parse_lat_lon(s: &str) -> Result<(f64, f64), String> {
-    let (a, b) = s
-        .split_once(',')
-        .ok_or_else(|| format!("expected LAT,LON, got {s:?}"))?;
-    let lat = a
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad latitude {a:?}"))?;
-    let lon = b
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad longitude {b:?}"))?;
-    Ok((lat, lon))
-}
-
-fn parse_wind(s: &str) -> Result<app::Wind, String> {
-    app::wind::parse(s).map_err(|e| e.to_string())
-}
-
-pub(crate) fn parse_time(s: &str) -> Result<i64, String> {
-    gleaner_app::parse_timestamp(s).ok_or_else(|| {
-        format!("expected RFC 3339 (2014-03-01T12:00:00Z) or a date (2014-03-01), got {s:?}")
-    })
-}
-
-/// The wall clock, seconds since the epoch: provenance only (creation times), never results.
-pub(crate) fn clock_now() -> i64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs() as i64)
 }
 
 fn run(cli: Cli) -> Result<()> {

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 
-use crate::{JsonArg, ProjectArg};
+use crate::args::{JsonArg, ProjectArg};
 
 use gleaner_wire::docs::CellRowDoc;
 

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use gleaner_campaign::demo::{self, DemoRequest};
 
-use crate::clock_now;
+use crate::args::clock_now;
 use crate::progress::Terminal;
 
 // The arguments of `gleaner demo` (no doc comment: the variant's is the help).
@@ -18,8 +18,8 @@ pub struct DemoArgs {
     #[arg(long, default_value = "gleaner-demo")]
     pub dir: PathBuf,
     /// The score the demo's project plans by (`gleaner`, the default, or the paper's S).
-    #[arg(long, value_enum, default_value_t = crate::MethodArg::Gleaner)]
-    pub method: crate::MethodArg,
+    #[arg(long, value_enum, default_value_t = crate::args::MethodArg::Gleaner)]
+    pub method: crate::args::MethodArg,
     /// Seed of the synthetic farm.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -40,7 +40,7 @@ pub struct DemoArgs {
 pub fn run(args: &DemoArgs) -> Result<String> {
     let request = DemoRequest {
         dir: args.dir.clone(),
-        gleaner_method: matches!(args.method, crate::MethodArg::Gleaner),
+        gleaner_method: matches!(args.method, crate::args::MethodArg::Gleaner),
         seed: args.seed,
         sensors: args.sensors,
         days: args.days,

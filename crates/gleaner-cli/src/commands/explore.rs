@@ -4,7 +4,7 @@
 use anyhow::Result;
 use gleaner_app as app;
 
-use crate::{JsonArg, ProjectArg, clock_now, parse_time, parse_wind};
+use crate::args::{JsonArg, ProjectArg, clock_now, parse_time, parse_wind};
 
 // The arguments of `gleaner explore` (no doc comment: the variant's is the help).
 #[derive(clap::Args)]

@@ -9,7 +9,8 @@ use gleaner_app::MissionId;
 use gleaner_render::files;
 use gleaner_wire::{WpmlOptions, convert, text};
 
-use crate::{ProjectArg, out};
+use crate::args::ProjectArg;
+use crate::output::out;
 
 // The arguments of `gleaner export` (no doc comment: the variant's is the help).
 #[derive(clap::Args)]

@@ -7,7 +7,9 @@ use anyhow::Result;
 use clap::ValueEnum;
 use gleaner_app as app;
 
-use crate::{ProjectArg, clock_now, outln, progress::Terminal};
+use crate::args::{ProjectArg, clock_now};
+use crate::output::outln;
+use crate::progress::Terminal;
 
 // The arguments of `gleaner ingest` (no doc comment: the variant's is the help).
 #[derive(clap::Args)]

@@ -7,7 +7,8 @@ use anyhow::{Context, Result};
 use clap::ValueEnum;
 use gleaner_app as app;
 
-use crate::{MethodArg, outln, parse_lat_lon};
+use crate::args::{MethodArg, parse_lat_lon};
+use crate::output::outln;
 
 // The arguments of `gleaner init` (no doc comment: the variant's is the help).
 #[derive(clap::Args)]

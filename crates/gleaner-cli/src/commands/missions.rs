@@ -5,7 +5,8 @@ use anyhow::Result;
 use gleaner_app::{self as app, MissionId};
 use gleaner_wire::text;
 
-use crate::{ProjectArg, emit, out, outln};
+use crate::args::ProjectArg;
+use crate::output::{emit, out, outln};
 
 // The arguments of `gleaner missions` (no doc comment: the variant's is the help).
 #[derive(clap::Args)]

@@ -7,7 +7,8 @@ use anyhow::Result;
 use gleaner_app as app;
 use gleaner_wire::text;
 
-use crate::{JsonArg, ProjectArg, WhenArgs, clock_now, parse_wind, warn};
+use crate::args::{JsonArg, ProjectArg, WhenArgs, clock_now, parse_wind};
+use crate::output::warn;
 
 // The arguments of `gleaner plan` (no doc comment: the variant's is the help).
 #[derive(clap::Args)]

@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use gleaner_app as app;
 
-use crate::{ProjectArg, emit, outln, parse_time};
+use crate::args::{ProjectArg, parse_time};
+use crate::output::{emit, outln};
 
 use gleaner_app::Estimator;
 use gleaner_kriging::Mean;

@@ -6,7 +6,9 @@ use std::path::PathBuf;
 use anyhow::Result;
 use gleaner_app::{self as app, MissionId};
 
-use crate::{ProjectArg, clock_now, outln, parse_time, progress::Terminal};
+use crate::args::{ProjectArg, clock_now, parse_time};
+use crate::output::outln;
+use crate::progress::Terminal;
 
 // The arguments of `gleaner record` (no doc comment: the variant's is the help).
 #[derive(clap::Args)]

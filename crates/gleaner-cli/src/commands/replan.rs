@@ -7,7 +7,7 @@ use anyhow::Result;
 use gleaner_app::{self as app, MissionId};
 use gleaner_wire::{convert, text};
 
-use crate::{JsonArg, ProjectArg, parse_wind};
+use crate::args::{JsonArg, ProjectArg, parse_wind};
 
 // The arguments of `gleaner replan` (no doc comment: the variant's is the help).
 #[derive(clap::Args)]

@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use anyhow::Result;
 use gleaner_app as app;
 
-use crate::{JsonArg, ProjectArg, WhenArgs, warn};
+use crate::args::{JsonArg, ProjectArg, WhenArgs};
+use crate::output::warn;
 
 use gleaner_wire::docs::{ScoreRowDoc, ScoringDoc};
 

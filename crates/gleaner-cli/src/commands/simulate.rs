@@ -48,22 +48,22 @@ pub struct SimulateArgs {
     pub data_dir: PathBuf,
     /// Readings available by this time are the history (RFC 3339 or date) [default: the
     /// dataset's].
-    #[arg(long, value_parser = crate::parse_time)]
+    #[arg(long, value_parser = crate::args::parse_time)]
     pub history_until: Option<i64>,
     /// Leave readings before this time out of the history [default: the dataset's].
-    #[arg(long, value_parser = crate::parse_time)]
+    #[arg(long, value_parser = crate::args::parse_time)]
     pub history_from: Option<i64>,
     /// First mission [default: the end of the history].
-    #[arg(long, value_parser = crate::parse_time)]
+    #[arg(long, value_parser = crate::args::parse_time)]
     pub start: Option<i64>,
     /// Last mission at or before this time [default: the dataset's].
-    #[arg(long, value_parser = crate::parse_time)]
+    #[arg(long, value_parser = crate::args::parse_time)]
     pub end: Option<i64>,
     /// Hours between missions.
     #[arg(long, default_value_t = 24.0)]
     pub every_hours: f64,
     /// Mission times instead of a period (comma-separated RFC 3339 or dates).
-    #[arg(long, value_delimiter = ',', value_parser = crate::parse_time)]
+    #[arg(long, value_delimiter = ',', value_parser = crate::args::parse_time)]
     pub times: Option<Vec<i64>>,
     /// Strategies, comma-separated, or `all` / `main` (gleaner, paper, variance, information,
     /// freshness, round-robin, random, nearest, exhaustive). Names: those, no-freshness,
@@ -287,6 +287,6 @@ pub fn run(
         cell_size_m: args.cell_size,
         command_line: command_line.to_string(),
     };
-    let s = simulation::simulate(&request, crate::clock_now(), progress)?;
+    let s = simulation::simulate(&request, crate::args::clock_now(), progress)?;
     Ok(format!("{}\n", simulation::summary_line(&s, &args.out)))
 }
