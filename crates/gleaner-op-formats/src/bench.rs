@@ -308,39 +308,79 @@ pub fn summarize(rows: &[BenchRow]) -> BenchSummary {
     }
 }
 
-fn opt(v: Option<f64>, digits: usize) -> String {
-    v.map_or_else(|| "-".to_string(), |x| format!("{x:.digits$}"))
+/// How a row's values are written: for reading in an aligned table, or exactly for CSV.
+#[derive(Clone, Copy, PartialEq)]
+enum Style {
+    Table,
+    Csv,
+}
+
+/// A row's nine columns, in the order `instance, set, n, budget, target, ours, gap, seconds,
+/// feasible`; the table rounds (target to 0 digits, gap to 2, seconds to 3) and shows a
+/// missing value as `-`, the CSV keeps 4 digits and leaves it empty.
+fn columns(r: &BenchRow, style: Style) -> [String; 9] {
+    let table = style == Style::Table;
+    let missing = || {
+        if table {
+            "-".to_string()
+        } else {
+            String::new()
+        }
+    };
+    [
+        r.instance.clone(),
+        r.set.clone(),
+        r.n.to_string(),
+        r.budget.to_string(),
+        r.target.map_or_else(missing, |t| {
+            if table {
+                format!("{t:.0}")
+            } else {
+                t.to_string()
+            }
+        }),
+        r.ours.to_string(),
+        r.gap_pct
+            .map_or_else(missing, |g| format!("{:.*}", if table { 2 } else { 4 }, g)),
+        format!("{:.*}", if table { 3 } else { 4 }, r.seconds),
+        match (table, r.feasible) {
+            (true, true) => "yes".to_string(),
+            (true, false) => "NO".to_string(),
+            (false, f) => f.to_string(),
+        },
+    ]
 }
 
 /// The rows as an aligned text table followed by the summary line.
 pub fn format_table(rows: &[BenchRow]) -> String {
+    let header = [
+        "instance", "set", "n", "budget", "target", "ours", "gap_%", "secs", "feasible",
+    ]
+    .map(String::from);
+    let body: Vec<[String; 9]> = rows.iter().map(|r| columns(r, Style::Table)).collect();
+    // The first two columns are left-aligned at least 8 and 3 wide, the others right-aligned
+    // at 6, 10, 10, 10, 8, 8, 8.
+    let mut widths = [8, 3, 6, 10, 10, 10, 8, 8, 8];
+    for line in &body {
+        for k in 0..2 {
+            widths[k] = widths[k].max(line[k].len());
+        }
+    }
     let mut s = String::new();
-    let w = rows
-        .iter()
-        .map(|r| r.instance.len())
-        .max()
-        .unwrap_or(8)
-        .max(8);
-    let ws = rows.iter().map(|r| r.set.len()).max().unwrap_or(3).max(3);
-    let _ = writeln!(
-        s,
-        "{:<w$} {:<ws$} {:>6} {:>10} {:>10} {:>10} {:>8} {:>8} {:>8}",
-        "instance", "set", "n", "budget", "target", "ours", "gap_%", "secs", "feasible"
-    );
-    for r in rows {
-        let _ = writeln!(
-            s,
-            "{:<w$} {:<ws$} {:>6} {:>10} {:>10} {:>10} {:>8} {:>8.3} {:>8}",
-            r.instance,
-            r.set,
-            r.n,
-            r.budget,
-            opt(r.target, 0),
-            r.ours,
-            opt(r.gap_pct, 2),
-            r.seconds,
-            if r.feasible { "yes" } else { "NO" }
-        );
+    for line in std::iter::once(&header).chain(&body) {
+        let cells: Vec<String> = line
+            .iter()
+            .zip(widths)
+            .enumerate()
+            .map(|(k, (v, w))| {
+                if k < 2 {
+                    format!("{v:<w$}")
+                } else {
+                    format!("{v:>w$}")
+                }
+            })
+            .collect();
+        let _ = writeln!(s, "{}", cells.join(" "));
     }
     let sm = summarize(rows);
     let _ = writeln!(
@@ -362,19 +402,7 @@ pub fn format_table(rows: &[BenchRow]) -> String {
 pub fn format_csv(rows: &[BenchRow]) -> String {
     let mut s = String::from("instance,set,n,budget,target,ours,gap_pct,seconds,feasible\n");
     for r in rows {
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{:.4},{}",
-            r.instance,
-            r.set,
-            r.n,
-            r.budget,
-            r.target.map_or(String::new(), |t| t.to_string()),
-            r.ours,
-            r.gap_pct.map_or(String::new(), |g| format!("{g:.4}")),
-            r.seconds,
-            r.feasible
-        );
+        let _ = writeln!(s, "{}", columns(r, Style::Csv).join(","));
     }
     s
 }
@@ -479,4 +507,64 @@ pub fn parse_routes(text: &str) -> Result<Vec<RouteRecord>, FormatError> {
         });
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rows() -> Vec<BenchRow> {
+        let row =
+            |instance: &str, set: &str, n, budget, target, ours, gap_pct, seconds, feasible| {
+                BenchRow {
+                    instance: instance.to_string(),
+                    set: set.to_string(),
+                    n,
+                    budget,
+                    target,
+                    ours,
+                    gap_pct,
+                    seconds,
+                    feasible,
+                    solver: "ils",
+                    routes: Vec::new(),
+                }
+            };
+        vec![
+            row(
+                "tsiligirides_1",
+                "tsil",
+                32,
+                5.0,
+                Some(10.0),
+                10.0,
+                Some(0.0),
+                0.01234,
+                true,
+            ),
+            row("x", "oplib-long", 7, 12.5, None, 3.5, None, 1.5, false),
+        ]
+    }
+
+    /// The table and the CSV of a row with a target and of an infeasible row without one.
+    #[test]
+    fn table_and_csv_snapshots() {
+        assert_eq!(
+            format_table(&rows()),
+            "\
+instance       set             n     budget     target       ours    gap_%     secs feasible
+tsiligirides_1 tsil           32          5         10         10     0.00    0.012      yes
+x              oplib-long      7       12.5          -        3.5        -    1.500       NO
+2 instances, 1 with target: 1 matched (0 beat), mean gap 0.000%, worst gap 0.000%, 1 infeasible, 1.5 s total
+"
+        );
+        assert_eq!(
+            format_csv(&rows()),
+            "\
+instance,set,n,budget,target,ours,gap_pct,seconds,feasible
+tsiligirides_1,tsil,32,5,10,10,0.0000,0.0123,true
+x,oplib-long,7,12.5,,3.5,,1.5000,false
+"
+        );
+    }
 }

@@ -7,6 +7,11 @@
 pub(crate) struct Rgb(pub u8, pub u8, pub u8);
 
 impl Rgb {
+    /// The colour `0xrrggbb`.
+    const fn from_hex(rgb: u32) -> Rgb {
+        Rgb((rgb >> 16) as u8, (rgb >> 8) as u8, rgb as u8)
+    }
+
     /// `#rrggbb`.
     pub(crate) fn hex(self) -> String {
         format!("#{:02x}{:02x}{:02x}", self.0, self.1, self.2)
@@ -24,35 +29,29 @@ impl Rgb {
     }
 }
 
+/// A colour table written as `0xrrggbb` values, as colour maps are published.
+const fn rgb_table<const N: usize>(hex: [u32; N]) -> [Rgb; N] {
+    let mut out = [Rgb(0, 0, 0); N];
+    let mut i = 0;
+    while i < N {
+        out[i] = Rgb::from_hex(hex[i]);
+        i += 1;
+    }
+    out
+}
+
 /// Viridis sampled at 0, 0.1, ..., 1.
-const VIRIDIS: [Rgb; 11] = [
-    Rgb(0x44, 0x01, 0x54),
-    Rgb(0x48, 0x24, 0x75),
-    Rgb(0x41, 0x44, 0x87),
-    Rgb(0x35, 0x5f, 0x8d),
-    Rgb(0x2a, 0x78, 0x8e),
-    Rgb(0x21, 0x91, 0x8c),
-    Rgb(0x22, 0xa8, 0x84),
-    Rgb(0x44, 0xbf, 0x70),
-    Rgb(0x7a, 0xd1, 0x51),
-    Rgb(0xbd, 0xdf, 0x26),
-    Rgb(0xfd, 0xe7, 0x25),
-];
+const VIRIDIS: [Rgb; 11] = rgb_table([
+    0x440154, 0x482475, 0x414487, 0x355f8d, 0x2a788e, 0x21918c, 0x22a884, 0x44bf70, 0x7ad151,
+    0xbddf26, 0xfde725,
+]);
 
 /// Magma (perceptually uniform, readable in grey and by colour-blind readers) at 1, 0.9,
 /// ..., 0.2: light for small values, dark purple for large ones; its near-black end is left
 /// out so dark markers stay visible on every cell.
-const MAGMA_REVERSED: [Rgb; 9] = [
-    Rgb(0xfc, 0xfd, 0xbf),
-    Rgb(0xfe, 0xcf, 0x92),
-    Rgb(0xfe, 0x9f, 0x6d),
-    Rgb(0xf7, 0x70, 0x5c),
-    Rgb(0xde, 0x49, 0x68),
-    Rgb(0xb7, 0x37, 0x79),
-    Rgb(0x8c, 0x29, 0x81),
-    Rgb(0x64, 0x1a, 0x80),
-    Rgb(0x3b, 0x0f, 0x70),
-];
+const MAGMA_REVERSED: [Rgb; 9] = rgb_table([
+    0xfcfdbf, 0xfecf92, 0xfe9f6d, 0xf7705c, 0xde4968, 0xb73779, 0x8c2981, 0x641a80, 0x3b0f70,
+]);
 
 /// A colour map through equally spaced anchors.
 #[derive(Debug, Clone, Copy)]

@@ -958,6 +958,11 @@ impl Settings {
 /// square).
 pub const MAX_RADIUS_CELLS: f64 = 100.0;
 
+/// Unit of the anomaly settings in [`RANGES`].
+const SD: &str = "standard deviations";
+/// Unit of the wind direction in [`RANGES`].
+const DEG_FROM_NORTH: &str = "degrees from north";
+
 /// The allowed range of every numeric setting of `gleaner.toml`, inclusive unless marked, with
 /// its unit: (key, min, max, min exclusive, unit). Values outside are refused with the key, the
 /// value and the range; NaN and infinities are always refused.
@@ -978,20 +983,8 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ("utility.history_window_days", 0.0, 36_525.0, true, "days"),
     ("utility.min_overlap", 2.0, 1e6, false, "timestamps"),
     ("utility.epsilon", 0.0, 1e6, true, "(unit of the modality)"),
-    (
-        "utility.anomaly_kappa",
-        0.0,
-        1e3,
-        true,
-        "standard deviations",
-    ),
-    (
-        "utility.anomaly_flag",
-        0.0,
-        1e6,
-        false,
-        "standard deviations",
-    ),
+    ("utility.anomaly_kappa", 0.0, 1e3, true, SD),
+    ("utility.anomaly_flag", 0.0, 1e6, false, SD),
     ("utility.anomaly_min_neighbours", 1.0, 64.0, false, "cells"),
     ("utility.condition_classes", 2.0, 20.0, false, "classes"),
     ("utility.condition_refit_growth", 0.0, 10.0, false, ""),
@@ -1015,13 +1008,7 @@ pub const RANGES: &[(&str, f64, f64, bool, &str)] = &[
     ("planner.unshared_weight", 0.0, 100.0, false, ""),
     ("planner.information_weight", 0.0, 1.0, false, ""),
     ("flight.wind_mps", 0.0, 40.0, false, "m/s"),
-    (
-        "flight.wind_from_deg",
-        0.0,
-        360.0,
-        false,
-        "degrees from north",
-    ),
+    ("flight.wind_from_deg", 0.0, 360.0, false, DEG_FROM_NORTH),
     ("flight.wind_margin_mps", 0.0, 20.0, false, "m/s"),
 ];
 
