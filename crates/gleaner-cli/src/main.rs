@@ -134,9 +134,10 @@ enum Command {
         after_help = "Examples:\n  gleaner migrate --project farm --to postgres://gleaner@localhost/farms\n  gleaner migrate --project farm --to 'postgres://gleaner@localhost/farms#farm_a' --switch\n  gleaner migrate --project farm --database postgres://gleaner@localhost/farms --to farm-copy.db"
     )]
     Migrate(migrate::MigrateArgs),
-    /// Crash-safety harness: kill `ingest` (into an empty and a filled project), `plan` and `record` with SIGKILL at evenly spread
-    /// write steps on SQLite and PostgreSQL, then check integrity, all-or-nothing and that a
-    /// rerun completes (real CAF data; a benchmark-style run, minutes).
+    /// Crash-safety harness: kill `ingest` (into an empty and a filled project), `plan` and
+    /// `record` with SIGKILL at evenly spread write steps on SQLite and PostgreSQL, then check
+    /// integrity, all-or-nothing and that a rerun completes (real CAF data; a benchmark-style
+    /// run, minutes).
     #[command(
         name = "crash-test",
         after_help = "Examples:\n  gleaner crash-test --kill-points 34          # up to 272 kill points: 4 use cases x 2 backends\n  gleaner crash-test --backend sqlite --kill-points 5"
@@ -202,8 +203,9 @@ of levels.
 
 --from/--to/--every-hours: every sensor's mean, sd and 90% interval at each time of a range, by
 the same estimator (one fit on the readings up to --to; each time uses only readings stamped at
-or before it; the interval mean ± q·sd, q calibrated on back-tests: docs/method.md §7) as CSV (time,sensor,mean,sd,lo90,hi90), or with --json the
-`gleaner.reconstruction-series` document (as GET /api/v1/reconstruct?from=..&to=..).
+or before it; the interval mean ± q·sd, q calibrated on back-tests: docs/method.md §7) as CSV
+(time,sensor,mean,sd,lo90,hi90), or with --json the `gleaner.reconstruction-series` document
+(as GET /api/v1/reconstruct?from=..&to=..).
 
 --map FILE.svg|FILE.png: the map of the estimated field at --at, a two-panel figure for a paper
 (178 mm wide; the PNG at 300 dpi): left the estimate, right its uncertainty (the posterior sd),

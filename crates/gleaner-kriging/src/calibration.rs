@@ -136,9 +136,6 @@ mod tests {
         assert_eq!(interval_multiplier(&[]), Z90);
     }
 
-    /// Two sensors, perfectly known model: sensor 0 read through the back-test, sensor 1
-    /// estimated. The errors are the standardised distances of sensor 1's values from the
-    /// filter's estimate, and only back-test readings of the unread sensor give one.
     /// Two sensors 1 apart read at `times`, with values `a` and `b`.
     fn two_sensors<'a>(times: &'a [i64], a: &'a [f64], b: &'a [f64]) -> [SensorSeries<'a>; 2] {
         [
@@ -166,6 +163,9 @@ mod tests {
         assert!(backtest_stretches(100, 0, 0).is_empty());
     }
 
+    /// Two sensors, perfectly known model: sensor 0 read through the back-test, sensor 1
+    /// estimated. The errors are the standardised distances of sensor 1's values from the
+    /// filter's estimate, and only back-test readings of the unread sensor give one.
     #[test]
     fn backtest_estimates_the_unread_sensors_after_the_split() {
         let model =

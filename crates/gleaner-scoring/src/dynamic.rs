@@ -116,6 +116,13 @@ pub fn dynamic_window_s(model: &DynamicModel) -> i64 {
     ((3.0 * tau) as i64).clamp(lo, hi)
 }
 
+/// Half-width of the dynamic model's 90% interval around a posterior mean of `variance` (the
+/// modality's unit squared): `q`·√(variance + reading noise), the modality's unit, `q` from
+/// [`dynamic_multiplier`].
+pub(crate) fn half90(model: &DynamicModel, q: f64, variance: f64) -> f64 {
+    q * (variance.max(0.0) + model.noise()).sqrt()
+}
+
 /// The back-test stretches for estimation time `at` (seconds) over readings from `first`
 /// (seconds): `(start, end)` of each, the latest first, each `span` long (the largest age of
 /// `ages`), ending at `at − span`, `at − 2·span`, … — at most

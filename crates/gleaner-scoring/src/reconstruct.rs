@@ -17,7 +17,7 @@ use gleaner_kriging::{
 use gleaner_store::{ReadingBatch, Store};
 
 use crate::choices::Estimator;
-use crate::dynamic::{dynamic_from_columns, dynamic_multiplier, dynamic_window_s};
+use crate::dynamic::{self, dynamic_from_columns, dynamic_multiplier, dynamic_window_s};
 use crate::error::{AppError, Result};
 use crate::knowledge::sampling_step;
 use crate::kriging_inputs::{Columns, KrigingInputs};
@@ -627,13 +627,7 @@ fn dynamic_at(
     let q = dynamic_multiplier(known, at, step, unshared_weight)?;
     Ok(filtered
         .into_iter()
-        .map(|(mean, variance)| {
-            (
-                mean,
-                variance,
-                q * (variance.max(0.0) + model.noise()).sqrt(),
-            )
-        })
+        .map(|(mean, variance)| (mean, variance, dynamic::half90(model, q, variance)))
         .collect())
 }
 
@@ -848,7 +842,7 @@ pub fn reconstruct_series<S: Store>(
                     let (mu, v) = f.estimate(k);
                     mean[i * m + j] = mu;
                     variance[i * m + j] = v;
-                    half90[i * m + j] = q * (v.max(0.0) + model.noise()).sqrt();
+                    half90[i * m + j] = dynamic::half90(model, q, v);
                 }
             });
         }

@@ -215,8 +215,9 @@ fn just_planned(id: Option<MissionId>, m: &NewMission) -> MissionDoc {
     mission_doc(id, m, status, None)
 }
 
-/// A sortie after the first of a day's plan, with its wind (the candidates and the greedy
-/// baseline belong to the day's first sortie: see [`planned_mission`]).
+/// A sortie after the first of a day's plan, with its wind. The greedy baseline belongs to
+/// the day's first sortie ([`planned_mission`]); `candidates` is left unset (the sorties share
+/// the first's candidates: the CLI sets them to print each sortie's count, the API does not).
 pub fn extra_sortie(e: &ExtraSortie) -> MissionDoc {
     let mut doc = just_planned(e.id, &e.mission);
     doc.wind = Some(wind(&e.wind));
